@@ -1,0 +1,2 @@
+"""dustoptics."""
+__version__ = "0.1.0"

@@ -1,0 +1,1 @@
+"""Material catalogue of dustoptics (installed as ``dustoptics.refractive_indices``)."""
