@@ -367,8 +367,9 @@ def _accumulate(
     """Sum the Mie quantities of many spheres with weights.
 
     For node j (size parameter x_j, weight w_j) adds to ``f_out`` the unpolarized
-    intensity I_j(mu) = |S1_j|^2 + |S2_j|^2 times c_j, where c_j = w_j x_j^-2
-    (cross-section weighting: the sum is proportional to int n C_sca p dr) or
+    intensity I_j(mu) = |S1_j|^2 + |S2_j|^2 times c_j, where c_j = w_j
+    (cross-section weighting: I_j / k^2 = 2 C_sca,j p_j, so the sum divided by
+    2 pi sum(w x^2 Q_sca) is the weighted phase function) or
     c_j = w_j / (2 pi x_j^2 Q_sca,j) when ``per_particle`` (each sphere's own
     normalized phase function, weighted by number).  Angles come as tables of
     pi_n and tau_n at mu >= 0; if ``symmetric``, f_out has twice as many entries
@@ -406,7 +407,7 @@ def _accumulate(
         if per_particle:
             c = w / (2.0 * np.pi * x2 * qsca)
         else:
-            c = w / x2
+            c = w
         for k in range(nmax):
             n = k + 1
             cn = (2.0 * n + 1.0) / (n * (n + 1.0))
