@@ -1,0 +1,962 @@
+"""Particle size distributions.
+
+A size distribution is a number density of particles per unit radius,
+``n(r)``, normalized so that ``integral_0^inf n(r) dr = 1``.  Radii are in
+micrometres throughout, so ``n`` is in [um^-1] and the k-th moment
+``<r^k> = integral_0^inf r^k n(r) dr`` is in [um^k].
+
+Every distribution knows its moments, the fraction of any moment that lies
+above or below a radius, and radii that cut off the tails with a bounded,
+documented loss.  All of these are analytic (regularized incomplete gamma
+functions, the normal distribution and their inverses from scipy), so the
+quadrature that integrates Mie quantities over ``n(r)`` can truncate the radius
+range with a known error instead of guessing it.
+
+Models
+------
+- :class:`ModifiedGamma`: Hansen & Travis (1974), parametrized by effective
+  radius and effective variance.
+- :class:`Gamma`: the same family by shape and scale.
+- :class:`LogNormal`: by median radius and the standard deviation of ``ln r``.
+- :class:`ModifiedLogNormal`: CosmoScout VR's log-normal parametrized by
+  effective radius and effective variance.
+- :class:`Monodisperse`: a single radius (no density).
+- :class:`MultiModal`: a mixture of any of the above, weighted by relative
+  number density.
+
+The effective radius and variance are (Hansen & Travis 1974)::
+
+    r_eff = <r^3> / <r^2>
+    v_eff = <r^4> <r^2> / <r^3>^2 - 1
+
+that is, the mean and the relative variance of the radius weighted by the
+geometric cross-section ``pi r^2 n(r)``.
+
+References
+----------
+.. [1] J. E. Hansen and L. D. Travis, "Light scattering in planetary
+   atmospheres," Space Sci. Rev., vol. 16, pp. 527-610, 1974,
+   doi:10.1007/BF00168069.
+.. [2] German Aerospace Center (DLR), CosmoScout VR, plugin csp-atmospheres,
+   scattering-table-generator (mie mode, size modes ``modifiedLogNormal`` and
+   ``relativeNumberDensity``), https://github.com/cosmoscout/cosmoscout-vr.
+"""
+
+from __future__ import annotations
+
+import math
+from abc import ABC, abstractmethod
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any, ClassVar
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy import special, stats
+
+from dustoptics._validation import (
+    as_float_array,
+    check_open_interval,
+    check_positive,
+    check_real,
+)
+
+__all__ = [
+    "Gamma",
+    "LogNormal",
+    "ModifiedGamma",
+    "ModifiedLogNormal",
+    "Monodisperse",
+    "MultiModal",
+    "SizeDistribution",
+]
+
+FloatOrArray = float | NDArray[np.float64]
+
+HANSEN_TRAVIS_1974 = (
+    'J. E. Hansen and L. D. Travis, "Light scattering in planetary atmospheres," '
+    "Space Sci. Rev., vol. 16, pp. 527-610, 1974, doi:10.1007/BF00168069"
+)
+COSMOSCOUT_VR = (
+    "German Aerospace Center (DLR), CosmoScout VR, plugin csp-atmospheres, "
+    "scattering-table-generator, https://github.com/cosmoscout/cosmoscout-vr"
+)
+
+
+def _as_radius(radius_um: ArrayLike) -> NDArray[np.float64]:
+    """Radii as a float64 array (a copy); NaN is kept and propagates."""
+    try:
+        return np.array(radius_um, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ValueError(f"radius_um must be real numbers [um]; got {radius_um!r}") from None
+
+
+def _scalar_or_array(values: NDArray[np.float64]) -> FloatOrArray:
+    """Return a Python float for 0-d results and the array otherwise."""
+    return float(values) if values.ndim == 0 else values
+
+
+def _check_tail_fraction(tail_fraction: Any) -> float:
+    return check_open_interval("tail_fraction", tail_fraction, 0.0, 0.5)
+
+
+class SizeDistribution(ABC):
+    """A normalized number distribution of particle radii, ``n(r)`` [um^-1].
+
+    Subclasses provide the moments and the moment tail fractions analytically;
+    the derived radii and cross-sections below follow from the moments.
+    Instances are immutable and hashable.
+
+    Attributes
+    ----------
+    model : str
+        Short name of the model, recorded with every table built from it.
+    citation : str
+        Where the model is defined.
+    """
+
+    __slots__ = ()
+
+    model: ClassVar[str]
+    citation: ClassVar[str]
+
+    # ------------------------------------------------------------------ density
+
+    @property
+    def has_density(self) -> bool:
+        """Whether ``n(r)`` is a density (False when it has a point mass)."""
+        return True
+
+    @property
+    def is_monodisperse(self) -> bool:
+        """Whether every particle has the same radius."""
+        return False
+
+    @abstractmethod
+    def pdf(self, radius_um: ArrayLike) -> FloatOrArray:
+        """Number density ``n(r)`` [um^-1], normalized to 1 over r > 0.
+
+        Parameters
+        ----------
+        radius_um : array_like
+            Radius. [um]
+
+        Returns
+        -------
+        float or numpy.ndarray
+            ``n(r)``, with the shape of ``radius_um``; 0 where ``r <= 0`` and
+            NaN where ``radius_um`` is NaN. [um^-1]
+        """
+
+    # ------------------------------------------------------------------ moments
+
+    @abstractmethod
+    def moment(self, k: float) -> float:
+        """Moment ``<r^k> = integral_0^inf r^k n(r) dr`` [um^k].
+
+        Parameters
+        ----------
+        k : float
+            Order of the moment; any real number for which the moment is finite.
+
+        Returns
+        -------
+        float
+            ``<r^k>``. [um^k]
+
+        Raises
+        ------
+        ValueError
+            If ``k`` is not finite or the moment diverges.
+        """
+
+    @abstractmethod
+    def _tail(self, k: float, radius_um: NDArray[np.float64], upper: bool) -> NDArray[np.float64]:
+        """Fraction of the k-th moment above (``upper``) or below ``radius_um``.
+
+        ``k`` is validated by the caller; ``radius_um`` may hold r <= 0 or NaN.
+        """
+
+    @abstractmethod
+    def _bounds(
+        self, tail_fraction: float, lower_moment: float, upper_moment: float
+    ) -> tuple[float, float]:
+        """Unvalidated implementation of :meth:`radius_bounds_um`."""
+
+    @abstractmethod
+    def _parameters(self) -> dict[str, Any]:
+        """Model parameters, keyed by name with the unit in the name."""
+
+    def moment_tail_fraction(self, k: float, radius_um: ArrayLike, *, upper: bool) -> FloatOrArray:
+        """Fraction of the k-th moment integral above or below a radius.
+
+        With ``M_k = integral_0^inf r'^k n(r') dr'``::
+
+            upper=True:   F_k^>(r) = integral_r^inf r'^k n(r') dr' / M_k
+            upper=False:  F_k^<(r) = integral_0^r   r'^k n(r') dr' / M_k = 1 - F_k^>(r)
+
+        ``k = 0`` is the number fraction, ``k = 2`` the fraction of the
+        geometric cross-section, ``k = 3`` the fraction of the volume.
+
+        Parameters
+        ----------
+        k : float
+            Order of the moment (any real for which ``<r^k>`` is finite).
+        radius_um : array_like
+            Radius where the distribution is cut. [um]
+        upper : bool
+            True for the fraction above ``radius_um``, False for the fraction
+            at or below it (the two differ only for :class:`Monodisperse`,
+            whose whole mass sits at one radius).
+
+        Returns
+        -------
+        float or numpy.ndarray
+            The fraction in [0, 1], with the shape of ``radius_um``; NaN where
+            ``radius_um`` is NaN. [1]
+
+        Notes
+        -----
+        For the gamma family the k-weighted distribution ``r^k n(r) / M_k`` is
+        again a gamma distribution with shape ``shape + k``, so the fractions
+        are the regularized incomplete gamma functions ``Q(shape + k, r/scale)``
+        and ``P(shape + k, r/scale)``.  For the log-normal family it is again
+        log-normal with ``ln`` median ``mu + k sigma^2``, so the fractions are
+        the normal survival and distribution functions of
+        ``(ln r - mu - k sigma^2) / sigma``.  A mixture weights each mode's
+        fraction by the mode's share of the k-th moment.
+        """
+        k = check_real("k", k)
+        self.moment(k)  # raises if the moment diverges
+        r = _as_radius(radius_um)
+        return _scalar_or_array(self._tail(k, r, bool(upper)))
+
+    def radius_bounds_um(
+        self,
+        *,
+        tail_fraction: float,
+        lower_moment: float = 0.0,
+        upper_moment: float = 6.0,
+    ) -> tuple[float, float]:
+        """Radii that cut off the tails of the distribution with a bounded loss.
+
+        Returns ``(r_lo, r_hi)`` such that, with the tail fractions ``F_k^<``
+        and ``F_k^>`` of :meth:`moment_tail_fraction` and ``eps = tail_fraction``::
+
+            F_p^<(r_lo) <= eps   for every moment order p >= lower_moment,
+            F_p^>(r_hi) <= eps   for every moment order p <= upper_moment.
+
+        So for every p in ``[lower_moment, upper_moment]`` the integral
+        ``integral r^p n(r) dr`` restricted to ``[r_lo, r_hi]`` misses at most
+        ``eps`` of ``<r^p>`` in each tail, ``2 eps`` in total.  The defaults,
+        0 to 6, cover the particle number (p = 0), the geometric and
+        large-particle cross-sections (p = 2), absorption of small particles
+        (p = 3) and Rayleigh scattering (p = 6).  More generally, if
+        ``|f(r)| <= A r^q`` for ``r >= r_hi`` with ``q <= upper_moment``, the
+        part of ``integral f n dr`` above ``r_hi`` is at most
+        ``A eps <r^q>`` (and likewise below ``r_lo``).
+
+        Parameters
+        ----------
+        tail_fraction : float
+            Largest fraction ``eps`` of a moment allowed in each tail; in the
+            open interval (0, 0.5). [1]
+        lower_moment : float, default 0
+            Moment order whose lower tail is bounded. [1]
+        upper_moment : float, default 6
+            Moment order whose upper tail is bounded; must be
+            ``>= lower_moment``. [1]
+
+        Returns
+        -------
+        r_lo_um, r_hi_um : tuple of float
+            Lower and upper radius, ``0 < r_lo_um <= r_hi_um``. [um]
+
+        Notes
+        -----
+        For one continuous mode the bounds are the exact quantiles,
+        ``F_lower^<(r_lo) = F_upper^>(r_hi) = eps`` (up to the rounding of
+        ``scipy.special.gammaincinv``/``gammainccinv`` or
+        ``scipy.stats.norm.isf``).  The statement for other orders p follows
+        because the tail fractions are monotonic in the order: the density of
+        ``r^p n(r)`` relative to that of ``r^q n(r)`` is proportional to
+        ``r^(p - q)``, increasing in r for p > q, so ``F_p^>(r)`` does not
+        decrease and ``F_p^<(r)`` does not increase with p (likelihood-ratio
+        ordering).
+
+        For a :class:`MultiModal` the bounds are the smallest ``r_lo`` and the
+        largest ``r_hi`` of its modes.  This is still a valid bound: the
+        mixture's tail fraction is a weighted mean of the modes' fractions,
+        ``F^<(r) = sum_i c_i F_i^<(r) / sum_i c_i`` with ``c_i >= 0`` the
+        modes' contributions to the moment, and each ``F_i^<`` is
+        non-decreasing in r, so at ``r_lo = min_i r_lo,i`` every
+        ``F_i^<(r_lo) <= F_i^<(r_lo,i) <= eps`` and hence their mean is too
+        (symmetrically for ``r_hi``).  It is conservative: the mixture's own
+        tail is usually much smaller than ``eps``.
+        """
+        eps = _check_tail_fraction(tail_fraction)
+        lower = check_real("lower_moment", lower_moment)
+        upper = check_real("upper_moment", upper_moment)
+        if lower > upper:
+            raise ValueError(
+                f"lower_moment must be <= upper_moment; got lower_moment={lower_moment!r}, "
+                f"upper_moment={upper_moment!r}"
+            )
+        self.moment(lower)  # raise if either moment diverges
+        self.moment(upper)
+        return self._bounds(eps, lower, upper)
+
+    # ---------------------------------------------------------- derived radii
+
+    @property
+    def mean_radius_um(self) -> float:
+        """Number-mean radius ``<r>``. [um]"""
+        return self.moment(1.0)
+
+    @property
+    def area_mean_radius_um(self) -> float:
+        """Radius of the mean cross-section, ``sqrt(<r^2>)``. [um]"""
+        return math.sqrt(self.moment(2.0))
+
+    @property
+    def volume_mean_radius_um(self) -> float:
+        """Radius of the mean volume, ``cbrt(<r^3>)``. [um]"""
+        return float(np.cbrt(self.moment(3.0)))
+
+    @property
+    def r_eff_um(self) -> float:
+        """Effective radius ``<r^3> / <r^2>`` (Hansen & Travis 1974). [um]"""
+        return self.moment(3.0) / self.moment(2.0)
+
+    @property
+    def v_eff(self) -> float:
+        """Effective variance ``<r^4> <r^2> / <r^3>^2 - 1`` (Hansen & Travis 1974). [1]"""
+        m3 = self.moment(3.0)
+        return self.moment(4.0) * self.moment(2.0) / (m3 * m3) - 1.0
+
+    @property
+    def mean_cross_section_um2(self) -> float:
+        """Mean geometric cross-section ``pi <r^2>``. [um^2]"""
+        return math.pi * self.moment(2.0)
+
+    @property
+    def mean_volume_um3(self) -> float:
+        """Mean particle volume ``4/3 pi <r^3>``. [um^3]"""
+        return 4.0 / 3.0 * math.pi * self.moment(3.0)
+
+    # ------------------------------------------------------------- provenance
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain description for provenance (metadata of tables and files).
+
+        Returns
+        -------
+        dict
+            ``model`` (str), ``citation`` (str), ``parameters`` (dict of the
+            constructor's arguments, with the unit in each key: ``_um`` for
+            micrometres, none for dimensionless numbers) and ``derived``
+            (``r_eff_um`` and ``v_eff`` of the distribution).  A mixture adds
+            ``modes``, a list of its modes' dicts.
+        """
+        return {
+            "model": self.model,
+            "citation": self.citation,
+            "parameters": self._parameters(),
+            "derived": {"r_eff_um": self.r_eff_um, "v_eff": self.v_eff},
+        }
+
+
+# ---------------------------------------------------------------------- gamma
+
+
+class _GammaFamily(SizeDistribution):
+    """Gamma distributions, ``n(r) ~ r^(shape - 1) exp(-r / scale)``."""
+
+    __slots__ = ()
+
+    @abstractmethod
+    def _shape_scale(self) -> tuple[float, float]:
+        """``(shape, scale_um)`` of the gamma distribution."""
+
+    def pdf(self, radius_um: ArrayLike) -> FloatOrArray:
+        shape, scale = self._shape_scale()
+        r = _as_radius(radius_um)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            density = stats.gamma.pdf(r, shape, scale=scale)
+        return _scalar_or_array(np.where(r > 0.0, density, np.where(np.isnan(r), np.nan, 0.0)))
+
+    def moment(self, k: float) -> float:
+        """Moment ``<r^k> = scale^k Gamma(shape + k) / Gamma(shape)`` [um^k].
+
+        Finite for ``k > -shape``; see :meth:`SizeDistribution.moment`.
+        """
+        k = check_real("k", k)
+        shape, scale = self._shape_scale()
+        if not shape + k > 0.0:
+            raise ValueError(
+                f"k must be > -shape = {-shape!r} for the moment of this gamma distribution "
+                f"to be finite; got {k!r}"
+            )
+        return float(scale**k * special.poch(shape, k))
+
+    def _tail(self, k: float, radius_um: NDArray[np.float64], upper: bool) -> NDArray[np.float64]:
+        shape, scale = self._shape_scale()
+        x = np.clip(radius_um, 0.0, None) / scale  # r <= 0: whole moment lies above
+        fraction = special.gammaincc(shape + k, x) if upper else special.gammainc(shape + k, x)
+        return np.asarray(fraction, dtype=np.float64)
+
+    def _bounds(
+        self, tail_fraction: float, lower_moment: float, upper_moment: float
+    ) -> tuple[float, float]:
+        shape, scale = self._shape_scale()
+        r_lo = scale * special.gammaincinv(shape + lower_moment, tail_fraction)
+        r_hi = scale * special.gammainccinv(shape + upper_moment, tail_fraction)
+        return float(r_lo), float(r_hi)
+
+    @property
+    def r_eff_um(self) -> float:
+        """Effective radius, ``scale (shape + 2)`` for a gamma distribution. [um]"""
+        shape, scale = self._shape_scale()
+        return scale * (shape + 2.0)
+
+    @property
+    def v_eff(self) -> float:
+        """Effective variance, ``1 / (shape + 2)`` for a gamma distribution. [1]"""
+        shape, _ = self._shape_scale()
+        return 1.0 / (shape + 2.0)
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class ModifiedGamma(_GammaFamily):
+    r"""Modified gamma distribution of Hansen & Travis (1974).
+
+    .. math::
+
+        n(r) \propto r^{(1 - 3b)/b} \exp\left(-\frac{r}{a b}\right),
+        \qquad a = r_\mathrm{eff},\; b = v_\mathrm{eff},
+
+    a gamma distribution with ``shape = (1 - 2b)/b`` and ``scale = a b`` [um],
+    normalized here to 1.  Its effective radius and effective variance are
+    exactly ``a`` and ``b``: ``<r^3>/<r^2> = scale (shape + 2) = a`` and
+    ``<r^4><r^2>/<r^3>^2 - 1 = 1/(shape + 2) = b``.
+
+    Parameters
+    ----------
+    r_eff_um : float
+        Effective radius ``a = <r^3>/<r^2>``, > 0. [um]
+    v_eff : float
+        Effective variance ``b``, in the open interval (0, 0.5); at 0.5 the
+        shape reaches 0 and the distribution can no longer be normalized. [1]
+
+    Notes
+    -----
+    The Martian dust model of the seed thesis uses ``r_eff_um=1.6, v_eff=0.2``
+    (after Tomasko et al. 1999), i.e. ``Gamma(shape=3, scale_um=0.32)``.
+    For ``v_eff > 1/3`` the shape is below 1 and ``n(r)`` diverges
+    (integrably) at r -> 0.
+
+    References
+    ----------
+    .. [1] J. E. Hansen and L. D. Travis, "Light scattering in planetary
+       atmospheres," Space Sci. Rev., vol. 16, pp. 527-610, 1974,
+       doi:10.1007/BF00168069.
+
+    Examples
+    --------
+    >>> d = ModifiedGamma(r_eff_um=1.6, v_eff=0.2)
+    >>> round(d.shape, 12), round(d.scale_um, 12)
+    (3.0, 0.32)
+    """
+
+    model: ClassVar[str] = "modified_gamma"
+    citation: ClassVar[str] = HANSEN_TRAVIS_1974
+
+    # ``field()`` keeps the base class's r_eff_um/v_eff properties from being
+    # taken as default values; the slots then shadow those properties.
+    r_eff_um: float = field()
+    v_eff: float = field()
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "r_eff_um", check_positive("r_eff_um", self.r_eff_um, unit="um"))
+        object.__setattr__(self, "v_eff", check_open_interval("v_eff", self.v_eff, 0.0, 0.5))
+
+    @property
+    def shape(self) -> float:
+        """Gamma shape ``(1 - 2 v_eff) / v_eff``. [1]"""
+        return (1.0 - 2.0 * self.v_eff) / self.v_eff
+
+    @property
+    def scale_um(self) -> float:
+        """Gamma scale ``r_eff v_eff``. [um]"""
+        return self.r_eff_um * self.v_eff
+
+    def _shape_scale(self) -> tuple[float, float]:
+        return self.shape, self.scale_um
+
+    def _parameters(self) -> dict[str, Any]:
+        return {"r_eff_um": self.r_eff_um, "v_eff": self.v_eff}
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class Gamma(_GammaFamily):
+    r"""Gamma distribution by shape and scale.
+
+    .. math::
+
+        n(r) = \frac{r^{\alpha - 1} e^{-r/\theta}}{\Gamma(\alpha)\, \theta^\alpha},
+        \qquad \alpha = \mathrm{shape},\; \theta = \mathrm{scale}
+
+    with ``r_eff = theta (alpha + 2)`` and ``v_eff = 1 / (alpha + 2)``
+    (Hansen & Travis 1974); :class:`ModifiedGamma` is the same family by those.
+
+    Parameters
+    ----------
+    shape : float
+        Shape ``alpha`` > 0. [1]
+    scale_um : float
+        Scale ``theta`` > 0. [um]
+
+    References
+    ----------
+    .. [1] J. E. Hansen and L. D. Travis, "Light scattering in planetary
+       atmospheres," Space Sci. Rev., vol. 16, pp. 527-610, 1974,
+       doi:10.1007/BF00168069.
+    """
+
+    model: ClassVar[str] = "gamma"
+    citation: ClassVar[str] = HANSEN_TRAVIS_1974
+
+    shape: float
+    scale_um: float
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "shape", check_positive("shape", self.shape))
+        object.__setattr__(self, "scale_um", check_positive("scale_um", self.scale_um, unit="um"))
+
+    def _shape_scale(self) -> tuple[float, float]:
+        return self.shape, self.scale_um
+
+    def _parameters(self) -> dict[str, Any]:
+        return {"shape": self.shape, "scale_um": self.scale_um}
+
+
+# ------------------------------------------------------------------ log-normal
+
+
+class _LogNormalFamily(SizeDistribution):
+    """Log-normal distributions, ``ln r ~ Normal(mu, sigma)``."""
+
+    __slots__ = ()
+
+    @abstractmethod
+    def _mu_sigma(self) -> tuple[float, float]:
+        """``(mu, sigma)``: mean and standard deviation of ``ln(r / 1 um)``."""
+
+    def pdf(self, radius_um: ArrayLike) -> FloatOrArray:
+        mu, sigma = self._mu_sigma()
+        r = _as_radius(radius_um)
+        return _scalar_or_array(stats.lognorm.pdf(r, sigma, scale=math.exp(mu)))
+
+    def moment(self, k: float) -> float:
+        """Moment ``<r^k> = exp(k mu + k^2 sigma^2 / 2)`` [um^k], finite for every real k."""
+        k = check_real("k", k)
+        mu, sigma = self._mu_sigma()
+        return math.exp(k * mu + 0.5 * k * k * sigma * sigma)
+
+    def _tail(self, k: float, radius_um: NDArray[np.float64], upper: bool) -> NDArray[np.float64]:
+        mu, sigma = self._mu_sigma()
+        with np.errstate(divide="ignore", invalid="ignore"):
+            log_r = np.where(radius_um > 0.0, np.log(radius_um), -np.inf)
+        log_r = np.where(np.isnan(radius_um), np.nan, log_r)
+        z = (log_r - mu - k * sigma * sigma) / sigma
+        fraction = stats.norm.sf(z) if upper else stats.norm.cdf(z)
+        return np.asarray(fraction, dtype=np.float64)
+
+    def _bounds(
+        self, tail_fraction: float, lower_moment: float, upper_moment: float
+    ) -> tuple[float, float]:
+        mu, sigma = self._mu_sigma()
+        z = float(stats.norm.isf(tail_fraction))
+        r_lo = math.exp(mu + lower_moment * sigma * sigma - z * sigma)
+        r_hi = math.exp(mu + upper_moment * sigma * sigma + z * sigma)
+        return r_lo, r_hi
+
+    @property
+    def r_eff_um(self) -> float:
+        """Effective radius, ``exp(mu + 5 sigma^2 / 2)`` for a log-normal. [um]"""
+        mu, sigma = self._mu_sigma()
+        return math.exp(mu + 2.5 * sigma * sigma)
+
+    @property
+    def v_eff(self) -> float:
+        """Effective variance, ``exp(sigma^2) - 1`` for a log-normal. [1]"""
+        _, sigma = self._mu_sigma()
+        return math.expm1(sigma * sigma)
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class LogNormal(_LogNormalFamily):
+    r"""Log-normal distribution by median radius and logarithmic width.
+
+    .. math::
+
+        n(r) = \frac{1}{\sqrt{2\pi}\, \sigma r}
+               \exp\left(-\frac{(\ln r - \mu)^2}{2 \sigma^2}\right),
+        \qquad \mu = \ln r_\mathrm{med}
+
+    so ``ln r`` is normally distributed with mean ``mu`` and standard
+    deviation ``sigma``; ``<r^k> = exp(k mu + k^2 sigma^2 / 2)``.
+
+    Parameters
+    ----------
+    median_radius_um : float
+        Median radius ``r_med = exp(mu)`` of the number distribution, > 0. [um]
+    sigma : float
+        Standard deviation of ``ln r``, > 0.  It is the natural logarithm of
+        the geometric standard deviation: ``sigma = ln(sigma_g)``, so a
+        geometric standard deviation of 1.5 is ``sigma = 0.405``. [1]
+
+    Notes
+    -----
+    CosmoScout VR's plain ``logNormal`` size mode takes the same ``mu``
+    (which it calls the mean, of ``ln r``) and ``sigma``.
+
+    References
+    ----------
+    .. [1] J. E. Hansen and L. D. Travis, "Light scattering in planetary
+       atmospheres," Space Sci. Rev., vol. 16, pp. 527-610, 1974,
+       doi:10.1007/BF00168069.
+    """
+
+    model: ClassVar[str] = "log_normal"
+    citation: ClassVar[str] = HANSEN_TRAVIS_1974
+
+    median_radius_um: float
+    sigma: float
+
+    def __post_init__(self) -> None:
+        object.__setattr__(
+            self,
+            "median_radius_um",
+            check_positive("median_radius_um", self.median_radius_um, unit="um"),
+        )
+        object.__setattr__(self, "sigma", check_positive("sigma", self.sigma))
+
+    @property
+    def geometric_std(self) -> float:
+        """Geometric standard deviation ``exp(sigma)``. [1]"""
+        return math.exp(self.sigma)
+
+    def _mu_sigma(self) -> tuple[float, float]:
+        return math.log(self.median_radius_um), self.sigma
+
+    def _parameters(self) -> dict[str, Any]:
+        return {"median_radius_um": self.median_radius_um, "sigma": self.sigma}
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class ModifiedLogNormal(_LogNormalFamily):
+    r"""Log-normal distribution by effective radius and effective variance.
+
+    CosmoScout VR's ``modifiedLogNormal`` size mode: a :class:`LogNormal` with
+
+    .. math::
+
+        s^2 = \ln(1 + v_\mathrm{eff}), \qquad
+        \mu = \ln r_\mathrm{eff} - \tfrac{5}{2} s^2, \qquad
+        \sigma = s,
+
+    i.e. ``median_radius_um = exp(mu)``.  Its effective radius and variance are
+    exactly the given ones: with ``<r^k> = exp(k mu + k^2 s^2 / 2)``,
+
+    - ``<r^3>/<r^2> = exp(mu + (9 - 4) s^2 / 2) = exp(mu + 5 s^2 / 2) = r_eff``,
+    - ``<r^4><r^2>/<r^3>^2 = exp((16 + 4 - 18) s^2 / 2) = exp(s^2) = 1 + v_eff``.
+
+    Parameters
+    ----------
+    r_eff_um : float
+        Effective radius ``<r^3>/<r^2>``, > 0. [um]
+    v_eff : float
+        Effective variance, > 0.  Any positive value gives a valid
+        distribution (there is no upper bound, unlike :class:`ModifiedGamma`);
+        large values put the median far below ``r_eff``, since
+        ``median = r_eff (1 + v_eff)^(-5/2)``. [1]
+
+    Notes
+    -----
+    CosmoScout's Mars aerosol settings use two such modes,
+    ``(r_eff_um=0.04, v_eff=0.1)`` and ``(r_eff_um=1.4, v_eff=0.35)``, with
+    relative number densities 1000 : 1 (see :class:`MultiModal`).
+
+    References
+    ----------
+    .. [1] German Aerospace Center (DLR), CosmoScout VR, plugin csp-atmospheres,
+       scattering-table-generator, https://github.com/cosmoscout/cosmoscout-vr.
+    .. [2] J. E. Hansen and L. D. Travis, "Light scattering in planetary
+       atmospheres," Space Sci. Rev., vol. 16, pp. 527-610, 1974,
+       doi:10.1007/BF00168069 (definition of r_eff and v_eff).
+    """
+
+    model: ClassVar[str] = "modified_log_normal"
+    citation: ClassVar[str] = COSMOSCOUT_VR
+
+    # ``field()`` keeps the base class's r_eff_um/v_eff properties from being
+    # taken as default values; the slots then shadow those properties.
+    r_eff_um: float = field()
+    v_eff: float = field()
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "r_eff_um", check_positive("r_eff_um", self.r_eff_um, unit="um"))
+        object.__setattr__(self, "v_eff", check_positive("v_eff", self.v_eff))
+
+    @property
+    def sigma(self) -> float:
+        """Standard deviation of ``ln r``, ``sqrt(ln(1 + v_eff))``. [1]"""
+        return math.sqrt(math.log1p(self.v_eff))
+
+    @property
+    def median_radius_um(self) -> float:
+        """Median radius ``exp(mu) = r_eff (1 + v_eff)^(-5/2)``. [um]"""
+        return math.exp(self._mu_sigma()[0])
+
+    def as_log_normal(self) -> LogNormal:
+        """The same distribution as a :class:`LogNormal`."""
+        return LogNormal(median_radius_um=self.median_radius_um, sigma=self.sigma)
+
+    def _mu_sigma(self) -> tuple[float, float]:
+        s2 = math.log1p(self.v_eff)
+        return math.log(self.r_eff_um) - 2.5 * s2, math.sqrt(s2)
+
+    def _parameters(self) -> dict[str, Any]:
+        return {"r_eff_um": self.r_eff_um, "v_eff": self.v_eff}
+
+
+# --------------------------------------------------------------- monodisperse
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class Monodisperse(SizeDistribution):
+    """All particles of one radius: ``n(r) = delta(r - radius_um)``.
+
+    It has no density, so :meth:`pdf` raises; a quadrature should test
+    :attr:`is_monodisperse` (or :attr:`has_density`) and use the single node
+    ``radius_um`` with weight 1.  Moments are ``radius_um^k``, ``r_eff_um`` is
+    ``radius_um`` and ``v_eff`` is 0.
+
+    Parameters
+    ----------
+    radius_um : float
+        Radius of every particle, > 0. [um]
+    """
+
+    model: ClassVar[str] = "monodisperse"
+    citation: ClassVar[str] = "single particle radius (no size distribution)"
+
+    radius_um: float
+
+    def __post_init__(self) -> None:
+        object.__setattr__(
+            self, "radius_um", check_positive("radius_um", self.radius_um, unit="um")
+        )
+
+    @property
+    def has_density(self) -> bool:
+        """False: the distribution is a point mass."""
+        return False
+
+    @property
+    def is_monodisperse(self) -> bool:
+        """True."""
+        return True
+
+    def pdf(self, radius_um: ArrayLike) -> FloatOrArray:
+        """Not defined: a single radius has no probability density.
+
+        Raises
+        ------
+        TypeError
+            Always.  Use :attr:`radius_um` as the only quadrature node.
+        """
+        raise TypeError(
+            f"Monodisperse(radius_um={self.radius_um!r}) has no probability density; "
+            "use its radius_um as the single quadrature node with weight 1"
+        )
+
+    def moment(self, k: float) -> float:
+        """Moment ``radius_um^k`` [um^k]."""
+        return float(self.radius_um ** check_real("k", k))
+
+    def _tail(self, k: float, radius_um: NDArray[np.float64], upper: bool) -> NDArray[np.float64]:
+        above = np.where(self.radius_um > radius_um, 1.0, 0.0)
+        fraction = above if upper else 1.0 - above
+        return np.where(np.isnan(radius_um), np.nan, fraction)
+
+    def _bounds(
+        self, tail_fraction: float, lower_moment: float, upper_moment: float
+    ) -> tuple[float, float]:
+        return self.radius_um, self.radius_um
+
+    @property
+    def r_eff_um(self) -> float:
+        """Effective radius, ``radius_um``. [um]"""
+        return self.radius_um
+
+    @property
+    def v_eff(self) -> float:
+        """Effective variance, 0. [1]"""
+        return 0.0
+
+    def _parameters(self) -> dict[str, Any]:
+        return {"radius_um": self.radius_um}
+
+
+# ------------------------------------------------------------------- mixtures
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class MultiModal(SizeDistribution):
+    """Mixture of size modes weighted by relative number density.
+
+    .. math::
+
+        n(r) = \\sum_i w_i n_i(r), \\qquad w_i = d_i / \\sum_j d_j
+
+    with ``d_i`` the relative number densities and ``n_i`` the modes, each
+    normalized to 1.  Moments are the weighted sums ``<r^k> = sum_i w_i
+    <r^k>_i``.  This is how CosmoScout VR combines its size modes (scattering
+    cross-sections weighted by relative number density).
+
+    Parameters
+    ----------
+    modes : sequence of SizeDistribution
+        The modes, at least one (mixtures may be nested).
+    relative_number_densities : sequence of float
+        One positive, finite number per mode; only ratios matter (they are
+        normalized to the :attr:`number_fractions`). [1]
+
+    Examples
+    --------
+    CosmoScout VR's Mars aerosols: a fine and a coarse mode, 1000 : 1 in number.
+
+    >>> mars = MultiModal(
+    ...     modes=(ModifiedLogNormal(r_eff_um=0.04, v_eff=0.1),
+    ...            ModifiedLogNormal(r_eff_um=1.4, v_eff=0.35)),
+    ...     relative_number_densities=(1000.0, 1.0),
+    ... )
+    >>> round(mars.number_fractions[0], 6)
+    0.999001
+
+    References
+    ----------
+    .. [1] German Aerospace Center (DLR), CosmoScout VR, plugin csp-atmospheres,
+       scattering-table-generator, https://github.com/cosmoscout/cosmoscout-vr.
+    """
+
+    model: ClassVar[str] = "multimodal"
+    citation: ClassVar[str] = COSMOSCOUT_VR
+
+    modes: Sequence[SizeDistribution]  # stored as a tuple
+    relative_number_densities: Sequence[float]  # stored as a tuple of float
+    _weights: tuple[float, ...] = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        if isinstance(self.modes, SizeDistribution):
+            raise TypeError(
+                f"modes must be a sequence of SizeDistribution; got the single {self.modes!r} "
+                "(wrap it in a tuple)"
+            )
+        modes = tuple(self.modes)
+        if not modes:
+            raise ValueError("modes must contain at least one SizeDistribution; got none")
+        for i, mode in enumerate(modes):
+            if not isinstance(mode, SizeDistribution):
+                raise TypeError(f"modes[{i}] must be a SizeDistribution; got {mode!r}")
+        densities = as_float_array(
+            "relative_number_densities", np.atleast_1d(self.relative_number_densities), ndim=1
+        )
+        if densities.size != len(modes):
+            raise ValueError(
+                f"relative_number_densities must have one entry per mode ({len(modes)} modes); "
+                f"got {densities.size}: {densities.tolist()!r}"
+            )
+        if not np.all(densities > 0.0):
+            raise ValueError(
+                f"relative_number_densities must all be > 0; got {densities.tolist()!r}"
+            )
+        object.__setattr__(self, "modes", modes)
+        object.__setattr__(self, "relative_number_densities", tuple(densities.tolist()))
+        object.__setattr__(self, "_weights", tuple((densities / densities.sum()).tolist()))
+
+    @property
+    def number_fractions(self) -> tuple[float, ...]:
+        """Fraction of the particles in each mode, summing to 1. [1]"""
+        return self._weights
+
+    @property
+    def has_density(self) -> bool:
+        """Whether every mode has a density."""
+        return all(mode.has_density for mode in self.modes)
+
+    @property
+    def is_monodisperse(self) -> bool:
+        """Whether every mode is monodisperse at one and the same radius."""
+        return (
+            all(m.is_monodisperse for m in self.modes)
+            and len({m.r_eff_um for m in self.modes}) == 1
+        )
+
+    def pdf(self, radius_um: ArrayLike) -> FloatOrArray:
+        """Number density ``sum_i w_i n_i(r)`` [um^-1].
+
+        Raises
+        ------
+        TypeError
+            If a mode has no density (a :class:`Monodisperse` mode); integrate
+            such a mixture mode by mode.
+        """
+        r = _as_radius(radius_um)
+        total = np.zeros_like(r)
+        for weight, mode in zip(self._weights, self.modes, strict=True):
+            total = total + weight * np.asarray(mode.pdf(r))
+        return _scalar_or_array(total)
+
+    def moment(self, k: float) -> float:
+        """Moment ``sum_i w_i <r^k>_i`` [um^k]; finite when every mode's is."""
+        k = check_real("k", k)
+        return math.fsum(
+            w * mode.moment(k) for w, mode in zip(self._weights, self.modes, strict=True)
+        )
+
+    def _moment_shares(self, k: float) -> NDArray[np.float64]:
+        """Each mode's share of the mixture's k-th moment, summing to 1."""
+        contributions = np.array(
+            [w * m.moment(k) for w, m in zip(self._weights, self.modes, strict=True)],
+            dtype=np.float64,
+        )
+        shares: NDArray[np.float64] = contributions / math.fsum(contributions)
+        return shares
+
+    def _tail(self, k: float, radius_um: NDArray[np.float64], upper: bool) -> NDArray[np.float64]:
+        shares = self._moment_shares(k)
+        total = np.zeros_like(radius_um)
+        for share, mode in zip(shares, self.modes, strict=True):
+            total = total + share * mode._tail(k, radius_um, upper)
+        return total
+
+    def _bounds(
+        self, tail_fraction: float, lower_moment: float, upper_moment: float
+    ) -> tuple[float, float]:
+        bounds = [m._bounds(tail_fraction, lower_moment, upper_moment) for m in self.modes]
+        return min(lo for lo, _ in bounds), max(hi for _, hi in bounds)
+
+    def _parameters(self) -> dict[str, Any]:
+        return {
+            "relative_number_densities": list(self.relative_number_densities),
+            "number_fractions": list(self.number_fractions),
+        }
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain description for provenance; see :meth:`SizeDistribution.to_dict`."""
+        out = super(MultiModal, self).to_dict()
+        out["modes"] = [mode.to_dict() for mode in self.modes]
+        return out

@@ -1,0 +1,541 @@
+"""Tests for dustoptics.sizedist.
+
+The analytic moments, tail fractions and bounds are checked against
+``scipy.integrate.quad`` of the density, which shares no code with them (the
+density comes from ``scipy.stats``; the moments from ``scipy.special.poch`` or
+the log-normal closed form; the tails from incomplete gamma / normal functions).
+Quadrature runs in ``t = ln r`` (``dr = r dt``), where every integrand here is a
+smooth bump, with a tolerance of 1e-12 so that 1e-8 comparisons are meaningful.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import itertools
+import math
+from collections.abc import Callable
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from scipy import integrate
+
+from dustoptics.sizedist import (
+    Gamma,
+    LogNormal,
+    ModifiedGamma,
+    ModifiedLogNormal,
+    Monodisperse,
+    MultiModal,
+    SizeDistribution,
+)
+
+MOMENT_ORDERS = (1, 2, 3, 4, 6)
+FAST = settings(max_examples=15, deadline=None)  # quad is the slow part
+
+# CosmoScout VR, scattering-table-generator/mie-settings/mars_realistic.json.
+MARS_FINE = ModifiedLogNormal(r_eff_um=0.04, v_eff=0.1)
+MARS_COARSE = ModifiedLogNormal(r_eff_um=1.4, v_eff=0.35)
+
+
+def cosmoscout_mars() -> MultiModal:
+    return MultiModal(modes=(MARS_FINE, MARS_COARSE), relative_number_densities=(1000.0, 1.0))
+
+
+# ------------------------------------------------------------------ reference
+
+
+def _windows_ln_r(dist: SizeDistribution, k: float) -> list[tuple[float, float, float]]:
+    """``(start, peak, end)`` in ln r outside which ``r^(k+1) n(r)`` is < e^-40 of its peak."""
+    if isinstance(dist, MultiModal):
+        return [w for mode in dist.modes for w in _windows_ln_r(mode, k)]
+    if isinstance(dist, (Gamma, ModifiedGamma)):
+        # In t = ln r the integrand is ~ exp(a t - e^t / scale), a = shape + k + 1,
+        # i.e. exp(a (d + 1 - e^d)) times its peak at distance d from the peak:
+        # exponential decay below, Gaussian of width 1/sqrt(a) near the peak for
+        # large a, double-exponential decay above.
+        a = dist.shape + k + 1.0
+        peak = math.log(dist.scale_um * a)
+        return [(peak - 40.0 / a - 12.0 / math.sqrt(a), peak, peak + 4.0)]
+    assert isinstance(dist, (LogNormal, ModifiedLogNormal))
+    # A Gaussian in t of width sigma, centred at mu + (k + 1) sigma^2.
+    peak = math.log(dist.median_radius_um) + (k + 1.0) * dist.sigma**2
+    return [(peak - 9.0 * dist.sigma, peak, peak + 9.0 * dist.sigma)]
+
+
+def quad_moment(
+    dist: SizeDistribution, k: float, lo_um: float = 0.0, hi_um: float = math.inf
+) -> float:
+    """``integral_lo^hi r^k n(r) dr`` by adaptive quadrature in ln r."""
+    windows = _windows_ln_r(dist, k)
+    t_lo = min(w[0] for w in windows) if lo_um <= 0.0 else math.log(lo_um)
+    t_hi = max(w[2] for w in windows) if math.isinf(hi_um) else math.log(hi_um)
+    if t_hi <= t_lo:
+        return 0.0
+
+    def integrand(t: float) -> float:
+        r = math.exp(t)
+        return float(r ** (k + 1.0)) * float(dist.pdf(r))
+
+    inner = sorted({p for w in windows for p in w if t_lo < p < t_hi})
+    value, _ = integrate.quad(
+        integrand, t_lo, t_hi, points=inner or None, limit=500, epsabs=0.0, epsrel=1e-12
+    )
+    return float(value)
+
+
+# ----------------------------------------------------------------- strategies
+
+modified_gammas = st.builds(
+    ModifiedGamma,
+    r_eff_um=st.floats(0.05, 20.0),
+    # v_eff <= 1/3 keeps shape >= 1 (no singularity at r = 0 for quad);
+    # the singular range is tested separately.
+    v_eff=st.floats(0.01, 0.33),
+)
+gammas = st.builds(Gamma, shape=st.floats(1.0, 100.0), scale_um=st.floats(0.005, 5.0))
+log_normals = st.builds(
+    LogNormal, median_radius_um=st.floats(0.01, 10.0), sigma=st.floats(0.05, 1.2)
+)
+modified_log_normals = st.builds(
+    ModifiedLogNormal, r_eff_um=st.floats(0.02, 20.0), v_eff=st.floats(0.01, 1.0)
+)
+continuous = st.one_of(modified_gammas, gammas, log_normals, modified_log_normals)
+
+
+# --------------------------------------------------------- density, moments
+
+
+@FAST
+@given(dist=continuous)
+def test_pdf_is_normalized(dist: SizeDistribution) -> None:
+    assert quad_moment(dist, 0.0) == pytest.approx(1.0, rel=1e-9)
+
+
+@FAST
+@given(dist=continuous)
+def test_moments_match_quadrature(dist: SizeDistribution) -> None:
+    for k in MOMENT_ORDERS:
+        assert dist.moment(k) == pytest.approx(quad_moment(dist, k), rel=1e-8), k
+
+
+@pytest.mark.parametrize("k", [-0.1, 0.0, 0.5, 1.0, 2.0, 3.0, 6.0])
+def test_moments_for_singular_modified_gamma(k: float) -> None:
+    # v_eff = 0.45: shape = 2/9 < 1, n(r) ~ r^(-7/9) at r -> 0.  quad's
+    # algebraic weight takes the factor r^(shape + k - 1) exactly; what is left,
+    # n(r) r^(1 - shape), is smooth.
+    dist = ModifiedGamma(r_eff_um=1.0, v_eff=0.45)
+
+    def smooth(r: float) -> float:
+        r = max(r, 1e-300)  # n(0) is defined as 0; the limit of n(r) r^(1 - shape) is not
+        return float(dist.pdf(r)) * float(r ** (1.0 - dist.shape))
+
+    near, _ = integrate.quad(
+        smooth,
+        0.0,
+        dist.scale_um,
+        weight="alg",
+        wvar=(dist.shape + k - 1.0, 0.0),
+        epsabs=0.0,
+        epsrel=1e-12,
+    )
+    far, _ = integrate.quad(
+        lambda r: r**k * float(dist.pdf(r)), dist.scale_um, math.inf, epsabs=0.0, epsrel=1e-12
+    )
+    assert dist.moment(k) == pytest.approx(near + far, rel=1e-8)
+
+
+def test_modified_gamma_is_hansen_travis_formula() -> None:
+    # n(r) ~ r^((1 - 3b)/b) exp(-r/(a b)): the ratio to the unnormalized form is constant.
+    a, b = 1.6, 0.2
+    r = np.geomspace(0.01, 20.0, 50)
+    ratio = ModifiedGamma(r_eff_um=a, v_eff=b).pdf(r) / (
+        r ** ((1 - 3 * b) / b) * np.exp(-r / (a * b))
+    )
+    np.testing.assert_allclose(ratio, ratio[0], rtol=1e-12)
+
+
+def test_seed_mars_dust_is_gamma_3_032() -> None:
+    modified = ModifiedGamma(r_eff_um=1.6, v_eff=0.2)
+    plain = Gamma(shape=3.0, scale_um=0.32)
+    assert modified.shape == pytest.approx(3.0, rel=1e-14)
+    assert modified.scale_um == pytest.approx(0.32, rel=1e-14)
+    r = np.linspace(0.0, 15.0, 301)
+    np.testing.assert_allclose(modified.pdf(r), plain.pdf(r), rtol=1e-13, atol=0.0)
+    for k in MOMENT_ORDERS:
+        assert modified.moment(k) == pytest.approx(plain.moment(k), rel=1e-13)
+
+
+def test_log_normal_closed_form() -> None:
+    dist = LogNormal(median_radius_um=0.5, sigma=0.4)
+    r = np.array([0.1, 0.5, 2.0])
+    expected = np.exp(-((np.log(r / 0.5)) ** 2) / (2 * 0.4**2)) / (np.sqrt(2 * np.pi) * 0.4 * r)
+    np.testing.assert_allclose(dist.pdf(r), expected, rtol=1e-13)
+    assert dist.moment(2.5) == pytest.approx(0.5**2.5 * math.exp(2.5**2 * 0.4**2 / 2), rel=1e-14)
+    assert dist.geometric_std == pytest.approx(math.exp(0.4))
+
+
+def test_modified_log_normal_is_cosmoscout_log_normal() -> None:
+    r_eff, v_eff = 1.4, 0.35
+    s2 = math.log(1.0 + v_eff)
+    mu = math.log(r_eff) - 2.5 * s2
+    dist = ModifiedLogNormal(r_eff_um=r_eff, v_eff=v_eff)
+    plain = LogNormal(median_radius_um=math.exp(mu), sigma=math.sqrt(s2))
+    same = dist.as_log_normal()
+    assert same.median_radius_um == pytest.approx(plain.median_radius_um, rel=1e-15)
+    assert same.sigma == pytest.approx(plain.sigma, rel=1e-15)
+    r = np.geomspace(0.01, 30.0, 40)
+    np.testing.assert_allclose(dist.pdf(r), plain.pdf(r), rtol=1e-13)
+
+
+@given(
+    r_eff=st.floats(0.01, 50.0),
+    v_eff=st.floats(1e-3, 0.4999),
+    cls=st.sampled_from([ModifiedGamma, ModifiedLogNormal]),
+)
+def test_effective_radius_and_variance_from_moments_are_the_inputs(
+    r_eff: float, v_eff: float, cls: type[ModifiedGamma] | type[ModifiedLogNormal]
+) -> None:
+    dist = cls(r_eff_um=r_eff, v_eff=v_eff)
+    m2, m3, m4 = dist.moment(2), dist.moment(3), dist.moment(4)
+    assert m3 / m2 == pytest.approx(r_eff, rel=1e-12)
+    # v_eff = m4 m2 / m3^2 - 1 cancels: the ratio carries ~1e-15 of rounding,
+    # relative to v_eff that is ~1e-15 / v_eff, so compare the ratio itself.
+    assert m4 * m2 / m3**2 == pytest.approx(1.0 + v_eff, rel=1e-12)
+    assert dist.r_eff_um == r_eff and dist.v_eff == v_eff
+
+
+@FAST
+@given(dist=st.one_of(gammas, log_normals))
+def test_closed_form_r_eff_v_eff_agree_with_moments(dist: SizeDistribution) -> None:
+    m2, m3, m4 = dist.moment(2), dist.moment(3), dist.moment(4)
+    assert dist.r_eff_um == pytest.approx(m3 / m2, rel=1e-12)
+    assert 1.0 + dist.v_eff == pytest.approx(m4 * m2 / m3**2, rel=1e-12)
+
+
+def test_derived_radii_and_cross_sections() -> None:
+    dist = Gamma(shape=3.0, scale_um=0.32)
+    # <r^k> = scale^k (shape)(shape+1)...(shape+k-1) for integer k.
+    m1, m2, m3 = 0.32 * 3, 0.32**2 * 3 * 4, 0.32**3 * 3 * 4 * 5
+    assert dist.mean_radius_um == pytest.approx(m1, rel=1e-14)
+    assert dist.area_mean_radius_um == pytest.approx(math.sqrt(m2), rel=1e-14)
+    assert dist.volume_mean_radius_um == pytest.approx(m3 ** (1 / 3), rel=1e-14)
+    assert dist.mean_cross_section_um2 == pytest.approx(math.pi * m2, rel=1e-14)
+    assert dist.mean_volume_um3 == pytest.approx(4 / 3 * math.pi * m3, rel=1e-14)
+    # Brief, section 5: the number-mean geometric cross-section of this dust is 3.86 um^2.
+    assert dist.mean_cross_section_um2 == pytest.approx(3.86, abs=0.005)
+
+
+def test_pdf_shapes_and_edges() -> None:
+    dist = ModifiedGamma(r_eff_um=1.6, v_eff=0.2)
+    assert isinstance(dist.pdf(1.0), float)
+    assert np.shape(dist.pdf(np.ones((2, 3)))) == (2, 3)
+    for d in (
+        dist,
+        ModifiedGamma(r_eff_um=1.0, v_eff=0.45),
+        Gamma(shape=1.0, scale_um=1.0),
+        LogNormal(median_radius_um=1.0, sigma=0.3),
+    ):
+        np.testing.assert_array_equal(d.pdf([-1.0, 0.0]), [0.0, 0.0])
+        assert math.isnan(d.pdf(math.nan))
+
+
+# ------------------------------------------------------------- tail fractions
+
+
+@FAST
+@given(dist=continuous, factor=st.floats(0.1, 6.0), k=st.sampled_from([0, 2, 3, 6]))
+def test_tail_fractions_match_quadrature(dist: SizeDistribution, factor: float, k: int) -> None:
+    r = factor * dist.r_eff_um
+    total = dist.moment(k)
+    above = quad_moment(dist, k, lo_um=r) / total
+    below = quad_moment(dist, k, hi_um=r) / total
+    assert dist.moment_tail_fraction(k, r, upper=True) == pytest.approx(above, rel=1e-7, abs=1e-12)
+    assert dist.moment_tail_fraction(k, r, upper=False) == pytest.approx(below, rel=1e-7, abs=1e-12)
+
+
+def test_tail_fraction_edges_and_shapes() -> None:
+    for dist in (Gamma(shape=3.0, scale_um=0.32), LogNormal(median_radius_um=1.0, sigma=0.5)):
+        out = dist.moment_tail_fraction(2, [[-1.0, 0.0, np.inf]], upper=True)
+        assert np.shape(out) == (1, 3)
+        np.testing.assert_array_equal(out, [[1.0, 1.0, 0.0]])
+        np.testing.assert_array_equal(
+            dist.moment_tail_fraction(2, [-1.0, 0.0, np.inf], upper=False), [0.0, 0.0, 1.0]
+        )
+        assert math.isnan(dist.moment_tail_fraction(0, math.nan, upper=True))
+        r = np.geomspace(0.05, 10, 7)
+        np.testing.assert_allclose(
+            dist.moment_tail_fraction(3, r, upper=True)
+            + dist.moment_tail_fraction(3, r, upper=False),
+            1.0,
+            rtol=1e-14,
+        )
+
+
+@FAST
+@given(dist=continuous, factor=st.floats(0.1, 6.0))
+def test_tail_fractions_are_ordered_in_moment(dist: SizeDistribution, factor: float) -> None:
+    # Higher moments put more weight at large radii (likelihood-ratio ordering):
+    # this is what makes radius_bounds_um valid for every order in between.
+    r = factor * dist.r_eff_um
+    above = [dist.moment_tail_fraction(k, r, upper=True) for k in (0, 1, 2, 3, 4, 6)]
+    assert all(a <= b * (1 + 1e-12) + 1e-300 for a, b in itertools.pairwise(above))
+
+
+# ------------------------------------------------------------------- bounds
+
+
+def _check_bounds(dist: SizeDistribution, eps: float, lower: float, upper: float) -> None:
+    r_lo, r_hi = dist.radius_bounds_um(tail_fraction=eps, lower_moment=lower, upper_moment=upper)
+    assert 0.0 < r_lo < r_hi
+    limit = eps * (1.0 + 1e-6)
+    for p in {lower, 0.5 * (lower + upper), upper}:
+        total = dist.moment(p)
+        assert quad_moment(dist, p, hi_um=r_lo) / total <= limit, ("below", p)
+        assert quad_moment(dist, p, lo_um=r_hi) / total <= limit, ("above", p)
+
+
+@FAST
+@given(
+    dist=continuous,
+    eps=st.sampled_from([0.1, 1e-3, 1e-6, 1e-9]),
+    orders=st.sampled_from([(0.0, 6.0), (0.0, 2.0), (2.0, 3.0), (3.0, 3.0)]),
+)
+def test_radius_bounds_bound_the_tails(
+    dist: SizeDistribution, eps: float, orders: tuple[float, float]
+) -> None:
+    _check_bounds(dist, eps, *orders)
+
+
+@pytest.mark.parametrize("eps", [1e-2, 1e-4, 1e-8])
+def test_radius_bounds_are_exact_quantiles_for_one_mode(eps: float) -> None:
+    for dist in (ModifiedGamma(r_eff_um=1.6, v_eff=0.2), MARS_COARSE):
+        r_lo, r_hi = dist.radius_bounds_um(tail_fraction=eps)
+        assert dist.moment_tail_fraction(0, r_lo, upper=False) == pytest.approx(eps, rel=1e-9)
+        assert dist.moment_tail_fraction(6, r_hi, upper=True) == pytest.approx(eps, rel=1e-9)
+        assert quad_moment(dist, 0, hi_um=r_lo) == pytest.approx(eps, rel=1e-7)
+
+
+@pytest.mark.parametrize("eps", [1e-2, 1e-6])
+def test_radius_bounds_of_the_cosmoscout_mixture(eps: float) -> None:
+    mars = cosmoscout_mars()
+    _check_bounds(mars, eps, 0.0, 6.0)
+    r_lo, r_hi = mars.radius_bounds_um(tail_fraction=eps)
+    assert r_lo == MARS_FINE.radius_bounds_um(tail_fraction=eps)[0]
+    assert r_hi == MARS_COARSE.radius_bounds_um(tail_fraction=eps)[1]
+
+
+# ----------------------------------------------------------------- mixtures
+
+
+@FAST
+@given(dist=continuous)
+def test_single_mode_mixture_equals_the_mode(dist: SizeDistribution) -> None:
+    mix = MultiModal(modes=(dist,), relative_number_densities=(3.7,))
+    assert mix.number_fractions == (1.0,)
+    r = np.geomspace(0.01, 50.0, 25) * dist.r_eff_um
+    np.testing.assert_allclose(mix.pdf(r), dist.pdf(r), rtol=1e-15)
+    for k in (0, *MOMENT_ORDERS):
+        assert mix.moment(k) == pytest.approx(dist.moment(k), rel=1e-15)
+        np.testing.assert_allclose(
+            mix.moment_tail_fraction(k, r, upper=True),
+            dist.moment_tail_fraction(k, r, upper=True),
+            rtol=1e-14,
+        )
+    assert mix.r_eff_um == pytest.approx(dist.r_eff_um, rel=1e-13)
+    assert mix.v_eff == pytest.approx(dist.v_eff, rel=1e-10)
+    assert mix.radius_bounds_um(tail_fraction=1e-5) == dist.radius_bounds_um(tail_fraction=1e-5)
+
+
+def test_mixture_is_the_weighted_sum_of_its_modes() -> None:
+    modes = (
+        ModifiedGamma(r_eff_um=0.3, v_eff=0.1),
+        LogNormal(median_radius_um=2.0, sigma=0.3),
+        Gamma(shape=5.0, scale_um=0.1),
+    )
+    mix = MultiModal(modes=modes, relative_number_densities=[2.0, 1.0, 1.0])
+    w = (0.5, 0.25, 0.25)
+    assert mix.number_fractions == pytest.approx(w, rel=1e-15)
+    r = np.geomspace(0.01, 20.0, 30)
+    np.testing.assert_allclose(
+        mix.pdf(r), sum(wi * m.pdf(r) for wi, m in zip(w, modes, strict=True)), rtol=1e-14
+    )
+    for k in (0.5, *MOMENT_ORDERS):
+        expected = sum(wi * m.moment(k) for wi, m in zip(w, modes, strict=True))
+        assert mix.moment(k) == pytest.approx(expected, rel=1e-14)
+        assert mix.moment(k) == pytest.approx(quad_moment(mix, k), rel=1e-8)
+        # The tail fraction is the moment-weighted mean of the modes' fractions.
+        c = np.array([wi * m.moment(k) for wi, m in zip(w, modes, strict=True)])
+        tails = np.array([m.moment_tail_fraction(k, r, upper=False) for m in modes])
+        np.testing.assert_allclose(
+            mix.moment_tail_fraction(k, r, upper=False),
+            c @ tails / c.sum(),
+            rtol=1e-13,
+            atol=1e-300,
+        )
+
+
+def test_cosmoscout_mars_mixture() -> None:
+    mars = cosmoscout_mars()
+    assert mars.number_fractions == pytest.approx((1000 / 1001, 1 / 1001), rel=1e-15)
+    assert quad_moment(mars, 0.0) == pytest.approx(1.0, rel=1e-9)
+    for k in MOMENT_ORDERS:
+        assert mars.moment(k) == pytest.approx(quad_moment(mars, k), rel=1e-8)
+    # In number the fine mode dominates; in cross-section the coarse one does.
+    assert mars.mean_radius_um < 0.05
+    assert 0.5 < mars.r_eff_um < 1.4
+    d = mars.to_dict()
+    assert d["model"] == "multimodal" and "CosmoScout" in d["citation"]
+    assert [m["parameters"] for m in d["modes"]] == [
+        {"r_eff_um": 0.04, "v_eff": 0.1},
+        {"r_eff_um": 1.4, "v_eff": 0.35},
+    ]
+    assert d["parameters"]["relative_number_densities"] == [1000.0, 1.0]
+
+
+# ------------------------------------------------------------- monodisperse
+
+
+def test_monodisperse() -> None:
+    dist = Monodisperse(radius_um=0.8)
+    assert dist.is_monodisperse and not dist.has_density
+    with pytest.raises(TypeError, match="no probability density"):
+        dist.pdf(0.8)
+    assert dist.moment(3) == pytest.approx(0.8**3)
+    assert dist.r_eff_um == 0.8 and dist.v_eff == 0.0
+    np.testing.assert_array_equal(
+        dist.moment_tail_fraction(2, [0.5, 0.8, 1.0], upper=True), [1.0, 0.0, 0.0]
+    )
+    np.testing.assert_array_equal(
+        dist.moment_tail_fraction(2, [0.5, 0.8, 1.0], upper=False), [0.0, 1.0, 1.0]
+    )
+    assert dist.radius_bounds_um(tail_fraction=1e-3) == (0.8, 0.8)
+
+    mix = MultiModal(modes=(dist, Gamma(shape=2.0, scale_um=1.0)), relative_number_densities=(1, 3))
+    assert not mix.has_density and not mix.is_monodisperse
+    assert mix.moment(2) == pytest.approx(0.25 * 0.64 + 0.75 * 6.0, rel=1e-14)
+    with pytest.raises(TypeError, match="no probability density"):
+        mix.pdf(1.0)
+    two = MultiModal(modes=(dist, dist), relative_number_densities=(1, 2))
+    assert two.is_monodisperse
+
+
+# -------------------------------------------------------------- provenance
+
+
+def test_to_dict_and_immutability() -> None:
+    dist = ModifiedGamma(r_eff_um=1.6, v_eff=0.2)
+    d = dist.to_dict()
+    assert d["model"] == "modified_gamma"
+    assert "doi:10.1007/BF00168069" in d["citation"] == dist.citation
+    assert d["parameters"] == {"r_eff_um": 1.6, "v_eff": 0.2}
+    assert d["derived"] == {"r_eff_um": 1.6, "v_eff": 0.2}
+    assert LogNormal(median_radius_um=1.0, sigma=0.2).to_dict()["parameters"] == {
+        "median_radius_um": 1.0,
+        "sigma": 0.2,
+    }
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        dist.v_eff = 0.3  # type: ignore[misc]
+    with pytest.raises(TypeError):
+        ModifiedGamma(1.6, 0.2)  # type: ignore[call-arg]  # keyword-only
+    assert dist == ModifiedGamma(r_eff_um=1.6, v_eff=0.2)
+    assert len({dist, ModifiedGamma(r_eff_um=1.6, v_eff=0.2), cosmoscout_mars()}) == 2
+    assert "r_eff_um=1.6" in repr(dist)
+
+
+# --------------------------------------------------------------- bad input
+
+BAD_CONSTRUCTIONS: list[tuple[Callable[[], object], str]] = [
+    (lambda: ModifiedGamma(r_eff_um=0.0, v_eff=0.2), r"r_eff_um must be > 0 um; got 0\.0"),
+    (lambda: ModifiedGamma(r_eff_um=-1.0, v_eff=0.2), r"r_eff_um must be > 0"),
+    (
+        lambda: ModifiedGamma(r_eff_um=1.6, v_eff=0.0),
+        r"v_eff must be in the open interval \(0\.0, 0\.5\); got 0\.0",
+    ),
+    (lambda: ModifiedGamma(r_eff_um=1.6, v_eff=0.5), r"v_eff .*\(0\.0, 0\.5\).*0\.5"),
+    (lambda: ModifiedGamma(r_eff_um=1.6, v_eff=-0.1), r"v_eff .*\(0\.0, 0\.5\)"),
+    (
+        lambda: ModifiedGamma(r_eff_um=math.nan, v_eff=0.2),
+        r"r_eff_um must be a finite real number; got nan",
+    ),
+    (
+        lambda: ModifiedGamma(r_eff_um=1.6, v_eff=math.inf),
+        r"v_eff must be a finite real number; got inf",
+    ),
+    (
+        lambda: ModifiedGamma(r_eff_um="big", v_eff=0.2),  # type: ignore[arg-type]
+        r"r_eff_um must be a finite real number; got 'big'",
+    ),
+    (lambda: Gamma(shape=0.0, scale_um=1.0), r"shape must be > 0; got 0\.0"),
+    (lambda: Gamma(shape=-2.0, scale_um=1.0), r"shape must be > 0; got -2\.0"),
+    (lambda: Gamma(shape=2.0, scale_um=math.nan), r"scale_um must be a finite real number"),
+    (lambda: LogNormal(median_radius_um=1.0, sigma=0.0), r"sigma must be > 0; got 0\.0"),
+    (lambda: LogNormal(median_radius_um=-1.0, sigma=0.3), r"median_radius_um must be > 0 um"),
+    (lambda: ModifiedLogNormal(r_eff_um=1.0, v_eff=0.0), r"v_eff must be > 0; got 0\.0"),
+    (
+        lambda: ModifiedLogNormal(r_eff_um=math.inf, v_eff=0.1),
+        r"r_eff_um must be a finite real number",
+    ),
+    (lambda: Monodisperse(radius_um=0.0), r"radius_um must be > 0 um; got 0\.0"),
+    (
+        lambda: MultiModal(modes=(), relative_number_densities=()),
+        r"modes must contain at least one",
+    ),
+    (
+        lambda: MultiModal(modes=(MARS_FINE, MARS_COARSE), relative_number_densities=(1.0, -1.0)),
+        r"relative_number_densities must all be > 0; got \[1\.0, -1\.0\]",
+    ),
+    (
+        lambda: MultiModal(modes=(MARS_FINE, MARS_COARSE), relative_number_densities=(1.0, 0.0)),
+        r"relative_number_densities must all be > 0",
+    ),
+    (
+        lambda: MultiModal(modes=(MARS_FINE,), relative_number_densities=(math.nan,)),
+        r"relative_number_densities must be finite",
+    ),
+    (
+        lambda: MultiModal(modes=(MARS_FINE,), relative_number_densities=(math.inf,)),
+        r"relative_number_densities must be finite",
+    ),
+    (
+        lambda: MultiModal(modes=(MARS_FINE, MARS_COARSE), relative_number_densities=(1.0,)),
+        r"relative_number_densities must have one entry per mode \(2 modes\); got 1",
+    ),
+]
+
+
+@pytest.mark.parametrize(("build", "message"), BAD_CONSTRUCTIONS)
+def test_bad_parameters_raise(build: Callable[[], object], message: str) -> None:
+    with pytest.raises(ValueError, match=message):
+        build()
+
+
+def test_bad_modes_raise_type_error() -> None:
+    with pytest.raises(TypeError, match=r"modes\[1\] must be a SizeDistribution"):
+        MultiModal(modes=(MARS_FINE, 1.0), relative_number_densities=(1.0, 1.0))  # type: ignore[arg-type]
+    with pytest.raises(TypeError, match="modes must be a sequence"):
+        MultiModal(modes=MARS_FINE, relative_number_densities=(1.0,))  # type: ignore[arg-type]
+
+
+def test_bad_method_arguments_raise() -> None:
+    dist = ModifiedGamma(r_eff_um=1.0, v_eff=0.45)  # shape = 2/9
+    with pytest.raises(ValueError, match=r"k must be > -shape = -0\.222.*; got -0\.5"):
+        dist.moment(-0.5)
+    with pytest.raises(ValueError, match="k must be a finite real number; got nan"):
+        dist.moment(math.nan)
+    with pytest.raises(ValueError, match=r"k must be > -shape"):
+        dist.moment_tail_fraction(-1.0, 1.0, upper=True)
+    with pytest.raises(ValueError, match=r"k must be > -shape"):
+        dist.radius_bounds_um(tail_fraction=1e-3, lower_moment=-1.0)
+    for eps in (0.0, 0.5, -1e-3, math.nan):
+        with pytest.raises(ValueError, match=r"tail_fraction must .*"):
+            dist.radius_bounds_um(tail_fraction=eps)
+    with pytest.raises(
+        ValueError, match=r"tail_fraction must be in the open interval \(0\.0, 0\.5\)"
+    ):
+        dist.radius_bounds_um(tail_fraction=0.5)
+    with pytest.raises(ValueError, match="lower_moment must be <= upper_moment"):
+        dist.radius_bounds_um(tail_fraction=1e-3, lower_moment=3.0, upper_moment=2.0)
+    with pytest.raises(TypeError):
+        dist.moment_tail_fraction(2, 1.0, True)  # type: ignore[call-arg]  # keyword-only
