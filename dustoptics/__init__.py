@@ -1,2 +1,76 @@
-"""dustoptics."""
-__version__ = "0.1.0"
+"""dustoptics: exact, reproducible optics of atmospheric dust for renderers.
+
+The data flow reads one way: materials and mixing rules give a refractive index
+m = n + i k; a size distribution gives n(r); :mod:`dustoptics.quadrature` places
+deterministic radius nodes; :mod:`dustoptics.mie` computes the spheres; and
+:func:`dustoptics.optics.compute_optics` averages them into a converged table
+over wavelength and scattering angle.
+
+>>> import dustoptics as do
+>>> dist = do.ModifiedGamma(r_eff_um=1.6, v_eff=0.2)
+>>> t = do.compute_optics(do.mars_dust(), dist)     # doctest: +SKIP
+"""
+
+from importlib.metadata import PackageNotFoundError, version as _version
+
+from dustoptics import materials, mie, mixing, optics, quadrature, sizedist
+from dustoptics.materials import (
+    ConstantIndex,
+    GasFormulaIndex,
+    OrientationAverage,
+    RefractiveIndex,
+    TabulatedIndex,
+    get_material,
+    list_materials,
+    read_index_csv,
+)
+from dustoptics.mixing import Mixture, bruggeman, mars_dust, maxwell_garnett
+from dustoptics.optics import ConvergenceWarning, OpticsTable, compute_optics
+from dustoptics.quadrature import QuadratureSettings
+from dustoptics.sizedist import (
+    Gamma,
+    LogNormal,
+    ModifiedGamma,
+    ModifiedLogNormal,
+    Monodisperse,
+    MultiModal,
+    SizeDistribution,
+)
+
+try:
+    __version__ = _version("dustoptics")
+except PackageNotFoundError:  # running from a source tree that was never installed
+    __version__ = "0.0.0+unknown"
+
+__all__ = [
+    "materials",
+    "mie",
+    "mixing",
+    "optics",
+    "quadrature",
+    "sizedist",
+    "ConstantIndex",
+    "GasFormulaIndex",
+    "OrientationAverage",
+    "RefractiveIndex",
+    "TabulatedIndex",
+    "get_material",
+    "list_materials",
+    "read_index_csv",
+    "Mixture",
+    "bruggeman",
+    "mars_dust",
+    "maxwell_garnett",
+    "ConvergenceWarning",
+    "OpticsTable",
+    "compute_optics",
+    "QuadratureSettings",
+    "Gamma",
+    "LogNormal",
+    "ModifiedGamma",
+    "ModifiedLogNormal",
+    "Monodisperse",
+    "MultiModal",
+    "SizeDistribution",
+    "__version__",
+]

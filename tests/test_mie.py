@@ -1,0 +1,260 @@
+"""Single-sphere Mie results against published benchmarks, through the public API.
+
+Every benchmark value is compared to the digits it was published with: the
+tolerance is half a unit in the last printed digit (plus 1e-12 relative for
+floating-point round-off), found from the value's own text.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+from decimal import Decimal
+
+import miepython
+import numpy as np
+import pytest
+
+import dustoptics as do
+from dustoptics.mie import single_sphere
+from tests._shared import shared_path
+
+BENCH = ("reference-data", "mie-benchmarks")
+WAVELENGTH_NM = 1000.0  # any wavelength; radius chosen to give the benchmark's x
+
+
+def half_unit_last_digit(text: str) -> float:
+    """Half a unit in the last printed digit of a decimal number written as text."""
+    exponent = Decimal(text.strip()).as_tuple().exponent
+    return 0.5 * 10.0 ** int(exponent)
+
+
+def half_unit_significant(value: float, digits: int) -> float:
+    """Half a unit in the ``digits``-th significant figure of ``value``."""
+    return 0.5 * 10.0 ** (np.floor(np.log10(abs(value))) - (digits - 1)) if value else 0.0
+
+
+def assert_published(computed: float, text: str, what: str, *, significant: int | None = None) -> None:
+    """|computed - published| within half a unit of the last digit that carries
+    information: the last printed one, or the last of ``significant`` figures
+    when the source states that precision (MIEV0: 7; a printed "50102220.0"
+    carries no information in its trailing zeros)."""
+    published = float(text)
+    tol = half_unit_last_digit(text)
+    if significant is not None:
+        tol = max(tol, half_unit_significant(published, significant))
+    tol += 1e-12 * abs(published)
+    assert abs(computed - published) <= tol, f"{what}: computed {computed!r}, published {text}"
+
+
+def read_csv(name: str) -> list[dict[str, str]]:
+    path = shared_path(*BENCH, name)
+    with open(path, newline="") as fh:
+        return list(csv.DictReader(row for row in fh if not row.startswith("#")))
+
+
+def monodisperse(m: complex, x: float, theta_deg: np.ndarray | None = None) -> do.OpticsTable:
+    radius_um = x * WAVELENGTH_NM * 1e-3 / (2.0 * np.pi)
+    theta = np.array([0.0, 180.0]) if theta_deg is None else theta_deg
+    return do.compute_optics(m, do.Monodisperse(radius_um=radius_um), [WAVELENGTH_NM], theta)
+
+
+def miev0_cases() -> list[dict[str, str]]:
+    rows = read_csv("miev0_wiscombe_efficiencies.csv")
+    return [r for r in rows if r["perfect_conductor"] == "0"]
+
+
+def bessel_closed_form(m: complex, x: float, n_terms: int = 12) -> tuple[float, float, float]:
+    """Q_ext, Q_sca, g Q_sca from scipy's spherical Bessel functions (BH Eq. 4.53).
+
+    An independent route for small spheres, where few terms are needed and the
+    closed forms are accurate.
+    """
+    from scipy.special import spherical_jn, spherical_yn
+
+    n = np.arange(1, n_terms + 1)
+    z = m * x
+
+    def psi(t: complex) -> np.ndarray:
+        return t * spherical_jn(n, t)
+
+    def dpsi(t: complex) -> np.ndarray:
+        return spherical_jn(n, t) + t * spherical_jn(n, t, derivative=True)
+
+    h = spherical_jn(n, x) + 1j * spherical_yn(n, x)
+    dh = h + x * (spherical_jn(n, x, derivative=True) + 1j * spherical_yn(n, x, derivative=True))
+    xi = x * h
+    a = (m * psi(z) * dpsi(x) - psi(x) * dpsi(z)) / (m * psi(z) * dh - xi * dpsi(z))
+    b = (psi(z) * dpsi(x) - m * psi(x) * dpsi(z)) / (psi(z) * dh - m * xi * dpsi(z))
+    c = 2.0 / x**2
+    qext = c * np.sum((2 * n + 1) * (a + b).real)
+    qsca = c * np.sum((2 * n + 1) * (abs(a) ** 2 + abs(b) ** 2))
+    gq = 2 * c * (
+        np.sum(n[:-1] * (n[:-1] + 2) / (n[:-1] + 1) * (a[:-1] * np.conj(a[1:]) + b[:-1] * np.conj(b[1:])).real)
+        + np.sum((2 * n + 1) / (n * (n + 1)) * (a * np.conj(b)).real)
+    )
+    return float(qext), float(qsca), float(gq)
+
+
+# MIEV0's printed answers for its four x ~ 0.1 cases (5, 6, 12, 13) are good to
+# about 2e-6 relative only: cases 5 and 12 come from its small-particle
+# expansion, and near x = 0.1 its upward Riccati-Bessel recurrence loses digits.
+# The closed form above agrees with dustoptics to 1e-12 there (tested), and with
+# MIEV0 to 2e-6; every larger case is compared to the digits printed.
+MIEV0_SMALL_X = 0.2
+
+
+def test_miev0_efficiencies_through_public_api() -> None:
+    """Wiscombe's MIEV0 test cases 5-19 (m = n - ik in the file: use k = |m_im|).
+
+    Cases 1-4 are perfect conductors (m -> infinity), which dustoptics does not model.
+    """
+    cases = miev0_cases()
+    assert len(cases) == 15
+    for row in cases:
+        m = complex(float(row["m_re"]), abs(float(row["m_im"])))
+        x = float(row["x"])
+        t = monodisperse(m, x)
+        got = (t.qext[0], t.qsca[0], t.g[0] * t.qsca[0])
+        label = f"MIEV0 case {row['case']} (x={row['x']}, m={m})"
+        if x < MIEV0_SMALL_X:
+            # g Q_sca ~ x^6 is a difference of nearly equal terms: 1e-10 leaves
+            # room for the closed form's own round-off.
+            np.testing.assert_allclose(got, bessel_closed_form(m, x), rtol=1e-10, err_msg=label)
+            published = [float(row[k]) for k in ("Qext", "Qsca", "GQsc")]
+            np.testing.assert_allclose(got, published, rtol=2e-6, err_msg=label)
+            continue
+        assert_published(got[0], row["Qext"], label + " Qext", significant=7)
+        assert_published(got[1], row["Qsca"], label + " Qsca", significant=7)
+        assert_published(got[2], row["GQsc"], label + " g*Qsca", significant=7)
+
+
+def test_miev0_amplitudes() -> None:
+    """Complex S1, S2 at 0..180 deg; the file's n - ik convention gives conjugates.
+
+    Values are stored to 7 significant figures, and the small components of an
+    amplitude (e.g. the imaginary part at a zero crossing) carry only the
+    precision of its magnitude: the test allows 1e-6 of max(|S1|, |S2|) at that
+    angle.  One value is exempt: case 11 (x = 10^4, m = 1.33 - 1e-5 i) at 180
+    deg, where MIEV0's notes flag S near 180 deg as precision-sensitive; there
+    its printed S differs from ours by 4.4e-6 relative while miepython agrees
+    with ours to 1e-9, so that point is checked against miepython.
+    """
+    rows = [r for r in read_csv("miev0_wiscombe_amplitudes.csv") if float(r["m_re"]) > 0]
+    assert len(rows) == 15 * 7
+    for row in rows:
+        m = complex(float(row["m_re"]), abs(float(row["m_im"])))
+        x = float(row["x"])
+        mu = np.cos(np.deg2rad(float(row["theta_deg"])))
+        r = single_sphere(m=m, x=x, mu=np.array([mu]))
+        s1 = np.conj(r.s1[0])
+        s2 = np.conj(r.s2[0])
+        label = f"case {row['case']} theta={row['theta_deg']}"
+        ref1 = complex(float(row["S1_re"]), float(row["S1_im"]))
+        ref2 = complex(float(row["S2_re"]), float(row["S2_im"]))
+        scale = max(abs(ref1), abs(ref2))
+        if row["case"] == "11" and row["theta_deg"] == "180":
+            mp1, mp2 = miepython.S1_S2(np.conj(m), x, np.array([mu]), norm="wiscombe")
+            assert abs(s1 - mp1[0]) <= 1e-8 * scale and abs(s2 - mp2[0]) <= 1e-8 * scale, label
+            assert abs(s1 - ref1) <= 5e-6 * scale, label
+            continue
+        tol = (2e-6 if x < MIEV0_SMALL_X else 1e-6) * scale
+        assert abs(s1 - ref1) <= tol, f"{label} S1: {s1} vs {ref1}"
+        assert abs(s2 - ref2) <= tol, f"{label} S2: {s2} vs {ref2}"
+
+
+def test_wiscombe1979_efficiencies() -> None:
+    for row in read_csv("wiscombe1979_ncar_efficiencies.csv"):
+        m = complex(float(row["n"]), float(row["k"]))
+        t = monodisperse(m, float(row["x"]))
+        label = f"Wiscombe 1979 {row['case']}"
+        assert_published(t.qext[0], row["Qext"], label + " Qext")
+        assert_published(t.qsca[0], row["Qsca"], label + " Qsca")
+        assert_published(t.cabs_um2[0] / t.mean_geometric_cross_section_um2, row["Qabs"], label + " Qabs")
+        assert_published(t.g[0], row["g"], label + " g")
+
+
+def test_wiscombe1979_angular_intensity() -> None:
+    """S11 = (|S1|^2 + |S2|^2)/2 = P pi x^2 Q_sca, printed to 6 significant figures."""
+    rows = read_csv("wiscombe1979_ncar_angular.csv")
+    by_case: dict[str, list[dict[str, str]]] = {}
+    for row in rows:
+        by_case.setdefault(row["case"], []).append(row)
+    for case, case_rows in by_case.items():
+        x = float(case_rows[0]["x"])
+        m = complex(float(case_rows[0]["n"]), float(case_rows[0]["k"]))
+        theta = np.array([float(r["theta_deg"]) for r in case_rows])
+        t = monodisperse(m, x, theta)
+        s11 = t.phase[0] * np.pi * x * x * t.qsca[0]
+        for value, row in zip(s11, case_rows):
+            text = row["S11"]
+            # 6 significant figures: half a unit in the 6th digit, relative.
+            tol = 0.5 * 10.0 ** (np.floor(np.log10(abs(float(text)))) - 5) + 1e-12 * abs(float(text))
+            assert abs(value - float(text)) <= tol, f"{case} theta={row['theta_deg']}: {value} vs {text}"
+
+
+def test_bohren_huffman_sample() -> None:
+    """B&H Appendix A: m = 1.55, r = 0.525 um, lambda = 0.6328 um."""
+    path = shared_path(*BENCH, "bohren_huffman_bhmie_sample.json")
+    data = json.loads(path.read_text(), parse_float=str)
+    inputs = data["inputs"]
+    table = data["table"]
+    theta = np.array([float(r["theta_deg"]) for r in table])
+    t = do.compute_optics(
+        complex(float(inputs["m_real"]), float(inputs["m_imag"])),
+        do.Monodisperse(radius_um=float(inputs["sphere_radius_um"])),
+        [float(inputs["wavelength_um"]) * 1e3],
+        theta,
+    )
+    assert_published(t.qext[0], data["scalars"]["Qext"], "B&H Qext")
+    assert_published(t.qsca[0], data["scalars"]["Qsca"], "B&H Qsca")
+    # Radar backscatter efficiency 4 |S1(180)|^2 / x^2 = 4 pi Q_sca P(180 deg).
+    assert_published(4.0 * np.pi * t.qsca[0] * t.phase[0, -1], data["scalars"]["Qback"], "B&H Qback")
+    ratio = t.phase[0] / t.phase[0, 0]
+    for value, row in zip(ratio, table):
+        assert_published(value, row["S11_over_S11_0deg"], f"B&H S11 ratio at {row['theta_deg']} deg")
+
+
+@pytest.mark.parametrize(
+    ("m", "x"),
+    [(1.5 + 0.01j, 0.3), (1.52 + 0.005j, 12.0), (2.5 + 1.0j, 40.0), (1.33 + 1e-8j, 150.0), (0.9 + 0.0j, 5.0)],
+)
+def test_monodisperse_equals_miepython(m: complex, x: float) -> None:
+    """compute_optics with a Monodisperse distribution is single-sphere Mie (miepython)."""
+    theta = np.linspace(0.0, 180.0, 37)
+    t = monodisperse(m, x, theta)
+    qext, qsca, _, g = miepython.efficiencies_mx(np.conj(m), x)
+    np.testing.assert_allclose(t.qext[0], qext, rtol=1e-10)
+    np.testing.assert_allclose(t.qsca[0], qsca, rtol=1e-10)
+    np.testing.assert_allclose(t.g[0], g, rtol=1e-10, atol=1e-13)
+    p_ref = miepython.i_unpolarized(np.conj(m), x, np.cos(np.deg2rad(theta)), norm="one")
+    np.testing.assert_allclose(t.phase[0], p_ref, rtol=1e-9)
+    assert t.error_estimate[0] == 0.0 and t.n_nodes[0] == 1
+
+
+def test_small_sphere_keeps_precision() -> None:
+    """x << 1: psi_n by downward recurrence keeps the Rayleigh limit exact.
+
+    Rayleigh (Bohren & Huffman Eq. 5.7-5.8): Q_sca = 8/3 x^4 |(m^2-1)/(m^2+2)|^2,
+    Q_abs = 4 x Im((m^2-1)/(m^2+2)); corrections are O(x^2).
+    """
+    m = 1.5 + 0.1j
+    x = 1e-4
+    r = single_sphere(m=m, x=x)
+    alpha = (m * m - 1) / (m * m + 2)
+    np.testing.assert_allclose(r.qsca, 8.0 / 3.0 * x**4 * abs(alpha) ** 2, rtol=1e-7)
+    np.testing.assert_allclose(r.qabs, 4.0 * x * alpha.imag, rtol=1e-7)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [
+        ({"m": 1.5 - 0.1j, "x": 1.0}, "k >= 0"),
+        ({"m": 1.5, "x": 0.0}, "x must be > 0"),
+        ({"m": complex(np.nan, 0), "x": 1.0}, "finite"),
+        ({"m": 1.5, "x": 1.0, "mu": [1.5]}, r"\[-1, 1\]"),
+    ],
+)
+def test_single_sphere_rejects_bad_input(kwargs: dict, match: str) -> None:
+    with pytest.raises(ValueError, match=match):
+        single_sphere(**kwargs)
