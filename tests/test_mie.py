@@ -17,7 +17,7 @@ import pytest
 
 import dustoptics as do
 from dustoptics.mie import single_sphere
-from tests._shared import shared_path
+from _shared import shared_path
 
 BENCH = ("reference-data", "mie-benchmarks")
 WAVELENGTH_NM = 1000.0  # any wavelength; radius chosen to give the benchmark's x
