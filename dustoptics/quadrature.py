@@ -64,6 +64,9 @@ class QuadratureSettings:
         Largest fraction of the relevant moment left out at each end. [-]
     max_level : int
         Largest refinement level (2^max_level times the level-0 panels). [-]
+    min_panels : int
+        Fewest panels at level 0, so that even a narrow distribution spanning a
+        small range of s is resolved before any comparison of levels. [-]
     """
 
     nodes_per_panel: int = 8
@@ -71,6 +74,7 @@ class QuadratureSettings:
     transition_size_parameter: float = 1.0
     tail_fraction: float = 1e-7
     max_level: int = 9
+    min_panels: int = 4
 
     def __post_init__(self) -> None:
         if not (isinstance(self.nodes_per_panel, int) and 2 <= self.nodes_per_panel <= 64):
@@ -82,6 +86,8 @@ class QuadratureSettings:
         check_open_interval("tail_fraction", self.tail_fraction, 0.0, 0.01)
         if not (isinstance(self.max_level, int) and 0 <= self.max_level <= 16):
             raise ValueError(f"max_level must be an integer in [0, 16]; got {self.max_level!r}")
+        if not (isinstance(self.min_panels, int) and 1 <= self.min_panels <= 1024):
+            raise ValueError(f"min_panels must be an integer in [1, 1024]; got {self.min_panels!r}")
 
 
 @dataclass(frozen=True)
@@ -160,7 +166,7 @@ def radius_nodes(
     x_c = settings.transition_size_parameter
     s_lo = _stretch(k_um * r_lo, x_c)
     s_hi = _stretch(k_um * r_hi, x_c)
-    n0 = max(1, int(np.ceil((s_hi - s_lo) / settings.panel_width)))
+    n0 = max(settings.min_panels, int(np.ceil((s_hi - s_lo) / settings.panel_width)))
     n_panels = n0 * 2**level
     edges = np.linspace(s_lo, s_hi, n_panels + 1)
     half = 0.5 * np.diff(edges)
