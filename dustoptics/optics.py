@@ -393,7 +393,7 @@ def compute_optics(
     >>> import dustoptics as do
     >>> t = do.compute_optics(1.5 + 0.01j, do.Monodisperse(radius_um=0.5), [550.0], [0.0, 90.0, 180.0])
     >>> round(float(t.qext[0]), 6)
-    2.827385
+    3.092896
     """
     if not isinstance(distribution, SizeDistribution):
         raise ValueError(
