@@ -423,12 +423,9 @@ def main(argv: list[str] | None = None) -> int:
     parser = _parser()
     try:
         args = parser.parse_args(argv)
+        return _COMMANDS[args.command](args, parser)
     except SystemExit as exc:  # --help, --version, usage errors
         return exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 2)
-    try:
-        return _COMMANDS[args.command](args, parser)
-    except SystemExit as exc:  # a usage error found after parsing
-        return exc.code if isinstance(exc.code, int) else 2
     except BrokenPipeError:  # e.g. `dustoptics materials | head`: not an error
         _silence_stdout()
         return 0

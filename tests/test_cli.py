@@ -184,3 +184,15 @@ def test_module_entry_point_runs():
     )
     assert done.returncode == 0
     assert done.stdout.strip() == f"dustoptics {do.__version__}"
+
+
+def test_broken_pipe_during_help_is_not_an_error(monkeypatch):
+    class ClosedPipe:
+        def write(self, text):
+            raise BrokenPipeError(32, "Broken pipe")
+
+        def flush(self):
+            raise BrokenPipeError(32, "Broken pipe")
+
+    monkeypatch.setattr(sys, "stdout", ClosedPipe())
+    assert cli.main(["build", "--help"]) == 0
