@@ -253,7 +253,9 @@ def test_depolarized_rayleigh_limits() -> None:
 def test_dhg_conventions_map_onto_each_other(g1: float, g2: float, f: float) -> None:
     mu = np.linspace(-1, 1, 33)
     kobe = dhg_kobe2026(mu, g1=g1, g2=g2, f=f)
-    np.testing.assert_allclose(kobe, dhg_costa2021(mu, g1=g1, g2=g2, alpha=1.0 - f), rtol=1e-13)
+    # 1 - (1 - f) differs from f by rounding: compare on the scale of the largest value
+    costa = dhg_costa2021(mu, g1=g1, g2=g2, alpha=1.0 - f)
+    np.testing.assert_allclose(kobe, costa, rtol=1e-13, atol=1e-14 * float(kobe.max()))
     np.testing.assert_allclose(
         kobe, double_henyey_greenstein(mu, g1=g1, g2=g2, f=f, convention="kobe2026"), rtol=0
     )
