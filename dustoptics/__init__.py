@@ -13,7 +13,7 @@ over wavelength and scattering angle.
 
 from importlib.metadata import PackageNotFoundError, version as _version
 
-from dustoptics import materials, mie, mixing, optics, quadrature, sizedist
+from dustoptics import materials, mie, mixing, optics, phase, quadrature, sizedist
 from dustoptics.materials import (
     ConstantIndex,
     GasFormulaIndex,
@@ -26,6 +26,15 @@ from dustoptics.materials import (
 )
 from dustoptics.mixing import Mixture, bruggeman, mars_dust, maxwell_garnett
 from dustoptics.optics import ConvergenceWarning, OpticsTable, compute_optics
+from dustoptics.phase import (
+    costa2021_mars_dhg,
+    cornette_shanks1992,
+    double_henyey_greenstein,
+    henyey_greenstein,
+    hybrid,
+    renormalize,
+    sphere_integral,
+)
 from dustoptics.quadrature import QuadratureSettings
 from dustoptics.sizedist import (
     Gamma,
@@ -47,6 +56,7 @@ __all__ = [
     "mie",
     "mixing",
     "optics",
+    "phase",
     "quadrature",
     "sizedist",
     "ConstantIndex",
@@ -64,6 +74,13 @@ __all__ = [
     "ConvergenceWarning",
     "OpticsTable",
     "compute_optics",
+    "costa2021_mars_dhg",
+    "cornette_shanks1992",
+    "double_henyey_greenstein",
+    "henyey_greenstein",
+    "hybrid",
+    "renormalize",
+    "sphere_integral",
     "QuadratureSettings",
     "Gamma",
     "LogNormal",
