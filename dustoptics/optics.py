@@ -399,6 +399,11 @@ def compute_optics(
         raise ValueError(
             f"distribution must be a dustoptics SizeDistribution (e.g. ModifiedGamma); got {distribution!r}"
         )
+    if not (distribution.has_density or distribution.is_monodisperse):
+        raise ValueError(
+            "distribution mixes Monodisperse and continuous modes, which the radius "
+            f"quadrature does not support; got {distribution!r}"
+        )
     wl = default_wavelengths_nm() if wavelengths_nm is None else as_increasing_grid(
         "wavelengths_nm", wavelengths_nm, unit="nm"
     )

@@ -206,6 +206,15 @@ def test_seed_used_number_not_cross_section_weighting() -> None:
         ({"refractive_index": "unobtainium"}, "unobtainium"),
         ({"distribution": 1.6}, "distribution must be a dustoptics SizeDistribution"),
         ({"wavelengths_nm": [100.0]}, "range"),
+        (
+            {
+                "distribution": do.MultiModal(
+                    modes=(do.Monodisperse(radius_um=1.0), do.ModifiedGamma(r_eff_um=0.5, v_eff=0.1)),
+                    relative_number_densities=(1.0, 1.0),
+                )
+            },
+            "mixes Monodisperse and continuous modes",
+        ),
     ],
 )
 def test_bad_input_raises(kwargs: dict, match: str) -> None:
