@@ -353,57 +353,64 @@ def gauss_legendre_mu(n: int) -> tuple[np.ndarray, np.ndarray]:
     return _gauss_legendre_cached(int(n))
 
 
+#: Columns appended after the angular values in each row of :func:`_accumulate`:
+#: sums of w, w x^2 Q_ext, w x^2 Q_sca, w x^2 Q_sca g, and w g.
+N_SUMS = 5
+
+
 @njit(cache=True, nogil=True)
 def _accumulate(
     m: complex,
     x_nodes: np.ndarray,
     w_nodes: np.ndarray,
+    node_panel: np.ndarray,
+    n_panels: int,
     per_particle: bool,
     pi_t: np.ndarray,
     tau_t: np.ndarray,
     symmetric: bool,
-    f_out: np.ndarray,
-) -> tuple[float, float, float, float, float]:
-    """Sum the Mie quantities of many spheres with weights.
+) -> np.ndarray:
+    """Sum the Mie quantities of many spheres with weights, per panel.
 
-    For node j (size parameter x_j, weight w_j) adds to ``f_out`` the unpolarized
-    intensity I_j(mu) = |S1_j|^2 + |S2_j|^2 times c_j, where c_j = w_j
-    (cross-section weighting: I_j / k^2 = 2 C_sca,j p_j, so the sum divided by
-    2 pi sum(w x^2 Q_sca) is the weighted phase function) or
-    c_j = w_j / (2 pi x_j^2 Q_sca,j) when ``per_particle`` (each sphere's own
-    normalized phase function, weighted by number).  Angles come as tables of
-    pi_n and tau_n at mu >= 0; if ``symmetric``, f_out has twice as many entries
-    and its second half receives the values at -mu, obtained from the parity
+    For node j (size parameter x_j, weight w_j, panel node_panel[j]) adds to
+    that panel's row the unpolarized intensity I_j(mu) = |S1_j|^2 + |S2_j|^2
+    times c_j, where c_j = w_j (cross-section weighting: I_j / k^2 = 2 C_sca,j
+    p_j, so the sum divided by 2 pi sum(w x^2 Q_sca) is the weighted phase
+    function) or c_j = w_j / (2 pi x_j^2 Q_sca,j) when ``per_particle`` (each
+    sphere's own normalized phase function, weighted by number).  Angles come
+    as tables of pi_n and tau_n at mu >= 0; if ``symmetric``, the next n_mu
+    columns receive the values at -mu, obtained from the parity
     pi_n(-mu) = (-1)^(n-1) pi_n(mu), tau_n(-mu) = (-1)^n tau_n(mu) at no extra
-    cost.  Returns sums of w, w x^2 Q_ext, w x^2 Q_sca, w x^2 Q_sca g and
-    w g (the last for number weighting), all in units of (lambda / 2 pi)^2.
+    cost.  The last ``N_SUMS`` columns hold sums of w, w x^2 Q_ext,
+    w x^2 Q_sca, w x^2 Q_sca g and w g (times pi (lambda / 2 pi)^2 the second
+    and third are areas).  Returns an array of shape (n_panels, n_f + N_SUMS).
     """
     n_nodes = x_nodes.shape[0]
-    nmax_all = wiscombe_nmax(x_nodes[n_nodes - 1])
+    n_mu = pi_t.shape[0]
+    n_f = 2 * n_mu if symmetric else n_mu
+    out = np.zeros((n_panels, n_f + N_SUMS))
+    if n_nodes == 0:
+        return out
+    nmax_all = wiscombe_nmax(np.max(x_nodes))
     a = np.empty(nmax_all, dtype=np.complex128)
     b = np.empty(nmax_all, dtype=np.complex128)
     d = np.empty(nmax_all + 1, dtype=np.complex128)
     psi = np.empty(nmax_all + 1)
     aa = np.empty(nmax_all, dtype=np.complex128)
     bb = np.empty(nmax_all, dtype=np.complex128)
-    n_mu = pi_t.shape[0]
-    s_w = 0.0
-    s_ext = 0.0
-    s_sca = 0.0
-    s_gsca = 0.0
-    s_g = 0.0
     for j in range(n_nodes):
         x = x_nodes[j]
         w = w_nodes[j]
+        row = out[node_panel[j]]
         nmax = wiscombe_nmax(x)
         _mie_coefficients(m, x, nmax, a, b, d, psi)
         qext, qsca, gq = _efficiencies(x, nmax, a, b)
         x2 = x * x
-        s_w += w
-        s_ext += w * x2 * qext
-        s_sca += w * x2 * qsca
-        s_gsca += w * x2 * gq
-        s_g += w * gq / qsca
+        row[n_f] += w
+        row[n_f + 1] += w * x2 * qext
+        row[n_f + 2] += w * x2 * qsca
+        row[n_f + 3] += w * x2 * gq
+        row[n_f + 4] += w * gq / qsca
         if per_particle:
             c = w / (2.0 * np.pi * x2 * qsca)
         else:
@@ -443,14 +450,14 @@ def _accumulate(
                 e2 += bb[k] * p
             s1 = e1 + o1
             s2 = e2 + o2
-            f_out[i] += c * (s1.real * s1.real + s1.imag * s1.imag + s2.real * s2.real + s2.imag * s2.imag)
+            row[i] += c * (s1.real * s1.real + s1.imag * s1.imag + s2.real * s2.real + s2.imag * s2.imag)
             if symmetric:
                 s1 = e1 - o1
                 s2 = e2 - o2
-                f_out[n_mu + i] += c * (
+                row[n_mu + i] += c * (
                     s1.real * s1.real + s1.imag * s1.imag + s2.real * s2.real + s2.imag * s2.imag
                 )
-    return s_w, s_ext, s_sca, s_gsca, s_g
+    return out
 
 
 @njit(cache=True, nogil=True)

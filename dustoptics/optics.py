@@ -42,7 +42,7 @@ import numpy as np
 
 from dustoptics import mie
 from dustoptics._validation import as_increasing_grid, check_choice, check_open_interval
-from dustoptics.quadrature import QuadratureSettings, radius_nodes
+from dustoptics.quadrature import QuadratureSettings, initial_panels, panel_nodes
 from dustoptics.sizedist import SizeDistribution
 
 __all__ = [
@@ -100,7 +100,12 @@ class OpticsTable:
     cross_section_error_estimate : numpy.ndarray
         The same for <C_ext> and <C_sca> (relative) and g (absolute). [-]
     n_nodes : numpy.ndarray
-        Radius nodes used at the returned level, per wavelength. [-]
+        Radius nodes of the returned quadrature, per wavelength. [-]
+    quadrature_panels : tuple of numpy.ndarray
+        Per wavelength, the final panels (shape (n_panels, 2)) in the stretched
+        variable s of :mod:`dustoptics.quadrature`; each panel's two halves
+        carry the Gauss-Legendre rule that gave the table, so
+        ``quadrature.panel_nodes`` on the halves reproduces the nodes. [-]
     refractive_index : numpy.ndarray
         m = n + i k used at each wavelength. [-]
     mean_geometric_cross_section_um2 : float
@@ -130,7 +135,8 @@ class OpticsTable:
     error_estimate: np.ndarray
     cross_section_error_estimate: np.ndarray
     n_nodes: np.ndarray
-    refractive_index: np.ndarray
+    quadrature_panels: tuple[np.ndarray, ...] = field(repr=False)
+    refractive_index: np.ndarray = field(repr=False)
     mean_geometric_cross_section_um2: float
     weighting: str
     rtol: float
@@ -224,16 +230,26 @@ def resolve_refractive_index(
 
 
 @dataclass(frozen=True)
-class _Level:
+class _Result:
     phase: np.ndarray
     cext: float
     csca: float
     g: float
     n_nodes: int
+    err_phase: float
+    err_cross: float
+    panels_s: np.ndarray
 
 
 class _WavelengthSolver:
-    """Everything for one wavelength: angular tables, then levels on demand."""
+    """One wavelength: angular tables once, then adaptive refinement over radius.
+
+    Each panel is integrated twice, with one n-point Gauss-Legendre rule and
+    with one on each of its halves; the difference estimates the coarse rule's
+    error, and the halves' sum is kept.  Panels are split, worst first, until
+    the summed estimates meet the tolerances; a split panel's halves already
+    know their coarse values, so no evaluation is ever repeated.
+    """
 
     def __init__(
         self,
@@ -252,14 +268,26 @@ class _WavelengthSolver:
         self.distribution = distribution
         self.per_particle = per_particle
         self.settings = settings
-        top = radius_nodes(
-            distribution,
-            wavelength_nm=wavelength_nm,
-            level=0,
-            settings=settings,
-            lower_moment=0 if per_particle else 2,
-        )
-        self.nmax = mie.wiscombe_nmax(float(top.size_parameter[-1]))
+        if distribution.is_monodisperse:
+            self.edges = np.empty(0)
+            x_top = 2.0 * np.pi * distribution.mean_radius_um / self.wavelength_um
+        else:
+            self.edges = initial_panels(
+                distribution,
+                wavelength_nm=wavelength_nm,
+                settings=settings,
+                lower_moment=0 if per_particle else 2,
+            )
+            top, _ = panel_nodes(
+                distribution,
+                wavelength_nm=wavelength_nm,
+                lower_s=self.edges[-2:-1],
+                upper_s=self.edges[-1:],
+                settings=settings,
+            )
+            x_top = float(top.size_parameter.max())
+        # Every node lies below the top panel's end; n_max there bounds all.
+        self.nmax = mie.wiscombe_nmax(max(x_top, 1e-3) * 1.0001 + 1.0)
         n_half = 16 * ((self.nmax + 1 + 15) // 16)
         # Sum at Gauss angles and project on Legendre polynomials when that is
         # cheaper than summing at every output angle.  2 n_half >= 2 nmax + 2
@@ -270,25 +298,115 @@ class _WavelengthSolver:
             self.mu_half = np.ascontiguousarray(mu_g[n_half:])
             self.w_half = np.ascontiguousarray(w_g[n_half:])
             self.pi_t, self.tau_t = mie._pi_tau_table(self.mu_half, self.nmax)
+            self.n_f = 2 * n_half
         else:
             self.pi_t, self.tau_t = mie._pi_tau_table(mu_out, self.nmax)
+            self.n_f = mu_out.size
 
-    def level(self, level: int) -> _Level:
-        nodes = radius_nodes(
+    def evaluate(self, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
+        """Rows of angular values and sums, one per panel [lower, upper] in s."""
+        nodes, node_panel = panel_nodes(
             self.distribution,
             wavelength_nm=self.wavelength_nm,
-            level=level,
+            lower_s=lower,
+            upper_s=upper,
             settings=self.settings,
-            lower_moment=0 if self.per_particle else 2,
         )
-        x = nodes.size_parameter
-        n_f = 2 * self.pi_t.shape[0] if self.legendre else self.pi_t.shape[0]
-        f = np.zeros(n_f)
-        s_w, s_ext, s_sca, s_gsca, s_g = mie._accumulate(
-            self.m, x, nodes.weight, self.per_particle, self.pi_t, self.tau_t, self.legendre, f
+        return mie._accumulate(
+            self.m,
+            nodes.size_parameter,
+            nodes.weight,
+            node_panel,
+            lower.size,
+            self.per_particle,
+            self.pi_t,
+            self.tau_t,
+            self.legendre,
         )
+
+    def halves(self, lower: np.ndarray, upper: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Rows for the left and right halves of each panel."""
+        mid = 0.5 * (lower + upper)
+        rows = self.evaluate(np.concatenate([lower, mid]), np.concatenate([mid, upper]))
+        return rows[: lower.size], rows[lower.size :]
+
+    def _errors(self, delta: np.ndarray, total: np.ndarray) -> tuple[np.ndarray, np.ndarray, float, float]:
+        """Error estimates from the per-panel differences ``delta`` of the two rules.
+
+        Returns per panel the relative phase error and the largest relative
+        cross-section (or absolute g) error, and for the whole sum the phase
+        error max_mu sum_p |dF_p(mu)| / F(mu) plus the normalization's relative
+        error, and the cross-section error.  g = num / norm, so
+        |dg| <= (|d num| + |g| |d norm|) / norm.
+        """
+        n_f = self.n_f
+        norm = n_f if self.per_particle else n_f + 2
+        gnum = n_f + 4 if self.per_particle else n_f + 3
+        g = total[gnum] / total[norm]
+        rel_f = delta[:, :n_f] / total[:n_f]
+        rel_norm = delta[:, norm] / total[norm]
+        cross = np.column_stack(
+            [
+                delta[:, n_f + 1] / total[n_f + 1],
+                delta[:, n_f + 2] / total[n_f + 2],
+                (delta[:, gnum] + abs(g) * delta[:, norm]) / total[norm],
+            ]
+        )
+        panel_phase = np.max(rel_f, axis=1) + rel_norm
+        err_phase = float(np.max(np.sum(rel_f, axis=0)) + np.sum(rel_norm))
+        err_cross = float(np.max(np.sum(cross, axis=0)))
+        return panel_phase, np.max(cross, axis=1), err_phase, err_cross
+
+    def solve(self, rtol: float, cross_rtol: float) -> _Result:
+        if self.distribution.is_monodisperse:
+            x = np.array([2.0 * np.pi * self.distribution.mean_radius_um / self.wavelength_um])
+            rows = mie._accumulate(
+                self.m, x, np.ones(1), np.zeros(1, dtype=np.int64), 1, self.per_particle,
+                self.pi_t, self.tau_t, False,
+            )
+            return self._finish(rows[0], 1, 0.0, 0.0, np.empty((0, 2)))
+        lower, upper = self.edges[:-1], self.edges[1:]
+        coarse = self.evaluate(lower, upper)
+        left, right = self.halves(lower, upper)
+        max_panels = (self.edges.size - 1) * 2**self.settings.max_level
+        while True:
+            fine = left + right
+            total = fine.sum(axis=0)
+            delta = np.abs(fine - coarse)
+            phase_e, cross_e, err_phase, err_cross = self._errors(delta, total)
+            if (err_phase <= rtol and err_cross <= cross_rtol) or lower.size >= max_panels:
+                break
+            # Normalized badness: if sum(badness) <= 1 both tolerances hold.
+            badness = np.maximum(phase_e / rtol, cross_e / cross_rtol)
+            order = np.argsort(-badness, kind="stable")
+            cumulative = np.cumsum(badness[order])
+            n_split = int(np.searchsorted(cumulative, cumulative[-1] - 0.5)) + 1
+            split = np.sort(order[:n_split])
+            keep = np.ones(lower.size, dtype=bool)
+            keep[split] = False
+            mid = 0.5 * (lower[split] + upper[split])
+            new_lower = np.concatenate([lower[split], mid])
+            new_upper = np.concatenate([mid, upper[split]])
+            new_coarse = np.concatenate([left[split], right[split]])
+            new_left, new_right = self.halves(new_lower, new_upper)
+            lower = np.concatenate([lower[keep], new_lower])
+            upper = np.concatenate([upper[keep], new_upper])
+            coarse = np.concatenate([coarse[keep], new_coarse])
+            left = np.concatenate([left[keep], new_left])
+            right = np.concatenate([right[keep], new_right])
+        order = np.argsort(lower, kind="stable")
+        panels = np.column_stack([lower[order], upper[order]])
+        n_nodes = 2 * self.settings.nodes_per_panel * lower.size
+        return self._finish(total, n_nodes, err_phase, err_cross, panels)
+
+    def _finish(
+        self, total: np.ndarray, n_nodes: int, err_phase: float, err_cross: float, panels: np.ndarray
+    ) -> _Result:
+        n_f = self.n_f
+        f = total[:n_f]
+        s_w, s_ext, s_sca, s_gsca, s_g = total[n_f:]
         if self.legendre:
-            beta = mie._legendre_project(self.mu_half, self.w_half, f, 2 * self.nmax)
+            beta = mie._legendre_project(self.mu_half, self.w_half, np.ascontiguousarray(f), 2 * self.nmax)
             f = mie._legendre_evaluate(beta, self.mu_out)
         if self.per_particle:
             phase = f / s_w
@@ -301,32 +419,16 @@ class _WavelengthSolver:
         # sum w_j would renormalize to the truncated *number* distribution, which
         # for cross-section weighting drops up to ~0.3 % of the (tiny) particles
         # below r_lo and biases <C> high.
-        return _Level(
+        return _Result(
             phase=phase,
             cext=area * s_ext,
             csca=area * s_sca,
-            g=g,
-            n_nodes=x.size,
+            g=float(g),
+            n_nodes=int(n_nodes),
+            err_phase=err_phase,
+            err_cross=err_cross,
+            panels_s=panels,
         )
-
-
-def _converge(solver: _WavelengthSolver, rtol: float, cross_rtol: float) -> tuple[_Level, float, float]:
-    """Raise the refinement level until two successive levels agree."""
-    if solver.distribution.is_monodisperse:
-        return solver.level(0), 0.0, 0.0
-    previous = solver.level(0)
-    for lev in range(1, solver.settings.max_level + 1):
-        current = solver.level(lev)
-        err_phase = float(np.max(np.abs(current.phase - previous.phase) / current.phase))
-        err_cross = max(
-            abs(current.cext - previous.cext) / current.cext,
-            abs(current.csca - previous.csca) / current.csca,
-            abs(current.g - previous.g),
-        )
-        if err_phase <= rtol and err_cross <= cross_rtol:
-            return current, err_phase, err_cross
-        previous = current
-    return current, err_phase, err_cross
 
 
 def compute_optics(
@@ -429,7 +531,7 @@ def compute_optics(
     mu_out = np.cos(np.deg2rad(theta))
     per_particle = weighting == "number"
 
-    def one(i: int) -> tuple[_Level, float, float]:
+    def one(i: int) -> _Result:
         solver = _WavelengthSolver(
             m=complex(m[i]),
             wavelength_nm=float(wl[i]),
@@ -438,7 +540,7 @@ def compute_optics(
             per_particle=per_particle,
             settings=settings,
         )
-        return _converge(solver, rtol, cross_rtol)
+        return solver.solve(rtol, cross_rtol)
 
     n_threads = min(workers, wl.size)
     if n_threads > 1:
@@ -448,12 +550,11 @@ def compute_optics(
     else:
         results = [one(i) for i in range(wl.size)]
 
-    levels = [r[0] for r in results]
-    err_phase = np.array([r[1] for r in results])
-    err_cross = np.array([r[2] for r in results])
-    phase = np.vstack([lev.phase for lev in levels])
-    cext = np.array([lev.cext for lev in levels])
-    csca = np.array([lev.csca for lev in levels])
+    err_phase = np.array([r.err_phase for r in results])
+    err_cross = np.array([r.err_cross for r in results])
+    phase = np.vstack([r.phase for r in results])
+    cext = np.array([r.cext for r in results])
+    csca = np.array([r.csca for r in results])
     geometric = distribution.mean_cross_section_um2
     if not (np.all(np.isfinite(phase)) and np.all(phase > 0)):
         raise FloatingPointError("phase function is not finite and positive; please report this input")
@@ -477,10 +578,11 @@ def compute_optics(
         qext=cext / geometric,
         qsca=csca / geometric,
         ssa=csca / cext,
-        g=np.array([lev.g for lev in levels]),
+        g=np.array([r.g for r in results]),
         error_estimate=err_phase,
         cross_section_error_estimate=err_cross,
-        n_nodes=np.array([lev.n_nodes for lev in levels]),
+        n_nodes=np.array([r.n_nodes for r in results]),
+        quadrature_panels=tuple(r.panels_s for r in results),
         refractive_index=m,
         mean_geometric_cross_section_um2=float(geometric),
         weighting=weighting,

@@ -41,7 +41,7 @@ from scipy.special import roots_legendre, wrightomega
 from dustoptics._validation import check_open_interval, check_positive
 from dustoptics.sizedist import SizeDistribution
 
-__all__ = ["QuadratureSettings", "RadiusNodes", "radius_nodes"]
+__all__ = ["QuadratureSettings", "RadiusNodes", "initial_panels", "panel_nodes", "radius_nodes"]
 
 _UPPER_MOMENT = 6
 
@@ -124,6 +124,73 @@ def _unstretch(s: np.ndarray, x_c: float) -> np.ndarray:
     return x_c * np.real(wrightomega(s))
 
 
+def initial_panels(
+    distribution: SizeDistribution,
+    *,
+    wavelength_nm: float,
+    settings: QuadratureSettings,
+    lower_moment: int,
+) -> np.ndarray:
+    """Level-0 panel edges in the stretched variable s, increasing. [-]
+
+    The truncated radius range [r_lo, r_hi] (see the module docstring) mapped
+    to s and cut into max(min_panels, ceil(width / panel_width)) equal panels.
+
+    Parameters
+    ----------
+    distribution : SizeDistribution
+        Number distribution n(r) with a density. [um^-1]
+    wavelength_nm : float
+        Wavelength in the medium. [nm]
+    settings : QuadratureSettings
+        Node placement parameters.
+    lower_moment : int
+        Moment whose lower tail (below r_lo) is bounded by the tail fraction:
+        0 for number-weighted averages, 2 for cross-section weighted ones. [-]
+    """
+    k_um = 2.0 * np.pi / (wavelength_nm * 1e-3)  # wavenumber [um^-1]
+    r_lo, r_hi = distribution.radius_bounds_um(
+        tail_fraction=settings.tail_fraction,
+        lower_moment=lower_moment,
+        upper_moment=_UPPER_MOMENT,
+    )
+    x_c = settings.transition_size_parameter
+    s_lo = _stretch(k_um * r_lo, x_c)
+    s_hi = _stretch(k_um * r_hi, x_c)
+    n0 = max(settings.min_panels, int(np.ceil((s_hi - s_lo) / settings.panel_width)))
+    return np.linspace(s_lo, s_hi, n0 + 1)
+
+
+def panel_nodes(
+    distribution: SizeDistribution,
+    *,
+    wavelength_nm: float,
+    lower_s: np.ndarray,
+    upper_s: np.ndarray,
+    settings: QuadratureSettings,
+) -> tuple[RadiusNodes, np.ndarray]:
+    """Gauss-Legendre nodes on the panels [lower_s[i], upper_s[i]] of s.
+
+    Returns the nodes (``nodes_per_panel`` per panel, panel after panel) and,
+    for each node, the index of its panel.
+    """
+    k_um = 2.0 * np.pi / (wavelength_nm * 1e-3)
+    x_c = settings.transition_size_parameter
+    lower = np.asarray(lower_s, dtype=np.float64)
+    upper = np.asarray(upper_s, dtype=np.float64)
+    half = 0.5 * (upper - lower)
+    mid = 0.5 * (upper + lower)
+    t, gw = _gauss_legendre(settings.nodes_per_panel)
+    s = (mid[:, None] + half[:, None] * t[None, :]).ravel()
+    ds_weight = (half[:, None] * gw[None, :]).ravel()
+    x = _unstretch(s, x_c)
+    dx_ds = 1.0 / (1.0 / x_c + 1.0 / x)
+    r = x / k_um
+    w = np.asarray(distribution.pdf(r), dtype=np.float64) * (dx_ds / k_um) * ds_weight
+    node_panel = np.repeat(np.arange(lower.size, dtype=np.int64), settings.nodes_per_panel)
+    return RadiusNodes(size_parameter=x, weight=w, radius_um=r), node_panel
+
+
 def radius_nodes(
     distribution: SizeDistribution,
     *,
@@ -132,7 +199,7 @@ def radius_nodes(
     settings: QuadratureSettings,
     lower_moment: int,
 ) -> RadiusNodes:
-    """Gauss-Legendre nodes over radius for one wavelength and refinement level.
+    """Gauss-Legendre nodes over radius on uniformly refined panels.
 
     Parameters
     ----------
@@ -145,37 +212,22 @@ def radius_nodes(
     settings : QuadratureSettings
         Node placement parameters.
     lower_moment : int
-        Moment whose lower tail (below r_lo) is bounded by the tail fraction:
-        0 for number-weighted averages, 2 for cross-section weighted ones. [-]
+        See :func:`initial_panels`. [-]
 
     Returns
     -------
     RadiusNodes
         A single node of weight 1 for a monodisperse distribution.
     """
-    k_um = 2.0 * np.pi / (wavelength_nm * 1e-3)  # wavenumber [um^-1]
+    k_um = 2.0 * np.pi / (wavelength_nm * 1e-3)
     if distribution.is_monodisperse:
         r = float(distribution.mean_radius_um)
         return RadiusNodes(np.array([k_um * r]), np.array([1.0]), np.array([r]))
-
-    r_lo, r_hi = distribution.radius_bounds_um(
-        tail_fraction=settings.tail_fraction,
-        lower_moment=lower_moment,
-        upper_moment=_UPPER_MOMENT,
+    edges0 = initial_panels(
+        distribution, wavelength_nm=wavelength_nm, settings=settings, lower_moment=lower_moment
     )
-    x_c = settings.transition_size_parameter
-    s_lo = _stretch(k_um * r_lo, x_c)
-    s_hi = _stretch(k_um * r_hi, x_c)
-    n0 = max(settings.min_panels, int(np.ceil((s_hi - s_lo) / settings.panel_width)))
-    n_panels = n0 * 2**level
-    edges = np.linspace(s_lo, s_hi, n_panels + 1)
-    half = 0.5 * np.diff(edges)
-    mid = 0.5 * (edges[1:] + edges[:-1])
-    t, gw = _gauss_legendre(settings.nodes_per_panel)
-    s = (mid[:, None] + half[:, None] * t[None, :]).ravel()
-    ds_weight = (half[:, None] * gw[None, :]).ravel()
-    x = _unstretch(s, x_c)
-    dx_ds = 1.0 / (1.0 / x_c + 1.0 / x)
-    r = x / k_um
-    w = np.asarray(distribution.pdf(r), dtype=np.float64) * (dx_ds / k_um) * ds_weight
-    return RadiusNodes(size_parameter=x, weight=w, radius_um=r)
+    edges = np.linspace(edges0[0], edges0[-1], (edges0.size - 1) * 2**level + 1)
+    nodes, _ = panel_nodes(
+        distribution, wavelength_nm=wavelength_nm, lower_s=edges[:-1], upper_s=edges[1:], settings=settings
+    )
+    return nodes
