@@ -14,10 +14,14 @@ stretched variable
 
 which is logarithmic below the transition size parameter x_c and linear above
 it, with a smooth Jacobian (its inverse is x = x_c omega(s), with omega the
-Wright omega function).  The interval [s(x_lo), s(x_hi)] is cut into equal panels,
-each carrying an n-point Gauss-Legendre rule.  Refinement level L doubles the
-panel count 2^L times; :func:`dustoptics.optics.compute_optics` raises L until two
-successive levels agree to the requested tolerance.
+Wright omega function).  The interval [s(x_lo), s(x_hi)] is first cut into
+equal panels (:func:`initial_panels`), each carrying an n-point Gauss-Legendre
+rule (:func:`panel_nodes`).  :func:`dustoptics.optics.compute_optics` then
+refines adaptively: every panel is integrated with one rule and with one rule
+on each half, the difference estimates the error, and the worst panels are
+halved until the summed estimates meet the tolerances.  Resonances thus get
+nodes where they are, and smooth stretches keep few.  :func:`radius_nodes`
+gives uniformly refined nodes (for checks of the moments and for baselines).
 
 Tails are truncated where the distribution's analytic moments say they are
 negligible (:meth:`dustoptics.sizedist.SizeDistribution.radius_bounds_um`):
@@ -63,7 +67,9 @@ class QuadratureSettings:
     tail_fraction : float
         Largest fraction of the relevant moment left out at each end. [-]
     max_level : int
-        Largest refinement level (2^max_level times the level-0 panels). [-]
+        Bounds the adaptive refinement: at most 2^max_level times the level-0
+        panel count, i.e. panels no narrower than 2^-max_level of the initial
+        ones on average. [-]
     min_panels : int
         Fewest panels at level 0, so that even a narrow distribution spanning a
         small range of s is resolved before any comparison of levels. [-]
