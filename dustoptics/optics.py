@@ -60,7 +60,7 @@ RefractiveIndexLike = Union[complex, float, Sequence[complex], Callable[[Any], A
 
 
 class ConvergenceWarning(UserWarning):
-    """The radius quadrature reached its finest level before the tolerance."""
+    """The radius quadrature reached its panel limit before the tolerance."""
 
 
 def default_wavelengths_nm() -> np.ndarray:
@@ -94,9 +94,10 @@ class OpticsTable:
     g : numpy.ndarray
         Asymmetry parameter, 2 pi int P mu dmu. [-]
     error_estimate : numpy.ndarray
-        Largest relative change of the phase function at any angle between the
-        last two refinement levels (an upper estimate of the returned table's
-        error, which comes from the finer level). [-]
+        Estimated largest relative error of the phase function at any angle:
+        the summed differences between each radius panel's Gauss rule and the
+        rules on its two halves (an upper estimate for the returned table, which
+        uses the halves). [-]
     cross_section_error_estimate : numpy.ndarray
         The same for <C_ext> and <C_sca> (relative) and g (absolute). [-]
     n_nodes : numpy.ndarray
