@@ -378,7 +378,8 @@ def _accumulate(
     p_j, so the sum divided by 2 pi sum(w x^2 Q_sca) is the weighted phase
     function) or c_j = w_j / (2 pi x_j^2 Q_sca,j) when ``per_particle`` (each
     sphere's own normalized phase function, weighted by number).  Angles come
-    as tables of pi_n and tau_n at mu >= 0; if ``symmetric``, the next n_mu
+    as transposed tables pi_t[n - 1, i] = pi_n(mu_i) (tau_t likewise) at
+    mu >= 0; if ``symmetric``, the next n_mu
     columns receive the values at -mu, obtained from the parity
     pi_n(-mu) = (-1)^(n-1) pi_n(mu), tau_n(-mu) = (-1)^n tau_n(mu) at no extra
     cost.  The last ``N_SUMS`` columns hold sums of w, w x^2 Q_ext,
@@ -386,7 +387,7 @@ def _accumulate(
     and third are areas).  Returns an array of shape (n_panels, n_f + N_SUMS).
     """
     n_nodes = x_nodes.shape[0]
-    n_mu = pi_t.shape[0]
+    n_mu = pi_t.shape[1]
     n_f = 2 * n_mu if symmetric else n_mu
     out = np.zeros((n_panels, n_f + N_SUMS))
     if n_nodes == 0:
@@ -398,6 +399,9 @@ def _accumulate(
     psi = np.empty(nmax_all + 1)
     aa = np.empty(nmax_all, dtype=np.complex128)
     bb = np.empty(nmax_all, dtype=np.complex128)
+    acc = np.empty((8, n_mu))
+    e1r, e1i, o1r, o1i = acc[0], acc[1], acc[2], acc[3]
+    e2r, e2i, o2r, o2i = acc[4], acc[5], acc[6], acc[7]
     for j in range(n_nodes):
         x = x_nodes[j]
         w = w_nodes[j]
@@ -420,43 +424,64 @@ def _accumulate(
             cn = (2.0 * n + 1.0) / (n * (n + 1.0))
             aa[k] = cn * a[k]
             bb[k] = cn * b[k]
+        # Parity split: e* collects terms even in mu, o* terms odd in mu, so
+        # S(+mu) = e + o and S(-mu) = e - o.  Two orders (n odd, then n + 1
+        # even) per pass; the inner loop runs over angles, contiguous in the
+        # transposed tables, in real arithmetic, which the compiler vectorizes.
+        e1r[:] = 0.0
+        e1i[:] = 0.0
+        o1r[:] = 0.0
+        o1i[:] = 0.0
+        e2r[:] = 0.0
+        e2i[:] = 0.0
+        o2r[:] = 0.0
+        o2i[:] = 0.0
+        for k in range(0, nmax, 2):
+            ar0 = aa[k].real
+            ai0 = aa[k].imag
+            br0 = bb[k].real
+            bi0 = bb[k].imag
+            if k + 1 < nmax:
+                ar1 = aa[k + 1].real
+                ai1 = aa[k + 1].imag
+                br1 = bb[k + 1].real
+                bi1 = bb[k + 1].imag
+                k1 = k + 1
+            else:  # odd nmax: a zero even order against any valid row
+                ar1 = 0.0
+                ai1 = 0.0
+                br1 = 0.0
+                bi1 = 0.0
+                k1 = k
+            p0 = pi_t[k]
+            t0 = tau_t[k]
+            p1 = pi_t[k1]
+            t1 = tau_t[k1]
+            for i in range(n_mu):
+                pp0 = p0[i]
+                tt0 = t0[i]
+                pp1 = p1[i]
+                tt1 = t1[i]
+                e1r[i] += ar0 * pp0 + br1 * tt1
+                e1i[i] += ai0 * pp0 + bi1 * tt1
+                o1r[i] += br0 * tt0 + ar1 * pp1
+                o1i[i] += bi0 * tt0 + ai1 * pp1
+                e2r[i] += br0 * pp0 + ar1 * tt1
+                e2i[i] += bi0 * pp0 + ai1 * tt1
+                o2r[i] += ar0 * tt0 + br1 * pp1
+                o2i[i] += ai0 * tt0 + bi1 * pp1
         for i in range(n_mu):
-            # Parity split: e* collects terms even in mu, o* terms odd in mu.
-            e1 = 0.0 + 0.0j
-            o1 = 0.0 + 0.0j
-            e2 = 0.0 + 0.0j
-            o2 = 0.0 + 0.0j
-            k = 0
-            while k + 1 < nmax:  # n = k+1 odd, then n = k+2 even
-                p = pi_t[i, k]
-                t = tau_t[i, k]
-                e1 += aa[k] * p
-                o1 += bb[k] * t
-                o2 += aa[k] * t
-                e2 += bb[k] * p
-                p = pi_t[i, k + 1]
-                t = tau_t[i, k + 1]
-                o1 += aa[k + 1] * p
-                e1 += bb[k + 1] * t
-                e2 += aa[k + 1] * t
-                o2 += bb[k + 1] * p
-                k += 2
-            if k < nmax:
-                p = pi_t[i, k]
-                t = tau_t[i, k]
-                e1 += aa[k] * p
-                o1 += bb[k] * t
-                o2 += aa[k] * t
-                e2 += bb[k] * p
-            s1 = e1 + o1
-            s2 = e2 + o2
-            row[i] += c * (s1.real * s1.real + s1.imag * s1.imag + s2.real * s2.real + s2.imag * s2.imag)
+            s1r = e1r[i] + o1r[i]
+            s1i = e1i[i] + o1i[i]
+            s2r = e2r[i] + o2r[i]
+            s2i = e2i[i] + o2i[i]
+            row[i] += c * (s1r * s1r + s1i * s1i + s2r * s2r + s2i * s2i)
             if symmetric:
-                s1 = e1 - o1
-                s2 = e2 - o2
-                row[n_mu + i] += c * (
-                    s1.real * s1.real + s1.imag * s1.imag + s2.real * s2.real + s2.imag * s2.imag
-                )
+                s1r = e1r[i] - o1r[i]
+                s1i = e1i[i] - o1i[i]
+                s2r = e2r[i] - o2r[i]
+                s2i = e2i[i] - o2i[i]
+                row[n_mu + i] += c * (s1r * s1r + s1i * s1i + s2r * s2r + s2i * s2i)
     return out
 
 

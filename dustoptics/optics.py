@@ -298,11 +298,14 @@ class _WavelengthSolver:
             mu_g, w_g = mie.gauss_legendre_mu(2 * n_half)
             self.mu_half = np.ascontiguousarray(mu_g[n_half:])
             self.w_half = np.ascontiguousarray(w_g[n_half:])
-            self.pi_t, self.tau_t = mie._pi_tau_table(self.mu_half, self.nmax)
+            pi_t, tau_t = mie._pi_tau_table(self.mu_half, self.nmax)
             self.n_f = 2 * n_half
         else:
-            self.pi_t, self.tau_t = mie._pi_tau_table(mu_out, self.nmax)
+            pi_t, tau_t = mie._pi_tau_table(mu_out, self.nmax)
             self.n_f = mu_out.size
+        # The kernel reads the tables order by order: (nmax, n_mu) layout.
+        self.pi_t = np.ascontiguousarray(pi_t.T)
+        self.tau_t = np.ascontiguousarray(tau_t.T)
 
     def evaluate(self, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
         """Rows of angular values and sums, one per panel [lower, upper] in s."""
