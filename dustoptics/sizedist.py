@@ -52,7 +52,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy import special, stats
+from scipy import special
 
 from dustoptics._validation import (
     as_float_array,
@@ -277,7 +277,7 @@ class SizeDistribution(ABC):
         For one continuous mode the bounds are the exact quantiles,
         ``F_lower^<(r_lo) = F_upper^>(r_hi) = eps`` (up to the rounding of
         ``scipy.special.gammaincinv``/``gammainccinv`` or
-        ``scipy.stats.norm.isf``).  The statement for other orders p follows
+        ``scipy.special.ndtri``).  The statement for other orders p follows
         because the tail fractions are monotonic in the order: the density of
         ``r^p n(r)`` relative to that of ``r^q n(r)`` is proportional to
         ``r^(p - q)``, increasing in r for p > q, so ``F_p^>(r)`` does not
@@ -381,8 +381,11 @@ class _GammaFamily(SizeDistribution):
     def pdf(self, radius_um: ArrayLike) -> FloatOrArray:
         shape, scale = self._shape_scale()
         r = _as_radius(radius_um)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            density = stats.gamma.pdf(r, shape, scale=scale)
+        # scipy.special rather than scipy.stats: same density, without
+        # scipy.stats' import time (~0.4 s) and per-call overhead.
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            y = r / scale
+            density = np.exp(special.xlogy(shape - 1.0, y) - y - special.gammaln(shape)) / scale
         return _scalar_or_array(np.where(r > 0.0, density, np.where(np.isnan(r), np.nan, 0.0)))
 
     def moment(self, k: float) -> float:
@@ -555,7 +558,10 @@ class _LogNormalFamily(SizeDistribution):
     def pdf(self, radius_um: ArrayLike) -> FloatOrArray:
         mu, sigma = self._mu_sigma()
         r = _as_radius(radius_um)
-        return _scalar_or_array(stats.lognorm.pdf(r, sigma, scale=math.exp(mu)))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            z = (np.log(np.where(r > 0.0, r, np.nan)) - mu) / sigma
+            density = np.exp(-0.5 * z * z) / (r * sigma * math.sqrt(2.0 * math.pi))
+        return _scalar_or_array(np.where(r > 0.0, density, np.where(np.isnan(r), np.nan, 0.0)))
 
     def moment(self, k: float) -> float:
         """Moment ``<r^k> = exp(k mu + k^2 sigma^2 / 2)`` [um^k], finite for every real k."""
@@ -569,14 +575,14 @@ class _LogNormalFamily(SizeDistribution):
             log_r = np.where(radius_um > 0.0, np.log(radius_um), -np.inf)
         log_r = np.where(np.isnan(radius_um), np.nan, log_r)
         z = (log_r - mu - k * sigma * sigma) / sigma
-        fraction = stats.norm.sf(z) if upper else stats.norm.cdf(z)
+        fraction = special.ndtr(-z) if upper else special.ndtr(z)
         return np.asarray(fraction, dtype=np.float64)
 
     def _bounds(
         self, tail_fraction: float, lower_moment: float, upper_moment: float
     ) -> tuple[float, float]:
         mu, sigma = self._mu_sigma()
-        z = float(stats.norm.isf(tail_fraction))
+        z = float(-special.ndtri(tail_fraction))
         r_lo = math.exp(mu + lower_moment * sigma * sigma - z * sigma)
         r_hi = math.exp(mu + upper_moment * sigma * sigma + z * sigma)
         return r_lo, r_hi
