@@ -32,12 +32,9 @@ References
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import lru_cache
 
-import numba
 import numpy as np
 from numba import njit
-from scipy.special import roots_legendre
 
 from dustoptics._validation import as_float_array, check_positive
 
@@ -45,7 +42,6 @@ __all__ = [
     "wiscombe_nmax",
     "SingleSphere",
     "single_sphere",
-    "gauss_legendre_mu",
 ]
 
 
@@ -335,22 +331,6 @@ def single_sphere(*, m: complex, x: float, mu: np.ndarray | float = 1.0) -> Sing
 # ----------------------------------------------------------------------------
 # Polydisperse accumulation
 # ----------------------------------------------------------------------------
-
-
-@lru_cache(maxsize=64)
-def _gauss_legendre_cached(n: int) -> tuple[np.ndarray, np.ndarray]:
-    mu, w = roots_legendre(n)
-    mu.setflags(write=False)
-    w.setflags(write=False)
-    return mu, w
-
-
-def gauss_legendre_mu(n: int) -> tuple[np.ndarray, np.ndarray]:
-    """Gauss-Legendre nodes and weights on [-1, 1] (scipy), cached by ``n``.
-
-    Returned arrays are read-only; nodes increase from -1 to 1.
-    """
-    return _gauss_legendre_cached(int(n))
 
 
 #: Columns appended after the angular values in each row of :func:`_accumulate`:

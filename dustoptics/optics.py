@@ -42,7 +42,8 @@ import numpy as np
 
 from dustoptics import mie
 from dustoptics._validation import as_increasing_grid, check_choice, check_open_interval
-from dustoptics.quadrature import QuadratureSettings, initial_panels, panel_nodes
+from dustoptics.materials import RefractiveIndex, get_material
+from dustoptics.quadrature import QuadratureSettings, gauss_legendre, initial_panels, panel_nodes
 from dustoptics.sizedist import SizeDistribution
 
 __all__ = [
@@ -176,18 +177,14 @@ def resolve_refractive_index(
     k < 0, n <= 0, non-finite values, or a wavelength outside the data.
     """
     if isinstance(refractive_index, str):
-        from dustoptics import materials
-
-        refractive_index = materials.get_material(refractive_index)
-    if callable(refractive_index):
-        try:
-            m = np.asarray(refractive_index(wavelength_nm), dtype=np.complex128)
-        except (TypeError, ValueError) as exc:
-            if isinstance(exc, ValueError) and "range" in str(exc):
-                raise
-            m = np.array([complex(refractive_index(float(w))) for w in wavelength_nm])
-        if m.shape != wavelength_nm.shape:
-            m = np.array([complex(refractive_index(float(w))) for w in wavelength_nm])
+        refractive_index = get_material(refractive_index)
+    if isinstance(refractive_index, RefractiveIndex):
+        # Materials evaluate arrays and raise for wavelengths outside their data.
+        m = np.asarray(refractive_index(wavelength_nm), dtype=np.complex128)
+        label = _describe(refractive_index)
+    elif callable(refractive_index):
+        # Any other callable is asked one wavelength at a time.
+        m = np.array([complex(refractive_index(float(w))) for w in wavelength_nm])
         label = _describe(refractive_index)
     elif np.ndim(refractive_index) == 0:
         try:
@@ -295,7 +292,7 @@ class _WavelengthSolver:
         # nodes integrate |S|^2 P_l (degree <= 4 nmax) exactly.
         self.legendre = n_half < mu_out.size and not distribution.is_monodisperse
         if self.legendre:
-            mu_g, w_g = mie.gauss_legendre_mu(2 * n_half)
+            mu_g, w_g = gauss_legendre(2 * n_half)
             self.mu_half = np.ascontiguousarray(mu_g[n_half:])
             self.w_half = np.ascontiguousarray(w_g[n_half:])
             pi_t, tau_t = mie._pi_tau_table(self.mu_half, self.nmax)

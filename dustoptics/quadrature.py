@@ -45,7 +45,14 @@ from scipy.special import roots_legendre, wrightomega
 from dustoptics._validation import check_open_interval, check_positive
 from dustoptics.sizedist import SizeDistribution
 
-__all__ = ["QuadratureSettings", "RadiusNodes", "initial_panels", "panel_nodes", "radius_nodes"]
+__all__ = [
+    "QuadratureSettings",
+    "RadiusNodes",
+    "gauss_legendre",
+    "initial_panels",
+    "panel_nodes",
+    "radius_nodes",
+]
 
 _UPPER_MOMENT = 6
 
@@ -116,9 +123,16 @@ class RadiusNodes:
     radius_um: np.ndarray
 
 
-@lru_cache(maxsize=16)
-def _gauss_legendre(n: int) -> tuple[np.ndarray, np.ndarray]:
-    t, w = roots_legendre(n)
+@lru_cache(maxsize=64)
+def gauss_legendre(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Gauss-Legendre nodes (increasing) and weights on [-1, 1], cached by ``n``.
+
+    From scipy.special.roots_legendre; the arrays are read-only.  Used for the
+    radius panels and for the angular grid of the Legendre projection.
+    """
+    t, w = roots_legendre(int(n))
+    t.setflags(write=False)
+    w.setflags(write=False)
     return t, w
 
 
@@ -186,7 +200,7 @@ def panel_nodes(
     upper = np.asarray(upper_s, dtype=np.float64)
     half = 0.5 * (upper - lower)
     mid = 0.5 * (upper + lower)
-    t, gw = _gauss_legendre(settings.nodes_per_panel)
+    t, gw = gauss_legendre(settings.nodes_per_panel)
     s = (mid[:, None] + half[:, None] * t[None, :]).ravel()
     ds_weight = (half[:, None] * gw[None, :]).ravel()
     x = _unstretch(s, x_c)
