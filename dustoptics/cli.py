@@ -9,7 +9,7 @@ Usage::
     dustoptics --version
 
 ``build`` computes a preset's table with :func:`dustoptics.compute_optics` and
-writes it into ``DIR/NAME/`` with :func:`dustoptics.export.write_seed_csv`.
+writes it into ``DIR/NAME/`` with :func:`dustoptics.io.seed_csv.write_seed_csv`.
 The presets are defined in :data:`PRESETS`, the only place in the package that
 names them.
 
@@ -194,7 +194,8 @@ def build(
         Bad parameter (named in the message).
     """
     import dustoptics as do
-    from dustoptics import export
+    from dustoptics.io import seed_csv as export
+    from dustoptics.table import Table
 
     if name not in PRESETS:
         raise KeyError(f"unknown preset {name!r}; valid names: {', '.join(PRESETS)}")
@@ -238,8 +239,19 @@ def build(
     seconds = time.perf_counter() - start
     messages = [str(w.message) for w in caught]
     _note(progress, f"{name}: computed in {seconds:.1f} s; writing {target}")
-    metadata = {"preset": name, "description": preset.description, "source": preset.source}
-    paths = export.write_seed_csv(table, target, overwrite=overwrite, metadata=metadata)
+    inputs = {
+        "preset": name,
+        "description": preset.description,
+        "source": preset.source,
+        "material": table.material,
+        "distribution": table.distribution.to_dict(),
+        "weighting": table.weighting,
+        "rtol": float(table.rtol),
+        "wavelengths_nm": table.wavelength_nm.tolist(),
+        "n_theta": int(table.theta_deg.size),
+    }
+    result = Table.from_optics(table, name=name, inputs=inputs, notes=tuple(messages))
+    paths = export.write_seed_csv(result, target, overwrite=overwrite)
     return BuildResult(name=name, paths=paths, table=table, seconds=seconds, warnings=messages)
 
 

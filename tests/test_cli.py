@@ -14,7 +14,7 @@ from _shared import shared_path
 
 import dustoptics as do
 from dustoptics import cli
-from dustoptics.export import (
+from dustoptics.io.seed_csv import (
     EXTINCTION_FILENAME,
     PHASE_FILENAME,
     SEED_CSV_FILES,

@@ -1,6 +1,86 @@
 """Readers and writers of :class:`dustoptics.table.Table` in renderers' formats.
 
 One module per format; each writes atomically (a temporary file in the target
-directory, renamed into place) and refuses to replace existing files unless
-asked to.
+directory, renamed into place; :mod:`dustoptics.io._atomic`) and refuses to
+replace existing files unless asked to (``overwrite=True``).  Readers raise
+:class:`FormatError` (a :class:`ValueError`) naming the file and the problem.
+
+- :mod:`~dustoptics.io.hdf5`: one netCDF-4 compatible HDF5 file
+  (:func:`write_hdf5`, :func:`read_hdf5`).
+- :mod:`~dustoptics.io.seed_csv`: the seed framework's CSV files with a JSON
+  provenance sidecar (:func:`write_seed_csv`, :func:`read_seed_csv`).
+- :mod:`~dustoptics.io.cosmoscout`: CosmoScout VR's per-constituent CSV set
+  (:func:`write_cosmoscout_constituent`, :func:`write_cosmoscout_set`,
+  :func:`read_cosmoscout_constituent`, :func:`check_cosmoscout_set`).
+
+:data:`FORMATS` maps a format name (the command line's ``--format``) to a
+writer ``writer(table, out_dir, *, overwrite=False, **options) -> list[Path]``
+that writes one table into a directory.  Each format module registers its
+writer here when imported; this package imports them all.
 """
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from dustoptics.io._atomic import FormatError
+
+#: A writer of one table into a directory: ``(table, out_dir, *, overwrite, **options) -> paths``.
+Writer = Callable[..., list[Path]]
+
+#: Format name -> writer; filled by each format module when it is imported.
+FORMATS: dict[str, Writer] = {}
+
+
+def register_format(name: str, writer: Writer) -> None:
+    """Register ``writer`` under ``name`` in :data:`FORMATS` (names are unique)."""
+    if name in FORMATS and FORMATS[name] is not writer:
+        raise ValueError(f"format {name!r} is already registered (to {FORMATS[name].__qualname__})")
+    FORMATS[name] = writer
+
+
+def write(table: Any, out_dir: Any, *, format: str, overwrite: bool = False, **options: Any) -> list[Path]:
+    """Write ``table`` into ``out_dir`` in the named format (see :data:`FORMATS`).
+
+    Raises
+    ------
+    ValueError
+        Unknown format (the message lists the valid names).
+    """
+    if format not in FORMATS:
+        raise ValueError(f"format must be one of {', '.join(map(repr, FORMATS))}; got {format!r}")
+    return FORMATS[format](table, out_dir, overwrite=overwrite, **options)
+
+
+from dustoptics.io import cosmoscout, hdf5, seed_csv  # noqa: E402  (they register into FORMATS)
+from dustoptics.io.cosmoscout import (  # noqa: E402
+    CosmoScoutConstituent,
+    check_cosmoscout_set,
+    read_cosmoscout_constituent,
+    write_cosmoscout_constituent,
+    write_cosmoscout_set,
+)
+from dustoptics.io.hdf5 import read_hdf5, write_hdf5  # noqa: E402
+from dustoptics.io.seed_csv import read_seed_csv, write_seed_csv  # noqa: E402
+
+__all__ = [
+    "FORMATS",
+    "CosmoScoutConstituent",
+    "FormatError",
+    "Writer",
+    "check_cosmoscout_set",
+    "cosmoscout",
+    "hdf5",
+    "read_cosmoscout_constituent",
+    "read_hdf5",
+    "read_seed_csv",
+    "register_format",
+    "seed_csv",
+    "write",
+    "write_cosmoscout_constituent",
+    "write_cosmoscout_set",
+    "write_hdf5",
+    "write_seed_csv",
+]
