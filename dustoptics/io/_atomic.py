@@ -153,7 +153,7 @@ def write_files(contents: Mapping[Path, Content], *, overwrite: bool = False) ->
         module docstring).
     """
     targets = [Path(p) for p in contents]
-    if len(set(targets)) != len(targets):
+    if len({os.path.abspath(t) for t in targets}) != len(targets):
         raise ValueError(f"write_files: duplicate targets in {[str(t) for t in targets]}")
     check_targets(targets, overwrite=overwrite)
     created_dirs: list[Path] = []

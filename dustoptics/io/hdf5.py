@@ -288,7 +288,7 @@ def _check_derived(path: Path, f: Any, table: Table) -> None:
             i = int(np.argmax(values != expected[key]))
             raise FormatError(
                 f"{path}: derived variable {key!r} disagrees with {DERIVED[key]} at wavelength "
-                f"{table.wavelength_nm[i]!r} nm: file {values[i]!r}, recomputed {expected[key][i]!r}"
+                f"{float(table.wavelength_nm[i])!r} nm: file {float(values[i])!r}, recomputed {float(expected[key][i])!r}"
             )
 
 

@@ -444,8 +444,8 @@ def _check_derived(path: Path, table: Table, columns: dict[str, np.ndarray]) -> 
             i = int(np.argmax(columns[attribute] != expected))
             raise FormatError(
                 f"{path}: column {header} disagrees with the stored columns at "
-                f"wavelength {table.wavelength_nm[i]!r} nm: file {columns[attribute][i]!r}, "
-                f"recomputed {expected[i]!r}"
+                f"wavelength {float(table.wavelength_nm[i])!r} nm: file {float(columns[attribute][i])!r}, "
+                f"recomputed {float(expected[i])!r}"
             )
 
 
