@@ -51,6 +51,7 @@ import numpy as np
 
 from dustoptics._validation import as_float_array, check_choice, check_positive
 from dustoptics.colour import CMF_MODELS, band_weights
+from dustoptics.io import register_format
 from dustoptics.io._atomic import write_files
 from dustoptics.io.texture import _safe_stem
 from dustoptics.phase import sphere_integral
@@ -609,3 +610,6 @@ def write_glsl(
     out = Path(out_dir_or_path)
     target = out if out.suffix == ".glsl" else out / f"{_safe_stem(table.name)}_phase.glsl"
     return write_files({target: source.encode("ascii")}, overwrite=overwrite)
+
+
+register_format("glsl", write_glsl)

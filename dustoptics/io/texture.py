@@ -50,6 +50,7 @@ from typing import Any
 import numpy as np
 
 from dustoptics._validation import check_choice
+from dustoptics.io import register_format
 from dustoptics.io._atomic import FormatError, write_files
 from dustoptics.phase import sphere_integral
 from dustoptics.table import PHASE_NORMALIZATION
@@ -421,3 +422,6 @@ def read_texture(sidecar_path: str | os.PathLike[str]) -> TextureData:
         sampling=sampling,
         metadata=meta,
     )
+
+
+register_format("texture", write_texture)

@@ -1,0 +1,157 @@
+"""Raw float32 texture with JSON sidecar: round trip, sidecar content, both samplings, damage."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+
+import numpy as np
+import pytest
+
+from dustoptics.io import FormatError
+from dustoptics.io.texture import TEXTURE_FORMAT, read_texture, texture_values, write_texture
+from dustoptics.phase import henyey_greenstein
+from dustoptics.table import Provenance, Source, Table
+
+
+def make_table(n_theta: int = 181) -> Table:
+    """Henyey-Greenstein phase functions (g = 0.8, 0.7, 0.6) at 440, 550, 680 nm."""
+    theta = np.linspace(0.0, 180.0, n_theta)
+    g = np.array([0.8, 0.7, 0.6])
+    phase = np.array([henyey_greenstein(np.cos(np.deg2rad(theta)), g=x) for x in g])
+    return Table(
+        name="hg test/1",  # a name that is not a safe file name
+        wavelength_nm=np.array([440.0, 550.0, 680.0]),
+        theta_deg=theta,
+        phase=phase,
+        g=g,
+        provenance=Provenance(
+            inputs={"model": "henyey_greenstein", "g": g.tolist()},
+            sources=(Source(name="hg", role="phase function", citation="Henyey & Greenstein 1941"),),
+        ),
+    )
+
+
+def test_theta_round_trip_and_sidecar(tmp_path) -> None:
+    table = make_table()
+    raw, side = write_texture(table, tmp_path, n_angles=361)
+    assert (raw.name, side.name) == ("hg_test_1_phase_theta.raw", "hg_test_1_phase_theta.json")
+    data = raw.read_bytes()
+    assert len(data) == 3 * 361 * 4
+    tex = read_texture(side)
+    theta = np.linspace(0.0, 180.0, 361)
+    expected = table.phase_at(theta).astype("<f4")
+    np.testing.assert_array_equal(tex.phase, expected)
+    assert tex.phase.dtype == np.float32 and not tex.phase.flags.writeable
+    # Memory order: row = wavelength, angle fastest; little-endian float32.
+    assert data[4 * 361 : 4 * 362] == np.float32(expected[1, 0]).astype("<f4").tobytes()
+    np.testing.assert_array_equal(tex.theta_deg, theta)
+    np.testing.assert_array_equal(tex.wavelength_nm, table.wavelength_nm)
+    assert tex.mu is None and tex.sampling == "theta"
+    meta = json.loads(side.read_text())
+    assert meta["format"] == TEXTURE_FORMAT
+    assert meta["dtype"] == "<f4" and meta["byte_order"] == "little-endian"
+    assert meta["shape"] == [3, 361]
+    assert meta["gl"]["width"] == 361 and meta["gl"]["height"] == 3
+    assert meta["sha256"] == hashlib.sha256(data).hexdigest()
+    assert meta["axes"][0]["unit"] == "nm" and meta["axes"][1]["unit"] == "deg"
+    assert meta["sampling_description"].startswith("uniform in theta_deg from 0 (forward, column 0) to 180")
+    assert meta["unit"] == "sr^-1"
+    assert meta["normalization"] == "2 pi int_{-1}^{1} P(mu) dmu = 1 (per steradian)"
+    assert meta["table"] == "hg test/1"
+    assert meta["input_hash"] == table.provenance.input_hash
+    assert meta["provenance"]["sources"][0]["citation"] == "Henyey & Greenstein 1941"
+    # The HG table read linearly in angle at 1 deg integrates to 1 within 1e-3
+    # (its own discretization); the texture keeps that.
+    np.testing.assert_allclose(meta["sphere_integral_of_samples"], 1.0, atol=1e-3)
+
+
+def test_cos_sampling_values_and_endpoints(tmp_path) -> None:
+    table = make_table()
+    raw, side = write_texture(table, tmp_path, sampling="cos", n_angles=2049)
+    tex = read_texture(side)
+    mu = np.linspace(1.0, -1.0, 2049)
+    assert tex.mu[0] == 1.0 and tex.mu[-1] == -1.0 and tex.mu[1024] == 0.0
+    np.testing.assert_array_equal(tex.mu, mu)
+    expected = table.phase_at(np.degrees(np.arccos(mu))).astype(np.float32)
+    np.testing.assert_array_equal(tex.phase, expected)
+    np.testing.assert_array_equal(tex.phase[:, 0], table.phase[:, 0].astype(np.float32))
+    np.testing.assert_array_equal(tex.phase[:, -1], table.phase[:, -1].astype(np.float32))
+    meta = tex.metadata
+    assert meta["axes"][1]["name"] == "mu"
+    assert "from 1 (forward, column 0) to -1 (backward, column 2048)" in meta["sampling_description"]
+    # Linear in mu at 2049 samples: HG g = 0.8 loses its peak's curvature; the
+    # trapezoid integral (exact for that interpolation) is recorded, near 1.
+    np.testing.assert_allclose(meta["sphere_integral_of_samples"], 1.0, atol=2e-3)
+    assert raw.name == "hg_test_1_phase_cos.raw"
+
+
+def test_deterministic_bytes(tmp_path) -> None:
+    table = make_table()
+    a = write_texture(table, tmp_path / "a", sampling="cos")
+    b = write_texture(table, tmp_path / "b", sampling="cos")
+    for x, y in zip(a, b):
+        assert x.read_bytes() == y.read_bytes()
+
+
+def test_no_overwrite_without_force(tmp_path) -> None:
+    table = make_table()
+    raw, side = write_texture(table, tmp_path)
+    before = raw.read_bytes()
+    with pytest.raises(FileExistsError, match="overwrite=True"):
+        write_texture(table, tmp_path, n_angles=181)
+    assert raw.read_bytes() == before
+    write_texture(table, tmp_path, n_angles=181, overwrite=True)
+    assert len(raw.read_bytes()) == 3 * 181 * 4
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted([raw.name, side.name])  # no temporaries
+
+
+def test_truncated_raw_file_is_a_clear_error(tmp_path) -> None:
+    raw, side = write_texture(make_table(), tmp_path)
+    raw.write_bytes(raw.read_bytes()[:-4])
+    with pytest.raises(FormatError, match=r"truncated: 8648 bytes, but shape \[3, 721\] of float32 needs 8652"):
+        read_texture(side)
+
+
+def test_altered_raw_file_fails_checksum(tmp_path) -> None:
+    raw, side = write_texture(make_table(), tmp_path)
+    data = bytearray(raw.read_bytes())
+    data[0] ^= 1
+    raw.write_bytes(bytes(data))
+    with pytest.raises(FormatError, match="SHA-256 .* differs from the sidecar's"):
+        read_texture(side)
+
+
+def test_not_a_sidecar(tmp_path) -> None:
+    path = tmp_path / "x.json"
+    path.write_text('{"format": "something else"}')
+    with pytest.raises(FormatError, match="not a 'dustoptics-phase-texture/1' sidecar"):
+        read_texture(path)
+    path.write_text("{")
+    with pytest.raises(FormatError, match="cannot read the texture sidecar as JSON"):
+        read_texture(path)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"sampling": "log"}, "sampling must be one of 'theta', 'cos'"),
+        ({"n_angles": 1}, "n_angles must be an integer >= 2"),
+        ({"n_angles": 100.0}, "n_angles must be an integer >= 2"),
+        ({"stem": "../x"}, "stem must be a non-empty file-name stem"),
+    ],
+)
+def test_errors(tmp_path, kwargs: dict, message: str) -> None:
+    with pytest.raises(ValueError, match=message):
+        write_texture(make_table(), tmp_path, **kwargs)
+
+
+def test_texture_values_two_samples() -> None:
+    # The smallest texture: the two ends, forward and backward, in both samplings.
+    table = make_table()
+    for sampling in ("theta", "cos"):
+        phase, theta, _ = texture_values(table, sampling=sampling, n_angles=2)
+        assert theta.tolist() == [0.0, 180.0]
+        np.testing.assert_array_equal(phase, table.phase[:, [0, -1]].astype(np.float32))
+    assert math.isclose(float(np.degrees(np.arccos(-1.0))), 180.0)
