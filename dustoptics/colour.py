@@ -34,6 +34,7 @@ References
 from __future__ import annotations
 
 from dataclasses import dataclass
+from itertools import pairwise
 from typing import Any
 
 import numpy as np
@@ -151,7 +152,7 @@ def _pieces(low: float, high: float) -> tuple[np.ndarray, np.ndarray]:
     cuts = sorted({mu for lobes in _LOBES for _, mu, _, _ in lobes if low < mu < high})
     edges = [low, *cuts, high]
     starts, ends = [], []
-    for a, b in zip(edges[:-1], edges[1:]):
+    for a, b in pairwise(edges):
         n = max(1, int(np.ceil((b - a) / _MAX_PIECE_NM)))
         e = np.linspace(a, b, n + 1)
         starts.append(e[:-1])

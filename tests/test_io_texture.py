@@ -10,7 +10,12 @@ import numpy as np
 import pytest
 
 from dustoptics.io import FormatError
-from dustoptics.io.texture import TEXTURE_FORMAT, read_texture, texture_values, write_texture
+from dustoptics.io.texture import (
+    TEXTURE_FORMAT,
+    read_texture,
+    texture_values,
+    write_texture,
+)
 from dustoptics.phase import henyey_greenstein
 from dustoptics.table import Provenance, Source, Table
 

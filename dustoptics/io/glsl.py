@@ -4,7 +4,11 @@ The snippet follows the seed shader: a constant array of ``vec3`` (three
 channels, by default R, G, B = 680, 550, 440 nm) sampled uniformly over
 0..180 deg, and ``vec3 MiePhaseFunction(float nu)`` that takes the cosine of
 the scattering angle, computes ``x = (N - 1) acos(nu) / pi`` and interpolates
-linearly between samples ``floor(x)`` and ``floor(x) + 1``.  Per-channel
+linearly between samples ``floor(x)`` and ``floor(x) + 1``.  By default
+``acos`` is computed by a polynomial in the snippet (Abramowitz & Stegun
+4.4.46, error 2.5e-7 rad in float32), because GLSL leaves the builtin's
+precision to the driver (Mesa llvmpipe's is off by up to 1.6e-4 rad);
+``acos="builtin"`` keeps the seed's call.  Per-channel
 constants give the asymmetry parameter and, when the table has them, the
 cross-sections, single-scattering albedo and volume coefficients.
 
@@ -322,6 +326,11 @@ def _vec3(values: Any) -> str:
     return "vec3(" + ", ".join(glsl_float(v) for v in values) + ")"
 
 
+def _const(kind: str, name: str, value: str, comment: str) -> str:
+    """One constant declaration with its unit comment."""
+    return f"const {kind} {name} = {value};  // {comment}"
+
+
 def _text(value: Any) -> str:
     """One-line ASCII rendering of free text for a comment (quoted, escaped)."""
     return json.dumps(str(value), ensure_ascii=True)
@@ -486,35 +495,35 @@ def glsl_snippet(
         + ("GLSL builtin" if acos == "builtin" else "Abramowitz & Stegun 4.4.46 polynomial"),
         "",
         f"const int {names['PHASE_N']} = {n};",
-        f"const float {names['PHASE_INDEX_PER_RAD']} = {glsl_float((n - 1) / math.pi)};"
-        f"  // (N - 1) / pi [rad^-1]",
-        f"const vec3 {names['WAVELENGTH_NM']} = {_vec3(ch.wavelength_nm)};"
-        + ("  // [nm]" if ch.mode == "wavelengths" else "  // band mean wavelengths [nm]"),
-        f"const vec3 {names['G']} = {_vec3(ch.g)};  // asymmetry parameter [-]",
+        _const("float", names["PHASE_INDEX_PER_RAD"], glsl_float((n - 1) / math.pi),
+               "(N - 1) / pi [rad^-1]"),
+        _const("vec3", names["WAVELENGTH_NM"], _vec3(ch.wavelength_nm),
+               "[nm]" if ch.mode == "wavelengths" else "band mean wavelengths [nm]"),
+        _const("vec3", names["G"], _vec3(ch.g), "asymmetry parameter [-]"),
     ]
     if ch.cext_m2 is not None and ch.csca_m2 is not None:
         cabs = ch.cext_m2 - ch.csca_m2
         lines += [
-            f"const vec3 {names['CEXT_M2']} = {_vec3(ch.cext_m2)};"
-            "  // mean extinction cross-section per particle [m^2]",
-            f"const vec3 {names['CSCA_M2']} = {_vec3(ch.csca_m2)};"
-            "  // mean scattering cross-section per particle [m^2]",
-            f"const vec3 {names['CABS_M2']} = {_vec3(cabs)};"
-            "  // mean absorption cross-section per particle [m^2]",
-            f"const vec3 {names['SSA']} = {_vec3(ch.csca_m2 / ch.cext_m2)};"
-            "  // single-scattering albedo csca / cext [-]",
+            _const("vec3", names["CEXT_M2"], _vec3(ch.cext_m2),
+                   "mean extinction cross-section per particle [m^2]"),
+            _const("vec3", names["CSCA_M2"], _vec3(ch.csca_m2),
+                   "mean scattering cross-section per particle [m^2]"),
+            _const("vec3", names["CABS_M2"], _vec3(cabs),
+                   "mean absorption cross-section per particle [m^2]"),
+            _const("vec3", names["SSA"], _vec3(ch.csca_m2 / ch.cext_m2),
+                   "single-scattering albedo csca / cext [-]"),
         ]
         if ch.number_density_per_m3 is not None:
             density = ch.number_density_per_m3
             lines += [
-                f"const float {names['NUMBER_DENSITY_PER_M3']} = {glsl_float(density)};"
-                "  // number density of the beta coefficients [m^-3]",
-                f"const vec3 {names['BETA_EXT_PER_M']} = {_vec3(density * ch.cext_m2)};"
-                "  // extinction coefficient [m^-1]",
-                f"const vec3 {names['BETA_SCA_PER_M']} = {_vec3(density * ch.csca_m2)};"
-                "  // scattering coefficient [m^-1]",
-                f"const vec3 {names['BETA_ABS_PER_M']} = {_vec3(density * cabs)};"
-                "  // absorption coefficient [m^-1]",
+                _const("float", names["NUMBER_DENSITY_PER_M3"], glsl_float(density),
+                       "number density of the beta coefficients [m^-3]"),
+                _const("vec3", names["BETA_EXT_PER_M"], _vec3(density * ch.cext_m2),
+                       "extinction coefficient [m^-1]"),
+                _const("vec3", names["BETA_SCA_PER_M"], _vec3(density * ch.csca_m2),
+                       "scattering coefficient [m^-1]"),
+                _const("vec3", names["BETA_ABS_PER_M"], _vec3(density * cabs),
+                       "absorption coefficient [m^-1]"),
             ]
     lines += [
         "",
