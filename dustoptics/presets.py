@@ -1,0 +1,127 @@
+"""Named dust models: the package's preset configuration files.
+
+Each preset is a TOML file in ``dustoptics/data/presets/`` that follows the
+schema of :mod:`dustoptics.config`, with comments saying what it is, its
+sources with full citations and every choice its sources left open.  Copy one
+(:func:`preset_text`), edit it, and build it with
+:func:`dustoptics.config.load_config` and :func:`dustoptics.config.build_table`.
+
+========================  ======================================================
+``blue-moons``            Blue Moon's dust (Meyran 2022 after Ehlers et al. 2014),
+                          physical cross-section weighting, default grids
+                          (the default preset)
+``blue-moons-seed``       the seed thesis's published table as it made it:
+                          number weighting, 1,800 angles
+``hybrid``                ``blue-moons`` blended 50/50 with Costa et al.'s Mars
+                          DHG, g1 clamped outside 440-680 nm
+``hybrid-seed``           ``blue-moons-seed`` blended 50/50 with Costa's DHG,
+                          Meyran's quadratic g1 as the seed used it
+``costa``                 Costa et al. 2021's Mars DHG alone (phase only)
+``collienne``             Collienne et al. 2013's Cornette-Shanks aerosol,
+                          g = 0.8 (phase only)
+``cosmoscout-mars``       CosmoScout VR's two-mode Mars aerosols, computed by
+                          quadrature instead of random radii
+========================  ======================================================
+
+>>> from dustoptics import presets
+>>> presets.list_presets()[:2]
+['blue-moons', 'blue-moons-seed']
+>>> presets.load_preset("blue-moons").optics.weighting
+'scattering'
+"""
+
+from __future__ import annotations
+
+from importlib import resources
+from typing import Any, Final
+
+from dustoptics.config import BuildConfig, build_table, parse_config
+from dustoptics.table import Table
+
+__all__ = ["DEFAULT_PRESET", "build_preset", "list_presets", "load_preset", "preset_text"]
+
+#: The preset built when none is named.
+DEFAULT_PRESET: Final = "blue-moons"
+
+_SUFFIX: Final = ".toml"
+
+
+def _directory() -> Any:
+    return resources.files("dustoptics").joinpath("data", "presets")
+
+
+def list_presets() -> list[str]:
+    """Names of the shipped presets, sorted.
+
+    Returns
+    -------
+    list of str
+    """
+    return sorted(
+        entry.name[: -len(_SUFFIX)]
+        for entry in _directory().iterdir()
+        if entry.name.endswith(_SUFFIX) and entry.is_file()
+    )
+
+
+def _check_name(name: Any) -> str:
+    names = list_presets()
+    if not isinstance(name, str) or name not in names:
+        raise ValueError(f"unknown preset {name!r}; valid presets: {', '.join(names)}")
+    return name
+
+
+def preset_text(name: str) -> str:
+    """The TOML text of a preset, to read or to copy and edit.
+
+    Parameters
+    ----------
+    name : str
+        A name of :func:`list_presets`.
+
+    Returns
+    -------
+    str
+
+    Raises
+    ------
+    ValueError
+        Unknown name (the message lists the valid ones).
+    """
+    return _directory().joinpath(_check_name(name) + _SUFFIX).read_text(encoding="utf-8")
+
+
+def load_preset(name: str) -> BuildConfig:
+    """A preset's validated configuration.
+
+    Raises
+    ------
+    ValueError
+        Unknown name (the message lists the valid ones).
+    """
+    config = parse_config(preset_text(name), source=f"preset {name}{_SUFFIX}")
+    if config.name != name:  # a packaging mistake, not a user error
+        raise RuntimeError(f"preset file {name}{_SUFFIX} declares name = {config.name!r}")
+    return config
+
+
+def build_preset(name: str = DEFAULT_PRESET, **kwargs: Any) -> Table:
+    """Compute a preset's table.
+
+    Parameters
+    ----------
+    name : str, optional
+        A name of :func:`list_presets`; default :data:`DEFAULT_PRESET`.
+    **kwargs
+        ``workers`` and ``progress`` of :func:`dustoptics.config.build_table`.
+
+    Returns
+    -------
+    Table
+
+    Raises
+    ------
+    ValueError
+        Unknown name (the message lists the valid ones).
+    """
+    return build_table(load_preset(name), **kwargs)
