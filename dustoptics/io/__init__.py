@@ -54,16 +54,16 @@ def write(table: Any, out_dir: Any, *, format: str, overwrite: bool = False, **o
     return FORMATS[format](table, out_dir, overwrite=overwrite, **options)
 
 
-from dustoptics.io import cosmoscout, hdf5, seed_csv  # noqa: E402  (they register into FORMATS)
-from dustoptics.io.cosmoscout import (  # noqa: E402
+from dustoptics.io import cosmoscout, hdf5, seed_csv
+from dustoptics.io.cosmoscout import (
     CosmoScoutConstituent,
     check_cosmoscout_set,
     read_cosmoscout_constituent,
     write_cosmoscout_constituent,
     write_cosmoscout_set,
 )
-from dustoptics.io.hdf5 import read_hdf5, write_hdf5  # noqa: E402
-from dustoptics.io.seed_csv import read_seed_csv, write_seed_csv  # noqa: E402
+from dustoptics.io.hdf5 import read_hdf5, write_hdf5
+from dustoptics.io.seed_csv import read_seed_csv, write_seed_csv
 
 __all__ = [
     "FORMATS",

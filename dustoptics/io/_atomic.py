@@ -31,7 +31,7 @@ import tempfile
 from collections.abc import Callable, Mapping
 from pathlib import Path
 
-__all__ = ["FILE_MODE", "FormatError", "Content", "check_targets", "write_files"]
+__all__ = ["FILE_MODE", "Content", "FormatError", "check_targets", "write_files"]
 
 #: Permission bits of written files (tables are meant to be shared and read).
 FILE_MODE = 0o644

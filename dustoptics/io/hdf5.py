@@ -51,7 +51,13 @@ import numpy as np
 
 from dustoptics.io import register_format
 from dustoptics.io._atomic import FormatError, write_files
-from dustoptics.table import PHASE_NORMALIZATION, UNITS, Provenance, Table, canonical_json
+from dustoptics.table import (
+    PHASE_NORMALIZATION,
+    UNITS,
+    Provenance,
+    Table,
+    canonical_json,
+)
 
 __all__ = ["CONVENTIONS", "DERIVED", "HDF5_SUFFIX", "read_hdf5", "write_hdf5", "write_hdf5_files"]
 
@@ -275,19 +281,19 @@ def _read_array(path: Path, f: Any, key: str, shape: tuple[int, ...] | None, *, 
 
 def _check_derived(path: Path, f: Any, table: Table) -> None:
     expected = _derived_values(table)
-    for key in DERIVED:
+    for key, formula in DERIVED.items():
         if key not in f:
             continue
         if key not in expected:
             raise FormatError(
-                f"{path}: variable {key!r} ({DERIVED[key]}) is present but the stored variables "
+                f"{path}: variable {key!r} ({formula}) is present but the stored variables "
                 "it derives from are not"
             )
         values = _read_array(path, f, key, expected[key].shape, required=True)
         if not np.array_equal(values, expected[key]):
             i = int(np.argmax(values != expected[key]))
             raise FormatError(
-                f"{path}: derived variable {key!r} disagrees with {DERIVED[key]} at wavelength "
+                f"{path}: derived variable {key!r} disagrees with {formula} at wavelength "
                 f"{float(table.wavelength_nm[i])!r} nm: file {float(values[i])!r}, recomputed {float(expected[key][i])!r}"
             )
 

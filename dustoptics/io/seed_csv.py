@@ -47,7 +47,15 @@ import numpy as np
 
 from dustoptics.io import register_format
 from dustoptics.io._atomic import FormatError, write_files
-from dustoptics.io._text import check_increasing, floats, number, parse, read_rows, shift, wavelength_label
+from dustoptics.io._text import (
+    check_increasing,
+    floats,
+    number,
+    parse,
+    read_rows,
+    shift,
+    wavelength_label,
+)
 from dustoptics.table import PHASE_NORMALIZATION, UNITS, Provenance, Table
 
 __all__ = [
@@ -93,6 +101,15 @@ EXTINCTION_COLUMNS: tuple[tuple[str, str, str, int, bool], ...] = (
     ("g", "1", "g", 0, True),
 )
 _EFFICIENCIES = ("qext", "qsca")
+#: Quantities of the summary whose units it states.
+_SUMMARY_UNITS = (
+    "wavelength_nm",
+    "error_estimate",
+    "cross_section_error_estimate",
+    "mean_geometric_cross_section_um2",
+    "number_density_per_m3",
+    "g",
+)
 
 
 @dataclass(frozen=True)
@@ -189,13 +206,7 @@ def _summary_bytes(table: Table, hashes: dict[str, str]) -> bytes:
         "number_density_per_m3": table.number_density_per_m3,
         "per_wavelength": per_wavelength,
         "files": files,
-        "units": {
-            key: UNITS[key][0]
-            for key in (
-                "wavelength_nm", "error_estimate", "cross_section_error_estimate",
-                "mean_geometric_cross_section_um2", "number_density_per_m3", "g",
-            )
-        },  # fmt: skip
+        "units": {key: UNITS[key][0] for key in _SUMMARY_UNITS},
     }
     text = json.dumps(summary, indent=2, sort_keys=True, allow_nan=False, ensure_ascii=True)
     return (text + "\n").encode("ascii")
