@@ -95,8 +95,10 @@ def _log_derivative(z: complex, d: np.ndarray) -> None:
     n_top = d.shape[0] - 1
     dn = _log_derivative_cf(z, n_top)
     d[n_top] = dn
+    inv_z = 1.0 / z  # one complex division, not two per order
     for n in range(n_top, 0, -1):
-        dn = n / z - 1.0 / (dn + n / z)
+        n_z = n * inv_z
+        dn = n_z - 1.0 / (dn + n_z)
         d[n - 1] = dn
 
 
@@ -135,6 +137,21 @@ def _riccati_psi(x: float, n_start: int, psi: np.ndarray) -> None:
         psi[k] *= scale
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _divide(num: complex, den: complex) -> complex:
+    """num / den as num conj(den) / |den|^2.
+
+    Cheaper than the general complex division, which guards against
+    |den|^2 overflowing; here |den| = |t xi_n - xi_{n-1}| stays far below
+    1e150 for every size parameter above 1e-40.
+    """
+    scale = 1.0 / (den.real * den.real + den.imag * den.imag)
+    return complex(
+        (num.real * den.real + num.imag * den.imag) * scale,
+        (num.imag * den.real - num.real * den.imag) * scale,
+    )
+
+
 @njit(cache=True, nogil=True)
 def _miller_start(x: float, nmax: int) -> int:
     return int(max(nmax, x) + 25 + 1.5 * np.sqrt(x))
@@ -153,16 +170,17 @@ def _mie_coefficients(
     _log_derivative(m * x, d[: nmax + 1])
     _riccati_psi(x, _miller_start(x, nmax), psi[: nmax + 1])
     inv_x = 1.0 / x
+    inv_m = 1.0 / m
     chi_prev = np.cos(x)  # chi_0
     chi_cur = np.cos(x) * inv_x + np.sin(x)  # chi_1
     for n in range(1, nmax + 1):
         xi_n = psi[n] - 1j * chi_cur
         xi_prev = psi[n - 1] - 1j * chi_prev
         n_x = n * inv_x
-        t = d[n] / m + n_x
-        a[n - 1] = (t * psi[n] - psi[n - 1]) / (t * xi_n - xi_prev)
+        t = d[n] * inv_m + n_x
+        a[n - 1] = _divide(t * psi[n] - psi[n - 1], t * xi_n - xi_prev)
         t = m * d[n] + n_x
-        b[n - 1] = (t * psi[n] - psi[n - 1]) / (t * xi_n - xi_prev)
+        b[n - 1] = _divide(t * psi[n] - psi[n - 1], t * xi_n - xi_prev)
         chi_next = (2 * n + 1) * inv_x * chi_cur - chi_prev
         chi_prev = chi_cur
         chi_cur = chi_next
@@ -491,6 +509,67 @@ def _legendre_project(mu_half: np.ndarray, w_half: np.ndarray, f: np.ndarray, lm
     for ell in range(lmax + 1):
         beta[ell] *= (2 * ell + 1) / 2.0
     return beta
+
+
+@njit(cache=True, nogil=True)
+def _legendre_regrid(
+    rows: np.ndarray, mu_half: np.ndarray, w_half: np.ndarray, lmax: int, mu_half_out: np.ndarray
+) -> np.ndarray:
+    """Values of polynomials of degree <= lmax, given per row at a symmetric Gauss
+    grid (+mu_half, then -mu_half), at the symmetric grid +mu_half_out, -mu_half_out.
+
+    Each row is projected on P_0..P_lmax (exact when 2 len(mu_half) Gauss nodes
+    integrate the row times P_lmax) and summed again by parity: the even
+    orders give the part even in mu, the odd orders the odd part, so one
+    Clenshaw-free pass over the output half-grid yields both signs.
+    """
+    n_rows = rows.shape[0]
+    n_in = mu_half.shape[0]
+    n_out = mu_half_out.shape[0]
+    # P_l at the input and output half-grids, built once for all rows.
+    p_in = np.empty((lmax + 1, n_in))
+    p_out = np.empty((lmax + 1, n_out))
+    for grid, table in ((mu_half, p_in), (mu_half_out, p_out)):
+        for i in range(grid.shape[0]):
+            u = grid[i]
+            p_prev = 0.0
+            p_cur = 1.0
+            for ell in range(lmax + 1):
+                table[ell, i] = p_cur
+                p_next = ((2 * ell + 1) * u * p_cur - ell * p_prev) / (ell + 1)
+                p_prev = p_cur
+                p_cur = p_next
+    out = np.empty((n_rows, 2 * n_out))
+    beta = np.empty(lmax + 1)
+    even = np.empty(n_out)
+    odd = np.empty(n_out)
+    for r in range(n_rows):
+        row = rows[r]
+        for ell in range(lmax + 1):
+            acc = 0.0
+            pl = p_in[ell]
+            if ell % 2 == 0:
+                for i in range(n_in):
+                    acc += w_half[i] * (row[i] + row[n_in + i]) * pl[i]
+            else:
+                for i in range(n_in):
+                    acc += w_half[i] * (row[i] - row[n_in + i]) * pl[i]
+            beta[ell] = acc * (2 * ell + 1) / 2.0
+        even[:] = 0.0
+        odd[:] = 0.0
+        for ell in range(lmax + 1):
+            b = beta[ell]
+            pl = p_out[ell]
+            if ell % 2 == 0:
+                for i in range(n_out):
+                    even[i] += b * pl[i]
+            else:
+                for i in range(n_out):
+                    odd[i] += b * pl[i]
+        for i in range(n_out):
+            out[r, i] = even[i] + odd[i]
+            out[r, n_out + i] = even[i] - odd[i]
+    return out
 
 
 @njit(cache=True, nogil=True)

@@ -36,7 +36,7 @@ import warnings
 from collections.abc import Callable, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
-from typing import Any, Union
+from typing import Any, NamedTuple, Union
 
 import numpy as np
 
@@ -102,12 +102,18 @@ class OpticsTable:
     cross_section_error_estimate : numpy.ndarray
         The same for <C_ext> and <C_sca> (relative) and g (absolute). [-]
     n_nodes : numpy.ndarray
-        Radius nodes of the returned quadrature, per wavelength. [-]
+        Radius nodes of the quadrature that gave the phase function, per
+        wavelength. [-]
+    cross_section_n_nodes : numpy.ndarray
+        Radius nodes of the (separate, finer) quadrature that gave the
+        cross-sections and g, per wavelength. [-]
     quadrature_panels : tuple of numpy.ndarray
-        Per wavelength, the final panels (shape (n_panels, 2)) in the stretched
-        variable s of :mod:`dustoptics.quadrature`; each panel's two halves
-        carry the Gauss-Legendre rule that gave the table, so
-        ``quadrature.panel_nodes`` on the halves reproduces the nodes. [-]
+        Per wavelength, the phase function's final panels (shape (n_panels, 2))
+        in the stretched variable s of :mod:`dustoptics.quadrature`; each
+        panel's two halves carry the Gauss-Legendre rule that gave the table,
+        so ``quadrature.panel_nodes`` on the halves reproduces the nodes. [-]
+    cross_section_panels : tuple of numpy.ndarray
+        The same for the cross-sections and g. [-]
     refractive_index : numpy.ndarray
         m = n + i k used at each wavelength. [-]
     mean_geometric_cross_section_um2 : float
@@ -137,7 +143,9 @@ class OpticsTable:
     error_estimate: np.ndarray
     cross_section_error_estimate: np.ndarray
     n_nodes: np.ndarray
+    cross_section_n_nodes: np.ndarray
     quadrature_panels: tuple[np.ndarray, ...] = field(repr=False)
+    cross_section_panels: tuple[np.ndarray, ...] = field(repr=False)
     refractive_index: np.ndarray = field(repr=False)
     mean_geometric_cross_section_um2: float
     weighting: str
@@ -234,9 +242,32 @@ class _Result:
     csca: float
     g: float
     n_nodes: int
+    cross_section_n_nodes: int
     err_phase: float
     err_cross: float
     panels_s: np.ndarray
+    cross_section_panels_s: np.ndarray
+
+
+@dataclass(frozen=True)
+class _Run:
+    """One converged refinement: the summed row, its final panels and error."""
+
+    total: np.ndarray
+    panels_s: np.ndarray
+    n_nodes: int
+    error: float
+
+
+class _Panels(NamedTuple):
+    """Refinement state: panels [lower, upper] in s with rows of their coarse
+    rule and of the rules on their left and right halves."""
+
+    lower: np.ndarray
+    upper: np.ndarray
+    coarse: np.ndarray
+    left: np.ndarray
+    right: np.ndarray
 
 
 class _WavelengthSolver:
@@ -245,8 +276,15 @@ class _WavelengthSolver:
     Each panel is integrated twice, with one n-point Gauss-Legendre rule and
     with one on each of its halves; the difference estimates the coarse rule's
     error, and the halves' sum is kept.  Panels are split, worst first, until
-    the summed estimates meet the tolerances; a split panel's halves already
+    the summed estimates meet the tolerance; a split panel's halves already
     know their coarse values, so no evaluation is ever repeated.
+
+    Two refinements run one after the other, because their costs differ: the
+    phase function (sums over angles, O(n_max^2) a sphere) to ``rtol``, then
+    the cross-sections and g (O(n_max) a sphere) to ``cross_section_rtol``,
+    continuing from the phase function's panels without angles.  Refining both
+    with one criterion spent the angular sums on nodes that only the
+    cross-sections' tighter tolerance needed.
     """
 
     def __init__(
@@ -292,20 +330,44 @@ class _WavelengthSolver:
         # nodes integrate |S|^2 P_l (degree <= 4 nmax) exactly.
         self.legendre = n_half < mu_out.size and not distribution.is_monodisperse
         if self.legendre:
-            mu_g, w_g = gauss_legendre(2 * n_half)
-            self.mu_half = np.ascontiguousarray(mu_g[n_half:])
-            self.w_half = np.ascontiguousarray(w_g[n_half:])
-            pi_t, tau_t = mie._pi_tau_table(self.mu_half, self.nmax)
+            self.n_half = n_half
+            self.mu_half, self.w_half, pi_t, tau_t = self._angles(n_half)
             self.n_f = 2 * n_half
+            # Angular tiers: a panel whose spheres need fewer orders is summed
+            # on a smaller Gauss grid (cost ~ n_max x n_angles per sphere) and
+            # moved to the full grid through its exact Legendre series.  Tier
+            # sizes fall by sqrt(2) down to 32 half-grid angles.
+            tiers = {n_half}
+            k = 1
+            while (t := 16 * -(-int(n_half * 2.0 ** (-k / 2)) // 16)) >= 32:
+                tiers.add(t)
+                k += 1
+            self.tiers = np.array(sorted(tiers))
+            self._tier_tables: dict[int, tuple[np.ndarray, ...]] = {n_half: (self.mu_half, self.w_half, pi_t, tau_t)}
         else:
-            pi_t, tau_t = mie._pi_tau_table(mu_out, self.nmax)
+            pi_t, tau_t = self._tables(mu_out, self.nmax)
             self.n_f = mu_out.size
-        # The kernel reads the tables order by order: (nmax, n_mu) layout.
-        self.pi_t = np.ascontiguousarray(pi_t.T)
-        self.tau_t = np.ascontiguousarray(tau_t.T)
+        self.pi_t, self.tau_t = pi_t, tau_t
+        # Cross-sections alone: no angles.
+        self.no_angles = np.empty((self.nmax, 0))
 
-    def evaluate(self, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
-        """Rows of angular values and sums, one per panel [lower, upper] in s."""
+    @staticmethod
+    def _tables(mu: np.ndarray, nmax: int) -> tuple[np.ndarray, np.ndarray]:
+        # The kernel reads the tables order by order: (nmax, n_mu) layout.
+        pi_t, tau_t = mie._pi_tau_table(mu, nmax)
+        return np.ascontiguousarray(pi_t.T), np.ascontiguousarray(tau_t.T)
+
+    def _angles(self, n_half: int) -> tuple[np.ndarray, ...]:
+        """Positive half of the 2 n_half-point Gauss rule and pi_n, tau_n there
+        for n <= n_half - 1 (2 n_half >= 2 n_max + 2 nodes integrate
+        |S|^2 P_l, degree <= 4 n_max, exactly)."""
+        mu_g, w_g = gauss_legendre(2 * n_half)
+        mu_half = np.ascontiguousarray(mu_g[n_half:])
+        w_half = np.ascontiguousarray(w_g[n_half:])
+        return (mu_half, w_half, *self._tables(mu_half, min(n_half - 1, self.nmax)))
+
+    def evaluate(self, lower: np.ndarray, upper: np.ndarray, *, angles: bool = True) -> np.ndarray:
+        """Rows of angular values (if ``angles``) and sums, one per panel [lower, upper] in s."""
         nodes, node_panel = panel_nodes(
             self.distribution,
             wavelength_nm=self.wavelength_nm,
@@ -313,72 +375,102 @@ class _WavelengthSolver:
             upper_s=upper,
             settings=self.settings,
         )
-        return mie._accumulate(
-            self.m,
-            nodes.size_parameter,
-            nodes.weight,
-            node_panel,
-            lower.size,
-            self.per_particle,
-            self.pi_t,
-            self.tau_t,
-            self.legendre,
-        )
+        x, w = nodes.size_parameter, nodes.weight
+        if not angles:
+            return mie._accumulate(
+                self.m, x, w, node_panel, lower.size, self.per_particle,
+                self.no_angles, self.no_angles, False,
+            )
+        if not self.legendre:
+            return mie._accumulate(
+                self.m, x, w, node_panel, lower.size, self.per_particle, self.pi_t, self.tau_t, False
+            )
+        per = self.settings.nodes_per_panel
+        x_top = x.reshape(lower.size, per).max(axis=1)
+        # wiscombe_nmax + 1, plus 1 so that cbrt's rounding can never pick a tier
+        # one order short (the kernel reads the tables without bounds checks).
+        need = (x_top + 4.05 * np.cbrt(x_top) + 2.0).astype(np.int64) + 2
+        tier = np.searchsorted(self.tiers, need)
+        out = np.empty((lower.size, self.n_f + mie.N_SUMS))
+        for t in np.unique(tier):
+            n_half = int(self.tiers[t])
+            if n_half not in self._tier_tables:
+                self._tier_tables[n_half] = self._angles(n_half)
+            mu_half, w_half, pi_t, tau_t = self._tier_tables[n_half]
+            sel = np.flatnonzero(tier == t)
+            idx = (sel[:, None] * per + np.arange(per)).ravel()
+            local = np.repeat(np.arange(sel.size, dtype=np.int64), per)
+            rows = mie._accumulate(
+                self.m, x[idx], w[idx], local, sel.size, self.per_particle, pi_t, tau_t, True
+            )
+            if n_half == self.n_half:
+                out[sel] = rows
+            else:
+                n_f = 2 * n_half
+                out[sel, : self.n_f] = mie._legendre_regrid(
+                    np.ascontiguousarray(rows[:, :n_f]), mu_half, w_half, 2 * n_half - 2, self.mu_half
+                )
+                out[sel, self.n_f :] = rows[:, n_f:]
+        return out
 
-    def halves(self, lower: np.ndarray, upper: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def halves(
+        self, lower: np.ndarray, upper: np.ndarray, *, angles: bool = True
+    ) -> tuple[np.ndarray, np.ndarray]:
         """Rows for the left and right halves of each panel."""
         mid = 0.5 * (lower + upper)
-        rows = self.evaluate(np.concatenate([lower, mid]), np.concatenate([mid, upper]))
+        rows = self.evaluate(np.concatenate([lower, mid]), np.concatenate([mid, upper]), angles=angles)
         return rows[: lower.size], rows[lower.size :]
 
-    def _errors(self, delta: np.ndarray, total: np.ndarray) -> tuple[np.ndarray, np.ndarray, float, float]:
-        """Error estimates from the per-panel differences ``delta`` of the two rules.
+    def _phase_errors(self, delta: np.ndarray, total: np.ndarray) -> tuple[np.ndarray, float]:
+        """Relative phase error per panel and of the sum, from panel differences ``delta``.
 
-        Returns per panel the relative phase error and the largest relative
-        cross-section (or absolute g) error, and for the whole sum the phase
-        error max_mu sum_p |dF_p(mu)| / F(mu) plus the normalization's relative
-        error, and the cross-section error.  g = num / norm, so
-        |dg| <= (|d num| + |g| |d norm|) / norm.
+        The sum's error is max_mu sum_p |dF_p(mu)| / F(mu) plus the relative
+        error of the normalization (sum w, or sum w x^2 Q_sca).
         """
         n_f = self.n_f
         norm = n_f if self.per_particle else n_f + 2
-        gnum = n_f + 4 if self.per_particle else n_f + 3
-        g = total[gnum] / total[norm]
         rel_f = delta[:, :n_f] / total[:n_f]
         rel_norm = delta[:, norm] / total[norm]
+        return np.max(rel_f, axis=1) + rel_norm, float(np.max(np.sum(rel_f, axis=0)) + np.sum(rel_norm))
+
+    def _cross_errors(self, delta: np.ndarray, total: np.ndarray) -> tuple[np.ndarray, float]:
+        """Largest error of <C_ext>, <C_sca> (relative) and g (absolute), per panel and of the sum.
+
+        g = num / norm, so |dg| <= (|d num| + |g| |d norm|) / norm.
+        """
+        norm, gnum = (0, 4) if self.per_particle else (2, 3)
+        g = total[gnum] / total[norm]
         cross = np.column_stack(
             [
-                delta[:, n_f + 1] / total[n_f + 1],
-                delta[:, n_f + 2] / total[n_f + 2],
+                delta[:, 1] / total[1],
+                delta[:, 2] / total[2],
                 (delta[:, gnum] + abs(g) * delta[:, norm]) / total[norm],
             ]
         )
-        panel_phase = np.max(rel_f, axis=1) + rel_norm
-        err_phase = float(np.max(np.sum(rel_f, axis=0)) + np.sum(rel_norm))
-        err_cross = float(np.max(np.sum(cross, axis=0)))
-        return panel_phase, np.max(cross, axis=1), err_phase, err_cross
+        return np.max(cross, axis=1), float(np.max(np.sum(cross, axis=0)))
 
-    def solve(self, rtol: float, cross_rtol: float) -> _Result:
-        if self.distribution.is_monodisperse:
-            x = np.array([2.0 * np.pi * self.distribution.mean_radius_um / self.wavelength_um])
-            rows = mie._accumulate(
-                self.m, x, np.ones(1), np.zeros(1, dtype=np.int64), 1, self.per_particle,
-                self.pi_t, self.tau_t, False,
-            )
-            return self._finish(rows[0], 1, 0.0, 0.0, np.empty((0, 2)))
+    def initial_state(self) -> _Panels:
+        """The initial panels, each integrated with its coarse rule and on its halves."""
         lower, upper = self.edges[:-1], self.edges[1:]
-        coarse = self.evaluate(lower, upper)
         left, right = self.halves(lower, upper)
+        return _Panels(lower, upper, self.evaluate(lower, upper), left, right)
+
+    def refine(self, state: _Panels, *, angles: bool, tol: float) -> tuple[_Panels, _Run]:
+        """Adaptive refinement of the phase function (``angles``) or the cross-sections to ``tol``.
+
+        Starts from ``state`` (whose rows hold angular values only if ``angles``).
+        """
+        errors = self._phase_errors if angles else self._cross_errors
+        lower, upper, coarse, left, right = state
         max_panels = (self.edges.size - 1) * 2**self.settings.max_level
         while True:
             fine = left + right
             total = fine.sum(axis=0)
-            delta = np.abs(fine - coarse)
-            phase_e, cross_e, err_phase, err_cross = self._errors(delta, total)
-            if (err_phase <= rtol and err_cross <= cross_rtol) or lower.size >= max_panels:
+            panel_error, error = errors(np.abs(fine - coarse), total)
+            if error <= tol or lower.size >= max_panels:
                 break
-            # Normalized badness: if sum(badness) <= 1 both tolerances hold.
-            badness = np.maximum(phase_e / rtol, cross_e / cross_rtol)
+            # Split the worst panels until the rest's summed error is below tol/2.
+            badness = panel_error / tol
             order = np.argsort(-badness, kind="stable")
             cumulative = np.cumsum(badness[order])
             n_split = int(np.searchsorted(cumulative, cumulative[-1] - 0.5)) + 1
@@ -389,7 +481,7 @@ class _WavelengthSolver:
             new_lower = np.concatenate([lower[split], mid])
             new_upper = np.concatenate([mid, upper[split]])
             new_coarse = np.concatenate([left[split], right[split]])
-            new_left, new_right = self.halves(new_lower, new_upper)
+            new_left, new_right = self.halves(new_lower, new_upper, angles=angles)
             lower = np.concatenate([lower[keep], new_lower])
             upper = np.concatenate([upper[keep], new_upper])
             coarse = np.concatenate([coarse[keep], new_coarse])
@@ -397,24 +489,38 @@ class _WavelengthSolver:
             right = np.concatenate([right[keep], new_right])
         order = np.argsort(lower, kind="stable")
         panels = np.column_stack([lower[order], upper[order]])
-        n_nodes = 2 * self.settings.nodes_per_panel * lower.size
-        return self._finish(total, n_nodes, err_phase, err_cross, panels)
+        run = _Run(total, panels, 2 * self.settings.nodes_per_panel * lower.size, error)
+        return _Panels(lower, upper, coarse, left, right), run
 
-    def _finish(
-        self, total: np.ndarray, n_nodes: int, err_phase: float, err_cross: float, panels: np.ndarray
-    ) -> _Result:
+    def solve(self, rtol: float, cross_rtol: float) -> _Result:
+        if self.distribution.is_monodisperse:
+            x = np.array([2.0 * np.pi * self.distribution.mean_radius_um / self.wavelength_um])
+            rows = mie._accumulate(
+                self.m, x, np.ones(1), np.zeros(1, dtype=np.int64), 1, self.per_particle,
+                self.pi_t, self.tau_t, False,
+            )
+            run = _Run(rows[0], np.empty((0, 2)), 1, 0.0)
+            return self.finish(run, _Run(rows[0, self.n_f :], run.panels_s, 1, 0.0))
+        state, phase_run = self.refine(self.initial_state(), angles=True, tol=rtol)
+        # The cross-sections continue from the phase function's panels (whose
+        # sums they already hold), refining further without angles.
+        sums = _Panels(state.lower, state.upper, *(rows[:, self.n_f :] for rows in state[2:]))
+        _, cross_run = self.refine(sums, angles=False, tol=cross_rtol)
+        return self.finish(phase_run, cross_run)
+
+    def finish(self, phase_run: _Run, cross_run: _Run) -> _Result:
+        """Phase function from ``phase_run``, cross-sections and g from ``cross_run``."""
         n_f = self.n_f
-        f = total[:n_f]
-        s_w, s_ext, s_sca, s_gsca, s_g = total[n_f:]
+        f = phase_run.total[:n_f]
         if self.legendre:
             beta = mie._legendre_project(self.mu_half, self.w_half, np.ascontiguousarray(f), 2 * self.nmax)
             f = mie._legendre_evaluate(beta, self.mu_out)
-        if self.per_particle:
-            phase = f / s_w
-            g = s_g / s_w
-        else:
-            phase = f / (2.0 * np.pi * s_sca)
-            g = s_gsca / s_sca
+        # Normalized with the phase run's own sums, so 2 pi int P dmu = 1 holds
+        # for the nodes that made P.
+        s_w, _, s_sca = phase_run.total[n_f : n_f + 3]
+        phase = f / s_w if self.per_particle else f / (2.0 * np.pi * s_sca)
+        s_w, s_ext, s_sca, s_gsca, s_g = cross_run.total
+        g = s_g / s_w if self.per_particle else s_gsca / s_sca
         area = (self.wavelength_um / (2.0 * np.pi)) ** 2 * np.pi  # x^2 -> pi r^2 [um^2]
         # n(r) is normalized analytically, so <C> = sum w_j C_j; dividing by
         # sum w_j would renormalize to the truncated *number* distribution, which
@@ -425,10 +531,12 @@ class _WavelengthSolver:
             cext=area * s_ext,
             csca=area * s_sca,
             g=float(g),
-            n_nodes=int(n_nodes),
-            err_phase=err_phase,
-            err_cross=err_cross,
-            panels_s=panels,
+            n_nodes=phase_run.n_nodes,
+            cross_section_n_nodes=cross_run.n_nodes,
+            err_phase=phase_run.error,
+            err_cross=cross_run.error,
+            panels_s=phase_run.panels_s,
+            cross_section_panels_s=cross_run.panels_s,
         )
 
 
@@ -583,7 +691,9 @@ def compute_optics(
         error_estimate=err_phase,
         cross_section_error_estimate=err_cross,
         n_nodes=np.array([r.n_nodes for r in results]),
+        cross_section_n_nodes=np.array([r.cross_section_n_nodes for r in results]),
         quadrature_panels=tuple(r.panels_s for r in results),
+        cross_section_panels=tuple(r.cross_section_panels_s for r in results),
         refractive_index=m,
         mean_geometric_cross_section_um2=float(geometric),
         weighting=weighting,

@@ -27,10 +27,14 @@ Tails are truncated where the distribution's analytic moments say they are
 negligible (:meth:`dustoptics.sizedist.SizeDistribution.radius_bounds_um`):
 below r_lo lies at most ``tail_fraction`` of the moment that normalizes the
 average (number for number weighting, area for cross-section weighting), and
-above r_hi at most ``tail_fraction`` of the sixth moment.  The forward peak of
-the phase function scales as the fourth moment (|S(0)|^2 ~ x^4) and every
-other polydisperse quantity with a lower one; since the tail fraction of a
-moment grows with its order, bounding the sixth bounds them all.  Random
+above r_hi at most ``tail_fraction`` of the fourth moment.  The forward peak
+of the phase function, the quantity most sensitive to large spheres, scales as
+the fourth moment (|S(0)|^2 ~ x^4 Q_ext^2 / 4, with Q_ext -> 2); every other
+polydisperse quantity (cross-sections ~ r^2, the number-weighted phase
+function ~ r^2 forward) with a lower one, and the tail fraction of a moment
+grows with its order, so bounding the fourth bounds them all.  (The sixth
+moment, used before, moved r_hi 15 % further out for the storm-dust
+distribution and cost 25 % more time for no change above 1e-7.)  Random
 sampling is never used.
 """
 
@@ -54,7 +58,7 @@ __all__ = [
     "radius_nodes",
 ]
 
-_UPPER_MOMENT = 6
+_UPPER_MOMENT = 4
 
 
 @dataclass(frozen=True)

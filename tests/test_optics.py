@@ -9,7 +9,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import dustoptics as do
-from dustoptics.optics import _WavelengthSolver
+from dustoptics.optics import _Run, _WavelengthSolver
 from dustoptics.quadrature import QuadratureSettings, radius_nodes
 from _shared import shared_path
 
@@ -94,11 +94,15 @@ def test_doubling_nodes_stays_within_error_estimate(weighting: str) -> None:
             per_particle=weighting == "number",
             settings=t.settings,
         )
-        lo, hi = t.quadrature_panels[i][:, 0], t.quadrature_panels[i][:, 1]
-        edges = lo[:, None] + (hi - lo)[:, None] * np.array([0.0, 0.25, 0.5, 0.75, 1.0])
-        rows = solver.evaluate(edges[:, :-1].ravel(), edges[:, 1:].ravel())
-        finer = solver._finish(rows.sum(axis=0), 2 * t.n_nodes[i], 0.0, 0.0, t.quadrature_panels[i])
+        runs = []
+        for panels, angles in ((t.quadrature_panels[i], True), (t.cross_section_panels[i], False)):
+            lo, hi = panels[:, 0], panels[:, 1]
+            edges = lo[:, None] + (hi - lo)[:, None] * np.array([0.0, 0.25, 0.5, 0.75, 1.0])
+            rows = solver.evaluate(edges[:, :-1].ravel(), edges[:, 1:].ravel(), angles=angles)
+            runs.append(_Run(rows.sum(axis=0), panels, 4 * panels.shape[0] * t.settings.nodes_per_panel, 0.0))
+        finer = solver.finish(*runs)
         assert finer.n_nodes == 2 * t.n_nodes[i]
+        assert finer.cross_section_n_nodes == 2 * t.cross_section_n_nodes[i]
         assert np.max(np.abs(finer.phase / t.phase[i] - 1)) <= t.error_estimate[i]
         assert abs(finer.cext / t.cext_um2[i] - 1) <= t.cross_section_error_estimate[i]
         assert abs(finer.csca / t.csca_um2[i] - 1) <= t.cross_section_error_estimate[i]
