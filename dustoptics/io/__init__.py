@@ -12,6 +12,11 @@ replace existing files unless asked to (``overwrite=True``).  Readers raise
 - :mod:`~dustoptics.io.cosmoscout`: CosmoScout VR's per-constituent CSV set
   (:func:`write_cosmoscout_constituent`, :func:`write_cosmoscout_set`,
   :func:`read_cosmoscout_constituent`, :func:`check_cosmoscout_set`).
+- :mod:`~dustoptics.io.glsl`: a GLSL snippet with the phase function as a
+  constant array and ``vec3 MiePhaseFunction(float nu)`` (:func:`glsl_snippet`,
+  :func:`write_glsl`).
+- :mod:`~dustoptics.io.texture`: a raw little-endian float32 texture (angle x
+  wavelength) with a JSON sidecar (:func:`write_texture`, :func:`read_texture`).
 
 :data:`FORMATS` maps a format name (the command line's ``--format``) to a
 writer ``writer(table, out_dir, *, overwrite=False, **options) -> list[Path]``
@@ -54,7 +59,7 @@ def write(table: Any, out_dir: Any, *, format: str, overwrite: bool = False, **o
     return FORMATS[format](table, out_dir, overwrite=overwrite, **options)
 
 
-from dustoptics.io import cosmoscout, hdf5, seed_csv
+from dustoptics.io import cosmoscout, glsl, hdf5, seed_csv, texture
 from dustoptics.io.cosmoscout import (
     CosmoScoutConstituent,
     check_cosmoscout_set,
@@ -63,12 +68,20 @@ from dustoptics.io.cosmoscout import (
     write_cosmoscout_set,
 )
 from dustoptics.io.hdf5 import read_hdf5, write_hdf5
+from dustoptics.io.glsl import glsl_snippet, write_glsl
 from dustoptics.io.seed_csv import read_seed_csv, write_seed_csv
+from dustoptics.io.texture import read_texture, write_texture
 
 __all__ = [
     "FORMATS",
     "CosmoScoutConstituent",
     "FormatError",
+    "glsl",
+    "glsl_snippet",
+    "read_texture",
+    "texture",
+    "write_glsl",
+    "write_texture",
     "Writer",
     "check_cosmoscout_set",
     "cosmoscout",
