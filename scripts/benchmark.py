@@ -28,12 +28,12 @@ What is measured, and how
 
 2. Baseline A: miepython with its JIT on, one ``efficiencies_mx`` and one
    ``i_unpolarized(..., norm="one")`` call per radius node, looping over the
-   very nodes and weights of dustoptics' returned quadrature, summing <C_ext>,
-   <C_sca>, g and the C_sca-weighted phase function at the 1,801 angles.  The
-   nodes are rebuilt from the table: from ``quadrature_panels`` with
-   ``panel_nodes`` (adaptive refinement), or, for uniform refinement, with
-   ``radius_nodes`` at level log2(n_nodes / n_nodes at level 0).  A gets the
-   final nodes for free (dustoptics also evaluates what it needs to find them).
+   very nodes and weights of dustoptics' returned quadratures: the
+   C_sca-weighted phase function at the 1,801 angles on the phase-function
+   nodes, <C_ext>, <C_sca> and g on the cross-section nodes.  The nodes are
+   rebuilt from the table's ``quadrature_panels`` and ``cross_section_panels``
+   with ``panel_nodes``.  A gets the final nodes for free (dustoptics also
+   evaluates what it needs to find them).
    Timed on 3 wavelengths spread over the range (1 with ``--quick``) and
    scaled to 48 by node count (A's time per node x dustoptics' total nodes).
 
@@ -341,66 +341,58 @@ def measure_compile(warm_s: float) -> dict:
     }
 
 
-def converged_nodes(table, i: int) -> tuple[object, str, bool]:
-    """The radius nodes dustoptics used at wavelength index i.
+def converged_nodes(table, i: int) -> tuple[object, object]:
+    """The radius nodes dustoptics used at wavelength index i: (phase nodes, cross-section nodes).
 
-    Returns (nodes, how they were found, whether their count is dustoptics').
-    A table with ``quadrature_panels`` (adaptive refinement) gives its final
-    panels, whose halves carry the rule: ``panel_nodes`` on the halves rebuilds
-    the nodes.  Otherwise dustoptics refined uniformly and its converged level
-    is L = log2(n_nodes / n_nodes at level 0), rebuilt with ``radius_nodes``;
-    should the count match no level, the smallest uniform level with at least
-    as many nodes is used (and the third value is False).
+    Each final panel's halves carry the Gauss-Legendre rule, so
+    ``panel_nodes`` on the halves of ``quadrature_panels`` (phase function)
+    and of ``cross_section_panels`` (cross-sections and g) rebuilds them.
     """
     wl = float(table.wavelength_nm[i])
-    panels = getattr(table, "quadrature_panels", None)
-    panel_nodes = getattr(quadrature, "panel_nodes", None)
-    if panels is not None and panel_nodes is not None:
-        lower, upper = panels[i][:, 0], panels[i][:, 1]
+
+    def rebuild(panels):
+        lower, upper = panels[:, 0], panels[:, 1]
         mid = 0.5 * (lower + upper)
-        nodes, _ = panel_nodes(
+        nodes, _ = quadrature.panel_nodes(
             table.distribution,
             wavelength_nm=wl,
             lower_s=np.concatenate([lower, mid]),
             upper_s=np.concatenate([mid, upper]),
             settings=table.settings,
         )
-        how = f"{lower.size} adaptive panels"
-    else:
-        lower_moment = 2 if table.weighting == "scattering" else 0
+        return nodes
 
-        def nodes_at(level: int):
-            return quadrature.radius_nodes(
-                table.distribution,
-                wavelength_nm=wl,
-                level=level,
-                settings=table.settings,
-                lower_moment=lower_moment,
-            )
-
-        n0 = nodes_at(0).size_parameter.size
-        level = max(0, int(np.ceil(np.log2(table.n_nodes[i] / n0) - 1e-9)))
-        nodes = nodes_at(level)
-        how = f"uniform level {level}"
-    return nodes, how, bool(nodes.size_parameter.size == table.n_nodes[i])
+    return rebuild(table.quadrature_panels[i]), rebuild(table.cross_section_panels[i])
 
 
-def baseline_a(miepython, m: complex, wavelength_nm: float, nodes, mu: np.ndarray) -> dict:
-    """miepython at dustoptics' nodes: C_sca-weighted phase function, <C_ext>, <C_sca>, g."""
+def baseline_a(miepython, m: complex, wavelength_nm: float, phase_nodes, cross_nodes, mu: np.ndarray) -> dict:
+    """miepython at dustoptics' nodes: C_sca-weighted phase function on the phase
+    nodes; <C_ext>, <C_sca>, g on the cross-section nodes.  Returns the results
+    and the time of each loop."""
     k = 2.0 * np.pi / (wavelength_nm * 1e-3)  # [um^-1]
     m_mie = np.conj(m)  # miepython: n - i k
-    s_ext = s_sca = s_gsca = 0.0
+    t0 = time.perf_counter()
     p_sum = np.zeros_like(mu)
-    for r, w in zip(nodes.radius_um, nodes.weight):
+    p_norm = 0.0
+    for r, w in zip(phase_nodes.radius_um, phase_nodes.weight):
         x = k * r
-        qext, qsca, _, g = miepython.efficiencies_mx(m_mie, x)
+        qsca = miepython.efficiencies_mx(m_mie, x)[1]
         p = miepython.i_unpolarized(m_mie, x, mu, norm="one")  # 2 pi int p dmu = 1
         c_sca = w * qsca * np.pi * r * r
-        s_ext += w * qext * np.pi * r * r
-        s_sca += c_sca
-        s_gsca += c_sca * g
+        p_norm += c_sca
         p_sum += c_sca * p
-    return {"cext": s_ext, "csca": s_sca, "g": s_gsca / s_sca, "phase": p_sum / s_sca}
+    t1 = time.perf_counter()
+    s_ext = s_sca = s_gsca = 0.0
+    for r, w in zip(cross_nodes.radius_um, cross_nodes.weight):
+        qext, qsca, _, g = miepython.efficiencies_mx(m_mie, k * r)
+        s_ext += w * qext * np.pi * r * r
+        s_sca += w * qsca * np.pi * r * r
+        s_gsca += w * qsca * np.pi * r * r * g
+    t2 = time.perf_counter()
+    return {
+        "cext": s_ext, "csca": s_sca, "g": s_gsca / s_sca, "phase": p_sum / p_norm,
+        "phase_time_s": t1 - t0, "cross_time_s": t2 - t1,
+    }
 
 
 def measure_baseline_a(default_table, n_sub: int) -> dict:
@@ -414,41 +406,38 @@ def measure_baseline_a(default_table, n_sub: int) -> dict:
     # Compile miepython's kernels before timing.
     miepython.efficiencies_mx(np.conj(table.refractive_index[0]), 5.0)
     miepython.i_unpolarized(np.conj(table.refractive_index[0]), 5.0, mu, norm="one")
-    per_wl, results, elapsed, all_same = [], {}, 0.0, True
+    per_wl, results = [], {}
     for i in idx:
         wl = float(table.wavelength_nm[i])
-        nodes, how, same = converged_nodes(table, i)
-        all_same &= same
-        log(f"baseline A at {wl:g} nm: {nodes.radius_um.size} nodes ({how}) ...")
-        t0 = time.perf_counter()
-        res = baseline_a(miepython, complex(table.refractive_index[i]), wl, nodes, mu)
-        dt = time.perf_counter() - t0
-        elapsed += dt
+        phase_nodes, cross_nodes = converged_nodes(table, i)
+        assert phase_nodes.radius_um.size == table.n_nodes[i]
+        assert cross_nodes.radius_um.size == table.cross_section_n_nodes[i]
+        log(f"baseline A at {wl:g} nm: {phase_nodes.radius_um.size} + {cross_nodes.radius_um.size} nodes ...")
+        res = baseline_a(miepython, complex(table.refractive_index[i]), wl, phase_nodes, cross_nodes, mu)
         results[wl] = res
         per_wl.append(
             {
                 "wavelength_nm": wl,
-                "n_nodes": int(nodes.radius_um.size),
-                "n_nodes_dustoptics": int(table.n_nodes[i]),
-                "nodes_from": how,
-                "time_s": dt,
+                "n_nodes": int(phase_nodes.radius_um.size),
+                "n_cross_section_nodes": int(cross_nodes.radius_um.size),
+                "nodes_from": "dustoptics' final panels",
+                "time_s": res["phase_time_s"] + res["cross_time_s"],
             }
         )
-    # Scale by dustoptics' node counts: A's time per node times all of its nodes.
-    nodes_sub = sum(p["n_nodes"] for p in per_wl)
-    nodes_all = int(table.n_nodes.sum())
+    # Scale each loop by dustoptics' node counts: time per node x all of its nodes.
+    phase_time = sum(results[p["wavelength_nm"]]["phase_time_s"] for p in per_wl)
+    cross_time = sum(results[p["wavelength_nm"]]["cross_time_s"] for p in per_wl)
+    phase_sub = sum(p["n_nodes"] for p in per_wl)
+    cross_sub = sum(p["n_cross_section_nodes"] for p in per_wl)
+    phase_all = int(table.n_nodes.sum())
+    cross_all = int(table.cross_section_n_nodes.sum())
     return {
         "per_wavelength": per_wl,
-        "subset_time_s": elapsed,
-        "scaled_time_s": elapsed * nodes_all / nodes_sub,
-        "same_nodes_as_dustoptics": all_same,
-        "method": f"timed on {len(idx)} of {table.wavelength_nm.size} wavelengths, scaled to 48 by node count "
-        f"(time per node x {nodes_all} nodes); "
-        + (
-            "nodes = dustoptics' own final nodes, rebuilt from its quadrature"
-            if all_same
-            else "dustoptics' nodes not rebuildable: smallest uniform level with at least as many nodes"
-        ),
+        "subset_time_s": phase_time + cross_time,
+        "scaled_time_s": phase_time * phase_all / phase_sub + cross_time * cross_all / cross_sub,
+        "method": f"timed on {len(idx)} of {table.wavelength_nm.size} wavelengths, scaled to 48 by node "
+        f"count ({phase_all} phase-function nodes, {cross_all} cross-section nodes); "
+        "nodes = dustoptics' own final nodes, rebuilt from its quadrature panels",
         "_results": results,
     }
 
@@ -709,7 +698,10 @@ def format_report(res: dict) -> str:
     a = res["baseline_a"]
     head("2. Baseline A: miepython (JIT) at dustoptics' final radius nodes")
     for p in a["per_wavelength"]:
-        row(f"{p['wavelength_nm']:g} nm: {p['n_nodes']} nodes ({p['nodes_from']})", f"{p['time_s']:.3f} s")
+        row(
+            f"{p['wavelength_nm']:g} nm: {p['n_nodes']} + {p['n_cross_section_nodes']} nodes ({p['nodes_from']})",
+            f"{p['time_s']:.3f} s",
+        )
     row("scaled to 48 wavelengths", f"{a['scaled_time_s']:.1f} s")
     row("  method", a["method"])
 
@@ -744,11 +736,7 @@ def format_report(res: dict) -> str:
     wl_b = ", ".join(f"{w:g}" for w in acc["wavelengths_b_nm"])
     err(f"dustoptics default ({wl_a} nm)", acc["dustoptics"])
     err(f"baseline A ({wl_a} nm)", acc["baseline_a"])
-    same = res["baseline_a"]["same_nodes_as_dustoptics"]
-    err(
-        f"baseline A vs dustoptics ({'same' if same else 'not the same'} nodes)",
-        acc["baseline_a_vs_dustoptics"],
-    )
+    err("baseline A vs dustoptics (same nodes)", acc["baseline_a_vs_dustoptics"])
     n_radii = res["baseline_b"]["per_wavelength"][0]["n_radii"]
     err(f"baseline B ({n_radii} radii) vs number-weighted ref ({wl_b} nm)", acc["baseline_b"])
     err("dustoptics number-weighted, rtol 1e-4", acc["dustoptics_number_weighted"])
