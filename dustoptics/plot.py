@@ -28,7 +28,6 @@ from __future__ import annotations
 
 import io
 import os
-import tempfile
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -388,30 +387,6 @@ def _render(figure: Any, fmt: str) -> bytes:
     return buffer.getvalue()
 
 
-def _write_atomic(path: Path, data: bytes, *, overwrite: bool) -> None:
-    """Write ``data`` to a temporary file beside ``path``, then move it into place."""
-    if not overwrite and (path.exists() or path.is_symlink()):
-        raise FileExistsError(
-            f"{path} already exists (pass overwrite=True, or --force on the command line, to replace)"
-        )
-    path.parent.mkdir(parents=True, exist_ok=True)
-    temporary: Path | None = None
-    try:
-        with tempfile.NamedTemporaryFile(
-            mode="wb", prefix=f".{path.name}.", suffix=".tmp", dir=path.parent, delete=False
-        ) as handle:
-            temporary = Path(handle.name)
-            handle.write(data)
-            handle.flush()
-            os.fsync(handle.fileno())
-        os.chmod(temporary, 0o644)  # NamedTemporaryFile creates 0600; figures are meant to be shared
-        os.replace(temporary, path)
-        temporary = None
-    finally:
-        if temporary is not None:
-            temporary.unlink(missing_ok=True)
-
-
 def save(figure: Figure, path: str | os.PathLike[str], *, overwrite: bool = False) -> Path:
     """Write a figure to a PNG or SVG file, atomically and reproducibly.
 
@@ -441,11 +416,12 @@ def save(figure: Figure, path: str | os.PathLike[str], *, overwrite: bool = Fals
 
     Notes
     -----
-    The whole file is rendered in memory, written to a temporary file in the
-    target directory and moved into place with :func:`os.replace`, so the
-    target is never left partly written.  Output is reproducible: the same
-    figure (hence the same table, with the same matplotlib, fonts and style)
-    gives the same bytes.  PNG files carry no ``Software`` entry; SVG files
+    The whole file is rendered in memory and written with the package's one
+    atomic-write mechanism (:func:`dustoptics.io._atomic.write_files`): a
+    temporary file in the target directory, moved into place with
+    :func:`os.replace`, so the target is never left partly written.  Output
+    is reproducible: the same figure (hence the same table, with the same
+    matplotlib, fonts and style) gives the same bytes.  PNG files carry no ``Software`` entry; SVG files
     carry no date and their element ids use a fixed salt
     (``svg.hashsalt``, set for the duration of the call only).
     """
@@ -457,5 +433,8 @@ def save(figure: Figure, path: str | os.PathLike[str], *, overwrite: bool = Fals
     mpl = _matplotlib()
     if not isinstance(figure, mpl.figure.Figure):
         raise TypeError(f"figure must be a matplotlib.figure.Figure; got {type(figure).__name__}")
-    _write_atomic(target, _render(figure, fmt), overwrite=bool(overwrite))
+    # Imported here: dustoptics.io loads every format's writer, which plotting does not need.
+    from dustoptics.io._atomic import write_files
+
+    write_files({target: _render(figure, fmt)}, overwrite=bool(overwrite))
     return target
