@@ -1,0 +1,600 @@
+"""Complete atmospheres for renderers: molecules, aerosols, ozone, densities.
+
+An :class:`Atmosphere` is a planet (radius, atmosphere top, Sun distance,
+refractivity) and its constituents, each a :class:`Constituent`: a
+:class:`~dustoptics.table.Table` whose ``number_density_per_m3`` is the number
+density where the constituent's relative density is 1, and a
+:class:`~dustoptics.column.DensityProfile`.  :func:`write_atmosphere` writes
+it as CosmoScout VR's CSV set (through
+:func:`dustoptics.io.cosmoscout.write_cosmoscout_set`) plus the settings JSON
+snippet that points CosmoScout's Bruneton preprocessor at the files.
+
+Builders (the presets of the seeds)
+-----------------------------------
+:func:`mars_atmosphere`
+    CO2 molecules (``"costa2021-mars"``: Bideau-Mehu 1973 CO2 at 610 Pa and
+    215 K, King factor with delta = 0.09, Penndorf phase function; or
+    ``"collienne2013"``: Collienne et al.'s three coefficients) and a dust
+    table computed by the caller (any dust preset), whose number density is
+    set from a measured optical depth at a reference wavelength.
+:func:`earth_atmosphere`
+    Air molecules (``"kobe2026"``, ``"costa2021"`` or ``"penndorf1957"``),
+    aerosols (a table, or Kobe's constant coefficients) and ozone (Kobe's
+    three cross-sections at 6e-7 of the air density, or any
+    :class:`~dustoptics.gases.OzoneCrossSection` with any profile, e.g.
+    Bruneton's layer).  With the defaults it is Kobe's Earth with ozone, on
+    his three wavelengths 475, 510, 650 nm.
+
+Planet settings (the seeds' renderer configurations and CosmoScout VR's)
+------------------------------------------------------------------------
+Mars: radius 3390 km, atmosphere top 3510 km (the seeds' renderer), molecule
+scale height 8 km and dust scale height 11.1 km (Costa et al. 2021, Table 1),
+Sun distance 227.9e9 m (CosmoScout VR's ``mars.json``; its irradiance is
+(1 AU / 1.524 AU)^2 = 0.43 of Earth's, the seeds' "sun strength").
+Earth: radius 6371 km, top 6451 km, Sun distance 149.6e9 m (CosmoScout VR's
+``earth.json``).
+
+References
+----------
+.. [1] German Aerospace Center (DLR), CosmoScout VR, plugin csp-atmospheres
+   (bruneton-preprocessor settings, scattering-table-generator),
+   https://github.com/cosmoscout/cosmoscout-vr.
+.. [2] J. Costa et al., IEEE TVCG 27(2), 785-795 (2021),
+   doi:10.1109/TVCG.2020.3030333, Table 1.
+.. [3] D. Kobe, "Ozone absorption in single atmospheric scattering,"
+   graduation work, Howest DAE, 2025-2026, sections 10.4, 11.3, 11.5.
+.. [4] T. Meyran, "Physically based real-time rendering of the Martian
+   atmosphere," M.Sc. thesis, Hochschule Hannover, 2022.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Final
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from dustoptics import gases
+from dustoptics import phase as _phase
+from dustoptics._validation import as_increasing_grid, check_choice, check_positive
+from dustoptics.column import (
+    DensityProfile,
+    ExponentialProfile,
+    FixedFractionProfile,
+    number_density_from_optical_depth,
+    sample_profile,
+)
+from dustoptics.table import Provenance, Source, Table
+
+__all__ = [
+    "CONSTITUENT_ROLES",
+    "EARTH_MOLECULE_MODELS",
+    "KOBE2026_AEROSOL_BETA_SCA_PER_M",
+    "MARS_MOLECULE_MODELS",
+    "Atmosphere",
+    "Constituent",
+    "earth_atmosphere",
+    "mars_atmosphere",
+    "settings_json",
+    "write_atmosphere",
+]
+
+#: Roles CosmoScout VR's Bruneton model has: two scattering media and one absorbing.
+CONSTITUENT_ROLES: Final = ("molecules", "aerosols", "ozone")
+
+#: Molecule models of :func:`mars_atmosphere`.
+MARS_MOLECULE_MODELS: Final = ("costa2021-mars", "collienne2013")
+#: Molecule models of :func:`earth_atmosphere`.
+EARTH_MOLECULE_MODELS: Final = ("kobe2026", "costa2021", "penndorf1957")
+
+#: Molecule scale heights by model. [m]  Kobe: 7994 m (his section 10.4.1);
+#: Costa Earth: 7995.75 m (ICAO, their Table 1); Penndorf: 8000 m (Bruneton's
+#: models); Mars: 8000 m (Costa et al. Table 1).
+_MOLECULE_SCALE_HEIGHT_M: Final = {
+    "kobe2026": 7994.0,
+    "costa2021": 7995.75,
+    "penndorf1957": 8000.0,
+    "costa2021-mars": 8000.0,
+    "collienne2013": 8000.0,
+}
+
+#: Kobe's aerosol scattering coefficient (after Bruneton & Neyret and Bodare &
+#: Sandberg), wavelength independent; extinction is ``beta_sca / 0.9``. [m^-1]
+KOBE2026_AEROSOL_BETA_SCA_PER_M: Final = 2e-6
+
+_MARS_RADIUS_M: Final = 3390e3
+_MARS_TOP_M: Final = 3510e3
+_MARS_SUN_DISTANCE_M: Final = 227.9e9
+_EARTH_RADIUS_M: Final = 6371e3
+_EARTH_TOP_M: Final = 6451e3
+_EARTH_SUN_DISTANCE_M: Final = 149.6e9
+_N_ALTITUDES: Final = 1024
+
+
+@dataclass(frozen=True)
+class Constituent:
+    """One medium of an atmosphere.
+
+    Attributes
+    ----------
+    role : {"molecules", "aerosols", "ozone"}
+        Its slot in CosmoScout VR's model (ozone must not scatter).
+    table : Table
+        Optics with cross-sections and ``number_density_per_m3``, the number
+        density where ``profile`` is 1. [m^-3]
+    profile : DensityProfile
+        Relative density over altitude.
+    """
+
+    role: str
+    table: Table
+    profile: DensityProfile
+
+    def __post_init__(self) -> None:
+        check_choice("role", self.role, CONSTITUENT_ROLES)
+        if not isinstance(self.table, Table):
+            raise TypeError(f"table must be a dustoptics Table; got {type(self.table).__name__}")
+        if not self.table.has_cross_sections or self.table.number_density_per_m3 is None:
+            raise ValueError(
+                f"constituent {self.role!r}: table {self.table.name!r} needs cross-sections and "
+                "number_density_per_m3 (the density where the profile is 1)"
+            )
+        if not isinstance(self.profile, DensityProfile):
+            raise TypeError(f"profile must be a DensityProfile; got {type(self.profile).__name__}")
+        if self.role == "ozone" and np.any(self.table.csca_um2 > 0):
+            raise ValueError(f"constituent 'ozone' must not scatter (csca_um2 = 0); table {self.table.name!r} does")
+
+
+@dataclass(frozen=True)
+class Atmosphere:
+    """A planet's atmosphere as a renderer loads it.
+
+    Attributes
+    ----------
+    name : str
+        Prefix of the written files (letters, digits, ``.``, ``_``, ``-``).
+    planet_radius_m : float
+        Radius of the ground. [m]
+    atmosphere_radius_m : float
+        Radius of the top of the atmosphere, > planet radius. [m]
+    constituents : tuple of Constituent
+        One ``molecules``, one ``aerosols``, at most one ``ozone``; identical
+        wavelengths.
+    sun_distance_m : float
+        Mean Sun distance (CosmoScout scales the solar irradiance by it). [m]
+    refractivity : float
+        ``n - 1`` of the air at the ground (CosmoScout's ``ior``, for
+        refraction), at 550 nm. [-]
+    n_altitudes : int
+        Samples of each density profile, evenly spaced from the ground to the
+        top (CosmoScout's default 1024).
+    """
+
+    name: str
+    planet_radius_m: float
+    atmosphere_radius_m: float
+    constituents: tuple[Constituent, ...]
+    sun_distance_m: float
+    refractivity: float
+    n_altitudes: int = _N_ALTITUDES
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.name, str) or not self.name:
+            raise ValueError(f"name must be a non-empty string; got {self.name!r}")
+        r = check_positive("planet_radius_m", self.planet_radius_m, unit="m")
+        top = check_positive("atmosphere_radius_m", self.atmosphere_radius_m, unit="m")
+        if top <= r:
+            raise ValueError(
+                f"atmosphere_radius_m must exceed planet_radius_m ({r!r} m); got {self.atmosphere_radius_m!r}"
+            )
+        check_positive("sun_distance_m", self.sun_distance_m, unit="m")
+        if not (math.isfinite(self.refractivity) and self.refractivity >= 0.0):
+            raise ValueError(f"refractivity (n - 1) must be finite and >= 0; got {self.refractivity!r}")
+        if isinstance(self.n_altitudes, bool) or not isinstance(self.n_altitudes, int) or self.n_altitudes < 2:
+            raise ValueError(f"n_altitudes must be an integer >= 2; got {self.n_altitudes!r}")
+        cons = tuple(self.constituents)
+        roles = [c.role for c in cons if isinstance(c, Constituent)]
+        if len(roles) != len(cons):
+            raise TypeError("constituents must all be Constituent objects")
+        for role, allowed in (("molecules", (1,)), ("aerosols", (1,)), ("ozone", (0, 1))):
+            if roles.count(role) not in allowed:
+                raise ValueError(
+                    f"an atmosphere needs exactly one 'molecules', one 'aerosols' and at most one "
+                    f"'ozone' constituent; got roles {roles}"
+                )
+        wl = cons[0].table.wavelength_nm
+        for c in cons[1:]:
+            if not np.array_equal(c.table.wavelength_nm, wl):
+                raise ValueError(
+                    f"constituent {c.role!r} has wavelengths {c.table.wavelength_nm.tolist()} nm; "
+                    f"{cons[0].role!r} has {wl.tolist()} nm: all must be identical"
+                )
+        object.__setattr__(self, "constituents", cons)
+
+    @property
+    def thickness_m(self) -> float:
+        """Atmosphere top above the ground. [m]"""
+        return self.atmosphere_radius_m - self.planet_radius_m
+
+    @property
+    def wavelength_nm(self) -> np.ndarray:
+        """The shared wavelengths. [nm]"""
+        return self.constituents[0].table.wavelength_nm
+
+    def constituent(self, role: str) -> Constituent:
+        """The constituent with that role (``KeyError`` if absent)."""
+        for c in self.constituents:
+            if c.role == role:
+                return c
+        raise KeyError(f"atmosphere {self.name!r} has no {role!r} constituent")
+
+    def file_prefix(self, role: str) -> str:
+        """File-name prefix of a constituent: ``<name>_<role>``."""
+        return f"{self.name}_{role}"
+
+    def cosmoscout_constituents(self) -> dict[str, tuple[Table, np.ndarray]]:
+        """Mapping for :func:`~dustoptics.io.cosmoscout.write_cosmoscout_set`.
+
+        Each profile is sampled at :attr:`n_altitudes` evenly spaced altitudes
+        from the ground to the top and rescaled to a largest sample of 1; the
+        table's number density is multiplied by the same factor, so ``beta``
+        times the written density is the constituent's coefficient at every
+        sampled altitude.
+        """
+        out: dict[str, tuple[Table, np.ndarray]] = {}
+        for c in self.constituents:
+            s = sample_profile(c.profile, top_altitude_m=self.thickness_m, n_altitudes=self.n_altitudes)
+            table = c.table
+            if s.peak != 1.0:
+                table = table.replace(number_density_per_m3=table.number_density_per_m3 * s.peak)
+            out[self.file_prefix(c.role)] = (table, np.array(s.relative_density))
+        return out
+
+
+# ---------------------------------------------------------------- settings
+
+
+def settings_json(atmosphere: Atmosphere, *, path_prefix: str = "") -> str:
+    """CosmoScout VR's Bruneton-preprocessor settings for the atmosphere.
+
+    Parameters
+    ----------
+    atmosphere : Atmosphere
+        The atmosphere.
+    path_prefix : str, optional
+        Prepended to every file name (e.g. the directory of the set as seen
+        from where the preprocessor runs, ending in ``/``).  Default: bare
+        file names, relative to the directory of the set.
+
+    Returns
+    -------
+    str
+        JSON text (2-space indent, fixed key order, trailing newline):
+        ``sunDistance`` [m], ``minAltitude`` and ``maxAltitude`` (the planet
+        and atmosphere radii [m], as CosmoScout names them), ``molecules``,
+        ``aerosols`` (``phase``, ``betaSca``, ``betaAbs``, ``density`` files),
+        ``ozone`` (``betaAbs``, ``density``) when present, and ``ior``
+        (``n - 1``).  The preprocessor's sampling settings are left to its
+        defaults.
+    """
+    if not isinstance(atmosphere, Atmosphere):
+        raise TypeError(f"atmosphere must be an Atmosphere; got {type(atmosphere).__name__}")
+    data: dict[str, Any] = {
+        "sunDistance": atmosphere.sun_distance_m,
+        "minAltitude": atmosphere.planet_radius_m,
+        "maxAltitude": atmosphere.atmosphere_radius_m,
+    }
+    for c in atmosphere.constituents:
+        p = path_prefix + atmosphere.file_prefix(c.role)
+        if c.role == "ozone":
+            data["ozone"] = {"betaAbs": f"{p}_absorption.csv", "density": f"{p}_density.csv"}
+        else:
+            data[c.role] = {
+                "phase": f"{p}_phase.csv",
+                "betaSca": f"{p}_scattering.csv",
+                "betaAbs": f"{p}_absorption.csv",
+                "density": f"{p}_density.csv",
+            }
+    data["ior"] = atmosphere.refractivity
+    return json.dumps(data, indent=2, allow_nan=False) + "\n"
+
+
+def write_atmosphere(
+    atmosphere: Atmosphere,
+    directory: str | os.PathLike[str],
+    *,
+    n_theta: int = 181,
+    overwrite: bool = False,
+    path_prefix: str = "",
+) -> list[Path]:
+    """Write CosmoScout VR's CSV set and ``<name>_settings.json``.
+
+    Parameters
+    ----------
+    atmosphere : Atmosphere
+        The atmosphere.
+    directory : path-like
+        Output directory (created if missing).
+    n_theta : int, default 181
+        Phase-function angles from 0 to 180 deg.
+    overwrite : bool, default False
+        Replace existing files.
+    path_prefix : str, optional
+        See :func:`settings_json`.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The CSV files, then the settings file.
+
+    Raises
+    ------
+    FileExistsError
+        A target exists and ``overwrite`` is False (checked before anything
+        is written).
+    """
+    from dustoptics.io._atomic import check_targets, write_files
+    from dustoptics.io.cosmoscout import write_cosmoscout_set
+
+    root = Path(directory)
+    settings_path = root / f"{atmosphere.name}_settings.json"
+    check_targets([settings_path], overwrite=overwrite)
+    text = settings_json(atmosphere, path_prefix=path_prefix)
+    written = write_cosmoscout_set(
+        root, atmosphere.cosmoscout_constituents(), n_theta=n_theta, overwrite=overwrite
+    )
+    written += write_files({settings_path: text.encode("utf-8")}, overwrite=overwrite)
+    return written
+
+
+# ---------------------------------------------------------------- builders
+
+
+def _cext_at(table: Table, wavelength_nm: float) -> float:
+    wl = table.wavelength_nm
+    w = check_positive("reference_wavelength_nm", wavelength_nm, unit="nm")
+    if not wl[0] <= w <= wl[-1]:
+        raise ValueError(
+            f"reference_wavelength_nm must lie within the table's wavelengths [{wl[0]:g}, {wl[-1]:g}] nm "
+            f"(no extrapolation); got {wavelength_nm!r}"
+        )
+    if table.cext_um2 is None:
+        raise ValueError(f"table {table.name!r} holds a phase function only; it needs cext_um2")
+    return float(np.interp(w, wl, table.cext_um2))
+
+
+def _molecules(model: str | gases.RayleighModel, allowed: tuple[str, ...], wl: np.ndarray) -> tuple[Table, str, float]:
+    """Molecule table, model name and ground refractivity at 550 nm."""
+    if isinstance(model, gases.RayleighModel):
+        gas = model
+    else:
+        check_choice("molecules", model, allowed)
+        if model == "collienne2013":
+            table = gases.collienne2013_table(wl, name="collienne2013-molecules")
+            co2 = gases.get_rayleigh_model("costa2021-mars")
+            return table, model, float(co2.refractivity(550.0))
+        gas = gases.get_rayleigh_model(model)
+    return gas.table(wl), gas.name, float(gas.refractivity(550.0))
+
+
+def mars_atmosphere(
+    *,
+    dust_table: Table,
+    optical_depth: float = 0.5,
+    reference_wavelength_nm: float = 550.0,
+    dust_scale_height_m: float = 11100.0,
+    dust_profile: DensityProfile | None = None,
+    molecules: str | gases.RayleighModel = "costa2021-mars",
+    molecules_scale_height_m: float | None = None,
+    planet_radius_m: float = _MARS_RADIUS_M,
+    atmosphere_radius_m: float = _MARS_TOP_M,
+    name: str = "mars",
+) -> Atmosphere:
+    """Mars: CO2 molecules and a dust table scaled to a measured optical depth.
+
+    Parameters
+    ----------
+    dust_table : Table
+        Dust optics with cross-sections (e.g. from
+        :func:`dustoptics.optics.compute_optics` via ``Table.from_optics``);
+        its wavelengths are the atmosphere's.
+    optical_depth : float, default 0.5
+        Vertical dust optical depth at ``reference_wavelength_nm`` (clear
+        seasons 0.3-1, MER), > 0. [-]
+    reference_wavelength_nm : float, default 550
+        Wavelength of the measured optical depth, within the table's range
+        (linear interpolation of ``cext_um2``). [nm]
+    dust_scale_height_m : float, default 11100
+        Exponential dust profile (Costa et al. Table 1: 11.1 km). [m]
+    dust_profile : DensityProfile, optional
+        Any other dust profile (then ``dust_scale_height_m`` is ignored).
+    molecules : {"costa2021-mars", "collienne2013"} or RayleighModel
+        Molecule model (see :mod:`dustoptics.gases`).
+    molecules_scale_height_m : float, optional
+        Default 8000 m (Costa et al. Table 1). [m]
+    planet_radius_m, atmosphere_radius_m : float
+        Default 3390 km and 3510 km (the seeds' renderer). [m]
+    name : str, default "mars"
+        File prefix.
+
+    Returns
+    -------
+    Atmosphere
+        The dust number density is ``N0 = tau / (<C_ext> L)`` with ``L`` the
+        dust column length up to the atmosphere top, so the rendered column
+        has exactly the given optical depth.
+    """
+    if not isinstance(dust_table, Table):
+        raise TypeError(f"dust_table must be a Table; got {type(dust_table).__name__}")
+    wl = dust_table.wavelength_nm
+    top = check_positive("atmosphere_radius_m", atmosphere_radius_m, unit="m") - check_positive(
+        "planet_radius_m", planet_radius_m, unit="m"
+    )
+    if top <= 0:
+        raise ValueError(f"atmosphere_radius_m must exceed planet_radius_m; got {atmosphere_radius_m!r}")
+    profile = dust_profile if dust_profile is not None else ExponentialProfile(scale_height_m=dust_scale_height_m)
+    n0 = number_density_from_optical_depth(
+        optical_depth=optical_depth,
+        cext_um2=_cext_at(dust_table, reference_wavelength_nm),
+        profile=profile,
+        top_altitude_m=top,
+    )
+    dust = dust_table.replace(number_density_per_m3=n0)
+    mol_table, mol_name, refractivity = _molecules(molecules, MARS_MOLECULE_MODELS, wl)
+    h_mol = molecules_scale_height_m if molecules_scale_height_m is not None else _MOLECULE_SCALE_HEIGHT_M.get(mol_name, 8000.0)
+    return Atmosphere(
+        name=name,
+        planet_radius_m=planet_radius_m,
+        atmosphere_radius_m=atmosphere_radius_m,
+        constituents=(
+            Constituent(role="molecules", table=mol_table, profile=ExponentialProfile(scale_height_m=h_mol)),
+            Constituent(role="aerosols", table=dust, profile=profile),
+        ),
+        sun_distance_m=_MARS_SUN_DISTANCE_M,
+        refractivity=refractivity,
+    )
+
+
+def _kobe_aerosols(wl: np.ndarray, *, g: float) -> Table:
+    theta = np.linspace(0.0, 180.0, 1801)
+    p = _phase.renormalize(
+        np.broadcast_to(_phase.tabulate(_phase.cornette_shanks1992, theta_deg=theta, g=g), (wl.size, theta.size)),
+        theta_deg=theta,
+    )
+    beta_sca = np.full(wl.size, KOBE2026_AEROSOL_BETA_SCA_PER_M)
+    return Table(
+        name="kobe2026-aerosols",
+        wavelength_nm=wl,
+        theta_deg=theta,
+        phase=p,
+        g=np.full(wl.size, float(_phase.cornette_shanks1992_asymmetry(g=g))),
+        cext_um2=beta_sca / 0.9 * 1e12,
+        csca_um2=beta_sca * 1e12,
+        number_density_per_m3=1.0,
+        provenance=Provenance(
+            inputs={"kind": "kobe2026-aerosols", "wavelength_nm": wl, "cornette_shanks_g": g},
+            sources=(
+                Source(name="kobe2026", role="aerosol coefficients", citation=_phase.KOBE_2026),
+                Source(name="cornette_shanks1992", role="phase function", citation=_phase.CORNETTE_SHANKS_1992),
+            ),
+            notes=(
+                ("Kobe's beta_M = 2e-6 m^-1 and beta_M^e = beta_M / 0.9, published without a number "
+                "density: carried per unit density (number_density_per_m3 = 1, cross-section = beta)."),
+                ("Phase function: Cornette-Shanks, g = 0.76 by default (Bruneton 2008's Earth aerosols "
+                "as CosmoScout VR reproduces them), not Kobe's Henyey-Greenstein g = -0.99 (his "
+                "sign convention for the angle)."),
+            ),
+        ),
+    )
+
+
+def earth_atmosphere(
+    *,
+    wavelength_nm: ArrayLike = (475.0, 510.0, 650.0),
+    molecules: str | gases.RayleighModel = "kobe2026",
+    molecules_scale_height_m: float | None = None,
+    aerosol_table: Table | None = None,
+    aerosol_profile: DensityProfile | None = None,
+    aerosol_g: float = 0.76,
+    ozone: gases.OzoneCrossSection | None = gases.KOBE2026_OZONE,
+    ozone_profile: DensityProfile | None = None,
+    ozone_number_density_per_m3: float | None = None,
+    planet_radius_m: float = _EARTH_RADIUS_M,
+    atmosphere_radius_m: float = _EARTH_TOP_M,
+    name: str = "earth",
+) -> Atmosphere:
+    """Earth: air molecules, aerosols and (optionally) ozone.
+
+    Parameters
+    ----------
+    wavelength_nm : array_like, default (475, 510, 650)
+        Strictly increasing wavelengths (Kobe's three by default; his ozone
+        cross-sections exist only there). [nm]
+    molecules : {"kobe2026", "costa2021", "penndorf1957"} or RayleighModel
+        Molecule model.
+    molecules_scale_height_m : float, optional
+        Default by model: 7994 m (Kobe), 7995.75 m (Costa), 8000 m. [m]
+    aerosol_table : Table, optional
+        Aerosol optics with cross-sections and ``number_density_per_m3``, at
+        ``wavelength_nm``; default Kobe's constant coefficients
+        (``beta_sca = 2e-6 m^-1``, ``beta_ext = beta_sca / 0.9``) with a
+        Cornette-Shanks phase function of ``aerosol_g``.
+    aerosol_profile : DensityProfile, optional
+        Default exponential, 1200 m (Kobe, Bruneton).
+    aerosol_g : float, default 0.76
+        Cornette-Shanks ``g`` of the default aerosols. [-]
+    ozone : OzoneCrossSection or None, default KOBE2026_OZONE
+        Ozone cross-sections; None for no ozone.
+    ozone_profile : DensityProfile, optional
+        Default Kobe's: the molecules' profile at 6e-7 of their density
+        (:class:`~dustoptics.column.FixedFractionProfile`).  For any other
+        profile give ``ozone_number_density_per_m3``.
+    ozone_number_density_per_m3 : float, optional
+        Ozone density where ``ozone_profile`` is 1 (e.g.
+        :data:`~dustoptics.column.BRUNETON2017_OZONE_PEAK_NUMBER_DENSITY_PER_M3`). [m^-3]
+    planet_radius_m, atmosphere_radius_m : float
+        Default 6371 km and 6451 km (CosmoScout VR). [m]
+    name : str, default "earth"
+        File prefix.
+
+    Returns
+    -------
+    Atmosphere
+    """
+    wl = as_increasing_grid("wavelength_nm", wavelength_nm, unit="nm")
+    mol_table, mol_name, refractivity = _molecules(molecules, EARTH_MOLECULE_MODELS, wl)
+    h_mol = molecules_scale_height_m if molecules_scale_height_m is not None else _MOLECULE_SCALE_HEIGHT_M.get(mol_name, 8000.0)
+    mol_profile = ExponentialProfile(scale_height_m=h_mol)
+    if aerosol_table is None:
+        aerosols = _kobe_aerosols(wl, g=aerosol_g)
+    else:
+        if not isinstance(aerosol_table, Table):
+            raise TypeError(f"aerosol_table must be a Table; got {type(aerosol_table).__name__}")
+        aerosols = aerosol_table
+    cons = [
+        Constituent(role="molecules", table=mol_table, profile=mol_profile),
+        Constituent(
+            role="aerosols",
+            table=aerosols,
+            profile=aerosol_profile if aerosol_profile is not None else ExponentialProfile(scale_height_m=1200.0),
+        ),
+    ]
+    if ozone is not None:
+        profile = ozone_profile if ozone_profile is not None else FixedFractionProfile(
+            base=mol_profile, fraction=gases.KOBE2026_OZONE_FRACTION
+        )
+        if isinstance(profile, FixedFractionProfile):
+            if ozone_number_density_per_m3 is not None:
+                raise ValueError(
+                    "ozone_number_density_per_m3 is set by a FixedFractionProfile (fraction x the "
+                    f"molecules' density); got ozone_number_density_per_m3={ozone_number_density_per_m3!r} too"
+                )
+            n_o3 = profile.number_density_per_m3(base_number_density_per_m3=mol_table.number_density_per_m3)
+        elif ozone_number_density_per_m3 is None:
+            raise ValueError(
+                f"ozone_number_density_per_m3 is required with ozone_profile {profile!r} "
+                "(the ozone number density where the profile is 1) [m^-3]"
+            )
+        else:
+            n_o3 = ozone_number_density_per_m3
+        cons.append(
+            Constituent(
+                role="ozone",
+                table=gases.ozone_table(wl, cross_section=ozone, number_density_per_m3=n_o3, name=ozone.name),
+                profile=profile,
+            )
+        )
+    return Atmosphere(
+        name=name,
+        planet_radius_m=planet_radius_m,
+        atmosphere_radius_m=atmosphere_radius_m,
+        constituents=tuple(cons),
+        sun_distance_m=_EARTH_SUN_DISTANCE_M,
+        refractivity=refractivity,
+    )
+

@@ -1,0 +1,152 @@
+"""Tests of dustoptics.atmosphere: complete CosmoScout VR sets for Mars and Earth."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from _shared import shared_path
+
+import dustoptics as do
+from dustoptics import atmosphere as atm
+from dustoptics import gases
+from dustoptics.column import (
+    BRUNETON2017_OZONE,
+    BRUNETON2017_OZONE_PEAK_NUMBER_DENSITY_PER_M3,
+    ExponentialProfile,
+    optical_depth,
+)
+from dustoptics.io.cosmoscout import check_cosmoscout_set, read_cosmoscout_constituent
+from dustoptics.table import Table
+
+WL15 = np.linspace(360.0, 830.0, 15)  # CosmoScout's default wavelength set
+
+
+@pytest.fixture(scope="module")
+def dust_table() -> Table:
+    dist = do.ModifiedGamma(r_eff_um=1.6, v_eff=0.2)
+    optics = do.compute_optics(do.mars_dust(), dist, WL15, np.linspace(0.0, 180.0, 181), rtol=1e-3)
+    return Table.from_optics(optics, name="blue-moon-dust", inputs={"test": "mars dust, r_eff 1.6, v_eff 0.2"})
+
+
+def test_mars_set_passes_reader_rules(dust_table, tmp_path):
+    mars = atm.mars_atmosphere(dust_table=dust_table, optical_depth=0.5, reference_wavelength_nm=550.0)
+    files = atm.write_atmosphere(mars, tmp_path)
+    assert check_cosmoscout_set(tmp_path) == ["mars_aerosols", "mars_molecules"]
+    settings = json.loads((tmp_path / "mars_settings.json").read_text())
+    # BRIEF section 6: Mars radius 3390 km, atmosphere top 3510 km.
+    assert settings["minAltitude"] == 3390e3 and settings["maxAltitude"] == 3510e3
+    assert settings["aerosols"]["density"] == "mars_aerosols_density.csv"
+    for entry in ("molecules", "aerosols"):
+        for key in ("phase", "betaSca", "betaAbs", "density"):
+            assert (tmp_path / settings[entry][key]).is_file()
+    assert "ozone" not in settings
+    assert settings["ior"] == pytest.approx(gases.get_rayleigh_model("costa2021-mars").refractivity(550.0))
+    assert files[-1].name == "mars_settings.json"
+
+
+def test_mars_dust_reproduces_optical_depth(dust_table, tmp_path):
+    mars = atm.mars_atmosphere(dust_table=dust_table, optical_depth=0.7, reference_wavelength_nm=550.0)
+    dust = mars.constituent("aerosols")
+    cext_550 = float(np.interp(550.0, dust_table.wavelength_nm, dust_table.cext_um2))
+    tau = optical_depth(
+        number_density_per_m3=dust.table.number_density_per_m3,
+        cext_um2=cext_550,
+        profile=dust.profile,
+        top_altitude_m=mars.thickness_m,
+    )
+    assert tau == pytest.approx(0.7, rel=1e-13)
+    # The written coefficients are N0 <C> at the ground (density 1 at altitude 0).
+    atm.write_atmosphere(mars, tmp_path)
+    read = read_cosmoscout_constituent(tmp_path, "mars_aerosols")
+    np.testing.assert_allclose(read.beta_sca_per_m, dust.table.beta_sca_per_m, rtol=1e-12)
+    assert read.density[0] == 1.0
+    np.testing.assert_allclose(
+        read.density, np.exp(-np.linspace(0.0, 120e3, 1024) / 11100.0), rtol=1e-12
+    )
+
+
+def test_write_is_deterministic_and_refuses_overwrite(dust_table, tmp_path):
+    mars = atm.mars_atmosphere(dust_table=dust_table)
+    a, b = tmp_path / "a", tmp_path / "b"
+    fa = atm.write_atmosphere(mars, a)
+    fb = atm.write_atmosphere(mars, b)
+    for x, y in zip(fa, fb, strict=True):
+        assert x.read_bytes() == y.read_bytes()
+    with pytest.raises(FileExistsError):
+        atm.write_atmosphere(mars, a)
+    atm.write_atmosphere(mars, a, overwrite=True)
+
+
+def test_mars_collienne_molecules(tmp_path):
+    # Collienne's coefficients exist only at 440, 510, 680 nm: a 3-wavelength set.
+    wl = np.array([440.0, 510.0, 680.0])
+    dist = do.ModifiedGamma(r_eff_um=1.6, v_eff=0.2)
+    optics = do.compute_optics(1.52 + 0.006j, dist, wl, np.linspace(0.0, 180.0, 181), rtol=1e-3)
+    dust = Table.from_optics(optics, name="dust", inputs={"test": 1})
+    mars = atm.mars_atmosphere(dust_table=dust, molecules="collienne2013")
+    np.testing.assert_allclose(
+        mars.constituent("molecules").table.beta_sca_per_m, [5.75e-6, 13.57e-6, 19.918e-6], rtol=1e-15
+    )
+    atm.write_atmosphere(mars, tmp_path)
+    check_cosmoscout_set(tmp_path)
+
+
+def test_kobe_earth_with_ozone(tmp_path):
+    earth = atm.earth_atmosphere()
+    atm.write_atmosphere(earth, tmp_path)
+    assert check_cosmoscout_set(tmp_path) == ["earth_aerosols", "earth_molecules", "earth_ozone"]
+    settings = json.loads((tmp_path / "earth_settings.json").read_text())
+    assert set(settings["ozone"]) == {"betaAbs", "density"}
+    # Hand computation (Kobe 11.5.1): beta_O3 = sigma * 6e-7 * N_s at the ground.
+    expected = np.array([4.5e-26, 1.9e-25, 3.1e-25]) * 6e-7 * 2.545e25
+    ozone = read_cosmoscout_constituent(tmp_path, "earth_ozone")
+    np.testing.assert_allclose(ozone.beta_abs_per_m, expected, rtol=1e-12)
+    # Kobe's Rayleigh coefficients (6.56e-6, 1.73e-5, 2.30e-5 at 650, 510, 475 nm).
+    mol = read_cosmoscout_constituent(tmp_path, "earth_molecules")
+    np.testing.assert_allclose(mol.beta_sca_per_m, [2.30e-5, 1.73e-5, 6.56e-6], rtol=5e-3)
+    # Kobe's aerosols: beta_sca 2e-6, extinction beta_sca / 0.9.
+    aer = read_cosmoscout_constituent(tmp_path, "earth_aerosols")
+    np.testing.assert_allclose(aer.beta_sca_per_m, 2e-6, rtol=1e-12)
+    np.testing.assert_allclose(aer.beta_abs_per_m, 2e-6 / 0.9 - 2e-6, rtol=1e-9)
+    # Ozone follows the molecules' profile (fixed fraction).
+    np.testing.assert_array_equal(ozone.density, mol.density)
+
+
+def test_earth_with_tabulated_ozone_and_bruneton_layer(tmp_path):
+    xs = gases.read_ozone_csv(shared_path("reference-data", "spectra", "ozone_xsec_bruneton_pas_233K.csv"))
+    earth = atm.earth_atmosphere(
+        wavelength_nm=WL15,
+        molecules="penndorf1957",
+        ozone=xs,
+        ozone_profile=BRUNETON2017_OZONE,
+        ozone_number_density_per_m3=BRUNETON2017_OZONE_PEAK_NUMBER_DENSITY_PER_M3,
+    )
+    atm.write_atmosphere(earth, tmp_path)
+    check_cosmoscout_set(tmp_path)
+    ozone = read_cosmoscout_constituent(tmp_path, "earth_ozone")
+    # The 1024-sample grid misses the 25 km peak: samples rescaled to 1 and beta by the same factor,
+    # so beta * density equals sigma * N(z) at every sample.
+    z = np.linspace(0.0, 80e3, 1024)
+    n_z = BRUNETON2017_OZONE_PEAK_NUMBER_DENSITY_PER_M3 * BRUNETON2017_OZONE.relative_density(z)
+    np.testing.assert_allclose(
+        np.outer(ozone.density, ozone.beta_abs_per_m), np.outer(n_z, xs(WL15)), rtol=1e-12, atol=1e-30
+    )
+
+
+def test_bad_input(dust_table):
+    with pytest.raises(ValueError, match=r"optical_depth must be > 0; got -0.5"):
+        atm.mars_atmosphere(dust_table=dust_table, optical_depth=-0.5)
+    with pytest.raises(ValueError, match=r"reference_wavelength_nm must lie within .*\[360, 830\] nm.*880"):
+        atm.mars_atmosphere(dust_table=dust_table, reference_wavelength_nm=880.0)
+    with pytest.raises(ValueError, match=r"scale_height_m must be > 0 m"):
+        atm.mars_atmosphere(dust_table=dust_table, dust_scale_height_m=-1.0)
+    with pytest.raises(ValueError, match=r"molecules must be one of 'costa2021-mars', 'collienne2013'"):
+        atm.mars_atmosphere(dust_table=dust_table, molecules="kobe2026")
+    with pytest.raises(ValueError, match=r"published only at wavelength_nm"):
+        atm.earth_atmosphere(wavelength_nm=[450.0, 550.0])  # Kobe's ozone at his 3 wavelengths only
+    with pytest.raises(ValueError, match=r"ozone_number_density_per_m3 is required"):
+        atm.earth_atmosphere(ozone_profile=ExponentialProfile(scale_height_m=5000.0))
+    with pytest.raises(ValueError, match=r"atmosphere_radius_m must exceed planet_radius_m"):
+        atm.earth_atmosphere(atmosphere_radius_m=6000e3)
