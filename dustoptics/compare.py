@@ -95,8 +95,10 @@ class TableComparison:
         )
         lines = [
             f"b = {self.name_b!r} against a = {self.name_a!r} ({how})",
-            f"{'wavelength':>10}  {'P_b/P_a(0)':>10}  {'g_a':>7}  {'g_b':>7}  "
-            f"{'median |b-a|/a':>14}  {'max |b-a|/a':>11}",
+            (
+                f"{'wavelength':>10}  {'P_b/P_a(0)':>10}  {'g_a':>7}  {'g_b':>7}  "
+                f"{'median |b-a|/a':>14}  {'max |b-a|/a':>11}"
+            ),
             f"{'[nm]':>10}  {'[-]':>10}  {'[-]':>7}  {'[-]':>7}  {'[%]':>14}  {'[%]':>11}",
         ]
         for i, wl in enumerate(self.wavelength_nm):

@@ -82,6 +82,7 @@ largest difference from the analytic formula.
 
 from __future__ import annotations
 
+import itertools
 import math
 import os
 import re
@@ -744,7 +745,7 @@ def _parse_material(ctx: _Context, value: Any) -> MaterialConfig:
 def _parse_mode(ctx: _Context, prefix: str, sec: Mapping[str, Any], *, in_mixture: bool) -> ModeConfig:
     models = tuple(_DISTRIBUTIONS) if in_mixture else (*_DISTRIBUTIONS, "multimodal")
     model = _choice(ctx, f"{prefix}.model", _required(ctx, prefix, sec, "model"), models)
-    cls, params = _DISTRIBUTIONS[model]
+    params = _DISTRIBUTIONS[model][1]
     allowed = ("model", *(p for p, _ in params)) + (("relative_number_density",) if in_mixture else ())
     _known_keys(ctx, prefix, sec, allowed, f"for {prefix}.model = {model!r}")
     values: dict[str, float] = {}
@@ -811,7 +812,7 @@ def _parse_wavelengths(ctx: _Context, value: Any) -> tuple[float, ...]:
     if not items:
         raise ctx.error(key, "must not be empty")
     grid = [_positive(ctx, f"{key}[{i}]", x, "nm") for i, x in enumerate(items)]
-    if any(b <= a for a, b in zip(grid, grid[1:])):
+    if any(b <= a for a, b in itertools.pairwise(grid)):
         raise ctx.error(key, f"must be strictly increasing; got {items!r}")
     return tuple(grid)
 
@@ -1019,15 +1020,15 @@ def _compute_mie(config: BuildConfig, workers: int | None,
                  progress: Callable[[int, int], None] | None) -> OpticsTable:
     assert config.material is not None and config.size_distribution is not None
     wl = config.wavelengths_nm
-    kwargs = dict(
-        refractive_index=config.material.build(),
-        distribution=config.size_distribution.build(),
-        theta_deg=config.theta_deg,
-        rtol=config.optics.rtol,
-        weighting=config.optics.weighting,
-        cross_section_rtol=config.optics.cross_section_rtol,
-        workers=workers,
-    )
+    kwargs: dict[str, Any] = {
+        "refractive_index": config.material.build(),
+        "distribution": config.size_distribution.build(),
+        "theta_deg": config.theta_deg,
+        "rtol": config.optics.rtol,
+        "weighting": config.optics.weighting,
+        "cross_section_rtol": config.optics.cross_section_rtol,
+        "workers": workers,
+    }
     if progress is None:
         return compute_optics(wavelengths_nm=wl, **kwargs)
     # Each wavelength is computed independently (compute_optics's contract),

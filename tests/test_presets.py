@@ -8,14 +8,15 @@ import warnings
 import numpy as np
 import pandas as pd
 import pytest
+from _shared import shared_path
 
 from dustoptics import phase, presets
 from dustoptics.config import BuildConfig, build_table, parse_config
 from dustoptics.phase import ExtrapolationWarning
 from dustoptics.table import Table, canonical_json
-from _shared import shared_path
 
 NAMES = ["blue-moons", "blue-moons-seed", "collienne", "cosmoscout-mars", "costa", "hybrid", "hybrid-seed"]
+
 
 #: cosmoscout-mars's coarse log-normal mode reaches radii of ~70 um (the radius
 #: quadrature keeps the tail up to the 6th moment), so the full 48-wavelength
@@ -24,14 +25,14 @@ NAMES = ["blue-moons", "blue-moons-seed", "collienne", "cosmoscout-mars", "costa
 #: contract), so they are rows of the full table.
 COSMOSCOUT_TEST_WAVELENGTHS_NM = (360.0, 550.0, 830.0)
 
-def test_config(name: str) -> BuildConfig:
+
+def _preset_config(name: str) -> BuildConfig:
     config = presets.load_preset(name)
     if name == "cosmoscout-mars":
         optics = dataclasses.replace(config.optics, wavelengths_nm=COSMOSCOUT_TEST_WAVELENGTHS_NM)
         config = dataclasses.replace(config, optics=optics)
     return config
 
-test_config.__test__ = False  # a helper, not a test
 
 def _build(name: str) -> tuple[Table, list[warnings.WarningMessage]]:
     with warnings.catch_warnings(record=True) as caught:
@@ -39,22 +40,32 @@ def _build(name: str) -> tuple[Table, list[warnings.WarningMessage]]:
         table = build_table(_preset_config(name))
     return table, list(caught)
 
+
 @pytest.fixture(scope="module")
+
+
 def built() -> dict[str, tuple[Table, list[warnings.WarningMessage]]]:
     """Each preset built once per module (with its warnings)."""
     return {name: _build(name) for name in NAMES}
+
 
 def test_list_presets() -> None:
     assert presets.list_presets() == NAMES
     assert presets.DEFAULT_PRESET in NAMES
 
+
 @pytest.mark.parametrize("bad", ["blue-moon", "", "BLUE-MOONS", None])
+
+
 def test_unknown_preset_lists_valid_names(bad) -> None:
     for function in (presets.preset_text, presets.load_preset, presets.build_preset):
         with pytest.raises(ValueError, match=r"unknown preset .*valid presets: blue-moons, blue-moons-seed, "):
             function(bad)
 
+
 @pytest.mark.parametrize("name", NAMES)
+
+
 def test_preset_text_is_a_config_with_its_name_and_citations(name: str) -> None:
     text = presets.preset_text(name)
     assert text.startswith(f"# {name}:")
@@ -63,6 +74,7 @@ def test_preset_text_is_a_config_with_its_name_and_citations(name: str) -> None:
     assert config.sources and config.choices and config.description
     assert all(len(s.citation) > 40 for s in config.sources)
     assert presets.load_preset(name).to_inputs() == config.to_inputs()
+
 
 @pytest.mark.parametrize(
     ("name", "authors"),
@@ -76,12 +88,17 @@ def test_preset_text_is_a_config_with_its_name_and_citations(name: str) -> None:
         ("cosmoscout-mars", ("CosmoScout VR", "Ehlers", "Querry")),
     ],
 )
+
+
 def test_sources_cited(name: str, authors: tuple[str, ...]) -> None:
     citations = " ".join(s.citation for s in presets.load_preset(name).sources)
     for author in authors:
         assert author in citations
 
+
 @pytest.mark.parametrize("name", NAMES)
+
+
 def test_every_preset_builds(built, name: str) -> None:
     table, _ = built[name]
     config = _preset_config(name)
@@ -94,7 +111,10 @@ def test_every_preset_builds(built, name: str) -> None:
     assert table.has_cross_sections == config.phase.uses_mie
     assert np.all(np.abs(table.g) < 1)
 
+
 @pytest.mark.parametrize("name", NAMES)
+
+
 def test_building_twice_is_identical_to_the_byte(built, name: str) -> None:
     first, _ = built[name]
     second, _ = _build(name)
@@ -106,6 +126,7 @@ def test_building_twice_is_identical_to_the_byte(built, name: str) -> None:
             assert a.tobytes() == b.tobytes(), key
     assert canonical_json(first.provenance.to_dict()) == canonical_json(second.provenance.to_dict())
     assert first.equals(second)
+
 
 def test_blue_moons_seed_reproduces_the_seed_table(built) -> None:
     """Meyran 2022's published table (BRIEF section 5): median 0.4-0.5 % and
@@ -124,10 +145,12 @@ def test_blue_moons_seed_reproduces_the_seed_table(built) -> None:
         assert 0.003 <= median[i] <= 0.006, (wl, median[i])
         assert worst[i] <= top, (wl, worst[i])
 
+
 def test_blue_moons_forward_peak(built) -> None:
     """BRIEF section 2: 67.3 sr^-1 (physical) and 28.6 sr^-1 (number) at 360 nm."""
     assert built["blue-moons"][0].phase[0, 0] == pytest.approx(67.3, abs=0.05)
     assert built["blue-moons-seed"][0].phase[0, 0] == pytest.approx(28.6, abs=0.05)
+
 
 def _costa_table(wavelength_nm: np.ndarray, theta_deg: np.ndarray, outside: str) -> np.ndarray:
     with warnings.catch_warnings():
@@ -139,8 +162,11 @@ def _costa_table(wavelength_nm: np.ndarray, theta_deg: np.ndarray, outside: str)
     )
     return phase.renormalize(raw, theta_deg=theta_deg)
 
+
 @pytest.mark.parametrize(("name", "mie", "outside"), [("hybrid-seed", "blue-moons-seed", "quadratic"),
                                                       ("hybrid", "blue-moons", "clamp")])
+
+
 def test_hybrid_is_the_renormalized_half_blend(built, name: str, mie: str, outside: str) -> None:
     """Identity: the hybrid preset is 0.5 renorm(P_mie) + 0.5 renorm(P_costa),
     renormalized, with g its mean cosine and the Mie cross-sections."""
@@ -163,12 +189,14 @@ def test_hybrid_is_the_renormalized_half_blend(built, name: str, mie: str, outsi
     else:
         assert not extrapolated
 
+
 def test_hybrid_uses_the_costa_preset_table(built) -> None:
     """Both use outside='clamp' on the same grid, so hybrid's analytic part is costa's table."""
     hyb, costa, mie = built["hybrid"][0], built["costa"][0], built["blue-moons"][0]
     theta = hyb.theta_deg
     expected = phase.hybrid(phase.renormalize(mie.phase, theta_deg=theta), costa.phase, theta_deg=theta)
     np.testing.assert_array_equal(hyb.phase, expected)
+
 
 def test_costa_g_matches_published_parameters(built) -> None:
     """Costa et al.'s source-code values: g = alpha g1 + (1 - alpha) g2 with
@@ -181,6 +209,7 @@ def test_costa_g_matches_published_parameters(built) -> None:
         i = int(np.flatnonzero(table.wavelength_nm == wl)[0])
         assert table.g[i] == pytest.approx(0.743 * g1 + 0.257 * 0.094, abs=1e-5)
 
+
 def test_collienne_is_cornette_shanks_08(built) -> None:
     """Cornette-Shanks mean cosine 3 g (4 + g^2) / (5 (2 + g^2)) = 0.843636... at g = 0.8."""
     table, _ = built["collienne"]
@@ -188,6 +217,7 @@ def test_collienne_is_cornette_shanks_08(built) -> None:
     assert presets.load_preset("collienne").phase.parameters["g"] == 0.8
     np.testing.assert_allclose(table.g, 3 * 0.8 * 4.64 / (5 * 2.64), atol=1e-5)
     np.testing.assert_array_equal(table.phase, np.broadcast_to(table.phase[0], table.phase.shape))
+
 
 def test_cosmoscout_mars_inputs(built) -> None:
     inputs = presets.load_preset("cosmoscout-mars").to_inputs()
@@ -200,6 +230,7 @@ def test_cosmoscout_mars_inputs(built) -> None:
     assert inputs["material"]["hematite"] == "hematite-querry1985-extraordinary"
     table, _ = built["cosmoscout-mars"]
     assert np.all(table.ssa <= 1) and np.all(table.error_estimate <= 1e-4)
+
 
 def test_seed_and_physical_presets_differ_only_in_weighting_and_angles() -> None:
     seed, physical = presets.load_preset("blue-moons-seed").to_inputs(), presets.load_preset("blue-moons").to_inputs()
