@@ -1,455 +1,485 @@
-"""The ``dustoptics`` command line.
+"""The ``dustoptics`` command line: thin, the library does the work.
 
 Usage::
 
-    dustoptics build [NAME] [--out DIR] [--rtol RTOL] [--wavelengths-nm LIST]
-                     [--n-theta N] [--force] [--quiet]
-    dustoptics presets
+    dustoptics build [NAME_OR_CONFIG] [--out DIR] [--format FMT[,FMT...]] [--force] [--quiet]
+    dustoptics export FILE.h5 --out DIR --format FMT[,FMT...] [--force]
+    dustoptics info FILE
+    dustoptics plot FILE --kind {phase,polar,map,spectra} [--wavelengths-nm LIST] --out FIG.png|.svg
+    dustoptics presets [--show NAME]
     dustoptics materials
     dustoptics --version
 
-``build`` computes a preset's table with :func:`dustoptics.compute_optics` and
-writes it into ``DIR/NAME/`` with :func:`dustoptics.io.seed_csv.write_seed_csv`.
-The presets are defined in :data:`PRESETS`, the only place in the package that
-names them.
+``build`` computes a preset (``dustoptics presets``) or a TOML configuration
+file (:mod:`dustoptics.config`; copy a preset with ``presets --show NAME``)
+and writes it into ``DIR/NAME/`` in each format of :data:`dustoptics.io.FORMATS`
+(``hdf5``, ``csv``, ``cosmoscout``, ``glsl``, ``texture``).  ``export`` turns
+an HDF5 table into other formats in ``DIR``; ``info`` says what a table file
+holds and how it was made; ``plot`` draws it (needs the ``plot`` extra).
 
-Exit status: 0 on success, 1 on failure (e.g. an output file exists without
-``--force``), 2 on a usage error (unknown preset, bad option value).  Errors
-are printed as ``dustoptics: error: <message>`` on stderr, without a traceback.
+Exit status: 0 on success, 1 on failure (an output exists without ``--force``,
+a damaged input file, an input the physics rejects), 2 on a usage error
+(unknown preset, format or option value).  Errors are printed as
+``dustoptics: error: <message>`` on stderr, without a traceback.  A closed
+output pipe (``dustoptics info f.h5 | head``) is not an error.
 """
 
 from __future__ import annotations
 
 import argparse
-import itertools
+import json
 import os
 import sys
 import time
 import warnings
-from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, TextIO
 
 import numpy as np
 
-__all__ = ["PRESETS", "BuildResult", "Preset", "build", "main"]
+__all__ = ["TableBuilder", "main", "read_table"]
 
 PROG = "dustoptics"
 
-
-@dataclass(frozen=True)
-class Preset:
-    """A named table definition.
-
-    Attributes
-    ----------
-    description : str
-        One line for ``dustoptics presets``.
-    source : str
-        Where the model comes from.
-    material : callable
-        Returns the refractive-index object, m(lambda) = n + i k.
-    distribution : callable
-        Returns the :class:`~dustoptics.sizedist.SizeDistribution`.
-    weighting : str
-        ``"scattering"`` (physical) or ``"number"`` (the seed's average).
-    theta_deg : callable or None
-        Returns the default scattering angles [deg]; None for
-        :func:`dustoptics.optics.default_theta_deg` (0 to 180 in 0.1 deg steps).
-    wavelengths_nm : callable or None
-        Returns the default wavelengths [nm]; None for 360, 370, ..., 830.
-    """
-
-    description: str
-    source: str
-    material: Callable[[], Any] = field(repr=False)
-    distribution: Callable[[], Any] = field(repr=False)
-    weighting: str = "scattering"
-    theta_deg: Callable[[], np.ndarray] | None = field(default=None, repr=False)
-    wavelengths_nm: Callable[[], np.ndarray] | None = field(default=None, repr=False)
+#: Formats written by ``build`` when ``--format`` is not given.
+DEFAULT_FORMATS = ("hdf5", "csv")
 
 
-def _blue_moon_dust() -> Any:
-    import dustoptics as do
-
-    return do.mars_dust(hematite_fraction=0.03, host_index=1.5, hematite="querry-extraordinary")
+class UsageError(ValueError):
+    """A command-line usage error (exit status 2)."""
 
 
-def _mars_sizes() -> Any:
-    import dustoptics as do
-
-    return do.ModifiedGamma(r_eff_um=1.6, v_eff=0.2)
+# ---------------------------------------------------------------------- library side
 
 
-#: The presets ``dustoptics build`` knows.  (A later version reads them from TOML files.)
-PRESETS: dict[str, Preset] = {
-    "mars-dust": Preset(
-        description=(
-            "Blue Moon's Mars dust (3 % hematite in n=1.5, modified gamma r_eff 1.6 um, "
-            "v_eff 0.2), physical cross-section weighting"
-        ),
-        source=(
-            "Meyran 2022 after Ehlers et al. 2014; Querry 1985 hematite (extraordinary ray); "
-            "sizes Tomasko et al. 1999"
-        ),
-        material=_blue_moon_dust,
-        distribution=_mars_sizes,
-        weighting="scattering",
-    ),
-    "mars-dust-seed": Preset(
-        description=(
-            "the seed thesis's published table: the same dust, number-weighted phase function, "
-            "1,800 angles"
-        ),
-        source="Meyran 2022 (seed-tables/MiePhaseFunctionSpectrum.csv), computed deterministically",
-        material=_blue_moon_dust,
-        distribution=_mars_sizes,
-        weighting="number",
-        theta_deg=lambda: np.linspace(0.0, 180.0, 1800),
-    ),
-}
-
-DEFAULT_PRESET = "mars-dust"
-DEFAULT_OUT = "tables"
-DEFAULT_RTOL = 1e-4
-
-
-@dataclass(frozen=True)
-class BuildResult:
-    """What :func:`build` wrote.
-
-    Attributes
-    ----------
-    name : str
-        Preset name.
-    paths : list of pathlib.Path
-        Files written.
-    table : OpticsTable
-        The computed table.
-    seconds : float
-        Wall-clock time of the computation. [s]
-    warnings : list of str
-        Messages of warnings raised while computing (e.g. non-convergence).
-    """
-
-    name: str
-    paths: list[Path]
-    table: Any = field(repr=False)
-    seconds: float
-    warnings: list[str]
-
-
-def _count(n: int, noun: str) -> str:
-    return f"{n} {noun}" if n == 1 else f"{n} {noun}s"
-
-
-def _note(stream: TextIO | None, message: str) -> None:
-    if stream is not None:
-        print(message, file=stream, flush=True)
-
-
-def build(
-    name: str = DEFAULT_PRESET,
-    out: str | os.PathLike[str] = DEFAULT_OUT,
-    *,
-    rtol: float = DEFAULT_RTOL,
-    wavelengths_nm: Sequence[float] | None = None,
-    n_theta: int | None = None,
-    overwrite: bool = False,
-    progress: TextIO | None = None,
-) -> BuildResult:
-    """Compute a preset's table and write it into ``out/name/``.
-
-    Parameters
-    ----------
-    name : str
-        A key of :data:`PRESETS`.
-    out : path-like
-        Parent directory; the files go into ``out/name/``.
-    rtol : float
-        Quadrature tolerance on the phase function, in (0, 0.1). [-]
-    wavelengths_nm : sequence of float, optional
-        Override the preset's wavelengths. [nm]
-    n_theta : int, optional
-        Override the preset's angles with ``n_theta`` evenly spaced angles
-        from 0 to 180 deg inclusive (>= 2).
-    overwrite : bool
-        Replace existing files.
-    progress : text stream, optional
-        Where to print progress (None: silent).
-
-    Returns
-    -------
-    BuildResult
+def read_table(path: str | os.PathLike[str]) -> Any:
+    """Read a table from an HDF5 file (``.h5``/``.hdf5``/``.nc``), a seed-CSV
+    directory or its ``table_summary.json``.
 
     Raises
     ------
-    KeyError
-        Unknown preset (the message lists the valid names).
-    FileExistsError
-        An output file exists and ``overwrite`` is False; checked before
-        computing.
-    ValueError
-        Bad parameter (named in the message).
+    dustoptics.io.FormatError
+        A damaged or unrecognized file.
+    FileNotFoundError
+        No such file.
     """
-    import dustoptics as do
-    from dustoptics.io import seed_csv as export
-    from dustoptics.table import Table
+    from dustoptics.io import FormatError, read_hdf5, read_seed_csv
+    from dustoptics.io.seed_csv import SUMMARY_FILENAME
 
-    if name not in PRESETS:
-        raise KeyError(f"unknown preset {name!r}; valid names: {', '.join(PRESETS)}")
-    preset = PRESETS[name]
-    target = Path(out) / name
-    if not overwrite:
-        existing = export.existing_outputs(target)
-        if existing:
-            raise FileExistsError(
-                f"{existing[0]} already exists (use --force / overwrite=True to replace it)"
-            )
-    if n_theta is not None:
-        if not (isinstance(n_theta, (int, np.integer)) and n_theta >= 2):
-            raise ValueError(f"n_theta must be an integer >= 2; got {n_theta!r}")
-        theta: np.ndarray | None = np.linspace(0.0, 180.0, int(n_theta))
-    else:
-        theta = None if preset.theta_deg is None else preset.theta_deg()
-    wavelengths: Sequence[float] | np.ndarray | None = wavelengths_nm
-    if wavelengths is None and preset.wavelengths_nm is not None:
-        wavelengths = preset.wavelengths_nm()
-
-    material = preset.material()
-    distribution = preset.distribution()
-    n_wl = len(wavelengths) if wavelengths is not None else do.optics.default_wavelengths_nm().size
-    n_th = theta.size if theta is not None else do.optics.default_theta_deg().size
-    _note(
-        progress,
-        f"{name}: computing {_count(n_wl, 'wavelength')} x {_count(n_th, 'angle')} (rtol {rtol:g})...",
+    p = Path(path)
+    if not p.exists():
+        raise FileNotFoundError(f"no such file or directory: {str(p)!r}")
+    if p.is_dir() or p.name == SUMMARY_FILENAME:
+        return read_seed_csv(p if p.is_dir() else p.parent)
+    if p.suffix.lower() in (".h5", ".hdf5", ".nc"):
+        return read_hdf5(p)
+    raise FormatError(
+        f"{str(p)!r}: not a table file; give an HDF5 file (.h5, .hdf5, .nc), a seed-CSV "
+        f"directory or its {SUMMARY_FILENAME}"
     )
-    start = time.perf_counter()
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always", do.ConvergenceWarning)
-        table = do.compute_optics(
-            material,
-            distribution,
-            wavelengths_nm=wavelengths,
-            theta_deg=theta,
-            rtol=rtol,
-            weighting=preset.weighting,
-        )
-    seconds = time.perf_counter() - start
-    messages = [str(w.message) for w in caught]
-    _note(progress, f"{name}: computed in {seconds:.1f} s; writing {target}")
-    inputs = {
-        "preset": name,
-        "description": preset.description,
-        "source": preset.source,
-        "material": table.material,
-        "distribution": table.distribution.to_dict(),
-        "weighting": table.weighting,
-        "rtol": float(table.rtol),
-        "wavelengths_nm": table.wavelength_nm.tolist(),
-        "n_theta": int(table.theta_deg.size),
-    }
-    result = Table.from_optics(table, name=name, inputs=inputs, notes=tuple(messages))
-    paths = export.write_seed_csv(result, target, overwrite=overwrite)
-    return BuildResult(name=name, paths=paths, table=table, seconds=seconds, warnings=messages)
 
 
-# ------------------------------------------------------------------ argument types
+@dataclass(frozen=True)
+class FormatOptions:
+    """Options of the individual formats, as the command line gives them."""
+
+    channels_nm: tuple[float, ...] | None = None
+    colour: str | None = None
+    resolution_deg: float | None = None
+    sampling: str | None = None
+    n_angles: int | None = None
+    density: np.ndarray | None = None
+
+    def for_format(self, name: str) -> dict[str, Any]:
+        """Keyword options for the writer of format ``name``."""
+        if name == "glsl":
+            out: dict[str, Any] = {"channels_nm": self.channels_nm, "colour": self.colour}
+            if self.resolution_deg is not None:
+                out["resolution_deg"] = self.resolution_deg
+            return out
+        if name == "texture":
+            out = {}
+            if self.sampling is not None:
+                out["sampling"] = self.sampling
+            if self.n_angles is not None:
+                out["n_angles"] = self.n_angles
+            return out
+        if name == "cosmoscout":
+            return {"density": self.density}
+        return {}
 
 
-def _rtol(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"must be a number in (0, 0.1); got {text!r}") from None
-    if not (0.0 < value < 0.1):
-        raise argparse.ArgumentTypeError(f"must be in the open interval (0, 0.1); got {text!r}")
-    return value
+class TableBuilder:
+    """Builds a preset or configuration and writes it in several formats.
+
+    Parameters
+    ----------
+    name_or_config : str
+        A preset name or the path of a TOML configuration file.
+    progress : TextIO or None
+        Where to report progress (None: silent).
+    """
+
+    def __init__(self, name_or_config: str, *, progress: TextIO | None = None) -> None:
+        from dustoptics import config, presets
+
+        self.progress = progress
+        if name_or_config.endswith(".toml") or os.sep in name_or_config or Path(name_or_config).is_file():
+            self.config = config.load_config(name_or_config)
+        else:
+            try:
+                self.config = presets.load_preset(name_or_config)
+            except ValueError as exc:
+                raise UsageError(str(exc)) from None
+
+    @property
+    def name(self) -> str:
+        return self.config.name
+
+    def build(self) -> Any:
+        """Compute the table, reporting progress per wavelength."""
+        from dustoptics import config
+
+        start = time.perf_counter()
+        tty = self.progress is not None and self.progress.isatty()
+
+        def report(done: int, total: int) -> None:
+            if self.progress is None:
+                return
+            if tty or done in (0, total):
+                end = "\n" if done == total else ("\r" if tty else "\n")
+                elapsed = time.perf_counter() - start
+                print(f"{self.name}: {done}/{total} wavelengths, {elapsed:.1f} s", end=end, file=self.progress)
+                self.progress.flush()
+
+        return config.build_table(self.config, progress=report)
 
 
-def _wavelength_list(text: str) -> list[float]:
-    cells = [cell.strip() for cell in text.split(",")]
-    if not cells or any(cell == "" for cell in cells):
+def write_formats(
+    table: Any, out_dir: Path, formats: Sequence[str], *, overwrite: bool, options: FormatOptions
+) -> list[Path]:
+    """Write ``table`` into ``out_dir`` in every format; returns the paths written."""
+    from dustoptics.io import write
+
+    written: list[Path] = []
+    for name in formats:
+        written.extend(write(table, out_dir, format=name, overwrite=overwrite, **options.for_format(name)))
+    return written
+
+
+def describe(table: Any) -> str:
+    """What a table holds and how it was made, as text for ``info``."""
+    prov = table.provenance
+    wl, theta = table.wavelength_nm, table.theta_deg
+    lines = [
+        f"name:            {table.name}",
+        f"wavelengths:     {wl.size}, {wl[0]:g} .. {wl[-1]:g} nm",
+        f"angles:          {theta.size}, {theta[0]:g} .. {theta[-1]:g} deg",
+        "phase function:  [sr^-1], 2 pi int P dmu = 1",
+        f"g:               {table.g.min():.6g} .. {table.g.max():.6g}",
+    ]
+    if table.has_cross_sections:
+        lines += [
+            f"cext_um2:        {table.cext_um2.min():.6g} .. {table.cext_um2.max():.6g}",
+            f"ssa:             {table.ssa.min():.6g} .. {table.ssa.max():.6g}",
+        ]
+    else:
+        lines.append("cross-sections:  none (phase function only)")
+    if table.number_density_per_m3 is not None:
+        lines.append(f"number density:  {table.number_density_per_m3:.6g} m^-3")
+    if table.error_estimate is not None:
+        lines.append(f"error estimate:  phase <= {table.error_estimate.max():.2e} (relative)")
+    if table.cross_section_error_estimate is not None:
+        lines.append(f"                 cross-sections, g <= {table.cross_section_error_estimate.max():.2e}")
+    lines.append(f"input hash:      {prov.input_hash}")
+    lines.append("software:        " + ", ".join(f"{k} {v}" for k, v in sorted(prov.software.items())))
+    if prov.sources:
+        lines.append("sources:")
+        lines += [f"  - {s.name} ({s.role}): {s.citation}" for s in prov.sources]
+    if prov.notes:
+        lines.append("notes:")
+        lines += [f"  - {n}" for n in prov.notes]
+    lines.append("inputs:")
+    lines += ["  " + line for line in json.dumps(prov.to_dict()["inputs"], indent=2, sort_keys=True).splitlines()]
+    return "\n".join(lines)
+
+
+# ---------------------------------------------------------------------- argument parsing
+
+
+def _formats(text: str) -> tuple[str, ...]:
+    from dustoptics.io import FORMATS
+
+    names = tuple(part.strip() for part in text.split(",") if part.strip())
+    unknown = [n for n in names if n not in FORMATS]
+    if not names or unknown:
         raise argparse.ArgumentTypeError(
-            f"must be a comma-separated list of wavelengths in nm, e.g. 440,550,680; got {text!r}"
+            f"unknown format {', '.join(map(repr, unknown)) or repr(text)}; "
+            f"choose from {', '.join(sorted(FORMATS))} (comma-separated)"
         )
-    values = []
-    for cell in cells:
-        try:
-            value = float(cell)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"{cell!r} is not a number (wavelengths in nm)") from None
-        if not (np.isfinite(value) and value > 0):
-            raise argparse.ArgumentTypeError(f"wavelengths must be finite and > 0 nm; got {cell!r}")
-        values.append(value)
-    if any(b <= a for a, b in itertools.pairwise(values)):
-        raise argparse.ArgumentTypeError(f"wavelengths must be strictly increasing; got {text!r}")
+    return tuple(dict.fromkeys(names))
+
+
+def _float_list(text: str) -> tuple[float, ...]:
+    try:
+        values = tuple(float(v) for v in text.replace(" ", ",").split(",") if v)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected comma-separated numbers; got {text!r}") from None
+    if not values or not all(np.isfinite(values)):
+        raise argparse.ArgumentTypeError(f"expected comma-separated finite numbers; got {text!r}")
     return values
 
 
-def _n_theta(text: str) -> int:
+def _positive_float(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number; got {text!r}") from None
+    if not (np.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"must be a finite number > 0; got {text!r}")
+    return value
+
+
+def _positive_int(text: str) -> int:
     try:
         value = int(text)
     except ValueError:
-        raise argparse.ArgumentTypeError(f"must be an integer >= 2; got {text!r}") from None
+        raise argparse.ArgumentTypeError(f"expected an integer; got {text!r}") from None
     if value < 2:
-        raise argparse.ArgumentTypeError(
-            f"must be an integer >= 2 (angles 0 and 180 deg included); got {text!r}"
-        )
+        raise argparse.ArgumentTypeError(f"must be an integer >= 2; got {text!r}")
     return value
+
+
+def _add_format_options(p: argparse.ArgumentParser, *, default: str | None) -> None:
+    help_default = f" (default {default})" if default else ""
+    p.add_argument(
+        "--format", type=_formats, default=_formats(default) if default else None, required=default is None,
+        metavar="FMT[,FMT...]", help=f"output formats: hdf5, csv, cosmoscout, glsl, texture{help_default}",
+    )
+    p.add_argument("--force", action="store_true", help="replace existing output files")
+    g = p.add_argument_group("glsl")
+    g.add_argument("--channels-nm", type=_float_list, metavar="R,G,B",
+                   help="wavelengths of the three channels [nm] (default 680,550,440)")
+    g.add_argument("--colour", choices=["cie1931"], help="CIE 1931 colour bands instead of three wavelengths")
+    g.add_argument("--resolution-deg", type=_positive_float, metavar="DEG",
+                   help="angular step of the constant array [deg] (default 0.25)")
+    g = p.add_argument_group("texture")
+    g.add_argument("--sampling", choices=["theta", "cos"], help="uniform in angle or in cos(angle) (default theta)")
+    g.add_argument("--n-angles", type=_positive_int, metavar="N", help="samples along the angle axis (default 721)")
+    g = p.add_argument_group("cosmoscout (beta in m^-1 needs a number density)")
+    g.add_argument("--number-density-per-m3", type=_positive_float, metavar="N0",
+                   help="number density at the surface [m^-3] (overrides the configuration's)")
+    g.add_argument("--scale-height-m", type=_positive_float, default=10_000.0, metavar="H",
+                   help="exponential density profile's scale height [m] (default 10000, the seeds' Mars dust)")
+    g.add_argument("--top-altitude-m", type=_positive_float, default=120_000.0, metavar="Z",
+                   help="atmosphere top above the surface [m] (default 120000, Mars 3510 - 3390 km)")
+    g.add_argument("--n-altitudes", type=_positive_int, default=1024, metavar="N",
+                   help="density samples (default 1024)")
 
 
 def _parser() -> argparse.ArgumentParser:
     from dustoptics import __version__
+    from dustoptics.presets import DEFAULT_PRESET
 
     parser = argparse.ArgumentParser(
         prog=PROG,
-        description="Polydisperse Mie optics of atmospheric dust and lookup tables for atmosphere renderers.",
+        description="Exact, reproducible optics of atmospheric dust and lookup tables for renderers.",
     )
     parser.add_argument("--version", action="version", version=f"{PROG} {__version__}")
-    commands = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    sub.required = True
 
-    names = ", ".join(PRESETS)
-    b = commands.add_parser(
-        "build",
-        help="compute a preset's table and write it as CSV",
-        description=(
-            "Compute a preset's table and write MiePhaseFunctionSpectrum.csv, "
-            "MieExtinctionSpectrum.csv and table_summary.json into OUT/NAME/."
-        ),
-    )
-    b.add_argument(
-        "name",
-        nargs="?",
-        default=DEFAULT_PRESET,
-        choices=list(PRESETS),
-        metavar="NAME",
-        help=f"preset name (default: {DEFAULT_PRESET}; one of: {names})",
-    )
-    b.add_argument(
-        "--out", default=DEFAULT_OUT, metavar="DIR", help=f"parent directory (default: {DEFAULT_OUT})"
-    )
-    b.add_argument(
-        "--rtol",
-        type=_rtol,
-        default=DEFAULT_RTOL,
-        help=f"quadrature tolerance on the phase function, in (0, 0.1) (default: {DEFAULT_RTOL:g})",
-    )
-    b.add_argument(
-        "--wavelengths-nm",
-        type=_wavelength_list,
-        default=None,
-        metavar="LIST",
-        help="comma-separated wavelengths in nm, e.g. 440,550,680 (default: the preset's, 360..830 step 10)",
-    )
-    b.add_argument(
-        "--n-theta",
-        type=_n_theta,
-        default=None,
-        metavar="N",
-        help="N evenly spaced angles from 0 to 180 deg (default: the preset's)",
-    )
-    b.add_argument("--force", action="store_true", help="overwrite existing files")
-    b.add_argument("--quiet", action="store_true", help="no progress messages on stderr")
+    p = sub.add_parser("build", help="compute a preset or configuration file and write its tables")
+    p.add_argument("name", nargs="?", default=DEFAULT_PRESET, metavar="NAME_OR_CONFIG",
+                   help=f"preset name (see 'presets') or TOML configuration file (default {DEFAULT_PRESET})")
+    p.add_argument("--out", type=Path, default=Path("tables"), metavar="DIR",
+                   help="output directory; files go to DIR/NAME/ (default ./tables)")
+    p.add_argument("--quiet", action="store_true", help="no progress or summary output")
+    _add_format_options(p, default=",".join(DEFAULT_FORMATS))
 
-    commands.add_parser("presets", help="list the presets", description="List the presets build knows.")
-    commands.add_parser(
-        "materials",
-        help="list the refractive-index catalogue",
-        description="List the material catalogue.",
-    )
+    p = sub.add_parser("export", help="convert an HDF5 table into other formats")
+    p.add_argument("file", type=Path, metavar="FILE.h5")
+    p.add_argument("--out", type=Path, required=True, metavar="DIR", help="output directory")
+    p.add_argument("--quiet", action="store_true", help="no summary output")
+    _add_format_options(p, default=None)
+
+    p = sub.add_parser("info", help="what a table file holds and how it was made")
+    p.add_argument("file", type=Path, metavar="FILE", help="HDF5 file, seed-CSV directory or its table_summary.json")
+
+    p = sub.add_parser("plot", help="plot a table (needs the 'plot' extra: matplotlib)")
+    p.add_argument("file", type=Path, metavar="FILE")
+    p.add_argument("--kind", choices=["phase", "polar", "map", "spectra"], default="phase",
+                   help="phase function (log scale), polar, wavelength x angle map, or spectra")
+    p.add_argument("--wavelengths-nm", type=_float_list, metavar="LIST",
+                   help="wavelengths to draw for phase/polar [nm] (must be on the table's grid)")
+    p.add_argument("--out", type=Path, required=True, metavar="FIG", help="output file, .png or .svg")
+    p.add_argument("--force", action="store_true", help="replace an existing figure")
+
+    p = sub.add_parser("presets", help="list the presets, or print one's configuration file")
+    p.add_argument("--show", metavar="NAME", help="print the TOML of preset NAME (copy it to edit)")
+
+    sub.add_parser("materials", help="list the refractive-index catalogue")
     return parser
 
 
-# ------------------------------------------------------------------ commands
+# ---------------------------------------------------------------------- commands
 
 
-def _cmd_build(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
-    result = build(
-        args.name,
-        args.out,
-        rtol=args.rtol,
-        wavelengths_nm=args.wavelengths_nm,
-        n_theta=args.n_theta,
-        overwrite=args.force,
-        progress=None if args.quiet else sys.stderr,
+def _say(args: argparse.Namespace, text: str) -> None:
+    if not getattr(args, "quiet", False):
+        print(text)
+
+
+def _format_options(args: argparse.Namespace, table: Any) -> tuple[Any, FormatOptions]:
+    """The table (with a number density if given) and the writers' options."""
+    density = None
+    if "cosmoscout" in args.format:
+        from dustoptics.column import ExponentialProfile, sample_profile
+
+        if args.number_density_per_m3 is not None:
+            table = table.replace(number_density_per_m3=args.number_density_per_m3)
+        if table.number_density_per_m3 is None:
+            raise UsageError(
+                "the cosmoscout format needs a number density for beta [m^-1]: give "
+                "--number-density-per-m3 or number_density_per_m3 in the configuration"
+            )
+        samples = sample_profile(
+            ExponentialProfile(scale_height_m=args.scale_height_m),
+            top_altitude_m=args.top_altitude_m,
+            n_altitudes=args.n_altitudes,
+        )
+        density = samples.relative_density
+    options = FormatOptions(
+        channels_nm=args.channels_nm,
+        colour=args.colour,
+        resolution_deg=args.resolution_deg,
+        sampling=args.sampling,
+        n_angles=args.n_angles,
+        density=density,
     )
-    for message in result.warnings:
-        print(f"{PROG}: warning: {message}", file=sys.stderr)
-    table = result.table
-    for path in result.paths:
-        print(f"wrote {path}")
-    i = int(np.argmax(table.error_estimate))
-    worst = float(table.error_estimate[i])
-    status = "within" if worst <= table.rtol else "ABOVE"
-    print(
-        f"worst error_estimate: {worst:.2e} at {table.wavelength_nm[i]:g} nm "
-        f"({status} rtol {table.rtol:g}; {_count(table.wavelength_nm.size, 'wavelength')} x "
-        f"{_count(table.theta_deg.size, 'angle')}, {result.seconds:.1f} s)"
-    )
+    return table, options
+
+
+def _cmd_build(args: argparse.Namespace) -> int:
+    builder = TableBuilder(args.name, progress=None if args.quiet else sys.stderr)
+    out_dir = args.out / builder.name
+    if out_dir.exists() and any(out_dir.iterdir()) and not args.force:
+        raise FileExistsError(f"{str(out_dir)!r} already holds files; use --force to replace them")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        table = builder.build()
+    for w in caught:
+        print(f"{PROG}: warning: {w.message}", file=sys.stderr)
+    table, options = _format_options(args, table)
+    written = write_formats(table, out_dir, args.format, overwrite=args.force, options=options)
+    _say(args, f"{builder.name}: wrote {len(written)} files to {out_dir}")
+    for path in written:
+        _say(args, f"  {path}")
     return 0
 
 
-def _cmd_presets(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
-    width = max(len(name) for name in PRESETS)
-    for name, preset in PRESETS.items():
-        print(f"{name:<{width}}  {preset.description}")
-        print(f"{'':<{width}}  source: {preset.source}")
+def _cmd_export(args: argparse.Namespace) -> int:
+    from dustoptics.io import read_hdf5
+
+    table = read_hdf5(args.file)
+    table, options = _format_options(args, table)
+    written = write_formats(table, args.out, args.format, overwrite=args.force, options=options)
+    _say(args, f"{table.name}: wrote {len(written)} files to {args.out}")
+    for path in written:
+        _say(args, f"  {path}")
     return 0
 
 
-def _cmd_materials(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
-    import dustoptics as do
-
-    for name in do.list_materials():
-        print(name)
+def _cmd_info(args: argparse.Namespace) -> int:
+    print(describe(read_table(args.file)))
     return 0
 
 
-_COMMANDS = {"build": _cmd_build, "presets": _cmd_presets, "materials": _cmd_materials}
+def _cmd_plot(args: argparse.Namespace) -> int:
+    from dustoptics import plot
+
+    table = read_table(args.file)
+    if args.kind in ("phase", "polar"):
+        figure = plot.phase_function(table, wavelengths_nm=args.wavelengths_nm, polar=args.kind == "polar")
+    elif args.kind == "map":
+        figure = plot.phase_map(table)
+    else:
+        figure = plot.spectra(table)
+    path = plot.save(figure, args.out, overwrite=args.force)
+    print(f"wrote {path}")
+    return 0
+
+
+def _cmd_presets(args: argparse.Namespace) -> int:
+    from dustoptics import presets
+
+    if args.show is not None:
+        try:
+            text = presets.preset_text(args.show)
+        except ValueError as exc:
+            raise UsageError(str(exc)) from None
+        sys.stdout.write(text)
+        return 0
+    for name in presets.list_presets():
+        description = (presets.load_preset(name).description.splitlines() or [""])[0]
+        marker = " (default)" if name == presets.DEFAULT_PRESET else ""
+        print(f"{name:18s} {description}{marker}")
+    return 0
+
+
+def _cmd_materials(args: argparse.Namespace) -> int:
+    from dustoptics.materials import get_material, list_materials
+
+    for name in list_materials():
+        material = get_material(name)
+        lo, hi = material.wavelength_range_nm
+        print(f"{name:36s} {lo:8.1f} - {hi:8.1f} nm  {material.citation}")
+    return 0
+
+
+_COMMANDS = {
+    "build": _cmd_build,
+    "export": _cmd_export,
+    "info": _cmd_info,
+    "plot": _cmd_plot,
+    "presets": _cmd_presets,
+    "materials": _cmd_materials,
+}
 
 
 def _silence_stdout() -> None:
-    """After a broken pipe, point stdout at devnull so the exit flush does not fail."""
-    try:
-        devnull = os.open(os.devnull, os.O_WRONLY)
-        os.dup2(devnull, sys.stdout.fileno())
-    except (OSError, ValueError, AttributeError):
-        pass
+    """After a broken pipe, send further output to devnull so exit is quiet."""
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, sys.stdout.fileno())
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Run the command line.
+    """Run the command line; returns the exit status (0 ok, 1 failure, 2 usage).
 
     Parameters
     ----------
     argv : list of str, optional
-        Arguments without the program name; default ``sys.argv[1:]``.
-
-    Returns
-    -------
-    int
-        Exit status: 0 success, 1 failure, 2 usage error.
+        Arguments without the program name (default ``sys.argv[1:]``).
     """
-    parser = _parser()
+    from dustoptics.config import ConfigError
+
     try:
-        args = parser.parse_args(argv)
-        return _COMMANDS[args.command](args, parser)
-    except SystemExit as exc:  # --help, --version, usage errors
-        return exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 2)
-    except BrokenPipeError:  # e.g. `dustoptics materials | head`: not an error
+        try:
+            args = _parser().parse_args(argv)
+        except SystemExit as exc:  # argparse: --help/--version (0) or usage (2)
+            return int(exc.code or 0)
+        return _COMMANDS[args.command](args)
+    except BrokenPipeError:
         _silence_stdout()
         return 0
-    except KeyboardInterrupt:
-        print(f"{PROG}: interrupted", file=sys.stderr)
-        return 130
-    except FileExistsError as exc:
-        print(f"{PROG}: error: {exc.args[0] if exc.args else exc}", file=sys.stderr)
-        return 1
-    except (OSError, ValueError, KeyError) as exc:
-        message = exc.args[0] if isinstance(exc, KeyError) and exc.args else exc
-        print(f"{PROG}: error: {message}", file=sys.stderr)
+    except (UsageError, ConfigError) as exc:
+        print(f"{PROG}: error: {exc}", file=sys.stderr)
+        return 2
+    except (OSError, ValueError, ImportError) as exc:
+        # FormatError is a ValueError; FileExistsError/PermissionError are OSErrors.
+        print(f"{PROG}: error: {exc}", file=sys.stderr)
         return 1
 
 

@@ -1,6 +1,7 @@
 """Tests for the ``dustoptics`` command line, called through ``main(argv)``.
 
-Builds use two wavelengths, 19 angles and rtol 1e-3 (about half a second each).
+Most builds use a small configuration file (three wavelengths, 19 angles,
+rtol 1e-3: well under a second); one test builds a shipped preset.
 """
 
 from __future__ import annotations
@@ -10,129 +11,188 @@ import sys
 
 import numpy as np
 import pytest
-from _shared import shared_path
 
 import dustoptics as do
-from dustoptics import cli
-from dustoptics.io.seed_csv import (
-    EXTINCTION_FILENAME,
-    PHASE_FILENAME,
-    SEED_CSV_FILES,
-    read_phase_csv,
-    read_seed_csv,
-)
+from dustoptics import cli, presets
+from dustoptics.io import read_hdf5, read_seed_csv, read_texture
+from dustoptics.io.cosmoscout import check_cosmoscout_set, read_cosmoscout_constituent
 
-QUICK = ["--wavelengths-nm", "440,550", "--n-theta", "19", "--rtol", "1e-3"]
+SMALL = """\
+name = "small-dust"
+description = "three wavelengths of Blue Moon's dust, for the command-line tests"
 
+[material]
+model = "mars_dust"
+hematite_fraction = 0.03
+host_index = { n = 1.5, k = 0.0 }
+hematite = "querry-extraordinary"
+rule = "maxwell_garnett"
 
-def _build(tmp_path, *extra: str) -> list[str]:
-    return ["build", "mars-dust", "--out", str(tmp_path), *QUICK, *extra]
+[size_distribution]
+model = "modified_gamma"
+r_eff_um = 1.0
+v_eff = 0.2
 
+[optics]
+weighting = "scattering"
+rtol = 1e-3
+wavelengths_nm = [440.0, 550.0, 680.0]
+n_theta = 19
 
-def test_build_writes_the_files(tmp_path, capsys):
-    assert cli.main(_build(tmp_path)) == 0
-    out, err = capsys.readouterr()
-    target = tmp_path / "mars-dust"
-    assert sorted(p.name for p in target.iterdir()) == sorted(SEED_CSV_FILES)
-    for name in SEED_CSV_FILES:
-        assert f"wrote {target / name}" in out
-    assert "worst error_estimate" in out
-    assert "computing 2 wavelengths x 19 angles" in err  # progress goes to stderr
-    table = read_seed_csv(target)
-    assert table.wavelength_nm.tolist() == [440.0, 550.0]
-    np.testing.assert_array_equal(table.theta_deg, np.linspace(0.0, 180.0, 19))
-
-
-def test_quiet_build_prints_no_progress(tmp_path, capsys):
-    assert cli.main(_build(tmp_path, "--quiet")) == 0
-    out, err = capsys.readouterr()
-    assert err == ""
-    assert "wrote" in out
+[phase]
+model = "mie"
+"""
 
 
-def test_two_builds_give_identical_bytes(tmp_path, capsys):
-    assert cli.main(_build(tmp_path / "a", "--quiet")) == 0
-    assert cli.main(_build(tmp_path / "b", "--quiet")) == 0
-    for name in SEED_CSV_FILES:
-        first = (tmp_path / "a" / "mars-dust" / name).read_bytes()
-        assert first == (tmp_path / "b" / "mars-dust" / name).read_bytes(), name
+@pytest.fixture
+def config(tmp_path):
+    path = tmp_path / "small.toml"
+    path.write_text(SMALL, encoding="utf-8")
+    return path
 
 
-def test_existing_output_needs_force(tmp_path, capsys):
-    target = tmp_path / "mars-dust"
-    target.mkdir()
-    (target / PHASE_FILENAME).write_text("keep me\n")
-    assert cli.main(_build(tmp_path, "--quiet")) == 1
-    err = capsys.readouterr().err
-    assert f"dustoptics: error: {target / PHASE_FILENAME} already exists" in err
-    assert "--force" in err and "Traceback" not in err
-    assert (target / PHASE_FILENAME).read_text() == "keep me\n"
-    assert not (target / EXTINCTION_FILENAME).exists()  # checked before computing or writing
-    assert cli.main(_build(tmp_path, "--quiet", "--force")) == 0
-    assert read_phase_csv(target / PHASE_FILENAME).phase.shape == (2, 19)
+def _build(config, out, *extra: str) -> int:
+    return cli.main(["build", str(config), "--out", str(out), "--quiet", *extra])
 
 
-def test_seed_preset_reproduces_the_seed_table(tmp_path, capsys):
-    """mars-dust-seed: number weighting on the seed's 1,800 angles (BRIEF section 5)."""
-    seed_path = shared_path("seed-tables", PHASE_FILENAME)
-    args = [
-        "build",
-        "mars-dust-seed",
-        "--out",
-        str(tmp_path),
-        "--wavelengths-nm",
-        "550",
-        "--rtol",
-        "1e-3",
-    ]
-    assert cli.main(args) == 0
-    ours_text = (tmp_path / "mars-dust-seed" / PHASE_FILENAME).read_text().splitlines()
-    seed_text = seed_path.read_text().splitlines()
-    # The same angle column, character for character.
-    assert [line.split(",", 1)[0] for line in ours_text] == [line.split(",", 1)[0] for line in seed_text]
-    ours, seed = read_phase_csv(tmp_path / "mars-dust-seed" / PHASE_FILENAME), read_phase_csv(seed_path)
-    column = int(np.flatnonzero(seed.wavelength_nm == 550.0)[0])
-    relative = np.abs(ours.phase[0] / seed.phase[column] - 1.0)
-    # The seed's Monte-Carlo noise: 0.4-0.5 % median, about 3 % maximum.
-    assert np.median(relative) < 0.01
-    assert relative.max() < 0.05
+def test_build_writes_every_format_and_they_agree(config, tmp_path, capsys):
+    out = tmp_path / "out"
+    args = ["--format", "hdf5,csv,glsl,texture,cosmoscout", "--number-density-per-m3", "1e8"]
+    assert _build(config, out, *args) == 0
+    folder = out / "small-dust"
+    h5 = read_hdf5(folder / "small-dust.h5")
+    csv = read_seed_csv(folder)
+    assert h5.equals(csv)
+    assert h5.number_density_per_m3 == 1e8
+    # The table is what the library computes from the same configuration.
+    ref = do.config.build_table(do.config.load_config(config))
+    np.testing.assert_array_equal(h5.phase, ref.phase)
+    assert h5.provenance.input_hash == ref.provenance.input_hash
+    assert "MiePhaseFunction" in (folder / "small-dust_phase.glsl").read_text()
+    texture = read_texture(folder / "small-dust_phase_theta.json")
+    assert texture.phase.shape[0] == 3
+    assert check_cosmoscout_set(folder) == ["small-dust"]
+    constituent = read_cosmoscout_constituent(folder, "small-dust")
+    # beta = N0 <C_sca>, with <C_sca> in um^2 = 1e-12 m^2.
+    np.testing.assert_allclose(constituent.beta_sca_per_m, 1e8 * ref.csca_um2 * 1e-12, rtol=1e-15)
+    assert constituent.density.max() == 1.0
+
+
+def test_build_progress_and_summary(config, tmp_path, capsys):
+    assert cli.main(["build", str(config), "--out", str(tmp_path), "--format", "hdf5"]) == 0
+    captured = capsys.readouterr()
+    assert "small-dust: 3/3 wavelengths" in captured.err
+    assert "wrote 1 files" in captured.out
+
+
+def test_two_builds_give_identical_bytes(config, tmp_path):
+    for out in ("a", "b"):
+        assert _build(config, tmp_path / out, "--format", "hdf5,csv,glsl") == 0
+    names = sorted(p.name for p in (tmp_path / "a" / "small-dust").iterdir())
+    for name in names:
+        a = (tmp_path / "a" / "small-dust" / name).read_bytes()
+        assert a == (tmp_path / "b" / "small-dust" / name).read_bytes(), name
+
+
+def test_existing_output_needs_force(config, tmp_path, capsys):
+    assert _build(config, tmp_path, "--format", "hdf5") == 0
+    before = (tmp_path / "small-dust" / "small-dust.h5").read_bytes()
+    assert _build(config, tmp_path, "--format", "hdf5") == 1
+    assert "--force" in capsys.readouterr().err
+    assert _build(config, tmp_path, "--format", "hdf5", "--force") == 0
+    assert (tmp_path / "small-dust" / "small-dust.h5").read_bytes() == before
+
+
+def test_export_from_hdf5(config, tmp_path):
+    assert _build(config, tmp_path, "--format", "hdf5") == 0
+    h5 = tmp_path / "small-dust" / "small-dust.h5"
+    out = tmp_path / "exported"
+    assert cli.main(["export", str(h5), "--out", str(out), "--format", "csv", "--quiet"]) == 0
+    assert read_seed_csv(out).equals(read_hdf5(h5))
+    # No overwrite without --force.
+    assert cli.main(["export", str(h5), "--out", str(out), "--format", "csv", "--quiet"]) == 1
+
+
+def test_info_describes_provenance(config, tmp_path, capsys):
+    assert _build(config, tmp_path, "--format", "hdf5,csv") == 0
+    capsys.readouterr()
+    table = read_hdf5(tmp_path / "small-dust" / "small-dust.h5")
+    for target in ("small-dust/small-dust.h5", "small-dust", "small-dust/table_summary.json"):
+        assert cli.main(["info", str(tmp_path / target)]) == 0
+        out = capsys.readouterr().out
+        assert "name:            small-dust" in out
+        assert table.provenance.input_hash in out
+        assert "wavelengths:     3, 440 .. 680 nm" in out
+        assert "modified_gamma" in out
+
+
+@pytest.mark.parametrize("damage", ["truncate", "garbage", "missing"])
+def test_damaged_or_missing_input_is_a_clean_failure(config, tmp_path, capsys, damage):
+    assert _build(config, tmp_path, "--format", "hdf5") == 0
+    h5 = tmp_path / "small-dust" / "small-dust.h5"
+    if damage == "truncate":
+        h5.write_bytes(h5.read_bytes()[:2000])
+    elif damage == "garbage":
+        h5.write_bytes(b"not an hdf5 file at all")
+    else:
+        h5.unlink()
+    capsys.readouterr()
+    for argv in (["info", str(h5)], ["export", str(h5), "--out", str(tmp_path / "x"), "--format", "csv"]):
+        assert cli.main(argv) == 1
+        err = capsys.readouterr().err
+        assert err.startswith("dustoptics: error: ") and "small-dust.h5" in err
+        assert "Traceback" not in err
+    assert not (tmp_path / "x").exists()
 
 
 def test_unknown_preset_is_a_usage_error(capsys):
     assert cli.main(["build", "nope"]) == 2
     err = capsys.readouterr().err
     assert "nope" in err
-    for name in cli.PRESETS:
+    for name in presets.list_presets():
         assert name in err
+
+
+def test_config_error_names_key_and_line(tmp_path, capsys):
+    path = tmp_path / "bad.toml"
+    path.write_text(SMALL.replace("v_eff = 0.2", "v_eff = 0.7"), encoding="utf-8")
+    assert cli.main(["build", str(path), "--out", str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    line = SMALL.splitlines().index("v_eff = 0.2") + 1
+    assert f"bad.toml:{line}" in err and "size_distribution.v_eff" in err
 
 
 @pytest.mark.parametrize(
     ("args", "parameter", "message"),
     [
-        (["--rtol", "-1"], "--rtol", "open interval"),
-        (["--rtol", "abc"], "--rtol", "must be a number"),
-        (["--rtol", "0.5"], "--rtol", "open interval"),
-        (["--wavelengths-nm", "550,440"], "--wavelengths-nm", "strictly increasing"),
-        (["--wavelengths-nm", "440,,550"], "--wavelengths-nm", "comma-separated"),
-        (["--wavelengths-nm", "blue"], "--wavelengths-nm", "not a number"),
-        (["--wavelengths-nm", "0,550"], "--wavelengths-nm", "> 0 nm"),
-        (["--n-theta", "1"], "--n-theta", ">= 2"),
-        (["--n-theta", "1.5"], "--n-theta", "integer"),
+        (["--format", "pdf"], "--format", "unknown format 'pdf'"),
+        (["--format", "hdf5,nope"], "--format", "unknown format 'nope'"),
+        (["--resolution-deg", "-1"], "--resolution-deg", "> 0"),
+        (["--n-angles", "1"], "--n-angles", ">= 2"),
+        (["--channels-nm", "red"], "--channels-nm", "comma-separated"),
+        (["--sampling", "log"], "--sampling", "invalid choice"),
     ],
 )
-def test_bad_options_exit_2_naming_the_parameter(tmp_path, capsys, args, parameter, message):
-    assert cli.main(["build", "--out", str(tmp_path), *args]) == 2
+def test_bad_options_exit_2_naming_the_parameter(config, tmp_path, capsys, args, parameter, message):
+    assert cli.main(["build", str(config), "--out", str(tmp_path / "o"), *args]) == 2
     err = capsys.readouterr().err
     assert f"argument {parameter}: " in err and message in err
-    assert not any(tmp_path.iterdir())
+    assert not (tmp_path / "o").exists()
 
 
-def test_library_error_exits_1_without_traceback(tmp_path, capsys):
-    args = ["build", "--out", str(tmp_path), "--wavelengths-nm", "100", "--n-theta", "3", "--quiet"]
-    assert cli.main(args) == 1
+def test_cosmoscout_without_number_density_is_a_usage_error(config, tmp_path, capsys):
+    assert _build(config, tmp_path, "--format", "cosmoscout") == 2
+    assert "--number-density-per-m3" in capsys.readouterr().err
+    assert not any((tmp_path / "small-dust").iterdir()) if (tmp_path / "small-dust").exists() else True
+
+
+def test_physics_error_exits_1_without_traceback(tmp_path, capsys):
+    path = tmp_path / "uv.toml"
+    path.write_text(SMALL.replace("[440.0, 550.0, 680.0]", "[100.0, 550.0]"), encoding="utf-8")
+    assert cli.main(["build", str(path), "--out", str(tmp_path), "--quiet"]) == 1
     err = capsys.readouterr().err
-    assert err.startswith("dustoptics: error: ") and "range" in err
-    assert "Traceback" not in err
+    assert err.startswith("dustoptics: error: ") and "Traceback" not in err
+    assert "100" in err
 
 
 def test_version(capsys):
@@ -145,33 +205,48 @@ def test_no_command_is_a_usage_error(capsys):
     assert "COMMAND" in capsys.readouterr().err
 
 
-def test_presets_lists_names_and_sources(capsys):
+def test_presets_lists_names_and_shows_their_files(capsys):
     assert cli.main(["presets"]) == 0
     out = capsys.readouterr().out
-    for name, preset in cli.PRESETS.items():
-        assert name in out and preset.description in out and preset.source in out
+    for name in presets.list_presets():
+        assert name in out
+    assert "(default)" in out
+    assert cli.main(["presets", "--show", "hybrid"]) == 0
+    assert capsys.readouterr().out == presets.preset_text("hybrid")
+    assert cli.main(["presets", "--show", "nope"]) == 2
 
 
 def test_materials_lists_the_catalogue(capsys):
     assert cli.main(["materials"]) == 0
-    assert capsys.readouterr().out.split() == list(do.list_materials())
+    names = [line.split()[0] for line in capsys.readouterr().out.splitlines()]
+    assert names == list(do.list_materials())
 
 
-def test_broken_pipe_is_not_an_error(monkeypatch):
-    class ClosedPipe:
-        def write(self, text):
-            raise BrokenPipeError(32, "Broken pipe")
+def test_plot_writes_a_figure(config, tmp_path, capsys):
+    pytest.importorskip("matplotlib")
+    assert _build(config, tmp_path, "--format", "hdf5") == 0
+    h5 = str(tmp_path / "small-dust" / "small-dust.h5")
+    for kind, suffix in (("phase", "png"), ("polar", "svg"), ("map", "png"), ("spectra", "svg")):
+        out = tmp_path / f"fig-{kind}.{suffix}"
+        assert cli.main(["plot", h5, "--kind", kind, "--out", str(out)]) == 0
+        assert out.stat().st_size > 0
+    assert cli.main(["plot", h5, "--kind", "phase", "--wavelengths-nm", "551", "--out", str(tmp_path / "f.png")]) == 1
+    assert "551" in capsys.readouterr().err
 
-        def flush(self):
-            raise BrokenPipeError(32, "Broken pipe")
 
-    monkeypatch.setattr(sys, "stdout", ClosedPipe())
-    assert cli.main(["materials"]) == 0
+class _ClosedPipe:
+    def write(self, text):
+        raise BrokenPipeError(32, "Broken pipe")
+
+    def flush(self):
+        raise BrokenPipeError(32, "Broken pipe")
 
 
-def test_build_function_rejects_unknown_preset(tmp_path):
-    with pytest.raises(KeyError, match="mars-dust, mars-dust-seed"):
-        cli.build("nope", tmp_path)
+@pytest.mark.parametrize("argv", [["materials"], ["build", "--help"], ["presets"]])
+def test_broken_pipe_is_not_an_error(monkeypatch, argv):
+    monkeypatch.setattr(sys, "stdout", _ClosedPipe())
+    monkeypatch.setattr(cli, "_silence_stdout", lambda: None)
+    assert cli.main(argv) == 0
 
 
 def test_module_entry_point_runs():
@@ -186,13 +261,8 @@ def test_module_entry_point_runs():
     assert done.stdout.strip() == f"dustoptics {do.__version__}"
 
 
-def test_broken_pipe_during_help_is_not_an_error(monkeypatch):
-    class ClosedPipe:
-        def write(self, text):
-            raise BrokenPipeError(32, "Broken pipe")
-
-        def flush(self):
-            raise BrokenPipeError(32, "Broken pipe")
-
-    monkeypatch.setattr(sys, "stdout", ClosedPipe())
-    assert cli.main(["build", "--help"]) == 0
+def test_preset_build_matches_the_library(tmp_path):
+    assert cli.main(["build", "costa", "--out", str(tmp_path), "--quiet", "--format", "hdf5"]) == 0
+    table = read_hdf5(tmp_path / "costa" / "costa.h5")
+    assert table.equals(presets.build_preset("costa"))
+    assert not table.has_cross_sections
