@@ -117,7 +117,7 @@ def _first_difference(name: str, a: np.ndarray, b: np.ndarray, unit: str) -> str
     if a.size != b.size:
         return f"{name} grids differ: {a.size} values in a, {b.size} in b"
     i = int(np.flatnonzero(a != b)[0])
-    return f"{name} grids differ: first at index {i}, {a[i]!r} {unit} in a, {b[i]!r} {unit} in b"
+    return f"{name} grids differ: first at index {i}, {float(a[i])!r} {unit} in a, {float(b[i])!r} {unit} in b"
 
 
 def compare_tables(a: Table, b: Table, *, theta_deg: ArrayLike | None = None) -> TableComparison:
