@@ -99,7 +99,12 @@ import numpy as np
 from dustoptics import phase as _phase
 from dustoptics.materials import get_material, list_materials
 from dustoptics.mixing import MARS_DUST_HEMATITE, MIXING_RULES, mars_dust
-from dustoptics.optics import WEIGHTINGS, OpticsTable, compute_optics
+from dustoptics.optics import (
+    WEIGHTINGS,
+    ConvergenceWarning,
+    OpticsTable,
+    compute_optics,
+)
 from dustoptics.sizedist import (
     Gamma,
     LogNormal,
@@ -1077,8 +1082,10 @@ def build_table(
         ``Provenance.inputs`` is ``config.to_inputs()``; the sources are the
         configuration's plus those of the material, size distribution and
         analytic phase function; the notes are the configuration's choices,
-        how g was obtained, and the messages of any warnings raised while
-        building (which are also re-issued to the caller).
+        how g was obtained, and the messages of the package's warnings about
+        the result (:class:`~dustoptics.optics.ConvergenceWarning`,
+        :class:`~dustoptics.phase.ExtrapolationWarning`); every warning raised
+        while building is re-issued to the caller.
 
     Raises
     ------
@@ -1147,7 +1154,12 @@ def build_table(
             )
             if progress is not None:
                 progress(wl.size, wl.size)
-    messages = [f"warning ({w.category.__name__}): {w.message}" for w in caught]
+    # The package's own warnings about the result go into the notes; all are re-issued.
+    messages = [
+        f"warning ({w.category.__name__}): {w.message}"
+        for w in caught
+        if issubclass(w.category, (ConvergenceWarning, _phase.ExtrapolationWarning))
+    ]
     notes.extend(dict.fromkeys(messages))  # once each, in order
     provenance = table.provenance
     table = table.replace(
