@@ -387,6 +387,7 @@ def mars_atmosphere(
     dust_table: Table,
     optical_depth: float = 0.5,
     reference_wavelength_nm: float = 550.0,
+    reference_cext_um2: float | None = None,
     dust_scale_height_m: float = 11100.0,
     dust_profile: DensityProfile | None = None,
     molecules: str | gases.RayleighModel = "costa2021-mars",
@@ -408,7 +409,11 @@ def mars_atmosphere(
         seasons 0.3-1, MER), > 0. [-]
     reference_wavelength_nm : float, default 550
         Wavelength of the measured optical depth, within the table's range
-        (linear interpolation of ``cext_um2``). [nm]
+        (linear interpolation of ``cext_um2`` unless ``reference_cext_um2``
+        is given). [nm]
+    reference_cext_um2 : float, optional
+        The dust's <C_ext> computed at ``reference_wavelength_nm`` (exact,
+        where the table's grid does not hold that wavelength). [um^2]
     dust_scale_height_m : float, default 11100
         Exponential dust profile (Costa et al. Table 1: 11.1 km). [m]
     dust_profile : DensityProfile, optional
@@ -440,7 +445,11 @@ def mars_atmosphere(
     profile = dust_profile if dust_profile is not None else ExponentialProfile(scale_height_m=dust_scale_height_m)
     n0 = number_density_from_optical_depth(
         optical_depth=optical_depth,
-        cext_um2=_cext_at(dust_table, reference_wavelength_nm),
+        cext_um2=(
+            _cext_at(dust_table, reference_wavelength_nm)
+            if reference_cext_um2 is None
+            else check_positive("reference_cext_um2", reference_cext_um2, unit="um^2")
+        ),
         profile=profile,
         top_altitude_m=top,
     )

@@ -3,6 +3,7 @@
 Usage::
 
     dustoptics build [NAME_OR_CONFIG] [--out DIR] [--format FMT[,FMT...]] [--force] [--quiet]
+    dustoptics build mars|earth [--out DIR] [--dust PRESET] [--optical-depth TAU] [--force]
     dustoptics export FILE.h5 --out DIR --format FMT[,FMT...] [--force]
     dustoptics info FILE
     dustoptics plot FILE --kind {phase,polar,map,spectra} [--wavelengths-nm LIST] --out FIG.png|.svg
@@ -13,7 +14,9 @@ Usage::
 ``build`` computes a preset (``dustoptics presets``) or a TOML configuration
 file (:mod:`dustoptics.config`; copy a preset with ``presets --show NAME``)
 and writes it into ``DIR/NAME/`` in each format of :data:`dustoptics.io.FORMATS`
-(``hdf5``, ``csv``, ``cosmoscout``, ``glsl``, ``texture``).  ``export`` turns
+(``hdf5``, ``csv``, ``cosmoscout``, ``glsl``, ``texture``); ``build mars`` and
+``build earth`` write CosmoScout VR's whole atmosphere set (molecules,
+aerosols, ozone, densities and the settings JSON).  ``export`` turns
 an HDF5 table into other formats in ``DIR``; ``info`` says what a table file
 holds and how it was made; ``plot`` draws it (needs the ``plot`` extra).
 
@@ -39,7 +42,7 @@ from typing import Any, TextIO
 
 import numpy as np
 
-__all__ = ["TableBuilder", "main", "read_table"]
+__all__ = ["TableBuilder", "build_atmosphere", "main", "read_table"]
 
 PROG = "dustoptics"
 
@@ -134,6 +137,14 @@ class TableBuilder:
             except ValueError as exc:
                 raise UsageError(str(exc)) from None
 
+    @classmethod
+    def from_config(cls, config: Any, *, progress: TextIO | None = None) -> TableBuilder:
+        """A builder for an already validated :class:`dustoptics.config.BuildConfig`."""
+        builder = cls.__new__(cls)
+        builder.config = config
+        builder.progress = progress
+        return builder
+
     @property
     def name(self) -> str:
         return self.config.name
@@ -155,6 +166,63 @@ class TableBuilder:
                 self.progress.flush()
 
         return config.build_table(self.config, progress=report)
+
+
+#: Names ``build`` treats as whole CosmoScout VR atmosphere sets.
+ATMOSPHERES = ("mars", "earth")
+
+#: CosmoScout VR's default wavelength set: 15 evenly spaced over 360-830 nm. [nm]
+COSMOSCOUT_WAVELENGTHS_NM = tuple(np.linspace(360.0, 830.0, 15).tolist())
+
+
+def build_atmosphere(
+    name: str,
+    *,
+    dust: str = "blue-moons",
+    optical_depth: float = 0.5,
+    reference_wavelength_nm: float = 550.0,
+    ozone_csv: str | os.PathLike[str] | None = None,
+    progress: TextIO | None = None,
+) -> Any:
+    """The atmosphere set ``name`` ("mars" or "earth").
+
+    Mars: CO2 molecules (Costa et al. 2021 corrected to Martian conditions)
+    and the dust of preset or configuration ``dust``, computed at CosmoScout
+    VR's 15 wavelengths with angles every 0.1 deg (a superset of the files'
+    1 deg), its number density set by the vertical ``optical_depth`` at
+    ``reference_wavelength_nm`` (<C_ext> computed there exactly).
+    Earth: Kobe 2026's air, aerosols and ozone on his three wavelengths, or,
+    with ``ozone_csv`` (:func:`dustoptics.gases.read_ozone_csv`), that
+    spectrum in Bruneton's ozone layer on the 15 wavelengths.
+    """
+    from dataclasses import replace
+
+    from dustoptics import atmosphere, column, config, gases
+    from dustoptics.table import Table
+
+    if name == "earth":
+        if ozone_csv is None:
+            return atmosphere.earth_atmosphere()
+        return atmosphere.earth_atmosphere(
+            wavelength_nm=COSMOSCOUT_WAVELENGTHS_NM,
+            ozone=gases.read_ozone_csv(ozone_csv),
+            ozone_profile=column.BRUNETON2017_OZONE,
+            ozone_number_density_per_m3=column.BRUNETON2017_OZONE_PEAK_NUMBER_DENSITY_PER_M3,
+        )
+    builder = TableBuilder(dust, progress=progress)
+    cfg = builder.config
+    if not cfg.phase.uses_mie:
+        raise UsageError(f"dust {dust!r} has no cross-sections (a phase-function-only model); choose a Mie preset")
+    grid = replace(cfg, optics=replace(cfg.optics, wavelengths_nm=COSMOSCOUT_WAVELENGTHS_NM, n_theta=1801))
+    dust_table: Table = TableBuilder.from_config(grid, progress=progress).build()
+    reference = replace(cfg, optics=replace(cfg.optics, wavelengths_nm=(float(reference_wavelength_nm),), n_theta=2))
+    cext = TableBuilder.from_config(reference, progress=None).build().cext_um2[0]
+    return atmosphere.mars_atmosphere(
+        dust_table=dust_table,
+        optical_depth=optical_depth,
+        reference_wavelength_nm=reference_wavelength_nm,
+        reference_cext_um2=float(cext),
+    )
 
 
 def write_formats(
@@ -293,11 +361,21 @@ def _parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("build", help="compute a preset or configuration file and write its tables")
     p.add_argument("name", nargs="?", default=DEFAULT_PRESET, metavar="NAME_OR_CONFIG",
-                   help=f"preset name (see 'presets') or TOML configuration file (default {DEFAULT_PRESET})")
+                   help=f"preset name (see 'presets'), TOML configuration file, or an atmosphere set "
+                   f"({', '.join(ATMOSPHERES)}) (default {DEFAULT_PRESET})")
     p.add_argument("--out", type=Path, default=Path("tables"), metavar="DIR",
                    help="output directory; files go to DIR/NAME/ (default ./tables)")
     p.add_argument("--quiet", action="store_true", help="no progress or summary output")
     _add_format_options(p, default=",".join(DEFAULT_FORMATS))
+    g = p.add_argument_group("atmosphere sets ('build mars', 'build earth': CosmoScout VR's full set)")
+    g.add_argument("--dust", default="blue-moons", metavar="PRESET_OR_CONFIG",
+                   help="Mars dust model (default blue-moons)")
+    g.add_argument("--optical-depth", type=_positive_float, default=0.5, metavar="TAU",
+                   help="Mars vertical dust optical depth (default 0.5; clear seasons 0.3-1)")
+    g.add_argument("--reference-wavelength-nm", type=_positive_float, default=550.0, metavar="NM",
+                   help="wavelength of that optical depth [nm] (default 550)")
+    g.add_argument("--ozone-csv", type=Path, metavar="FILE",
+                   help="Earth: ozone cross-sections (see dustoptics.gases.read_ozone_csv) in Bruneton's layer")
 
     p = sub.add_parser("export", help="convert an HDF5 table into other formats")
     p.add_argument("file", type=Path, metavar="FILE.h5")
@@ -362,7 +440,28 @@ def _format_options(args: argparse.Namespace, table: Any) -> tuple[Any, FormatOp
     return table, options
 
 
+def _cmd_build_atmosphere(args: argparse.Namespace) -> int:
+    from dustoptics import atmosphere
+
+    atm = build_atmosphere(
+        args.name,
+        dust=args.dust,
+        optical_depth=args.optical_depth,
+        reference_wavelength_nm=args.reference_wavelength_nm,
+        ozone_csv=args.ozone_csv,
+        progress=None if args.quiet else sys.stderr,
+    )
+    out_dir = args.out / args.name
+    written = atmosphere.write_atmosphere(atm, out_dir, overwrite=args.force)
+    _say(args, f"{args.name}: wrote {len(written)} files (CosmoScout VR set) to {out_dir}")
+    for path in written:
+        _say(args, f"  {path}")
+    return 0
+
+
 def _cmd_build(args: argparse.Namespace) -> int:
+    if args.name in ATMOSPHERES:
+        return _cmd_build_atmosphere(args)
     builder = TableBuilder(args.name, progress=None if args.quiet else sys.stderr)
     out_dir = args.out / builder.name
     if out_dir.exists() and any(out_dir.iterdir()) and not args.force:

@@ -6,6 +6,7 @@ rtol 1e-3: well under a second); one test builds a shipped preset.
 
 from __future__ import annotations
 
+import json
 import subprocess
 import sys
 
@@ -266,3 +267,34 @@ def test_preset_build_matches_the_library(tmp_path):
     table = read_hdf5(tmp_path / "costa" / "costa.h5")
     assert table.equals(presets.build_preset("costa"))
     assert not table.has_cross_sections
+
+
+def test_build_mars_and_earth_write_whole_cosmoscout_sets(config, tmp_path):
+    args = ["--out", str(tmp_path), "--quiet", "--dust", str(config), "--optical-depth", "0.6"]
+    assert cli.main(["build", "mars", *args]) == 0
+    assert cli.main(["build", "earth", "--out", str(tmp_path), "--quiet"]) == 0
+    assert check_cosmoscout_set(tmp_path / "mars") == ["mars_aerosols", "mars_molecules"]
+    assert check_cosmoscout_set(tmp_path / "earth") == ["earth_aerosols", "earth_molecules", "earth_ozone"]
+    # The dust's column reproduces the optical depth at 550 nm: tau = N0 <C_ext> L
+    # (exponential profile, 11.1 km, cut at the 120 km top), with <C_ext> computed here.
+    dust = read_cosmoscout_constituent(tmp_path / "mars", "mars_aerosols")
+    cfg = do.config.load_config(config)
+    from dataclasses import replace
+
+    at550 = replace(cfg, optics=replace(cfg.optics, wavelengths_nm=(550.0,), n_theta=2))
+    cext_m2 = do.config.build_table(at550).cext_um2[0] * 1e-12
+    h, top = 11100.0, 120e3
+    n0 = float(dust.beta_sca_per_m[0] / (read_hdf5_free_csca(cfg, 0)))
+    length = h * (1 - np.exp(-top / h))
+    np.testing.assert_allclose(n0 * cext_m2 * length, 0.6, rtol=1e-12)
+    settings = json.loads((tmp_path / "mars" / "mars_settings.json").read_text())
+    assert settings["minAltitude"] == 3390e3 and settings["maxAltitude"] == 3510e3
+    assert cli.main(["build", "mars", *args]) == 1  # exists, no --force
+
+
+def read_hdf5_free_csca(cfg, i):
+    """<C_sca> [m^2] of the configuration at CosmoScout's i-th wavelength, computed here."""
+    from dataclasses import replace
+
+    grid = replace(cfg, optics=replace(cfg.optics, wavelengths_nm=cli.COSMOSCOUT_WAVELENGTHS_NM, n_theta=1801))
+    return do.config.build_table(grid).csca_um2[i] * 1e-12
