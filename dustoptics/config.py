@@ -816,10 +816,10 @@ def _parse_wavelengths(ctx: _Context, value: Any) -> tuple[float, ...]:
     items = _array(ctx, key, value)
     if not items:
         raise ctx.error(key, "must not be empty")
-    grid = [_positive(ctx, f"{key}[{i}]", x, "nm") for i, x in enumerate(items)]
-    if any(b <= a for a, b in itertools.pairwise(grid)):
+    values = [_positive(ctx, f"{key}[{i}]", x, "nm") for i, x in enumerate(items)]
+    if any(b <= a for a, b in itertools.pairwise(values)):
         raise ctx.error(key, f"must be strictly increasing; got {items!r}")
-    return tuple(grid)
+    return tuple(values)
 
 
 def _parse_optics(ctx: _Context, value: Any, *, mie: bool, model: str) -> OpticsConfig:
@@ -926,6 +926,8 @@ def parse_config(text: str, *, source: str = "<string>") -> BuildConfig:
     sources = _parse_sources(ctx, data.get("sources", []))
     phase_config = _parse_phase(ctx, data.get("phase", {"model": "mie"}))
     mie = phase_config.uses_mie
+    material: MaterialConfig | None = None
+    distribution: SizeDistributionConfig | None = None
     if mie:
         material = _parse_material(ctx, _required(ctx, "", data, "material"))
         distribution = _parse_size_distribution(ctx, _required(ctx, "", data, "size_distribution"))
@@ -933,7 +935,6 @@ def parse_config(text: str, *, source: str = "<string>") -> BuildConfig:
         for key in ("material", "size_distribution", "number_density_per_m3"):
             if key in data:
                 raise _not_used(ctx, key, phase_config.model)
-        material = distribution = None
     optics = _parse_optics(ctx, data.get("optics", {}), mie=mie, model=phase_config.model)
     density = None
     if "number_density_per_m3" in data:
