@@ -1,0 +1,96 @@
+"""Rebuild the preset tables kept in ``tables/`` (or check that they are current).
+
+Usage::
+
+    python scripts/build_tables.py           # rebuild every preset into tables/NAME/
+    python scripts/build_tables.py --check   # exit 1 if any table is out of date
+
+Each preset (``dustoptics presets``) is written as ``tables/NAME/NAME.h5``
+(the full table with its provenance) and ``tables/NAME/NAME_phase.glsl`` (the
+shader snippet at its defaults).  ``--check`` recomputes every preset and
+compares it with the stored HDF5 file: the inputs (their hash) must be equal
+and the numbers equal to 1e-9 relative (far below the tables' 1e-4 accuracy,
+far above the last-bit differences a different CPU or library build may
+give), so a change of code or preset that moves a table fails the check.
+The test suite runs the same check (``tests/test_tables.py``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from dustoptics import presets
+from dustoptics.io import read_hdf5, write_glsl, write_hdf5
+
+REPO_ROOT = Path(__file__).resolve().parents[1]
+TABLES = REPO_ROOT / "tables"
+
+#: Relative tolerance of ``--check``. [-]
+CHECK_RTOL = 1e-9
+
+_ARRAYS = ("phase", "g", "cext_um2", "csca_um2", "error_estimate", "cross_section_error_estimate")
+
+
+def table_path(name: str, root: Path = TABLES) -> Path:
+    """The stored HDF5 file of preset ``name``."""
+    return root / name / f"{name}.h5"
+
+
+def differences(name: str, root: Path = TABLES) -> list[str]:
+    """What differs between the stored table of ``name`` and a fresh build (empty: current)."""
+    path = table_path(name, root)
+    if not path.exists():
+        return [f"{path} is missing"]
+    stored = read_hdf5(path)
+    fresh = presets.build_preset(name)
+    problems = []
+    if stored.provenance.input_hash != fresh.provenance.input_hash:
+        problems.append(f"{name}: inputs changed (input hash {stored.provenance.input_hash[:12]} "
+                        f"stored, {fresh.provenance.input_hash[:12]} now)")
+    for grid in ("wavelength_nm", "theta_deg"):
+        if not np.array_equal(getattr(stored, grid), getattr(fresh, grid)):
+            problems.append(f"{name}: {grid} grid changed")
+            return problems
+    for key in _ARRAYS:
+        a, b = getattr(stored, key), getattr(fresh, key)
+        if (a is None) != (b is None):
+            problems.append(f"{name}: {key} present in one table only")
+        elif a is not None and not np.allclose(a, b, rtol=CHECK_RTOL, atol=0.0):
+            worst = float(np.max(np.abs(a - b) / np.maximum(np.abs(b), np.finfo(float).tiny)))
+            problems.append(f"{name}: {key} differs by up to {worst:.2e} relative")
+    return problems
+
+
+def build(names: list[str], root: Path = TABLES) -> None:
+    """Rebuild the tables of ``names`` into ``root``."""
+    for name in names:
+        table = presets.build_preset(name)
+        out = root / name
+        write_hdf5(table, table_path(name, root), overwrite=True)
+        write_glsl(table, out, overwrite=True)
+        print(f"{name}: {out}")
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--check", action="store_true", help="compare instead of rebuilding; exit 1 if stale")
+    parser.add_argument("names", nargs="*", help="presets (default: all)")
+    args = parser.parse_args(argv)
+    names = args.names or presets.list_presets()
+    if args.check:
+        problems = [p for name in names for p in differences(name)]
+        for p in problems:
+            print(p, file=sys.stderr)
+        if problems:
+            print("tables are out of date: run python scripts/build_tables.py", file=sys.stderr)
+        return 1 if problems else 0
+    build(names)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
