@@ -137,21 +137,6 @@ def _riccati_psi(x: float, n_start: int, psi: np.ndarray) -> None:
         psi[k] *= scale
 
 
-@njit(cache=True, nogil=True, inline="always")
-def _divide(num: complex, den: complex) -> complex:
-    """num / den as num conj(den) / |den|^2.
-
-    Cheaper than the general complex division, which guards against
-    |den|^2 overflowing; here |den| = |t xi_n - xi_{n-1}| stays far below
-    1e150 for every size parameter above 1e-40.
-    """
-    scale = 1.0 / (den.real * den.real + den.imag * den.imag)
-    return complex(
-        (num.real * den.real + num.imag * den.imag) * scale,
-        (num.imag * den.real - num.real * den.imag) * scale,
-    )
-
-
 @njit(cache=True, nogil=True)
 def _miller_start(x: float, nmax: int) -> int:
     return int(max(nmax, x) + 25 + 1.5 * np.sqrt(x))
@@ -178,9 +163,9 @@ def _mie_coefficients(
         xi_prev = psi[n - 1] - 1j * chi_prev
         n_x = n * inv_x
         t = d[n] * inv_m + n_x
-        a[n - 1] = _divide(t * psi[n] - psi[n - 1], t * xi_n - xi_prev)
+        a[n - 1] = (t * psi[n] - psi[n - 1]) / (t * xi_n - xi_prev)
         t = m * d[n] + n_x
-        b[n - 1] = _divide(t * psi[n] - psi[n - 1], t * xi_n - xi_prev)
+        b[n - 1] = (t * psi[n] - psi[n - 1]) / (t * xi_n - xi_prev)
         chi_next = (2 * n + 1) * inv_x * chi_cur - chi_prev
         chi_prev = chi_cur
         chi_cur = chi_next

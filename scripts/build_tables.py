@@ -9,7 +9,7 @@ Each preset (``dustoptics presets``) is written as ``tables/NAME/NAME.h5``
 (the full table with its provenance) and ``tables/NAME/NAME_phase.glsl`` (the
 shader snippet at its defaults).  ``--check`` recomputes every preset and
 compares it with the stored HDF5 file: the inputs (their hash) must be equal
-and the numbers equal to 1e-9 relative (far below the tables' 1e-4 accuracy,
+and the numbers equal to 1e-9 relative (error estimates: 1e-6; far below the tables' 1e-4 accuracy,
 far above the last-bit differences a different CPU or library build may
 give), so a change of code or preset that moves a table fails the check.
 The test suite runs the same check (``tests/test_tables.py``).
@@ -31,6 +31,10 @@ TABLES = REPO_ROOT / "tables"
 
 #: Relative tolerance of ``--check``. [-]
 CHECK_RTOL = 1e-9
+#: The error estimates are differences of nearly equal quadrature sums, so
+#: round-off moves them ~1000x more (measured: 1.7e-9 from a change in how one
+#: complex division rounds); they are checked to this looser tolerance. [-]
+ESTIMATE_RTOL = 1e-6
 
 _ARRAYS = ("phase", "g", "cext_um2", "csca_um2", "error_estimate", "cross_section_error_estimate")
 
@@ -59,7 +63,9 @@ def differences(name: str, root: Path = TABLES) -> list[str]:
         a, b = getattr(stored, key), getattr(fresh, key)
         if (a is None) != (b is None):
             problems.append(f"{name}: {key} present in one table only")
-        elif a is not None and not np.allclose(a, b, rtol=CHECK_RTOL, atol=0.0):
+        elif a is not None and not np.allclose(
+            a, b, rtol=ESTIMATE_RTOL if key.endswith("error_estimate") else CHECK_RTOL, atol=0.0
+        ):
             worst = float(np.max(np.abs(a - b) / np.maximum(np.abs(b), np.finfo(float).tiny)))
             problems.append(f"{name}: {key} differs by up to {worst:.2e} relative")
     return problems
