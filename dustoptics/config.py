@@ -970,18 +970,6 @@ def load_config(path: str | os.PathLike[str]) -> BuildConfig:
 # ------------------------------------------------------------------- building
 
 
-def _mean_cosine(phase: np.ndarray, theta_deg: np.ndarray) -> np.ndarray:
-    """``2 pi int P mu dmu`` of a table read linearly in theta, exactly.
-
-    ``int P sin(t) cos(t) dt = (1/4) int_0^{2 pi} P(u/2) sin(u) du`` with
-    ``u = 2 t``; ``P`` is linear in ``u`` on each interval, so the weights of
-    :func:`dustoptics.phase.sphere_integral` on the doubled grid integrate it
-    exactly (their derivation holds on any interval, not only within [0, pi]).
-    """
-    weights = _phase._linear_theta_weights(2.0 * np.asarray(theta_deg, dtype=np.float64))
-    return 0.5 * math.pi * (np.asarray(phase) @ weights)
-
-
 def _analytic_table(config: BuildConfig, name: str, params: Mapping[str, Any],
                     wavelengths: np.ndarray, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray, Source]:
     """(renormalized table, analytic mean cosine per wavelength, its source)."""
@@ -1130,7 +1118,7 @@ def build_table(
                     optics, name=config.name, inputs=inputs, sources=tuple(sources),
                     number_density_per_m3=config.number_density_per_m3,
                 )
-                table = base.replace(phase=blended, g=_mean_cosine(blended, theta))
+                table = base.replace(phase=blended, g=_phase.mean_cosine(blended, theta_deg=theta))
             else:
                 table = Table.from_optics(
                     optics, name=config.name, inputs=inputs, sources=tuple(sources),
@@ -1142,7 +1130,7 @@ def build_table(
                 progress(0, wl.size)
             p_analytic, exact, analytic_source = _analytic_table(config, ph.analytic, ph.parameters, wl, theta)
             _add_sources(sources, analytic_source)
-            g = _mean_cosine(p_analytic, theta)
+            g = _phase.mean_cosine(p_analytic, theta_deg=theta)
             notes.append(
                 f"phase: {ph.analytic} sampled at the table's angles and renormalized under linear "
                 "interpolation in theta; no cross-sections (phase function only); g is the mean "

@@ -139,6 +139,7 @@ __all__ = [
     "hg_draine_jendersie_deon2023_asymmetry",
     "hybrid",
     "jendersie_deon2023_parameters",
+    "mean_cosine",
     "rayleigh",
     "rayleigh_asymmetry",
     "rayleigh_depolarized",
@@ -1395,6 +1396,40 @@ def sphere_integral(phase: ArrayLike, *, theta_deg: ArrayLike) -> FloatOrArray:
     theta = _table_grid(theta_deg)
     p = _table("phase", phase, theta)
     return _out(2.0 * math.pi * (p @ _linear_theta_weights(theta)))
+
+
+def mean_cosine(phase: ArrayLike, *, theta_deg: ArrayLike) -> FloatOrArray:
+    """Mean cosine (asymmetry parameter) of a phase table read linearly in angle.
+
+    Computes ``g = 2 pi int_{-1}^{1} P mu dmu`` exactly for ``P`` linear in
+    ``theta`` between samples:
+    ``int P sin(t) cos(t) dt = (1/4) int_0^{2 pi} P(u/2) sin(u) du`` with
+    ``u = 2 t``, and ``P`` is linear in ``u`` on each interval, so the weights
+    of :func:`sphere_integral` on the doubled grid integrate it exactly (their
+    derivation holds on any interval, not only within [0, pi]).
+
+    Parameters
+    ----------
+    phase : array_like
+        Phase table, shape ``(..., n_theta)``, normalized to 1. [sr^-1]
+    theta_deg : array_like
+        Scattering angles, strictly increasing from exactly 0 to exactly 180. [deg]
+
+    Returns
+    -------
+    float or numpy.ndarray
+        g per row, shape ``phase.shape[:-1]``. [-]
+
+    Examples
+    --------
+    >>> theta = np.linspace(0.0, 180.0, 1801)
+    >>> p = henyey_greenstein(np.cos(np.deg2rad(theta)), g=0.5)
+    >>> abs(mean_cosine(p, theta_deg=theta) - 0.5) < 1e-5
+    True
+    """
+    theta = _table_grid(theta_deg)
+    p = _table("phase", phase, theta)
+    return _out(0.5 * math.pi * (p @ _linear_theta_weights(2.0 * theta)))
 
 
 def renormalize(phase: ArrayLike, *, theta_deg: ArrayLike) -> FloatArray:

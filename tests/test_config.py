@@ -3,17 +3,14 @@
 from __future__ import annotations
 
 import dataclasses
-import math
 
 import numpy as np
 import pytest
-from scipy import integrate
 
 from dustoptics import phase, presets
 from dustoptics.config import (
     BuildConfig,
     ConfigError,
-    _mean_cosine,
     build_table,
     load_config,
     parse_config,
@@ -285,23 +282,12 @@ def test_config_is_frozen() -> None:
 # ------------------------------------------------------------- building
 
 
-def test_mean_cosine_is_exact_for_linear_interpolation() -> None:
-    """Against scipy quad of the piecewise-linear-in-theta function (independent)."""
-    theta = np.array([0.0, 3.0, 10.0, 45.0, 90.0, 91.0, 150.0, 180.0])
-    values = np.array([[9.0, 5.0, 2.0, 0.5, 0.1, 0.1, 0.05, 0.2]])
-    expected = 2 * math.pi * integrate.quad(
-        lambda t: np.interp(t, np.deg2rad(theta), values[0]) * math.sin(t) * math.cos(t),
-        0.0, math.pi, points=np.deg2rad(theta[1:-1]), epsabs=1e-14, epsrel=1e-13, limit=200,
-    )[0]
-    assert _mean_cosine(values, theta)[0] == pytest.approx(expected, rel=1e-11)
-
-
 def test_mean_cosine_of_sampled_henyey_greenstein() -> None:
     """HG(g) sampled at 0.1 deg and renormalized: mean cosine g to the sampling error."""
     theta = np.linspace(0, 180, 1801)
     for g in (-0.3, 0.0, 0.5, 0.8):
         p = phase.renormalize(phase.tabulate(phase.henyey_greenstein, theta_deg=theta, g=g), theta_deg=theta)
-        assert _mean_cosine(p, theta) == pytest.approx(g, abs=1e-5)
+        assert phase.mean_cosine(p, theta_deg=theta) == pytest.approx(g, abs=1e-5)
 
 
 def test_progress_does_not_change_the_result() -> None:

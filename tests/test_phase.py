@@ -22,6 +22,7 @@ from hypothesis import strategies as st
 from scipy import integrate
 
 from dustoptics import phase
+from dustoptics import phase as do_phase
 from dustoptics.phase import (
     ANALYTIC_MODELS,
     COLLIENNE2013_MARS,
@@ -640,3 +641,16 @@ def test_collienne_dataset() -> None:
 def test_module_exports_exist() -> None:
     for name in phase.__all__:
         assert hasattr(phase, name), name
+
+
+def test_mean_cosine_is_exact_for_linear_interpolation() -> None:
+    """Against scipy quad of the piecewise-linear-in-theta function (independent)."""
+    theta = np.array([0.0, 3.0, 10.0, 45.0, 90.0, 91.0, 150.0, 180.0])
+    values = np.array([[9.0, 5.0, 2.0, 0.5, 0.1, 0.1, 0.05, 0.2]])
+    expected = 2 * math.pi * integrate.quad(
+        lambda t: np.interp(t, np.deg2rad(theta), values[0]) * math.sin(t) * math.cos(t),
+        0.0, math.pi, points=np.deg2rad(theta[1:-1]), epsabs=1e-14, epsrel=1e-13, limit=200,
+    )[0]
+    assert do_phase.mean_cosine(values, theta_deg=theta)[0] == pytest.approx(expected, rel=1e-11)
+
+
