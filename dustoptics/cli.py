@@ -115,35 +115,31 @@ class FormatOptions:
 
 
 class TableBuilder:
-    """Builds a preset or configuration and writes it in several formats.
+    """Builds the table of a configuration, reporting progress per wavelength.
 
     Parameters
     ----------
-    name_or_config : str
-        A preset name or the path of a TOML configuration file.
+    config : dustoptics.config.BuildConfig
+        A validated configuration.
     progress : TextIO or None
         Where to report progress (None: silent).
     """
 
-    def __init__(self, name_or_config: str, *, progress: TextIO | None = None) -> None:
-        from dustoptics import config, presets
-
+    def __init__(self, config: Any, *, progress: TextIO | None = None) -> None:
+        self.config = config
         self.progress = progress
-        if name_or_config.endswith(".toml") or os.sep in name_or_config or Path(name_or_config).is_file():
-            self.config = config.load_config(name_or_config)
-        else:
-            try:
-                self.config = presets.load_preset(name_or_config)
-            except ValueError as exc:
-                raise UsageError(str(exc)) from None
 
     @classmethod
-    def from_config(cls, config: Any, *, progress: TextIO | None = None) -> TableBuilder:
-        """A builder for an already validated :class:`dustoptics.config.BuildConfig`."""
-        builder = cls.__new__(cls)
-        builder.config = config
-        builder.progress = progress
-        return builder
+    def from_name(cls, name_or_config: str, *, progress: TextIO | None = None) -> TableBuilder:
+        """A builder for a preset name or the path of a TOML configuration file."""
+        from dustoptics import config, presets
+
+        if name_or_config.endswith(".toml") or os.sep in name_or_config or Path(name_or_config).is_file():
+            return cls(config.load_config(name_or_config), progress=progress)
+        try:
+            return cls(presets.load_preset(name_or_config), progress=progress)
+        except ValueError as exc:
+            raise UsageError(str(exc)) from None
 
     @property
     def name(self) -> str:
@@ -209,14 +205,14 @@ def build_atmosphere(
             ozone_profile=column.BRUNETON2017_OZONE,
             ozone_number_density_per_m3=column.BRUNETON2017_OZONE_PEAK_NUMBER_DENSITY_PER_M3,
         )
-    builder = TableBuilder(dust, progress=progress)
+    builder = TableBuilder.from_name(dust, progress=progress)
     cfg = builder.config
     if not cfg.phase.uses_mie:
         raise UsageError(f"dust {dust!r} has no cross-sections (a phase-function-only model); choose a Mie preset")
     grid = replace(cfg, optics=replace(cfg.optics, wavelengths_nm=COSMOSCOUT_WAVELENGTHS_NM, n_theta=1801))
-    dust_table: Table = TableBuilder.from_config(grid, progress=progress).build()
+    dust_table: Table = TableBuilder(grid, progress=progress).build()
     reference = replace(cfg, optics=replace(cfg.optics, wavelengths_nm=(float(reference_wavelength_nm),), n_theta=2))
-    cext = TableBuilder.from_config(reference, progress=None).build().cext_um2[0]
+    cext = TableBuilder(reference).build().cext_um2[0]
     return atmosphere.mars_atmosphere(
         dust_table=dust_table,
         optical_depth=optical_depth,
@@ -462,7 +458,7 @@ def _cmd_build_atmosphere(args: argparse.Namespace) -> int:
 def _cmd_build(args: argparse.Namespace) -> int:
     if args.name in ATMOSPHERES:
         return _cmd_build_atmosphere(args)
-    builder = TableBuilder(args.name, progress=None if args.quiet else sys.stderr)
+    builder = TableBuilder.from_name(args.name, progress=None if args.quiet else sys.stderr)
     out_dir = args.out / builder.name
     if out_dir.exists() and any(out_dir.iterdir()) and not args.force:
         raise FileExistsError(f"{str(out_dir)!r} already holds files; use --force to replace them")
