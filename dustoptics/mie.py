@@ -56,85 +56,19 @@ def wiscombe_nmax(x: float) -> int:
     return int(x + 4.05 * x ** (1.0 / 3.0) + 2.0)
 
 
-@njit(cache=True, nogil=True)
-def _log_derivative_cf(z: complex, n: int) -> complex:
-    """D_n(z) = psi_n'(z)/psi_n(z) by Lentz's continued fraction (Lentz 1976).
+#: Spheres whose Mie coefficients are computed together.  The recurrences for
+#: one sphere are chains of dependent complex divisions (bound by latency);
+#: run side by side over a batch, each step is a loop over spheres that the
+#: compiler vectorizes.  LLVM's loop vectorizer skips loops of fewer than 16
+#: iterations, hence 16.
+LANES = 16
 
-    D_n(z) = -n/z + J_{nu-1}(z)/J_nu(z) with nu = n + 1/2, and the Bessel
-    ratio is the continued fraction 2nu/z - 1/(2(nu+1)/z - 1/(2(nu+2)/z - ...)),
-    evaluated with the modified Lentz algorithm (Thompson & Barnett 1986).
-    """
-    tiny = 1e-300
-    nu = n + 0.5
-    f = 2.0 * nu / z
-    c = f
-    dd = 0.0 + 0.0j
-    j = 1
-    while True:
-        bj = 2.0 * (nu + j) / z
-        dd = bj - dd
-        if dd == 0.0:
-            dd = tiny
-        c = bj - 1.0 / c
-        if c == 0.0:
-            c = tiny
-        dd = 1.0 / dd
-        delta = c * dd
-        f *= delta
-        j += 1
-        if abs(delta - 1.0) < 1e-15 or j > 10_000_000:
-            break
-    return -n / z + f
-
-
-@njit(cache=True, nogil=True)
-def _log_derivative(z: complex, d: np.ndarray) -> None:
-    """D_n(z) for n = 0..len(d)-1: the top value by continued fraction, then the
-    downward recurrence D_{n-1} = n/z - 1/(D_n + n/z), stable for every complex
-    z (Bohren & Huffman 1983, Eq. 4.89)."""
-    n_top = d.shape[0] - 1
-    dn = _log_derivative_cf(z, n_top)
-    d[n_top] = dn
-    inv_z = 1.0 / z  # one complex division, not two per order
-    for n in range(n_top, 0, -1):
-        n_z = n * inv_z
-        dn = n_z - 1.0 / (dn + n_z)
-        d[n - 1] = dn
-
-
-@njit(cache=True, nogil=True)
-def _riccati_psi(x: float, n_start: int, psi: np.ndarray) -> None:
-    """psi_n(x) = x j_n(x) for n = 0..len(psi)-1 by Miller's downward recurrence.
-
-    The upward recurrence loses all accuracy for n > x and, for x << 1, already
-    at n = 1 (psi_1 = sin x / x - cos x cancels).  Downward from ``n_start``,
-    psi_n is the dominant solution; the result is scaled to psi_0 = sin x or to
-    psi_1, whichever is larger (they cannot both be small).
-    """
-    n_out = psi.shape[0]
-    p_next = 0.0
-    p_cur = 1e-280
-    for n in range(n_start, 0, -1):
-        p_prev = (2 * n + 1) / x * p_cur - p_next
-        p_next = p_cur
-        p_cur = p_prev
-        if n - 1 < n_out:
-            psi[n - 1] = p_cur
-        if n < n_out:
-            psi[n] = p_next
-        if abs(p_cur) > 1e250:  # rescale everything stored so far
-            p_cur *= 1e-250
-            p_next *= 1e-250
-            for k in range(n - 1, n_out):
-                psi[k] *= 1e-250
-    sin_x = np.sin(x)
-    psi1 = sin_x / x - np.cos(x)
-    if abs(sin_x) >= abs(psi1):
-        scale = sin_x / psi[0]
-    else:
-        scale = psi1 / psi[1]
-    for k in range(n_out):
-        psi[k] *= scale
+# Rows of the per-sphere workspace ``lane`` (shape (_N_LANE_ROWS, n_spheres)).
+_IZR, _IZI, _FR, _FI, _CR, _CI, _DDR, _DDI, _DONE, _INVX, _PN, _PC, _SX, _CX = range(14)
+_N_LANE_ROWS = 14
+# Planes of the per-order workspace ``orders`` (shape (_N_PLANES, n_top + 1, n_spheres)).
+_DNR, _DNI, _PSI, _CHI, _AR, _AI, _BR, _BI = range(8)
+_N_PLANES = 8
 
 
 @njit(cache=True, nogil=True)
@@ -142,59 +76,248 @@ def _miller_start(x: float, nmax: int) -> int:
     return int(max(nmax, x) + 25 + 1.5 * np.sqrt(x))
 
 
-@njit(cache=True, nogil=True)
-def _mie_coefficients(
-    m: complex, x: float, nmax: int, a: np.ndarray, b: np.ndarray, d: np.ndarray, psi: np.ndarray
-) -> None:
-    """Fill a[0:nmax], b[0:nmax] with the external coefficients a_n, b_n (n = 1..nmax).
+@njit(cache=True, nogil=True, error_model="numpy", inline="always")
+def _reciprocal(re: float, im: float) -> tuple[float, float]:
+    """1 / (re + i im), scaled by max(|re|, |im|) so that no square overflows;
+    branch-free, so loops over spheres vectorize (error_model="numpy": no
+    ZeroDivisionError branch either)."""
+    s = max(abs(re), abs(im))
+    inv_s = 1.0 / s
+    u = re * inv_s
+    v = im * inv_s
+    q = inv_s / (u * u + v * v)
+    return u * q, -v * q
+
+
+@njit(cache=True, nogil=True, error_model="numpy", inline="always")
+def _reciprocal_moderate(re: float, im: float) -> tuple[float, float]:
+    """1 / (re + i im) with one division, for |re + i im| within 1e-150..1e150:
+    the continued fraction's and the D_n recurrence's denominators, of order
+    n / |m x| (tested to x = 1e-30, where Q_sca matches Rayleigh's to 1e-15)."""
+    q = 1.0 / (re * re + im * im)
+    return re * q, -im * q
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _log_derivative_top(m: complex, x: np.ndarray, n_top: int, lane: np.ndarray, orders: np.ndarray) -> None:
+    """D_n(m x) = psi_n'(m x) / psi_n(m x) at n = n_top for every sphere, by
+    Lentz's continued fraction (Lentz 1976, modified as by Thompson & Barnett
+    1986): D_n(z) = -n/z + J_{nu-1}(z)/J_nu(z), nu = n + 1/2, with the Bessel
+    ratio 2nu/z - 1/(2(nu+1)/z - 1/(2(nu+2)/z - ...)).  All spheres iterate
+    together; each stops updating once its factor is within 1e-15 of 1."""
+    n_sph = x.shape[0]
+    izr, izi = lane[_IZR], lane[_IZI]
+    fr, fi, cr, ci = lane[_FR], lane[_FI], lane[_CR], lane[_CI]
+    ddr, ddi, done = lane[_DDR], lane[_DDI], lane[_DONE]
+    nu = n_top + 0.5
+    for s in range(n_sph):
+        a, b = _reciprocal(m.real * x[s], m.imag * x[s])
+        izr[s] = a
+        izi[s] = b
+        fr[s] = 2.0 * nu * a
+        fi[s] = 2.0 * nu * b
+        cr[s] = fr[s]
+        ci[s] = fi[s]
+        ddr[s] = 0.0
+        ddi[s] = 0.0
+        done[s] = 0.0
+    tiny = 1e-30  # Lentz's guard against a zero denominator
+    j = 1
+    while True:
+        t = 2.0 * (nu + j)
+        n_done = 0.0
+        for s in range(n_sph):
+            bjr = t * izr[s]
+            bji = t * izi[s]
+            pr = bjr - ddr[s]
+            pi = bji - ddi[s]
+            pr += tiny if (pr == 0.0 and pi == 0.0) else 0.0
+            u, v = _reciprocal_moderate(pr, pi)
+            ddr[s] = u
+            ddi[s] = v
+            rr, ri = _reciprocal_moderate(cr[s], ci[s])
+            qr = bjr - rr
+            qi = bji - ri
+            qr += tiny if (qr == 0.0 and qi == 0.0) else 0.0
+            cr[s] = qr
+            ci[s] = qi
+            delr = qr * u - qi * v
+            deli = qr * v + qi * u
+            f_r = fr[s]
+            f_i = fi[s]
+            finished = done[s] != 0.0
+            fr[s] = f_r if finished else f_r * delr - f_i * deli
+            fi[s] = f_i if finished else f_r * deli + f_i * delr
+            finished = finished or abs(delr - 1.0) + abs(deli) < 1e-15
+            done[s] = 1.0 if finished else 0.0
+            n_done += done[s]
+        j += 1
+        if n_done == n_sph or j > 10_000_000:
+            break
+    dnr, dni = orders[_DNR], orders[_DNI]
+    for s in range(n_sph):
+        dnr[n_top, s] = fr[s] - n_top * izr[s]
+        dni[n_top, s] = fi[s] - n_top * izi[s]
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _log_derivative(n_top: int, lane: np.ndarray, orders: np.ndarray) -> None:
+    """D_n for n = n_top - 1 .. 0 by the downward recurrence
+    D_{n-1} = n/z - 1/(D_n + n/z), stable for every complex z (Bohren & Huffman
+    1983, Eq. 4.89), from the top value of :func:`_log_derivative_top`."""
+    izr, izi = lane[_IZR], lane[_IZI]
+    dnr, dni = orders[_DNR], orders[_DNI]
+    n_sph = izr.shape[0]
+    for n in range(n_top, 0, -1):
+        for s in range(n_sph):
+            nzr = n * izr[s]
+            nzi = n * izi[s]
+            u, v = _reciprocal_moderate(dnr[n, s] + nzr, dni[n, s] + nzi)
+            dnr[n - 1, s] = nzr - u
+            dni[n - 1, s] = nzi - v
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _riccati_bessel(x: np.ndarray, n_top: int, n_start: int, lane: np.ndarray, orders: np.ndarray) -> None:
+    """psi_n(x) = x j_n(x) and chi_n(x) = -x y_n(x) for n = 0..n_top.
+
+    psi_n by Miller's downward recurrence psi_{n-1} = (2n+1)/x psi_n - psi_{n+1}
+    from ``n_start``: downward, psi_n is the dominant solution (the upward
+    recurrence loses all accuracy for n > x, and for x << 1 already at n = 1,
+    where psi_1 = sin x / x - cos x cancels).  Each sphere is scaled to
+    psi_0 = sin x or to psi_1, whichever is larger (they cannot both be small).
+    chi_n by the upward recurrence, in which it is dominant.
+    """
+    n_sph = x.shape[0]
+    inv_x, pn, pc, sx, cx = lane[_INVX], lane[_PN], lane[_PC], lane[_SX], lane[_CX]
+    psi, chi = orders[_PSI], orders[_CHI]
+    for s in range(n_sph):
+        inv_x[s] = 1.0 / x[s]
+        pn[s] = 0.0
+        pc[s] = 1e-280
+    for n in range(n_start, 0, -1):
+        big = False
+        for s in range(n_sph):
+            p = (2 * n + 1) * inv_x[s] * pc[s] - pn[s]
+            pn[s] = pc[s]
+            pc[s] = p
+            big |= abs(p) > 1e250
+        if n <= n_top:
+            for s in range(n_sph):
+                psi[n, s] = pn[s]
+        if big:  # rare: rescale the spheres about to overflow, and what they stored
+            for s in range(n_sph):
+                if abs(pc[s]) > 1e250:
+                    pc[s] *= 1e-250
+                    pn[s] *= 1e-250
+                    for k in range(n, n_top + 1):
+                        psi[k, s] *= 1e-250
+    for s in range(n_sph):
+        psi[0, s] = pc[s]
+        sx[s] = np.sin(x[s])
+        cx[s] = np.cos(x[s])
+        psi1 = sx[s] * inv_x[s] - cx[s]
+        pc[s] = sx[s] / psi[0, s] if abs(sx[s]) >= abs(psi1) else psi1 / psi[1, s]
+    for n in range(n_top + 1):
+        for s in range(n_sph):
+            psi[n, s] *= pc[s]
+    for s in range(n_sph):
+        chi[0, s] = cx[s]
+        if n_top >= 1:
+            chi[1, s] = cx[s] * inv_x[s] + sx[s]
+    for n in range(1, n_top):
+        for s in range(n_sph):
+            chi[n + 1, s] = (2 * n + 1) * inv_x[s] * chi[n, s] - chi[n - 1, s]
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _mie_coefficients(m: complex, x: np.ndarray, nmax: np.ndarray, lane: np.ndarray, orders: np.ndarray) -> int:
+    """External coefficients a_n, b_n (n = 1..n_top) of a batch of spheres.
 
     BH Eq. 4.88: a_n = [(D_n/m + n/x) psi_n - psi_{n-1}] / [(D_n/m + n/x) xi_n - xi_{n-1}],
-    b_n the same with m D_n, xi_n = psi_n - i chi_n (chi_n = -x y_n(x)).
-    ``d`` must hold nmax + 1 values, ``psi`` nmax + 1 values (workspace).
+    b_n the same with m D_n, xi_n = psi_n - i chi_n.  Sphere s gets its own
+    n_max = ``nmax[s]`` terms: orders above it are set to zero, so sums over all
+    n_top = max(nmax) orders equal its own truncated series.  Results go to
+    ``orders[_AR, n - 1, s]`` (real a_n) and likewise _AI, _BR, _BI; ``orders``
+    needs shape (_N_PLANES, >= n_top + 1, len(x)) and ``lane``
+    (_N_LANE_ROWS, len(x)).  Returns n_top.
     """
-    _log_derivative(m * x, d[: nmax + 1])
-    _riccati_psi(x, _miller_start(x, nmax), psi[: nmax + 1])
-    inv_x = 1.0 / x
-    inv_m = 1.0 / m
-    chi_prev = np.cos(x)  # chi_0
-    chi_cur = np.cos(x) * inv_x + np.sin(x)  # chi_1
-    for n in range(1, nmax + 1):
-        xi_n = psi[n] - 1j * chi_cur
-        xi_prev = psi[n - 1] - 1j * chi_prev
-        n_x = n * inv_x
-        t = d[n] * inv_m + n_x
-        a[n - 1] = (t * psi[n] - psi[n - 1]) / (t * xi_n - xi_prev)
-        t = m * d[n] + n_x
-        b[n - 1] = (t * psi[n] - psi[n - 1]) / (t * xi_n - xi_prev)
-        chi_next = (2 * n + 1) * inv_x * chi_cur - chi_prev
-        chi_prev = chi_cur
-        chi_cur = chi_next
+    n_sph = x.shape[0]
+    n_top = 0
+    x_max = 0.0
+    for s in range(n_sph):
+        n_top = max(n_top, nmax[s])
+        x_max = max(x_max, x[s])
+    _log_derivative_top(m, x, n_top, lane, orders)
+    _log_derivative(n_top, lane, orders)
+    _riccati_bessel(x, n_top, _miller_start(x_max, n_top), lane, orders)
+    mr = m.real
+    mi = m.imag
+    imr, imi = _reciprocal(mr, mi)
+    inv_x = lane[_INVX]
+    dnr, dni, psi, chi = orders[_DNR], orders[_DNI], orders[_PSI], orders[_CHI]
+    ar, ai, br, bi = orders[_AR], orders[_AI], orders[_BR], orders[_BI]
+    for n in range(1, n_top + 1):
+        for s in range(n_sph):
+            p1 = psi[n, s]
+            p0 = psi[n - 1, s]
+            c1 = chi[n, s]
+            c0 = chi[n - 1, s]
+            n_x = n * inv_x[s]
+            d_r = dnr[n, s]
+            d_i = dni[n, s]
+            keep = n <= nmax[s]
+            # a_n with t = D_n / m + n / x
+            tr = d_r * imr - d_i * imi + n_x
+            ti = d_r * imi + d_i * imr
+            u, v = _reciprocal(tr * p1 + ti * c1 - p0, ti * p1 - tr * c1 + c0)
+            nr = tr * p1 - p0
+            ni = ti * p1
+            ar[n - 1, s] = nr * u - ni * v if keep else 0.0
+            ai[n - 1, s] = nr * v + ni * u if keep else 0.0
+            # b_n with t = m D_n + n / x
+            tr = mr * d_r - mi * d_i + n_x
+            ti = mr * d_i + mi * d_r
+            u, v = _reciprocal(tr * p1 + ti * c1 - p0, ti * p1 - tr * c1 + c0)
+            nr = tr * p1 - p0
+            ni = ti * p1
+            br[n - 1, s] = nr * u - ni * v if keep else 0.0
+            bi[n - 1, s] = nr * v + ni * u if keep else 0.0
+    return n_top
 
 
-@njit(cache=True, nogil=True)
-def _efficiencies(x: float, nmax: int, a: np.ndarray, b: np.ndarray) -> tuple[float, float, float]:
-    """Q_ext, Q_sca and g Q_sca from the coefficients (BH Eqs. 4.61, 4.62 and p. 120)."""
-    qext = 0.0
-    qsca = 0.0
-    gq = 0.0
-    for i in range(nmax):
+@njit(cache=True, nogil=True, error_model="numpy")
+def _efficiencies(x: np.ndarray, n_top: int, orders: np.ndarray, out: np.ndarray) -> None:
+    """Q_ext, Q_sca and g Q_sca of each sphere of a batch (BH Eqs. 4.61, 4.62
+    and p. 120) into out[0], out[1], out[2]; orders above a sphere's n_max hold
+    zeros (see :func:`_mie_coefficients`) and add nothing."""
+    n_sph = x.shape[0]
+    ar, ai, br, bi = orders[_AR], orders[_AI], orders[_BR], orders[_BI]
+    qext, qsca, gq = out[0], out[1], out[2]
+    for s in range(n_sph):
+        qext[s] = 0.0
+        qsca[s] = 0.0
+        gq[s] = 0.0
+    for i in range(n_top):
         n = i + 1
         c = 2.0 * n + 1.0
-        ar = a[i].real
-        ai = a[i].imag
-        br = b[i].real
-        bi = b[i].imag
-        qext += c * (ar + br)
-        qsca += c * (ar * ar + ai * ai + br * br + bi * bi)
-        gq += c / (n * (n + 1.0)) * (ar * br + ai * bi)
-        if i + 1 < nmax:
-            a1 = a[i + 1]
-            b1 = b[i + 1]
-            gq += n * (n + 2.0) / (n + 1.0) * (
-                ar * a1.real + ai * a1.imag + br * b1.real + bi * b1.imag
-            )
-    f = 2.0 / (x * x)
-    return f * qext, f * qsca, 2.0 * f * gq
+        c_ab = c / (n * (n + 1.0))
+        c_next = n * (n + 2.0) / (n + 1.0)
+        for s in range(n_sph):
+            qext[s] += c * (ar[i, s] + br[i, s])
+            qsca[s] += c * (ar[i, s] * ar[i, s] + ai[i, s] * ai[i, s] + br[i, s] * br[i, s] + bi[i, s] * bi[i, s])
+            gq[s] += c_ab * (ar[i, s] * br[i, s] + ai[i, s] * bi[i, s])
+        if i + 1 < n_top:
+            for s in range(n_sph):
+                gq[s] += c_next * (
+                    ar[i, s] * ar[i + 1, s] + ai[i, s] * ai[i + 1, s]
+                    + br[i, s] * br[i + 1, s] + bi[i, s] * bi[i + 1, s]
+                )
+    for s in range(n_sph):
+        f = 2.0 / (x[s] * x[s])
+        qext[s] *= f
+        qsca[s] *= f
+        gq[s] *= 2.0 * f
 
 
 @njit(cache=True, nogil=True)
@@ -246,15 +369,17 @@ def _amplitudes(
 @njit(cache=True, nogil=True)
 def _single_sphere_kernel(m: complex, x: float, mu: np.ndarray):
     nmax = wiscombe_nmax(x)
-    a = np.empty(nmax, dtype=np.complex128)
-    b = np.empty(nmax, dtype=np.complex128)
-    d = np.empty(nmax + 1, dtype=np.complex128)
-    psi = np.empty(nmax + 1)
-    _mie_coefficients(m, x, nmax, a, b, d, psi)
-    qext, qsca, gq = _efficiencies(x, nmax, a, b)
+    x_b = np.full(1, x)
+    lane = np.empty((_N_LANE_ROWS, 1))
+    orders = np.empty((_N_PLANES, nmax + 1, 1))
+    _mie_coefficients(m, x_b, np.full(1, nmax), lane, orders)
+    eff = np.empty((3, 1))
+    _efficiencies(x_b, nmax, orders, eff)
+    a = orders[_AR, :nmax, 0] + 1j * orders[_AI, :nmax, 0]
+    b = orders[_BR, :nmax, 0] + 1j * orders[_BI, :nmax, 0]
     pi_t, tau_t = _pi_tau_table(mu, nmax)
     s1, s2 = _amplitudes(nmax, a, b, pi_t, tau_t)
-    return qext, qsca, gq, s1, s2
+    return eff[0, 0], eff[1, 0], eff[2, 0], s1, s2
 
 
 @dataclass(frozen=True)
@@ -376,96 +501,136 @@ def _accumulate(
     if n_nodes == 0:
         return out
     nmax_all = wiscombe_nmax(np.max(x_nodes))
-    a = np.empty(nmax_all, dtype=np.complex128)
-    b = np.empty(nmax_all, dtype=np.complex128)
-    d = np.empty(nmax_all + 1, dtype=np.complex128)
-    psi = np.empty(nmax_all + 1)
+    # Batches of LANES spheres of neighbouring size (sorted by x, so that a
+    # batch's largest n_max wastes little on its smaller members).
+    order = np.argsort(x_nodes, kind="mergesort")
+    x_b = np.empty(LANES)
+    nmax_b = np.empty(LANES, dtype=np.int64)
+    lane = np.empty((_N_LANE_ROWS, LANES))
+    orders = np.empty((_N_PLANES, nmax_all + 1, LANES))
+    eff = np.empty((3, LANES))
+    ar, ai, br, bi = orders[_AR], orders[_AI], orders[_BR], orders[_BI]
     aa = np.empty(nmax_all, dtype=np.complex128)
     bb = np.empty(nmax_all, dtype=np.complex128)
     acc = np.empty((8, n_mu))
+    for j0 in range(0, n_nodes, LANES):
+        n_live = min(LANES, n_nodes - j0)
+        for s in range(LANES):  # a short last batch repeats its last sphere
+            x_b[s] = x_nodes[order[j0 + min(s, n_live - 1)]]
+            nmax_b[s] = wiscombe_nmax(x_b[s])
+        n_top = _mie_coefficients(m, x_b, nmax_b, lane, orders)
+        _efficiencies(x_b, n_top, orders, eff)
+        for s in range(n_live):
+            j = order[j0 + s]
+            x = x_b[s]
+            nmax = nmax_b[s]
+            _add_sphere(
+                out[node_panel[j]], w_nodes[j], x, nmax, eff[0, s], eff[1, s], eff[2, s],
+                ar[:, s], ai[:, s], br[:, s], bi[:, s], per_particle, pi_t, tau_t, symmetric,
+                aa, bb, acc,
+            )
+    return out
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _add_sphere(
+    row: np.ndarray,
+    w: float,
+    x: float,
+    nmax: int,
+    qext: float,
+    qsca: float,
+    gq: float,
+    ar: np.ndarray,
+    ai: np.ndarray,
+    br: np.ndarray,
+    bi: np.ndarray,
+    per_particle: bool,
+    pi_t: np.ndarray,
+    tau_t: np.ndarray,
+    symmetric: bool,
+    aa: np.ndarray,
+    bb: np.ndarray,
+    acc: np.ndarray,
+) -> None:
+    """Add one sphere's weighted intensity and sums to its panel's row (see
+    :func:`_accumulate`); ``aa``, ``bb`` and ``acc`` are workspace."""
+    n_mu = pi_t.shape[1]
+    n_f = 2 * n_mu if symmetric else n_mu
     e1r, e1i, o1r, o1i = acc[0], acc[1], acc[2], acc[3]
     e2r, e2i, o2r, o2i = acc[4], acc[5], acc[6], acc[7]
-    for j in range(n_nodes):
-        x = x_nodes[j]
-        w = w_nodes[j]
-        row = out[node_panel[j]]
-        nmax = wiscombe_nmax(x)
-        _mie_coefficients(m, x, nmax, a, b, d, psi)
-        qext, qsca, gq = _efficiencies(x, nmax, a, b)
-        x2 = x * x
-        row[n_f] += w
-        row[n_f + 1] += w * x2 * qext
-        row[n_f + 2] += w * x2 * qsca
-        row[n_f + 3] += w * x2 * gq
-        row[n_f + 4] += w * gq / qsca
-        if per_particle:
-            c = w / (2.0 * np.pi * x2 * qsca)
-        else:
-            c = w
-        for k in range(nmax):
-            n = k + 1
-            cn = (2.0 * n + 1.0) / (n * (n + 1.0))
-            aa[k] = cn * a[k]
-            bb[k] = cn * b[k]
-        # Parity split: e* collects terms even in mu, o* terms odd in mu, so
-        # S(+mu) = e + o and S(-mu) = e - o.  Two orders (n odd, then n + 1
-        # even) per pass; the inner loop runs over angles, contiguous in the
-        # transposed tables, in real arithmetic, which the compiler vectorizes.
-        e1r[:] = 0.0
-        e1i[:] = 0.0
-        o1r[:] = 0.0
-        o1i[:] = 0.0
-        e2r[:] = 0.0
-        e2i[:] = 0.0
-        o2r[:] = 0.0
-        o2i[:] = 0.0
-        for k in range(0, nmax, 2):
-            ar0 = aa[k].real
-            ai0 = aa[k].imag
-            br0 = bb[k].real
-            bi0 = bb[k].imag
-            if k + 1 < nmax:
-                ar1 = aa[k + 1].real
-                ai1 = aa[k + 1].imag
-                br1 = bb[k + 1].real
-                bi1 = bb[k + 1].imag
-                k1 = k + 1
-            else:  # odd nmax: a zero even order against any valid row
-                ar1 = 0.0
-                ai1 = 0.0
-                br1 = 0.0
-                bi1 = 0.0
-                k1 = k
-            p0 = pi_t[k]
-            t0 = tau_t[k]
-            p1 = pi_t[k1]
-            t1 = tau_t[k1]
-            for i in range(n_mu):
-                pp0 = p0[i]
-                tt0 = t0[i]
-                pp1 = p1[i]
-                tt1 = t1[i]
-                e1r[i] += ar0 * pp0 + br1 * tt1
-                e1i[i] += ai0 * pp0 + bi1 * tt1
-                o1r[i] += br0 * tt0 + ar1 * pp1
-                o1i[i] += bi0 * tt0 + ai1 * pp1
-                e2r[i] += br0 * pp0 + ar1 * tt1
-                e2i[i] += bi0 * pp0 + ai1 * tt1
-                o2r[i] += ar0 * tt0 + br1 * pp1
-                o2i[i] += ai0 * tt0 + bi1 * pp1
+    x2 = x * x
+    row[n_f] += w
+    row[n_f + 1] += w * x2 * qext
+    row[n_f + 2] += w * x2 * qsca
+    row[n_f + 3] += w * x2 * gq
+    row[n_f + 4] += w * gq / qsca
+    if n_mu == 0:
+        return
+    c = w / (2.0 * np.pi * x2 * qsca) if per_particle else w
+    for k in range(nmax):
+        n = k + 1
+        cn = (2.0 * n + 1.0) / (n * (n + 1.0))
+        aa[k] = cn * (ar[k] + 1j * ai[k])
+        bb[k] = cn * (br[k] + 1j * bi[k])
+    # Parity split: e* collects terms even in mu, o* terms odd in mu, so
+    # S(+mu) = e + o and S(-mu) = e - o.  Two orders (n odd, then n + 1
+    # even) per pass; the inner loop runs over angles, contiguous in the
+    # transposed tables, in real arithmetic, which the compiler vectorizes.
+    e1r[:] = 0.0
+    e1i[:] = 0.0
+    o1r[:] = 0.0
+    o1i[:] = 0.0
+    e2r[:] = 0.0
+    e2i[:] = 0.0
+    o2r[:] = 0.0
+    o2i[:] = 0.0
+    for k in range(0, nmax, 2):
+        ar0 = aa[k].real
+        ai0 = aa[k].imag
+        br0 = bb[k].real
+        bi0 = bb[k].imag
+        if k + 1 < nmax:
+            ar1 = aa[k + 1].real
+            ai1 = aa[k + 1].imag
+            br1 = bb[k + 1].real
+            bi1 = bb[k + 1].imag
+            k1 = k + 1
+        else:  # odd nmax: a zero even order against any valid row
+            ar1 = 0.0
+            ai1 = 0.0
+            br1 = 0.0
+            bi1 = 0.0
+            k1 = k
+        p0 = pi_t[k]
+        t0 = tau_t[k]
+        p1 = pi_t[k1]
+        t1 = tau_t[k1]
         for i in range(n_mu):
-            s1r = e1r[i] + o1r[i]
-            s1i = e1i[i] + o1i[i]
-            s2r = e2r[i] + o2r[i]
-            s2i = e2i[i] + o2i[i]
-            row[i] += c * (s1r * s1r + s1i * s1i + s2r * s2r + s2i * s2i)
-            if symmetric:
-                s1r = e1r[i] - o1r[i]
-                s1i = e1i[i] - o1i[i]
-                s2r = e2r[i] - o2r[i]
-                s2i = e2i[i] - o2i[i]
-                row[n_mu + i] += c * (s1r * s1r + s1i * s1i + s2r * s2r + s2i * s2i)
-    return out
+            pp0 = p0[i]
+            tt0 = t0[i]
+            pp1 = p1[i]
+            tt1 = t1[i]
+            e1r[i] += ar0 * pp0 + br1 * tt1
+            e1i[i] += ai0 * pp0 + bi1 * tt1
+            o1r[i] += br0 * tt0 + ar1 * pp1
+            o1i[i] += bi0 * tt0 + ai1 * pp1
+            e2r[i] += br0 * pp0 + ar1 * tt1
+            e2i[i] += bi0 * pp0 + ai1 * tt1
+            o2r[i] += ar0 * tt0 + br1 * pp1
+            o2i[i] += ai0 * tt0 + bi1 * pp1
+    for i in range(n_mu):
+        s1r = e1r[i] + o1r[i]
+        s1i = e1i[i] + o1i[i]
+        s2r = e2r[i] + o2r[i]
+        s2i = e2i[i] + o2i[i]
+        row[i] += c * (s1r * s1r + s1i * s1i + s2r * s2r + s2i * s2i)
+        if symmetric:
+            s1r = e1r[i] - o1r[i]
+            s1i = e1i[i] - o1i[i]
+            s2r = e2r[i] - o2r[i]
+            s2i = e2i[i] - o2i[i]
+            row[n_mu + i] += c * (s1r * s1r + s1i * s1i + s2r * s2r + s2i * s2i)
 
 
 @njit(cache=True, nogil=True)
@@ -497,21 +662,23 @@ def _legendre_project(mu_half: np.ndarray, w_half: np.ndarray, f: np.ndarray, lm
 
 
 @njit(cache=True, nogil=True)
-def _legendre_regrid(
-    rows: np.ndarray, mu_half: np.ndarray, w_half: np.ndarray, lmax: int, mu_half_out: np.ndarray
-) -> np.ndarray:
-    """Values of polynomials of degree <= lmax, given per row at a symmetric Gauss
-    grid (+mu_half, then -mu_half), at the symmetric grid +mu_half_out, -mu_half_out.
+def _legendre_regrid_matrices(
+    mu_half: np.ndarray, w_half: np.ndarray, lmax: int, mu_half_out: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Linear maps from values on a symmetric Gauss grid to values on another
+    of the polynomial of degree <= lmax they define, split by parity.
 
-    Each row is projected on P_0..P_lmax (exact when 2 len(mu_half) Gauss nodes
-    integrate the row times P_lmax) and summed again by parity: the even
-    orders give the part even in mu, the odd orders the odd part, so one
-    Clenshaw-free pass over the output half-grid yields both signs.
+    A polynomial f given at +mu_half (then -mu_half) has even part
+    e_i = (f(mu_i) + f(-mu_i)) / 2 and odd part o_i likewise; its Legendre
+    coefficients are beta_l = (2l + 1) sum_i w_i e_i P_l(mu_i) for even l
+    (o_i for odd l), exact when 2 len(mu_half) Gauss nodes integrate f P_lmax.
+    So the even part at mu_half_out is sum_i e_i R_even[i, :] with
+    R_even[i, k] = (2l + 1) w_i sum_{l even} P_l(mu_i) P_l(mu_out_k), and the
+    odd part likewise; f(+-mu_out) = even +- odd.  Returns (R_even, R_odd),
+    each of shape (len(mu_half), len(mu_half_out)).
     """
-    n_rows = rows.shape[0]
     n_in = mu_half.shape[0]
     n_out = mu_half_out.shape[0]
-    # P_l at the input and output half-grids, built once for all rows.
     p_in = np.empty((lmax + 1, n_in))
     p_out = np.empty((lmax + 1, n_out))
     for grid, table in ((mu_half, p_in), (mu_half_out, p_out)):
@@ -524,36 +691,43 @@ def _legendre_regrid(
                 p_next = ((2 * ell + 1) * u * p_cur - ell * p_prev) / (ell + 1)
                 p_prev = p_cur
                 p_cur = p_next
+    r_even = np.zeros((n_in, n_out))
+    r_odd = np.zeros((n_in, n_out))
+    for i in range(n_in):
+        for ell in range(lmax + 1):
+            c = (2 * ell + 1) * w_half[i] * p_in[ell, i]
+            target = r_even[i] if ell % 2 == 0 else r_odd[i]
+            pl = p_out[ell]
+            for k in range(n_out):
+                target[k] += c * pl[k]
+    return r_even, r_odd
+
+
+@njit(cache=True, nogil=True)
+def _legendre_regrid(rows: np.ndarray, r_even: np.ndarray, r_odd: np.ndarray) -> np.ndarray:
+    """Each row's values (+mu_half, then -mu_half) moved to the output grid
+    (+mu_half_out, then -mu_half_out) by the maps of
+    :func:`_legendre_regrid_matrices`."""
+    n_rows = rows.shape[0]
+    n_in, n_out = r_even.shape
     out = np.empty((n_rows, 2 * n_out))
-    beta = np.empty(lmax + 1)
     even = np.empty(n_out)
     odd = np.empty(n_out)
     for r in range(n_rows):
         row = rows[r]
-        for ell in range(lmax + 1):
-            acc = 0.0
-            pl = p_in[ell]
-            if ell % 2 == 0:
-                for i in range(n_in):
-                    acc += w_half[i] * (row[i] + row[n_in + i]) * pl[i]
-            else:
-                for i in range(n_in):
-                    acc += w_half[i] * (row[i] - row[n_in + i]) * pl[i]
-            beta[ell] = acc * (2 * ell + 1) / 2.0
         even[:] = 0.0
         odd[:] = 0.0
-        for ell in range(lmax + 1):
-            b = beta[ell]
-            pl = p_out[ell]
-            if ell % 2 == 0:
-                for i in range(n_out):
-                    even[i] += b * pl[i]
-            else:
-                for i in range(n_out):
-                    odd[i] += b * pl[i]
-        for i in range(n_out):
-            out[r, i] = even[i] + odd[i]
-            out[r, n_out + i] = even[i] - odd[i]
+        for i in range(n_in):
+            e = 0.5 * (row[i] + row[n_in + i])
+            o = 0.5 * (row[i] - row[n_in + i])
+            re = r_even[i]
+            ro = r_odd[i]
+            for k in range(n_out):
+                even[k] += e * re[k]
+                odd[k] += o * ro[k]
+        for k in range(n_out):
+            out[r, k] = even[k] + odd[k]
+            out[r, n_out + k] = even[k] - odd[k]
     return out
 
 

@@ -343,7 +343,8 @@ class _WavelengthSolver:
                 tiers.add(t)
                 k += 1
             self.tiers = np.array(sorted(tiers))
-            self._tier_tables: dict[int, tuple[np.ndarray, ...]] = {n_half: (self.mu_half, self.w_half, pi_t, tau_t)}
+            # Per tier: pi_n, tau_n tables and the maps to the full grid.
+            self._tier_tables: dict[int, tuple[np.ndarray, ...]] = {n_half: (pi_t, tau_t)}
         else:
             pi_t, tau_t = self._tables(mu_out, self.nmax)
             self.n_f = mu_out.size
@@ -395,8 +396,10 @@ class _WavelengthSolver:
         for t in np.unique(tier):
             n_half = int(self.tiers[t])
             if n_half not in self._tier_tables:
-                self._tier_tables[n_half] = self._angles(n_half)
-            mu_half, w_half, pi_t, tau_t = self._tier_tables[n_half]
+                mu_half, w_half, pi_t, tau_t = self._angles(n_half)
+                maps = mie._legendre_regrid_matrices(mu_half, w_half, 2 * n_half - 2, self.mu_half)
+                self._tier_tables[n_half] = (pi_t, tau_t, *maps)
+            pi_t, tau_t, *maps = self._tier_tables[n_half]
             sel = np.flatnonzero(tier == t)
             idx = (sel[:, None] * per + np.arange(per)).ravel()
             local = np.repeat(np.arange(sel.size, dtype=np.int64), per)
@@ -407,9 +410,7 @@ class _WavelengthSolver:
                 out[sel] = rows
             else:
                 n_f = 2 * n_half
-                out[sel, : self.n_f] = mie._legendre_regrid(
-                    np.ascontiguousarray(rows[:, :n_f]), mu_half, w_half, 2 * n_half - 2, self.mu_half
-                )
+                out[sel, : self.n_f] = mie._legendre_regrid(np.ascontiguousarray(rows[:, :n_f]), *maps)
                 out[sel, self.n_f :] = rows[:, n_f:]
         return out
 

@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 
 import dustoptics as do
+from dustoptics import mie
 from dustoptics.mie import single_sphere
 from _shared import shared_path
 
@@ -244,6 +245,51 @@ def test_small_sphere_keeps_precision() -> None:
     alpha = (m * m - 1) / (m * m + 2)
     np.testing.assert_allclose(r.qsca, 8.0 / 3.0 * x**4 * abs(alpha) ** 2, rtol=1e-7)
     np.testing.assert_allclose(r.qabs, 4.0 * x * alpha.imag, rtol=1e-7)
+
+
+@pytest.mark.parametrize("x", [1e-8, 1e-30])
+@pytest.mark.parametrize("m", [1.5 + 0.01j, 1.33 + 0j, 10.0 + 10.0j, 0.1 + 0.001j])
+def test_tiny_sphere_is_rayleigh(m: complex, x: float) -> None:
+    """At x = 1e-8 the O(x^2) corrections are below round-off, so Q_sca and
+    Q_abs equal Rayleigh's (BH Eqs. 5.7-5.8) to 1e-13: no branch, underflow or
+    overflow in the recurrences down to x = 1e-30."""
+    r = single_sphere(m=m, x=x)
+    alpha = (m * m - 1) / (m * m + 2)
+    np.testing.assert_allclose(r.qsca, 8.0 / 3.0 * x**4 * abs(alpha) ** 2, rtol=1e-13)
+    # Q_abs = Q_ext - Q_sca: for real m, zero to round-off of Q_ext.
+    np.testing.assert_allclose(r.qabs, 4.0 * x * alpha.imag, rtol=1e-13, atol=1e-13 * r.qext)
+    assert abs(r.g) < 1e-13
+
+
+def coefficients(m: complex, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """a_n, b_n (shape (n_top, len(x))) and n_max of spheres computed as one batch."""
+    nmax = np.array([mie.wiscombe_nmax(v) for v in x])
+    lane = np.empty((mie._N_LANE_ROWS, x.size))
+    orders = np.empty((mie._N_PLANES, nmax.max() + 1, x.size))
+    n_top = mie._mie_coefficients(m, x, nmax, lane, orders)
+    a = orders[mie._AR, :n_top] + 1j * orders[mie._AI, :n_top]
+    b = orders[mie._BR, :n_top] + 1j * orders[mie._BI, :n_top]
+    return a, b, nmax
+
+
+@pytest.mark.parametrize("m", [1.52 + 0.004j, 1.33 + 0j, 3.0 + 1.0j])
+def test_batch_equals_one_sphere_at_a_time(m: complex) -> None:
+    """The vectorized kernel computes spheres in batches that share the top
+    order of the recurrences (the largest member's n_max): each sphere's a_n,
+    b_n equal those computed alone, and orders above its own n_max are zero.
+    (Agreement is 1e-13 of the largest coefficient; alone and in a batch, the
+    continued fraction starts at different orders.)"""
+    rng = np.random.default_rng(3)
+    x = np.sort(np.concatenate([rng.uniform(0.5, 3.0, 5), rng.uniform(20.0, 40.0, 6), rng.uniform(90, 130, 5)]))
+    a, b, nmax = coefficients(m, x)
+    assert x.size == mie.LANES
+    for s in range(x.size):
+        a1, b1, _ = coefficients(m, x[s : s + 1])
+        k = nmax[s]
+        scale = max(np.abs(a1).max(), np.abs(b1).max())
+        np.testing.assert_allclose(a[:k, s], a1[:, 0], rtol=0, atol=1e-13 * scale)
+        np.testing.assert_allclose(b[:k, s], b1[:, 0], rtol=0, atol=1e-13 * scale)
+        assert np.all(a[k:, s] == 0) and np.all(b[k:, s] == 0)
 
 
 @pytest.mark.parametrize(
