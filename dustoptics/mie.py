@@ -738,17 +738,25 @@ def _legendre_regrid(rows: np.ndarray, r_even: np.ndarray, r_odd: np.ndarray) ->
 
 @njit(cache=True, nogil=True)
 def _legendre_evaluate(beta: np.ndarray, mu: np.ndarray) -> np.ndarray:
-    """Sum_l beta_l P_l(mu) by Clenshaw's recurrence."""
+    """Sum_l beta_l P_l(mu) by Clenshaw's recurrence.
+
+    P_{l+1} = alpha_l P_l + b_l P_{l-1} with alpha_l = (2l+1) mu / (l+1) and
+    b_l = -l / (l+1).  The recurrence runs over l for all angles at once (the
+    loop over angles innermost, which the compiler vectorizes).
+    """
     lmax = beta.shape[0] - 1
-    out = np.empty(mu.shape[0])
-    for i in range(mu.shape[0]):
-        u = mu[i]
-        b1 = 0.0
-        b2 = 0.0
-        for ell in range(lmax, 0, -1):
-            # P_{l+1} = alpha_l P_l + beta_l P_{l-1}: alpha = (2l+1)u/(l+1), beta = -l/(l+1)
-            bk = beta[ell] + (2 * ell + 1) * u / (ell + 1) * b1 - (ell + 1) / (ell + 2) * b2
-            b2 = b1
-            b1 = bk
-        out[i] = beta[0] + u * b1 - 0.5 * b2
+    n_mu = mu.shape[0]
+    b1 = np.zeros(n_mu)
+    b2 = np.zeros(n_mu)
+    for ell in range(lmax, 0, -1):
+        c1 = (2 * ell + 1) / (ell + 1)
+        c2 = (ell + 1) / (ell + 2)
+        be = beta[ell]
+        for i in range(n_mu):
+            bk = be + c1 * mu[i] * b1[i] - c2 * b2[i]
+            b2[i] = b1[i]
+            b1[i] = bk
+    out = np.empty(n_mu)
+    for i in range(n_mu):
+        out[i] = beta[0] + mu[i] * b1[i] - 0.5 * b2[i]
     return out

@@ -36,6 +36,7 @@ import warnings
 from collections.abc import Callable, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
+from functools import lru_cache
 from typing import Any, NamedTuple, Union
 
 import numpy as np
@@ -270,6 +271,34 @@ class _Panels(NamedTuple):
     right: np.ndarray
 
 
+def _pi_tau_tables(mu: np.ndarray, nmax: int) -> tuple[np.ndarray, np.ndarray]:
+    """pi_n(mu), tau_n(mu) for n = 1..nmax in the (nmax, n_mu) layout the kernel
+    reads order by order."""
+    pi_t, tau_t = mie._pi_tau_table(mu, nmax)
+    return np.ascontiguousarray(pi_t.T), np.ascontiguousarray(tau_t.T)
+
+
+@lru_cache(maxsize=32)
+def _gauss_angles(n_half: int) -> tuple[np.ndarray, ...]:
+    """Positive half of the 2 n_half-point Gauss rule in mu, its weights, and
+    pi_n, tau_n there for n <= n_half - 1 (2 n_half >= 2 n_max + 2 nodes
+    integrate |S|^2 P_l, degree <= 4 n_max, exactly).  Cached: they depend on
+    n_half alone, and wavelengths share them.  Not to be modified."""
+    mu_g, w_g = gauss_legendre(2 * n_half)
+    mu_half = np.ascontiguousarray(mu_g[n_half:])
+    w_half = np.ascontiguousarray(w_g[n_half:])
+    return (mu_half, w_half, *_pi_tau_tables(mu_half, n_half - 1))
+
+
+@lru_cache(maxsize=64)
+def _regrid_maps(n_half_in: int, n_half_out: int) -> tuple[np.ndarray, np.ndarray]:
+    """Maps from the 2 n_half_in Gauss angles to the 2 n_half_out ones of
+    polynomials of degree <= 2 n_half_in - 2 (see
+    :func:`dustoptics.mie._legendre_regrid_matrices`).  Cached; not to be modified."""
+    mu_in, w_in = _gauss_angles(n_half_in)[:2]
+    return mie._legendre_regrid_matrices(mu_in, w_in, 2 * n_half_in - 2, _gauss_angles(n_half_out)[0])
+
+
 class _WavelengthSolver:
     """One wavelength: angular tables once, then adaptive refinement over radius.
 
@@ -331,7 +360,7 @@ class _WavelengthSolver:
         self.legendre = n_half < mu_out.size and not distribution.is_monodisperse
         if self.legendre:
             self.n_half = n_half
-            self.mu_half, self.w_half, pi_t, tau_t = self._angles(n_half)
+            self.mu_half, self.w_half, pi_t, tau_t = _gauss_angles(n_half)
             self.n_f = 2 * n_half
             # Angular tiers: a panel whose spheres need fewer orders is summed
             # on a smaller Gauss grid (cost ~ n_max x n_angles per sphere) and
@@ -343,29 +372,12 @@ class _WavelengthSolver:
                 tiers.add(t)
                 k += 1
             self.tiers = np.array(sorted(tiers))
-            # Per tier: pi_n, tau_n tables and the maps to the full grid.
-            self._tier_tables: dict[int, tuple[np.ndarray, ...]] = {n_half: (pi_t, tau_t)}
         else:
-            pi_t, tau_t = self._tables(mu_out, self.nmax)
+            pi_t, tau_t = _pi_tau_tables(mu_out, self.nmax)
             self.n_f = mu_out.size
         self.pi_t, self.tau_t = pi_t, tau_t
         # Cross-sections alone: no angles.
         self.no_angles = np.empty((self.nmax, 0))
-
-    @staticmethod
-    def _tables(mu: np.ndarray, nmax: int) -> tuple[np.ndarray, np.ndarray]:
-        # The kernel reads the tables order by order: (nmax, n_mu) layout.
-        pi_t, tau_t = mie._pi_tau_table(mu, nmax)
-        return np.ascontiguousarray(pi_t.T), np.ascontiguousarray(tau_t.T)
-
-    def _angles(self, n_half: int) -> tuple[np.ndarray, ...]:
-        """Positive half of the 2 n_half-point Gauss rule and pi_n, tau_n there
-        for n <= n_half - 1 (2 n_half >= 2 n_max + 2 nodes integrate
-        |S|^2 P_l, degree <= 4 n_max, exactly)."""
-        mu_g, w_g = gauss_legendre(2 * n_half)
-        mu_half = np.ascontiguousarray(mu_g[n_half:])
-        w_half = np.ascontiguousarray(w_g[n_half:])
-        return (mu_half, w_half, *self._tables(mu_half, min(n_half - 1, self.nmax)))
 
     def evaluate(self, lower: np.ndarray, upper: np.ndarray, *, angles: bool = True) -> np.ndarray:
         """Rows of angular values (if ``angles``) and sums, one per panel [lower, upper] in s."""
@@ -395,11 +407,7 @@ class _WavelengthSolver:
         out = np.empty((lower.size, self.n_f + mie.N_SUMS))
         for t in np.unique(tier):
             n_half = int(self.tiers[t])
-            if n_half not in self._tier_tables:
-                mu_half, w_half, pi_t, tau_t = self._angles(n_half)
-                maps = mie._legendre_regrid_matrices(mu_half, w_half, 2 * n_half - 2, self.mu_half)
-                self._tier_tables[n_half] = (pi_t, tau_t, *maps)
-            pi_t, tau_t, *maps = self._tier_tables[n_half]
+            pi_t, tau_t = _gauss_angles(n_half)[2:]
             sel = np.flatnonzero(tier == t)
             idx = (sel[:, None] * per + np.arange(per)).ravel()
             local = np.repeat(np.arange(sel.size, dtype=np.int64), per)
@@ -410,7 +418,9 @@ class _WavelengthSolver:
                 out[sel] = rows
             else:
                 n_f = 2 * n_half
-                out[sel, : self.n_f] = mie._legendre_regrid(np.ascontiguousarray(rows[:, :n_f]), *maps)
+                out[sel, : self.n_f] = mie._legendre_regrid(
+                    np.ascontiguousarray(rows[:, :n_f]), *_regrid_maps(n_half, self.n_half)
+                )
                 out[sel, self.n_f :] = rows[:, n_f:]
         return out
 
