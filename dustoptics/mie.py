@@ -667,44 +667,61 @@ def _legendre_project(mu_half: np.ndarray, w_half: np.ndarray, f: np.ndarray, lm
 
 
 @njit(cache=True, nogil=True)
-def _legendre_regrid_matrices(
-    mu_half: np.ndarray, w_half: np.ndarray, lmax: int, mu_half_out: np.ndarray
+def _interpolation_maps(
+    mu_half: np.ndarray, w_half: np.ndarray, mu_half_out: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Linear maps from values on a symmetric Gauss grid to values on another
-    of the polynomial of degree <= lmax they define, split by parity.
+    """Linear maps from values on a symmetric Gauss-Legendre grid to values on
+    another, of the interpolating polynomial, split by parity.
 
-    A polynomial f given at +mu_half (then -mu_half) has even part
-    e_i = (f(mu_i) + f(-mu_i)) / 2 and odd part o_i likewise; its Legendre
-    coefficients are beta_l = (2l + 1) sum_i w_i e_i P_l(mu_i) for even l
-    (o_i for odd l), exact when 2 len(mu_half) Gauss nodes integrate f P_lmax.
-    So the even part at mu_half_out is sum_i e_i R_even[i, :] with
-    R_even[i, k] = (2l + 1) w_i sum_{l even} P_l(mu_i) P_l(mu_out_k), and the
-    odd part likewise; f(+-mu_out) = even +- odd.  Returns (R_even, R_odd),
-    each of shape (len(mu_half), len(mu_half_out)).
+    Values f at the 2 n Gauss nodes (+mu_half, then -mu_half) determine one
+    polynomial of degree <= 2n - 1; every polynomial of that degree, such as
+    |S|^2 of spheres with n_max <= n - 1 (degree 2 n_max), is reproduced
+    exactly (the same as projecting on P_0..P_{2n-1}).  It is evaluated by the
+    barycentric formula p(y) = sum_j lambda_j f_j / (y - t_j) / sum_j lambda_j
+    / (y - t_j), stable for Gauss-Legendre nodes t_j (Higham 2004), whose
+    weights are lambda_j = (-1)^j sqrt((1 - t_j^2) w_j) (Wang & Xiang 2012).
+    With e_i = (f(mu_i) + f(-mu_i)) / 2 and o_i the odd part, the even part of
+    p at mu_half_out is sum_i e_i R_even[i, :] and the odd part
+    sum_i o_i R_odd[i, :]; p(+-mu_out) = even +- odd.  Returns (R_even, R_odd),
+    each of shape (len(mu_half), len(mu_half_out)); O(n^2), not O(n^3).
+
+    References: N. J. Higham, IMA J. Numer. Anal. 24, 547-556 (2004),
+    doi:10.1093/imanum/24.4.547; H. Wang and S. Xiang, Math. Comp. 81,
+    861-877 (2012), doi:10.1090/S0025-5718-2011-02549-4.
     """
     n_in = mu_half.shape[0]
     n_out = mu_half_out.shape[0]
-    p_in = np.empty((lmax + 1, n_in))
-    p_out = np.empty((lmax + 1, n_out))
-    for grid, table in ((mu_half, p_in), (mu_half_out, p_out)):
-        for i in range(grid.shape[0]):
-            u = grid[i]
-            p_prev = 0.0
-            p_cur = 1.0
-            for ell in range(lmax + 1):
-                table[ell, i] = p_cur
-                p_next = ((2 * ell + 1) * u * p_cur - ell * p_prev) / (ell + 1)
-                p_prev = p_cur
-                p_cur = p_next
-    r_even = np.zeros((n_in, n_out))
-    r_odd = np.zeros((n_in, n_out))
+    # Nodes in increasing order are -mu_half[n-1..0], then mu_half[0..n-1];
+    # node +mu_half[i] has index n + i, node -mu_half[i] index n - 1 - i.
+    lam_plus = np.empty(n_in)
+    lam_minus = np.empty(n_in)
     for i in range(n_in):
-        for ell in range(lmax + 1):
-            c = (2 * ell + 1) * w_half[i] * p_in[ell, i]
-            target = r_even[i] if ell % 2 == 0 else r_odd[i]
-            pl = p_out[ell]
-            for k in range(n_out):
-                target[k] += c * pl[k]
+        lam = np.sqrt((1.0 - mu_half[i] * mu_half[i]) * w_half[i])
+        lam_plus[i] = lam if (n_in + i) % 2 == 0 else -lam
+        lam_minus[i] = lam if (n_in - 1 - i) % 2 == 0 else -lam
+    r_even = np.empty((n_in, n_out))
+    r_odd = np.empty((n_in, n_out))
+    c_plus = np.empty(n_in)
+    c_minus = np.empty(n_in)
+    for k in range(n_out):
+        y = mu_half_out[k]
+        hit = -1
+        total = 0.0
+        for i in range(n_in):
+            if y == mu_half[i]:
+                hit = i
+            c_plus[i] = lam_plus[i] / (y - mu_half[i])
+            c_minus[i] = lam_minus[i] / (y + mu_half[i])
+            total += c_plus[i] + c_minus[i]
+        for i in range(n_in):
+            if hit >= 0:  # y is a node (y > 0, so of the + half): p(y) = f there
+                cp = 1.0 if i == hit else 0.0
+                cm = 0.0
+            else:
+                cp = c_plus[i] / total
+                cm = c_minus[i] / total
+            r_even[i, k] = cp + cm
+            r_odd[i, k] = cp - cm
     return r_even, r_odd
 
 
@@ -712,7 +729,7 @@ def _legendre_regrid_matrices(
 def _legendre_regrid(rows: np.ndarray, r_even: np.ndarray, r_odd: np.ndarray) -> np.ndarray:
     """Each row's values (+mu_half, then -mu_half) moved to the output grid
     (+mu_half_out, then -mu_half_out) by the maps of
-    :func:`_legendre_regrid_matrices`."""
+    :func:`_interpolation_maps`."""
     n_rows = rows.shape[0]
     n_in, n_out = r_even.shape
     out = np.empty((n_rows, 2 * n_out))

@@ -44,7 +44,13 @@ import numpy as np
 from dustoptics import mie
 from dustoptics._validation import as_increasing_grid, check_choice, check_open_interval
 from dustoptics.materials import RefractiveIndex, get_material
-from dustoptics.quadrature import QuadratureSettings, gauss_legendre, initial_panels, panel_nodes
+from dustoptics.quadrature import (
+    QuadratureSettings,
+    gauss_legendre,
+    initial_panels,
+    panel_nodes,
+    size_parameter_at,
+)
 from dustoptics.sizedist import SizeDistribution
 
 __all__ = [
@@ -290,15 +296,6 @@ def _gauss_angles(n_half: int) -> tuple[np.ndarray, ...]:
     return (mu_half, w_half, *_pi_tau_tables(mu_half, n_half - 1))
 
 
-@lru_cache(maxsize=64)
-def _regrid_maps(n_half_in: int, n_half_out: int) -> tuple[np.ndarray, np.ndarray]:
-    """Maps from the 2 n_half_in Gauss angles to the 2 n_half_out ones of
-    polynomials of degree <= 2 n_half_in - 2 (see
-    :func:`dustoptics.mie._legendre_regrid_matrices`).  Cached; not to be modified."""
-    mu_in, w_in = _gauss_angles(n_half_in)[:2]
-    return mie._legendre_regrid_matrices(mu_in, w_in, 2 * n_half_in - 2, _gauss_angles(n_half_out)[0])
-
-
 class _WavelengthSolver:
     """One wavelength: angular tables once, then adaptive refinement over radius.
 
@@ -343,14 +340,7 @@ class _WavelengthSolver:
                 settings=settings,
                 lower_moment=0 if per_particle else 2,
             )
-            top, _ = panel_nodes(
-                distribution,
-                wavelength_nm=wavelength_nm,
-                lower_s=self.edges[-2:-1],
-                upper_s=self.edges[-1:],
-                settings=settings,
-            )
-            x_top = float(top.size_parameter.max())
+            x_top = float(size_parameter_at(self.edges[-1], settings=settings))
         # Every node lies below the top panel's end; n_max there bounds all.
         self.nmax = mie.wiscombe_nmax(max(x_top, 1e-3) * 1.0001 + 1.0)
         n_half = 16 * ((self.nmax + 1 + 15) // 16)
@@ -364,14 +354,16 @@ class _WavelengthSolver:
             self.n_f = 2 * n_half
             # Angular tiers: a panel whose spheres need fewer orders is summed
             # on a smaller Gauss grid (cost ~ n_max x n_angles per sphere) and
-            # moved to the full grid through its exact Legendre series.  Tier
-            # sizes fall by sqrt(2) down to 32 half-grid angles.
+            # moved to the full grid by exact polynomial interpolation
+            # (mie._interpolation_maps, built once per tier).  Tier sizes
+            # fall by 2^(1/4), in multiples of 16, down to 32 half-grid angles.
             tiers = {n_half}
             k = 1
-            while (t := 16 * -(-int(n_half * 2.0 ** (-k / 2)) // 16)) >= 32:
+            while (t := 16 * -(-int(n_half * 2.0 ** (-k / 4)) // 16)) >= 32:
                 tiers.add(t)
                 k += 1
             self.tiers = np.array(sorted(tiers))
+            self._maps: dict[int, tuple[np.ndarray, np.ndarray]] = {}
         else:
             pi_t, tau_t = _pi_tau_tables(mu_out, self.nmax)
             self.n_f = mu_out.size
@@ -418,8 +410,11 @@ class _WavelengthSolver:
                 out[sel] = rows
             else:
                 n_f = 2 * n_half
+                if n_half not in self._maps:
+                    mu_in, w_in = _gauss_angles(n_half)[:2]
+                    self._maps[n_half] = mie._interpolation_maps(mu_in, w_in, self.mu_half)
                 out[sel, : self.n_f] = mie._legendre_regrid(
-                    np.ascontiguousarray(rows[:, :n_f]), *_regrid_maps(n_half, self.n_half)
+                    np.ascontiguousarray(rows[:, :n_f]), *self._maps[n_half]
                 )
                 out[sel, self.n_f :] = rows[:, n_f:]
         return out
