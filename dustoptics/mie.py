@@ -76,7 +76,7 @@ def _miller_start(x: float, nmax: int) -> int:
     return int(max(nmax, x) + 25 + 1.5 * np.sqrt(x))
 
 
-@njit(cache=True, nogil=True, error_model="numpy", inline="always")
+@njit(cache=True, nogil=True, error_model="numpy")
 def _reciprocal(re: float, im: float) -> tuple[float, float]:
     """1 / (re + i im), scaled by max(|re|, |im|) so that no square overflows;
     branch-free, so loops over spheres vectorize (error_model="numpy": no
@@ -89,7 +89,7 @@ def _reciprocal(re: float, im: float) -> tuple[float, float]:
     return u * q, -v * q
 
 
-@njit(cache=True, nogil=True, error_model="numpy", inline="always")
+@njit(cache=True, nogil=True, error_model="numpy")
 def _reciprocal_moderate(re: float, im: float) -> tuple[float, float]:
     """1 / (re + i im) with one division, for |re + i im| within 1e-150..1e150:
     the continued fraction's and the D_n recurrence's denominators, of order
@@ -243,8 +243,8 @@ def _mie_coefficients(m: complex, x: np.ndarray, nmax: np.ndarray, lane: np.ndar
     (_N_LANE_ROWS, len(x)).  Returns n_top.
     """
     n_sph = x.shape[0]
-    n_top = 0
-    x_max = 0.0
+    n_top = nmax[0]  # not a literal 0: callees would be compiled for that type too
+    x_max = x[0]
     for s in range(n_sph):
         n_top = max(n_top, nmax[s])
         x_max = max(x_max, x[s])
@@ -493,6 +493,9 @@ def _accumulate(
     cost.  The last ``N_SUMS`` columns hold sums of w, w x^2 Q_ext,
     w x^2 Q_sca, w x^2 Q_sca g and w g (times pi (lambda / 2 pi)^2 the second
     and third are areas).  Returns an array of shape (n_panels, n_f + N_SUMS).
+
+    The Mie coefficients are computed for LANES consecutive nodes at a time,
+    up to the largest n_max among them: give the nodes sorted by x.
     """
     n_nodes = x_nodes.shape[0]
     n_mu = pi_t.shape[1]
@@ -500,10 +503,10 @@ def _accumulate(
     out = np.zeros((n_panels, n_f + N_SUMS))
     if n_nodes == 0:
         return out
-    nmax_all = wiscombe_nmax(np.max(x_nodes))
-    # Batches of LANES spheres of neighbouring size (sorted by x, so that a
-    # batch's largest n_max wastes little on its smaller members).
-    order = np.argsort(x_nodes, kind="mergesort")
+    x_top = x_nodes[0]
+    for j in range(n_nodes):
+        x_top = max(x_top, x_nodes[j])
+    nmax_all = wiscombe_nmax(x_top)
     x_b = np.empty(LANES)
     nmax_b = np.empty(LANES, dtype=np.int64)
     lane = np.empty((_N_LANE_ROWS, LANES))
@@ -515,12 +518,12 @@ def _accumulate(
     for j0 in range(0, n_nodes, LANES):
         n_live = min(LANES, n_nodes - j0)
         for s in range(LANES):  # a short last batch repeats its last sphere
-            x_b[s] = x_nodes[order[j0 + min(s, n_live - 1)]]
+            x_b[s] = x_nodes[j0 + min(s, n_live - 1)]
             nmax_b[s] = wiscombe_nmax(x_b[s])
         n_top = _mie_coefficients(m, x_b, nmax_b, lane, orders)
         _efficiencies(x_b, n_top, orders, eff)
         for s in range(n_live):
-            j = order[j0 + s]
+            j = j0 + s
             x = x_b[s]
             nmax = nmax_b[s]
             _add_sphere(
@@ -531,7 +534,7 @@ def _accumulate(
     return out
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True)
 def _add_sphere(
     row: np.ndarray,
     w: float,

@@ -371,6 +371,24 @@ class _WavelengthSolver:
         # Cross-sections alone: no angles.
         self.no_angles = np.empty((self.nmax, 0))
 
+    def _accumulate(
+        self,
+        x: np.ndarray,
+        w: np.ndarray,
+        node_panel: np.ndarray,
+        n_panels: int,
+        pi_t: np.ndarray,
+        tau_t: np.ndarray,
+        symmetric: bool,
+    ) -> np.ndarray:
+        # The kernel computes the Mie coefficients of consecutive spheres in
+        # batches that share the largest member's n_max: sorted by size, a
+        # batch wastes little.
+        order = np.argsort(x, kind="stable")
+        return mie._accumulate(
+            self.m, x[order], w[order], node_panel[order], n_panels, self.per_particle, pi_t, tau_t, symmetric
+        )
+
     def evaluate(self, lower: np.ndarray, upper: np.ndarray, *, angles: bool = True) -> np.ndarray:
         """Rows of angular values (if ``angles``) and sums, one per panel [lower, upper] in s."""
         nodes, node_panel = panel_nodes(
@@ -382,14 +400,9 @@ class _WavelengthSolver:
         )
         x, w = nodes.size_parameter, nodes.weight
         if not angles:
-            return mie._accumulate(
-                self.m, x, w, node_panel, lower.size, self.per_particle,
-                self.no_angles, self.no_angles, False,
-            )
+            return self._accumulate(x, w, node_panel, lower.size, self.no_angles, self.no_angles, False)
         if not self.legendre:
-            return mie._accumulate(
-                self.m, x, w, node_panel, lower.size, self.per_particle, self.pi_t, self.tau_t, False
-            )
+            return self._accumulate(x, w, node_panel, lower.size, self.pi_t, self.tau_t, False)
         per = self.settings.nodes_per_panel
         x_top = x.reshape(lower.size, per).max(axis=1)
         # wiscombe_nmax + 1, plus 1 so that cbrt's rounding can never pick a tier
@@ -403,9 +416,7 @@ class _WavelengthSolver:
             sel = np.flatnonzero(tier == t)
             idx = (sel[:, None] * per + np.arange(per)).ravel()
             local = np.repeat(np.arange(sel.size, dtype=np.int64), per)
-            rows = mie._accumulate(
-                self.m, x[idx], w[idx], local, sel.size, self.per_particle, pi_t, tau_t, True
-            )
+            rows = self._accumulate(x[idx], w[idx], local, sel.size, pi_t, tau_t, True)
             if n_half == self.n_half:
                 out[sel] = rows
             else:
