@@ -669,7 +669,7 @@ def _legendre_project(mu_half: np.ndarray, w_half: np.ndarray, f: np.ndarray, lm
     return beta
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")  # y at a node: inf, then replaced
 def _interpolation_maps(
     mu_half: np.ndarray, w_half: np.ndarray, mu_half_out: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:

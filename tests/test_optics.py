@@ -10,7 +10,7 @@ from hypothesis import strategies as st
 
 import dustoptics as do
 from dustoptics.optics import _Run, _WavelengthSolver
-from dustoptics.quadrature import QuadratureSettings, radius_nodes
+from dustoptics.quadrature import QuadratureSettings, radius_nodes, size_parameter_at
 from _shared import shared_path
 
 # Gauss-Legendre angles: P(mu) of a truncated Mie series is a polynomial in mu,
@@ -236,3 +236,12 @@ def test_bad_input_raises(kwargs: dict, match: str) -> None:
     call.update(kwargs)
     with pytest.raises(ValueError, match=match):
         do.compute_optics(**call)
+
+
+@given(x=st.floats(1e-6, 1e4), x_c=st.floats(0.1, 10.0))
+@settings(max_examples=50, deadline=None)
+def test_size_parameter_at_inverts_the_stretch(x: float, x_c: float) -> None:
+    """size_parameter_at(s) returns the x with s = x / x_c + ln(x / x_c)."""
+    s = x / x_c + np.log(x / x_c)
+    got = float(size_parameter_at(s, settings=QuadratureSettings(transition_size_parameter=x_c)))
+    assert got == pytest.approx(x, rel=1e-12)
