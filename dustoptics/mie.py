@@ -268,22 +268,25 @@ def _mie_coefficients(m: complex, x: np.ndarray, nmax: np.ndarray, lane: np.ndar
             d_i = dni[n, s]
             keep = n <= nmax[s]
             # a_n with t = D_n / m + n / x
-            tr = d_r * imr - d_i * imi + n_x
-            ti = d_r * imi + d_i * imr
-            u, v = _reciprocal(tr * p1 + ti * c1 - p0, ti * p1 - tr * c1 + c0)
-            nr = tr * p1 - p0
-            ni = ti * p1
-            ar[n - 1, s] = nr * u - ni * v if keep else 0.0
-            ai[n - 1, s] = nr * v + ni * u if keep else 0.0
+            re, im = _bh_ratio(d_r * imr - d_i * imi + n_x, d_r * imi + d_i * imr, p1, p0, c1, c0)
+            ar[n - 1, s] = re if keep else 0.0
+            ai[n - 1, s] = im if keep else 0.0
             # b_n with t = m D_n + n / x
-            tr = mr * d_r - mi * d_i + n_x
-            ti = mr * d_i + mi * d_r
-            u, v = _reciprocal(tr * p1 + ti * c1 - p0, ti * p1 - tr * c1 + c0)
-            nr = tr * p1 - p0
-            ni = ti * p1
-            br[n - 1, s] = nr * u - ni * v if keep else 0.0
-            bi[n - 1, s] = nr * v + ni * u if keep else 0.0
+            re, im = _bh_ratio(mr * d_r - mi * d_i + n_x, mr * d_i + mi * d_r, p1, p0, c1, c0)
+            br[n - 1, s] = re if keep else 0.0
+            bi[n - 1, s] = im if keep else 0.0
     return n_top
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _bh_ratio(tr: float, ti: float, p1: float, p0: float, c1: float, c0: float) -> tuple[float, float]:
+    """(t psi_n - psi_{n-1}) / (t xi_n - xi_{n-1}) for t = tr + i ti, psi_n = p1,
+    psi_{n-1} = p0 and xi = psi - i chi with chi_n = c1, chi_{n-1} = c0: the
+    common form of a_n and b_n (Bohren & Huffman 1983, Eq. 4.88)."""
+    u, v = _reciprocal(tr * p1 + ti * c1 - p0, ti * p1 - tr * c1 + c0)
+    nr = tr * p1 - p0
+    ni = ti * p1
+    return nr * u - ni * v, nr * v + ni * u
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
