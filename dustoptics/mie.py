@@ -469,6 +469,45 @@ def single_sphere(*, m: complex, x: float, mu: np.ndarray | float = 1.0) -> Sing
 N_SUMS = 5
 
 
+#: Angles per block of :func:`angular_table`'s layout.  Each block holds the
+#: eight rows of a pass (pi and tau of four orders) for BLOCK angles side by
+#: side, so that every access of a pass lies at a constant offset from the
+#: block's start: the compiler then checks at run time only that the table and
+#: the accumulators do not overlap, once per block, instead of 64 pairs of
+#: rows once per pass (which cost more than the arithmetic for n_angles < 100).
+BLOCK = 16
+
+
+@njit(cache=True, nogil=True)
+def angular_table(mu: np.ndarray, nmax: int) -> np.ndarray:
+    """pi_n(mu) and tau_n(mu), n = 1..nmax, in the blocked layout of the kernel.
+
+    Upward recurrences (BH Eq. 4.47): pi_n = ((2n-1) mu pi_{n-1} - n pi_{n-2})/(n-1),
+    tau_n = n mu pi_n - (n+1) pi_{n-1}; stable for |mu| <= 1.  Returns an
+    array of shape (ceil(nmax / 4), 8 * n_pad), n_pad = len(mu) rounded up to
+    a multiple of BLOCK: row q holds orders 4q+1..4q+4, for each block of BLOCK
+    angles the 8 x BLOCK values pi_{4q+1}, tau_{4q+1}, pi_{4q+2}, ..., tau_{4q+4}.
+    Orders above nmax and angles beyond len(mu) hold zeros.
+    """
+    n_mu = mu.shape[0]
+    n_pad = BLOCK * ((n_mu + BLOCK - 1) // BLOCK)
+    n_pass = (nmax + 3) // 4
+    tab = np.zeros((n_pass, 8 * n_pad))
+    for i in range(n_mu):
+        u = mu[i]
+        base = (i // BLOCK) * 8 * BLOCK + i % BLOCK
+        p_prev = 0.0
+        p_cur = 1.0
+        for n in range(1, nmax + 1):
+            q, j = divmod(n - 1, 4)
+            tab[q, base + 2 * j * BLOCK] = p_cur
+            tab[q, base + (2 * j + 1) * BLOCK] = n * u * p_cur - (n + 1) * p_prev
+            p_next = ((2 * n + 1) * u * p_cur - (n + 1) * p_prev) / n
+            p_prev = p_cur
+            p_cur = p_next
+    return tab
+
+
 @njit(cache=True, nogil=True)
 def _accumulate(
     m: complex,
@@ -477,8 +516,8 @@ def _accumulate(
     node_panel: np.ndarray,
     n_panels: int,
     per_particle: bool,
-    pi_t: np.ndarray,
-    tau_t: np.ndarray,
+    table: np.ndarray,
+    n_mu: int,
     symmetric: bool,
 ) -> np.ndarray:
     """Sum the Mie quantities of many spheres with weights, per panel.
@@ -488,20 +527,20 @@ def _accumulate(
     times c_j, where c_j = w_j (cross-section weighting: I_j / k^2 = 2 C_sca,j
     p_j, so the sum divided by 2 pi sum(w x^2 Q_sca) is the weighted phase
     function) or c_j = w_j / (2 pi x_j^2 Q_sca,j) when ``per_particle`` (each
-    sphere's own normalized phase function, weighted by number).  Angles come
-    as transposed tables pi_t[n - 1, i] = pi_n(mu_i) (tau_t likewise) at
-    mu >= 0; if ``symmetric``, the next n_mu
-    columns receive the values at -mu, obtained from the parity
+    sphere's own normalized phase function, weighted by number).  The angles
+    are the first ``n_mu`` of ``table`` (from :func:`angular_table`, with at
+    least n_max orders for every node); if ``symmetric`` (angles mu >= 0),
+    the next n_mu columns receive the values at -mu, obtained from the parity
     pi_n(-mu) = (-1)^(n-1) pi_n(mu), tau_n(-mu) = (-1)^n tau_n(mu) at no extra
     cost.  The last ``N_SUMS`` columns hold sums of w, w x^2 Q_ext,
     w x^2 Q_sca, w x^2 Q_sca g and w g (times pi (lambda / 2 pi)^2 the second
-    and third are areas).  Returns an array of shape (n_panels, n_f + N_SUMS).
+    and third are areas).  Returns an array of shape (n_panels, n_f + N_SUMS),
+    n_f = 2 n_mu if ``symmetric`` else n_mu.
 
     The Mie coefficients are computed for LANES consecutive nodes at a time,
     up to the largest n_max among them: give the nodes sorted by x.
     """
     n_nodes = x_nodes.shape[0]
-    n_mu = pi_t.shape[1]
     n_f = 2 * n_mu if symmetric else n_mu
     out = np.zeros((n_panels, n_f + N_SUMS))
     if n_nodes == 0:
@@ -517,7 +556,7 @@ def _accumulate(
     eff = np.empty((3, LANES))
     ar, ai, br, bi = orders[_AR], orders[_AI], orders[_BR], orders[_BI]
     coef = np.empty((nmax_all + 4, 4))
-    acc = np.empty((8, n_mu))
+    acc = np.empty(table.shape[1] if n_mu > 0 else 0)
     for j0 in range(0, n_nodes, LANES):
         n_live = min(LANES, n_nodes - j0)
         for s in range(LANES):  # a short last batch repeats its last sphere
@@ -531,7 +570,7 @@ def _accumulate(
             nmax = nmax_b[s]
             _add_sphere(
                 out[node_panel[j]], w_nodes[j], x, nmax, eff[0, s], eff[1, s], eff[2, s],
-                ar[:, s], ai[:, s], br[:, s], bi[:, s], per_particle, pi_t, tau_t, symmetric,
+                ar[:, s], ai[:, s], br[:, s], bi[:, s], per_particle, table, n_mu, symmetric,
                 coef, acc,
             )
     return out
@@ -551,19 +590,16 @@ def _add_sphere(
     br: np.ndarray,
     bi: np.ndarray,
     per_particle: bool,
-    pi_t: np.ndarray,
-    tau_t: np.ndarray,
+    table: np.ndarray,
+    n_mu: int,
     symmetric: bool,
     coef: np.ndarray,
     acc: np.ndarray,
 ) -> None:
     """Add one sphere's weighted intensity and sums to its panel's row (see
     :func:`_accumulate`); ``coef`` (shape (>= n_max + 3, 4)) and ``acc``
-    (shape (8, n_mu)) are workspace."""
-    n_mu = pi_t.shape[1]
+    (length table.shape[1]) are workspace."""
     n_f = 2 * n_mu if symmetric else n_mu
-    e1r, e1i, o1r, o1i = acc[0], acc[1], acc[2], acc[3]
-    e2r, e2i, o2r, o2i = acc[4], acc[5], acc[6], acc[7]
     x2 = x * x
     row[n_f] += w
     row[n_f + 1] += w * x2 * qext
@@ -575,8 +611,8 @@ def _add_sphere(
     c = w / (2.0 * np.pi * x2 * qsca) if per_particle else w
     # (2n + 1) / (n (n + 1)) a_n and b_n as real and imaginary parts, padded
     # with zero orders to a multiple of 4.
-    n_pad = 4 * ((nmax + 3) // 4)
-    for k in range(n_pad):
+    n_pass = (nmax + 3) // 4
+    for k in range(4 * n_pass):
         if k < nmax:
             n = k + 1
             cn = (2.0 * n + 1.0) / (n * (n + 1.0))
@@ -586,61 +622,64 @@ def _add_sphere(
             coef[k, 3] = cn * bi[k]
         else:
             coef[k, :] = 0.0
-    # Parity split: e* collects terms even in mu, o* terms odd in mu, so
-    # S(+mu) = e + o and S(-mu) = e - o.  Four orders (n odd, even, odd,
-    # even) per pass over the angles, contiguous in the transposed tables, in
-    # real arithmetic, which the compiler vectorizes; four rather than two
-    # halve the loads and stores of the accumulators per order.
-    e1r[:] = 0.0
-    e1i[:] = 0.0
-    o1r[:] = 0.0
-    o1i[:] = 0.0
-    e2r[:] = 0.0
-    e2i[:] = 0.0
-    o2r[:] = 0.0
-    o2i[:] = 0.0
-    last = nmax - 1  # padded orders read any valid table row, times zero
-    for k in range(0, n_pad, 4):
+    # Parity split: rows 0-3 of each block of ``acc`` collect the terms of
+    # S1 even in mu (real, imaginary) and odd in mu, rows 4-7 those of S2, so
+    # S(+mu) = e + o and S(-mu) = e - o.  Four orders (n odd, even, odd, even)
+    # per pass, in real arithmetic, which the compiler vectorizes over the
+    # angles of a block; four rather than two halve the loads and stores of
+    # the accumulators per order.
+    acc[:] = 0.0
+    n_blocks = table.shape[1] // (8 * BLOCK)
+    # The block's trip count, BLOCK, as a value known only at run time: a loop
+    # of a constant 16 would be unrolled, not vectorized.
+    nb = table.shape[1] // (8 * n_blocks)
+    for q in range(n_pass):
+        k = 4 * q
         ar0, ai0, br0, bi0 = coef[k, 0], coef[k, 1], coef[k, 2], coef[k, 3]
         ar1, ai1, br1, bi1 = coef[k + 1, 0], coef[k + 1, 1], coef[k + 1, 2], coef[k + 1, 3]
         ar2, ai2, br2, bi2 = coef[k + 2, 0], coef[k + 2, 1], coef[k + 2, 2], coef[k + 2, 3]
         ar3, ai3, br3, bi3 = coef[k + 3, 0], coef[k + 3, 1], coef[k + 3, 2], coef[k + 3, 3]
-        p0 = pi_t[k]
-        t0 = tau_t[k]
-        p1 = pi_t[min(k + 1, last)]
-        t1 = tau_t[min(k + 1, last)]
-        p2 = pi_t[min(k + 2, last)]
-        t2 = tau_t[min(k + 2, last)]
-        p3 = pi_t[min(k + 3, last)]
-        t3 = tau_t[min(k + 3, last)]
-        for i in range(n_mu):
-            pp0 = p0[i]
-            tt0 = t0[i]
-            pp1 = p1[i]
-            tt1 = t1[i]
-            pp2 = p2[i]
-            tt2 = t2[i]
-            pp3 = p3[i]
-            tt3 = t3[i]
-            e1r[i] += ar0 * pp0 + br1 * tt1 + ar2 * pp2 + br3 * tt3
-            e1i[i] += ai0 * pp0 + bi1 * tt1 + ai2 * pp2 + bi3 * tt3
-            o1r[i] += br0 * tt0 + ar1 * pp1 + br2 * tt2 + ar3 * pp3
-            o1i[i] += bi0 * tt0 + ai1 * pp1 + bi2 * tt2 + ai3 * pp3
-            e2r[i] += br0 * pp0 + ar1 * tt1 + br2 * pp2 + ar3 * tt3
-            e2i[i] += bi0 * pp0 + ai1 * tt1 + bi2 * pp2 + ai3 * tt3
-            o2r[i] += ar0 * tt0 + br1 * pp1 + ar2 * tt2 + br3 * pp3
-            o2i[i] += ai0 * tt0 + bi1 * pp1 + ai2 * tt2 + bi3 * pp3
+        tab_q = table[q]
+        for blk in range(n_blocks):
+            t = tab_q[blk * 8 * BLOCK : (blk + 1) * 8 * BLOCK]
+            a = acc[blk * 8 * BLOCK : (blk + 1) * 8 * BLOCK]
+            for i in range(nb):
+                pp0 = t[i]
+                tt0 = t[BLOCK + i]
+                pp1 = t[2 * BLOCK + i]
+                tt1 = t[3 * BLOCK + i]
+                pp2 = t[4 * BLOCK + i]
+                tt2 = t[5 * BLOCK + i]
+                pp3 = t[6 * BLOCK + i]
+                tt3 = t[7 * BLOCK + i]
+                a[i] += ar0 * pp0 + br1 * tt1 + ar2 * pp2 + br3 * tt3
+                a[BLOCK + i] += ai0 * pp0 + bi1 * tt1 + ai2 * pp2 + bi3 * tt3
+                a[2 * BLOCK + i] += br0 * tt0 + ar1 * pp1 + br2 * tt2 + ar3 * pp3
+                a[3 * BLOCK + i] += bi0 * tt0 + ai1 * pp1 + bi2 * tt2 + ai3 * pp3
+                a[4 * BLOCK + i] += br0 * pp0 + ar1 * tt1 + br2 * pp2 + ar3 * tt3
+                a[5 * BLOCK + i] += bi0 * pp0 + ai1 * tt1 + bi2 * pp2 + ai3 * tt3
+                a[6 * BLOCK + i] += ar0 * tt0 + br1 * pp1 + ar2 * tt2 + br3 * pp3
+                a[7 * BLOCK + i] += ai0 * tt0 + bi1 * pp1 + ai2 * tt2 + bi3 * pp3
     for i in range(n_mu):
-        s1r = e1r[i] + o1r[i]
-        s1i = e1i[i] + o1i[i]
-        s2r = e2r[i] + o2r[i]
-        s2i = e2i[i] + o2i[i]
+        base = (i // BLOCK) * 8 * BLOCK + i % BLOCK
+        e1r = acc[base]
+        e1i = acc[base + BLOCK]
+        o1r = acc[base + 2 * BLOCK]
+        o1i = acc[base + 3 * BLOCK]
+        e2r = acc[base + 4 * BLOCK]
+        e2i = acc[base + 5 * BLOCK]
+        o2r = acc[base + 6 * BLOCK]
+        o2i = acc[base + 7 * BLOCK]
+        s1r = e1r + o1r
+        s1i = e1i + o1i
+        s2r = e2r + o2r
+        s2i = e2i + o2i
         row[i] += c * (s1r * s1r + s1i * s1i + s2r * s2r + s2i * s2i)
         if symmetric:
-            s1r = e1r[i] - o1r[i]
-            s1i = e1i[i] - o1i[i]
-            s2r = e2r[i] - o2r[i]
-            s2i = e2i[i] - o2i[i]
+            s1r = e1r - o1r
+            s1i = e1i - o1i
+            s2r = e2r - o2r
+            s2i = e2i - o2i
             row[n_mu + i] += c * (s1r * s1r + s1i * s1i + s2r * s2r + s2i * s2i)
 
 

@@ -277,23 +277,17 @@ class _Panels(NamedTuple):
     right: np.ndarray
 
 
-def _pi_tau_tables(mu: np.ndarray, nmax: int) -> tuple[np.ndarray, np.ndarray]:
-    """pi_n(mu), tau_n(mu) for n = 1..nmax in the (nmax, n_mu) layout the kernel
-    reads order by order."""
-    pi_t, tau_t = mie._pi_tau_table(mu, nmax)
-    return np.ascontiguousarray(pi_t.T), np.ascontiguousarray(tau_t.T)
-
-
 @lru_cache(maxsize=32)
 def _gauss_angles(n_half: int) -> tuple[np.ndarray, ...]:
     """Positive half of the 2 n_half-point Gauss rule in mu, its weights, and
-    pi_n, tau_n there for n <= n_half - 1 (2 n_half >= 2 n_max + 2 nodes
-    integrate |S|^2 P_l, degree <= 4 n_max, exactly).  Cached: they depend on
-    n_half alone, and wavelengths share them.  Not to be modified."""
+    pi_n, tau_n there for n <= n_half - 1 (:func:`mie.angular_table`; 2 n_half
+    >= 2 n_max + 2 nodes integrate |S|^2 P_l, degree <= 4 n_max, exactly).
+    Cached: they depend on n_half alone, and wavelengths share them.  Not to
+    be modified."""
     mu_g, w_g = gauss_legendre(2 * n_half)
     mu_half = np.ascontiguousarray(mu_g[n_half:])
     w_half = np.ascontiguousarray(w_g[n_half:])
-    return (mu_half, w_half, *_pi_tau_tables(mu_half, n_half - 1))
+    return mu_half, w_half, mie.angular_table(mu_half, n_half - 1)
 
 
 class _WavelengthSolver:
@@ -350,7 +344,7 @@ class _WavelengthSolver:
         self.legendre = n_half < mu_out.size and not distribution.is_monodisperse
         if self.legendre:
             self.n_half = n_half
-            self.mu_half, self.w_half, pi_t, tau_t = _gauss_angles(n_half)
+            self.mu_half, self.w_half, table = _gauss_angles(n_half)
             self.n_f = 2 * n_half
             # Angular tiers: a panel whose spheres need fewer orders is summed
             # on a smaller Gauss grid (cost ~ n_max x n_angles per sphere) and
@@ -365,11 +359,11 @@ class _WavelengthSolver:
             self.tiers = np.array(sorted(tiers))
             self._maps: dict[int, tuple[np.ndarray, np.ndarray]] = {}
         else:
-            pi_t, tau_t = _pi_tau_tables(mu_out, self.nmax)
+            table = mie.angular_table(mu_out, self.nmax)
             self.n_f = mu_out.size
-        self.pi_t, self.tau_t = pi_t, tau_t
+        self.table = table
         # Cross-sections alone: no angles.
-        self.no_angles = np.empty((self.nmax, 0))
+        self.no_angles = np.empty((0, 0))
 
     def _accumulate(
         self,
@@ -377,8 +371,8 @@ class _WavelengthSolver:
         w: np.ndarray,
         node_panel: np.ndarray,
         n_panels: int,
-        pi_t: np.ndarray,
-        tau_t: np.ndarray,
+        table: np.ndarray,
+        n_mu: int,
         symmetric: bool,
     ) -> np.ndarray:
         # The kernel computes the Mie coefficients of consecutive spheres in
@@ -386,7 +380,7 @@ class _WavelengthSolver:
         # batch wastes little.
         order = np.argsort(x, kind="stable")
         return mie._accumulate(
-            self.m, x[order], w[order], node_panel[order], n_panels, self.per_particle, pi_t, tau_t, symmetric
+            self.m, x[order], w[order], node_panel[order], n_panels, self.per_particle, table, n_mu, symmetric
         )
 
     def evaluate(self, lower: np.ndarray, upper: np.ndarray, *, angles: bool = True) -> np.ndarray:
@@ -400,9 +394,9 @@ class _WavelengthSolver:
         )
         x, w = nodes.size_parameter, nodes.weight
         if not angles:
-            return self._accumulate(x, w, node_panel, lower.size, self.no_angles, self.no_angles, False)
+            return self._accumulate(x, w, node_panel, lower.size, self.no_angles, 0, False)
         if not self.legendre:
-            return self._accumulate(x, w, node_panel, lower.size, self.pi_t, self.tau_t, False)
+            return self._accumulate(x, w, node_panel, lower.size, self.table, self.n_f, False)
         per = self.settings.nodes_per_panel
         x_top = x.reshape(lower.size, per).max(axis=1)
         # wiscombe_nmax + 1, plus 1 so that cbrt's rounding can never pick a tier
@@ -412,11 +406,11 @@ class _WavelengthSolver:
         out = np.empty((lower.size, self.n_f + mie.N_SUMS))
         for t in np.unique(tier):
             n_half = int(self.tiers[t])
-            pi_t, tau_t = _gauss_angles(n_half)[2:]
+            table = _gauss_angles(n_half)[2]
             sel = np.flatnonzero(tier == t)
             idx = (sel[:, None] * per + np.arange(per)).ravel()
             local = np.repeat(np.arange(sel.size, dtype=np.int64), per)
-            rows = self._accumulate(x[idx], w[idx], local, sel.size, pi_t, tau_t, True)
+            rows = self._accumulate(x[idx], w[idx], local, sel.size, table, n_half, True)
             if n_half == self.n_half:
                 out[sel] = rows
             else:
@@ -514,7 +508,7 @@ class _WavelengthSolver:
             x = np.array([2.0 * np.pi * self.distribution.mean_radius_um / self.wavelength_um])
             rows = mie._accumulate(
                 self.m, x, np.ones(1), np.zeros(1, dtype=np.int64), 1, self.per_particle,
-                self.pi_t, self.tau_t, False,
+                self.table, self.n_f, False,
             )
             run = _Run(rows[0], np.empty((0, 2)), 1, 0.0)
             return self.finish(run, _Run(rows[0, self.n_f :], run.panels_s, 1, 0.0))
