@@ -63,12 +63,35 @@ def wiscombe_nmax(x: float) -> int:
 #: iterations, hence 16.
 LANES = 16
 
-# Rows of the per-sphere workspace ``lane`` (shape (_N_LANE_ROWS, n_spheres)).
-_IZR, _IZI, _FR, _FI, _CR, _CI, _DDR, _DDI, _DONE, _INVX, _PN, _PC, _SX, _CX = range(14)
-_N_LANE_ROWS = 14
-# Planes of the per-order workspace ``orders`` (shape (_N_PLANES, n_top + 1, n_spheres)).
-_DNR, _DNI, _PSI, _CHI, _AR, _AI, _BR, _BI = range(8)
+# The coefficient kernels share one flat float64 workspace (:func:`_workspace`):
+# per-sphere rows of LANES values, then one block of _N_PLANES rows per order
+# n = 0..n_top.  The names below are offsets: row r of the sphere part starts
+# at r * LANES, plane p of an order's block at p * LANES.  Every access in a
+# loop over spheres is then a constant offset plus the sphere's index from the
+# start of one view, so the compiler sees that the loop's stores cannot
+# overlap its loads; with separate arrays it tested every pair at run time,
+# once per loop, which cost more than the loop's arithmetic.
+(_X, _NMAX, _IZR, _IZI, _FR, _FI, _CR, _CI, _DDR, _DDI, _DONE, _INVX, _PN, _PC, _SX, _CX,
+ _QEXT, _QSCA, _GQ) = range(0, 19 * LANES, LANES)
+_N_LANE_ROWS = 19
+_LANE = _N_LANE_ROWS * LANES  # length of the per-sphere part
+# Planes of an order's block: D_n(m x) (real, imaginary), psi_n(x), chi_n(x),
+# and in the block of order n - 1, a_n and b_n (real, imaginary).
+_DNR, _DNI, _PSI, _CHI, _AR, _AI, _BR, _BI = range(0, 8 * LANES, LANES)
 _N_PLANES = 8
+_BLK = _N_PLANES * LANES  # length of one order's block
+
+
+@njit(cache=True, nogil=True)
+def _workspace(n_top: int) -> np.ndarray:
+    """Workspace of the coefficient kernels for up to LANES spheres with n_max <= n_top."""
+    return np.empty(_LANE + (n_top + 1) * _BLK)
+
+
+@njit(cache=True, nogil=True)
+def _orders(ws: np.ndarray, n: int, count: int) -> np.ndarray:
+    """View of the blocks of orders n .. n + count - 1 of workspace ``ws``."""
+    return ws[_LANE + n * _BLK : _LANE + (n + count) * _BLK]
 
 
 @njit(cache=True, nogil=True)
@@ -99,86 +122,82 @@ def _reciprocal_moderate(re: float, im: float) -> tuple[float, float]:
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _log_derivative_top(m: complex, x: np.ndarray, n_top: int, lane: np.ndarray, orders: np.ndarray) -> None:
+def _log_derivative_top(m: complex, n_sph: int, n_top: int, ws: np.ndarray) -> None:
     """D_n(m x) = psi_n'(m x) / psi_n(m x) at n = n_top for every sphere, by
     Lentz's continued fraction (Lentz 1976, modified as by Thompson & Barnett
     1986): D_n(z) = -n/z + J_{nu-1}(z)/J_nu(z), nu = n + 1/2, with the Bessel
     ratio 2nu/z - 1/(2(nu+1)/z - 1/(2(nu+2)/z - ...)).  All spheres iterate
     together; each stops updating once its factor is within 1e-15 of 1."""
-    n_sph = x.shape[0]
-    izr, izi = lane[_IZR], lane[_IZI]
-    fr, fi, cr, ci = lane[_FR], lane[_FI], lane[_CR], lane[_CI]
-    ddr, ddi, done = lane[_DDR], lane[_DDI], lane[_DONE]
+    lane = ws[:_LANE]
     nu = n_top + 0.5
     for s in range(n_sph):
-        a, b = _reciprocal(m.real * x[s], m.imag * x[s])
-        izr[s] = a
-        izi[s] = b
-        fr[s] = 2.0 * nu * a
-        fi[s] = 2.0 * nu * b
-        cr[s] = fr[s]
-        ci[s] = fi[s]
-        ddr[s] = 0.0
-        ddi[s] = 0.0
-        done[s] = 0.0
+        a, b = _reciprocal(m.real * lane[_X + s], m.imag * lane[_X + s])
+        lane[_IZR + s] = a
+        lane[_IZI + s] = b
+        lane[_FR + s] = 2.0 * nu * a
+        lane[_FI + s] = 2.0 * nu * b
+        lane[_CR + s] = 2.0 * nu * a
+        lane[_CI + s] = 2.0 * nu * b
+        lane[_DDR + s] = 0.0
+        lane[_DDI + s] = 0.0
+        lane[_DONE + s] = 0.0
     tiny = 1e-30  # Lentz's guard against a zero denominator
     j = 1
     while True:
         t = 2.0 * (nu + j)
         n_done = 0.0
         for s in range(n_sph):
-            bjr = t * izr[s]
-            bji = t * izi[s]
-            pr = bjr - ddr[s]
-            pi = bji - ddi[s]
+            bjr = t * lane[_IZR + s]
+            bji = t * lane[_IZI + s]
+            pr = bjr - lane[_DDR + s]
+            pi = bji - lane[_DDI + s]
             pr += tiny if (pr == 0.0 and pi == 0.0) else 0.0
             u, v = _reciprocal_moderate(pr, pi)
-            ddr[s] = u
-            ddi[s] = v
-            rr, ri = _reciprocal_moderate(cr[s], ci[s])
+            lane[_DDR + s] = u
+            lane[_DDI + s] = v
+            rr, ri = _reciprocal_moderate(lane[_CR + s], lane[_CI + s])
             qr = bjr - rr
             qi = bji - ri
             qr += tiny if (qr == 0.0 and qi == 0.0) else 0.0
-            cr[s] = qr
-            ci[s] = qi
+            lane[_CR + s] = qr
+            lane[_CI + s] = qi
             delr = qr * u - qi * v
             deli = qr * v + qi * u
-            f_r = fr[s]
-            f_i = fi[s]
-            finished = done[s] != 0.0
-            fr[s] = f_r if finished else f_r * delr - f_i * deli
-            fi[s] = f_i if finished else f_r * deli + f_i * delr
+            f_r = lane[_FR + s]
+            f_i = lane[_FI + s]
+            finished = lane[_DONE + s] != 0.0
+            lane[_FR + s] = f_r if finished else f_r * delr - f_i * deli
+            lane[_FI + s] = f_i if finished else f_r * deli + f_i * delr
             finished = finished or abs(delr - 1.0) + abs(deli) < 1e-15
-            done[s] = 1.0 if finished else 0.0
-            n_done += done[s]
+            lane[_DONE + s] = 1.0 if finished else 0.0
+            n_done += lane[_DONE + s]
         j += 1
         if n_done == n_sph or j > 10_000_000:
             break
-    dnr, dni = orders[_DNR], orders[_DNI]
+    top = _orders(ws, n_top, 1)
     for s in range(n_sph):
-        dnr[n_top, s] = fr[s] - n_top * izr[s]
-        dni[n_top, s] = fi[s] - n_top * izi[s]
+        top[_DNR + s] = lane[_FR + s] - n_top * lane[_IZR + s]
+        top[_DNI + s] = lane[_FI + s] - n_top * lane[_IZI + s]
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _log_derivative(n_top: int, lane: np.ndarray, orders: np.ndarray) -> None:
+def _log_derivative(n_sph: int, n_top: int, ws: np.ndarray) -> None:
     """D_n for n = n_top - 1 .. 0 by the downward recurrence
     D_{n-1} = n/z - 1/(D_n + n/z), stable for every complex z (Bohren & Huffman
     1983, Eq. 4.89), from the top value of :func:`_log_derivative_top`."""
-    izr, izi = lane[_IZR], lane[_IZI]
-    dnr, dni = orders[_DNR], orders[_DNI]
-    n_sph = izr.shape[0]
+    lane = ws[:_LANE]
     for n in range(n_top, 0, -1):
+        o = _orders(ws, n - 1, 2)  # D_{n-1} at 0, D_n at _BLK
         for s in range(n_sph):
-            nzr = n * izr[s]
-            nzi = n * izi[s]
-            u, v = _reciprocal_moderate(dnr[n, s] + nzr, dni[n, s] + nzi)
-            dnr[n - 1, s] = nzr - u
-            dni[n - 1, s] = nzi - v
+            nzr = n * lane[_IZR + s]
+            nzi = n * lane[_IZI + s]
+            u, v = _reciprocal_moderate(o[_BLK + _DNR + s] + nzr, o[_BLK + _DNI + s] + nzi)
+            o[_DNR + s] = nzr - u
+            o[_DNI + s] = nzi - v
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _riccati_bessel(x: np.ndarray, n_top: int, n_start: int, lane: np.ndarray, orders: np.ndarray) -> None:
+def _riccati_bessel(n_sph: int, n_top: int, n_start: int, ws: np.ndarray) -> None:
     """psi_n(x) = x j_n(x) and chi_n(x) = -x y_n(x) for n = 0..n_top.
 
     psi_n by Miller's downward recurrence psi_{n-1} = (2n+1)/x psi_n - psi_{n+1}
@@ -188,93 +207,98 @@ def _riccati_bessel(x: np.ndarray, n_top: int, n_start: int, lane: np.ndarray, o
     psi_0 = sin x or to psi_1, whichever is larger (they cannot both be small).
     chi_n by the upward recurrence, in which it is dominant.
     """
-    n_sph = x.shape[0]
-    inv_x, pn, pc, sx, cx = lane[_INVX], lane[_PN], lane[_PC], lane[_SX], lane[_CX]
-    psi, chi = orders[_PSI], orders[_CHI]
+    lane = ws[:_LANE]
     for s in range(n_sph):
-        inv_x[s] = 1.0 / x[s]
-        pn[s] = 0.0
-        pc[s] = 1e-280
+        lane[_INVX + s] = 1.0 / lane[_X + s]
+        lane[_PN + s] = 0.0
+        lane[_PC + s] = 1e-280
     for n in range(n_start, 0, -1):
         big = False
         for s in range(n_sph):
-            p = (2 * n + 1) * inv_x[s] * pc[s] - pn[s]
-            pn[s] = pc[s]
-            pc[s] = p
+            p = (2 * n + 1) * lane[_INVX + s] * lane[_PC + s] - lane[_PN + s]
+            lane[_PN + s] = lane[_PC + s]
+            lane[_PC + s] = p
             big |= abs(p) > 1e250
         if n <= n_top:
+            o = _orders(ws, n, 1)
             for s in range(n_sph):
-                psi[n, s] = pn[s]
+                o[_PSI + s] = lane[_PN + s]
         if big:  # rare: rescale the spheres about to overflow, and what they stored
             for s in range(n_sph):
-                if abs(pc[s]) > 1e250:
-                    pc[s] *= 1e-250
-                    pn[s] *= 1e-250
+                if abs(lane[_PC + s]) > 1e250:
+                    lane[_PC + s] *= 1e-250
+                    lane[_PN + s] *= 1e-250
                     for k in range(n, n_top + 1):
-                        psi[k, s] *= 1e-250
+                        ws[_LANE + k * _BLK + _PSI + s] *= 1e-250
+    o = _orders(ws, 0, 2)  # orders 0 and 1
     for s in range(n_sph):
-        psi[0, s] = pc[s]
-        sx[s] = np.sin(x[s])
-        cx[s] = np.cos(x[s])
-        psi1 = sx[s] * inv_x[s] - cx[s]
-        pc[s] = sx[s] / psi[0, s] if abs(sx[s]) >= abs(psi1) else psi1 / psi[1, s]
+        o[_PSI + s] = lane[_PC + s]
+        sx = np.sin(lane[_X + s])
+        cx = np.cos(lane[_X + s])
+        lane[_SX + s] = sx
+        lane[_CX + s] = cx
+        psi1 = sx * lane[_INVX + s] - cx
+        lane[_PC + s] = sx / o[_PSI + s] if abs(sx) >= abs(psi1) else psi1 / o[_BLK + _PSI + s]
     for n in range(n_top + 1):
+        o = _orders(ws, n, 1)
         for s in range(n_sph):
-            psi[n, s] *= pc[s]
+            o[_PSI + s] *= lane[_PC + s]
+    o = _orders(ws, 0, 2)
     for s in range(n_sph):
-        chi[0, s] = cx[s]
-        if n_top >= 1:
-            chi[1, s] = cx[s] * inv_x[s] + sx[s]
+        o[_CHI + s] = lane[_CX + s]
+        o[_BLK + _CHI + s] = lane[_CX + s] * lane[_INVX + s] + lane[_SX + s]
     for n in range(1, n_top):
+        o = _orders(ws, n - 1, 3)  # chi_{n-1}, chi_n, chi_{n+1}
         for s in range(n_sph):
-            chi[n + 1, s] = (2 * n + 1) * inv_x[s] * chi[n, s] - chi[n - 1, s]
+            o[2 * _BLK + _CHI + s] = (2 * n + 1) * lane[_INVX + s] * o[_BLK + _CHI + s] - o[_CHI + s]
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _mie_coefficients(m: complex, x: np.ndarray, nmax: np.ndarray, lane: np.ndarray, orders: np.ndarray) -> int:
+def _mie_coefficients(m: complex, x: np.ndarray, nmax: np.ndarray, ws: np.ndarray) -> int:
     """External coefficients a_n, b_n (n = 1..n_top) of a batch of spheres.
 
     BH Eq. 4.88: a_n = [(D_n/m + n/x) psi_n - psi_{n-1}] / [(D_n/m + n/x) xi_n - xi_{n-1}],
-    b_n the same with m D_n, xi_n = psi_n - i chi_n.  Sphere s gets its own
-    n_max = ``nmax[s]`` terms: orders above it are set to zero, so sums over all
-    n_top = max(nmax) orders equal its own truncated series.  Results go to
-    ``orders[_AR, n - 1, s]`` (real a_n) and likewise _AI, _BR, _BI; ``orders``
-    needs shape (_N_PLANES, >= n_top + 1, len(x)) and ``lane``
-    (_N_LANE_ROWS, len(x)).  Returns n_top.
+    b_n the same with m D_n, xi_n = psi_n - i chi_n.  Sphere s (of at most
+    LANES) gets its own n_max = ``nmax[s]`` terms: orders above it are set to
+    zero, so sums over all n_top = max(nmax) orders equal its own truncated
+    series.  Results go to workspace ``ws`` (from :func:`_workspace`, for at
+    least n_top orders): a_n of sphere s at the _AR (real) and _AI planes of
+    order n - 1's block, b_n at _BR and _BI.  Returns n_top.
     """
     n_sph = x.shape[0]
+    lane = ws[:_LANE]
     n_top = nmax[0]  # not a literal 0: callees would be compiled for that type too
     x_max = x[0]
     for s in range(n_sph):
         n_top = max(n_top, nmax[s])
         x_max = max(x_max, x[s])
-    _log_derivative_top(m, x, n_top, lane, orders)
-    _log_derivative(n_top, lane, orders)
-    _riccati_bessel(x, n_top, _miller_start(x_max, n_top), lane, orders)
+        lane[_X + s] = x[s]
+        lane[_NMAX + s] = nmax[s]
+    _log_derivative_top(m, n_sph, n_top, ws)
+    _log_derivative(n_sph, n_top, ws)
+    _riccati_bessel(n_sph, n_top, _miller_start(x_max, n_top), ws)
     mr = m.real
     mi = m.imag
     imr, imi = _reciprocal(mr, mi)
-    inv_x = lane[_INVX]
-    dnr, dni, psi, chi = orders[_DNR], orders[_DNI], orders[_PSI], orders[_CHI]
-    ar, ai, br, bi = orders[_AR], orders[_AI], orders[_BR], orders[_BI]
     for n in range(1, n_top + 1):
+        o = _orders(ws, n - 1, 2)  # order n - 1 at 0 (receives a_n, b_n), order n at _BLK
         for s in range(n_sph):
-            p1 = psi[n, s]
-            p0 = psi[n - 1, s]
-            c1 = chi[n, s]
-            c0 = chi[n - 1, s]
-            n_x = n * inv_x[s]
-            d_r = dnr[n, s]
-            d_i = dni[n, s]
-            keep = n <= nmax[s]
+            p1 = o[_BLK + _PSI + s]
+            p0 = o[_PSI + s]
+            c1 = o[_BLK + _CHI + s]
+            c0 = o[_CHI + s]
+            n_x = n * lane[_INVX + s]
+            d_r = o[_BLK + _DNR + s]
+            d_i = o[_BLK + _DNI + s]
+            keep = n <= lane[_NMAX + s]
             # a_n with t = D_n / m + n / x
             re, im = _bh_ratio(d_r * imr - d_i * imi + n_x, d_r * imi + d_i * imr, p1, p0, c1, c0)
-            ar[n - 1, s] = re if keep else 0.0
-            ai[n - 1, s] = im if keep else 0.0
+            o[_AR + s] = re if keep else 0.0
+            o[_AI + s] = im if keep else 0.0
             # b_n with t = m D_n + n / x
             re, im = _bh_ratio(mr * d_r - mi * d_i + n_x, mr * d_i + mi * d_r, p1, p0, c1, c0)
-            br[n - 1, s] = re if keep else 0.0
-            bi[n - 1, s] = im if keep else 0.0
+            o[_BR + s] = re if keep else 0.0
+            o[_BI + s] = im if keep else 0.0
     return n_top
 
 
@@ -290,37 +314,49 @@ def _bh_ratio(tr: float, ti: float, p1: float, p0: float, c1: float, c0: float) 
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _efficiencies(x: np.ndarray, n_top: int, orders: np.ndarray, out: np.ndarray) -> None:
+def _efficiencies(n_sph: int, n_top: int, ws: np.ndarray) -> None:
     """Q_ext, Q_sca and g Q_sca of each sphere of a batch (BH Eqs. 4.61, 4.62
-    and p. 120) into out[0], out[1], out[2]; orders above a sphere's n_max hold
-    zeros (see :func:`_mie_coefficients`) and add nothing."""
-    n_sph = x.shape[0]
-    ar, ai, br, bi = orders[_AR], orders[_AI], orders[_BR], orders[_BI]
-    qext, qsca, gq = out[0], out[1], out[2]
+    and p. 120) into the _QEXT, _QSCA and _GQ rows of ``ws``; orders above a
+    sphere's n_max hold zeros (see :func:`_mie_coefficients`) and add nothing."""
+    lane = ws[:_LANE]
     for s in range(n_sph):
-        qext[s] = 0.0
-        qsca[s] = 0.0
-        gq[s] = 0.0
+        lane[_QEXT + s] = 0.0
+        lane[_QSCA + s] = 0.0
+        lane[_GQ + s] = 0.0
     for i in range(n_top):
         n = i + 1
         c = 2.0 * n + 1.0
         c_ab = c / (n * (n + 1.0))
         c_next = n * (n + 2.0) / (n + 1.0)
+        o = _orders(ws, i, 2)  # a_n, b_n at 0; a_{n+1}, b_{n+1} at _BLK
         for s in range(n_sph):
-            qext[s] += c * (ar[i, s] + br[i, s])
-            qsca[s] += c * (ar[i, s] * ar[i, s] + ai[i, s] * ai[i, s] + br[i, s] * br[i, s] + bi[i, s] * bi[i, s])
-            gq[s] += c_ab * (ar[i, s] * br[i, s] + ai[i, s] * bi[i, s])
+            ar = o[_AR + s]
+            ai = o[_AI + s]
+            br = o[_BR + s]
+            bi = o[_BI + s]
+            lane[_QEXT + s] += c * (ar + br)
+            lane[_QSCA + s] += c * (ar * ar + ai * ai + br * br + bi * bi)
+            lane[_GQ + s] += c_ab * (ar * br + ai * bi)
         if i + 1 < n_top:
             for s in range(n_sph):
-                gq[s] += c_next * (
-                    ar[i, s] * ar[i + 1, s] + ai[i, s] * ai[i + 1, s]
-                    + br[i, s] * br[i + 1, s] + bi[i, s] * bi[i + 1, s]
+                lane[_GQ + s] += c_next * (
+                    o[_AR + s] * o[_BLK + _AR + s] + o[_AI + s] * o[_BLK + _AI + s]
+                    + o[_BR + s] * o[_BLK + _BR + s] + o[_BI + s] * o[_BLK + _BI + s]
                 )
     for s in range(n_sph):
-        f = 2.0 / (x[s] * x[s])
-        qext[s] *= f
-        qsca[s] *= f
-        gq[s] *= 2.0 * f
+        f = 2.0 / (lane[_X + s] * lane[_X + s])
+        lane[_QEXT + s] *= f
+        lane[_QSCA + s] *= f
+        lane[_GQ + s] *= 2.0 * f
+
+
+def _coefficients(ws: np.ndarray, n_top: int, n_sph: int) -> tuple[np.ndarray, np.ndarray]:
+    """a_n, b_n (n = 1..n_top) of the spheres of workspace ``ws`` after
+    :func:`_mie_coefficients`, as complex arrays of shape (n_top, n_sph)."""
+    blocks = ws[_LANE : _LANE + n_top * _BLK].reshape(n_top, _N_PLANES, LANES)[:, :, :n_sph]
+    a = blocks[:, _AR // LANES] + 1j * blocks[:, _AI // LANES]
+    b = blocks[:, _BR // LANES] + 1j * blocks[:, _BI // LANES]
+    return a, b
 
 
 @njit(cache=True, nogil=True)
@@ -372,17 +408,18 @@ def _amplitudes(
 @njit(cache=True, nogil=True)
 def _single_sphere_kernel(m: complex, x: float, mu: np.ndarray):
     nmax = wiscombe_nmax(x)
-    x_b = np.full(1, x)
-    lane = np.empty((_N_LANE_ROWS, 1))
-    orders = np.empty((_N_PLANES, nmax + 1, 1))
-    _mie_coefficients(m, x_b, np.full(1, nmax), lane, orders)
-    eff = np.empty((3, 1))
-    _efficiencies(x_b, nmax, orders, eff)
-    a = orders[_AR, :nmax, 0] + 1j * orders[_AI, :nmax, 0]
-    b = orders[_BR, :nmax, 0] + 1j * orders[_BI, :nmax, 0]
+    ws = _workspace(nmax)
+    _mie_coefficients(m, np.full(1, x), np.full(1, nmax), ws)
+    _efficiencies(1, nmax, ws)
+    a = np.empty(nmax, dtype=np.complex128)
+    b = np.empty(nmax, dtype=np.complex128)
+    for k in range(nmax):
+        o = _orders(ws, k, 1)
+        a[k] = complex(o[_AR], o[_AI])
+        b[k] = complex(o[_BR], o[_BI])
     pi_t, tau_t = _pi_tau_table(mu, nmax)
     s1, s2 = _amplitudes(nmax, a, b, pi_t, tau_t)
-    return eff[0, 0], eff[1, 0], eff[2, 0], s1, s2
+    return ws[_QEXT], ws[_QSCA], ws[_GQ], s1, s2
 
 
 @dataclass(frozen=True)
@@ -551,10 +588,7 @@ def _accumulate(
     nmax_all = wiscombe_nmax(x_top)
     x_b = np.empty(LANES)
     nmax_b = np.empty(LANES, dtype=np.int64)
-    lane = np.empty((_N_LANE_ROWS, LANES))
-    orders = np.empty((_N_PLANES, nmax_all + 1, LANES))
-    eff = np.empty((3, LANES))
-    ar, ai, br, bi = orders[_AR], orders[_AI], orders[_BR], orders[_BI]
+    ws = _workspace(nmax_all)
     coef = np.empty((nmax_all + 4, 4))
     acc = np.empty(table.shape[1] if n_mu > 0 else 0)
     for j0 in range(0, n_nodes, LANES):
@@ -562,16 +596,13 @@ def _accumulate(
         for s in range(LANES):  # a short last batch repeats its last sphere
             x_b[s] = x_nodes[j0 + min(s, n_live - 1)]
             nmax_b[s] = wiscombe_nmax(x_b[s])
-        n_top = _mie_coefficients(m, x_b, nmax_b, lane, orders)
-        _efficiencies(x_b, n_top, orders, eff)
+        n_top = _mie_coefficients(m, x_b, nmax_b, ws)
+        _efficiencies(LANES, n_top, ws)
         for s in range(n_live):
             j = j0 + s
-            x = x_b[s]
-            nmax = nmax_b[s]
             _add_sphere(
-                out[node_panel[j]], w_nodes[j], x, nmax, eff[0, s], eff[1, s], eff[2, s],
-                ar[:, s], ai[:, s], br[:, s], bi[:, s], per_particle, table, n_mu, symmetric,
-                coef, acc,
+                out[node_panel[j]], w_nodes[j], x_b[s], nmax_b[s], ws, s,
+                per_particle, table, n_mu, symmetric, coef, acc,
             )
     return out
 
@@ -582,13 +613,8 @@ def _add_sphere(
     w: float,
     x: float,
     nmax: int,
-    qext: float,
-    qsca: float,
-    gq: float,
-    ar: np.ndarray,
-    ai: np.ndarray,
-    br: np.ndarray,
-    bi: np.ndarray,
+    ws: np.ndarray,
+    s: int,
     per_particle: bool,
     table: np.ndarray,
     n_mu: int,
@@ -596,10 +622,14 @@ def _add_sphere(
     coef: np.ndarray,
     acc: np.ndarray,
 ) -> None:
-    """Add one sphere's weighted intensity and sums to its panel's row (see
-    :func:`_accumulate`); ``coef`` (shape (>= n_max + 3, 4)) and ``acc``
-    (length table.shape[1]) are workspace."""
+    """Add the weighted intensity and sums of sphere ``s`` of workspace ``ws``
+    (after :func:`_mie_coefficients` and :func:`_efficiencies`) to its
+    panel's row (see :func:`_accumulate`); ``coef`` (shape (>= n_max + 3, 4))
+    and ``acc`` (length table.shape[1]) are workspace."""
     n_f = 2 * n_mu if symmetric else n_mu
+    qext = ws[_QEXT + s]
+    qsca = ws[_QSCA + s]
+    gq = ws[_GQ + s]
     x2 = x * x
     row[n_f] += w
     row[n_f + 1] += w * x2 * qext
@@ -616,10 +646,11 @@ def _add_sphere(
         if k < nmax:
             n = k + 1
             cn = (2.0 * n + 1.0) / (n * (n + 1.0))
-            coef[k, 0] = cn * ar[k]
-            coef[k, 1] = cn * ai[k]
-            coef[k, 2] = cn * br[k]
-            coef[k, 3] = cn * bi[k]
+            o = _LANE + k * _BLK + s  # a_n, b_n in order n - 1's block
+            coef[k, 0] = cn * ws[o + _AR]
+            coef[k, 1] = cn * ws[o + _AI]
+            coef[k, 2] = cn * ws[o + _BR]
+            coef[k, 3] = cn * ws[o + _BI]
         else:
             coef[k, :] = 0.0
     # Parity split: rows 0-3 of each block of ``acc`` collect the terms of

@@ -264,11 +264,9 @@ def test_tiny_sphere_is_rayleigh(m: complex, x: float) -> None:
 def coefficients(m: complex, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """a_n, b_n (shape (n_top, len(x))) and n_max of spheres computed as one batch."""
     nmax = np.array([mie.wiscombe_nmax(v) for v in x])
-    lane = np.empty((mie._N_LANE_ROWS, x.size))
-    orders = np.empty((mie._N_PLANES, nmax.max() + 1, x.size))
-    n_top = mie._mie_coefficients(m, x, nmax, lane, orders)
-    a = orders[mie._AR, :n_top] + 1j * orders[mie._AI, :n_top]
-    b = orders[mie._BR, :n_top] + 1j * orders[mie._BI, :n_top]
+    ws = mie._workspace(nmax.max())
+    n_top = mie._mie_coefficients(m, x, nmax, ws)
+    a, b = mie._coefficients(ws, n_top, x.size)
     return a, b, nmax
 
 
