@@ -715,6 +715,78 @@ def _add_sphere(
 
 
 @njit(cache=True, nogil=True)
+def _accumulate_tiers(
+    m: complex,
+    x_nodes: np.ndarray,
+    w_nodes: np.ndarray,
+    node_panel: np.ndarray,
+    node_tier: np.ndarray,
+    n_panels: int,
+    per_particle: bool,
+    tier_size: np.ndarray,
+    tables: np.ndarray,
+    table_start: np.ndarray,
+    maps: np.ndarray,
+    map_start: np.ndarray,
+) -> np.ndarray:
+    """:func:`_accumulate` on tiers of symmetric Gauss grids, moved to the largest.
+
+    Node j is summed on tier ``node_tier[j]``: the grid of tier_size[t]
+    half-grid angles, whose :func:`angular_table` is ``tables[table_start[t]:
+    table_start[t + 1]]`` (flattened).  Each panel's nodes must share one tier,
+    and the nodes come sorted by tier, then by x.  Rows of tiers below the
+    last are moved to the last tier's grid by the maps of
+    :func:`_interpolation_maps` (R_even then R_odd, flattened, at
+    ``maps[map_start[t]:]``).  Returns rows of shape
+    (n_panels, 2 tier_size[-1] + N_SUMS), as :func:`_accumulate` would on the
+    largest grid (to the rounding of the interpolation).
+    """
+    n_top = tier_size[tier_size.shape[0] - 1]
+    out = np.zeros((n_panels, 2 * n_top + N_SUMS))
+    local = np.full(n_panels, -1, dtype=np.int64)
+    panel_of = np.empty(n_panels, dtype=np.int64)
+    n_nodes = x_nodes.shape[0]
+    j0 = 0
+    while j0 < n_nodes:
+        t = node_tier[j0]
+        j1 = j0
+        n_loc = 0
+        while j1 < n_nodes and node_tier[j1] == t:
+            p = node_panel[j1]
+            if local[p] < 0:
+                local[p] = n_loc
+                panel_of[n_loc] = p
+                n_loc += 1
+            j1 += 1
+        node_local = np.empty(j1 - j0, dtype=np.int64)
+        for j in range(j0, j1):
+            node_local[j - j0] = local[node_panel[j]]
+        n_t = tier_size[t]
+        width = 8 * n_t  # n_t is a multiple of BLOCK
+        flat = tables[table_start[t] : table_start[t + 1]]
+        table = flat.reshape((flat.shape[0] // width, width))
+        rows = _accumulate(
+            m, x_nodes[j0:j1], w_nodes[j0:j1], node_local, n_loc, per_particle, table, n_t, True
+        )
+        if n_t == n_top:
+            for r in range(n_loc):
+                out[panel_of[r]] = rows[r]
+        else:
+            size = n_t * n_top
+            r_even = maps[map_start[t] : map_start[t] + size].reshape((n_t, n_top))
+            r_odd = maps[map_start[t] + size : map_start[t] + 2 * size].reshape((n_t, n_top))
+            moved = _legendre_regrid(np.ascontiguousarray(rows[:, : 2 * n_t]), r_even, r_odd)
+            for r in range(n_loc):
+                p = panel_of[r]
+                out[p, : 2 * n_top] = moved[r]
+                out[p, 2 * n_top :] = rows[r, 2 * n_t :]
+        for r in range(n_loc):
+            local[panel_of[r]] = -1
+        j0 = j1
+    return out
+
+
+@njit(cache=True, nogil=True)
 def _legendre_project(mu_half: np.ndarray, w_half: np.ndarray, f: np.ndarray, lmax: int) -> np.ndarray:
     """Legendre coefficients beta_l = (2l+1)/2 int f P_l dmu, l = 0..lmax.
 

@@ -357,7 +357,17 @@ class _WavelengthSolver:
                 tiers.add(t)
                 k += 1
             self.tiers = np.array(sorted(tiers))
-            self._maps: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+            # The tiers' tables and maps, flattened for one kernel call per
+            # evaluation (see mie._accumulate_tiers).
+            tables = [_gauss_angles(int(t))[2].ravel() for t in self.tiers]
+            maps = [
+                np.concatenate([r.ravel() for r in mie._interpolation_maps(*_gauss_angles(int(t))[:2], self.mu_half)])
+                for t in self.tiers[:-1]
+            ]
+            self._tables = np.concatenate(tables)
+            self._table_start = np.cumsum([0] + [a.size for a in tables])
+            self._maps = np.concatenate(maps) if maps else np.empty(0)
+            self._map_start = np.cumsum([0] + [a.size for a in maps])
         else:
             table = mie.angular_table(mu_out, self.nmax)
             self.n_f = mu_out.size
@@ -402,27 +412,13 @@ class _WavelengthSolver:
         # wiscombe_nmax + 1, plus 1 so that cbrt's rounding can never pick a tier
         # one order short (the kernel reads the tables without bounds checks).
         need = (x_top + 4.05 * np.cbrt(x_top) + 2.0).astype(np.int64) + 2
-        tier = np.searchsorted(self.tiers, need)
-        out = np.empty((lower.size, self.n_f + mie.N_SUMS))
-        for t in np.unique(tier):
-            n_half = int(self.tiers[t])
-            table = _gauss_angles(n_half)[2]
-            sel = np.flatnonzero(tier == t)
-            idx = (sel[:, None] * per + np.arange(per)).ravel()
-            local = np.repeat(np.arange(sel.size, dtype=np.int64), per)
-            rows = self._accumulate(x[idx], w[idx], local, sel.size, table, n_half, True)
-            if n_half == self.n_half:
-                out[sel] = rows
-            else:
-                n_f = 2 * n_half
-                if n_half not in self._maps:
-                    mu_in, w_in = _gauss_angles(n_half)[:2]
-                    self._maps[n_half] = mie._interpolation_maps(mu_in, w_in, self.mu_half)
-                out[sel, : self.n_f] = mie._legendre_regrid(
-                    np.ascontiguousarray(rows[:, :n_f]), *self._maps[n_half]
-                )
-                out[sel, self.n_f :] = rows[:, n_f:]
-        return out
+        node_tier = np.repeat(np.searchsorted(self.tiers, need), per)
+        # By tier, then by size: batches of spheres of similar n_max.
+        order = np.lexsort((x, node_tier))
+        return mie._accumulate_tiers(
+            self.m, x[order], w[order], node_panel[order], node_tier[order], lower.size,
+            self.per_particle, self.tiers, self._tables, self._table_start, self._maps, self._map_start,
+        )
 
     def halves(
         self, lower: np.ndarray, upper: np.ndarray, *, angles: bool = True
