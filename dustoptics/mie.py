@@ -509,9 +509,10 @@ N_SUMS = 5
 #: Angles per block of :func:`angular_table`'s layout.  Each block holds the
 #: eight rows of a pass (pi and tau of four orders) for BLOCK angles side by
 #: side, so that every access of a pass lies at a constant offset from the
-#: block's start: the compiler then checks at run time only that the table and
-#: the accumulators do not overlap, once per block, instead of 64 pairs of
-#: rows once per pass (which cost more than the arithmetic for n_angles < 100).
+#: start of the table's row (and of the accumulators): the compiler then
+#: checks at run time only that table and accumulators do not overlap, once
+#: per pass, instead of 64 pairs of separate rows (which cost more than the
+#: arithmetic for fewer than about 100 angles).
 BLOCK = 16
 
 
@@ -670,11 +671,15 @@ def _add_sphere(
         ar1, ai1, br1, bi1 = coef[k + 1, 0], coef[k + 1, 1], coef[k + 1, 2], coef[k + 1, 3]
         ar2, ai2, br2, bi2 = coef[k + 2, 0], coef[k + 2, 1], coef[k + 2, 2], coef[k + 2, 3]
         ar3, ai3, br3, bi3 = coef[k + 3, 0], coef[k + 3, 1], coef[k + 3, 2], coef[k + 3, 3]
-        tab_q = table[q]
+        # Offsets from one row view rather than a view per block: the
+        # compiler then checks the overlap of table and accumulators once per
+        # pass, not per block.
+        t = table[q]
+        a = acc
         for blk in range(n_blocks):
-            t = tab_q[blk * 8 * BLOCK : (blk + 1) * 8 * BLOCK]
-            a = acc[blk * 8 * BLOCK : (blk + 1) * 8 * BLOCK]
-            for i in range(nb):
+            o = blk * 8 * BLOCK
+            for ii in range(nb):
+                i = o + ii
                 pp0 = t[i]
                 tt0 = t[BLOCK + i]
                 pp1 = t[2 * BLOCK + i]
@@ -691,27 +696,27 @@ def _add_sphere(
                 a[5 * BLOCK + i] += bi0 * pp0 + ai1 * tt1 + bi2 * pp2 + ai3 * tt3
                 a[6 * BLOCK + i] += ar0 * tt0 + br1 * pp1 + ar2 * tt2 + br3 * pp3
                 a[7 * BLOCK + i] += ai0 * tt0 + bi1 * pp1 + ai2 * tt2 + bi3 * pp3
-    for i in range(n_mu):
-        base = (i // BLOCK) * 8 * BLOCK + i % BLOCK
-        e1r = acc[base]
-        e1i = acc[base + BLOCK]
-        o1r = acc[base + 2 * BLOCK]
-        o1i = acc[base + 3 * BLOCK]
-        e2r = acc[base + 4 * BLOCK]
-        e2i = acc[base + 5 * BLOCK]
-        o2r = acc[base + 6 * BLOCK]
-        o2i = acc[base + 7 * BLOCK]
-        s1r = e1r + o1r
-        s1i = e1i + o1i
-        s2r = e2r + o2r
-        s2i = e2i + o2i
-        row[i] += c * (s1r * s1r + s1i * s1i + s2r * s2r + s2i * s2i)
+    # Intensities |S1|^2 + |S2|^2 at +mu (and -mu), block by block, so that
+    # this loop too runs over the angles of a block and vectorizes.
+    for blk in range(n_blocks):
+        a = acc[blk * 8 * BLOCK : (blk + 1) * 8 * BLOCK]
+        i0 = blk * BLOCK
+        n_l = min(nb, n_mu - i0)
+        plus = row[i0 : i0 + n_l]
+        for i in range(n_l):
+            s1r = a[i] + a[2 * BLOCK + i]
+            s1i = a[BLOCK + i] + a[3 * BLOCK + i]
+            s2r = a[4 * BLOCK + i] + a[6 * BLOCK + i]
+            s2i = a[5 * BLOCK + i] + a[7 * BLOCK + i]
+            plus[i] += c * (s1r * s1r + s1i * s1i + s2r * s2r + s2i * s2i)
         if symmetric:
-            s1r = e1r - o1r
-            s1i = e1i - o1i
-            s2r = e2r - o2r
-            s2i = e2i - o2i
-            row[n_mu + i] += c * (s1r * s1r + s1i * s1i + s2r * s2r + s2i * s2i)
+            minus = row[n_mu + i0 : n_mu + i0 + n_l]
+            for i in range(n_l):
+                s1r = a[i] - a[2 * BLOCK + i]
+                s1i = a[BLOCK + i] - a[3 * BLOCK + i]
+                s2r = a[4 * BLOCK + i] - a[6 * BLOCK + i]
+                s2i = a[5 * BLOCK + i] - a[7 * BLOCK + i]
+                minus[i] += c * (s1r * s1r + s1i * s1i + s2r * s2r + s2i * s2i)
 
 
 @njit(cache=True, nogil=True)
