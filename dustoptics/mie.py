@@ -71,9 +71,9 @@ LANES = 16
 # start of one view, so the compiler sees that the loop's stores cannot
 # overlap its loads; with separate arrays it tested every pair at run time,
 # once per loop, which cost more than the loop's arithmetic.
-(_X, _NMAX, _IZR, _IZI, _FR, _FI, _CR, _CI, _DDR, _DDI, _DONE, _INVX, _PN, _PC, _SX, _CX,
- _QEXT, _QSCA, _GQ) = range(0, 19 * LANES, LANES)
-_N_LANE_ROWS = 19
+(_X, _NMAX, _IZR, _IZI, _FR, _FI, _CR, _CI, _DDR, _DDI, _DONE, _INVX, _PN, _PC,
+ _APR, _API, _BPR, _BPI, _QEXT, _QSCA, _GQ) = range(0, 21 * LANES, LANES)
+_N_LANE_ROWS = 21
 _LANE = _N_LANE_ROWS * LANES  # length of the per-sphere part
 # Planes of an order's block: D_n(m x) (real, imaginary), psi_n(x), chi_n(x),
 # and in the block of order n - 1, a_n and b_n (real, imaginary).
@@ -84,8 +84,9 @@ _BLK = _N_PLANES * LANES  # length of one order's block
 
 @njit(cache=True, nogil=True)
 def _workspace(n_top: int) -> np.ndarray:
-    """Workspace of the coefficient kernels for up to LANES spheres with n_max <= n_top."""
-    return np.empty(_LANE + (n_top + 1) * _BLK)
+    """Workspace of the coefficient kernels for up to LANES spheres with n_max <= n_top
+    (orders 0..n_top + 1: the upward sweep computes chi_{n_top + 1} too)."""
+    return np.empty(_LANE + (n_top + 2) * _BLK)
 
 
 @njit(cache=True, nogil=True)
@@ -122,13 +123,12 @@ def _reciprocal_moderate(re: float, im: float) -> tuple[float, float]:
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _log_derivative_top(m: complex, n_sph: int, n_top: int, ws: np.ndarray) -> None:
+def _log_derivative_top(m: complex, n_sph: int, n_top: int, lane: np.ndarray, ws: np.ndarray) -> None:
     """D_n(m x) = psi_n'(m x) / psi_n(m x) at n = n_top for every sphere, by
     Lentz's continued fraction (Lentz 1976, modified as by Thompson & Barnett
     1986): D_n(z) = -n/z + J_{nu-1}(z)/J_nu(z), nu = n + 1/2, with the Bessel
     ratio 2nu/z - 1/(2(nu+1)/z - 1/(2(nu+2)/z - ...)).  All spheres iterate
     together; each stops updating once its factor is within 1e-15 of 1."""
-    lane = ws[:_LANE]
     nu = n_top + 0.5
     for s in range(n_sph):
         a, b = _reciprocal(m.real * lane[_X + s], m.imag * lane[_X + s])
@@ -181,81 +181,9 @@ def _log_derivative_top(m: complex, n_sph: int, n_top: int, ws: np.ndarray) -> N
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _log_derivative(n_sph: int, n_top: int, ws: np.ndarray) -> None:
-    """D_n for n = n_top - 1 .. 0 by the downward recurrence
-    D_{n-1} = n/z - 1/(D_n + n/z), stable for every complex z (Bohren & Huffman
-    1983, Eq. 4.89), from the top value of :func:`_log_derivative_top`."""
-    lane = ws[:_LANE]
-    for n in range(n_top, 0, -1):
-        o = _orders(ws, n - 1, 2)  # D_{n-1} at 0, D_n at _BLK
-        for s in range(n_sph):
-            nzr = n * lane[_IZR + s]
-            nzi = n * lane[_IZI + s]
-            u, v = _reciprocal_moderate(o[_BLK + _DNR + s] + nzr, o[_BLK + _DNI + s] + nzi)
-            o[_DNR + s] = nzr - u
-            o[_DNI + s] = nzi - v
-
-
-@njit(cache=True, nogil=True, error_model="numpy")
-def _riccati_bessel(n_sph: int, n_top: int, n_start: int, ws: np.ndarray) -> None:
-    """psi_n(x) = x j_n(x) and chi_n(x) = -x y_n(x) for n = 0..n_top.
-
-    psi_n by Miller's downward recurrence psi_{n-1} = (2n+1)/x psi_n - psi_{n+1}
-    from ``n_start``: downward, psi_n is the dominant solution (the upward
-    recurrence loses all accuracy for n > x, and for x << 1 already at n = 1,
-    where psi_1 = sin x / x - cos x cancels).  Each sphere is scaled to
-    psi_0 = sin x or to psi_1, whichever is larger (they cannot both be small).
-    chi_n by the upward recurrence, in which it is dominant.
-    """
-    lane = ws[:_LANE]
-    for s in range(n_sph):
-        lane[_INVX + s] = 1.0 / lane[_X + s]
-        lane[_PN + s] = 0.0
-        lane[_PC + s] = 1e-280
-    for n in range(n_start, 0, -1):
-        big = False
-        for s in range(n_sph):
-            p = (2 * n + 1) * lane[_INVX + s] * lane[_PC + s] - lane[_PN + s]
-            lane[_PN + s] = lane[_PC + s]
-            lane[_PC + s] = p
-            big |= abs(p) > 1e250
-        if n <= n_top:
-            o = _orders(ws, n, 1)
-            for s in range(n_sph):
-                o[_PSI + s] = lane[_PN + s]
-        if big:  # rare: rescale the spheres about to overflow, and what they stored
-            for s in range(n_sph):
-                if abs(lane[_PC + s]) > 1e250:
-                    lane[_PC + s] *= 1e-250
-                    lane[_PN + s] *= 1e-250
-                    for k in range(n, n_top + 1):
-                        ws[_LANE + k * _BLK + _PSI + s] *= 1e-250
-    o = _orders(ws, 0, 2)  # orders 0 and 1
-    for s in range(n_sph):
-        o[_PSI + s] = lane[_PC + s]
-        sx = np.sin(lane[_X + s])
-        cx = np.cos(lane[_X + s])
-        lane[_SX + s] = sx
-        lane[_CX + s] = cx
-        psi1 = sx * lane[_INVX + s] - cx
-        lane[_PC + s] = sx / o[_PSI + s] if abs(sx) >= abs(psi1) else psi1 / o[_BLK + _PSI + s]
-    for n in range(n_top + 1):
-        o = _orders(ws, n, 1)
-        for s in range(n_sph):
-            o[_PSI + s] *= lane[_PC + s]
-    o = _orders(ws, 0, 2)
-    for s in range(n_sph):
-        o[_CHI + s] = lane[_CX + s]
-        o[_BLK + _CHI + s] = lane[_CX + s] * lane[_INVX + s] + lane[_SX + s]
-    for n in range(1, n_top):
-        o = _orders(ws, n - 1, 3)  # chi_{n-1}, chi_n, chi_{n+1}
-        for s in range(n_sph):
-            o[2 * _BLK + _CHI + s] = (2 * n + 1) * lane[_INVX + s] * o[_BLK + _CHI + s] - o[_CHI + s]
-
-
-@njit(cache=True, nogil=True, error_model="numpy")
 def _mie_coefficients(m: complex, x: np.ndarray, nmax: np.ndarray, ws: np.ndarray) -> int:
-    """External coefficients a_n, b_n (n = 1..n_top) of a batch of spheres.
+    """External coefficients a_n, b_n (n = 1..n_top), Q_ext, Q_sca and g Q_sca
+    of a batch of spheres.
 
     BH Eq. 4.88: a_n = [(D_n/m + n/x) psi_n - psi_{n-1}] / [(D_n/m + n/x) xi_n - xi_{n-1}],
     b_n the same with m D_n, xi_n = psi_n - i chi_n.  Sphere s (of at most
@@ -263,10 +191,30 @@ def _mie_coefficients(m: complex, x: np.ndarray, nmax: np.ndarray, ws: np.ndarra
     zero, so sums over all n_top = max(nmax) orders equal its own truncated
     series.  Results go to workspace ``ws`` (from :func:`_workspace`, for at
     least n_top orders): a_n of sphere s at the _AR (real) and _AI planes of
-    order n - 1's block, b_n at _BR and _BI.  Returns n_top.
+    order n - 1's block, b_n at _BR and _BI; efficiencies (BH Eqs. 4.61,
+    4.62 and p. 120) in the _QEXT, _QSCA and _GQ rows.  Returns n_top.
+
+    Three sweeps over the orders, each a loop over spheres per order:
+
+    * D_n(m x) at n_top by Lentz's continued fraction
+      (:func:`_log_derivative_top`);
+    * downward: psi_n(x) = x j_n(x) by Miller's recurrence
+      psi_{n-1} = (2n+1)/x psi_n - psi_{n+1} from ``_miller_start`` (downward,
+      psi_n is the dominant solution; the upward recurrence loses all accuracy
+      for n > x, and for x << 1 already at n = 1, where
+      psi_1 = sin x / x - cos x cancels), and from n_top on, together,
+      D_{n-1} = n/z - 1/(D_n + n/z) (stable for every complex z, BH Eq. 4.89);
+    * upward: psi_n scaled to psi_0 = sin x or to psi_1, whichever is larger
+      (they cannot both be small); chi_n(x) = -x y_n(x) by the upward
+      recurrence, in which it is dominant; a_n, b_n; the efficiency sums.
+
+    Fusing the recurrences into one loop per order and sweep keeps several
+    independent dependency chains in flight and the loops few.
     """
     n_sph = x.shape[0]
-    lane = ws[:_LANE]
+    # The per-sphere rows in an array of their own: loops that store to both
+    # it and the orders' blocks vectorize only if the two are separate objects.
+    lane = np.empty(_LANE)
     n_top = nmax[0]  # not a literal 0: callees would be compiled for that type too
     x_max = x[0]
     for s in range(n_sph):
@@ -274,31 +222,109 @@ def _mie_coefficients(m: complex, x: np.ndarray, nmax: np.ndarray, ws: np.ndarra
         x_max = max(x_max, x[s])
         lane[_X + s] = x[s]
         lane[_NMAX + s] = nmax[s]
-    _log_derivative_top(m, n_sph, n_top, ws)
-    _log_derivative(n_sph, n_top, ws)
-    _riccati_bessel(n_sph, n_top, _miller_start(x_max, n_top), ws)
+    _log_derivative_top(m, n_sph, n_top, lane, ws)
+
+    # Downward sweep.
+    for s in range(n_sph):
+        lane[_INVX + s] = 1.0 / lane[_X + s]
+        lane[_PN + s] = 0.0
+        lane[_PC + s] = 1e-280
+    for n in range(_miller_start(x_max, n_top), 0, -1):
+        big = False
+        if n > n_top:
+            for s in range(n_sph):
+                p = (2 * n + 1) * lane[_INVX + s] * lane[_PC + s] - lane[_PN + s]
+                lane[_PN + s] = lane[_PC + s]
+                lane[_PC + s] = p
+                big |= abs(p) > 1e250
+        else:
+            o = _orders(ws, n - 1, 2)  # order n - 1 at 0, order n at _BLK
+            for s in range(n_sph):
+                p = (2 * n + 1) * lane[_INVX + s] * lane[_PC + s] - lane[_PN + s]
+                lane[_PN + s] = lane[_PC + s]
+                lane[_PC + s] = p
+                big |= abs(p) > 1e250
+                o[_BLK + _PSI + s] = lane[_PN + s]
+                nzr = n * lane[_IZR + s]
+                nzi = n * lane[_IZI + s]
+                u, v = _reciprocal_moderate(o[_BLK + _DNR + s] + nzr, o[_BLK + _DNI + s] + nzi)
+                o[_DNR + s] = nzr - u
+                o[_DNI + s] = nzi - v
+        if big:  # rare: rescale the spheres about to overflow, and what they stored
+            for s in range(n_sph):
+                if abs(lane[_PC + s]) > 1e250:
+                    lane[_PC + s] *= 1e-250
+                    lane[_PN + s] *= 1e-250
+                    for k in range(n, n_top + 1):
+                        ws[_LANE + k * _BLK + _PSI + s] *= 1e-250
+
+    # psi_0 (lane _PC, unscaled), the scale, chi_0 and chi_1.
+    o = _orders(ws, 0, 2)
+    for s in range(n_sph):
+        sx = np.sin(lane[_X + s])
+        cx = np.cos(lane[_X + s])
+        psi1 = sx * lane[_INVX + s] - cx
+        psi0 = lane[_PC + s]
+        scale = sx / psi0 if abs(sx) >= abs(psi1) else psi1 / o[_BLK + _PSI + s]
+        lane[_PC + s] = scale
+        o[_PSI + s] = psi0 * scale
+        o[_CHI + s] = cx
+        o[_BLK + _CHI + s] = cx * lane[_INVX + s] + sx
+        lane[_APR + s] = 0.0
+        lane[_API + s] = 0.0
+        lane[_BPR + s] = 0.0
+        lane[_BPI + s] = 0.0
+        lane[_QEXT + s] = 0.0
+        lane[_QSCA + s] = 0.0
+        lane[_GQ + s] = 0.0
+
+    # Upward sweep.
     mr = m.real
     mi = m.imag
     imr, imi = _reciprocal(mr, mi)
     for n in range(1, n_top + 1):
-        o = _orders(ws, n - 1, 2)  # order n - 1 at 0 (receives a_n, b_n), order n at _BLK
+        c = 2.0 * n + 1.0
+        c_ab = c / (n * (n + 1.0))
+        c_prev = (n - 1.0) * (n + 1.0) / n  # of a_{n-1} a_n* + b_{n-1} b_n* in g Q_sca
+        o = _orders(ws, n - 1, 3)  # orders n - 1 (receives a_n, b_n), n, n + 1
         for s in range(n_sph):
-            p1 = o[_BLK + _PSI + s]
+            p1 = o[_BLK + _PSI + s] * lane[_PC + s]
+            o[_BLK + _PSI + s] = p1
             p0 = o[_PSI + s]
             c1 = o[_BLK + _CHI + s]
             c0 = o[_CHI + s]
+            o[2 * _BLK + _CHI + s] = c * lane[_INVX + s] * c1 - c0
             n_x = n * lane[_INVX + s]
             d_r = o[_BLK + _DNR + s]
             d_i = o[_BLK + _DNI + s]
             keep = n <= lane[_NMAX + s]
             # a_n with t = D_n / m + n / x
             re, im = _bh_ratio(d_r * imr - d_i * imi + n_x, d_r * imi + d_i * imr, p1, p0, c1, c0)
-            o[_AR + s] = re if keep else 0.0
-            o[_AI + s] = im if keep else 0.0
+            ar = re if keep else 0.0
+            ai = im if keep else 0.0
             # b_n with t = m D_n + n / x
             re, im = _bh_ratio(mr * d_r - mi * d_i + n_x, mr * d_i + mi * d_r, p1, p0, c1, c0)
-            o[_BR + s] = re if keep else 0.0
-            o[_BI + s] = im if keep else 0.0
+            br = re if keep else 0.0
+            bi = im if keep else 0.0
+            o[_AR + s] = ar
+            o[_AI + s] = ai
+            o[_BR + s] = br
+            o[_BI + s] = bi
+            lane[_QEXT + s] += c * (ar + br)
+            lane[_QSCA + s] += c * (ar * ar + ai * ai + br * br + bi * bi)
+            lane[_GQ + s] += c_ab * (ar * br + ai * bi) + c_prev * (
+                lane[_APR + s] * ar + lane[_API + s] * ai + lane[_BPR + s] * br + lane[_BPI + s] * bi
+            )
+            lane[_APR + s] = ar
+            lane[_API + s] = ai
+            lane[_BPR + s] = br
+            lane[_BPI + s] = bi
+    for s in range(n_sph):
+        f = 2.0 / (lane[_X + s] * lane[_X + s])
+        ws[_X + s] = lane[_X + s]
+        ws[_QEXT + s] = lane[_QEXT + s] * f
+        ws[_QSCA + s] = lane[_QSCA + s] * f
+        ws[_GQ + s] = lane[_GQ + s] * 2.0 * f
     return n_top
 
 
@@ -311,43 +337,6 @@ def _bh_ratio(tr: float, ti: float, p1: float, p0: float, c1: float, c0: float) 
     nr = tr * p1 - p0
     ni = ti * p1
     return nr * u - ni * v, nr * v + ni * u
-
-
-@njit(cache=True, nogil=True, error_model="numpy")
-def _efficiencies(n_sph: int, n_top: int, ws: np.ndarray) -> None:
-    """Q_ext, Q_sca and g Q_sca of each sphere of a batch (BH Eqs. 4.61, 4.62
-    and p. 120) into the _QEXT, _QSCA and _GQ rows of ``ws``; orders above a
-    sphere's n_max hold zeros (see :func:`_mie_coefficients`) and add nothing."""
-    lane = ws[:_LANE]
-    for s in range(n_sph):
-        lane[_QEXT + s] = 0.0
-        lane[_QSCA + s] = 0.0
-        lane[_GQ + s] = 0.0
-    for i in range(n_top):
-        n = i + 1
-        c = 2.0 * n + 1.0
-        c_ab = c / (n * (n + 1.0))
-        c_next = n * (n + 2.0) / (n + 1.0)
-        o = _orders(ws, i, 2)  # a_n, b_n at 0; a_{n+1}, b_{n+1} at _BLK
-        for s in range(n_sph):
-            ar = o[_AR + s]
-            ai = o[_AI + s]
-            br = o[_BR + s]
-            bi = o[_BI + s]
-            lane[_QEXT + s] += c * (ar + br)
-            lane[_QSCA + s] += c * (ar * ar + ai * ai + br * br + bi * bi)
-            lane[_GQ + s] += c_ab * (ar * br + ai * bi)
-        if i + 1 < n_top:
-            for s in range(n_sph):
-                lane[_GQ + s] += c_next * (
-                    o[_AR + s] * o[_BLK + _AR + s] + o[_AI + s] * o[_BLK + _AI + s]
-                    + o[_BR + s] * o[_BLK + _BR + s] + o[_BI + s] * o[_BLK + _BI + s]
-                )
-    for s in range(n_sph):
-        f = 2.0 / (lane[_X + s] * lane[_X + s])
-        lane[_QEXT + s] *= f
-        lane[_QSCA + s] *= f
-        lane[_GQ + s] *= 2.0 * f
 
 
 def _coefficients(ws: np.ndarray, n_top: int, n_sph: int) -> tuple[np.ndarray, np.ndarray]:
@@ -410,7 +399,6 @@ def _single_sphere_kernel(m: complex, x: float, mu: np.ndarray):
     nmax = wiscombe_nmax(x)
     ws = _workspace(nmax)
     _mie_coefficients(m, np.full(1, x), np.full(1, nmax), ws)
-    _efficiencies(1, nmax, ws)
     a = np.empty(nmax, dtype=np.complex128)
     b = np.empty(nmax, dtype=np.complex128)
     for k in range(nmax):
@@ -598,7 +586,6 @@ def _accumulate(
             x_b[s] = x_nodes[j0 + min(s, n_live - 1)]
             nmax_b[s] = wiscombe_nmax(x_b[s])
         n_top = _mie_coefficients(m, x_b, nmax_b, ws)
-        _efficiencies(LANES, n_top, ws)
         for s in range(n_live):
             j = j0 + s
             _add_sphere(
@@ -624,7 +611,7 @@ def _add_sphere(
     acc: np.ndarray,
 ) -> None:
     """Add the weighted intensity and sums of sphere ``s`` of workspace ``ws``
-    (after :func:`_mie_coefficients` and :func:`_efficiencies`) to its
+    (after :func:`_mie_coefficients`) to its
     panel's row (see :func:`_accumulate`); ``coef`` (shape (>= n_max + 3, 4))
     and ``acc`` (length table.shape[1]) are workspace."""
     n_f = 2 * n_mu if symmetric else n_mu
