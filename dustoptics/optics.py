@@ -290,6 +290,40 @@ def _gauss_angles(n_half: int) -> tuple[np.ndarray, ...]:
     return mu_half, w_half, mie.angular_table(mu_half, n_half - 1)
 
 
+@lru_cache(maxsize=4)
+def _angular_tiers(n_half: int) -> tuple[np.ndarray, ...]:
+    """Angular tiers below the grid of n_half half-grid angles, flattened for
+    :func:`mie._accumulate_tiers`: tier sizes, their angular tables and start
+    offsets, the interpolation maps to the full grid and their offsets.
+
+    A panel whose spheres need fewer orders is summed on a smaller Gauss grid
+    (cost ~ n_max x n_angles per sphere) and moved to the full grid by exact
+    polynomial interpolation (:func:`mie._interpolation_maps`).  Tier sizes
+    fall by 2^(1/4), in multiples of 16, down to 32 half-grid angles.  Cached
+    (neighbouring wavelengths share n_half; a few MB each at n_half ~ 200).
+    Not to be modified.
+    """
+    tiers = {n_half}
+    k = 1
+    while (t := 16 * -(-int(n_half * 2.0 ** (-k / 4)) // 16)) >= 32:
+        tiers.add(t)
+        k += 1
+    sizes = np.array(sorted(tiers))
+    mu_half = _gauss_angles(n_half)[0]
+    tables = [_gauss_angles(int(t))[2].ravel() for t in sizes]
+    maps = [
+        np.concatenate([r.ravel() for r in mie._interpolation_maps(*_gauss_angles(int(t))[:2], mu_half)])
+        for t in sizes[:-1]
+    ]
+    return (
+        sizes,
+        np.concatenate(tables),
+        np.cumsum([0] + [a.size for a in tables]),
+        np.concatenate(maps) if maps else np.empty(0),
+        np.cumsum([0] + [a.size for a in maps]),
+    )
+
+
 class _WavelengthSolver:
     """One wavelength: angular tables once, then adaptive refinement over radius.
 
@@ -346,28 +380,7 @@ class _WavelengthSolver:
             self.n_half = n_half
             self.mu_half, self.w_half, table = _gauss_angles(n_half)
             self.n_f = 2 * n_half
-            # Angular tiers: a panel whose spheres need fewer orders is summed
-            # on a smaller Gauss grid (cost ~ n_max x n_angles per sphere) and
-            # moved to the full grid by exact polynomial interpolation
-            # (mie._interpolation_maps, built once per tier).  Tier sizes
-            # fall by 2^(1/4), in multiples of 16, down to 32 half-grid angles.
-            tiers = {n_half}
-            k = 1
-            while (t := 16 * -(-int(n_half * 2.0 ** (-k / 4)) // 16)) >= 32:
-                tiers.add(t)
-                k += 1
-            self.tiers = np.array(sorted(tiers))
-            # The tiers' tables and maps, flattened for one kernel call per
-            # evaluation (see mie._accumulate_tiers).
-            tables = [_gauss_angles(int(t))[2].ravel() for t in self.tiers]
-            maps = [
-                np.concatenate([r.ravel() for r in mie._interpolation_maps(*_gauss_angles(int(t))[:2], self.mu_half)])
-                for t in self.tiers[:-1]
-            ]
-            self._tables = np.concatenate(tables)
-            self._table_start = np.cumsum([0] + [a.size for a in tables])
-            self._maps = np.concatenate(maps) if maps else np.empty(0)
-            self._map_start = np.cumsum([0] + [a.size for a in maps])
+            self.tiers, self._tables, self._table_start, self._maps, self._map_start = _angular_tiers(n_half)
         else:
             table = mie.angular_table(mu_out, self.nmax)
             self.n_f = mu_out.size
