@@ -673,9 +673,11 @@ def compute_optics(
 
     n_threads = min(workers, wl.size)
     if n_threads > 1:
-        one(0)  # compile (or load from cache) once before threads share the kernels
+        # The first wavelength alone compiles (or loads from cache) the kernels
+        # before threads share them.
+        results = [one(0)]
         with ThreadPoolExecutor(max_workers=n_threads) as pool:
-            results = list(pool.map(one, range(wl.size)))
+            results += pool.map(one, range(1, wl.size))
     else:
         results = [one(i) for i in range(wl.size)]
 
