@@ -290,7 +290,7 @@ def _gauss_angles(n_half: int) -> tuple[np.ndarray, ...]:
     return mu_half, w_half, mie.angular_table(mu_half, n_half - 1)
 
 
-@lru_cache(maxsize=4)
+@lru_cache(maxsize=2)
 def _angular_tiers(n_half: int) -> tuple[np.ndarray, ...]:
     """Angular tiers below the grid of n_half half-grid angles, flattened for
     :func:`mie._accumulate_tiers`: tier sizes, their angular tables and start
