@@ -63,14 +63,18 @@ def wiscombe_nmax(x: float) -> int:
 #: iterations, hence 16.
 LANES = 16
 
-# The coefficient kernels share one flat float64 workspace (:func:`_workspace`):
-# per-sphere rows of LANES values, then one block of _N_PLANES rows per order
-# n = 0..n_top.  The names below are offsets: row r of the sphere part starts
-# at r * LANES, plane p of an order's block at p * LANES.  Every access in a
-# loop over spheres is then a constant offset plus the sphere's index from the
-# start of one view, so the compiler sees that the loop's stores cannot
-# overlap its loads; with separate arrays it tested every pair at run time,
-# once per loop, which cost more than the loop's arithmetic.
+# The coefficient kernels work in flat float64 arrays.  Per-sphere rows of
+# LANES values: the working rows in an array ``lane`` of their own (length
+# _LANE), the results (x, Q_ext, Q_sca, g Q_sca) in the same rows at the start
+# of the workspace (:func:`_workspace`), which continues with one block of
+# _N_PLANES rows per order n = 0..n_top + 1.  The names below are offsets: row
+# r starts at r * LANES, plane p of an order's block at p * LANES.  Every
+# access in a loop over spheres is then a constant offset plus the sphere's
+# index from the start of one view, so the compiler sees that the loop's
+# stores to that view cannot overlap its loads; with a separate array per row
+# it tested every pair at run time, once per loop, which cost more than the
+# loop's arithmetic.  (A loop that stores to two views of one array is not
+# vectorized at all: hence ``lane`` apart.)
 (_X, _NMAX, _IZR, _IZI, _FR, _FI, _CR, _CI, _DDR, _DDI, _DONE, _INVX, _PN, _PC,
  _APR, _API, _BPR, _BPI, _QEXT, _QSCA, _GQ) = range(0, 21 * LANES, LANES)
 _N_LANE_ROWS = 21
@@ -734,6 +738,8 @@ def _accumulate_tiers(
     largest grid (to the rounding of the interpolation).
     """
     n_top = tier_size[tier_size.shape[0] - 1]
+    # True, but not the literal: that would compile _accumulate a second time.
+    symmetric = n_top > 0
     out = np.zeros((n_panels, 2 * n_top + N_SUMS))
     local = np.full(n_panels, -1, dtype=np.int64)
     panel_of = np.empty(n_panels, dtype=np.int64)
@@ -758,7 +764,7 @@ def _accumulate_tiers(
         flat = tables[table_start[t] : table_start[t + 1]]
         table = flat.reshape((flat.shape[0] // width, width))
         rows = _accumulate(
-            m, x_nodes[j0:j1], w_nodes[j0:j1], node_local, n_loc, per_particle, table, n_t, True
+            m, x_nodes[j0:j1], w_nodes[j0:j1], node_local, n_loc, per_particle, table, n_t, symmetric
         )
         if n_t == n_top:
             for r in range(n_loc):
