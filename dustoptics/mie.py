@@ -589,7 +589,7 @@ def _accumulate(
         for s in range(LANES):  # a short last batch repeats its last sphere
             x_b[s] = x_nodes[j0 + min(s, n_live - 1)]
             nmax_b[s] = wiscombe_nmax(x_b[s])
-        n_top = _mie_coefficients(m, x_b, nmax_b, ws)
+        _mie_coefficients(m, x_b, nmax_b, ws)
         for s in range(n_live):
             j = j0 + s
             _add_sphere(
