@@ -378,13 +378,13 @@ class _WavelengthSolver:
         self.legendre = n_half < mu_out.size and not distribution.is_monodisperse
         if self.legendre:
             self.n_half = n_half
-            self.mu_half, self.w_half, table = _gauss_angles(n_half)
+            self.mu_half, self.w_half = _gauss_angles(n_half)[:2]
             self.n_f = 2 * n_half
             self.tiers, self._tables, self._table_start, self._maps, self._map_start = _angular_tiers(n_half)
         else:
-            table = mie.angular_table(mu_out, self.nmax)
+            # Summed at the output angles directly (few angles, or one sphere).
+            self.table = mie.angular_table(mu_out, self.nmax)
             self.n_f = mu_out.size
-        self.table = table
         # Cross-sections alone: no angles.
         self.no_angles = np.empty((0, 0))
 

@@ -333,3 +333,33 @@ def test_interpolation_maps_reproduce_polynomials(n_in: int, n_out: int) -> None
     # parity split and recombination round in the last bit).
     same = mie._legendre_regrid(np.ascontiguousarray(rows), *mie._interpolation_maps(mu_in, w_half, mu_in))
     np.testing.assert_allclose(same[0], rows[0], rtol=0, atol=4e-16 * np.abs(rows).max())
+
+
+@pytest.mark.parametrize("per_particle", [False, True])
+def test_tiers_equal_the_full_grid(per_particle: bool) -> None:
+    """The fast path (small spheres summed on a smaller Gauss grid, moved to
+    the full grid by polynomial interpolation, all tiers in one call) gives
+    the rows of the simple path (every sphere summed on the full grid).  The
+    interpolation is exact for |S|^2 of degree 2 n_max < 2 n_tier, so they
+    agree to round-off (1e-10 of the largest value, as the maps' own test)."""
+    from dustoptics.optics import _angular_tiers, _gauss_angles
+
+    m = 1.52 + 0.004j
+    n_full = 96
+    sizes, tables, table_start, maps, map_start = _angular_tiers(n_full)
+    assert sizes.size >= 3 and sizes[-1] == n_full
+    # Three panels of 16 nodes: small spheres on the smallest tier, middling
+    # on the next, large on the full grid (each tier holds n_max + 2 orders).
+    x = np.concatenate([np.linspace(1.0, 3.0, 16), np.linspace(15.0, 18.0, 16), np.linspace(55.0, 70.0, 16)])
+    w = np.linspace(0.5, 1.5, x.size)
+    panel = np.repeat(np.arange(3), 16)
+    tier = np.repeat([0, 1, sizes.size - 1], 16)
+    for t, hi in zip((0, 1, sizes.size - 1), (3.0, 18.0, 70.0)):
+        assert mie.wiscombe_nmax(hi) + 2 <= sizes[t]
+    fast = mie._accumulate_tiers(m, x, w, panel, tier, 3, per_particle, sizes, tables, table_start, maps, map_start)
+    full_table = _gauss_angles(n_full)[2]
+    simple = mie._accumulate(m, x, w, panel, 3, per_particle, full_table, n_full, True)
+    assert fast.shape == simple.shape == (3, 2 * n_full + mie.N_SUMS)
+    for p in range(3):  # each panel to its own scale (rows differ by orders of magnitude)
+        np.testing.assert_allclose(fast[p], simple[p], rtol=0, atol=1e-10 * np.abs(simple[p]).max())
+    assert np.all(fast[:, : 2 * n_full] > 0)
