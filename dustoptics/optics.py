@@ -40,6 +40,7 @@ from functools import lru_cache
 from typing import Any, NamedTuple, Union
 
 import numpy as np
+from numba import njit
 
 from dustoptics import mie
 from dustoptics._validation import as_increasing_grid, check_choice, check_open_interval
@@ -330,6 +331,45 @@ def _angular_tiers(n_half: int) -> tuple[np.ndarray, ...]:
     )
 
 
+@njit(cache=True, nogil=True)
+def _phase_refinement_errors(
+    pool: np.ndarray, coarse: np.ndarray, left: np.ndarray, right: np.ndarray, n_f: int, norm: int
+) -> tuple[np.ndarray, np.ndarray, float]:
+    """Summed row and relative phase errors of a refinement state.
+
+    Panel p has rows ``pool[coarse[p]]`` (its coarse rule) and ``pool[left[p]]``,
+    ``pool[right[p]]`` (the rules on its halves).  Returns the sum over panels of
+    the halves' rows F; per panel max_mu |dF_p(mu)| / F(mu) plus the relative
+    change of the normalization (column ``norm``: sum w, or sum w x^2 Q_sca);
+    and for the sum max_mu sum_p |dF_p(mu)| / F(mu) plus the summed relative
+    changes of the normalization.  One pass over the rows, no temporaries.
+    """
+    n_p = coarse.shape[0]
+    width = pool.shape[1]
+    total = np.zeros(width)
+    for p in range(n_p):
+        a = pool[left[p]]
+        b = pool[right[p]]
+        for c in range(width):
+            total[c] += a[c] + b[c]
+    column = np.zeros(n_f)
+    panel_error = np.empty(n_p)
+    norm_sum = 0.0
+    for p in range(n_p):
+        a = pool[left[p]]
+        b = pool[right[p]]
+        z = pool[coarse[p]]
+        rel_norm = abs(a[norm] + b[norm] - z[norm]) / total[norm]
+        worst = 0.0
+        for i in range(n_f):
+            d = abs(a[i] + b[i] - z[i]) / total[i]
+            column[i] += d
+            worst = max(worst, d)
+        panel_error[p] = worst + rel_norm
+        norm_sum += rel_norm
+    return total, panel_error, np.max(column) + norm_sum
+
+
 class _WavelengthSolver:
     """One wavelength: angular tables once, then adaptive refinement over radius.
 
@@ -448,23 +488,25 @@ class _WavelengthSolver:
         rows = self.evaluate(np.concatenate([lower, mid]), np.concatenate([mid, upper]), angles=angles)
         return rows[: lower.size], rows[lower.size :]
 
-    def _phase_errors(self, delta: np.ndarray, total: np.ndarray) -> tuple[np.ndarray, float]:
-        """Relative phase error per panel and of the sum, from panel differences ``delta``.
+    def _phase_errors(
+        self, pool: np.ndarray, coarse: np.ndarray, left: np.ndarray, right: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, float]:
+        """Summed row, and relative phase error per panel and of the sum (see
+        :func:`_phase_refinement_errors`)."""
+        norm = self.n_f if self.per_particle else self.n_f + 2
+        return _phase_refinement_errors(pool, coarse, left, right, self.n_f, norm)
 
-        The sum's error is max_mu sum_p |dF_p(mu)| / F(mu) plus the relative
-        error of the normalization (sum w, or sum w x^2 Q_sca).
-        """
-        n_f = self.n_f
-        norm = n_f if self.per_particle else n_f + 2
-        rel_f = delta[:, :n_f] / total[:n_f]
-        rel_norm = delta[:, norm] / total[norm]
-        return np.max(rel_f, axis=1) + rel_norm, float(np.max(np.sum(rel_f, axis=0)) + np.sum(rel_norm))
-
-    def _cross_errors(self, delta: np.ndarray, total: np.ndarray) -> tuple[np.ndarray, float]:
-        """Largest error of <C_ext>, <C_sca> (relative) and g (absolute), per panel and of the sum.
+    def _cross_errors(
+        self, pool: np.ndarray, coarse: np.ndarray, left: np.ndarray, right: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, float]:
+        """Summed row, and the largest error of <C_ext>, <C_sca> (relative) and
+        g (absolute) per panel and of the sum.
 
         g = num / norm, so |dg| <= (|d num| + |g| |d norm|) / norm.
         """
+        fine = pool[left] + pool[right]
+        total = fine.sum(axis=0)
+        delta = np.abs(fine - pool[coarse])
         norm, gnum = (0, 4) if self.per_particle else (2, 3)
         g = total[gnum] / total[norm]
         cross = np.column_stack(
@@ -474,7 +516,7 @@ class _WavelengthSolver:
                 (delta[:, gnum] + abs(g) * delta[:, norm]) / total[norm],
             ]
         )
-        return np.max(cross, axis=1), float(np.max(np.sum(cross, axis=0)))
+        return total, np.max(cross, axis=1), float(np.max(np.sum(cross, axis=0)))
 
     def _split_cost(self, upper: np.ndarray, angles: bool) -> np.ndarray:
         """Relative work of evaluating a panel ending at ``upper`` (in s): with
@@ -494,14 +536,18 @@ class _WavelengthSolver:
         """Adaptive refinement of the phase function (``angles``) or the cross-sections to ``tol``.
 
         Starts from ``state`` (whose rows hold angular values only if ``angles``).
+        Rows live in one growing pool, and panels refer to theirs by index, so
+        a split copies only the new rows.
         """
         errors = self._phase_errors if angles else self._cross_errors
-        lower, upper, coarse, left, right = state
+        lower, upper = state.lower, state.upper
+        n = lower.size
+        pool = np.concatenate([state.coarse, state.left, state.right])
+        n_rows = 3 * n
+        coarse, left, right = np.arange(n), np.arange(n, 2 * n), np.arange(2 * n, 3 * n)
         max_panels = (self.edges.size - 1) * 2**self.settings.max_level
         while True:
-            fine = left + right
-            total = fine.sum(axis=0)
-            panel_error, error = errors(np.abs(fine - coarse), total)
+            total, panel_error, error = errors(pool, coarse, left, right)
             if error <= tol or lower.size >= max_panels:
                 break
             # Split the panels that remove the most error per unit of work
@@ -521,17 +567,24 @@ class _WavelengthSolver:
             mid = 0.5 * (lower[split] + upper[split])
             new_lower = np.concatenate([lower[split], mid])
             new_upper = np.concatenate([mid, upper[split]])
-            new_coarse = np.concatenate([left[split], right[split]])
             new_left, new_right = self.halves(new_lower, new_upper, angles=angles)
+            k = new_lower.size
+            if n_rows + 2 * k > pool.shape[0]:
+                grown = np.empty((2 * (n_rows + 2 * k), pool.shape[1]))
+                grown[:n_rows] = pool[:n_rows]
+                pool = grown
+            pool[n_rows : n_rows + k] = new_left
+            pool[n_rows + k : n_rows + 2 * k] = new_right
+            coarse = np.concatenate([coarse[keep], left[split], right[split]])
+            left = np.concatenate([left[keep], np.arange(n_rows, n_rows + k)])
+            right = np.concatenate([right[keep], np.arange(n_rows + k, n_rows + 2 * k)])
+            n_rows += 2 * k
             lower = np.concatenate([lower[keep], new_lower])
             upper = np.concatenate([upper[keep], new_upper])
-            coarse = np.concatenate([coarse[keep], new_coarse])
-            left = np.concatenate([left[keep], new_left])
-            right = np.concatenate([right[keep], new_right])
         order = np.argsort(lower, kind="stable")
         panels = np.column_stack([lower[order], upper[order]])
         run = _Run(total, panels, 2 * self.settings.nodes_per_panel * lower.size, error)
-        return _Panels(lower, upper, coarse, left, right), run
+        return _Panels(lower, upper, pool[coarse], pool[left], pool[right]), run
 
     def solve(self, rtol: float, cross_rtol: float) -> _Result:
         if self.distribution.is_monodisperse:
