@@ -747,11 +747,13 @@ def compute_optics(
 
     n_threads = min(workers, wl.size)
     if n_threads > 1:
-        # The first wavelength alone compiles (or loads from cache) the kernels
-        # before threads share them.
-        results = [one(0)]
+        # In a process whose kernels are not compiled yet, the first wavelength
+        # alone compiles (or loads from numba's cache) them before threads
+        # share them; after that, it is the costliest wavelength to leave to
+        # one thread.  Each wavelength's result is the same either way.
+        first = [] if mie._accumulate_tiers.signatures else [one(0)]
         with ThreadPoolExecutor(max_workers=n_threads) as pool:
-            results += pool.map(one, range(1, wl.size))
+            results = first + list(pool.map(one, range(len(first), wl.size)))
     else:
         results = [one(i) for i in range(wl.size)]
 
