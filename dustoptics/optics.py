@@ -68,6 +68,11 @@ WEIGHTINGS = ("scattering", "number")
 RefractiveIndexLike = Union[complex, float, Sequence[complex], Callable[[Any], Any], str]
 
 
+def _n_max(x: np.ndarray) -> np.ndarray:
+    """:func:`mie.wiscombe_nmax` for arrays, before rounding down: x + 4.05 x^(1/3) + 2."""
+    return x + 4.05 * np.cbrt(x) + 2.0
+
+
 #: Refinement splits panels until the unsplit ones hold less than this
 #: fraction of the tolerance (see :meth:`_WavelengthSolver.refine`).
 _KEEP_FRACTION = 0.9
@@ -471,7 +476,7 @@ class _WavelengthSolver:
         x_top = x.reshape(lower.size, per).max(axis=1)
         # wiscombe_nmax + 1, plus 1 so that cbrt's rounding can never pick a tier
         # one order short (the kernel reads the tables without bounds checks).
-        need = (x_top + 4.05 * np.cbrt(x_top) + 2.0).astype(np.int64) + 2
+        need = _n_max(x_top).astype(np.int64) + 2
         node_tier = np.repeat(np.searchsorted(self.tiers, need), per)
         # By tier, then by size: batches of spheres of similar n_max.
         order = np.lexsort((x, node_tier))
@@ -522,8 +527,7 @@ class _WavelengthSolver:
         """Relative work of evaluating a panel ending at ``upper`` (in s): with
         n = n_max at its end, ~ (n + 8)^2 with angles (orders x tier angles,
         a tier ~ n + 8 angles), ~ n + 20 for the coefficients alone."""
-        x = size_parameter_at(upper, settings=self.settings)
-        n = x + 4.05 * np.cbrt(x) + 2.0
+        n = _n_max(size_parameter_at(upper, settings=self.settings))
         return (n + 8.0) ** 2 if angles else n + 20.0
 
     def initial_state(self) -> _Panels:
