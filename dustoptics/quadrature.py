@@ -44,6 +44,7 @@ from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
+from numba import njit
 from scipy.special import roots_legendre, wrightomega
 
 from dustoptics._validation import check_open_interval, check_positive
@@ -217,19 +218,48 @@ def panel_nodes(
     """
     k_um = 2.0 * np.pi / (wavelength_nm * 1e-3)
     x_c = settings.transition_size_parameter
-    lower = np.asarray(lower_s, dtype=np.float64)
-    upper = np.asarray(upper_s, dtype=np.float64)
-    half = 0.5 * (upper - lower)
-    mid = 0.5 * (upper + lower)
     t, gw = gauss_legendre(settings.nodes_per_panel)
-    s = (mid[:, None] + half[:, None] * t[None, :]).ravel()
-    ds_weight = (half[:, None] * gw[None, :]).ravel()
+    s, ds_weight, node_panel = _gauss_points(
+        np.asarray(lower_s, dtype=np.float64), np.asarray(upper_s, dtype=np.float64), t, gw
+    )
     x = _unstretch(s, x_c)
-    dx_ds = 1.0 / (1.0 / x_c + 1.0 / x)
     r = x / k_um
-    w = np.asarray(distribution.pdf(r), dtype=np.float64) * (dx_ds / k_um) * ds_weight
-    node_panel = np.repeat(np.arange(lower.size, dtype=np.int64), settings.nodes_per_panel)
+    w = _node_weights(x, np.asarray(distribution.pdf(r), dtype=np.float64), ds_weight, x_c, k_um)
     return RadiusNodes(size_parameter=x, weight=w, radius_um=r), node_panel
+
+
+@njit(cache=True, nogil=True)
+def _gauss_points(
+    lower: np.ndarray, upper: np.ndarray, t: np.ndarray, gw: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The rule (t, gw) on [-1, 1] mapped to each panel [lower[p], upper[p]]:
+    nodes s = mid + half t and weights half gw, panel after panel, and each
+    node's panel index."""
+    n = t.shape[0]
+    s = np.empty(lower.shape[0] * n)
+    ds_weight = np.empty(lower.shape[0] * n)
+    node_panel = np.empty(lower.shape[0] * n, dtype=np.int64)
+    for p in range(lower.shape[0]):
+        half = 0.5 * (upper[p] - lower[p])
+        mid = 0.5 * (upper[p] + lower[p])
+        for i in range(n):
+            s[p * n + i] = mid + half * t[i]
+            ds_weight[p * n + i] = half * gw[i]
+            node_panel[p * n + i] = p
+    return s, ds_weight, node_panel
+
+
+@njit(cache=True, nogil=True)
+def _node_weights(
+    x: np.ndarray, density: np.ndarray, ds_weight: np.ndarray, x_c: float, k_um: float
+) -> np.ndarray:
+    """Weights in r of nodes placed in s: w = n(r) (dr/ds) w_s, with
+    dr/ds = (dx/ds) / k and dx/ds = 1 / (1/x_c + 1/x) (the inverse of ds/dx)."""
+    w = np.empty(x.shape[0])
+    for j in range(x.shape[0]):
+        dx_ds = 1.0 / (1.0 / x_c + 1.0 / x[j])
+        w[j] = density[j] * (dx_ds / k_um) * ds_weight[j]
+    return w
 
 
 def radius_nodes(
