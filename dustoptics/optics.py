@@ -68,7 +68,8 @@ WEIGHTINGS = ("scattering", "number")
 RefractiveIndexLike = Union[complex, float, Sequence[complex], Callable[[Any], Any], str]
 
 
-def _n_max(x: np.ndarray) -> np.ndarray:
+@njit(cache=True, nogil=True)
+def _n_max(x: np.ndarray | float) -> np.ndarray | float:
     """:func:`mie.wiscombe_nmax` for arrays, before rounding down: x + 4.05 x^(1/3) + 2."""
     return x + 4.05 * np.cbrt(x) + 2.0
 
@@ -375,6 +376,186 @@ def _phase_refinement_errors(
     return total, panel_error, np.max(column) + norm_sum
 
 
+@njit(cache=True, nogil=True)
+def _cross_refinement_errors(
+    pool: np.ndarray, coarse: np.ndarray, left: np.ndarray, right: np.ndarray, norm: int, gnum: int
+) -> tuple[np.ndarray, np.ndarray, float]:
+    """Summed row and errors of <C_ext>, <C_sca> (relative) and g (absolute)
+    of a refinement state of rows of sums (see :func:`_phase_refinement_errors`):
+    per panel the largest of the three, and the largest of their sums over
+    panels.  g = num / norm (columns ``gnum`` and ``norm``), so
+    |dg| <= (|d num| + |g| |d norm|) / norm.
+    """
+    n_p = coarse.shape[0]
+    width = pool.shape[1]
+    total = np.zeros(width)
+    for p in range(n_p):
+        a = pool[left[p]]
+        b = pool[right[p]]
+        for c in range(width):
+            total[c] += a[c] + b[c]
+    g = abs(total[gnum] / total[norm])
+    panel_error = np.empty(n_p)
+    sums = np.zeros(3)
+    for p in range(n_p):
+        a = pool[left[p]]
+        b = pool[right[p]]
+        z = pool[coarse[p]]
+        e_ext = abs(a[1] + b[1] - z[1]) / total[1]
+        e_sca = abs(a[2] + b[2] - z[2]) / total[2]
+        e_g = (abs(a[gnum] + b[gnum] - z[gnum]) + g * abs(a[norm] + b[norm] - z[norm])) / total[norm]
+        panel_error[p] = max(e_ext, e_sca, e_g)
+        sums[0] += e_ext
+        sums[1] += e_sca
+        sums[2] += e_g
+    return total, panel_error, max(sums[0], sums[1], sums[2])
+
+
+@njit(cache=True, nogil=True)
+def _choose_splits(
+    panel_error: np.ndarray,
+    cost: np.ndarray,
+    tol: float,
+    keep_fraction: float,
+    lower: np.ndarray,
+    upper: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The panels to split, and the edges of the halves of their halves.
+
+    Panels in order of error per unit of ``cost`` (stable) until the rest hold
+    less than ``keep_fraction`` of ``tol``.  Returns the split panels' indices
+    (increasing) and the lower and upper edges of the 2k panels to evaluate:
+    the new panels are the split panels' left halves, then their right
+    halves, and each is evaluated on its own two halves (left halves of all
+    new panels first).
+    """
+    badness = panel_error / tol
+    order = np.argsort(-badness / cost, kind="mergesort")
+    cumulative = np.cumsum(badness[order])
+    n_split = np.searchsorted(cumulative, cumulative[-1] - keep_fraction) + 1
+    split = np.sort(order[:n_split])
+    k = split.shape[0]
+    new_lower = np.empty(2 * k)
+    new_upper = np.empty(2 * k)
+    for i in range(k):
+        lo = lower[split[i]]
+        hi = upper[split[i]]
+        mid = 0.5 * (lo + hi)
+        new_lower[i] = lo
+        new_upper[i] = mid
+        new_lower[k + i] = mid
+        new_upper[k + i] = hi
+    eval_lower = np.empty(4 * k)
+    eval_upper = np.empty(4 * k)
+    for i in range(2 * k):
+        mid = 0.5 * (new_lower[i] + new_upper[i])
+        eval_lower[i] = new_lower[i]
+        eval_upper[i] = mid
+        eval_lower[2 * k + i] = mid
+        eval_upper[2 * k + i] = new_upper[i]
+    return split, eval_lower, eval_upper
+
+
+@njit(cache=True, nogil=True)
+def _apply_splits(
+    pool: np.ndarray,
+    n_rows: int,
+    rows: np.ndarray,
+    split: np.ndarray,
+    coarse: np.ndarray,
+    left: np.ndarray,
+    right: np.ndarray,
+    lower: np.ndarray,
+    upper: np.ndarray,
+    cost: np.ndarray,
+    new_cost: np.ndarray,
+    eval_lower: np.ndarray,
+    eval_upper: np.ndarray,
+):
+    """The refinement state after splitting panels ``split`` (see
+    :func:`_choose_splits`): ``rows`` hold the new panels' left-half rows, then
+    their right-half rows; each new panel's coarse row is its parent's half.
+    Kept panels stay in order, the new ones follow.  Rows are appended to
+    ``pool`` (grown by doubling when full); returns the pool, its row count,
+    and the panels' coarse, left and right row indices, edges and costs.
+    """
+    k2 = rows.shape[0] // 2  # new panels
+    if n_rows + 2 * k2 > pool.shape[0]:
+        grown = np.empty((2 * (n_rows + 2 * k2), pool.shape[1]))
+        grown[:n_rows] = pool[:n_rows]
+        pool = grown
+    pool[n_rows : n_rows + 2 * k2] = rows
+    keep = np.ones(lower.shape[0], dtype=np.bool_)
+    keep[split] = False
+    n_keep = lower.shape[0] - split.shape[0]
+    size = n_keep + k2
+    new_coarse = np.empty(size, dtype=np.int64)
+    new_left = np.empty(size, dtype=np.int64)
+    new_right = np.empty(size, dtype=np.int64)
+    new_lower = np.empty(size)
+    new_upper = np.empty(size)
+    new_costs = np.empty(size)
+    i = 0
+    for p in range(lower.shape[0]):
+        if keep[p]:
+            new_coarse[i] = coarse[p]
+            new_left[i] = left[p]
+            new_right[i] = right[p]
+            new_lower[i] = lower[p]
+            new_upper[i] = upper[p]
+            new_costs[i] = cost[p]
+            i += 1
+    k = split.shape[0]
+    for h in range(k2):
+        parent = split[h % k]
+        new_coarse[i] = left[parent] if h < k else right[parent]
+        new_left[i] = n_rows + h
+        new_right[i] = n_rows + k2 + h
+        new_lower[i] = eval_lower[h]
+        new_upper[i] = eval_upper[k2 + h]
+        new_costs[i] = new_cost[h]
+        i += 1
+    return pool, n_rows + 2 * k2, new_coarse, new_left, new_right, new_lower, new_upper, new_costs
+
+
+@njit(cache=True, nogil=True)
+def _accumulate_by_tier(
+    m: complex,
+    x: np.ndarray,
+    w: np.ndarray,
+    node_panel: np.ndarray,
+    nodes_per_panel: int,
+    per_particle: bool,
+    tiers: np.ndarray,
+    tables: np.ndarray,
+    table_start: np.ndarray,
+    maps: np.ndarray,
+    map_start: np.ndarray,
+) -> np.ndarray:
+    """Rows of :func:`mie._accumulate_tiers` for nodes given panel after panel.
+
+    Each panel is summed on the smallest tier that holds n_max + 2 orders of
+    its largest sphere (wiscombe_nmax + 1, plus 1 so that the rounding of the
+    cube root can never pick a tier one order short: the kernel reads the
+    tables without bounds checks).  The nodes go to the kernel by tier, then
+    by size, so that its batches hold spheres of similar n_max.
+    """
+    n_panels = x.shape[0] // nodes_per_panel
+    node_tier = np.empty(x.shape[0], dtype=np.int64)
+    for p in range(n_panels):
+        x_top = x[p * nodes_per_panel]
+        for j in range(p * nodes_per_panel, (p + 1) * nodes_per_panel):
+            x_top = max(x_top, x[j])
+        tier = np.searchsorted(tiers, int(_n_max(x_top)) + 2)
+        node_tier[p * nodes_per_panel : (p + 1) * nodes_per_panel] = tier
+    by_size = np.argsort(x, kind="mergesort")
+    order = by_size[np.argsort(node_tier[by_size], kind="mergesort")]
+    return mie._accumulate_tiers(
+        m, x[order], w[order], node_panel[order], node_tier[order], n_panels,
+        per_particle, tiers, tables, table_start, maps, map_start,
+    )
+
+
 class _WavelengthSolver:
     """One wavelength: angular tables once, then adaptive refinement over radius.
 
@@ -472,17 +653,9 @@ class _WavelengthSolver:
             return self._accumulate(x, w, node_panel, lower.size, self.no_angles, 0, False)
         if not self.legendre:
             return self._accumulate(x, w, node_panel, lower.size, self.table, self.n_f, False)
-        per = self.settings.nodes_per_panel
-        x_top = x.reshape(lower.size, per).max(axis=1)
-        # wiscombe_nmax + 1, plus 1 so that cbrt's rounding can never pick a tier
-        # one order short (the kernel reads the tables without bounds checks).
-        need = _n_max(x_top).astype(np.int64) + 2
-        node_tier = np.repeat(np.searchsorted(self.tiers, need), per)
-        # By tier, then by size: batches of spheres of similar n_max.
-        order = np.lexsort((x, node_tier))
-        return mie._accumulate_tiers(
-            self.m, x[order], w[order], node_panel[order], node_tier[order], lower.size,
-            self.per_particle, self.tiers, self._tables, self._table_start, self._maps, self._map_start,
+        return _accumulate_by_tier(
+            self.m, x, w, node_panel, self.settings.nodes_per_panel, self.per_particle,
+            self.tiers, self._tables, self._table_start, self._maps, self._map_start,
         )
 
     def halves(
@@ -505,23 +678,9 @@ class _WavelengthSolver:
         self, pool: np.ndarray, coarse: np.ndarray, left: np.ndarray, right: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray, float]:
         """Summed row, and the largest error of <C_ext>, <C_sca> (relative) and
-        g (absolute) per panel and of the sum.
-
-        g = num / norm, so |dg| <= (|d num| + |g| |d norm|) / norm.
-        """
-        fine = pool[left] + pool[right]
-        total = fine.sum(axis=0)
-        delta = np.abs(fine - pool[coarse])
+        g (absolute) per panel and of the sum (see :func:`_cross_refinement_errors`)."""
         norm, gnum = (0, 4) if self.per_particle else (2, 3)
-        g = total[gnum] / total[norm]
-        cross = np.column_stack(
-            [
-                delta[:, 1] / total[1],
-                delta[:, 2] / total[2],
-                (delta[:, gnum] + abs(g) * delta[:, norm]) / total[norm],
-            ]
-        )
-        return total, np.max(cross, axis=1), float(np.max(np.sum(cross, axis=0)))
+        return _cross_refinement_errors(pool, coarse, left, right, norm, gnum)
 
     def _split_cost(self, upper: np.ndarray, angles: bool) -> np.ndarray:
         """Relative work of evaluating a panel ending at ``upper`` (in s): with
@@ -549,6 +708,7 @@ class _WavelengthSolver:
         pool = np.concatenate([state.coarse, state.left, state.right])
         n_rows = 3 * n
         coarse, left, right = np.arange(n), np.arange(n, 2 * n), np.arange(2 * n, 3 * n)
+        cost = self._split_cost(upper, angles)
         max_panels = (self.edges.size - 1) * 2**self.settings.max_level
         while True:
             total, panel_error, error = errors(pool, coarse, left, right)
@@ -561,30 +721,13 @@ class _WavelengthSolver:
             # work for the default table.  Work per node grows with n_max
             # (the angular sum ~ n_max x angles), so a wide panel of large
             # spheres is split only if its error is worth it.
-            badness = panel_error / tol
-            order = np.argsort(-badness / self._split_cost(upper, angles), kind="stable")
-            cumulative = np.cumsum(badness[order])
-            n_split = int(np.searchsorted(cumulative, cumulative[-1] - _KEEP_FRACTION)) + 1
-            split = np.sort(order[:n_split])
-            keep = np.ones(lower.size, dtype=bool)
-            keep[split] = False
-            mid = 0.5 * (lower[split] + upper[split])
-            new_lower = np.concatenate([lower[split], mid])
-            new_upper = np.concatenate([mid, upper[split]])
-            new_left, new_right = self.halves(new_lower, new_upper, angles=angles)
-            k = new_lower.size
-            if n_rows + 2 * k > pool.shape[0]:
-                grown = np.empty((2 * (n_rows + 2 * k), pool.shape[1]))
-                grown[:n_rows] = pool[:n_rows]
-                pool = grown
-            pool[n_rows : n_rows + k] = new_left
-            pool[n_rows + k : n_rows + 2 * k] = new_right
-            coarse = np.concatenate([coarse[keep], left[split], right[split]])
-            left = np.concatenate([left[keep], np.arange(n_rows, n_rows + k)])
-            right = np.concatenate([right[keep], np.arange(n_rows + k, n_rows + 2 * k)])
-            n_rows += 2 * k
-            lower = np.concatenate([lower[keep], new_lower])
-            upper = np.concatenate([upper[keep], new_upper])
+            split, eval_lower, eval_upper = _choose_splits(panel_error, cost, tol, _KEEP_FRACTION, lower, upper)
+            rows = self.evaluate(eval_lower, eval_upper, angles=angles)
+            new_cost = self._split_cost(eval_upper[eval_upper.size // 2 :], angles)
+            pool, n_rows, coarse, left, right, lower, upper, cost = _apply_splits(
+                pool, n_rows, rows, split, coarse, left, right, lower, upper, cost, new_cost,
+                eval_lower, eval_upper,
+            )
         order = np.argsort(lower, kind="stable")
         panels = np.column_stack([lower[order], upper[order]])
         run = _Run(total, panels, 2 * self.settings.nodes_per_panel * lower.size, error)

@@ -270,3 +270,87 @@ def test_phase_refinement_errors_equal_the_numpy_formula():
     np.testing.assert_allclose(total, want_total, rtol=1e-15)
     np.testing.assert_allclose(panel_error, rel_f.max(axis=1) + rel_norm, rtol=1e-14)
     assert error == pytest.approx(rel_f.sum(axis=0).max() + rel_norm.sum(), rel=1e-14)
+
+
+@pytest.mark.parametrize("per_particle", [False, True])
+def test_cross_refinement_errors_equal_the_numpy_formula(per_particle: bool):
+    """The compiled error pass of the cross-section refinement equals the
+    formula with whole-array numpy operations: relative changes of <C_ext>
+    and <C_sca>, and of g = num / norm the bound (|d num| + |g| |d norm|) / norm."""
+    from dustoptics.optics import _cross_refinement_errors
+
+    rng = np.random.default_rng(5)
+    n_p = 9
+    pool = rng.uniform(0.5, 2.0, size=(40, 5))
+    rows = rng.permutation(40)[: 3 * n_p]
+    coarse, left, right = rows[:n_p], rows[n_p : 2 * n_p], rows[2 * n_p :]
+    norm, gnum = (0, 4) if per_particle else (2, 3)
+    total, panel_error, error = _cross_refinement_errors(pool, coarse, left, right, norm, gnum)
+
+    fine = pool[left] + pool[right]
+    want_total = fine.sum(axis=0)
+    delta = np.abs(fine - pool[coarse])
+    g = want_total[gnum] / want_total[norm]
+    cross = np.column_stack(
+        [
+            delta[:, 1] / want_total[1],
+            delta[:, 2] / want_total[2],
+            (delta[:, gnum] + abs(g) * delta[:, norm]) / want_total[norm],
+        ]
+    )
+    np.testing.assert_allclose(total, want_total, rtol=1e-15)
+    np.testing.assert_allclose(panel_error, cross.max(axis=1), rtol=1e-14)
+    assert error == pytest.approx(cross.sum(axis=0).max(), rel=1e-14)
+
+
+def test_split_bookkeeping_equals_the_numpy_formula():
+    """The compiled split step of the refinement does what its numpy
+    statement says: split panels in order of error per cost until the rest
+    hold < keep_fraction of tol; the new panels (left halves, then right
+    halves) take their parent's half rows as coarse rows and the evaluated
+    rows as their halves; kept panels keep their order and rows."""
+    from dustoptics.optics import _apply_splits, _choose_splits
+
+    rng = np.random.default_rng(11)
+    n_p, width, tol, keep_fraction = 12, 6, 1e-4, 0.9
+    edges = np.sort(rng.uniform(-3.0, 9.0, n_p + 1))
+    lower, upper = edges[:-1], edges[1:]
+    panel_error = rng.uniform(0.0, 0.3, n_p) * tol
+    cost = rng.uniform(1.0, 50.0, n_p)
+    split, eval_lower, eval_upper = _choose_splits(panel_error, cost, tol, keep_fraction, lower, upper)
+
+    badness = panel_error / tol
+    order = np.argsort(-badness / cost, kind="stable")
+    cumulative = np.cumsum(badness[order])
+    n_split = int(np.searchsorted(cumulative, cumulative[-1] - keep_fraction)) + 1
+    want_split = np.sort(order[:n_split])
+    np.testing.assert_array_equal(split, want_split)
+    assert badness[np.setdiff1d(np.arange(n_p), split)].sum() < keep_fraction
+    mid = 0.5 * (lower[split] + upper[split])
+    new_lower = np.concatenate([lower[split], mid])
+    new_upper = np.concatenate([mid, upper[split]])
+    new_mid = 0.5 * (new_lower + new_upper)
+    np.testing.assert_array_equal(eval_lower, np.concatenate([new_lower, new_mid]))
+    np.testing.assert_array_equal(eval_upper, np.concatenate([new_mid, new_upper]))
+
+    n_rows = 3 * n_p
+    pool = rng.uniform(size=(n_rows + 1, width))  # full: the new rows must grow it
+    coarse, left, right = np.arange(n_p), np.arange(n_p, 2 * n_p), np.arange(2 * n_p, 3 * n_p)
+    k = 2 * split.size
+    rows = rng.uniform(size=(2 * k, width))
+    new_cost = rng.uniform(1.0, 50.0, k)
+    got = _apply_splits(
+        pool.copy(), n_rows, rows, split, coarse, left, right, lower, upper, cost, new_cost, eval_lower, eval_upper
+    )
+    grown, rows_after, got_coarse, got_left, got_right, got_lower, got_upper, got_cost = got
+    keep = np.ones(n_p, dtype=bool)
+    keep[split] = False
+    assert rows_after == n_rows + 2 * k
+    np.testing.assert_array_equal(grown[:n_rows], pool[:n_rows])
+    np.testing.assert_array_equal(grown[n_rows:rows_after], rows)
+    np.testing.assert_array_equal(got_coarse, np.concatenate([coarse[keep], left[split], right[split]]))
+    np.testing.assert_array_equal(got_left, np.concatenate([left[keep], np.arange(n_rows, n_rows + k)]))
+    np.testing.assert_array_equal(got_right, np.concatenate([right[keep], np.arange(n_rows + k, n_rows + 2 * k)]))
+    np.testing.assert_array_equal(got_lower, np.concatenate([lower[keep], new_lower]))
+    np.testing.assert_array_equal(got_upper, np.concatenate([upper[keep], new_upper]))
+    np.testing.assert_array_equal(got_cost, np.concatenate([cost[keep], new_cost]))
