@@ -149,20 +149,20 @@ def _log_derivative_top(m: complex, n_sph: int, n_top: int, lane: np.ndarray, ws
     j = 1
     while True:
         t = 2.0 * (nu + j)
-        n_done = 0.0
+        n_done = 0
         for s in range(n_sph):
             bjr = t * lane[_IZR + s]
             bji = t * lane[_IZI + s]
             pr = bjr - lane[_DDR + s]
             pi = bji - lane[_DDI + s]
-            pr += tiny if (pr == 0.0 and pi == 0.0) else 0.0
+            pr += tiny if (pr == 0.0) & (pi == 0.0) else 0.0
             u, v = _reciprocal_moderate(pr, pi)
             lane[_DDR + s] = u
             lane[_DDI + s] = v
             rr, ri = _reciprocal_moderate(lane[_CR + s], lane[_CI + s])
             qr = bjr - rr
             qi = bji - ri
-            qr += tiny if (qr == 0.0 and qi == 0.0) else 0.0
+            qr += tiny if (qr == 0.0) & (qi == 0.0) else 0.0
             lane[_CR + s] = qr
             lane[_CI + s] = qi
             delr = qr * u - qi * v
@@ -172,9 +172,9 @@ def _log_derivative_top(m: complex, n_sph: int, n_top: int, lane: np.ndarray, ws
             finished = lane[_DONE + s] != 0.0
             lane[_FR + s] = f_r if finished else f_r * delr - f_i * deli
             lane[_FI + s] = f_i if finished else f_r * deli + f_i * delr
-            finished = finished or abs(delr - 1.0) + abs(deli) < 1e-15
+            finished = finished | (abs(delr - 1.0) + abs(deli) < 1e-15)
             lane[_DONE + s] = 1.0 if finished else 0.0
-            n_done += lane[_DONE + s]
+            n_done += 1 if finished else 0
         j += 1
         if n_done == n_sph or j > 10_000_000:
             break
