@@ -149,6 +149,8 @@ def _log_derivative_top(m: complex, n_sph: int, n_top: int, lane: np.ndarray, ws
     j = 1
     while True:
         t = 2.0 * (nu + j)
+        # An integer count and no short-circuit tests: a float sum over the
+        # spheres, or branches, kept the compiler from vectorizing the loop.
         n_done = 0
         for s in range(n_sph):
             bjr = t * lane[_IZR + s]
