@@ -894,11 +894,14 @@ def compute_optics(
 
     n_threads = min(workers, wl.size)
     if n_threads > 1:
-        # In a process whose kernels are not compiled yet, the first wavelength
-        # alone compiles (or loads from numba's cache) them before threads
-        # share them; after that, it is the costliest wavelength to leave to
-        # one thread.  Each wavelength's result is the same either way.
-        first = [] if mie._accumulate_tiers.signatures else [one(0)]
+        # In a process that has not computed a table yet, the first wavelength
+        # alone compiles (or loads from numba's cache) the kernels before
+        # threads share them; after that, it is the costliest wavelength to
+        # leave to one thread.  (Every polydisperse wavelength calls
+        # _phase_refinement_errors from Python, so its signatures say whether
+        # one has run; kernels called only from compiled code keep none.)
+        # Each wavelength's result is the same either way.
+        first = [] if _phase_refinement_errors.signatures else [one(0)]
         with ThreadPoolExecutor(max_workers=n_threads) as pool:
             results = first + list(pool.map(one, range(len(first), wl.size)))
     else:
