@@ -791,26 +791,44 @@ def _legendre_project(mu_half: np.ndarray, w_half: np.ndarray, f: np.ndarray, lm
     """Legendre coefficients beta_l = (2l+1)/2 int f P_l dmu, l = 0..lmax.
 
     ``f`` holds values at +mu_half followed by values at -mu_half (Gauss
-    nodes and weights of the positive half of a symmetric rule).
+    nodes and weights of the positive half of a symmetric rule); P_l of even
+    l sees f's even part, of odd l its odd part.  The recurrence
+    P_{l+1} = ((2l+1) mu P_l - l P_{l-1}) / (l+1) runs over l for all angles
+    at once (angles innermost, which the compiler vectorizes); each l's sum
+    over angles runs in four interleaved partial sums, in a fixed order.
     """
     n_half = mu_half.shape[0]
-    beta = np.zeros(lmax + 1)
+    fe = np.empty(n_half)
+    fo = np.empty(n_half)
     for i in range(n_half):
-        u = mu_half[i]
-        fe = w_half[i] * (f[i] + f[n_half + i])  # even part, times weight
-        fo = w_half[i] * (f[i] - f[n_half + i])  # odd part, times weight
-        p_prev = 0.0
-        p_cur = 1.0
-        for ell in range(lmax + 1):
-            if ell % 2 == 0:
-                beta[ell] += fe * p_cur
-            else:
-                beta[ell] += fo * p_cur
-            p_next = ((2 * ell + 1) * u * p_cur - ell * p_prev) / (ell + 1)
-            p_prev = p_cur
-            p_cur = p_next
+        fe[i] = w_half[i] * (f[i] + f[n_half + i])  # even part, times weight
+        fo[i] = w_half[i] * (f[i] - f[n_half + i])  # odd part, times weight
+    p_prev = np.zeros(n_half)
+    p_cur = np.ones(n_half)
+    beta = np.empty(lmax + 1)
     for ell in range(lmax + 1):
-        beta[ell] *= (2 * ell + 1) / 2.0
+        g = fe if ell % 2 == 0 else fo
+        s0 = 0.0
+        s1 = 0.0
+        s2 = 0.0
+        s3 = 0.0
+        i = 0
+        while i + 4 <= n_half:
+            s0 += g[i] * p_cur[i]
+            s1 += g[i + 1] * p_cur[i + 1]
+            s2 += g[i + 2] * p_cur[i + 2]
+            s3 += g[i + 3] * p_cur[i + 3]
+            i += 4
+        while i < n_half:
+            s0 += g[i] * p_cur[i]
+            i += 1
+        beta[ell] = ((s0 + s1) + (s2 + s3)) * ((2 * ell + 1) / 2.0)
+        c1 = (2 * ell + 1) / (ell + 1.0)
+        c2 = ell / (ell + 1.0)
+        for i in range(n_half):
+            p_next = c1 * mu_half[i] * p_cur[i] - c2 * p_prev[i]
+            p_prev[i] = p_cur[i]
+            p_cur[i] = p_next
     return beta
 
 

@@ -304,6 +304,32 @@ def test_single_sphere_rejects_bad_input(kwargs: dict, match: str) -> None:
         single_sphere(**kwargs)
 
 
+@pytest.mark.parametrize("n_half", [32, 96])
+def test_legendre_project_recovers_coefficients(n_half: int) -> None:
+    """Gauss-Legendre quadrature on 2 n_half nodes integrates f P_l exactly
+    for degree(f) + l <= 4 n_half - 1, so projecting a Legendre series gives
+    back its coefficients, and zeros above its degree, whatever the parity of
+    the terms.  To round-off: 1e-11 for coefficients of order 1 (the error
+    grows with l, as (2l + 1)/2 times that of the integral; the
+    implementation before the vectorized one erred the same, 1.2e-13 at
+    n_half 32 and 3.6e-12 at 96)."""
+    from numpy.polynomial import legendre
+
+    from dustoptics.quadrature import gauss_legendre
+
+    rng = np.random.default_rng(7)
+    degree = n_half + 8
+    lmax = 3 * n_half - 16
+    coefficients = rng.uniform(-1.0, 1.0, degree + 1)
+    mu, w = gauss_legendre(2 * n_half)
+    mu_half, w_half = np.ascontiguousarray(mu[n_half:]), np.ascontiguousarray(w[n_half:])
+    f = legendre.legval(np.concatenate([mu_half, -mu_half]), coefficients)
+    beta = mie._legendre_project(mu_half, w_half, f, lmax)
+    want = np.zeros(lmax + 1)
+    want[: degree + 1] = coefficients
+    np.testing.assert_allclose(beta, want, rtol=0, atol=1e-11)
+
+
 @pytest.mark.parametrize(("n_in", "n_out"), [(32, 48), (48, 208), (144, 224)])
 def test_interpolation_maps_reproduce_polynomials(n_in: int, n_out: int) -> None:
     """Values of a polynomial of degree 2 n_in - 1 at the 2 n_in Gauss angles,
