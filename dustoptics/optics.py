@@ -433,7 +433,10 @@ def _choose_splits(
     order = np.argsort(-badness / cost, kind="mergesort")
     cumulative = np.cumsum(badness[order])
     n_split = np.searchsorted(cumulative, cumulative[-1] - keep_fraction) + 1
-    split = np.sort(order[:n_split])
+    chosen = np.zeros(badness.shape[0], dtype=np.bool_)
+    for i in range(n_split):
+        chosen[order[i]] = True
+    split = np.flatnonzero(chosen)  # increasing
     k = split.shape[0]
     new_lower = np.empty(2 * k)
     new_upper = np.empty(2 * k)
@@ -480,13 +483,19 @@ def _apply_splits(
     and the panels' coarse, left and right row indices, edges and costs.
     """
     k2 = rows.shape[0] // 2  # new panels
+    width = pool.shape[1]
     if n_rows + 2 * k2 > pool.shape[0]:
-        grown = np.empty((2 * (n_rows + 2 * k2), pool.shape[1]))
-        grown[:n_rows] = pool[:n_rows]
+        grown = np.empty((2 * (n_rows + 2 * k2), width))
+        for r in range(n_rows):
+            for c in range(width):
+                grown[r, c] = pool[r, c]
         pool = grown
-    pool[n_rows : n_rows + 2 * k2] = rows
+    for r in range(2 * k2):
+        for c in range(width):
+            pool[n_rows + r, c] = rows[r, c]
     keep = np.ones(lower.shape[0], dtype=np.bool_)
-    keep[split] = False
+    for p in split:
+        keep[p] = False
     n_keep = lower.shape[0] - split.shape[0]
     size = n_keep + k2
     new_coarse = np.empty(size, dtype=np.int64)
@@ -541,17 +550,40 @@ def _accumulate_by_tier(
     by size, so that its batches hold spheres of similar n_max.
     """
     n_panels = x.shape[0] // nodes_per_panel
-    node_tier = np.empty(x.shape[0], dtype=np.int64)
+    n_tiers = tiers.shape[0]
+    panel_tier = np.empty(n_panels, dtype=np.int64)
+    x_first = np.empty(n_panels)
+    count = np.zeros(n_tiers + 1, dtype=np.int64)
     for p in range(n_panels):
         x_top = x[p * nodes_per_panel]
         for j in range(p * nodes_per_panel, (p + 1) * nodes_per_panel):
             x_top = max(x_top, x[j])
-        tier = np.searchsorted(tiers, int(_n_max(x_top)) + 2)
-        node_tier[p * nodes_per_panel : (p + 1) * nodes_per_panel] = tier
-    by_size = np.argsort(x, kind="mergesort")
-    order = by_size[np.argsort(node_tier[by_size], kind="mergesort")]
+        panel_tier[p] = np.searchsorted(tiers, int(_n_max(x_top)) + 2)
+        x_first[p] = x[p * nodes_per_panel]
+        count[panel_tier[p] + 1] += 1
+    # Panels are disjoint, and x grows along each panel's nodes, so ordering
+    # the panels by tier, then by their first node, orders the nodes by tier,
+    # then by x: a stable sort by x, then a counting sort by tier.
+    for t in range(n_tiers):
+        count[t + 1] += count[t]
+    by_tier = np.empty(n_panels, dtype=np.int64)
+    for p in np.argsort(x_first, kind="mergesort"):
+        by_tier[count[panel_tier[p]]] = p
+        count[panel_tier[p]] += 1
+    x_sorted = np.empty(x.shape[0])
+    w_sorted = np.empty(x.shape[0])
+    panel_sorted = np.empty(x.shape[0], dtype=np.int64)
+    node_tier = np.empty(x.shape[0], dtype=np.int64)
+    for k in range(n_panels):
+        p = by_tier[k]
+        for i in range(nodes_per_panel):
+            j = p * nodes_per_panel + i
+            x_sorted[k * nodes_per_panel + i] = x[j]
+            w_sorted[k * nodes_per_panel + i] = w[j]
+            panel_sorted[k * nodes_per_panel + i] = node_panel[j]
+            node_tier[k * nodes_per_panel + i] = panel_tier[p]
     return mie._accumulate_tiers(
-        m, x[order], w[order], node_panel[order], node_tier[order], n_panels,
+        m, x_sorted, w_sorted, panel_sorted, node_tier, n_panels,
         per_particle, tiers, tables, table_start, maps, map_start,
     )
 
