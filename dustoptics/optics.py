@@ -432,7 +432,7 @@ def _choose_splits(
     badness = panel_error / tol
     order = np.argsort(-badness / cost, kind="mergesort")
     cumulative = np.cumsum(badness[order])
-    n_split = np.searchsorted(cumulative, cumulative[-1] - keep_fraction) + 1
+    n_split = min(np.searchsorted(cumulative, cumulative[-1] - keep_fraction) + 1, order.shape[0])
     chosen = np.zeros(badness.shape[0], dtype=np.bool_)
     for i in range(n_split):
         chosen[order[i]] = True
@@ -559,6 +559,8 @@ def _accumulate_by_tier(
         for j in range(p * nodes_per_panel, (p + 1) * nodes_per_panel):
             x_top = max(x_top, x[j])
         panel_tier[p] = np.searchsorted(tiers, int(_n_max(x_top)) + 2)
+        if panel_tier[p] == n_tiers:
+            raise ValueError("a panel's spheres need more orders than the largest angular tier holds")
         x_first[p] = x[p * nodes_per_panel]
         count[panel_tier[p] + 1] += 1
     # Panels are disjoint, and x grows along each panel's nodes, so ordering

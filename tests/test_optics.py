@@ -381,3 +381,14 @@ def test_accumulate_by_tier_equals_the_full_grid(per_particle: bool):
     assert fast.shape == simple.shape
     for p in range(len(shuffled)):
         np.testing.assert_allclose(fast[p], simple[p], rtol=0, atol=1e-10 * np.abs(simple[p]).max())
+
+
+def test_accumulate_by_tier_rejects_spheres_beyond_the_largest_tier():
+    """The kernel reads its angular tables without bounds checks, so a panel
+    whose spheres need more orders than the largest tier holds is an error,
+    not a read past the tables."""
+    from dustoptics.optics import _accumulate_by_tier, _angular_tiers
+
+    x = np.linspace(100.0, 110.0, 8)  # n_max ~ 130 > 96
+    with pytest.raises(ValueError, match="largest angular tier"):
+        _accumulate_by_tier(1.5 + 0.01j, x, np.ones(8), np.zeros(8, dtype=np.int64), 8, False, *_angular_tiers(96))
