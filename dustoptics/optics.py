@@ -48,6 +48,7 @@ from dustoptics.materials import RefractiveIndex, get_material
 from dustoptics.quadrature import (
     QuadratureSettings,
     gauss_legendre,
+    _wright_omega,
     initial_panels,
     panel_nodes,
     size_parameter_at,
@@ -528,6 +529,18 @@ def _apply_splits(
 
 
 @njit(cache=True, nogil=True)
+def _panel_cost(upper: np.ndarray, x_c: float, angles: bool) -> np.ndarray:
+    """Relative work of evaluating a panel ending at s = ``upper``: with n =
+    n_max at its end (x = x_c omega(s)), ~ (n + 8)^2 with angles (orders x
+    tier angles, a tier ~ n + 8 angles), ~ n + 20 for the coefficients alone."""
+    cost = np.empty(upper.shape[0])
+    for i in range(upper.shape[0]):
+        n = _n_max(x_c * _wright_omega(upper[i]))
+        cost[i] = (n + 8.0) ** 2 if angles else n + 20.0
+    return cost
+
+
+@njit(cache=True, nogil=True)
 def _accumulate_by_tier(
     m: complex,
     x: np.ndarray,
@@ -717,11 +730,9 @@ class _WavelengthSolver:
         return _cross_refinement_errors(pool, coarse, left, right, norm, gnum)
 
     def _split_cost(self, upper: np.ndarray, angles: bool) -> np.ndarray:
-        """Relative work of evaluating a panel ending at ``upper`` (in s): with
-        n = n_max at its end, ~ (n + 8)^2 with angles (orders x tier angles,
-        a tier ~ n + 8 angles), ~ n + 20 for the coefficients alone."""
-        n = _n_max(size_parameter_at(upper, settings=self.settings))
-        return (n + 8.0) ** 2 if angles else n + 20.0
+        """Relative work of evaluating panels ending at ``upper`` (in s) (see
+        :func:`_panel_cost`)."""
+        return _panel_cost(upper, self.settings.transition_size_parameter, angles)
 
     def initial_state(self) -> _Panels:
         """The initial panels, each integrated with its coarse rule and on its halves."""

@@ -45,7 +45,7 @@ from functools import lru_cache
 
 import numpy as np
 from numba import njit
-from scipy.special import roots_legendre, wrightomega
+from scipy.special import roots_legendre
 
 from dustoptics._validation import check_open_interval, check_positive
 from dustoptics.sizedist import SizeDistribution
@@ -156,14 +156,62 @@ def _stretch(x: np.ndarray | float, x_c: float) -> np.ndarray | float:
     return x / x_c + np.log(x / x_c)
 
 
+_EPS = float(np.finfo(np.float64).eps)
+
+
+@njit(cache=True, nogil=True)
+def _wright_omega(s: float) -> float:
+    """Wright omega of real s: the w > 0 with w + ln w = s.
+
+    Lawrence, Corless & Jeffrey (2012), Algorithm 917, on the real line: a
+    first guess (e^s below -2, e^(2 (s - 1) / 3) on [-2, 1), s - ln s +
+    ln s / s above), one step of the fourth-order Fritsch-Shafer-Crowley
+    iteration, and a second where the first's error bound,
+    |(2w^2 - 8w - 1) r^4| / (72 (1 + w)^6), exceeds machine epsilon; e^s
+    below s = -50 and s above 1e20, where those are exact in double
+    precision.  The same steps as ``scipy.special.wrightomega`` for real
+    input, whose values it reproduces to the bit (tests/test_quadrature.py);
+    compiled, so node placement runs without Python in between.
+    """
+    if np.isnan(s):
+        return s
+    if s < -50.0:
+        return np.exp(s)
+    if s > 1e20:
+        return s
+    if s < -2.0:
+        w = np.exp(s)
+    elif s < 1.0:
+        w = np.exp(2.0 * (s - 1.0) / 3.0)
+    else:
+        w = np.log(s)
+        w = s - w + w / s
+    for step in range(2):
+        r = s - w - np.log(w)
+        wp1 = w + 1.0
+        t = 2.0 * wp1 * (wp1 + 2.0 / 3.0 * r)
+        w = w * (1.0 + r / wp1 * (t - r) / (t - 2.0 * r))
+        bound = abs((2.0 * w * w - 8.0 * w - 1.0) * ((r * r) * (r * r)))
+        if not bound >= _EPS * 72.0 * ((wp1 * wp1) * (wp1 * wp1) * (wp1 * wp1)):
+            break
+    return w
+
+
+@njit(cache=True, nogil=True)
 def _unstretch(s: np.ndarray, x_c: float) -> np.ndarray:
-    return x_c * np.real(wrightomega(s))
+    """x = x_c omega(s) for a 1-d array s."""
+    x = np.empty(s.shape[0])
+    for i in range(s.shape[0]):
+        x[i] = x_c * _wright_omega(s[i])
+    return x
 
 
 def size_parameter_at(s: np.ndarray | float, *, settings: QuadratureSettings) -> np.ndarray:
     """Size parameter x at stretched coordinates s: the inverse of
     s(x) = x / x_c + ln(x / x_c), x = x_c omega(s) (Wright omega). [-]"""
-    return _unstretch(np.asarray(s, dtype=np.float64), settings.transition_size_parameter)
+    s = np.asarray(s, dtype=np.float64)
+    x = _unstretch(np.ascontiguousarray(s.ravel()), settings.transition_size_parameter).reshape(s.shape)
+    return x[()] if x.ndim == 0 else x
 
 
 def initial_panels(
@@ -219,10 +267,9 @@ def panel_nodes(
     k_um = 2.0 * np.pi / (wavelength_nm * 1e-3)
     x_c = settings.transition_size_parameter
     t, gw = gauss_legendre(settings.nodes_per_panel)
-    s, ds_weight, node_panel = _gauss_points(
-        np.asarray(lower_s, dtype=np.float64), np.asarray(upper_s, dtype=np.float64), t, gw
+    x, ds_weight, node_panel = _gauss_points(
+        np.asarray(lower_s, dtype=np.float64), np.asarray(upper_s, dtype=np.float64), t, gw, x_c
     )
-    x = _unstretch(s, x_c)
     r = x / k_um
     w = _node_weights(x, np.asarray(distribution.pdf(r), dtype=np.float64), ds_weight, x_c, k_um)
     return RadiusNodes(size_parameter=x, weight=w, radius_um=r), node_panel
@@ -230,23 +277,23 @@ def panel_nodes(
 
 @njit(cache=True, nogil=True)
 def _gauss_points(
-    lower: np.ndarray, upper: np.ndarray, t: np.ndarray, gw: np.ndarray
+    lower: np.ndarray, upper: np.ndarray, t: np.ndarray, gw: np.ndarray, x_c: float
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The rule (t, gw) on [-1, 1] mapped to each panel [lower[p], upper[p]]:
-    nodes s = mid + half t and weights half gw, panel after panel, and each
-    node's panel index."""
+    """The rule (t, gw) on [-1, 1] mapped to each panel [lower[p], upper[p]]
+    of s, panel after panel: the nodes' size parameters x = x_c omega(s) at
+    s = mid + half t, their weights half gw in s, and their panel indices."""
     n = t.shape[0]
-    s = np.empty(lower.shape[0] * n)
+    x = np.empty(lower.shape[0] * n)
     ds_weight = np.empty(lower.shape[0] * n)
     node_panel = np.empty(lower.shape[0] * n, dtype=np.int64)
     for p in range(lower.shape[0]):
         half = 0.5 * (upper[p] - lower[p])
         mid = 0.5 * (upper[p] + lower[p])
         for i in range(n):
-            s[p * n + i] = mid + half * t[i]
+            x[p * n + i] = x_c * _wright_omega(mid + half * t[i])
             ds_weight[p * n + i] = half * gw[i]
             node_panel[p * n + i] = p
-    return s, ds_weight, node_panel
+    return x, ds_weight, node_panel
 
 
 @njit(cache=True, nogil=True)
