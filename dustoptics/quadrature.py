@@ -172,6 +172,10 @@ def _wright_omega(s: float) -> float:
     precision.  The same steps as ``scipy.special.wrightomega`` for real
     input, whose values it reproduces to the bit (tests/test_quadrature.py);
     compiled, so node placement runs without Python in between.
+
+    P. W. Lawrence, R. M. Corless and D. J. Jeffrey, "Algorithm 917: Complex
+    double-precision evaluation of the Wright omega function," ACM Trans.
+    Math. Softw. 38(3), 20 (2012). doi:10.1145/2168773.2168779
     """
     if np.isnan(s):
         return s
