@@ -339,6 +339,19 @@ def _angular_tiers(n_half: int) -> tuple[np.ndarray, ...]:
 
 
 @njit(cache=True, nogil=True)
+def _halves_total(pool: np.ndarray, left: np.ndarray, right: np.ndarray) -> np.ndarray:
+    """Sum over panels p of the rows ``pool[left[p]] + pool[right[p]]``, panel
+    after panel: the refinement's current result."""
+    total = np.zeros(pool.shape[1])
+    for p in range(left.shape[0]):
+        a = pool[left[p]]
+        b = pool[right[p]]
+        for c in range(pool.shape[1]):
+            total[c] += a[c] + b[c]
+    return total
+
+
+@njit(cache=True, nogil=True)
 def _phase_refinement_errors(
     pool: np.ndarray, coarse: np.ndarray, left: np.ndarray, right: np.ndarray, n_f: int, norm: int
 ) -> tuple[np.ndarray, np.ndarray, float]:
@@ -352,13 +365,7 @@ def _phase_refinement_errors(
     changes of the normalization.  One pass over the rows, no temporaries.
     """
     n_p = coarse.shape[0]
-    width = pool.shape[1]
-    total = np.zeros(width)
-    for p in range(n_p):
-        a = pool[left[p]]
-        b = pool[right[p]]
-        for c in range(width):
-            total[c] += a[c] + b[c]
+    total = _halves_total(pool, left, right)
     column = np.zeros(n_f)
     panel_error = np.empty(n_p)
     norm_sum = 0.0
@@ -388,13 +395,7 @@ def _cross_refinement_errors(
     |dg| <= (|d num| + |g| |d norm|) / norm.
     """
     n_p = coarse.shape[0]
-    width = pool.shape[1]
-    total = np.zeros(width)
-    for p in range(n_p):
-        a = pool[left[p]]
-        b = pool[right[p]]
-        for c in range(width):
-            total[c] += a[c] + b[c]
+    total = _halves_total(pool, left, right)
     g = abs(total[gnum] / total[norm])
     panel_error = np.empty(n_p)
     sums = np.zeros(3)
