@@ -70,8 +70,8 @@ RefractiveIndexLike = Union[complex, float, Sequence[complex], Callable[[Any], A
 
 
 @njit(cache=True, nogil=True)
-def _n_max(x: np.ndarray | float) -> np.ndarray | float:
-    """:func:`mie.wiscombe_nmax` for arrays, before rounding down: x + 4.05 x^(1/3) + 2."""
+def _n_max(x: float) -> float:
+    """:func:`mie.wiscombe_nmax` before rounding down: x + 4.05 x^(1/3) + 2."""
     return x + 4.05 * np.cbrt(x) + 2.0
 
 
