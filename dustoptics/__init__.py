@@ -1,15 +1,15 @@
 """dustoptics: exact, reproducible optics of atmospheric dust for renderers.
 
 The data flow reads one way: materials and mixing rules give a refractive index
-m = n + i k; a size distribution gives n(r); :mod:`dustoptics.quadrature` places
-deterministic radius nodes; :mod:`dustoptics.mie` computes the spheres; and
-:func:`dustoptics.optics.compute_optics` averages them into a converged table
-over wavelength and scattering angle.  :mod:`dustoptics.phase` holds the
-analytic phase functions and blending, :mod:`dustoptics.config` and
-:mod:`dustoptics.presets` the named models, :mod:`dustoptics.table` the data
+m = n + i k; a size distribution gives n(r); :mod:`dustoptics.scattering.quadrature` places
+deterministic radius nodes; :mod:`dustoptics.scattering.mie` computes the spheres; and
+:func:`dustoptics.scattering.optics.compute_optics` averages them into a converged table
+over wavelength and scattering angle.  :mod:`dustoptics.scattering.phase` holds the
+analytic phase functions and blending, :mod:`dustoptics.models.config` and
+:mod:`dustoptics.models.presets` the named models, :mod:`dustoptics.table` the data
 model with provenance, :mod:`dustoptics.io` the renderers' formats,
-:mod:`dustoptics.gases`, :mod:`dustoptics.column`,
-:mod:`dustoptics.parametric` and :mod:`dustoptics.atmosphere` the other
+:mod:`dustoptics.atmosphere.gases`, :mod:`dustoptics.atmosphere.column`,
+:mod:`dustoptics.atmosphere.parametric` and :mod:`dustoptics.atmosphere.sets` the other
 constituents and whole atmosphere sets, and :mod:`dustoptics.cli` the
 command line.
 
@@ -20,30 +20,16 @@ command line.
 
 from importlib.metadata import PackageNotFoundError, version as _version
 
-from dustoptics import (
-    atmosphere,
-    colour,
-    column,
-    compare,
-    config,
-    gases,
-    io,
-    materials,
-    mie,
-    mixing,
-    optics,
-    parametric,
-    phase,
-    presets,
-    quadrature,
-    sizedist,
-    table,
-)
+from dustoptics import atmosphere, colour, compare, io, models, particles, scattering, table
+from dustoptics.atmosphere import column, gases, parametric
+from dustoptics.models import config, presets
+from dustoptics.particles import materials, mixing, sizedist
+from dustoptics.scattering import mie, optics, phase, quadrature
 from dustoptics.compare import compare_tables
-from dustoptics.config import build_table, load_config
-from dustoptics.presets import build_preset, list_presets
+from dustoptics.models.config import build_table, load_config
+from dustoptics.models.presets import build_preset, list_presets
 from dustoptics.table import Provenance, Source, Table
-from dustoptics.materials import (
+from dustoptics.particles.materials import (
     ConstantIndex,
     GasFormulaIndex,
     OrientationAverage,
@@ -53,9 +39,9 @@ from dustoptics.materials import (
     list_materials,
     read_index_csv,
 )
-from dustoptics.mixing import Mixture, bruggeman, mars_dust, maxwell_garnett
-from dustoptics.optics import ConvergenceWarning, OpticsTable, compute_optics
-from dustoptics.phase import (
+from dustoptics.particles.mixing import Mixture, bruggeman, mars_dust, maxwell_garnett
+from dustoptics.scattering.optics import ConvergenceWarning, OpticsTable, compute_optics
+from dustoptics.scattering.phase import (
     costa2021_mars_dhg,
     cornette_shanks1992,
     double_henyey_greenstein,
@@ -64,8 +50,8 @@ from dustoptics.phase import (
     renormalize,
     sphere_integral,
 )
-from dustoptics.quadrature import QuadratureSettings
-from dustoptics.sizedist import (
+from dustoptics.scattering.quadrature import QuadratureSettings
+from dustoptics.particles.sizedist import (
     Gamma,
     LogNormal,
     ModifiedGamma,
@@ -82,6 +68,9 @@ except PackageNotFoundError:  # running from a source tree that was never instal
 
 __all__ = [
     "atmosphere",
+    "models",
+    "particles",
+    "scattering",
     "colour",
     "column",
     "compare",

@@ -12,7 +12,7 @@ Usage::
     dustoptics --version
 
 ``build`` computes a preset (``dustoptics presets``) or a TOML configuration
-file (:mod:`dustoptics.config`; copy a preset with ``presets --show NAME``)
+file (:mod:`dustoptics.models.config`; copy a preset with ``presets --show NAME``)
 and writes it into ``DIR/NAME/`` in each format of :data:`dustoptics.io.FORMATS`
 (``hdf5``, ``csv``, ``cosmoscout``, ``glsl``, ``texture``); ``build mars`` and
 ``build earth`` write CosmoScout VR's whole atmosphere set (molecules,
@@ -119,7 +119,7 @@ class TableBuilder:
 
     Parameters
     ----------
-    config : dustoptics.config.BuildConfig
+    config : dustoptics.models.config.BuildConfig
         A validated configuration.
     progress : TextIO or None
         Where to report progress (None: silent).
@@ -132,7 +132,7 @@ class TableBuilder:
     @classmethod
     def from_name(cls, name_or_config: str, *, progress: TextIO | None = None) -> TableBuilder:
         """A builder for a preset name or the path of a TOML configuration file."""
-        from dustoptics import config, presets
+        from dustoptics.models import config, presets
 
         if name_or_config.endswith(".toml") or os.sep in name_or_config or Path(name_or_config).is_file():
             return cls(config.load_config(name_or_config), progress=progress)
@@ -147,7 +147,7 @@ class TableBuilder:
 
     def build(self) -> Any:
         """Compute the table, reporting progress per wavelength."""
-        from dustoptics import config
+        from dustoptics.models import config
 
         start = time.perf_counter()
         tty = self.progress is not None and self.progress.isatty()
@@ -188,12 +188,14 @@ def build_atmosphere(
     1 deg), its number density set by the vertical ``optical_depth`` at
     ``reference_wavelength_nm`` (<C_ext> computed there exactly).
     Earth: Kobe 2026's air, aerosols and ozone on his three wavelengths, or,
-    with ``ozone_csv`` (:func:`dustoptics.gases.read_ozone_csv`), that
+    with ``ozone_csv`` (:func:`dustoptics.atmosphere.gases.read_ozone_csv`), that
     spectrum in Bruneton's ozone layer on the 15 wavelengths.
     """
     from dataclasses import replace
 
-    from dustoptics import atmosphere, column, config, gases
+    from dustoptics.atmosphere import column, gases
+    from dustoptics.atmosphere import sets as atmosphere
+    from dustoptics.models import config
     from dustoptics.table import Table
 
     if name == "earth":
@@ -345,7 +347,7 @@ def _add_format_options(p: argparse.ArgumentParser, *, default: str | None) -> N
 
 def _parser() -> argparse.ArgumentParser:
     from dustoptics import __version__
-    from dustoptics.presets import DEFAULT_PRESET
+    from dustoptics.models.presets import DEFAULT_PRESET
 
     parser = argparse.ArgumentParser(
         prog=PROG,
@@ -371,7 +373,7 @@ def _parser() -> argparse.ArgumentParser:
     g.add_argument("--reference-wavelength-nm", type=_positive_float, default=550.0, metavar="NM",
                    help="wavelength of that optical depth [nm] (default 550)")
     g.add_argument("--ozone-csv", type=Path, metavar="FILE",
-                   help="Earth: ozone cross-sections (see dustoptics.gases.read_ozone_csv) in Bruneton's layer")
+                   help="Earth: ozone cross-sections (see dustoptics.atmosphere.gases.read_ozone_csv) in Bruneton's layer")
 
     p = sub.add_parser("export", help="convert an HDF5 table into other formats")
     p.add_argument("file", type=Path, metavar="FILE.h5")
@@ -410,7 +412,7 @@ def _format_options(args: argparse.Namespace, table: Any) -> tuple[Any, FormatOp
     """The table (with a number density if given) and the writers' options."""
     density = None
     if "cosmoscout" in args.format:
-        from dustoptics.column import ExponentialProfile, sample_profile
+        from dustoptics.atmosphere.column import ExponentialProfile, sample_profile
 
         if args.number_density_per_m3 is not None:
             table = table.replace(number_density_per_m3=args.number_density_per_m3)
@@ -437,7 +439,7 @@ def _format_options(args: argparse.Namespace, table: Any) -> tuple[Any, FormatOp
 
 
 def _cmd_build_atmosphere(args: argparse.Namespace) -> int:
-    from dustoptics import atmosphere
+    from dustoptics.atmosphere import sets as atmosphere
 
     atm = build_atmosphere(
         args.name,
@@ -508,7 +510,7 @@ def _cmd_plot(args: argparse.Namespace) -> int:
 
 
 def _cmd_presets(args: argparse.Namespace) -> int:
-    from dustoptics import presets
+    from dustoptics.models import presets
 
     if args.show is not None:
         try:
@@ -525,7 +527,7 @@ def _cmd_presets(args: argparse.Namespace) -> int:
 
 
 def _cmd_materials(args: argparse.Namespace) -> int:
-    from dustoptics.materials import get_material, list_materials
+    from dustoptics.particles.materials import get_material, list_materials
 
     for name in list_materials():
         material = get_material(name)
@@ -558,7 +560,7 @@ def main(argv: list[str] | None = None) -> int:
     argv : list of str, optional
         Arguments without the program name (default ``sys.argv[1:]``).
     """
-    from dustoptics.config import ConfigError
+    from dustoptics.models.config import ConfigError
 
     try:
         try:

@@ -5,7 +5,7 @@ forward peaks, the asymmetry parameters, and the median and largest relative
 difference of the phase functions over angle.  Its first use is the seed's
 number weighting against the physical cross-section weighting::
 
-    from dustoptics import presets
+    from dustoptics.models import presets
     from dustoptics.compare import compare_tables
 
     seed = presets.build_preset("blue-moons-seed")     # 1,800 angles

@@ -363,11 +363,11 @@ class Table:
         notes: tuple[str, ...] = (),
         number_density_per_m3: float | None = None,
     ) -> Table:
-        """A table from :func:`dustoptics.optics.compute_optics` results.
+        """A table from :func:`dustoptics.scattering.optics.compute_optics` results.
 
         Parameters
         ----------
-        optics : dustoptics.optics.OpticsTable
+        optics : dustoptics.scattering.optics.OpticsTable
             Computed optics.
         name : str
             Table name.
@@ -515,7 +515,7 @@ class Table:
         """Phase function at other angles by linear interpolation in angle.
 
         This is the interpolation a renderer applies to the table (and that
-        :func:`dustoptics.phase.sphere_integral` integrates exactly); at angles
+        :func:`dustoptics.scattering.phase.sphere_integral` integrates exactly); at angles
         of the table's own grid it returns the stored values unchanged.
 
         Parameters

@@ -113,8 +113,8 @@ if str(REPO_ROOT) not in sys.path:
     sys.path.insert(0, str(REPO_ROOT))
 
 import dustoptics as do
-from dustoptics import quadrature
-from dustoptics.quadrature import QuadratureSettings
+from dustoptics.scattering import quadrature
+from dustoptics.scattering.quadrature import QuadratureSettings
 
 # The default Mars-dust table and the storm case.
 R_EFF_UM, V_EFF = 1.6, 0.2

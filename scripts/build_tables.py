@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from dustoptics import presets
+from dustoptics.models import presets
 from dustoptics.io import read_hdf5, write_glsl, write_hdf5
 
 REPO_ROOT = Path(__file__).resolve().parents[1]

@@ -1,4 +1,4 @@
-"""Tests of dustoptics.atmosphere: complete CosmoScout VR sets for Mars and Earth."""
+"""Tests of dustoptics.atmosphere.sets: complete CosmoScout VR sets for Mars and Earth."""
 
 from __future__ import annotations
 
@@ -9,9 +9,9 @@ import pytest
 from _shared import shared_path
 
 import dustoptics as do
-from dustoptics import atmosphere as atm
-from dustoptics import gases
-from dustoptics.column import (
+from dustoptics.atmosphere import sets as atm
+from dustoptics.atmosphere import gases
+from dustoptics.atmosphere.column import (
     BRUNETON2017_OZONE,
     BRUNETON2017_OZONE_PEAK_NUMBER_DENSITY_PER_M3,
     ExponentialProfile,

@@ -1,4 +1,4 @@
-"""Tests of dustoptics.column: density profiles, optical depth <-> number density."""
+"""Tests of dustoptics.atmosphere.column: density profiles, optical depth <-> number density."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from scipy import integrate
 
-from dustoptics.column import (
+from dustoptics.atmosphere.column import (
     BRUNETON2017_OZONE,
     BRUNETON2017_OZONE_PEAK_NUMBER_DENSITY_PER_M3,
     ExponentialProfile,

@@ -7,9 +7,9 @@ import dataclasses
 import numpy as np
 import pytest
 
-from dustoptics import presets
+from dustoptics.models import presets
 from dustoptics.compare import TableComparison, compare_tables
-from dustoptics.config import build_table
+from dustoptics.models.config import build_table
 from dustoptics.table import Table
 
 

@@ -7,8 +7,9 @@ import dataclasses
 import numpy as np
 import pytest
 
-from dustoptics import phase, presets
-from dustoptics.config import (
+from dustoptics.models import presets
+from dustoptics.scattering import phase
+from dustoptics.models.config import (
     BuildConfig,
     ConfigError,
     build_table,

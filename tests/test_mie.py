@@ -16,8 +16,8 @@ import numpy as np
 import pytest
 
 import dustoptics as do
-from dustoptics import mie
-from dustoptics.mie import single_sphere
+from dustoptics.scattering import mie
+from dustoptics.scattering.mie import single_sphere
 from _shared import shared_path
 
 BENCH = ("reference-data", "mie-benchmarks")
@@ -315,7 +315,7 @@ def test_legendre_project_recovers_coefficients(n_half: int) -> None:
     n_half 32 and 3.6e-12 at 96)."""
     from numpy.polynomial import legendre
 
-    from dustoptics.quadrature import gauss_legendre
+    from dustoptics.scattering.quadrature import gauss_legendre
 
     rng = np.random.default_rng(7)
     degree = n_half + 8
@@ -368,7 +368,7 @@ def test_tiers_equal_the_full_grid(per_particle: bool) -> None:
     the rows of the simple path (every sphere summed on the full grid).  The
     interpolation is exact for |S|^2 of degree 2 n_max < 2 n_tier, so they
     agree to round-off (1e-10 of the largest value, as the maps' own test)."""
-    from dustoptics.optics import _angular_tiers, _gauss_angles
+    from dustoptics.scattering.optics import _angular_tiers, _gauss_angles
 
     m = 1.52 + 0.004j
     n_full = 96

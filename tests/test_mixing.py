@@ -1,4 +1,4 @@
-"""Tests of dustoptics.mixing: the mixing rules, Mixture, and the Mars dust model.
+"""Tests of dustoptics.particles.mixing: the mixing rules, Mixture, and the Mars dust model.
 
 Property-based tests (hypothesis) come first, then worked values and errors.
 """
@@ -14,8 +14,8 @@ from _shared import shared_path
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
-from dustoptics.materials import ConstantIndex, TabulatedIndex, get_material
-from dustoptics.mixing import (
+from dustoptics.particles.materials import ConstantIndex, TabulatedIndex, get_material
+from dustoptics.particles.mixing import (
     MIXING_RULES,
     Mixture,
     bruggeman,

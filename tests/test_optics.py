@@ -9,8 +9,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import dustoptics as do
-from dustoptics.optics import _Run, _WavelengthSolver
-from dustoptics.quadrature import QuadratureSettings, radius_nodes, size_parameter_at
+from dustoptics.scattering.optics import _Run, _WavelengthSolver
+from dustoptics.scattering.quadrature import QuadratureSettings, radius_nodes, size_parameter_at
 from _shared import shared_path
 
 # Gauss-Legendre angles: P(mu) of a truncated Mie series is a polynomial in mu,
@@ -252,7 +252,7 @@ def test_phase_refinement_errors_equal_the_numpy_formula():
     with whole-array numpy operations (sum of the halves; per panel
     max_mu |dF|/F plus the normalization's relative change; for the sum
     max_mu sum_p |dF_p|/F plus the summed normalization changes)."""
-    from dustoptics.optics import _phase_refinement_errors
+    from dustoptics.scattering.optics import _phase_refinement_errors
 
     rng = np.random.default_rng(3)
     n_f, width, n_p = 40, 45, 7
@@ -277,7 +277,7 @@ def test_cross_refinement_errors_equal_the_numpy_formula(per_particle: bool):
     """The compiled error pass of the cross-section refinement equals the
     formula with whole-array numpy operations: relative changes of <C_ext>
     and <C_sca>, and of g = num / norm the bound (|d num| + |g| |d norm|) / norm."""
-    from dustoptics.optics import _cross_refinement_errors
+    from dustoptics.scattering.optics import _cross_refinement_errors
 
     rng = np.random.default_rng(5)
     n_p = 9
@@ -309,7 +309,7 @@ def test_split_bookkeeping_equals_the_numpy_formula():
     hold < keep_fraction of tol; the new panels (left halves, then right
     halves) take their parent's half rows as coarse rows and the evaluated
     rows as their halves; kept panels keep their order and rows."""
-    from dustoptics.optics import _apply_splits, _choose_splits
+    from dustoptics.scattering.optics import _apply_splits, _choose_splits
 
     rng = np.random.default_rng(11)
     n_p, width, tol, keep_fraction = 12, 6, 1e-4, 0.9
@@ -362,8 +362,8 @@ def test_accumulate_by_tier_equals_the_full_grid(per_particle: bool):
     tier then size, panels given in any order) gives each panel the row that
     summing every sphere on the full angle grid gives, to round-off (1e-10 of
     each row's largest value, as the tiers' own test in test_mie)."""
-    from dustoptics import mie
-    from dustoptics.optics import _accumulate_by_tier, _angular_tiers, _gauss_angles
+    from dustoptics.scattering import mie
+    from dustoptics.scattering.optics import _accumulate_by_tier, _angular_tiers, _gauss_angles
 
     m = 1.52 + 0.004j
     n_full = 96
@@ -387,7 +387,7 @@ def test_accumulate_by_tier_rejects_spheres_beyond_the_largest_tier():
     """The kernel reads its angular tables without bounds checks, so a panel
     whose spheres need more orders than the largest tier holds is an error,
     not a read past the tables."""
-    from dustoptics.optics import _accumulate_by_tier, _angular_tiers
+    from dustoptics.scattering.optics import _accumulate_by_tier, _angular_tiers
 
     x = np.linspace(100.0, 110.0, 8)  # n_max ~ 130 > 96
     with pytest.raises(ValueError, match="largest angular tier"):

@@ -1,4 +1,4 @@
-"""Tests of dustoptics.parametric: Ångström, anomalous diffraction, Costa's turbidity."""
+"""Tests of dustoptics.atmosphere.parametric: Ångström, anomalous diffraction, Costa's turbidity."""
 
 from __future__ import annotations
 
@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 from scipy import integrate
 
-from dustoptics import optics
-from dustoptics.parametric import (
+from dustoptics.scattering import optics
+from dustoptics.atmosphere.parametric import (
     COSTA2021_MARS_HULST,
     ScatteringExceedsExtinctionWarning,
     ada_cext_um2,
@@ -19,7 +19,7 @@ from dustoptics.parametric import (
     costa2021_aerosol_coefficients,
     costa2021_turbidity_beta_sca_per_m,
 )
-from dustoptics.sizedist import ModifiedGamma, Monodisperse
+from dustoptics.particles.sizedist import ModifiedGamma, Monodisperse
 
 WL = np.array([440.0, 550.0, 680.0])
 

@@ -1,4 +1,4 @@
-"""Tests for dustoptics.phase.
+"""Tests for dustoptics.scattering.phase.
 
 Normalization and mean cosines are checked with quadratures that share no code
 with the module: composite Gauss-Legendre over ``mu`` (numpy's ``leggauss``)
@@ -21,9 +21,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy import integrate
 
-from dustoptics import phase
-from dustoptics import phase as do_phase
-from dustoptics.phase import (
+from dustoptics.scattering import phase
+from dustoptics.scattering import phase as do_phase
+from dustoptics.scattering.phase import (
     ANALYTIC_MODELS,
     COLLIENNE2013_MARS,
     COSTA2021_MARS_DHG_CODE,

@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from dustoptics import plot
-from dustoptics.phase import henyey_greenstein
+from dustoptics.scattering.phase import henyey_greenstein
 from dustoptics.table import Table
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"

@@ -10,9 +10,10 @@ import pandas as pd
 import pytest
 from _shared import shared_path
 
-from dustoptics import phase, presets
-from dustoptics.config import BuildConfig, build_table, parse_config
-from dustoptics.phase import ExtrapolationWarning
+from dustoptics.models import presets
+from dustoptics.scattering import phase
+from dustoptics.models.config import BuildConfig, build_table, parse_config
+from dustoptics.scattering.phase import ExtrapolationWarning
 from dustoptics.table import Table, canonical_json
 
 NAMES = ["blue-moons", "blue-moons-seed", "collienne", "cosmoscout-mars", "costa", "hybrid", "hybrid-seed"]

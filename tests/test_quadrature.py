@@ -1,4 +1,4 @@
-"""Tests of dustoptics.quadrature's compiled pieces (the quadrature's
+"""Tests of dustoptics.scattering.quadrature's compiled pieces (the quadrature's
 behaviour as a whole is tested through the tables in test_optics and
 test_accuracy)."""
 
@@ -10,7 +10,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.special import wrightomega
 
-from dustoptics.quadrature import QuadratureSettings, _unstretch, _wright_omega, size_parameter_at
+from dustoptics.scattering.quadrature import QuadratureSettings, _unstretch, _wright_omega, size_parameter_at
 
 
 def test_wright_omega_equals_scipy_to_the_bit():

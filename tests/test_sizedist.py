@@ -1,4 +1,4 @@
-"""Tests for dustoptics.sizedist.
+"""Tests for dustoptics.particles.sizedist.
 
 The analytic moments, tail fractions and bounds are checked against
 ``scipy.integrate.quad`` of the density, which shares no code with them (the
@@ -21,7 +21,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy import integrate
 
-from dustoptics.sizedist import (
+from dustoptics.particles.sizedist import (
     Gamma,
     LogNormal,
     ModifiedGamma,

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from dustoptics import presets
+from dustoptics.models import presets
 
 SCRIPT = Path(__file__).resolve().parents[1] / "scripts" / "build_tables.py"
 

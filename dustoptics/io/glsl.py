@@ -58,7 +58,7 @@ from dustoptics.colour import CMF_MODELS, band_weights
 from dustoptics.io import register_format
 from dustoptics.io._atomic import write_files
 from dustoptics.io.texture import _safe_stem
-from dustoptics.phase import sphere_integral
+from dustoptics.scattering.phase import sphere_integral
 from dustoptics.table import PHASE_NORMALIZATION
 
 __all__ = [

@@ -52,7 +52,7 @@ import numpy as np
 from dustoptics._validation import check_choice
 from dustoptics.io import register_format
 from dustoptics.io._atomic import FormatError, write_files
-from dustoptics.phase import sphere_integral
+from dustoptics.scattering.phase import sphere_integral
 from dustoptics.table import PHASE_NORMALIZATION
 
 __all__ = [

@@ -18,7 +18,7 @@ ADA accuracy
 ------------
 The ADA assumes a large size parameter and ``|m - 1| << 1``, and it omits
 the edge (grazing-ray) contribution, so it falls short of exact Mie.  Measured
-against :func:`dustoptics.optics.compute_optics` for a modified gamma
+against :func:`dustoptics.scattering.optics.compute_optics` for a modified gamma
 distribution (v_eff = 0.2) at 440, 550 and 680 nm (``tests/test_parametric.py``):
 
 =====================  ========  =====================
@@ -64,9 +64,9 @@ from dustoptics._validation import (
     check_positive,
     check_real,
 )
-from dustoptics.optics import resolve_refractive_index
-from dustoptics.quadrature import gauss_legendre
-from dustoptics.sizedist import SizeDistribution
+from dustoptics.scattering.optics import resolve_refractive_index
+from dustoptics.scattering.quadrature import gauss_legendre
+from dustoptics.particles.sizedist import SizeDistribution
 
 __all__ = [
     "COSTA2021_MARS_HULST",
@@ -247,7 +247,7 @@ def ada_cext_um2(
     wavelength_nm : array_like
         Strictly increasing wavelengths. [nm]
     refractive_index : complex, sequence, str or callable
-        As for :func:`dustoptics.optics.compute_optics`; ``n > 1``. [-]
+        As for :func:`dustoptics.scattering.optics.compute_optics`; ``n > 1``. [-]
     distribution : SizeDistribution
         Number size distribution (a Monodisperse one gives ``pi r^2 Q``).
 

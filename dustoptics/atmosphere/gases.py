@@ -102,7 +102,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy import constants
 
-from dustoptics import phase as _phase
+from dustoptics.scattering import phase as _phase
 from dustoptics._validation import (
     _show,
     as_float_array,
@@ -110,7 +110,7 @@ from dustoptics._validation import (
     check_choice,
     check_positive,
 )
-from dustoptics.materials import GasFormulaIndex, get_material
+from dustoptics.particles.materials import GasFormulaIndex, get_material
 from dustoptics.table import Provenance, Source, Table
 
 __all__ = [
@@ -752,7 +752,7 @@ def _at_points(name: str, wavelength_nm: ArrayLike, points: tuple[float, ...], v
 def collienne2013_beta_per_m(wavelength_nm: ArrayLike) -> FloatArray:
     """Collienne et al.'s Mars "Rayleigh" coefficients, only at 440, 510 and 680 nm. [m^-1]
 
-    Values from :data:`dustoptics.phase.COLLIENNE2013_MARS` (5.75e-6,
+    Values from :data:`dustoptics.scattering.phase.COLLIENNE2013_MARS` (5.75e-6,
     13.57e-6, 19.918e-6 m^-1): chosen by eye, increasing with wavelength, not
     computed from a refractive index.
 
@@ -777,7 +777,7 @@ def collienne2013_table(
     carries them per unit number density: ``number_density_per_m3 = 1`` and
     ``csca_um2 = cext_um2 = beta * 1e12``, so ``beta_sca_per_m`` returns the
     published values (to rounding, 1e-16).  The phase function is
-    :func:`dustoptics.phase.rayleigh` (Collienne's molecules are a Rayleigh
+    :func:`dustoptics.scattering.phase.rayleigh` (Collienne's molecules are a Rayleigh
     layer with hand-chosen coefficients).
     """
     wl = as_increasing_grid("wavelength_nm", wavelength_nm, unit="nm")

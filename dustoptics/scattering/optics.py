@@ -2,7 +2,7 @@
 
 :func:`compute_optics` averages single-sphere Mie results over a size
 distribution n(r) (normalized to 1) with the deterministic quadrature of
-:mod:`dustoptics.quadrature`:
+:mod:`dustoptics.scattering.quadrature`:
 
     <C_ext> = int n C_ext dr,   <C_sca> = int n C_sca dr,   <C_abs> = <C_ext> - <C_sca>,
 
@@ -42,10 +42,10 @@ from typing import Any, NamedTuple, Union
 import numpy as np
 from numba import njit
 
-from dustoptics import mie
+from dustoptics.scattering import mie
 from dustoptics._validation import as_increasing_grid, check_choice, check_open_interval
-from dustoptics.materials import RefractiveIndex, get_material
-from dustoptics.quadrature import (
+from dustoptics.particles.materials import RefractiveIndex, get_material
+from dustoptics.scattering.quadrature import (
     QuadratureSettings,
     gauss_legendre,
     _wright_omega,
@@ -53,7 +53,7 @@ from dustoptics.quadrature import (
     panel_nodes,
     size_parameter_at,
 )
-from dustoptics.sizedist import SizeDistribution
+from dustoptics.particles.sizedist import SizeDistribution
 
 __all__ = [
     "OpticsTable",
@@ -129,7 +129,7 @@ class OpticsTable:
         cross-sections and g, per wavelength. [-]
     quadrature_panels : tuple of numpy.ndarray
         Per wavelength, the phase function's final panels (shape (n_panels, 2))
-        in the stretched variable s of :mod:`dustoptics.quadrature`; each
+        in the stretched variable s of :mod:`dustoptics.scattering.quadrature`; each
         panel's two halves carry the Gauss-Legendre rule that gave the table,
         so ``quadrature.panel_nodes`` on the halves reproduces the nodes. [-]
     cross_section_panels : tuple of numpy.ndarray
@@ -199,7 +199,7 @@ def resolve_refractive_index(
     """Evaluate a refractive-index specification at the wavelengths.
 
     Accepts a complex constant, a sequence with one value per wavelength, a
-    catalogue name (see :func:`dustoptics.materials.list_materials`), a material
+    catalogue name (see :func:`dustoptics.particles.materials.list_materials`), a material
     or mixture object, or any callable ``wavelength_nm -> complex``.  Returns
     the complex array m = n + i k and a description.  Raises ValueError for
     k < 0, n <= 0, non-finite values, or a wavelength outside the data.
@@ -846,7 +846,7 @@ def compute_optics(
     refractive_index : complex, sequence, str or callable
         m = n + i k (k >= 0) relative to the surrounding medium: one value for
         all wavelengths, one per wavelength, a catalogue material name, a
-        material or mixture (e.g. :func:`dustoptics.mixing.mars_dust`), or any
+        material or mixture (e.g. :func:`dustoptics.particles.mixing.mars_dust`), or any
         callable ``wavelength_nm -> complex``. [-]
     distribution : SizeDistribution
         Number size distribution, e.g. ``ModifiedGamma(r_eff_um=1.6, v_eff=0.2)``.

@@ -1,10 +1,10 @@
 """Named dust models: the package's preset configuration files.
 
-Each preset is a TOML file in ``dustoptics/data/presets/`` that follows the
-schema of :mod:`dustoptics.config`, with comments saying what it is, its
+Each preset is a TOML file in ``dustoptics/models/data/presets/`` that follows the
+schema of :mod:`dustoptics.models.config`, with comments saying what it is, its
 sources with full citations and every choice its sources left open.  Copy one
 (:func:`preset_text`), edit it, and build it with
-:func:`dustoptics.config.load_config` and :func:`dustoptics.config.build_table`.
+:func:`dustoptics.models.config.load_config` and :func:`dustoptics.models.config.build_table`.
 
 ========================  ======================================================
 ``blue-moons``            Blue Moon's dust (Meyran 2022 after Ehlers et al. 2014),
@@ -23,7 +23,7 @@ sources with full citations and every choice its sources left open.  Copy one
                           quadrature instead of random radii
 ========================  ======================================================
 
->>> from dustoptics import presets
+>>> from dustoptics.models import presets
 >>> presets.list_presets()[:2]
 ['blue-moons', 'blue-moons-seed']
 >>> presets.load_preset("blue-moons").optics.weighting
@@ -35,7 +35,7 @@ from __future__ import annotations
 from importlib import resources
 from typing import Any, Final
 
-from dustoptics.config import BuildConfig, build_table, parse_config
+from dustoptics.models.config import BuildConfig, build_table, parse_config
 from dustoptics.table import Table
 
 __all__ = ["DEFAULT_PRESET", "build_preset", "list_presets", "load_preset", "preset_text"]
@@ -47,7 +47,7 @@ _SUFFIX: Final = ".toml"
 
 
 def _directory() -> Any:
-    return resources.files("dustoptics").joinpath("data", "presets")
+    return resources.files("dustoptics.models").joinpath("data", "presets")
 
 
 def list_presets() -> list[str]:
@@ -113,7 +113,7 @@ def build_preset(name: str = DEFAULT_PRESET, **kwargs: Any) -> Table:
     name : str, optional
         A name of :func:`list_presets`; default :data:`DEFAULT_PRESET`.
     **kwargs
-        ``workers`` and ``progress`` of :func:`dustoptics.config.build_table`.
+        ``workers`` and ``progress`` of :func:`dustoptics.models.config.build_table`.
 
     Returns
     -------

@@ -3,8 +3,8 @@
 A configuration file says everything a table is made from: the material, the
 size distribution, the grids and tolerances, the phase-function model, and the
 sources and choices behind them.  The package's presets
-(:mod:`dustoptics.presets`) are such files; a user copies one
-(``dustoptics.presets.preset_text(name)``), edits it and builds it.  Files are
+(:mod:`dustoptics.models.presets`) are such files; a user copies one
+(``dustoptics.models.presets.preset_text(name)``), edits it and builds it.  Files are
 read with the standard library's :mod:`tomllib` and validated key by key:
 unknown keys, wrong types and out-of-range values raise :class:`ConfigError`,
 which names the key (``size_distribution.modes[1].r_eff_um``), the line of the
@@ -26,7 +26,7 @@ Top level (before any ``[section]``)::
 
 ``[material]`` (Mie and hybrid models only), ``model`` one of
 
-- ``"mars_dust"`` (:func:`dustoptics.mixing.mars_dust`): ``hematite_fraction``
+- ``"mars_dust"`` (:func:`dustoptics.particles.mixing.mars_dust`): ``hematite_fraction``
   [0, 1] (default 0.03), ``host_index`` (a number n, or ``{n = 1.5, k = 0.0}``;
   default 1.5), ``hematite`` (default ``"querry-extraordinary"``), ``rule``
   (default ``"maxwell_garnett"``);
@@ -39,26 +39,26 @@ Top level (before any ``[section]``)::
 (``shape`` > 0, ``scale_um`` > 0), ``"log_normal"`` (``median_radius_um`` > 0,
 ``sigma`` > 0), ``"monodisperse"`` (``radius_um`` > 0), or ``"multimodal"``
 with one ``[[size_distribution.modes]]`` table per mode, each a model above
-plus ``relative_number_density`` > 0 (:class:`dustoptics.sizedist.MultiModal`).
+plus ``relative_number_density`` > 0 (:class:`dustoptics.particles.sizedist.MultiModal`).
 
 ``[optics]``: ``wavelengths_nm`` (a list, or ``{start = 360, stop = 830, step
 = 10}``, the default), angles as ``n_theta`` evenly spaced from 0 to 180 deg
 inclusive (default 1801) or ``theta_step_deg`` (must divide 180); for Mie and
 hybrid models also ``weighting`` (``"scattering"``, the default, or
 ``"number"``), ``rtol`` (default 1e-4) and ``cross_section_rtol`` (default
-``rtol / 100``), as in :func:`dustoptics.optics.compute_optics`.
+``rtol / 100``), as in :func:`dustoptics.scattering.optics.compute_optics`.
 
 ``[phase]``: ``model`` one of
 
 - ``"mie"`` (the default): the polydisperse Mie phase function;
 - ``"hybrid"``: Meyran 2022's blend ``renormalize((1 - w) P_mie + w P_analytic)``
-  (:func:`dustoptics.phase.hybrid`) with ``weight`` w in [0, 1] (default 0.5)
+  (:func:`dustoptics.scattering.phase.hybrid`) with ``weight`` w in [0, 1] (default 0.5)
   and ``analytic``, an analytic model below (default ``"costa2021_mars_dhg"``)
   with its parameters;
 - an analytic model alone: ``"costa2021_mars_dhg"`` (Costa et al.'s Mars DHG
-  spectrum, :func:`dustoptics.phase.costa2021_mars_dhg`, with ``outside``:
+  spectrum, :func:`dustoptics.scattering.phase.costa2021_mars_dhg`, with ``outside``:
   ``"quadratic"`` (default), ``"clamp"`` or ``"error"``), or any name of
-  :data:`dustoptics.phase.ANALYTIC_MODELS` with its parameters as keys
+  :data:`dustoptics.scattering.phase.ANALYTIC_MODELS` with its parameters as keys
   (``cornette_shanks1992`` with ``g``, ``henyey_greenstein`` with ``g``,
   ``dhg_costa2021`` with ``g1``, ``g2``, ``alpha``, ...), the same at every
   wavelength.  Analytic-only tables carry no cross-sections.
@@ -76,7 +76,7 @@ Asymmetry parameter ``g``: for ``"mie"`` it is the quadrature's
 ``2 pi int P mu dmu`` of the Mie phase function.  For ``"hybrid"`` and analytic
 models it is computed from the returned table, read as a renderer reads it
 (linear in theta between samples), with the exact piecewise-linear quadrature
-of :func:`dustoptics.phase.sphere_integral`; the provenance notes give its
+of :func:`dustoptics.scattering.phase.sphere_integral`; the provenance notes give its
 largest difference from the analytic formula.
 """
 
@@ -96,16 +96,16 @@ from typing import Any, Final
 
 import numpy as np
 
-from dustoptics import phase as _phase
-from dustoptics.materials import get_material, list_materials
-from dustoptics.mixing import MARS_DUST_HEMATITE, MIXING_RULES, mars_dust
-from dustoptics.optics import (
+from dustoptics.scattering import phase as _phase
+from dustoptics.particles.materials import get_material, list_materials
+from dustoptics.particles.mixing import MARS_DUST_HEMATITE, MIXING_RULES, mars_dust
+from dustoptics.scattering.optics import (
     WEIGHTINGS,
     ConvergenceWarning,
     OpticsTable,
     compute_optics,
 )
-from dustoptics.sizedist import (
+from dustoptics.particles.sizedist import (
     Gamma,
     LogNormal,
     ModifiedGamma,
@@ -458,7 +458,7 @@ class MaterialConfig:
     parameters: Mapping[str, Any]
 
     def build(self) -> Any:
-        """The refractive-index object for :func:`dustoptics.optics.compute_optics`."""
+        """The refractive-index object for :func:`dustoptics.scattering.optics.compute_optics`."""
         p = self.parameters
         if self.model == "mars_dust":
             host = complex(p["host_index"]["n"], p["host_index"]["k"])
@@ -498,7 +498,7 @@ class ModeConfig:
     relative_number_density: float | None = None
 
     def build(self) -> SizeDistribution:
-        """The :class:`~dustoptics.sizedist.SizeDistribution`."""
+        """The :class:`~dustoptics.particles.sizedist.SizeDistribution`."""
         cls = _DISTRIBUTIONS[self.model][0]
         return cls(**self.parameters)
 
@@ -526,7 +526,7 @@ class SizeDistributionConfig:
     modes: tuple[ModeConfig, ...]
 
     def build(self) -> SizeDistribution:
-        """The :class:`~dustoptics.sizedist.SizeDistribution` (a MultiModal for several modes)."""
+        """The :class:`~dustoptics.particles.sizedist.SizeDistribution` (a MultiModal for several modes)."""
         if self.model != "multimodal":
             return self.modes[0].build()
         return MultiModal(
@@ -584,7 +584,7 @@ class PhaseConfig:
     ----------
     model : str
         ``"mie"``, ``"hybrid"``, ``"costa2021_mars_dhg"`` or a name of
-        :data:`dustoptics.phase.ANALYTIC_MODELS`.
+        :data:`dustoptics.scattering.phase.ANALYTIC_MODELS`.
     analytic : str or None
         The analytic model (the model itself when analytic-only, the blended
         one for ``"hybrid"``, None for ``"mie"``).
@@ -1056,7 +1056,7 @@ def build_table(
     ----------
     config : BuildConfig
         A validated configuration (:func:`parse_config`, :func:`load_config`,
-        :func:`dustoptics.presets.load_preset`).
+        :func:`dustoptics.models.presets.load_preset`).
     workers : int, optional
         Threads over wavelengths for the Mie computation (default: all cores);
         the result is the same to the bit for any count.
@@ -1072,8 +1072,8 @@ def build_table(
         configuration's plus those of the material, size distribution and
         analytic phase function; the notes are the configuration's choices,
         how g was obtained, and the messages of the package's warnings about
-        the result (:class:`~dustoptics.optics.ConvergenceWarning`,
-        :class:`~dustoptics.phase.ExtrapolationWarning`); every warning raised
+        the result (:class:`~dustoptics.scattering.optics.ConvergenceWarning`,
+        :class:`~dustoptics.scattering.phase.ExtrapolationWarning`); every warning raised
         while building is re-issued to the caller.
 
     Raises

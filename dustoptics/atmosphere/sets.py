@@ -4,7 +4,7 @@ An :class:`Atmosphere` is a planet (radius, atmosphere top, Sun distance,
 refractivity) and its constituents, each a :class:`Constituent`: a
 :class:`~dustoptics.table.Table` whose ``number_density_per_m3`` is the number
 density where the constituent's relative density is 1, and a
-:class:`~dustoptics.column.DensityProfile`.  :func:`write_atmosphere` writes
+:class:`~dustoptics.atmosphere.column.DensityProfile`.  :func:`write_atmosphere` writes
 it as CosmoScout VR's CSV set (through
 :func:`dustoptics.io.cosmoscout.write_cosmoscout_set`) plus the settings JSON
 snippet that points CosmoScout's Bruneton preprocessor at the files.
@@ -21,7 +21,7 @@ Builders (the presets of the seeds)
     Air molecules (``"kobe2026"``, ``"costa2021"`` or ``"penndorf1957"``),
     aerosols (a table, or Kobe's constant coefficients) and ozone (Kobe's
     three cross-sections at 6e-7 of the air density, or any
-    :class:`~dustoptics.gases.OzoneCrossSection` with any profile, e.g.
+    :class:`~dustoptics.atmosphere.gases.OzoneCrossSection` with any profile, e.g.
     Bruneton's layer).  With the defaults it is Kobe's Earth with ozone, on
     his three wavelengths 475, 510, 650 nm.
 
@@ -59,10 +59,10 @@ from typing import Any, Final
 import numpy as np
 from numpy.typing import ArrayLike
 
-from dustoptics import gases
-from dustoptics import phase as _phase
+from dustoptics.atmosphere import gases
+from dustoptics.scattering import phase as _phase
 from dustoptics._validation import as_increasing_grid, check_choice, check_positive
-from dustoptics.column import (
+from dustoptics.atmosphere.column import (
     DensityProfile,
     ExponentialProfile,
     FixedFractionProfile,
@@ -402,7 +402,7 @@ def mars_atmosphere(
     ----------
     dust_table : Table
         Dust optics with cross-sections (e.g. from
-        :func:`dustoptics.optics.compute_optics` via ``Table.from_optics``);
+        :func:`dustoptics.scattering.optics.compute_optics` via ``Table.from_optics``);
         its wavelengths are the atmosphere's.
     optical_depth : float, default 0.5
         Vertical dust optical depth at ``reference_wavelength_nm`` (clear
@@ -419,7 +419,7 @@ def mars_atmosphere(
     dust_profile : DensityProfile, optional
         Any other dust profile (then ``dust_scale_height_m`` is ignored).
     molecules : {"costa2021-mars", "collienne2013"} or RayleighModel
-        Molecule model (see :mod:`dustoptics.gases`).
+        Molecule model (see :mod:`dustoptics.atmosphere.gases`).
     molecules_scale_height_m : float, optional
         Default 8000 m (Costa et al. Table 1). [m]
     planet_radius_m, atmosphere_radius_m : float
@@ -541,11 +541,11 @@ def earth_atmosphere(
         Ozone cross-sections; None for no ozone.
     ozone_profile : DensityProfile, optional
         Default Kobe's: the molecules' profile at 6e-7 of their density
-        (:class:`~dustoptics.column.FixedFractionProfile`).  For any other
+        (:class:`~dustoptics.atmosphere.column.FixedFractionProfile`).  For any other
         profile give ``ozone_number_density_per_m3``.
     ozone_number_density_per_m3 : float, optional
         Ozone density where ``ozone_profile`` is 1 (e.g.
-        :data:`~dustoptics.column.BRUNETON2017_OZONE_PEAK_NUMBER_DENSITY_PER_M3`). [m^-3]
+        :data:`~dustoptics.atmosphere.column.BRUNETON2017_OZONE_PEAK_NUMBER_DENSITY_PER_M3`). [m^-3]
     planet_radius_m, atmosphere_radius_m : float
         Default 6371 km and 6451 km (CosmoScout VR). [m]
     name : str, default "earth"

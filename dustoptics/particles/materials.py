@@ -17,7 +17,7 @@ The kinds of material:
   for gases at stated reference conditions.
 - :class:`OrientationAverage`: the isotropic average of the ordinary and
   extraordinary indices of a uniaxial crystal.
-- :class:`dustoptics.mixing.Mixture`: an effective-medium mixture of two
+- :class:`dustoptics.particles.mixing.Mixture`: an effective-medium mixture of two
   materials.
 
 Named materials come from the catalogue ``refractive_indices/catalogue.toml``
@@ -194,7 +194,7 @@ class RefractiveIndex(abc.ABC):
 
 
 # ---------------------------------------------------------------------------
-# Helpers shared by the kinds of material (and by dustoptics.mixing)
+# Helpers shared by the kinds of material (and by dustoptics.particles.mixing)
 # ---------------------------------------------------------------------------
 
 

@@ -16,7 +16,7 @@ which is logarithmic below the transition size parameter x_c and linear above
 it, with a smooth Jacobian (its inverse is x = x_c omega(s), with omega the
 Wright omega function).  The interval [s(x_lo), s(x_hi)] is first cut into
 equal panels (:func:`initial_panels`), each carrying an n-point Gauss-Legendre
-rule (:func:`panel_nodes`).  :func:`dustoptics.optics.compute_optics` then
+rule (:func:`panel_nodes`).  :func:`dustoptics.scattering.optics.compute_optics` then
 refines adaptively: every panel is integrated with one rule and with one rule
 on each half, the difference estimates the error, and the worst panels are
 halved until the summed estimates meet the tolerances.  Resonances thus get
@@ -24,7 +24,7 @@ nodes where they are, and smooth stretches keep few.  :func:`radius_nodes`
 gives uniformly refined nodes (for checks of the moments and for baselines).
 
 Tails are truncated where the distribution's analytic moments say they are
-negligible (:meth:`dustoptics.sizedist.SizeDistribution.radius_bounds_um`):
+negligible (:meth:`dustoptics.particles.sizedist.SizeDistribution.radius_bounds_um`):
 below r_lo lies at most ``tail_fraction`` of the moment that normalizes the
 average (number for number weighting, area for cross-section weighting), and
 above r_hi at most ``tail_fraction`` of the fourth moment.  The forward peak
@@ -48,7 +48,7 @@ from numba import njit
 from scipy.special import roots_legendre
 
 from dustoptics._validation import check_open_interval, check_positive
-from dustoptics.sizedist import SizeDistribution
+from dustoptics.particles.sizedist import SizeDistribution
 
 __all__ = [
     "QuadratureSettings",

@@ -44,7 +44,7 @@ from dustoptics._validation import (
     check_choice,
     check_closed_interval,
 )
-from dustoptics.materials import (
+from dustoptics.particles.materials import (
     RefractiveIndex,
     _index_from_epsilon,
     _intersect_ranges,
@@ -320,7 +320,7 @@ class Mixture(RefractiveIndex):
     ----------
     host : RefractiveIndex, complex or str
         The host (matrix) material; a number ``n + ik`` becomes a
-        :class:`~dustoptics.materials.ConstantIndex` and a string is looked up
+        :class:`~dustoptics.particles.materials.ConstantIndex` and a string is looked up
         in the catalogue.  After construction it is always a RefractiveIndex.
     inclusion : RefractiveIndex, complex or str
         The inclusion material, as for ``host``.

@@ -1,0 +1,31 @@
+"""Atmospheres: gases, vertical columns and whole atmosphere sets.
+
+- :mod:`~dustoptics.atmosphere.gases`: Rayleigh scattering and ozone absorption;
+- :mod:`~dustoptics.atmosphere.column`: density profiles, optical depth and
+  number density;
+- :mod:`~dustoptics.atmosphere.parametric`: Angstrom turbidity and anomalous
+  diffraction (Costa et al. 2021);
+- :mod:`~dustoptics.atmosphere.sets`: an :class:`Atmosphere` of constituents
+  (molecules, aerosols, ozone) and its builders for Mars and Earth.
+"""
+
+from dustoptics.atmosphere import column, gases, parametric, sets
+from dustoptics.atmosphere.sets import (
+    Atmosphere,
+    Constituent,
+    earth_atmosphere,
+    mars_atmosphere,
+    write_atmosphere,
+)
+
+__all__ = [
+    "column",
+    "gases",
+    "parametric",
+    "sets",
+    "Atmosphere",
+    "Constituent",
+    "earth_atmosphere",
+    "mars_atmosphere",
+    "write_atmosphere",
+]

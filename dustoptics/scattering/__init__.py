@@ -1,0 +1,15 @@
+"""Scattering: from one sphere to a converged population.
+
+- :mod:`~dustoptics.scattering.mie`: the numba Mie kernel (single spheres and
+  batched sums);
+- :mod:`~dustoptics.scattering.quadrature`: deterministic radius nodes
+  (Gauss-Legendre panels in a stretched size-parameter variable);
+- :mod:`~dustoptics.scattering.optics`: :func:`compute_optics`, the adaptive
+  polydisperse average that returns a :class:`~dustoptics.table.Table`;
+- :mod:`~dustoptics.scattering.phase`: analytic phase functions, blending
+  and renormalization.
+"""
+
+from dustoptics.scattering import mie, optics, phase, quadrature
+
+__all__ = ["mie", "optics", "phase", "quadrature"]
