@@ -18,17 +18,16 @@ command line.
 >>> t = do.compute_optics(do.mars_dust(), dist)     # doctest: +SKIP
 """
 
-from importlib.metadata import PackageNotFoundError, version as _version
+from importlib.metadata import PackageNotFoundError
+from importlib.metadata import version as _version
 
 from dustoptics import atmosphere, colour, compare, io, models, particles, scattering, table
 from dustoptics.atmosphere import column, gases, parametric
-from dustoptics.models import config, presets
-from dustoptics.particles import materials, mixing, sizedist
-from dustoptics.scattering import mie, optics, phase, quadrature
 from dustoptics.compare import compare_tables
+from dustoptics.models import config, presets
 from dustoptics.models.config import build_table, load_config
 from dustoptics.models.presets import build_preset, list_presets
-from dustoptics.table import Provenance, Source, Table
+from dustoptics.particles import materials, mixing, sizedist
 from dustoptics.particles.materials import (
     ConstantIndex,
     GasFormulaIndex,
@@ -40,17 +39,6 @@ from dustoptics.particles.materials import (
     read_index_csv,
 )
 from dustoptics.particles.mixing import Mixture, bruggeman, mars_dust, maxwell_garnett
-from dustoptics.scattering.optics import ConvergenceWarning, OpticsTable, compute_optics
-from dustoptics.scattering.phase import (
-    costa2021_mars_dhg,
-    cornette_shanks1992,
-    double_henyey_greenstein,
-    henyey_greenstein,
-    hybrid,
-    renormalize,
-    sphere_integral,
-)
-from dustoptics.scattering.quadrature import QuadratureSettings
 from dustoptics.particles.sizedist import (
     Gamma,
     LogNormal,
@@ -60,6 +48,19 @@ from dustoptics.particles.sizedist import (
     MultiModal,
     SizeDistribution,
 )
+from dustoptics.scattering import mie, optics, phase, quadrature
+from dustoptics.scattering.optics import ConvergenceWarning, OpticsTable, compute_optics
+from dustoptics.scattering.phase import (
+    cornette_shanks1992,
+    costa2021_mars_dhg,
+    double_henyey_greenstein,
+    henyey_greenstein,
+    hybrid,
+    renormalize,
+    sphere_integral,
+)
+from dustoptics.scattering.quadrature import QuadratureSettings
+from dustoptics.table import Provenance, Source, Table
 
 try:
     __version__ = _version("dustoptics")
@@ -67,63 +68,63 @@ except PackageNotFoundError:  # running from a source tree that was never instal
     __version__ = "0.0.0+unknown"
 
 __all__ = [
-    "atmosphere",
-    "models",
-    "particles",
-    "scattering",
-    "colour",
-    "column",
-    "compare",
-    "config",
-    "gases",
-    "io",
-    "parametric",
-    "presets",
-    "table",
-    "compare_tables",
-    "build_table",
-    "load_config",
-    "build_preset",
-    "list_presets",
-    "Provenance",
-    "Source",
-    "Table",
-    "materials",
-    "mie",
-    "mixing",
-    "optics",
-    "phase",
-    "quadrature",
-    "sizedist",
     "ConstantIndex",
-    "GasFormulaIndex",
-    "OrientationAverage",
-    "RefractiveIndex",
-    "TabulatedIndex",
-    "get_material",
-    "list_materials",
-    "read_index_csv",
-    "Mixture",
-    "bruggeman",
-    "mars_dust",
-    "maxwell_garnett",
     "ConvergenceWarning",
-    "OpticsTable",
-    "compute_optics",
-    "costa2021_mars_dhg",
-    "cornette_shanks1992",
-    "double_henyey_greenstein",
-    "henyey_greenstein",
-    "hybrid",
-    "renormalize",
-    "sphere_integral",
-    "QuadratureSettings",
     "Gamma",
+    "GasFormulaIndex",
     "LogNormal",
+    "Mixture",
     "ModifiedGamma",
     "ModifiedLogNormal",
     "Monodisperse",
     "MultiModal",
+    "OpticsTable",
+    "OrientationAverage",
+    "Provenance",
+    "QuadratureSettings",
+    "RefractiveIndex",
     "SizeDistribution",
+    "Source",
+    "Table",
+    "TabulatedIndex",
     "__version__",
+    "atmosphere",
+    "bruggeman",
+    "build_preset",
+    "build_table",
+    "colour",
+    "column",
+    "compare",
+    "compare_tables",
+    "compute_optics",
+    "config",
+    "cornette_shanks1992",
+    "costa2021_mars_dhg",
+    "double_henyey_greenstein",
+    "gases",
+    "get_material",
+    "henyey_greenstein",
+    "hybrid",
+    "io",
+    "list_materials",
+    "list_presets",
+    "load_config",
+    "mars_dust",
+    "materials",
+    "maxwell_garnett",
+    "mie",
+    "mixing",
+    "models",
+    "optics",
+    "parametric",
+    "particles",
+    "phase",
+    "presets",
+    "quadrature",
+    "read_index_csv",
+    "renormalize",
+    "scattering",
+    "sizedist",
+    "sphere_integral",
+    "table",
 ]

@@ -12,13 +12,13 @@ from typing import Any
 import numpy as np
 
 __all__ = [
-    "check_real",
-    "check_positive",
-    "check_open_interval",
-    "check_closed_interval",
     "as_float_array",
     "as_increasing_grid",
     "check_choice",
+    "check_closed_interval",
+    "check_open_interval",
+    "check_positive",
+    "check_real",
 ]
 
 

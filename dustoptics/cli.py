@@ -195,7 +195,6 @@ def build_atmosphere(
 
     from dustoptics.atmosphere import column, gases
     from dustoptics.atmosphere import sets as atmosphere
-    from dustoptics.models import config
     from dustoptics.table import Table
 
     if name == "earth":

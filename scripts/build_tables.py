@@ -23,8 +23,8 @@ from pathlib import Path
 
 import numpy as np
 
-from dustoptics.models import presets
 from dustoptics.io import read_hdf5, write_glsl, write_hdf5
+from dustoptics.models import presets
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
 TABLES = REPO_ROOT / "tables"

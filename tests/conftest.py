@@ -11,7 +11,7 @@ import os
 
 os.environ.setdefault("MIEPYTHON_USE_JIT", "1")
 
-from hypothesis import settings  # noqa: E402
+from hypothesis import settings
 
 # Property tests draw the same examples on every run (derandomized), so a
 # suite that passed once passes again: CI never fails on a newly drawn case.

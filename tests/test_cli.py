@@ -15,9 +15,9 @@ import pytest
 
 import dustoptics as do
 from dustoptics import cli
-from dustoptics.models import presets
 from dustoptics.io import read_hdf5, read_seed_csv, read_texture
 from dustoptics.io.cosmoscout import check_cosmoscout_set, read_cosmoscout_constituent
+from dustoptics.models import presets
 
 SMALL = """\
 name = "small-dust"

@@ -7,8 +7,8 @@ import dataclasses
 import numpy as np
 import pytest
 
-from dustoptics.models import presets
 from dustoptics.compare import TableComparison, compare_tables
+from dustoptics.models import presets
 from dustoptics.models.config import build_table
 from dustoptics.table import Table
 

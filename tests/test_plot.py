@@ -159,7 +159,7 @@ def test_phase_map_mesh_is_the_tables_phase_on_a_log_norm(mpl, table):
     x_edges, y_edges = corners[0, :, 0], corners[:, 0, 1]
     assert x_edges[0] == 0.0 and x_edges[-1] == 180.0
     assert np.all(x_edges[:-1] <= table.theta_deg) and np.all(table.theta_deg <= x_edges[1:])
-    assert np.all(y_edges[:-1] < WAVELENGTH_NM) and np.all(WAVELENGTH_NM < y_edges[1:])
+    assert np.all(y_edges[:-1] < WAVELENGTH_NM) and np.all(y_edges[1:] > WAVELENGTH_NM)
 
 
 def test_phase_map_single_wavelength(mpl, table):

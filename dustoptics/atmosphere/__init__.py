@@ -19,13 +19,13 @@ from dustoptics.atmosphere.sets import (
 )
 
 __all__ = [
-    "column",
-    "gases",
-    "parametric",
-    "sets",
     "Atmosphere",
     "Constituent",
+    "column",
     "earth_atmosphere",
+    "gases",
     "mars_atmosphere",
+    "parametric",
+    "sets",
     "write_atmosphere",
 ]

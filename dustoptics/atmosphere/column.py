@@ -242,7 +242,8 @@ class MultiModalProfile(DensityProfile):
     def relative_density(self, altitude_m: ArrayLike) -> FloatArray:
         """Weighted mean of the modes' relative densities. [-]"""
         z = _altitudes(altitude_m)
-        return sum(w * p.relative_density(z) for w, p in zip(self.weights, self.profiles, strict=True))
+        total = sum(w * p.relative_density(z) for w, p in zip(self.weights, self.profiles, strict=True))
+        return np.asarray(total, dtype=np.float64)
 
     def column_length_m(self, *, top_altitude_m: float = math.inf) -> float:
         """Weighted mean of the modes' column lengths. [m]"""

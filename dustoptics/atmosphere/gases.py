@@ -102,7 +102,6 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy import constants
 
-from dustoptics.scattering import phase as _phase
 from dustoptics._validation import (
     _show,
     as_float_array,
@@ -111,6 +110,7 @@ from dustoptics._validation import (
     check_positive,
 )
 from dustoptics.particles.materials import GasFormulaIndex, get_material
+from dustoptics.scattering import phase as _phase
 from dustoptics.table import Provenance, Source, Table
 
 __all__ = [

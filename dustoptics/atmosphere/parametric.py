@@ -64,9 +64,9 @@ from dustoptics._validation import (
     check_positive,
     check_real,
 )
+from dustoptics.particles.sizedist import SizeDistribution
 from dustoptics.scattering.optics import resolve_refractive_index
 from dustoptics.scattering.quadrature import gauss_legendre
-from dustoptics.particles.sizedist import SizeDistribution
 
 __all__ = [
     "COSTA2021_MARS_HULST",

@@ -59,9 +59,8 @@ from typing import Any, Final
 import numpy as np
 from numpy.typing import ArrayLike
 
-from dustoptics.atmosphere import gases
-from dustoptics.scattering import phase as _phase
 from dustoptics._validation import as_increasing_grid, check_choice, check_positive
+from dustoptics.atmosphere import gases
 from dustoptics.atmosphere.column import (
     DensityProfile,
     ExponentialProfile,
@@ -69,6 +68,7 @@ from dustoptics.atmosphere.column import (
     number_density_from_optical_depth,
     sample_profile,
 )
+from dustoptics.scattering import phase as _phase
 from dustoptics.table import Provenance, Source, Table
 
 __all__ = [
@@ -146,6 +146,7 @@ class Constituent:
             )
         if not isinstance(self.profile, DensityProfile):
             raise TypeError(f"profile must be a DensityProfile; got {type(self.profile).__name__}")
+        assert self.table.csca_um2 is not None  # has_cross_sections
         if self.role == "ozone" and np.any(self.table.csca_um2 > 0):
             raise ValueError(f"constituent 'ozone' must not scatter (csca_um2 = 0); table {self.table.name!r} does")
 
@@ -251,6 +252,7 @@ class Atmosphere:
             s = sample_profile(c.profile, top_altitude_m=self.thickness_m, n_altitudes=self.n_altitudes)
             table = c.table
             if s.peak != 1.0:
+                assert table.number_density_per_m3 is not None  # checked by the constituent
                 table = table.replace(number_density_per_m3=table.number_density_per_m3 * s.peak)
             out[self.file_prefix(c.role)] = (table, np.array(s.relative_density))
         return out
@@ -583,6 +585,7 @@ def earth_atmosphere(
                     "ozone_number_density_per_m3 is set by a FixedFractionProfile (fraction x the "
                     f"molecules' density); got ozone_number_density_per_m3={ozone_number_density_per_m3!r} too"
                 )
+            assert mol_table.number_density_per_m3 is not None  # the molecules' table sets it
             n_o3 = profile.number_density_per_m3(base_number_density_per_m3=mol_table.number_density_per_m3)
         elif ozone_number_density_per_m3 is None:
             raise ValueError(

@@ -67,8 +67,8 @@ from dustoptics.io.cosmoscout import (
     write_cosmoscout_constituent,
     write_cosmoscout_set,
 )
-from dustoptics.io.hdf5 import read_hdf5, write_hdf5
 from dustoptics.io.glsl import glsl_snippet, write_glsl
+from dustoptics.io.hdf5 import read_hdf5, write_hdf5
 from dustoptics.io.seed_csv import read_seed_csv, write_seed_csv
 from dustoptics.io.texture import read_texture, write_texture
 
@@ -76,24 +76,24 @@ __all__ = [
     "FORMATS",
     "CosmoScoutConstituent",
     "FormatError",
-    "glsl",
-    "glsl_snippet",
-    "read_texture",
-    "texture",
-    "write_glsl",
-    "write_texture",
     "Writer",
     "check_cosmoscout_set",
     "cosmoscout",
+    "glsl",
+    "glsl_snippet",
     "hdf5",
     "read_cosmoscout_constituent",
     "read_hdf5",
     "read_seed_csv",
+    "read_texture",
     "register_format",
     "seed_csv",
+    "texture",
     "write",
     "write_cosmoscout_constituent",
     "write_cosmoscout_set",
+    "write_glsl",
     "write_hdf5",
     "write_seed_csv",
+    "write_texture",
 ]

@@ -26,6 +26,7 @@ and what is wrong with it.
 
 from __future__ import annotations
 
+import contextlib
 import os
 import tempfile
 from collections.abc import Callable, Mapping
@@ -182,9 +183,7 @@ def write_files(contents: Mapping[Path, Content], *, overwrite: bool = False) ->
             if target not in preexisting:
                 target.unlink(missing_ok=True)
         for directory in sorted(created_dirs, key=lambda p: len(p.parts), reverse=True):
-            try:
+            with contextlib.suppress(OSError):
                 directory.rmdir()
-            except OSError:
-                pass
         raise
     return targets

@@ -173,6 +173,7 @@ def _constituent_files(
     profile = _check_density(name, density)
     lam = [cosmoscout_wavelength_text(w) for w in floats("wavelength_nm", table.wavelength_nm)]
     files: dict[Path, bytes] = {}
+    assert table.csca_um2 is not None  # checked by _check_density's caller
     scatters = bool(np.any(table.csca_um2 > 0))
     if scatters:
         theta = np.linspace(0.0, 180.0, n_theta)

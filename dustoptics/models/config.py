@@ -96,15 +96,8 @@ from typing import Any, Final
 
 import numpy as np
 
-from dustoptics.scattering import phase as _phase
 from dustoptics.particles.materials import get_material, list_materials
 from dustoptics.particles.mixing import MARS_DUST_HEMATITE, MIXING_RULES, mars_dust
-from dustoptics.scattering.optics import (
-    WEIGHTINGS,
-    ConvergenceWarning,
-    OpticsTable,
-    compute_optics,
-)
 from dustoptics.particles.sizedist import (
     Gamma,
     LogNormal,
@@ -113,6 +106,13 @@ from dustoptics.particles.sizedist import (
     Monodisperse,
     MultiModal,
     SizeDistribution,
+)
+from dustoptics.scattering import phase as _phase
+from dustoptics.scattering.optics import (
+    WEIGHTINGS,
+    ConvergenceWarning,
+    OpticsTable,
+    compute_optics,
 )
 from dustoptics.table import Provenance, Source, Table
 
@@ -1130,7 +1130,7 @@ def build_table(
                 progress(0, wl.size)
             p_analytic, exact, analytic_source = _analytic_table(config, ph.analytic, ph.parameters, wl, theta)
             _add_sources(sources, analytic_source)
-            g = _phase.mean_cosine(p_analytic, theta_deg=theta)
+            g = np.asarray(_phase.mean_cosine(p_analytic, theta_deg=theta), dtype=np.float64)
             notes.append(
                 f"phase: {ph.analytic} sampled at the table's angles and renormalized under linear "
                 "interpolation in theta; no cross-sections (phase function only); g is the mean "

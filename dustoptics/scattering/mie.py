@@ -39,9 +39,9 @@ from numba import njit
 from dustoptics._validation import as_float_array, check_positive
 
 __all__ = [
-    "wiscombe_nmax",
     "SingleSphere",
     "single_sphere",
+    "wiscombe_nmax",
 ]
 
 

@@ -37,36 +37,36 @@ from collections.abc import Callable, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from functools import lru_cache
-from typing import Any, NamedTuple, Union
+from typing import Any, NamedTuple, cast
 
 import numpy as np
 from numba import njit
 
-from dustoptics.scattering import mie
 from dustoptics._validation import as_increasing_grid, check_choice, check_open_interval
 from dustoptics.particles.materials import RefractiveIndex, get_material
+from dustoptics.particles.sizedist import SizeDistribution
+from dustoptics.scattering import mie
 from dustoptics.scattering.quadrature import (
     QuadratureSettings,
-    gauss_legendre,
     _wright_omega,
+    gauss_legendre,
     initial_panels,
     panel_nodes,
     size_parameter_at,
 )
-from dustoptics.particles.sizedist import SizeDistribution
 
 __all__ = [
-    "OpticsTable",
     "ConvergenceWarning",
+    "OpticsTable",
     "compute_optics",
-    "default_wavelengths_nm",
     "default_theta_deg",
+    "default_wavelengths_nm",
     "resolve_refractive_index",
 ]
 
 WEIGHTINGS = ("scattering", "number")
 
-RefractiveIndexLike = Union[complex, float, Sequence[complex], Callable[[Any], Any], str]
+RefractiveIndexLike = complex | float | Sequence[complex] | Callable[[Any], Any] | str
 
 
 @njit(cache=True, nogil=True)
@@ -216,13 +216,13 @@ def resolve_refractive_index(
         label = _describe(refractive_index)
     elif np.ndim(refractive_index) == 0:
         try:
-            m = np.full(wavelength_nm.shape, complex(refractive_index), dtype=np.complex128)
+            m = np.full(wavelength_nm.shape, complex(cast(complex, refractive_index)), dtype=np.complex128)
         except (TypeError, ValueError):
             raise ValueError(
                 "refractive_index must be a complex number, a sequence of complex numbers, "
                 f"a catalogue name or a callable wavelength_nm -> complex; got {refractive_index!r}"
             ) from None
-        label = f"constant m = {complex(refractive_index)}"
+        label = f"constant m = {complex(cast(complex, refractive_index))}"
     else:
         m = np.array(refractive_index, dtype=np.complex128)
         if m.shape != wavelength_nm.shape:

@@ -190,7 +190,7 @@ def _wright_omega(s: float) -> float:
     else:
         w = np.log(s)
         w = s - w + w / s
-    for step in range(2):
+    for _ in range(2):
         r = s - w - np.log(w)
         wp1 = w + 1.0
         t = 2.0 * wp1 * (wp1 + 2.0 / 3.0 * r)

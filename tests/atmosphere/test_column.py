@@ -35,7 +35,7 @@ def test_exponential_column_length_is_scale_height():
 def test_bruneton_ozone_layer():
     # Bruneton's comment: the profile's integral is 15 km; 300 DU / 15 km = 5.374e18 m^-3.
     assert BRUNETON2017_OZONE.column_length_m() == pytest.approx(15000.0, rel=1e-15)
-    assert BRUNETON2017_OZONE_PEAK_NUMBER_DENSITY_PER_M3 == pytest.approx(300 * 2.687e20 / 15000.0)
+    assert pytest.approx(300 * 2.687e20 / 15000.0) == BRUNETON2017_OZONE_PEAK_NUMBER_DENSITY_PER_M3
     # His two layers: h/15km - 2/3 below 25 km, -h/15km + 8/3 above (clamped to [0, 1]).
     z = np.array([0.0, 5000.0, 10000.0, 17500.0, 25000.0, 32500.0, 40000.0, 60000.0])
     bruneton = np.clip(np.where(z < 25000.0, z / 15000.0 - 2.0 / 3.0, -z / 15000.0 + 8.0 / 3.0), 0.0, 1.0)

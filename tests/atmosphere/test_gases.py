@@ -11,7 +11,6 @@ from _shared import shared_path
 from scipy import constants
 
 from dustoptics.atmosphere import gases
-from dustoptics.scattering import phase
 from dustoptics.atmosphere.gases import (
     KOBE2026_OZONE,
     OzoneCrossSection,
@@ -23,6 +22,7 @@ from dustoptics.atmosphere.gases import (
     rayleigh_cross_section_m2,
     read_ozone_csv,
 )
+from dustoptics.scattering import phase
 
 SPECTRA = ("reference-data", "spectra")
 

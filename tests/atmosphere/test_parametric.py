@@ -9,7 +9,6 @@ import numpy as np
 import pytest
 from scipy import integrate
 
-from dustoptics.scattering import optics
 from dustoptics.atmosphere.parametric import (
     COSTA2021_MARS_HULST,
     ScatteringExceedsExtinctionWarning,
@@ -20,6 +19,7 @@ from dustoptics.atmosphere.parametric import (
     costa2021_turbidity_beta_sca_per_m,
 )
 from dustoptics.particles.sizedist import ModifiedGamma, Monodisperse
+from dustoptics.scattering import optics
 
 WL = np.array([440.0, 550.0, 680.0])
 

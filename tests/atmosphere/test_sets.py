@@ -9,8 +9,8 @@ import pytest
 from _shared import shared_path
 
 import dustoptics as do
-from dustoptics.atmosphere import sets as atm
 from dustoptics.atmosphere import gases
+from dustoptics.atmosphere import sets as atm
 from dustoptics.atmosphere.column import (
     BRUNETON2017_OZONE,
     BRUNETON2017_OZONE_PEAK_NUMBER_DENSITY_PER_M3,

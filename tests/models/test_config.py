@@ -8,7 +8,6 @@ import numpy as np
 import pytest
 
 from dustoptics.models import presets
-from dustoptics.scattering import phase
 from dustoptics.models.config import (
     BuildConfig,
     ConfigError,
@@ -16,6 +15,7 @@ from dustoptics.models.config import (
     load_config,
     parse_config,
 )
+from dustoptics.scattering import phase
 
 #: A fast Mie configuration (small particles, few angles) for build tests.
 SMALL = """\

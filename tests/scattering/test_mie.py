@@ -14,11 +14,11 @@ from decimal import Decimal
 import miepython
 import numpy as np
 import pytest
+from _shared import shared_path
 
 import dustoptics as do
 from dustoptics.scattering import mie
 from dustoptics.scattering.mie import single_sphere
-from _shared import shared_path
 
 BENCH = ("reference-data", "mie-benchmarks")
 WAVELENGTH_NM = 1000.0  # any wavelength; radius chosen to give the benchmark's x

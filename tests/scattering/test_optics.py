@@ -5,13 +5,13 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 import pytest
+from _shared import shared_path
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import dustoptics as do
 from dustoptics.scattering.optics import _Run, _WavelengthSolver
 from dustoptics.scattering.quadrature import QuadratureSettings, radius_nodes, size_parameter_at
-from _shared import shared_path
 
 # Gauss-Legendre angles: P(mu) of a truncated Mie series is a polynomial in mu,
 # so 2 pi sum w P integrates it exactly (degree <= 2 n_max < 2 * 400).
@@ -134,7 +134,7 @@ def test_refractive_index_forms_agree() -> None:
     dist = do.ModifiedGamma(r_eff_um=0.3, v_eff=0.1)
     mat = do.mars_dust()
     values = mat(np.array(wl))
-    kwargs = dict(theta_deg=np.linspace(0, 180, 19), rtol=1e-3)
+    kwargs = {"theta_deg": np.linspace(0, 180, 19), "rtol": 1e-3}
     by_material = do.compute_optics(mat, dist, wl, **kwargs)
     by_sequence = do.compute_optics(list(values), dist, wl, **kwargs)
     by_callable = do.compute_optics(lambda w: complex(mat(w)), dist, wl, **kwargs)

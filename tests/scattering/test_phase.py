@@ -134,7 +134,8 @@ def test_registry_covers_every_model() -> None:
 def test_reference_quadrature_is_accurate() -> None:
     """The composite Gauss-Legendre agrees with adaptive quad on a sharp lobe."""
     for g in (0.99, -0.99, 0.95, 0.3):
-        f = lambda m, g=g: (1 - g * g) / (1 + g * g - 2 * g * m) ** 1.5 / FOUR_PI
+        def f(m, g=g):
+            return (1 - g * g) / (1 + g * g - 2 * g * m) ** 1.5 / FOUR_PI
         assert sphere_moment(f(MU_NODES)) == pytest.approx(sphere_quad(f), abs=1e-12)
         assert sphere_moment(f(MU_NODES), 1) == pytest.approx(g, abs=1e-12)
 
@@ -168,7 +169,8 @@ def test_normalized_and_mean_cosine(name: str, data: st.DataObject) -> None:
 )
 def test_normalized_by_adaptive_quad(name: str, params: dict) -> None:
     model = ANALYTIC_MODELS[name]
-    f = lambda m: model.phase(m, **params)
+    def f(m):
+        return model.phase(m, **params)
     assert sphere_quad(f) == pytest.approx(1.0, abs=1e-9)
     assert sphere_quad(f, 1) == pytest.approx(model.asymmetry(**params), abs=1e-9)
 
@@ -176,7 +178,7 @@ def test_normalized_by_adaptive_quad(name: str, params: dict) -> None:
 def test_penndorf_as_printed_is_not_normalized() -> None:
     integral = sphere_quad(rayleigh_penndorf1957)
     assert integral == pytest.approx(0.7629 * (1 + 0.932 / 3), abs=1e-13)
-    assert PENNDORF1957_SPHERE_INTEGRAL == pytest.approx(integral, abs=1e-13)
+    assert pytest.approx(integral, abs=1e-13) == PENNDORF1957_SPHERE_INTEGRAL
     assert 1.0 - integral == pytest.approx(9.24e-5, abs=1e-7)
     assert sphere_quad(rayleigh_penndorf1957, 1) == pytest.approx(0.0, abs=1e-15)
 
@@ -287,7 +289,7 @@ def test_broadcast_over_wavelength_and_angle() -> None:
 
 def test_scalar_in_float_out() -> None:
     for name, model in ANALYTIC_MODELS.items():
-        params = {p: 0.3 for p in model.parameters}
+        params = dict.fromkeys(model.parameters, 0.3)
         assert isinstance(model.phase(0.2, **params), float), name
 
 

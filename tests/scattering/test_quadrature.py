@@ -10,7 +10,12 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.special import wrightomega
 
-from dustoptics.scattering.quadrature import QuadratureSettings, _unstretch, _wright_omega, size_parameter_at
+from dustoptics.scattering.quadrature import (
+    QuadratureSettings,
+    _unstretch,
+    _wright_omega,
+    size_parameter_at,
+)
 
 
 def test_wright_omega_equals_scipy_to_the_bit():
