@@ -134,7 +134,11 @@ class TableBuilder:
         """A builder for a preset name or the path of a TOML configuration file."""
         from dustoptics.models import config, presets
 
-        if name_or_config.endswith(".toml") or os.sep in name_or_config or Path(name_or_config).is_file():
+        if (
+            name_or_config.endswith(".toml")
+            or os.sep in name_or_config
+            or Path(name_or_config).is_file()
+        ):
             return cls(config.load_config(name_or_config), progress=progress)
         try:
             return cls(presets.load_preset(name_or_config), progress=progress)
@@ -158,7 +162,11 @@ class TableBuilder:
             if tty or done in (0, total):
                 end = "\n" if done == total else ("\r" if tty else "\n")
                 elapsed = time.perf_counter() - start
-                print(f"{self.name}: {done}/{total} wavelengths, {elapsed:.1f} s", end=end, file=self.progress)
+                print(
+                    f"{self.name}: {done}/{total} wavelengths, {elapsed:.1f} s",
+                    end=end,
+                    file=self.progress,
+                )
                 self.progress.flush()
 
         return config.build_table(self.config, progress=report)
@@ -209,10 +217,16 @@ def build_atmosphere(
     builder = TableBuilder.from_name(dust, progress=progress)
     cfg = builder.config
     if not cfg.phase.uses_mie:
-        raise UsageError(f"dust {dust!r} has no cross-sections (a phase-function-only model); choose a Mie preset")
-    grid = replace(cfg, optics=replace(cfg.optics, wavelengths_nm=COSMOSCOUT_WAVELENGTHS_NM, n_theta=1801))
+        raise UsageError(
+            f"dust {dust!r} has no cross-sections (a phase-function-only model); choose a Mie preset"
+        )
+    grid = replace(
+        cfg, optics=replace(cfg.optics, wavelengths_nm=COSMOSCOUT_WAVELENGTHS_NM, n_theta=1801)
+    )
     dust_table: Table = TableBuilder(grid, progress=progress).build()
-    reference = replace(cfg, optics=replace(cfg.optics, wavelengths_nm=(float(reference_wavelength_nm),), n_theta=2))
+    reference = replace(
+        cfg, optics=replace(cfg.optics, wavelengths_nm=(float(reference_wavelength_nm),), n_theta=2)
+    )
     cext = TableBuilder(reference).build().cext_um2[0]
     return atmosphere.mars_atmosphere(
         dust_table=dust_table,
@@ -230,7 +244,9 @@ def write_formats(
 
     written: list[Path] = []
     for name in formats:
-        written.extend(write(table, out_dir, format=name, overwrite=overwrite, **options.for_format(name)))
+        written.extend(
+            write(table, out_dir, format=name, overwrite=overwrite, **options.for_format(name))
+        )
     return written
 
 
@@ -257,9 +273,13 @@ def describe(table: Any) -> str:
     if table.error_estimate is not None:
         lines.append(f"error estimate:  phase <= {table.error_estimate.max():.2e} (relative)")
     if table.cross_section_error_estimate is not None:
-        lines.append(f"                 cross-sections, g <= {table.cross_section_error_estimate.max():.2e}")
+        lines.append(
+            f"                 cross-sections, g <= {table.cross_section_error_estimate.max():.2e}"
+        )
     lines.append(f"input hash:      {prov.input_hash}")
-    lines.append("software:        " + ", ".join(f"{k} {v}" for k, v in sorted(prov.software.items())))
+    lines.append(
+        "software:        " + ", ".join(f"{k} {v}" for k, v in sorted(prov.software.items()))
+    )
     if prov.sources:
         lines.append("sources:")
         lines += [f"  - {s.name} ({s.role}): {s.citation}" for s in prov.sources]
@@ -267,7 +287,10 @@ def describe(table: Any) -> str:
         lines.append("notes:")
         lines += [f"  - {n}" for n in prov.notes]
     lines.append("inputs:")
-    lines += ["  " + line for line in json.dumps(prov.to_dict()["inputs"], indent=2, sort_keys=True).splitlines()]
+    lines += [
+        "  " + line
+        for line in json.dumps(prov.to_dict()["inputs"], indent=2, sort_keys=True).splitlines()
+    ]
     return "\n".join(lines)
 
 
@@ -291,7 +314,9 @@ def _float_list(text: str) -> tuple[float, ...]:
     try:
         values = tuple(float(v) for v in text.replace(" ", ",").split(",") if v)
     except ValueError:
-        raise argparse.ArgumentTypeError(f"expected comma-separated numbers; got {text!r}") from None
+        raise argparse.ArgumentTypeError(
+            f"expected comma-separated numbers; got {text!r}"
+        ) from None
     if not values or not all(np.isfinite(values)):
         raise argparse.ArgumentTypeError(f"expected comma-separated finite numbers; got {text!r}")
     return values
@@ -320,28 +345,70 @@ def _positive_int(text: str) -> int:
 def _add_format_options(p: argparse.ArgumentParser, *, default: str | None) -> None:
     help_default = f" (default {default})" if default else ""
     p.add_argument(
-        "--format", type=_formats, default=_formats(default) if default else None, required=default is None,
-        metavar="FMT[,FMT...]", help=f"output formats: hdf5, csv, cosmoscout, glsl, texture{help_default}",
+        "--format",
+        type=_formats,
+        default=_formats(default) if default else None,
+        required=default is None,
+        metavar="FMT[,FMT...]",
+        help=f"output formats: hdf5, csv, cosmoscout, glsl, texture{help_default}",
     )
     p.add_argument("--force", action="store_true", help="replace existing output files")
     g = p.add_argument_group("glsl")
-    g.add_argument("--channels-nm", type=_float_list, metavar="R,G,B",
-                   help="wavelengths of the three channels [nm] (default 680,550,440)")
-    g.add_argument("--colour", choices=["cie1931"], help="CIE 1931 colour bands instead of three wavelengths")
-    g.add_argument("--resolution-deg", type=_positive_float, metavar="DEG",
-                   help="angular step of the constant array [deg] (default 0.25)")
+    g.add_argument(
+        "--channels-nm",
+        type=_float_list,
+        metavar="R,G,B",
+        help="wavelengths of the three channels [nm] (default 680,550,440)",
+    )
+    g.add_argument(
+        "--colour", choices=["cie1931"], help="CIE 1931 colour bands instead of three wavelengths"
+    )
+    g.add_argument(
+        "--resolution-deg",
+        type=_positive_float,
+        metavar="DEG",
+        help="angular step of the constant array [deg] (default 0.25)",
+    )
     g = p.add_argument_group("texture")
-    g.add_argument("--sampling", choices=["theta", "cos"], help="uniform in angle or in cos(angle) (default theta)")
-    g.add_argument("--n-angles", type=_positive_int, metavar="N", help="samples along the angle axis (default 721)")
+    g.add_argument(
+        "--sampling",
+        choices=["theta", "cos"],
+        help="uniform in angle or in cos(angle) (default theta)",
+    )
+    g.add_argument(
+        "--n-angles",
+        type=_positive_int,
+        metavar="N",
+        help="samples along the angle axis (default 721)",
+    )
     g = p.add_argument_group("cosmoscout (beta in m^-1 needs a number density)")
-    g.add_argument("--number-density-per-m3", type=_positive_float, metavar="N0",
-                   help="number density at the surface [m^-3] (overrides the configuration's)")
-    g.add_argument("--scale-height-m", type=_positive_float, default=10_000.0, metavar="H",
-                   help="exponential density profile's scale height [m] (default 10000, the seeds' Mars dust)")
-    g.add_argument("--top-altitude-m", type=_positive_float, default=120_000.0, metavar="Z",
-                   help="atmosphere top above the surface [m] (default 120000, Mars 3510 - 3390 km)")
-    g.add_argument("--n-altitudes", type=_positive_int, default=1024, metavar="N",
-                   help="density samples (default 1024)")
+    g.add_argument(
+        "--number-density-per-m3",
+        type=_positive_float,
+        metavar="N0",
+        help="number density at the surface [m^-3] (overrides the configuration's)",
+    )
+    g.add_argument(
+        "--scale-height-m",
+        type=_positive_float,
+        default=10_000.0,
+        metavar="H",
+        help="exponential density profile's scale height [m] (default 10000, the seeds' Mars dust)",
+    )
+    g.add_argument(
+        "--top-altitude-m",
+        type=_positive_float,
+        default=120_000.0,
+        metavar="Z",
+        help="atmosphere top above the surface [m] (default 120000, Mars 3510 - 3390 km)",
+    )
+    g.add_argument(
+        "--n-altitudes",
+        type=_positive_int,
+        default=1024,
+        metavar="N",
+        help="density samples (default 1024)",
+    )
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -357,22 +424,52 @@ def _parser() -> argparse.ArgumentParser:
     sub.required = True
 
     p = sub.add_parser("build", help="compute a preset or configuration file and write its tables")
-    p.add_argument("name", nargs="?", default=DEFAULT_PRESET, metavar="NAME_OR_CONFIG",
-                   help=f"preset name (see 'presets'), TOML configuration file, or an atmosphere set "
-                   f"({', '.join(ATMOSPHERES)}) (default {DEFAULT_PRESET})")
-    p.add_argument("--out", type=Path, default=Path("tables"), metavar="DIR",
-                   help="output directory; files go to DIR/NAME/ (default ./tables)")
+    p.add_argument(
+        "name",
+        nargs="?",
+        default=DEFAULT_PRESET,
+        metavar="NAME_OR_CONFIG",
+        help=f"preset name (see 'presets'), TOML configuration file, or an atmosphere set "
+        f"({', '.join(ATMOSPHERES)}) (default {DEFAULT_PRESET})",
+    )
+    p.add_argument(
+        "--out",
+        type=Path,
+        default=Path("tables"),
+        metavar="DIR",
+        help="output directory; files go to DIR/NAME/ (default ./tables)",
+    )
     p.add_argument("--quiet", action="store_true", help="no progress or summary output")
     _add_format_options(p, default=",".join(DEFAULT_FORMATS))
-    g = p.add_argument_group("atmosphere sets ('build mars', 'build earth': CosmoScout VR's full set)")
-    g.add_argument("--dust", default="blue-moons", metavar="PRESET_OR_CONFIG",
-                   help="Mars dust model (default blue-moons)")
-    g.add_argument("--optical-depth", type=_positive_float, default=0.5, metavar="TAU",
-                   help="Mars vertical dust optical depth (default 0.5; clear seasons 0.3-1)")
-    g.add_argument("--reference-wavelength-nm", type=_positive_float, default=550.0, metavar="NM",
-                   help="wavelength of that optical depth [nm] (default 550)")
-    g.add_argument("--ozone-csv", type=Path, metavar="FILE",
-                   help="Earth: ozone cross-sections (see dustoptics.atmosphere.gases.read_ozone_csv) in Bruneton's layer")
+    g = p.add_argument_group(
+        "atmosphere sets ('build mars', 'build earth': CosmoScout VR's full set)"
+    )
+    g.add_argument(
+        "--dust",
+        default="blue-moons",
+        metavar="PRESET_OR_CONFIG",
+        help="Mars dust model (default blue-moons)",
+    )
+    g.add_argument(
+        "--optical-depth",
+        type=_positive_float,
+        default=0.5,
+        metavar="TAU",
+        help="Mars vertical dust optical depth (default 0.5; clear seasons 0.3-1)",
+    )
+    g.add_argument(
+        "--reference-wavelength-nm",
+        type=_positive_float,
+        default=550.0,
+        metavar="NM",
+        help="wavelength of that optical depth [nm] (default 550)",
+    )
+    g.add_argument(
+        "--ozone-csv",
+        type=Path,
+        metavar="FILE",
+        help="Earth: ozone cross-sections (see dustoptics.atmosphere.gases.read_ozone_csv) in Bruneton's layer",
+    )
 
     p = sub.add_parser("export", help="convert an HDF5 table into other formats")
     p.add_argument("file", type=Path, metavar="FILE.h5")
@@ -381,15 +478,30 @@ def _parser() -> argparse.ArgumentParser:
     _add_format_options(p, default=None)
 
     p = sub.add_parser("info", help="what a table file holds and how it was made")
-    p.add_argument("file", type=Path, metavar="FILE", help="HDF5 file, seed-CSV directory or its table_summary.json")
+    p.add_argument(
+        "file",
+        type=Path,
+        metavar="FILE",
+        help="HDF5 file, seed-CSV directory or its table_summary.json",
+    )
 
     p = sub.add_parser("plot", help="plot a table (needs the 'plot' extra: matplotlib)")
     p.add_argument("file", type=Path, metavar="FILE")
-    p.add_argument("--kind", choices=["phase", "polar", "map", "spectra"], default="phase",
-                   help="phase function (log scale), polar, wavelength x angle map, or spectra")
-    p.add_argument("--wavelengths-nm", type=_float_list, metavar="LIST",
-                   help="wavelengths to draw for phase/polar [nm] (must be on the table's grid)")
-    p.add_argument("--out", type=Path, required=True, metavar="FIG", help="output file, .png or .svg")
+    p.add_argument(
+        "--kind",
+        choices=["phase", "polar", "map", "spectra"],
+        default="phase",
+        help="phase function (log scale), polar, wavelength x angle map, or spectra",
+    )
+    p.add_argument(
+        "--wavelengths-nm",
+        type=_float_list,
+        metavar="LIST",
+        help="wavelengths to draw for phase/polar [nm] (must be on the table's grid)",
+    )
+    p.add_argument(
+        "--out", type=Path, required=True, metavar="FIG", help="output file, .png or .svg"
+    )
     p.add_argument("--force", action="store_true", help="replace an existing figure")
 
     p = sub.add_parser("presets", help="list the presets, or print one's configuration file")
@@ -498,7 +610,9 @@ def _cmd_plot(args: argparse.Namespace) -> int:
 
     table = read_table(args.file)
     if args.kind in ("phase", "polar"):
-        figure = plot.phase_function(table, wavelengths_nm=args.wavelengths_nm, polar=args.kind == "polar")
+        figure = plot.phase_function(
+            table, wavelengths_nm=args.wavelengths_nm, polar=args.kind == "polar"
+        )
     elif args.kind == "map":
         figure = plot.phase_map(table)
     else:

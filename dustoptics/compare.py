@@ -71,11 +71,25 @@ class TableComparison:
     interpolated: bool = False
 
     def __post_init__(self) -> None:
-        for key in ("wavelength_nm", "theta_deg", "forward_peak_ratio", "g_a", "g_b",
-                    "median_rel_diff", "max_rel_diff"):
+        for key in (
+            "wavelength_nm",
+            "theta_deg",
+            "forward_peak_ratio",
+            "g_a",
+            "g_b",
+            "median_rel_diff",
+            "max_rel_diff",
+        ):
             object.__setattr__(self, key, _readonly(getattr(self, key)))
 
-    _COLUMNS = ("wavelength_nm", "forward_peak_ratio", "g_a", "g_b", "median_rel_diff", "max_rel_diff")
+    _COLUMNS = (
+        "wavelength_nm",
+        "forward_peak_ratio",
+        "g_a",
+        "g_b",
+        "median_rel_diff",
+        "max_rel_diff",
+    )
 
     def to_frame(self) -> Any:
         """The comparison as a pandas DataFrame, one row per wavelength.
@@ -91,7 +105,8 @@ class TableComparison:
         """An aligned text table, one row per wavelength; differences in percent."""
         how = (
             f"linear interpolation onto {self.theta_deg.size} angles"
-            if self.interpolated else f"{self.theta_deg.size} angles"
+            if self.interpolated
+            else f"{self.theta_deg.size} angles"
         )
         lines = [
             f"b = {self.name_b!r} against a = {self.name_a!r} ({how})",

@@ -135,7 +135,9 @@ def _wavelength_indices(table: Table, wavelengths_nm: Any) -> np.ndarray:
     return np.asarray(indices, dtype=np.int64)
 
 
-def _edges(centres: np.ndarray, *, low: float | None = None, high: float | None = None) -> np.ndarray:
+def _edges(
+    centres: np.ndarray, *, low: float | None = None, high: float | None = None
+) -> np.ndarray:
     """Cell edges around grid points: midpoints inside, half a spacing outside.
 
     ``low`` and ``high`` clip the outer edges (the angle grid ends at 0 and 180
@@ -164,9 +166,7 @@ def _new_figure(mpl: Any, *, size: tuple[float, float]) -> Figure:
 # ---------------------------------------------------------------- figures
 
 
-def phase_function(
-    table: Table, *, wavelengths_nm: Any = None, polar: bool = False
-) -> Figure:
+def phase_function(table: Table, *, wavelengths_nm: Any = None, polar: bool = False) -> Figure:
     """Phase function against scattering angle for chosen wavelengths, log scale.
 
     Parameters
@@ -227,7 +227,9 @@ def phase_function(
         # angle label up under the disc.
         ax.set_xlabel(_LABEL_THETA, labelpad=-40)
         ax.set_ylabel(_LABEL_PHASE, labelpad=28)
-        ax.legend(title="wavelength", loc="upper left", bbox_to_anchor=(1.02, 1.0), fontsize="small")
+        ax.legend(
+            title="wavelength", loc="upper left", bbox_to_anchor=(1.02, 1.0), fontsize="small"
+        )
     else:
         ax.set_yscale("log", nonpositive="mask")
         ax.set_xlim(0.0, 180.0)

@@ -237,7 +237,9 @@ def _per_wavelength(name: str, value: Any, n: int) -> np.ndarray | None:
         return None
     arr = as_float_array(name, value)
     if arr.shape != (n,):
-        raise ValueError(f"{name} must have shape ({n},), one value per wavelength; got {arr.shape}")
+        raise ValueError(
+            f"{name} must have shape ({n},), one value per wavelength; got {arr.shape}"
+        )
     if not np.all(np.isfinite(arr)):
         raise ValueError(f"{name} must be finite; got {arr.tolist()}")
     return arr
@@ -295,12 +297,16 @@ class Table:
             raise ValueError(f"name must be a non-empty string; got {self.name!r}")
         wl = as_float_array("wavelength_nm", self.wavelength_nm)
         if wl.ndim != 1 or wl.size == 0 or not np.all(np.isfinite(wl)) or np.any(wl <= 0):
-            raise ValueError(f"wavelength_nm must be a non-empty 1-D array of positive values; got {wl!r}")
+            raise ValueError(
+                f"wavelength_nm must be a non-empty 1-D array of positive values; got {wl!r}"
+            )
         if np.any(np.diff(wl) <= 0):
             raise ValueError("wavelength_nm must be strictly increasing")
         theta = as_float_array("theta_deg", self.theta_deg)
         if theta.ndim != 1 or theta.size < 2:
-            raise ValueError(f"theta_deg must be a 1-D array of at least 2 angles; got shape {theta.shape}")
+            raise ValueError(
+                f"theta_deg must be a 1-D array of at least 2 angles; got shape {theta.shape}"
+            )
         if theta[0] != 0.0 or theta[-1] != 180.0 or np.any(np.diff(theta) <= 0):
             raise ValueError(
                 "theta_deg must increase strictly from exactly 0 to exactly 180 deg; "
@@ -335,7 +341,9 @@ class Table:
                 raise ValueError("cross-sections must satisfy cext_um2 > 0 and csca_um2 >= 0")
             # Allow the last-bit rounding of a sum, not a physically wrong albedo.
             if np.any(csca > cext * (1 + 1e-12)):
-                raise ValueError("csca_um2 must not exceed cext_um2 (single-scattering albedo <= 1)")
+                raise ValueError(
+                    "csca_um2 must not exceed cext_um2 (single-scattering albedo <= 1)"
+                )
         if np.any(np.abs(arrays["g"]) > 1):
             raise ValueError(f"g must satisfy |g| <= 1; got {arrays['g'].tolist()}")
         for key in ("mean_geometric_cross_section_um2", "number_density_per_m3"):
@@ -343,7 +351,9 @@ class Table:
             if value is not None:
                 object.__setattr__(self, key, check_positive(key, value))
         if not isinstance(self.provenance, Provenance):
-            raise TypeError(f"provenance must be a Provenance; got {type(self.provenance).__name__}")
+            raise TypeError(
+                f"provenance must be a Provenance; got {type(self.provenance).__name__}"
+            )
         for key, arr in arrays.items():
             if arr is not None:
                 arr = np.array(arr, dtype=np.float64, copy=True)
@@ -400,7 +410,9 @@ class Table:
             cross_section_error_estimate=optics.cross_section_error_estimate,
             mean_geometric_cross_section_um2=float(optics.mean_geometric_cross_section_um2),
             number_density_per_m3=number_density_per_m3,
-            provenance=Provenance(inputs=inputs, sources=sources, quadrature=quadrature, notes=notes),
+            provenance=Provenance(
+                inputs=inputs, sources=sources, quadrature=quadrature, notes=notes
+            ),
         )
 
     def replace(self, **changes: Any) -> Table:
@@ -496,8 +508,14 @@ class Table:
         if not isinstance(other, Table):
             return False
         for key in (
-            "wavelength_nm", "theta_deg", "phase", "g", "cext_um2", "csca_um2",
-            "error_estimate", "cross_section_error_estimate",
+            "wavelength_nm",
+            "theta_deg",
+            "phase",
+            "g",
+            "cext_um2",
+            "csca_um2",
+            "error_estimate",
+            "cross_section_error_estimate",
         ):
             a, b = getattr(self, key), getattr(other, key)
             if (a is None) != (b is None):
@@ -543,4 +561,3 @@ class Table:
             f"{self.wavelength_nm[0]:g}-{self.wavelength_nm[-1]:g} nm, "
             f"{self.theta_deg.size} angles, {kind}, input_hash={self.provenance.input_hash[:12]})"
         )
-

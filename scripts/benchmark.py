@@ -216,7 +216,9 @@ def run_cold_subprocess(env: dict[str, str]) -> dict:
     """Run the default table in a fresh interpreter; whole wall time plus its own report."""
     code = COLD_SNIPPET.format(r_eff=R_EFF_UM, v_eff=V_EFF)
     t0 = time.perf_counter()
-    proc = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=False)
+    proc = subprocess.run(
+        [sys.executable, "-c", code], env=env, capture_output=True, text=True, check=False
+    )
     wall = time.perf_counter() - t0
     if proc.returncode != 0:
         raise RuntimeError(f"benchmark subprocess failed:\n{proc.stderr}")
@@ -232,11 +234,17 @@ class DustOptics:
         self.material = do.mars_dust()
         self._memo: dict[tuple, dict] = {}
 
-    def table(self, r_eff: float, v_eff: float, wavelengths: np.ndarray, theta: np.ndarray, **kwargs):
+    def table(
+        self, r_eff: float, v_eff: float, wavelengths: np.ndarray, theta: np.ndarray, **kwargs
+    ):
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always", do.ConvergenceWarning)
             t = do.compute_optics(
-                self.material, do.ModifiedGamma(r_eff_um=r_eff, v_eff=v_eff), wavelengths, theta, **kwargs
+                self.material,
+                do.ModifiedGamma(r_eff_um=r_eff, v_eff=v_eff),
+                wavelengths,
+                theta,
+                **kwargs,
             )
         return t, not any(issubclass(w.category, do.ConvergenceWarning) for w in caught)
 
@@ -318,7 +326,11 @@ def measure_cold(quick: bool) -> dict:
         "maxrss_mb": reported["maxrss_mb"],
         "method": (
             "wall time of a whole `python -c 'import dustoptics; compute default table'` subprocess, "
-            + ("second of two runs" if n_runs == 2 else "one run; cache filled by this script's first call")
+            + (
+                "second of two runs"
+                if n_runs == 2
+                else "one run; cache filled by this script's first call"
+            )
         ),
     }
 
@@ -366,7 +378,9 @@ def converged_nodes(table, i: int) -> tuple[object, object]:
     return rebuild(table.quadrature_panels[i]), rebuild(table.cross_section_panels[i])
 
 
-def baseline_a(miepython, m: complex, wavelength_nm: float, phase_nodes, cross_nodes, mu: np.ndarray) -> dict:
+def baseline_a(
+    miepython, m: complex, wavelength_nm: float, phase_nodes, cross_nodes, mu: np.ndarray
+) -> dict:
     """miepython at dustoptics' nodes: C_sca-weighted phase function on the phase
     nodes; <C_ext>, <C_sca>, g on the cross-section nodes.  Returns the results
     and the time of each loop."""
@@ -391,8 +405,12 @@ def baseline_a(miepython, m: complex, wavelength_nm: float, phase_nodes, cross_n
         s_gsca += w * qsca * np.pi * r * r * g
     t2 = time.perf_counter()
     return {
-        "cext": s_ext, "csca": s_sca, "g": s_gsca / s_sca, "phase": p_sum / p_norm,
-        "phase_time_s": t1 - t0, "cross_time_s": t2 - t1,
+        "cext": s_ext,
+        "csca": s_sca,
+        "g": s_gsca / s_sca,
+        "phase": p_sum / p_norm,
+        "phase_time_s": t1 - t0,
+        "cross_time_s": t2 - t1,
     }
 
 
@@ -413,8 +431,12 @@ def measure_baseline_a(default_table, n_sub: int) -> dict:
         phase_nodes, cross_nodes = converged_nodes(table, i)
         assert phase_nodes.radius_um.size == table.n_nodes[i]
         assert cross_nodes.radius_um.size == table.cross_section_n_nodes[i]
-        log(f"baseline A at {wl:g} nm: {phase_nodes.radius_um.size} + {cross_nodes.radius_um.size} nodes ...")
-        res = baseline_a(miepython, complex(table.refractive_index[i]), wl, phase_nodes, cross_nodes, mu)
+        log(
+            f"baseline A at {wl:g} nm: {phase_nodes.radius_um.size} + {cross_nodes.radius_um.size} nodes ..."
+        )
+        res = baseline_a(
+            miepython, complex(table.refractive_index[i]), wl, phase_nodes, cross_nodes, mu
+        )
         results[wl] = res
         per_wl.append(
             {
@@ -443,7 +465,9 @@ def measure_baseline_a(default_table, n_sub: int) -> dict:
     }
 
 
-def baseline_b(miepython, m: complex, wavelength_nm: float, radii: np.ndarray, mu: np.ndarray) -> np.ndarray:
+def baseline_b(
+    miepython, m: complex, wavelength_nm: float, radii: np.ndarray, mu: np.ndarray
+) -> np.ndarray:
     """The seed pipeline at one wavelength: unweighted mean of normalized phase functions."""
     k = 2.0 * np.pi / (wavelength_nm * 1e-3)
     m_mie = np.conj(m)
@@ -521,9 +545,13 @@ def measure_accuracy(dust: DustOptics, default_table, a: dict, b: dict) -> dict:
         i = int(np.flatnonzero(default_table.wavelength_nm == wl)[0])
         res = a["_results"][float(wl)]
         rows["dustoptics"].append(
-            rel_errors(default_table.phase[i], default_table.cext_um2[i], ref.phase[j], ref.cext_um2[j])
+            rel_errors(
+                default_table.phase[i], default_table.cext_um2[i], ref.phase[j], ref.cext_um2[j]
+            )
         )
-        rows["baseline_a"].append(rel_errors(res["phase"], res["cext"], ref.phase[j], ref.cext_um2[j]))
+        rows["baseline_a"].append(
+            rel_errors(res["phase"], res["cext"], ref.phase[j], ref.cext_um2[j])
+        )
         rows["a_vs_dustoptics"].append(
             rel_errors(res["phase"], res["cext"], default_table.phase[i], default_table.cext_um2[i])
         )
@@ -531,13 +559,21 @@ def measure_accuracy(dust: DustOptics, default_table, a: dict, b: dict) -> dict:
     wl_b = np.array(sorted(b["_results"]))
     log(f"reference (number weighting) at {', '.join(f'{w:g}' for w in wl_b)} nm ...")
     ref_n, ref_n_converged = dust.table(
-        R_EFF_UM, V_EFF, wl_b, b["_theta"], rtol=REF_RTOL, quadrature=REF_QUADRATURE, weighting="number"
+        R_EFF_UM,
+        V_EFF,
+        wl_b,
+        b["_theta"],
+        rtol=REF_RTOL,
+        quadrature=REF_QUADRATURE,
+        weighting="number",
     )
     num, _ = dust.table(R_EFF_UM, V_EFF, wl_b, b["_theta"], rtol=RTOL, weighting="number")
     rows["baseline_b"], rows["dustoptics_number"] = [], []
     for j, wl in enumerate(wl_b):
         res = b["_results"][float(wl)]
-        rows["baseline_b"].append(rel_errors(res["phase"], res["cext"], ref_n.phase[j], ref_n.cext_um2[j]))
+        rows["baseline_b"].append(
+            rel_errors(res["phase"], res["cext"], ref_n.phase[j], ref_n.cext_um2[j])
+        )
         rows["dustoptics_number"].append(
             rel_errors(num.phase[j], num.cext_um2[j], ref_n.phase[j], ref_n.cext_um2[j])
         )
@@ -555,7 +591,9 @@ def measure_accuracy(dust: DustOptics, default_table, a: dict, b: dict) -> dict:
             f"dustoptics rtol={REF_RTOL:g}, {REF_QUADRATURE} "
             "(node placement independent of the default's); errors are maxima over the wavelengths shown"
         ),
-        "reference_error_estimate_max": float(max(ref.error_estimate.max(), ref_n.error_estimate.max())),
+        "reference_error_estimate_max": float(
+            max(ref.error_estimate.max(), ref_n.error_estimate.max())
+        ),
         "reference_converged": bool(ref_converged and ref_n_converged),
         "wavelengths_a_nm": [float(w) for w in wl_a],
         "wavelengths_b_nm": [float(w) for w in wl_b],
@@ -604,13 +642,18 @@ def targets(res: dict) -> list[dict]:
     """The issue's targets next to the measured values, PASS or FAIL."""
     warm = res["dustoptics_default"]["warm_s"]
     acc = res["accuracy"]
-    a_err, d_err = acc["baseline_a"]["max_rel_phase_error"], acc["dustoptics"]["max_rel_phase_error"]
+    a_err, d_err = (
+        acc["baseline_a"]["max_rel_phase_error"],
+        acc["dustoptics"]["max_rel_phase_error"],
+    )
     a_cext, d_cext = acc["baseline_a"]["rel_cext_error"], acc["dustoptics"]["rel_cext_error"]
     # "Equal" accuracy: within 1e-8 absolute of the relative errors.  Both sum over the
     # same nodes, so they differ by round-off (~1e-9), far below the tolerance (1e-4).
     equal_or_better = d_err <= a_err + 1e-8 and d_cext <= a_cext + 1e-8
     memory = [
-        v for v in (res["memory"]["main_after_warm_mb"], res["memory"]["cold_process_mb"]) if v is not None
+        v
+        for v in (res["memory"]["main_after_warm_mb"], res["memory"]["cold_process_mb"])
+        if v is not None
     ]
     storm = res["storm"]
     rows = [
@@ -709,7 +752,10 @@ def format_report(res: dict) -> str:
     b = res["baseline_b"]
     head("3. Baseline B: seed pipeline, random radii, miepython (JIT)")
     for p in b["per_wavelength"]:
-        row(f"{p['wavelength_nm']:g} nm: {p['n_radii']} radii x {B_N_THETA} angles", f"{p['time_s']:.3f} s")
+        row(
+            f"{p['wavelength_nm']:g} nm: {p['n_radii']} radii x {B_N_THETA} angles",
+            f"{p['time_s']:.3f} s",
+        )
     row("time per radius", f"{b['time_per_radius_s'] * 1e3:.3f} ms")
     row(f"scaled to {N_WAVELENGTHS_DEFAULT} x {B_RADII} radii", f"{b['scaled_time_s']:.1f} s")
     row("C_ext pass (not counted)", f"{b['cext_pass_time_s']:.3f} s")
@@ -750,7 +796,10 @@ def format_report(res: dict) -> str:
         f"warm (best of {s['repeats']})",
         f"{s['time_s']:.3f} s   [{', '.join(f'{t:.3f}' for t in s['times_s'])}]",
     )
-    row("radius nodes (total); max error estimate", f"{s['n_nodes_total']}; {s['max_error_estimate']:.1e}")
+    row(
+        "radius nodes (total); max error estimate",
+        f"{s['n_nodes_total']}; {s['max_error_estimate']:.1e}",
+    )
 
     sc = res["scaling"]
     head("5. Scaling of dustoptics warm time")
@@ -758,7 +807,11 @@ def format_report(res: dict) -> str:
     lines.append(
         f"  {'series':<14} {'value':>8} {'wavelengths':>12} {'angles':>8} {'nodes':>9} {'time [s]':>10}  converged"
     )
-    for series, key in (("r_eff [um]", "r_eff_um"), ("angles", "n_theta"), ("wavelengths", "n_wavelengths")):
+    for series, key in (
+        ("r_eff [um]", "r_eff_um"),
+        ("angles", "n_theta"),
+        ("wavelengths", "n_wavelengths"),
+    ):
         for p in sc[key]:
             value = p["r_eff_um"] if key == "r_eff_um" else p[key]
             lines.append(
@@ -776,7 +829,9 @@ def format_report(res: dict) -> str:
     row("cold subprocess (default table), own peak", mb(mem["cold_process_mb"]))
     row("this process, end of benchmark", mb(mem["main_end_mb"]))
     row("largest subprocess (RUSAGE_CHILDREN)", mb(mem["children_mb"]))
-    lines.append("  (on Linux RUSAGE_CHILDREN includes this process's memory when each child was spawned)")
+    lines.append(
+        "  (on Linux RUSAGE_CHILDREN includes this process's memory when each child was spawned)"
+    )
 
     r = res["ratios"]
     head("Ratios (baseline time / dustoptics warm time)")

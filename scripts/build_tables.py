@@ -53,8 +53,10 @@ def differences(name: str, root: Path = TABLES) -> list[str]:
     fresh = presets.build_preset(name)
     problems = []
     if stored.provenance.input_hash != fresh.provenance.input_hash:
-        problems.append(f"{name}: inputs changed (input hash {stored.provenance.input_hash[:12]} "
-                        f"stored, {fresh.provenance.input_hash[:12]} now)")
+        problems.append(
+            f"{name}: inputs changed (input hash {stored.provenance.input_hash[:12]} "
+            f"stored, {fresh.provenance.input_hash[:12]} now)"
+        )
     for grid in ("wavelength_nm", "theta_deg"):
         if not np.array_equal(getattr(stored, grid), getattr(fresh, grid)):
             problems.append(f"{name}: {grid} grid changed")
@@ -83,7 +85,9 @@ def build(names: list[str], root: Path = TABLES) -> None:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--check", action="store_true", help="compare instead of rebuilding; exit 1 if stale")
+    parser.add_argument(
+        "--check", action="store_true", help="compare instead of rebuilding; exit 1 if stale"
+    )
     parser.add_argument("names", nargs="*", help="presets (default: all)")
     args = parser.parse_args(argv)
     names = args.names or presets.list_presets()

@@ -139,7 +139,10 @@ def test_damaged_or_missing_input_is_a_clean_failure(config, tmp_path, capsys, d
     else:
         h5.unlink()
     capsys.readouterr()
-    for argv in (["info", str(h5)], ["export", str(h5), "--out", str(tmp_path / "x"), "--format", "csv"]):
+    for argv in (
+        ["info", str(h5)],
+        ["export", str(h5), "--out", str(tmp_path / "x"), "--format", "csv"],
+    ):
         assert cli.main(argv) == 1
         err = capsys.readouterr().err
         assert err.startswith("dustoptics: error: ") and "small-dust.h5" in err
@@ -175,7 +178,9 @@ def test_config_error_names_key_and_line(tmp_path, capsys):
         (["--sampling", "log"], "--sampling", "invalid choice"),
     ],
 )
-def test_bad_options_exit_2_naming_the_parameter(config, tmp_path, capsys, args, parameter, message):
+def test_bad_options_exit_2_naming_the_parameter(
+    config, tmp_path, capsys, args, parameter, message
+):
     assert cli.main(["build", str(config), "--out", str(tmp_path / "o"), *args]) == 2
     err = capsys.readouterr().err
     assert f"argument {parameter}: " in err and message in err
@@ -185,7 +190,9 @@ def test_bad_options_exit_2_naming_the_parameter(config, tmp_path, capsys, args,
 def test_cosmoscout_without_number_density_is_a_usage_error(config, tmp_path, capsys):
     assert _build(config, tmp_path, "--format", "cosmoscout") == 2
     assert "--number-density-per-m3" in capsys.readouterr().err
-    assert not any((tmp_path / "small-dust").iterdir()) if (tmp_path / "small-dust").exists() else True
+    assert (
+        not any((tmp_path / "small-dust").iterdir()) if (tmp_path / "small-dust").exists() else True
+    )
 
 
 def test_physics_error_exits_1_without_traceback(tmp_path, capsys):
@@ -232,7 +239,21 @@ def test_plot_writes_a_figure(config, tmp_path, capsys):
         out = tmp_path / f"fig-{kind}.{suffix}"
         assert cli.main(["plot", h5, "--kind", kind, "--out", str(out)]) == 0
         assert out.stat().st_size > 0
-    assert cli.main(["plot", h5, "--kind", "phase", "--wavelengths-nm", "551", "--out", str(tmp_path / "f.png")]) == 1
+    assert (
+        cli.main(
+            [
+                "plot",
+                h5,
+                "--kind",
+                "phase",
+                "--wavelengths-nm",
+                "551",
+                "--out",
+                str(tmp_path / "f.png"),
+            ]
+        )
+        == 1
+    )
     assert "551" in capsys.readouterr().err
 
 
@@ -275,7 +296,11 @@ def test_build_mars_and_earth_write_whole_cosmoscout_sets(config, tmp_path):
     assert cli.main(["build", "mars", *args]) == 0
     assert cli.main(["build", "earth", "--out", str(tmp_path), "--quiet"]) == 0
     assert check_cosmoscout_set(tmp_path / "mars") == ["mars_aerosols", "mars_molecules"]
-    assert check_cosmoscout_set(tmp_path / "earth") == ["earth_aerosols", "earth_molecules", "earth_ozone"]
+    assert check_cosmoscout_set(tmp_path / "earth") == [
+        "earth_aerosols",
+        "earth_molecules",
+        "earth_ozone",
+    ]
     # The dust's column reproduces the optical depth at 550 nm: tau = N0 <C_ext> L
     # (exponential profile, 11.1 km, cut at the 120 km top), with <C_ext> computed here.
     dust = read_cosmoscout_constituent(tmp_path / "mars", "mars_aerosols")
@@ -297,5 +322,7 @@ def read_hdf5_free_csca(cfg, i):
     """<C_sca> [m^2] of the configuration at CosmoScout's i-th wavelength, computed here."""
     from dataclasses import replace
 
-    grid = replace(cfg, optics=replace(cfg.optics, wavelengths_nm=cli.COSMOSCOUT_WAVELENGTHS_NM, n_theta=1801))
+    grid = replace(
+        cfg, optics=replace(cfg.optics, wavelengths_nm=cli.COSMOSCOUT_WAVELENGTHS_NM, n_theta=1801)
+    )
     return do.config.build_table(grid).csca_um2[i] * 1e-12

@@ -72,7 +72,9 @@ def test_band_average_of_linear_spectrum_is_centroid() -> None:
     fine = band_weights(np.arange(360.0, 831.0, 1.0))
     coarse = band_weights(np.array([360.0, 500.0, 600.0, 830.0]))
     np.testing.assert_allclose(coarse.centroid_nm, fine.centroid_nm, rtol=1e-13)
-    np.testing.assert_allclose(fine.weights @ np.arange(360.0, 831.0, 1.0), fine.centroid_nm, rtol=1e-15)
+    np.testing.assert_allclose(
+        fine.weights @ np.arange(360.0, 831.0, 1.0), fine.centroid_nm, rtol=1e-15
+    )
 
 
 def test_band_average_matches_cie_tabulation() -> None:
@@ -98,7 +100,11 @@ def test_band_average_matches_cie_tabulation() -> None:
         ([900.0, 1000.0], {}, "outside the CIE 1931 observer's 360-830 nm"),
         ([440.0, 680.0], {}, r"holds only \(xbar 0\.93.*min_coverage is 0\.99"),
         ([400.0, 700.0], {"model": "cie1964"}, "model must be one of 'cie1931'"),
-        ([400.0, 700.0], {"min_coverage": 1.5}, r"min_coverage must be in the closed interval \[0\.0, 1\.0\]"),
+        (
+            [400.0, 700.0],
+            {"min_coverage": 1.5},
+            r"min_coverage must be in the closed interval \[0\.0, 1\.0\]",
+        ),
     ],
 )
 def test_band_weights_errors(wavelength_nm, kwargs, message) -> None:

@@ -76,16 +76,24 @@ def test_mismatched_wavelengths(costa: Table) -> None:
     with pytest.raises(ValueError, match=r"wavelength_nm grids differ: 48 values in a, 2 in b"):
         compare_tables(costa, fewer)
     shifted = _at("costa", tuple(float(w) for w in costa.wavelength_nm[:-1]) + (831.0,))
-    with pytest.raises(ValueError, match=r"wavelength_nm grids differ: first at index 47, 830.0 nm in a, 831.0"):
+    with pytest.raises(
+        ValueError, match=r"wavelength_nm grids differ: first at index 47, 830.0 nm in a, 831.0"
+    ):
         compare_tables(costa, shifted)
 
 
 def test_mismatched_angles_and_bad_theta(costa: Table) -> None:
     config = presets.load_preset("costa")
-    coarse = build_table(dataclasses.replace(config, optics=dataclasses.replace(config.optics, n_theta=181)))
-    with pytest.raises(ValueError, match=r"theta_deg grids differ: 1801 values in a, 181 in b; pass theta_deg="):
+    coarse = build_table(
+        dataclasses.replace(config, optics=dataclasses.replace(config.optics, n_theta=181))
+    )
+    with pytest.raises(
+        ValueError, match=r"theta_deg grids differ: 1801 values in a, 181 in b; pass theta_deg="
+    ):
         compare_tables(costa, coarse)
-    c = compare_tables(costa, coarse, theta_deg=coarse.theta_deg)  # coarse grid points are fine-grid points
+    c = compare_tables(
+        costa, coarse, theta_deg=coarse.theta_deg
+    )  # coarse grid points are fine-grid points
     np.testing.assert_allclose(c.forward_peak_ratio, coarse.phase[:, 0] / costa.phase[:, 0], rtol=0)
     with pytest.raises(ValueError, match="starting at exactly 0 deg"):
         compare_tables(costa, coarse, theta_deg=[10.0, 20.0])
@@ -106,7 +114,12 @@ def test_text_and_frame(costa: Table, collienne: Table) -> None:
     assert lines[3].split()[0] == "360"
     frame = c.to_frame()
     assert list(frame.columns) == [
-        "wavelength_nm", "forward_peak_ratio", "g_a", "g_b", "median_rel_diff", "max_rel_diff",
+        "wavelength_nm",
+        "forward_peak_ratio",
+        "g_a",
+        "g_b",
+        "median_rel_diff",
+        "max_rel_diff",
     ]
     np.testing.assert_array_equal(frame["max_rel_diff"].to_numpy(), c.max_rel_diff)
     assert not c.max_rel_diff.flags.writeable

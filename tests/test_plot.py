@@ -120,7 +120,9 @@ def test_phase_function_polar(mpl, table):
 
 def test_phase_function_wavelength_not_in_grid_lists_the_nearest(table):
     # Checked before matplotlib is needed: runs without it too.
-    with pytest.raises(ValueError, match=r"wavelengths_nm: 551 nm is not in .* nearest in the grid: 550, 650 nm"):
+    with pytest.raises(
+        ValueError, match=r"wavelengths_nm: 551 nm is not in .* nearest in the grid: 550, 650 nm"
+    ):
         plot.phase_function(table, wavelengths_nm=[550, 551])
     with pytest.raises(ValueError, match=r"1000 nm is not in .* nearest in the grid: 650 nm"):
         plot.phase_function(table, wavelengths_nm=1000)
@@ -164,7 +166,11 @@ def test_phase_map_mesh_is_the_tables_phase_on_a_log_norm(mpl, table):
 
 def test_phase_map_single_wavelength(mpl, table):
     one = Table(
-        name="one", wavelength_nm=[550.0], theta_deg=table.theta_deg, phase=table.phase[1:2], g=G[1:2]
+        name="one",
+        wavelength_nm=[550.0],
+        theta_deg=table.theta_deg,
+        phase=table.phase[1:2],
+        g=G[1:2],
     )
     fig = plot.phase_map(one)
     (mesh,) = [c for c in fig.axes[0].collections if isinstance(c, mpl.collections.QuadMesh)]
@@ -230,11 +236,17 @@ def test_save_is_valid_and_byte_identical(mpl, table, tmp_path, suffix):
         assert root.tag == "{http://www.w3.org/2000/svg}svg"
         assert b"<dc:date>" not in data
     assert mpl.rcParams["svg.hashsalt"] == salt  # no global setting left changed
-    assert sorted(p.name for p in tmp_path.iterdir()) == [f"a{suffix}", f"b{suffix}"]  # no temporaries
+    assert sorted(p.name for p in tmp_path.iterdir()) == [
+        f"a{suffix}",
+        f"b{suffix}",
+    ]  # no temporaries
 
 
 def test_save_map_and_spectra_reproducible_svg(mpl, table, phase_only, tmp_path):
-    for name, make in [("map", lambda: plot.phase_map(table)), ("spectra", lambda: plot.spectra(phase_only))]:
+    for name, make in [
+        ("map", lambda: plot.phase_map(table)),
+        ("spectra", lambda: plot.spectra(phase_only)),
+    ]:
         a = plot.save(make(), tmp_path / f"{name}-1.svg").read_bytes()
         b = plot.save(make(), tmp_path / f"{name}-2.svg").read_bytes()
         assert a == b

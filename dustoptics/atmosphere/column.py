@@ -134,7 +134,9 @@ class ExponentialProfile(DensityProfile):
     scale_height_m: float
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "scale_height_m", check_positive("scale_height_m", self.scale_height_m, unit="m"))
+        object.__setattr__(
+            self, "scale_height_m", check_positive("scale_height_m", self.scale_height_m, unit="m")
+        )
 
     def relative_density(self, altitude_m: ArrayLike) -> FloatArray:
         """``exp(-z / H)``. [-]"""
@@ -177,7 +179,9 @@ class PiecewiseLinearProfile(DensityProfile):
         if z[0] != 0.0:
             raise ValueError(f"altitude_m must start at exactly 0 m (the surface); got {z[0]!r}")
         if np.any((d < 0.0) | (d > 1.0)) or d.max() != 1.0:
-            raise ValueError(f"density must lie in [0, 1] with largest value exactly 1; got {_show(d)}")
+            raise ValueError(
+                f"density must lie in [0, 1] with largest value exactly 1; got {_show(d)}"
+            )
         object.__setattr__(self, "altitude_m", tuple(z.tolist()))
         object.__setattr__(self, "density", tuple(d.tolist()))
 
@@ -232,17 +236,23 @@ class MultiModalProfile(DensityProfile):
     def __post_init__(self) -> None:
         profiles = tuple(self.profiles)
         if not profiles or not all(isinstance(p, DensityProfile) for p in profiles):
-            raise ValueError(f"profiles must be a non-empty sequence of DensityProfile; got {self.profiles!r}")
+            raise ValueError(
+                f"profiles must be a non-empty sequence of DensityProfile; got {self.profiles!r}"
+            )
         w = as_float_array("weights", self.weights, ndim=1)
         if w.size != len(profiles) or np.any(w <= 0.0):
-            raise ValueError(f"weights must be {len(profiles)} values > 0 (one per profile); got {_show(w)}")
+            raise ValueError(
+                f"weights must be {len(profiles)} values > 0 (one per profile); got {_show(w)}"
+            )
         object.__setattr__(self, "profiles", profiles)
         object.__setattr__(self, "weights", tuple((w / w.sum()).tolist()))
 
     def relative_density(self, altitude_m: ArrayLike) -> FloatArray:
         """Weighted mean of the modes' relative densities. [-]"""
         z = _altitudes(altitude_m)
-        total = sum(w * p.relative_density(z) for w, p in zip(self.weights, self.profiles, strict=True))
+        total = sum(
+            w * p.relative_density(z) for w, p in zip(self.weights, self.profiles, strict=True)
+        )
         return np.asarray(total, dtype=np.float64)
 
     def column_length_m(self, *, top_altitude_m: float = math.inf) -> float:
@@ -488,7 +498,11 @@ def sample_profile(
     """
     if not isinstance(profile, DensityProfile):
         raise TypeError(f"profile must be a DensityProfile; got {type(profile).__name__}")
-    if isinstance(n_altitudes, bool) or not isinstance(n_altitudes, (int, np.integer)) or n_altitudes < 2:
+    if (
+        isinstance(n_altitudes, bool)
+        or not isinstance(n_altitudes, (int, np.integer))
+        or n_altitudes < 2
+    ):
         raise ValueError(f"n_altitudes must be an integer >= 2; got {n_altitudes!r}")
     bottom = check_real("bottom_altitude_m", bottom_altitude_m)
     top = check_positive("top_altitude_m", top_altitude_m, unit="m")
@@ -506,4 +520,3 @@ def sample_profile(
     z.setflags(write=False)
     rel.setflags(write=False)
     return DensitySamples(altitude_m=z, relative_density=rel, peak=peak)
-

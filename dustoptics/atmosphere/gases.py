@@ -193,7 +193,9 @@ def _out(arr: FloatArray) -> float | FloatArray:
     return float(arr) if arr.ndim == 0 else arr
 
 
-def ideal_gas_number_density_per_m3(*, pressure_pa: ArrayLike, temperature_k: ArrayLike) -> float | FloatArray:
+def ideal_gas_number_density_per_m3(
+    *, pressure_pa: ArrayLike, temperature_k: ArrayLike
+) -> float | FloatArray:
     """Number density of an ideal gas, ``N = p / (k_B T)``.
 
     Parameters
@@ -276,7 +278,9 @@ def scaled_refractivity(
     if np.any(r < 0.0):
         raise ValueError(f"refractivity (n - 1) must be >= 0; got {_show(refractivity)}")
     n = _positive_array("number_density_per_m3", number_density_per_m3, "m^-3")
-    n_ref = check_positive("reference_number_density_per_m3", reference_number_density_per_m3, unit="m^-3")
+    n_ref = check_positive(
+        "reference_number_density_per_m3", reference_number_density_per_m3, unit="m^-3"
+    )
     return _out(r * (n / n_ref))
 
 
@@ -360,7 +364,9 @@ class ConstantRefractivity:
         object.__setattr__(
             self,
             "reference_number_density_per_m3",
-            check_positive("reference_number_density_per_m3", self.reference_number_density_per_m3, unit="m^-3"),
+            check_positive(
+                "reference_number_density_per_m3", self.reference_number_density_per_m3, unit="m^-3"
+            ),
         )
 
     def refractivity_at(self, wavelength_nm: ArrayLike) -> FloatArray:
@@ -437,7 +443,9 @@ class RayleighModel:
             return self.number_density_per_m3
         return check_positive("number_density_per_m3", number_density_per_m3, unit="m^-3")
 
-    def refractivity(self, wavelength_nm: ArrayLike, *, number_density_per_m3: float | None = None) -> FloatArray:
+    def refractivity(
+        self, wavelength_nm: ArrayLike, *, number_density_per_m3: float | None = None
+    ) -> FloatArray:
         """``n - 1`` scaled to the number density (default: the model's). [-]
 
         Raises
@@ -452,12 +460,16 @@ class RayleighModel:
             r_ref = self.index.refractivity_at(wavelength_nm)
         return np.asarray(
             scaled_refractivity(
-                refractivity=r_ref, number_density_per_m3=n, reference_number_density_per_m3=_reference(self.index)
+                refractivity=r_ref,
+                number_density_per_m3=n,
+                reference_number_density_per_m3=_reference(self.index),
             ),
             dtype=np.float64,
         )
 
-    def cross_section_m2(self, wavelength_nm: ArrayLike, *, number_density_per_m3: float | None = None) -> FloatArray:
+    def cross_section_m2(
+        self, wavelength_nm: ArrayLike, *, number_density_per_m3: float | None = None
+    ) -> FloatArray:
         """Scattering cross-section per molecule at the number density. [m^2]"""
         n = self._density(number_density_per_m3)
         return np.asarray(
@@ -470,7 +482,9 @@ class RayleighModel:
             dtype=np.float64,
         )
 
-    def beta_sca_per_m(self, wavelength_nm: ArrayLike, *, number_density_per_m3: float | None = None) -> FloatArray:
+    def beta_sca_per_m(
+        self, wavelength_nm: ArrayLike, *, number_density_per_m3: float | None = None
+    ) -> FloatArray:
         """Volume scattering coefficient ``N sigma``. [m^-1]"""
         n = self._density(number_density_per_m3)
         return n * self.cross_section_m2(wavelength_nm, number_density_per_m3=n)
@@ -564,7 +578,9 @@ def _theta_grid(theta_deg: ArrayLike | None) -> FloatArray:
         return np.linspace(0.0, 180.0, 1801)
     theta = as_increasing_grid("theta_deg", theta_deg, low=0.0, high=180.0, unit="deg")
     if theta.size < 2 or theta[0] != 0.0 or theta[-1] != 180.0:
-        raise ValueError(f"theta_deg must run from exactly 0 to exactly 180 deg; got {_show(theta)}")
+        raise ValueError(
+            f"theta_deg must run from exactly 0 to exactly 180 deg; got {_show(theta)}"
+        )
     return theta
 
 
@@ -580,10 +596,14 @@ def _penndorf1957() -> RayleighModel:
         ),
         citation=f"{_phase.PENNDORF_1957}; index {EDLEN_1953}; King factor {KING_1923}",
         notes=(
-            ("Standard air at 0 degC and 101325 Pa (Penndorf's Table III conditions), "
-            "Edlén 1953 index scaled from 15 degC by number density, delta = 0.035 (Penndorf)."),
-            ("Phase function: Chandrasekhar's depolarized Rayleigh at delta = 0.035, of which "
-            "Penndorf's 0.7629 (1 + 0.932 mu^2)/(4 pi) is the rounded form."),
+            (
+                "Standard air at 0 degC and 101325 Pa (Penndorf's Table III conditions), "
+                "Edlén 1953 index scaled from 15 degC by number density, delta = 0.035 (Penndorf)."
+            ),
+            (
+                "Phase function: Chandrasekhar's depolarized Rayleigh at delta = 0.035, of which "
+                "Penndorf's 0.7629 (1 + 0.932 mu^2)/(4 pi) is the rounded form."
+            ),
         ),
     )
 
@@ -598,12 +618,16 @@ def _costa2021() -> RayleighModel:
         number_density_per_m3=2.68731e25,
         citation=f"{_phase.COSTA_2021}, eq. (10), (11), Table 1; index {EDLEN_1953}",
         notes=(
-            ("Costa et al. Table 1 (Earth): N = 2.68731e19 cm^-3 (0 degC), delta = 0.0279, "
-            "Penndorf phase function; m(lambda) = 1.00027598, 1.00027783, 1.00028276 at "
-            "680, 550, 440 nm are Edlén's standard air at 15 degC."),
-            ("Here n - 1 is scaled to N (0 degC): the table uses one consistent state. Costa's "
-            "printed beta values are Penndorf's (delta = 0.035); with delta = 0.0279 this model "
-            "is 1.2 % lower."),
+            (
+                "Costa et al. Table 1 (Earth): N = 2.68731e19 cm^-3 (0 degC), delta = 0.0279, "
+                "Penndorf phase function; m(lambda) = 1.00027598, 1.00027783, 1.00028276 at "
+                "680, 550, 440 nm are Edlén's standard air at 15 degC."
+            ),
+            (
+                "Here n - 1 is scaled to N (0 degC): the table uses one consistent state. Costa's "
+                "printed beta values are Penndorf's (delta = 0.035); with delta = 0.0279 this model "
+                "is 1.2 % lower."
+            ),
         ),
     )
 
@@ -645,12 +669,16 @@ def _costa2021_mars() -> RayleighModel:
         number_density_per_m3=n_mars,
         citation=f"{_phase.COSTA_2021}, eq. (10), (11), Table 1 (Mars); index {co2.citation}",
         notes=(
-            ("Costa et al.'s Table 1 Mars values use the laboratory CO2 index (0 degC, 1 atm) with "
-            "N = 2.8e23 m^-3 (printed as a mass density), giving beta = 3.056e-3 m^-1 at 550 nm, "
-            "about 400x too large for Mars."),
-            (f"Corrected here as CosmoScout VR does: N from the ideal-gas law at "
-            f"{MARS_SURFACE_PRESSURE_PA:g} Pa and {MARS_SURFACE_TEMPERATURE_K:g} K and n - 1 scaled "
-            "to that N (3.4e-6 at 550 nm)."),
+            (
+                "Costa et al.'s Table 1 Mars values use the laboratory CO2 index (0 degC, 1 atm) with "
+                "N = 2.8e23 m^-3 (printed as a mass density), giving beta = 3.056e-3 m^-1 at 550 nm, "
+                "about 400x too large for Mars."
+            ),
+            (
+                f"Corrected here as CosmoScout VR does: N from the ideal-gas law at "
+                f"{MARS_SURFACE_PRESSURE_PA:g} Pa and {MARS_SURFACE_TEMPERATURE_K:g} K and n - 1 scaled "
+                "to that N (3.4e-6 at 550 nm)."
+            ),
         ),
     )
 
@@ -716,7 +744,9 @@ def rayleigh_beta_per_m(
     """
     gas = get_rayleigh_model(model) if isinstance(model, str) else model
     if not isinstance(gas, RayleighModel):
-        raise TypeError(f"model must be a name in {RAYLEIGH_MODELS} or a RayleighModel; got {model!r}")
+        raise TypeError(
+            f"model must be a name in {RAYLEIGH_MODELS} or a RayleighModel; got {model!r}"
+        )
     if number_density_per_m3 is not None and (pressure_pa is not None or temperature_k is not None):
         raise ValueError("give number_density_per_m3 or pressure_pa and temperature_k, not both")
     if (pressure_pa is None) != (temperature_k is None):
@@ -737,7 +767,9 @@ def rayleigh_beta_per_m(
 COLLIENNE2013_WAVELENGTH_NM: Final = tuple(_phase.COLLIENNE2013_MARS.wavelength_nm)
 
 
-def _at_points(name: str, wavelength_nm: ArrayLike, points: tuple[float, ...], values: tuple[float, ...]) -> FloatArray:
+def _at_points(
+    name: str, wavelength_nm: ArrayLike, points: tuple[float, ...], values: tuple[float, ...]
+) -> FloatArray:
     wl = as_float_array("wavelength_nm", wavelength_nm)
     lookup = dict(zip(points, values, strict=True))
     bad = [w for w in np.unique(wl).tolist() if w not in lookup]
@@ -762,7 +794,12 @@ def collienne2013_beta_per_m(wavelength_nm: ArrayLike) -> FloatArray:
         Any other wavelength.
     """
     c = _phase.COLLIENNE2013_MARS
-    return _at_points("collienne2013 beta", wavelength_nm, tuple(c.wavelength_nm), tuple(c.rayleigh_scattering_per_m))
+    return _at_points(
+        "collienne2013 beta",
+        wavelength_nm,
+        tuple(c.wavelength_nm),
+        tuple(c.rayleigh_scattering_per_m),
+    )
 
 
 def collienne2013_table(
@@ -799,10 +836,14 @@ def collienne2013_table(
         number_density_per_m3=1.0,
         provenance=Provenance(
             inputs={"kind": "collienne2013-molecules", "wavelength_nm": wl, "theta_deg": theta},
-            sources=(Source(name="collienne2013", role="scattering coefficients", citation=c.citation),),
+            sources=(
+                Source(name="collienne2013", role="scattering coefficients", citation=c.citation),
+            ),
             notes=(
-                ("Coefficients published without a number density: carried per unit density "
-                "(number_density_per_m3 = 1, cross-section = beta)."),
+                (
+                    "Coefficients published without a number density: carried per unit density "
+                    "(number_density_per_m3 = 1, cross-section = beta)."
+                ),
             ),
         ),
     )
@@ -846,14 +887,20 @@ class OzoneCrossSection:
             raise ValueError(f"wavelength_nm must be > 0 nm; got minimum {wl[0]!r}")
         sigma = as_float_array("sigma_m2", self.sigma_m2, ndim=1)
         if sigma.shape != wl.shape:
-            raise ValueError(f"sigma_m2 must have one value per wavelength ({wl.size}); got {sigma.size}")
+            raise ValueError(
+                f"sigma_m2 must have one value per wavelength ({wl.size}); got {sigma.size}"
+            )
         if np.any(sigma < 0.0):
             raise ValueError(f"sigma_m2 must be >= 0 m^2; got {_show(sigma)}")
         check_choice("interpolation", self.interpolation, _OZONE_INTERPOLATION)
         if not self.citation or not self.citation.strip():
-            raise ValueError("citation must name the source of the cross-sections; got an empty string")
+            raise ValueError(
+                "citation must name the source of the cross-sections; got an empty string"
+            )
         if self.interpolation == "linear" and wl.size < 2:
-            raise ValueError("a 'linear' spectrum needs at least 2 wavelengths; use interpolation='points'")
+            raise ValueError(
+                "a 'linear' spectrum needs at least 2 wavelengths; use interpolation='points'"
+            )
         for key, arr in (("wavelength_nm", wl), ("sigma_m2", sigma)):
             arr.setflags(write=False)
             object.__setattr__(self, key, arr)
@@ -995,7 +1042,9 @@ def ozone_beta_abs_per_m(
         Absorption coefficient. [m^-1]
     """
     if not isinstance(cross_section, OzoneCrossSection):
-        raise TypeError(f"cross_section must be an OzoneCrossSection; got {type(cross_section).__name__}")
+        raise TypeError(
+            f"cross_section must be an OzoneCrossSection; got {type(cross_section).__name__}"
+        )
     n = check_positive("number_density_per_m3", number_density_per_m3, unit="m^-3")
     return cross_section(wavelength_nm) * n
 
@@ -1051,8 +1100,13 @@ def ozone_table(
                 "wavelength_nm": wl,
                 "theta_deg": theta,
             },
-            sources=(Source(name=cross_section.name, role="absorption cross-section", citation=cross_section.citation),),
+            sources=(
+                Source(
+                    name=cross_section.name,
+                    role="absorption cross-section",
+                    citation=cross_section.citation,
+                ),
+            ),
             notes=("Absorbing only: csca = 0; the isotropic phase function carries no weight.",),
         ),
     )
-

@@ -91,7 +91,9 @@ class ScatteringExceedsExtinctionWarning(UserWarning):
 # ------------------------------------------------------------------ Ångström
 
 
-def angstrom_beta_per_m(wavelength_nm: ArrayLike, *, beta0_per_m: float, alpha: float) -> FloatArray:
+def angstrom_beta_per_m(
+    wavelength_nm: ArrayLike, *, beta0_per_m: float, alpha: float
+) -> FloatArray:
     """Ångström's turbidity law, ``beta = beta0 (lambda / 1 um)^(-alpha)``.
 
     Parameters
@@ -150,7 +152,9 @@ def _k_function(w: NDArray[np.complex128]) -> NDArray[np.complex128]:
     return out
 
 
-def ada_qext(*, wavelength_nm: ArrayLike, radius_um: ArrayLike, refractive_index: ArrayLike) -> FloatArray:
+def ada_qext(
+    *, wavelength_nm: ArrayLike, radius_um: ArrayLike, refractive_index: ArrayLike
+) -> FloatArray:
     """Extinction efficiency in the anomalous diffraction approximation.
 
     With ``rho = 4 pi r (n - 1) / lambda`` and ``tan(b) = k / (n - 1)``
@@ -207,9 +211,13 @@ def ada_qext(*, wavelength_nm: ArrayLike, radius_um: ArrayLike, refractive_index
     return q.reshape(shape)
 
 
-def _radius_panels(distribution: SizeDistribution, wavelength_nm: float, n_minus_1: float) -> tuple[FloatArray, FloatArray]:
+def _radius_panels(
+    distribution: SizeDistribution, wavelength_nm: float, n_minus_1: float
+) -> tuple[FloatArray, FloatArray]:
     """Nodes and weights (including n(r)) over the distribution's radius range."""
-    r_lo, r_hi = distribution.radius_bounds_um(tail_fraction=1e-9, lower_moment=2.0, upper_moment=2.0)
+    r_lo, r_hi = distribution.radius_bounds_um(
+        tail_fraction=1e-9, lower_moment=2.0, upper_moment=2.0
+    )
     # Panel edges: at most a factor 1.25 in radius (small particles) and at most
     # pi/4 in the phase shift rho (one eighth of an ADA oscillation).
     drho_dr = 4.0 * math.pi * 1000.0 * n_minus_1 / wavelength_nm
@@ -257,7 +265,9 @@ def ada_cext_um2(
         ``<C_ext>`` per wavelength. [um^2]
     """
     if not isinstance(distribution, SizeDistribution):
-        raise TypeError(f"distribution must be a SizeDistribution; got {type(distribution).__name__}")
+        raise TypeError(
+            f"distribution must be a SizeDistribution; got {type(distribution).__name__}"
+        )
     wl = as_increasing_grid("wavelength_nm", wavelength_nm, unit="nm")
     if wl[0] <= 0.0:
         raise ValueError(f"wavelength_nm must be > 0 nm; got minimum {wl[0]!r}")
@@ -267,7 +277,9 @@ def ada_cext_um2(
         r = distribution.moment(1.0)
         return math.pi * r * r * ada_qext(wavelength_nm=wl, radius_um=r, refractive_index=m)
     if not distribution.has_density:
-        raise ValueError(f"distribution mixes Monodisperse and continuous modes; got {distribution!r}")
+        raise ValueError(
+            f"distribution mixes Monodisperse and continuous modes; got {distribution!r}"
+        )
     for i, (w, mi) in enumerate(zip(wl, m)):
         if mi.real <= 1.0:
             raise ValueError(
@@ -324,7 +336,9 @@ def costa2021_turbidity_beta_sca_per_m(
         raise ValueError(f"wavelength_nm must be > 0 nm; got {_show(wl[wl <= 0.0])}")
     t = check_real("turbidity", turbidity)
     if t <= 1.0:
-        raise ValueError(f"turbidity must be > 1 (C(T) = (0.65 T - 0.65) 1e-16 > 0); got {turbidity!r}")
+        raise ValueError(
+            f"turbidity must be > 1 (C(T) = (0.65 T - 0.65) 1e-16 > 0); got {turbidity!r}"
+        )
     nu = check_real("junge_exponent", junge_exponent)
     if not 2.0 <= nu <= 6.0:
         raise ValueError(f"junge_exponent must be in [2, 6]; got {junge_exponent!r}")
@@ -332,7 +346,9 @@ def costa2021_turbidity_beta_sca_per_m(
     if np.any(k <= 0.0):
         raise ValueError(f"k_factor must be > 0; got {_show(k)}")
     if k.ndim > 0 and k.shape != wl.shape:
-        raise ValueError(f"k_factor must be one value or one per wavelength ({wl.size}); got shape {k.shape}")
+        raise ValueError(
+            f"k_factor must be one value or one per wavelength ({wl.size}); got shape {k.shape}"
+        )
     c = (0.65 * t - 0.65) * 1e-16
     return 0.434 * c * math.pi * (2.0 * math.pi / (wl * 1e-9)) ** (nu - 2.0) * k
 
@@ -406,9 +422,13 @@ def costa2021_aerosol_coefficients(
     """
     wl = as_increasing_grid("wavelength_nm", wavelength_nm, unit="nm")
     n = check_positive("number_density_per_m3", number_density_per_m3, unit="m^-3")
-    cext = ada_cext_um2(wavelength_nm=wl, refractive_index=refractive_index, distribution=distribution)
+    cext = ada_cext_um2(
+        wavelength_nm=wl, refractive_index=refractive_index, distribution=distribution
+    )
     beta_ext = n * cext * _UM2_TO_M2
-    beta_sca = costa2021_turbidity_beta_sca_per_m(wl, turbidity=turbidity, junge_exponent=junge_exponent, k_factor=k_factor)
+    beta_sca = costa2021_turbidity_beta_sca_per_m(
+        wl, turbidity=turbidity, junge_exponent=junge_exponent, k_factor=k_factor
+    )
     bad = beta_sca > beta_ext
     if np.any(bad):
         warnings.warn(
@@ -434,12 +454,14 @@ def costa2021_aerosol_coefficients(
 #: 0.001) i; K = (0.07, 0.16, 0.31); nu = 4; turbidity 1.01; N = 0.02e8 m^-3.
 #: Costa et al.'s own Table 1 gives T in [2, 10] and N = 2.8e29 cm^-3, with
 #: which scattering exceeds extinction.
-COSTA2021_MARS_HULST: Final = MappingProxyType({
-    "wavelength_nm": (440.0, 550.0, 680.0),
-    "radius_um": 1.6,
-    "refractive_index": (1.52 + 0.013j, 1.52 + 0.006j, 1.52 + 0.001j),
-    "k_factor": (0.07, 0.16, 0.31),
-    "junge_exponent": 4.0,
-    "turbidity": 1.01,
-    "number_density_per_m3": 0.02e8,
-})
+COSTA2021_MARS_HULST: Final = MappingProxyType(
+    {
+        "wavelength_nm": (440.0, 550.0, 680.0),
+        "radius_um": 1.6,
+        "refractive_index": (1.52 + 0.013j, 1.52 + 0.006j, 1.52 + 0.001j),
+        "k_factor": (0.07, 0.16, 0.31),
+        "junge_exponent": 4.0,
+        "turbidity": 1.01,
+        "number_density_per_m3": 0.02e8,
+    }
+)

@@ -148,7 +148,9 @@ class Constituent:
             raise TypeError(f"profile must be a DensityProfile; got {type(self.profile).__name__}")
         assert self.table.csca_um2 is not None  # has_cross_sections
         if self.role == "ozone" and np.any(self.table.csca_um2 > 0):
-            raise ValueError(f"constituent 'ozone' must not scatter (csca_um2 = 0); table {self.table.name!r} does")
+            raise ValueError(
+                f"constituent 'ozone' must not scatter (csca_um2 = 0); table {self.table.name!r} does"
+            )
 
 
 @dataclass(frozen=True)
@@ -195,8 +197,14 @@ class Atmosphere:
             )
         check_positive("sun_distance_m", self.sun_distance_m, unit="m")
         if not (math.isfinite(self.refractivity) and self.refractivity >= 0.0):
-            raise ValueError(f"refractivity (n - 1) must be finite and >= 0; got {self.refractivity!r}")
-        if isinstance(self.n_altitudes, bool) or not isinstance(self.n_altitudes, int) or self.n_altitudes < 2:
+            raise ValueError(
+                f"refractivity (n - 1) must be finite and >= 0; got {self.refractivity!r}"
+            )
+        if (
+            isinstance(self.n_altitudes, bool)
+            or not isinstance(self.n_altitudes, int)
+            or self.n_altitudes < 2
+        ):
             raise ValueError(f"n_altitudes must be an integer >= 2; got {self.n_altitudes!r}")
         cons = tuple(self.constituents)
         roles = [c.role for c in cons if isinstance(c, Constituent)]
@@ -249,7 +257,9 @@ class Atmosphere:
         """
         out: dict[str, tuple[Table, np.ndarray]] = {}
         for c in self.constituents:
-            s = sample_profile(c.profile, top_altitude_m=self.thickness_m, n_altitudes=self.n_altitudes)
+            s = sample_profile(
+                c.profile, top_altitude_m=self.thickness_m, n_altitudes=self.n_altitudes
+            )
             table = c.table
             if s.peak != 1.0:
                 assert table.number_density_per_m3 is not None  # checked by the constituent
@@ -370,7 +380,9 @@ def _cext_at(table: Table, wavelength_nm: float) -> float:
     return float(np.interp(w, wl, table.cext_um2))
 
 
-def _molecules(model: str | gases.RayleighModel, allowed: tuple[str, ...], wl: np.ndarray) -> tuple[Table, str, float]:
+def _molecules(
+    model: str | gases.RayleighModel, allowed: tuple[str, ...], wl: np.ndarray
+) -> tuple[Table, str, float]:
     """Molecule table, model name and ground refractivity at 550 nm."""
     if isinstance(model, gases.RayleighModel):
         gas = model
@@ -443,8 +455,14 @@ def mars_atmosphere(
         "planet_radius_m", planet_radius_m, unit="m"
     )
     if top <= 0:
-        raise ValueError(f"atmosphere_radius_m must exceed planet_radius_m; got {atmosphere_radius_m!r}")
-    profile = dust_profile if dust_profile is not None else ExponentialProfile(scale_height_m=dust_scale_height_m)
+        raise ValueError(
+            f"atmosphere_radius_m must exceed planet_radius_m; got {atmosphere_radius_m!r}"
+        )
+    profile = (
+        dust_profile
+        if dust_profile is not None
+        else ExponentialProfile(scale_height_m=dust_scale_height_m)
+    )
     n0 = number_density_from_optical_depth(
         optical_depth=optical_depth,
         cext_um2=(
@@ -457,13 +475,19 @@ def mars_atmosphere(
     )
     dust = dust_table.replace(number_density_per_m3=n0)
     mol_table, mol_name, refractivity = _molecules(molecules, MARS_MOLECULE_MODELS, wl)
-    h_mol = molecules_scale_height_m if molecules_scale_height_m is not None else _MOLECULE_SCALE_HEIGHT_M.get(mol_name, 8000.0)
+    h_mol = (
+        molecules_scale_height_m
+        if molecules_scale_height_m is not None
+        else _MOLECULE_SCALE_HEIGHT_M.get(mol_name, 8000.0)
+    )
     return Atmosphere(
         name=name,
         planet_radius_m=planet_radius_m,
         atmosphere_radius_m=atmosphere_radius_m,
         constituents=(
-            Constituent(role="molecules", table=mol_table, profile=ExponentialProfile(scale_height_m=h_mol)),
+            Constituent(
+                role="molecules", table=mol_table, profile=ExponentialProfile(scale_height_m=h_mol)
+            ),
             Constituent(role="aerosols", table=dust, profile=profile),
         ),
         sun_distance_m=_MARS_SUN_DISTANCE_M,
@@ -474,7 +498,9 @@ def mars_atmosphere(
 def _kobe_aerosols(wl: np.ndarray, *, g: float) -> Table:
     theta = np.linspace(0.0, 180.0, 1801)
     p = _phase.renormalize(
-        np.broadcast_to(_phase.tabulate(_phase.cornette_shanks1992, theta_deg=theta, g=g), (wl.size, theta.size)),
+        np.broadcast_to(
+            _phase.tabulate(_phase.cornette_shanks1992, theta_deg=theta, g=g), (wl.size, theta.size)
+        ),
         theta_deg=theta,
     )
     beta_sca = np.full(wl.size, KOBE2026_AEROSOL_BETA_SCA_PER_M)
@@ -491,14 +517,22 @@ def _kobe_aerosols(wl: np.ndarray, *, g: float) -> Table:
             inputs={"kind": "kobe2026-aerosols", "wavelength_nm": wl, "cornette_shanks_g": g},
             sources=(
                 Source(name="kobe2026", role="aerosol coefficients", citation=_phase.KOBE_2026),
-                Source(name="cornette_shanks1992", role="phase function", citation=_phase.CORNETTE_SHANKS_1992),
+                Source(
+                    name="cornette_shanks1992",
+                    role="phase function",
+                    citation=_phase.CORNETTE_SHANKS_1992,
+                ),
             ),
             notes=(
-                ("Kobe's beta_M = 2e-6 m^-1 and beta_M^e = beta_M / 0.9, published without a number "
-                "density: carried per unit density (number_density_per_m3 = 1, cross-section = beta)."),
-                ("Phase function: Cornette-Shanks, g = 0.76 by default (Bruneton 2008's Earth aerosols "
-                "as CosmoScout VR reproduces them), not Kobe's Henyey-Greenstein g = -0.99 (his "
-                "sign convention for the angle)."),
+                (
+                    "Kobe's beta_M = 2e-6 m^-1 and beta_M^e = beta_M / 0.9, published without a number "
+                    "density: carried per unit density (number_density_per_m3 = 1, cross-section = beta)."
+                ),
+                (
+                    "Phase function: Cornette-Shanks, g = 0.76 by default (Bruneton 2008's Earth aerosols "
+                    "as CosmoScout VR reproduces them), not Kobe's Henyey-Greenstein g = -0.99 (his "
+                    "sign convention for the angle)."
+                ),
             ),
         ),
     )
@@ -559,7 +593,11 @@ def earth_atmosphere(
     """
     wl = as_increasing_grid("wavelength_nm", wavelength_nm, unit="nm")
     mol_table, mol_name, refractivity = _molecules(molecules, EARTH_MOLECULE_MODELS, wl)
-    h_mol = molecules_scale_height_m if molecules_scale_height_m is not None else _MOLECULE_SCALE_HEIGHT_M.get(mol_name, 8000.0)
+    h_mol = (
+        molecules_scale_height_m
+        if molecules_scale_height_m is not None
+        else _MOLECULE_SCALE_HEIGHT_M.get(mol_name, 8000.0)
+    )
     mol_profile = ExponentialProfile(scale_height_m=h_mol)
     if aerosol_table is None:
         aerosols = _kobe_aerosols(wl, g=aerosol_g)
@@ -572,12 +610,16 @@ def earth_atmosphere(
         Constituent(
             role="aerosols",
             table=aerosols,
-            profile=aerosol_profile if aerosol_profile is not None else ExponentialProfile(scale_height_m=1200.0),
+            profile=aerosol_profile
+            if aerosol_profile is not None
+            else ExponentialProfile(scale_height_m=1200.0),
         ),
     ]
     if ozone is not None:
-        profile = ozone_profile if ozone_profile is not None else FixedFractionProfile(
-            base=mol_profile, fraction=gases.KOBE2026_OZONE_FRACTION
+        profile = (
+            ozone_profile
+            if ozone_profile is not None
+            else FixedFractionProfile(base=mol_profile, fraction=gases.KOBE2026_OZONE_FRACTION)
         )
         if isinstance(profile, FixedFractionProfile):
             if ozone_number_density_per_m3 is not None:
@@ -586,7 +628,9 @@ def earth_atmosphere(
                     f"molecules' density); got ozone_number_density_per_m3={ozone_number_density_per_m3!r} too"
                 )
             assert mol_table.number_density_per_m3 is not None  # the molecules' table sets it
-            n_o3 = profile.number_density_per_m3(base_number_density_per_m3=mol_table.number_density_per_m3)
+            n_o3 = profile.number_density_per_m3(
+                base_number_density_per_m3=mol_table.number_density_per_m3
+            )
         elif ozone_number_density_per_m3 is None:
             raise ValueError(
                 f"ozone_number_density_per_m3 is required with ozone_profile {profile!r} "
@@ -597,7 +641,9 @@ def earth_atmosphere(
         cons.append(
             Constituent(
                 role="ozone",
-                table=gases.ozone_table(wl, cross_section=ozone, number_density_per_m3=n_o3, name=ozone.name),
+                table=gases.ozone_table(
+                    wl, cross_section=ozone, number_density_per_m3=n_o3, name=ozone.name
+                ),
                 profile=profile,
             )
         )
@@ -609,4 +655,3 @@ def earth_atmosphere(
         sun_distance_m=_EARTH_SUN_DISTANCE_M,
         refractivity=refractivity,
     )
-

@@ -46,7 +46,9 @@ def register_format(name: str, writer: Writer) -> None:
     FORMATS[name] = writer
 
 
-def write(table: Any, out_dir: Any, *, format: str, overwrite: bool = False, **options: Any) -> list[Path]:
+def write(
+    table: Any, out_dir: Any, *, format: str, overwrite: bool = False, **options: Any
+) -> list[Path]:
     """Write ``table`` into ``out_dir`` in the named format (see :data:`FORMATS`).
 
     Raises

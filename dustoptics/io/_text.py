@@ -96,7 +96,9 @@ def read_rows(path: Path) -> list[list[str]]:
     try:
         text = data.decode("ascii")
     except UnicodeDecodeError as exc:
-        raise FormatError(f"{path}: not an ASCII CSV file ({exc.reason} at byte {exc.start})") from None
+        raise FormatError(
+            f"{path}: not an ASCII CSV file ({exc.reason} at byte {exc.start})"
+        ) from None
     if not text:
         raise FormatError(f"{path}: file is empty (expected a header line)")
     if not text.endswith("\n"):

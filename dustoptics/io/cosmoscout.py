@@ -128,7 +128,9 @@ def _check_name(name: Any) -> str:
 
 def _check_n_theta(n_theta: Any) -> int:
     if isinstance(n_theta, bool) or not isinstance(n_theta, (int, np.integer)) or n_theta < 2:
-        raise ValueError(f"n_theta must be an integer >= 2 (angles from 0 to 180 deg); got {n_theta!r}")
+        raise ValueError(
+            f"n_theta must be an integer >= 2 (angles from 0 to 180 deg); got {n_theta!r}"
+        )
     return int(n_theta)
 
 
@@ -158,7 +160,9 @@ def _constituent_files(
     table: Table, directory: Path, *, name: str, density: Any, n_theta: int
 ) -> dict[Path, bytes]:
     if not isinstance(table, Table):
-        raise TypeError(f"constituent {name!r}: table must be a dustoptics.table.Table; got {type(table).__name__}")
+        raise TypeError(
+            f"constituent {name!r}: table must be a dustoptics.table.Table; got {type(table).__name__}"
+        )
     if not table.has_cross_sections:
         raise ValueError(
             f"constituent {name!r}: table {table.name!r} holds a phase function only; CosmoScout "
@@ -180,7 +184,9 @@ def _constituent_files(
         phase = table.phase_at(theta)
         header = "lambda," + ",".join(number(t) for t in floats("theta_deg", theta))
         rows = [header]
-        rows += [lw + "," + ",".join(number(v) for v in row) for lw, row in zip(lam, phase.tolist())]
+        rows += [
+            lw + "," + ",".join(number(v) for v in row) for lw, row in zip(lam, phase.tolist())
+        ]
         files[directory / f"{name}_phase.csv"] = _lines(rows)
         beta_sca = floats("beta_sca_per_m", table.beta_sca_per_m)
         files[directory / f"{name}_scattering.csv"] = _lines(
@@ -253,7 +259,11 @@ def write_cosmoscout_constituent(
     1 by the interpolation error; it is not renormalized.
     """
     files = _constituent_files(
-        table, Path(directory), name=_check_name(name), density=density, n_theta=_check_n_theta(n_theta)
+        table,
+        Path(directory),
+        name=_check_name(name),
+        density=density,
+        n_theta=_check_n_theta(n_theta),
     )
     return write_files(files, overwrite=overwrite)
 
@@ -309,7 +319,9 @@ def write_cosmoscout_set(
         try:
             table, density = entry
         except (TypeError, ValueError):
-            raise ValueError(f"constituent {name!r} must be a (Table, density) pair; got {entry!r}") from None
+            raise ValueError(
+                f"constituent {name!r} must be a (Table, density) pair; got {entry!r}"
+            ) from None
         if isinstance(table, Table):
             if reference is None:
                 reference = (name, table.wavelength_nm)
@@ -354,7 +366,9 @@ register_format("cosmoscout", write_cosmoscout_files)
 # ------------------------------------------------------------------ reading
 
 
-def _read_numbers(path: Path, header: list[str] | None, width: int | None) -> tuple[list[str], np.ndarray]:
+def _read_numbers(
+    path: Path, header: list[str] | None, width: int | None
+) -> tuple[list[str], np.ndarray]:
     """Header cells and the numeric rows of one file (skipping the header line)."""
     rows = read_rows(path)
     head = [cell.strip() for cell in rows[0]]
@@ -387,7 +401,9 @@ def _nonnegative(path: Path, what: str, values: np.ndarray) -> np.ndarray:
     return values
 
 
-def read_cosmoscout_constituent(directory: str | os.PathLike[str], name: str) -> CosmoScoutConstituent:
+def read_cosmoscout_constituent(
+    directory: str | os.PathLike[str], name: str
+) -> CosmoScoutConstituent:
     """Read one constituent's files written by :func:`write_cosmoscout_constituent`.
 
     Parameters
@@ -420,7 +436,9 @@ def read_cosmoscout_constituent(directory: str | os.PathLike[str], name: str) ->
         if not paths[kind].is_file():
             raise FileNotFoundError(f"{paths[kind]}: no such file")
     if paths["phase"].is_file() != paths["scattering"].is_file():
-        present, absent = ("phase", "scattering") if paths["phase"].is_file() else ("scattering", "phase")
+        present, absent = (
+            ("phase", "scattering") if paths["phase"].is_file() else ("scattering", "phase")
+        )
         raise FileNotFoundError(f"{paths[absent]}: no such file (but {paths[present].name} exists)")
 
     _, absorption = _read_numbers(paths["absorption"], ["lambda", "beta_abs"], None)
@@ -429,7 +447,9 @@ def read_cosmoscout_constituent(directory: str | os.PathLike[str], name: str) ->
     _, density_rows = _read_numbers(paths["density"], None, 1)
     density = _nonnegative(paths["density"], "the relative density", density_rows[:, 0])
     if density.max() != 1.0:
-        raise FormatError(f"{paths['density']}: the relative density must have maximum 1; got {density.max()!r}")
+        raise FormatError(
+            f"{paths['density']}: the relative density must have maximum 1; got {density.max()!r}"
+        )
 
     def same_wavelengths(path: Path, values: np.ndarray) -> None:
         if not np.array_equal(values, wavelength):
@@ -445,7 +465,9 @@ def read_cosmoscout_constituent(directory: str | os.PathLike[str], name: str) ->
             raise FormatError(
                 f"{paths['phase']}: header must be 'lambda' then at least 2 angles [deg]; got {','.join(head)!r}"
             )
-        theta = np.array([parse(paths["phase"], 1, f"{j} (header)", c) for j, c in enumerate(head[1:], 2)])
+        theta = np.array(
+            [parse(paths["phase"], 1, f"{j} (header)", c) for j, c in enumerate(head[1:], 2)]
+        )
         expected = np.linspace(0.0, 180.0, theta.size)
         if not np.allclose(theta, expected, rtol=0, atol=1e-9):
             raise FormatError(
@@ -521,12 +543,16 @@ def check_cosmoscout_set(directory: str | os.PathLike[str]) -> list[str]:
         if match and path.is_file():
             kinds.setdefault(match["name"], set()).add(match["kind"])
     if not kinds:
-        raise FormatError(f"{root}: no CosmoScout files (<name>_phase.csv, _scattering.csv, ...) found")
+        raise FormatError(
+            f"{root}: no CosmoScout files (<name>_phase.csv, _scattering.csv, ...) found"
+        )
     reference: tuple[Path, list[float]] | None = None
     for name, present in sorted(kinds.items()):
         for kind in ("absorption", "density"):
             if kind not in present:
-                raise FormatError(f"{root / f'{name}_{kind}.csv'}: missing (every constituent needs one)")
+                raise FormatError(
+                    f"{root / f'{name}_{kind}.csv'}: missing (every constituent needs one)"
+                )
         if ("phase" in present) != ("scattering" in present):
             raise FormatError(
                 f"{root}: constituent {name!r} has only one of {name}_phase.csv and "
@@ -541,7 +567,9 @@ def check_cosmoscout_set(directory: str | os.PathLike[str]) -> list[str]:
             path = root / f"{name}_{kind}.csv"
             lam_nm = _reader_wavelengths_nm(path)
             if len(lam_nm) != n:
-                raise FormatError(f"{path}: {len(lam_nm)} wavelength rows; {name}_absorption.csv has {n}")
+                raise FormatError(
+                    f"{path}: {len(lam_nm)} wavelength rows; {name}_absorption.csv has {n}"
+                )
             if reference is None:
                 reference = (path, lam_nm)
             elif lam_nm != reference[1]:

@@ -86,8 +86,14 @@ ACOS_METHODS = ("polynomial", "builtin")
 #: |error| <= 2e-8 rad: M. Abramowitz and I. A. Stegun, Handbook of Mathematical
 #: Functions (1964), formula 4.4.46 (after C. Hastings, 1955).
 ACOS_AS4446 = (
-    1.5707963050, -0.2145988016, 0.0889789874, -0.0501743046,
-    0.0308918810, -0.0170881256, 0.0066700901, -0.0012624911,
+    1.5707963050,
+    -0.2145988016,
+    0.0889789874,
+    -0.0501743046,
+    0.0308918810,
+    -0.0170881256,
+    0.0066700901,
+    -0.0012624911,
 )
 
 _UM2_TO_M2 = 1e-12
@@ -97,7 +103,133 @@ _IDENTIFIER = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 # Keywords and reserved words of GLSL 4.60 (section 3.6) that an identifier of
 # ours could collide with; names with "__" or starting "gl_" are reserved too.
 _GLSL_KEYWORDS = frozenset(
-    ["attribute", "const", "uniform", "varying", "buffer", "shared", "coherent", "volatile", "restrict", "readonly", "writeonly", "atomic_uint", "layout", "centroid", "flat", "smooth", "noperspective", "patch", "sample", "invariant", "precise", "break", "continue", "do", "for", "while", "switch", "case", "default", "if", "else", "subroutine", "in", "out", "inout", "int", "void", "bool", "true", "false", "float", "double", "discard", "return", "vec2", "vec3", "vec4", "ivec2", "ivec3", "ivec4", "bvec2", "bvec3", "bvec4", "uint", "uvec2", "uvec3", "uvec4", "dvec2", "dvec3", "dvec4", "mat2", "mat3", "mat4", "mat2x2", "mat2x3", "mat2x4", "mat3x2", "mat3x3", "mat3x4", "mat4x2", "mat4x3", "mat4x4", "dmat2", "dmat3", "dmat4", "lowp", "mediump", "highp", "precision", "sampler1D", "sampler2D", "sampler3D", "samplerCube", "struct", "common", "partition", "active", "asm", "class", "union", "enum", "typedef", "template", "this", "resource", "goto", "inline", "noinline", "public", "static", "extern", "external", "interface", "long", "short", "half", "fixed", "unsigned", "superp", "input", "output", "hvec2", "hvec3", "hvec4", "fvec2", "fvec3", "fvec4", "filter", "sizeof", "cast", "namespace", "using", "sampler3DRect", "texture", "main"]
+    [
+        "attribute",
+        "const",
+        "uniform",
+        "varying",
+        "buffer",
+        "shared",
+        "coherent",
+        "volatile",
+        "restrict",
+        "readonly",
+        "writeonly",
+        "atomic_uint",
+        "layout",
+        "centroid",
+        "flat",
+        "smooth",
+        "noperspective",
+        "patch",
+        "sample",
+        "invariant",
+        "precise",
+        "break",
+        "continue",
+        "do",
+        "for",
+        "while",
+        "switch",
+        "case",
+        "default",
+        "if",
+        "else",
+        "subroutine",
+        "in",
+        "out",
+        "inout",
+        "int",
+        "void",
+        "bool",
+        "true",
+        "false",
+        "float",
+        "double",
+        "discard",
+        "return",
+        "vec2",
+        "vec3",
+        "vec4",
+        "ivec2",
+        "ivec3",
+        "ivec4",
+        "bvec2",
+        "bvec3",
+        "bvec4",
+        "uint",
+        "uvec2",
+        "uvec3",
+        "uvec4",
+        "dvec2",
+        "dvec3",
+        "dvec4",
+        "mat2",
+        "mat3",
+        "mat4",
+        "mat2x2",
+        "mat2x3",
+        "mat2x4",
+        "mat3x2",
+        "mat3x3",
+        "mat3x4",
+        "mat4x2",
+        "mat4x3",
+        "mat4x4",
+        "dmat2",
+        "dmat3",
+        "dmat4",
+        "lowp",
+        "mediump",
+        "highp",
+        "precision",
+        "sampler1D",
+        "sampler2D",
+        "sampler3D",
+        "samplerCube",
+        "struct",
+        "common",
+        "partition",
+        "active",
+        "asm",
+        "class",
+        "union",
+        "enum",
+        "typedef",
+        "template",
+        "this",
+        "resource",
+        "goto",
+        "inline",
+        "noinline",
+        "public",
+        "static",
+        "extern",
+        "external",
+        "interface",
+        "long",
+        "short",
+        "half",
+        "fixed",
+        "unsigned",
+        "superp",
+        "input",
+        "output",
+        "hvec2",
+        "hvec3",
+        "hvec4",
+        "fvec2",
+        "fvec3",
+        "fvec4",
+        "filter",
+        "sizeof",
+        "cast",
+        "namespace",
+        "using",
+        "sampler3DRect",
+        "texture",
+        "main",
+    ]
 )
 
 
@@ -195,7 +327,9 @@ def _fmt_nm(x: float) -> str:
     return f"{x:g}"
 
 
-def _wavelength_weights(wavelength_nm: np.ndarray, channels_nm: Any) -> tuple[np.ndarray, np.ndarray, tuple[str, ...]]:
+def _wavelength_weights(
+    wavelength_nm: np.ndarray, channels_nm: Any
+) -> tuple[np.ndarray, np.ndarray, tuple[str, ...]]:
     """Linear-interpolation weights of three channel wavelengths over the grid."""
     ch = as_float_array("channels_nm", channels_nm)
     if ch.shape != (3,):
@@ -425,13 +559,25 @@ def glsl_snippet(
     names = {
         key: _check_identifier("prefix", f"{prefix}_{key}")
         for key in (
-            "PHASE_N", "PHASE", "PHASE_INDEX_PER_RAD", "WAVELENGTH_NM", "G", "CEXT_M2", "CSCA_M2",
-            "CABS_M2", "SSA", "NUMBER_DENSITY_PER_M3", "BETA_EXT_PER_M", "BETA_SCA_PER_M",
+            "PHASE_N",
+            "PHASE",
+            "PHASE_INDEX_PER_RAD",
+            "WAVELENGTH_NM",
+            "G",
+            "CEXT_M2",
+            "CSCA_M2",
+            "CABS_M2",
+            "SSA",
+            "NUMBER_DENSITY_PER_M3",
+            "BETA_EXT_PER_M",
+            "BETA_SCA_PER_M",
             "BETA_ABS_PER_M",
         )
     }
     if function_name in names.values():
-        raise ValueError(f"function_name must differ from the constants' names; got {function_name!r}")
+        raise ValueError(
+            f"function_name must differ from the constants' names; got {function_name!r}"
+        )
     ch = glsl_channels(
         table,
         channels_nm=channels_nm,
@@ -484,35 +630,75 @@ def glsl_snippet(
         + ("GLSL builtin" if acos == "builtin" else "Abramowitz & Stegun 4.4.46 polynomial"),
         "",
         f"const int {names['PHASE_N']} = {n};",
-        _const("float", names["PHASE_INDEX_PER_RAD"], glsl_float((n - 1) / math.pi),
-               "(N - 1) / pi [rad^-1]"),
-        _const("vec3", names["WAVELENGTH_NM"], _vec3(ch.wavelength_nm),
-               "[nm]" if ch.mode == "wavelengths" else "band mean wavelengths [nm]"),
+        _const(
+            "float",
+            names["PHASE_INDEX_PER_RAD"],
+            glsl_float((n - 1) / math.pi),
+            "(N - 1) / pi [rad^-1]",
+        ),
+        _const(
+            "vec3",
+            names["WAVELENGTH_NM"],
+            _vec3(ch.wavelength_nm),
+            "[nm]" if ch.mode == "wavelengths" else "band mean wavelengths [nm]",
+        ),
         _const("vec3", names["G"], _vec3(ch.g), "asymmetry parameter [-]"),
     ]
     if ch.cext_m2 is not None and ch.csca_m2 is not None:
         cabs = ch.cext_m2 - ch.csca_m2
         lines += [
-            _const("vec3", names["CEXT_M2"], _vec3(ch.cext_m2),
-                   "mean extinction cross-section per particle [m^2]"),
-            _const("vec3", names["CSCA_M2"], _vec3(ch.csca_m2),
-                   "mean scattering cross-section per particle [m^2]"),
-            _const("vec3", names["CABS_M2"], _vec3(cabs),
-                   "mean absorption cross-section per particle [m^2]"),
-            _const("vec3", names["SSA"], _vec3(ch.csca_m2 / ch.cext_m2),
-                   "single-scattering albedo csca / cext [-]"),
+            _const(
+                "vec3",
+                names["CEXT_M2"],
+                _vec3(ch.cext_m2),
+                "mean extinction cross-section per particle [m^2]",
+            ),
+            _const(
+                "vec3",
+                names["CSCA_M2"],
+                _vec3(ch.csca_m2),
+                "mean scattering cross-section per particle [m^2]",
+            ),
+            _const(
+                "vec3",
+                names["CABS_M2"],
+                _vec3(cabs),
+                "mean absorption cross-section per particle [m^2]",
+            ),
+            _const(
+                "vec3",
+                names["SSA"],
+                _vec3(ch.csca_m2 / ch.cext_m2),
+                "single-scattering albedo csca / cext [-]",
+            ),
         ]
         if ch.number_density_per_m3 is not None:
             density = ch.number_density_per_m3
             lines += [
-                _const("float", names["NUMBER_DENSITY_PER_M3"], glsl_float(density),
-                       "number density of the beta coefficients [m^-3]"),
-                _const("vec3", names["BETA_EXT_PER_M"], _vec3(density * ch.cext_m2),
-                       "extinction coefficient [m^-1]"),
-                _const("vec3", names["BETA_SCA_PER_M"], _vec3(density * ch.csca_m2),
-                       "scattering coefficient [m^-1]"),
-                _const("vec3", names["BETA_ABS_PER_M"], _vec3(density * cabs),
-                       "absorption coefficient [m^-1]"),
+                _const(
+                    "float",
+                    names["NUMBER_DENSITY_PER_M3"],
+                    glsl_float(density),
+                    "number density of the beta coefficients [m^-3]",
+                ),
+                _const(
+                    "vec3",
+                    names["BETA_EXT_PER_M"],
+                    _vec3(density * ch.cext_m2),
+                    "extinction coefficient [m^-1]",
+                ),
+                _const(
+                    "vec3",
+                    names["BETA_SCA_PER_M"],
+                    _vec3(density * ch.csca_m2),
+                    "scattering coefficient [m^-1]",
+                ),
+                _const(
+                    "vec3",
+                    names["BETA_ABS_PER_M"],
+                    _vec3(density * cabs),
+                    "absorption coefficient [m^-1]",
+                ),
             ]
     lines += [
         "",

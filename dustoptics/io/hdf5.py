@@ -143,7 +143,9 @@ def _writer(table: Table) -> Callable[[Path], None]:
             f.attrs["software"] = canonical_json(dict(table.provenance.software))
 
             def dataset(key: str, data: Any, **options: Any) -> Any:
-                ds = f.create_dataset(key, data=np.asarray(data, dtype="<f8"), track_times=False, **options)
+                ds = f.create_dataset(
+                    key, data=np.asarray(data, dtype="<f8"), track_times=False, **options
+                )
                 _attrs(ds, key)
                 return ds
 
@@ -259,7 +261,9 @@ def _read_attr(path: Path, f: Any, key: str) -> str:
     return value
 
 
-def _read_array(path: Path, f: Any, key: str, shape: tuple[int, ...] | None, *, required: bool) -> Any:
+def _read_array(
+    path: Path, f: Any, key: str, shape: tuple[int, ...] | None, *, required: bool
+) -> Any:
     h5py = _h5py()
     if key not in f:
         if required:
@@ -275,7 +279,9 @@ def _read_array(path: Path, f: Any, key: str, shape: tuple[int, ...] | None, *, 
     try:
         data = obj[()]
     except (OSError, RuntimeError) as exc:
-        raise FormatError(f"{path}: variable {key!r} cannot be read (damaged or truncated?): {exc}") from None
+        raise FormatError(
+            f"{path}: variable {key!r} cannot be read (damaged or truncated?): {exc}"
+        ) from None
     return np.asarray(data, dtype=np.float64)
 
 
@@ -331,7 +337,9 @@ def read_hdf5(path: str | os.PathLike[str]) -> Table:
     try:
         f = h5py.File(path, "r")
     except OSError as exc:
-        raise FormatError(f"{path}: not a readable HDF5 file (truncated or another format?): {exc}") from None
+        raise FormatError(
+            f"{path}: not a readable HDF5 file (truncated or another format?): {exc}"
+        ) from None
     try:
         with f:
             conventions = _read_attr(path, f, "Conventions")
@@ -350,7 +358,9 @@ def read_hdf5(path: str | os.PathLike[str]) -> Table:
                 raise FormatError(f"{path}: wavelength_nm and theta_deg must be 1-D")
             n_wl = (wavelength.size,)
             fields: dict[str, Any] = {
-                "phase": _read_array(path, f, "phase", (wavelength.size, theta.size), required=True),
+                "phase": _read_array(
+                    path, f, "phase", (wavelength.size, theta.size), required=True
+                ),
                 "g": _read_array(path, f, "g", n_wl, required=True),
             }
             for key in _PER_WAVELENGTH[1:]:
@@ -360,7 +370,11 @@ def read_hdf5(path: str | os.PathLike[str]) -> Table:
                 fields[key] = None if value is None else float(value)
             try:
                 table = Table(
-                    name=name, wavelength_nm=wavelength, theta_deg=theta, provenance=provenance, **fields
+                    name=name,
+                    wavelength_nm=wavelength,
+                    theta_deg=theta,
+                    provenance=provenance,
+                    **fields,
                 )
             except ValueError as exc:
                 raise FormatError(f"{path}: {exc}") from None

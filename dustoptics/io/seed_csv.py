@@ -183,7 +183,12 @@ def _summary_bytes(table: Table, hashes: dict[str, str]) -> bytes:
         files[EXTINCTION_FILENAME] = {
             "sha256": hashes[EXTINCTION_FILENAME],
             "columns": [
-                {"name": header, "unit": unit, "meaning": UNITS[attribute][1], "derived": not stored}
+                {
+                    "name": header,
+                    "unit": unit,
+                    "meaning": UNITS[attribute][1],
+                    "derived": not stored,
+                }
                 for header, unit, attribute, _exponent, stored in _columns(table)
             ],
         }
@@ -327,7 +332,9 @@ def read_phase_csv(path: str | os.PathLike[str]) -> PhaseFunctionSpectrum:
         )
     if len(header) < 2:
         raise FormatError(f"{path}: the header has no wavelength columns")
-    wavelengths = np.array([parse(path, 1, f"{j} (header)", cell) for j, cell in enumerate(header[1:], 2)])
+    wavelengths = np.array(
+        [parse(path, 1, f"{j} (header)", cell) for j, cell in enumerate(header[1:], 2)]
+    )
     check_increasing(path, "the header wavelengths [nm]", wavelengths)
     if len(rows) < 2:
         raise FormatError(f"{path}: no data rows after the header")
@@ -343,7 +350,9 @@ def read_phase_csv(path: str | os.PathLike[str]) -> PhaseFunctionSpectrum:
             values[i, j - 1] = parse(path, line, f"{j + 1} ({header[j]} nm)", row[j])
     check_increasing(path, "the angles in the first column [deg]", theta)
     if theta[0] < 0.0 or theta[-1] > 180.0:
-        raise FormatError(f"{path}: angles must lie in [0, 180] deg; got {theta[0]!r} to {theta[-1]!r}")
+        raise FormatError(
+            f"{path}: angles must lie in [0, 180] deg; got {theta[0]!r} to {theta[-1]!r}"
+        )
     return PhaseFunctionSpectrum(
         wavelength_nm=wavelengths, theta_deg=theta, phase=np.ascontiguousarray(values.T)
     )
@@ -391,7 +400,9 @@ def read_extinction_csv(path: str | os.PathLike[str]) -> dict[str, np.ndarray]:
     for i, row in enumerate(rows[1:]):
         line = i + 2
         if len(row) != len(header):
-            raise FormatError(f"{path}: line {line} has {len(row)} cells; the header has {len(header)}")
+            raise FormatError(
+                f"{path}: line {line} has {len(row)} cells; the header has {len(header)}"
+            )
         for name, _unit, attribute, exponent, _stored in columns:
             out[attribute].append(parse(path, line, name, row[header.index(name)], exponent))
     arrays = {key: np.array(values) for key, values in out.items()}
@@ -530,7 +541,11 @@ def read_seed_csv(directory: str | os.PathLike[str], *, verify: bool = True) -> 
                 f"{extinction_path}: wavelengths ({columns['wavelength_nm'].size} values) differ "
                 f"from the header of {root / PHASE_FILENAME} ({phase.wavelength_nm.size} values)"
             )
-        fields = {"cext_um2": columns["cext_um2"], "csca_um2": columns["csca_um2"], "g": columns["g"]}
+        fields = {
+            "cext_um2": columns["cext_um2"],
+            "csca_um2": columns["csca_um2"],
+            "g": columns["g"],
+        }
     else:
         columns = {}
         fields = {"g": _guard(summary_path, lambda: array("g"))}

@@ -105,7 +105,9 @@ class TextureData:
 
 def _check_n_angles(n_angles: Any) -> int:
     if isinstance(n_angles, bool) or not isinstance(n_angles, (int, np.integer)) or n_angles < 2:
-        raise ValueError(f"n_angles must be an integer >= 2 (both ends are sampled); got {n_angles!r}")
+        raise ValueError(
+            f"n_angles must be an integer >= 2 (both ends are sampled); got {n_angles!r}"
+        )
     return int(n_angles)
 
 
@@ -158,13 +160,17 @@ def _safe_stem(name: str) -> str:
     return stem or "table"
 
 
-def _normalization_check(phase32: np.ndarray, theta: np.ndarray, mu: np.ndarray | None) -> list[float]:
+def _normalization_check(
+    phase32: np.ndarray, theta: np.ndarray, mu: np.ndarray | None
+) -> list[float]:
     """2 pi int P dmu of each row, read the way the sampling is meant to be interpolated."""
     p = phase32.astype(np.float64)
     if mu is None:  # linear in theta between samples: integrated exactly
         return np.atleast_1d(sphere_integral(p, theta_deg=theta)).tolist()
     # linear in mu between samples: the trapezoid rule is exact (mu decreasing)
-    return (2.0 * math.pi * np.sum(0.5 * (p[:, 1:] + p[:, :-1]) * (mu[:-1] - mu[1:]), axis=1)).tolist()
+    return (
+        2.0 * math.pi * np.sum(0.5 * (p[:, 1:] + p[:, :-1]) * (mu[:-1] - mu[1:]), axis=1)
+    ).tolist()
 
 
 def _sidecar(
@@ -371,7 +377,9 @@ def read_texture(sidecar_path: str | os.PathLike[str]) -> TextureData:
         sampling = meta["sampling"]
         wl_axis, angle_axis = meta["axes"]
     except (KeyError, TypeError, ValueError) as exc:
-        raise FormatError(f"{path}: texture sidecar is missing or has a malformed entry: {exc}") from None
+        raise FormatError(
+            f"{path}: texture sidecar is missing or has a malformed entry: {exc}"
+        ) from None
     if dtype != "<f4" or len(shape) != 2 or sampling not in SAMPLINGS:
         raise FormatError(
             f"{path}: unsupported texture (dtype {dtype!r}, shape {shape}, sampling {sampling!r}); "

@@ -336,8 +336,14 @@ def _join(prefix: str, key: str) -> str:
 
 
 def _type_name(value: Any) -> str:
-    return {bool: "boolean", int: "integer", float: "number", str: "string", list: "array",
-            dict: "table"}.get(type(value), type(value).__name__)
+    return {
+        bool: "boolean",
+        int: "integer",
+        float: "number",
+        str: "string",
+        list: "array",
+        dict: "table",
+    }.get(type(value), type(value).__name__)
 
 
 def _number(ctx: _Context, key: str, value: Any) -> float:
@@ -396,7 +402,9 @@ def _choice(ctx: _Context, key: str, value: Any, choices: tuple[str, ...] | list
 
 def _table(ctx: _Context, key: str, value: Any) -> dict[str, Any]:
     if not isinstance(value, dict):
-        raise ctx.error(key, f"must be a table ([{key}] or {{...}}); got {value!r} ({_type_name(value)})")
+        raise ctx.error(
+            key, f"must be a table ([{key}] or {{...}}); got {value!r} ({_type_name(value)})"
+        )
     return value
 
 
@@ -406,8 +414,13 @@ def _array(ctx: _Context, key: str, value: Any) -> list[Any]:
     return value
 
 
-def _known_keys(ctx: _Context, prefix: str, table: Mapping[str, Any], allowed: tuple[str, ...],
-                context: str = "") -> None:
+def _known_keys(
+    ctx: _Context,
+    prefix: str,
+    table: Mapping[str, Any],
+    allowed: tuple[str, ...],
+    context: str = "",
+) -> None:
     """Raise for the first key of ``table`` not in ``allowed`` (listing them)."""
     for key in table:
         if key not in allowed:
@@ -474,8 +487,10 @@ class MaterialConfig:
 
     def to_inputs(self) -> dict[str, Any]:
         """JSON-ready parameters."""
-        return {"model": self.model, **{k: (dict(v) if isinstance(v, Mapping) else v)
-                                        for k, v in self.parameters.items()}}
+        return {
+            "model": self.model,
+            **{k: (dict(v) if isinstance(v, Mapping) else v) for k, v in self.parameters.items()},
+        }
 
 
 @dataclass(frozen=True)
@@ -572,7 +587,9 @@ class OpticsConfig:
     def to_inputs(self) -> dict[str, Any]:
         out: dict[str, Any] = {"wavelengths_nm": list(self.wavelengths_nm), "n_theta": self.n_theta}
         if self.weighting is not None:
-            out.update(weighting=self.weighting, rtol=self.rtol, cross_section_rtol=self.cross_section_rtol)
+            out.update(
+                weighting=self.weighting, rtol=self.rtol, cross_section_rtol=self.cross_section_rtol
+            )
         return out
 
 
@@ -684,8 +701,15 @@ class BuildConfig:
 # ------------------------------------------------------------------ parsing
 
 _TOP_KEYS: Final = (
-    "name", "description", "choices", "number_density_per_m3", "sources",
-    "material", "size_distribution", "optics", "phase",
+    "name",
+    "description",
+    "choices",
+    "number_density_per_m3",
+    "sources",
+    "material",
+    "size_distribution",
+    "optics",
+    "phase",
 )
 
 
@@ -695,14 +719,22 @@ def _parse_sources(ctx: _Context, value: Any) -> tuple[Source, ...]:
         key = f"sources[{i}]"
         entry = _table(ctx, key, item)
         _known_keys(ctx, key, entry, ("name", "role", "citation"))
-        out.append(Source(**{k: _string(ctx, f"{key}.{k}", _required(ctx, key, entry, k))
-                             for k in ("name", "role", "citation")}))
+        out.append(
+            Source(
+                **{
+                    k: _string(ctx, f"{key}.{k}", _required(ctx, key, entry, k))
+                    for k in ("name", "role", "citation")
+                }
+            )
+        )
     return tuple(out)
 
 
 def _parse_material(ctx: _Context, value: Any) -> MaterialConfig:
     sec = _table(ctx, "material", value)
-    model = _choice(ctx, "material.model", _required(ctx, "material", sec, "model"), tuple(_MATERIAL_KEYS))
+    model = _choice(
+        ctx, "material.model", _required(ctx, "material", sec, "model"), tuple(_MATERIAL_KEYS)
+    )
     _known_keys(ctx, "material", sec, _MATERIAL_KEYS[model], f"for material.model = {model!r}")
     if model == "catalogue":
         names = list_materials()
@@ -714,14 +746,20 @@ def _parse_material(ctx: _Context, value: Any) -> MaterialConfig:
         if k < 0:
             raise ctx.error("material.k", f"must be >= 0 (absorption); got {sec['k']!r}")
         return MaterialConfig(model, _frozen({"n": n, "k": k}))
-    fraction = _closed(ctx, "material.hematite_fraction", sec.get("hematite_fraction", 0.03), 0.0, 1.0)
+    fraction = _closed(
+        ctx, "material.hematite_fraction", sec.get("hematite_fraction", 0.03), 0.0, 1.0
+    )
     host = sec.get("host_index", 1.5)
     if isinstance(host, dict):
         _known_keys(ctx, "material.host_index", host, ("n", "k"))
-        host_n = _positive(ctx, "material.host_index.n", _required(ctx, "material.host_index", host, "n"))
+        host_n = _positive(
+            ctx, "material.host_index.n", _required(ctx, "material.host_index", host, "n")
+        )
         host_k = _number(ctx, "material.host_index.k", host.get("k", 0.0))
         if host_k < 0:
-            raise ctx.error("material.host_index.k", f"must be >= 0 (absorption); got {host['k']!r}")
+            raise ctx.error(
+                "material.host_index.k", f"must be >= 0 (absorption); got {host['k']!r}"
+            )
     else:
         try:
             host_n = _positive(ctx, "material.host_index", host)
@@ -732,26 +770,34 @@ def _parse_material(ctx: _Context, value: Any) -> MaterialConfig:
             ) from None
         host_k = 0.0
     hematite = _choice(
-        ctx, "material.hematite", sec.get("hematite", "querry-extraordinary"),
+        ctx,
+        "material.hematite",
+        sec.get("hematite", "querry-extraordinary"),
         (*MARS_DUST_HEMATITE, *MARS_DUST_HEMATITE.values()),
     )
     rule = _choice(ctx, "material.rule", sec.get("rule", "maxwell_garnett"), MIXING_RULES)
     return MaterialConfig(
         model,
-        _frozen({
-            "hematite_fraction": fraction,
-            "host_index": _frozen({"n": host_n, "k": host_k}),
-            "hematite": MARS_DUST_HEMATITE.get(hematite, hematite),
-            "rule": rule,
-        }),
+        _frozen(
+            {
+                "hematite_fraction": fraction,
+                "host_index": _frozen({"n": host_n, "k": host_k}),
+                "hematite": MARS_DUST_HEMATITE.get(hematite, hematite),
+                "rule": rule,
+            }
+        ),
     )
 
 
-def _parse_mode(ctx: _Context, prefix: str, sec: Mapping[str, Any], *, in_mixture: bool) -> ModeConfig:
+def _parse_mode(
+    ctx: _Context, prefix: str, sec: Mapping[str, Any], *, in_mixture: bool
+) -> ModeConfig:
     models = tuple(_DISTRIBUTIONS) if in_mixture else (*_DISTRIBUTIONS, "multimodal")
     model = _choice(ctx, f"{prefix}.model", _required(ctx, prefix, sec, "model"), models)
     params = _DISTRIBUTIONS[model][1]
-    allowed = ("model", *(p for p, _ in params)) + (("relative_number_density",) if in_mixture else ())
+    allowed = ("model", *(p for p, _ in params)) + (
+        ("relative_number_density",) if in_mixture else ()
+    )
     _known_keys(ctx, prefix, sec, allowed, f"for {prefix}.model = {model!r}")
     values: dict[str, float] = {}
     for param, rule in params:
@@ -764,7 +810,9 @@ def _parse_mode(ctx: _Context, prefix: str, sec: Mapping[str, Any], *, in_mixtur
     density = None
     if in_mixture:
         density = _positive(
-            ctx, f"{prefix}.relative_number_density", _required(ctx, prefix, sec, "relative_number_density")
+            ctx,
+            f"{prefix}.relative_number_density",
+            _required(ctx, prefix, sec, "relative_number_density"),
         )
     mode = ModeConfig(model, _frozen(values), density)
     try:
@@ -777,18 +825,34 @@ def _parse_mode(ctx: _Context, prefix: str, sec: Mapping[str, Any], *, in_mixtur
 def _parse_size_distribution(ctx: _Context, value: Any) -> SizeDistributionConfig:
     sec = _table(ctx, "size_distribution", value)
     model = _choice(
-        ctx, "size_distribution.model", _required(ctx, "size_distribution", sec, "model"),
+        ctx,
+        "size_distribution.model",
+        _required(ctx, "size_distribution", sec, "model"),
         (*_DISTRIBUTIONS, "multimodal"),
     )
     if model != "multimodal":
-        return SizeDistributionConfig(model, (_parse_mode(ctx, "size_distribution", sec, in_mixture=False),))
-    _known_keys(ctx, "size_distribution", sec, ("model", "modes"), "for size_distribution.model = 'multimodal'")
+        return SizeDistributionConfig(
+            model, (_parse_mode(ctx, "size_distribution", sec, in_mixture=False),)
+        )
+    _known_keys(
+        ctx,
+        "size_distribution",
+        sec,
+        ("model", "modes"),
+        "for size_distribution.model = 'multimodal'",
+    )
     raw = _array(ctx, "size_distribution.modes", _required(ctx, "size_distribution", sec, "modes"))
     if not raw:
-        raise ctx.error("size_distribution.modes", "must hold at least one [[size_distribution.modes]] table")
+        raise ctx.error(
+            "size_distribution.modes", "must hold at least one [[size_distribution.modes]] table"
+        )
     modes = tuple(
-        _parse_mode(ctx, f"size_distribution.modes[{i}]", _table(ctx, f"size_distribution.modes[{i}]", m),
-                    in_mixture=True)
+        _parse_mode(
+            ctx,
+            f"size_distribution.modes[{i}]",
+            _table(ctx, f"size_distribution.modes[{i}]", m),
+            in_mixture=True,
+        )
         for i, m in enumerate(raw)
     )
     return SizeDistributionConfig("multimodal", modes)
@@ -833,12 +897,16 @@ def _parse_optics(ctx: _Context, value: Any, *, mie: bool, model: str) -> Optics
     _known_keys(ctx, "optics", sec, allowed + mie_keys)
     wavelengths = _parse_wavelengths(ctx, sec.get("wavelengths_nm", dict(_DEFAULT_WAVELENGTHS)))
     if "n_theta" in sec and "theta_step_deg" in sec:
-        raise ctx.error("optics.theta_step_deg", "give either optics.n_theta or optics.theta_step_deg, not both")
+        raise ctx.error(
+            "optics.theta_step_deg", "give either optics.n_theta or optics.theta_step_deg, not both"
+        )
     if "theta_step_deg" in sec:
         step = _open(ctx, "optics.theta_step_deg", sec["theta_step_deg"], 0.0, 180.0 + 1e-9)
         intervals = 180.0 / step
         if abs(intervals - round(intervals)) > 1e-9 * intervals:
-            raise ctx.error("optics.theta_step_deg", f"must divide 180 deg into whole steps; got {step:g}")
+            raise ctx.error(
+                "optics.theta_step_deg", f"must divide 180 deg into whole steps; got {step:g}"
+            )
         n_theta = round(intervals) + 1
     else:
         n_theta = _integer(ctx, "optics.n_theta", sec.get("n_theta", _DEFAULT_N_THETA), 2)
@@ -846,7 +914,9 @@ def _parse_optics(ctx: _Context, value: Any, *, mie: bool, model: str) -> Optics
         return OpticsConfig(wavelengths, n_theta)
     weighting = _choice(ctx, "optics.weighting", sec.get("weighting", "scattering"), WEIGHTINGS)
     rtol = _open(ctx, "optics.rtol", sec.get("rtol", _DEFAULT_RTOL), 0.0, 0.1)
-    cross = _open(ctx, "optics.cross_section_rtol", sec.get("cross_section_rtol", rtol / 100.0), 0.0, 0.1)
+    cross = _open(
+        ctx, "optics.cross_section_rtol", sec.get("cross_section_rtol", rtol / 100.0), 0.0, 0.1
+    )
     return OpticsConfig(wavelengths, n_theta, weighting, rtol, cross)
 
 
@@ -854,7 +924,9 @@ def _analytic_names() -> tuple[str, ...]:
     return (_COSTA_SPECTRUM, *_phase.ANALYTIC_MODELS)
 
 
-def _parse_analytic(ctx: _Context, sec: Mapping[str, Any], name: str, fixed: tuple[str, ...]) -> Mapping[str, Any]:
+def _parse_analytic(
+    ctx: _Context, sec: Mapping[str, Any], name: str, fixed: tuple[str, ...]
+) -> Mapping[str, Any]:
     """Parameters of analytic model ``name`` from ``[phase]`` (``fixed`` keys already handled)."""
     if name == _COSTA_SPECTRUM:
         _known_keys(ctx, "phase", sec, (*fixed, "outside"), f"for the analytic model {name!r}")
@@ -862,7 +934,9 @@ def _parse_analytic(ctx: _Context, sec: Mapping[str, Any], name: str, fixed: tup
         return _frozen({"outside": outside})
     model = _phase.get_analytic_model(name)
     _known_keys(ctx, "phase", sec, (*fixed, *model.parameters), f"for the analytic model {name!r}")
-    params = {p: _number(ctx, f"phase.{p}", _required(ctx, "phase", sec, p)) for p in model.parameters}
+    params = {
+        p: _number(ctx, f"phase.{p}", _required(ctx, "phase", sec, p)) for p in model.parameters
+    }
     try:
         model.phase(np.array([1.0, -1.0]), **params)
     except ValueError as exc:  # the function's own range checks name the parameter first
@@ -883,7 +957,9 @@ def _parse_phase(ctx: _Context, value: Any) -> PhaseConfig:
         return PhaseConfig("mie")
     if model == "hybrid":
         weight = _closed(ctx, "phase.weight", sec.get("weight", _DEFAULT_HYBRID_WEIGHT), 0.0, 1.0)
-        analytic = _choice(ctx, "phase.analytic", sec.get("analytic", _DEFAULT_ANALYTIC), _analytic_names())
+        analytic = _choice(
+            ctx, "phase.analytic", sec.get("analytic", _DEFAULT_ANALYTIC), _analytic_names()
+        )
         params = _parse_analytic(ctx, sec, analytic, ("model", "weight", "analytic"))
         return PhaseConfig("hybrid", analytic, params, weight)
     return PhaseConfig(model, model, _parse_analytic(ctx, sec, model, ("model",)))
@@ -915,13 +991,17 @@ def parse_config(text: str, *, source: str = "<string>") -> BuildConfig:
     except tomllib.TOMLDecodeError as exc:
         match = re.search(r"at line (\d+)", str(exc))
         raise ConfigError(
-            f"invalid TOML: {exc}", key=None, line=int(match.group(1)) if match else None, source=source
+            f"invalid TOML: {exc}",
+            key=None,
+            line=int(match.group(1)) if match else None,
+            source=source,
         ) from None
     _known_keys(ctx, "", data, _TOP_KEYS)
     name = _string(ctx, "name", _required(ctx, "", data, "name"))
     description = _string(ctx, "description", _required(ctx, "", data, "description"))
     choices = tuple(
-        _string(ctx, f"choices[{i}]", c) for i, c in enumerate(_array(ctx, "choices", data.get("choices", [])))
+        _string(ctx, f"choices[{i}]", c)
+        for i, c in enumerate(_array(ctx, "choices", data.get("choices", [])))
     )
     sources = _parse_sources(ctx, data.get("sources", []))
     phase_config = _parse_phase(ctx, data.get("phase", {"model": "mie"}))
@@ -970,15 +1050,23 @@ def load_config(path: str | os.PathLike[str]) -> BuildConfig:
 # ------------------------------------------------------------------- building
 
 
-def _analytic_table(config: BuildConfig, name: str, params: Mapping[str, Any],
-                    wavelengths: np.ndarray, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray, Source]:
+def _analytic_table(
+    config: BuildConfig,
+    name: str,
+    params: Mapping[str, Any],
+    wavelengths: np.ndarray,
+    theta: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, Source]:
     """(renormalized table, analytic mean cosine per wavelength, its source)."""
     n = wavelengths.size
     if name == _COSTA_SPECTRUM:
         spectrum = _phase.costa2021_mars_dhg(wavelengths, outside=params["outside"])
         raw = _phase.tabulate(
-            _phase.dhg_costa2021, theta_deg=theta,
-            g1=spectrum.g1[:, None], g2=spectrum.g2[:, None], alpha=spectrum.alpha[:, None],
+            _phase.dhg_costa2021,
+            theta_deg=theta,
+            g1=spectrum.g1[:, None],
+            g2=spectrum.g2[:, None],
+            alpha=spectrum.alpha[:, None],
         )
         exact = spectrum.asymmetry()
         source = Source(name=_COSTA_SPECTRUM, role="phase function", citation=spectrum.citation)
@@ -1010,8 +1098,9 @@ def _concatenate(parts: list[OpticsTable]) -> OpticsTable:
     return OpticsTable(**values)
 
 
-def _compute_mie(config: BuildConfig, workers: int | None,
-                 progress: Callable[[int, int], None] | None) -> OpticsTable:
+def _compute_mie(
+    config: BuildConfig, workers: int | None, progress: Callable[[int, int], None] | None
+) -> OpticsTable:
     assert config.material is not None and config.size_distribution is not None
     wl = config.wavelengths_nm
     kwargs: dict[str, Any] = {
@@ -1082,7 +1171,9 @@ def build_table(
         Inputs the engine rejects (e.g. a wavelength outside a material's data).
     """
     if not isinstance(config, BuildConfig):
-        raise TypeError(f"config must be a BuildConfig (see parse_config); got {type(config).__name__}")
+        raise TypeError(
+            f"config must be a BuildConfig (see parse_config); got {type(config).__name__}"
+        )
     wl = config.wavelengths_nm
     theta = config.theta_deg
     inputs = config.to_inputs()
@@ -1098,13 +1189,24 @@ def build_table(
             distribution = config.size_distribution.build()
             _add_sources(
                 sources,
-                Source(name=getattr(material, "name", str(material)), role="refractive index",
-                       citation=getattr(material, "citation", "constant refractive index from the configuration")),
-                Source(name=distribution.model, role="size distribution", citation=distribution.citation),
+                Source(
+                    name=getattr(material, "name", str(material)),
+                    role="refractive index",
+                    citation=getattr(
+                        material, "citation", "constant refractive index from the configuration"
+                    ),
+                ),
+                Source(
+                    name=distribution.model,
+                    role="size distribution",
+                    citation=distribution.citation,
+                ),
             )
             if ph.model == "hybrid":
                 assert ph.analytic is not None and ph.weight is not None
-                p_analytic, _, analytic_source = _analytic_table(config, ph.analytic, ph.parameters, wl, theta)
+                p_analytic, _, analytic_source = _analytic_table(
+                    config, ph.analytic, ph.parameters, wl, theta
+                )
                 _add_sources(sources, analytic_source)
                 p_mie = _phase.renormalize(optics.phase, theta_deg=theta)
                 blended = _phase.hybrid(p_mie, p_analytic, theta_deg=theta, weight=ph.weight)
@@ -1115,20 +1217,28 @@ def build_table(
                     "cross-sections and error estimates are the Mie computation's"
                 )
                 base = Table.from_optics(
-                    optics, name=config.name, inputs=inputs, sources=tuple(sources),
+                    optics,
+                    name=config.name,
+                    inputs=inputs,
+                    sources=tuple(sources),
                     number_density_per_m3=config.number_density_per_m3,
                 )
                 table = base.replace(phase=blended, g=_phase.mean_cosine(blended, theta_deg=theta))
             else:
                 table = Table.from_optics(
-                    optics, name=config.name, inputs=inputs, sources=tuple(sources),
+                    optics,
+                    name=config.name,
+                    inputs=inputs,
+                    sources=tuple(sources),
                     number_density_per_m3=config.number_density_per_m3,
                 )
         else:
             assert ph.analytic is not None
             if progress is not None:
                 progress(0, wl.size)
-            p_analytic, exact, analytic_source = _analytic_table(config, ph.analytic, ph.parameters, wl, theta)
+            p_analytic, exact, analytic_source = _analytic_table(
+                config, ph.analytic, ph.parameters, wl, theta
+            )
             _add_sources(sources, analytic_source)
             g = np.asarray(_phase.mean_cosine(p_analytic, theta_deg=theta), dtype=np.float64)
             notes.append(
@@ -1138,7 +1248,11 @@ def build_table(
                 f"{float(np.max(np.abs(g - exact))):.2e} from the analytic formula"
             )
             table = Table(
-                name=config.name, wavelength_nm=wl, theta_deg=theta, phase=p_analytic, g=g,
+                name=config.name,
+                wavelength_nm=wl,
+                theta_deg=theta,
+                phase=p_analytic,
+                g=g,
                 provenance=Provenance(inputs=inputs, sources=tuple(sources)),
             )
             if progress is not None:
@@ -1153,8 +1267,11 @@ def build_table(
     provenance = table.provenance
     table = table.replace(
         provenance=Provenance(
-            inputs=provenance.inputs, sources=tuple(sources), software=provenance.software,
-            quadrature=provenance.quadrature, notes=tuple(notes),
+            inputs=provenance.inputs,
+            sources=tuple(sources),
+            software=provenance.software,
+            quadrature=provenance.quadrature,
+            notes=tuple(notes),
         )
     )
     for w in caught:

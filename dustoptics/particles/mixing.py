@@ -99,7 +99,9 @@ def _as_index_array(name: str, values: ArrayLike) -> ComplexArray:
     try:
         m = np.array(values, dtype=np.complex128)
     except (TypeError, ValueError):
-        raise ValueError(f"{name} must be complex refractive indices n + ik; got {_show(values)}") from None
+        raise ValueError(
+            f"{name} must be complex refractive indices n + ik; got {_show(values)}"
+        ) from None
     bad = ~np.isfinite(m) | (m.real <= 0.0) | (m.imag < 0.0)
     if np.any(bad):
         raise ValueError(
@@ -140,7 +142,9 @@ def _exact_limits(
     m: ComplexArray, m_host: ComplexArray, m_incl: ComplexArray, v: FloatArray
 ) -> ComplexArray:
     """Return the host itself at v = 0 and the inclusion itself at v = 1."""
-    return np.asarray(np.where(v == 0.0, m_host, np.where(v == 1.0, m_incl, m)), dtype=np.complex128)
+    return np.asarray(
+        np.where(v == 0.0, m_host, np.where(v == 1.0, m_incl, m)), dtype=np.complex128
+    )
 
 
 # ---------------------------------------------------------------------------
@@ -148,7 +152,9 @@ def _exact_limits(
 # ---------------------------------------------------------------------------
 
 
-def maxwell_garnett(*, host: ArrayLike, inclusion: ArrayLike, volume_fraction: ArrayLike) -> ComplexArray:
+def maxwell_garnett(
+    *, host: ArrayLike, inclusion: ArrayLike, volume_fraction: ArrayLike
+) -> ComplexArray:
     """Maxwell Garnett effective index of inclusions dispersed in a host.
 
     .. math::
@@ -370,7 +376,9 @@ class Mixture(RefractiveIndex):
         object.__setattr__(self, "volume_fraction", fraction)
         object.__setattr__(self, "wavelength_range_nm", _intersect_ranges(host, inclusion))
         if not self.name:
-            object.__setattr__(self, "name", f"{rule}({fraction:g} {inclusion.name} in {host.name})")
+            object.__setattr__(
+                self, "name", f"{rule}({fraction:g} {inclusion.name} in {host.name})"
+            )
         if not self.citation:
             object.__setattr__(
                 self,
@@ -459,16 +467,23 @@ def mars_dust(
     mineral = get_material(MARS_DUST_HEMATITE.get(hematite, hematite))
     name = f"mars-dust-ehlers2014({fraction:g} {mineral.name} in {host.name}, {rule})"
     citation = (
-        f"{_EHLERS2014} (dust model); {_MEYRAN2022} (\"Blue Moon's\" model); "
+        f'{_EHLERS2014} (dust model); {_MEYRAN2022} ("Blue Moon\'s" model); '
         f"{_RULE_CITATIONS[rule]}; hematite: {mineral.citation}"
     )
     return Mixture(
-        host=host, inclusion=mineral, volume_fraction=fraction, rule=rule, name=name, citation=citation
+        host=host,
+        inclusion=mineral,
+        volume_fraction=fraction,
+        rule=rule,
+        name=name,
+        citation=citation,
     )
 
 
 def _mars_dust_host(host_index: Any) -> RefractiveIndex:
     """``host_index`` as a material; strings are not accepted here."""
     if isinstance(host_index, str):
-        raise TypeError(f"host_index must be a complex refractive index or a RefractiveIndex; got {host_index!r}")
+        raise TypeError(
+            f"host_index must be a complex refractive index or a RefractiveIndex; got {host_index!r}"
+        )
     return as_refractive_index(host_index, name="host_index")

@@ -75,8 +75,29 @@ LANES = 16
 # it tested every pair at run time, once per loop, which cost more than the
 # loop's arithmetic.  (A loop that stores to two views of one array is not
 # vectorized at all: hence ``lane`` apart.)
-(_X, _NMAX, _IZR, _IZI, _FR, _FI, _CR, _CI, _DDR, _DDI, _DONE, _INVX, _PN, _PC,
- _APR, _API, _BPR, _BPI, _QEXT, _QSCA, _GQ) = range(0, 21 * LANES, LANES)
+(
+    _X,
+    _NMAX,
+    _IZR,
+    _IZI,
+    _FR,
+    _FI,
+    _CR,
+    _CI,
+    _DDR,
+    _DDI,
+    _DONE,
+    _INVX,
+    _PN,
+    _PC,
+    _APR,
+    _API,
+    _BPR,
+    _BPI,
+    _QEXT,
+    _QSCA,
+    _GQ,
+) = range(0, 21 * LANES, LANES)
 _N_LANE_ROWS = 21
 _LANE = _N_LANE_ROWS * LANES  # length of the per-sphere part
 # Planes of an order's block: D_n(m x) (real, imaginary), psi_n(x), chi_n(x),
@@ -127,7 +148,9 @@ def _reciprocal_moderate(re: float, im: float) -> tuple[float, float]:
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _log_derivative_top(m: complex, n_sph: int, n_top: int, lane: np.ndarray, ws: np.ndarray) -> None:
+def _log_derivative_top(
+    m: complex, n_sph: int, n_top: int, lane: np.ndarray, ws: np.ndarray
+) -> None:
     """D_n(m x) = psi_n'(m x) / psi_n(m x) at n = n_top for every sphere, by
     Lentz's continued fraction (Lentz 1976, modified as by Thompson & Barnett
     1986): D_n(z) = -n/z + J_{nu-1}(z)/J_nu(z), nu = n + 1/2, with the Bessel
@@ -319,7 +342,10 @@ def _mie_coefficients(m: complex, x: np.ndarray, nmax: np.ndarray, ws: np.ndarra
             lane[_QEXT + s] += c * (ar + br)
             lane[_QSCA + s] += c * (ar * ar + ai * ai + br * br + bi * bi)
             lane[_GQ + s] += c_ab * (ar * br + ai * bi) + c_prev * (
-                lane[_APR + s] * ar + lane[_API + s] * ai + lane[_BPR + s] * br + lane[_BPI + s] * bi
+                lane[_APR + s] * ar
+                + lane[_API + s] * ai
+                + lane[_BPR + s] * br
+                + lane[_BPI + s] * bi
             )
             lane[_APR + s] = ar
             lane[_API + s] = ai
@@ -335,7 +361,9 @@ def _mie_coefficients(m: complex, x: np.ndarray, nmax: np.ndarray, ws: np.ndarra
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _bh_ratio(tr: float, ti: float, p1: float, p0: float, c1: float, c0: float) -> tuple[float, float]:
+def _bh_ratio(
+    tr: float, ti: float, p1: float, p0: float, c1: float, c0: float
+) -> tuple[float, float]:
     """(t psi_n - psi_{n-1}) / (t xi_n - xi_{n-1}) for t = tr + i ti, psi_n = p1,
     psi_{n-1} = p0 and xi = psi - i chi with chi_n = c1, chi_{n-1} = c0: the
     common form of a_n and b_n (Bohren & Huffman 1983, Eq. 4.88)."""
@@ -595,8 +623,18 @@ def _accumulate(
         for s in range(n_live):
             j = j0 + s
             _add_sphere(
-                out[node_panel[j]], w_nodes[j], x_b[s], nmax_b[s], ws, s,
-                per_particle, table, n_mu, symmetric, coef, acc,
+                out[node_panel[j]],
+                w_nodes[j],
+                x_b[s],
+                nmax_b[s],
+                ws,
+                s,
+                per_particle,
+                table,
+                n_mu,
+                symmetric,
+                coef,
+                acc,
             )
     return out
 
@@ -766,7 +804,15 @@ def _accumulate_tiers(
         flat = tables[table_start[t] : table_start[t + 1]]
         table = flat.reshape((flat.shape[0] // width, width))
         rows = _accumulate(
-            m, x_nodes[j0:j1], w_nodes[j0:j1], node_local, n_loc, per_particle, table, n_t, symmetric
+            m,
+            x_nodes[j0:j1],
+            w_nodes[j0:j1],
+            node_local,
+            n_loc,
+            per_particle,
+            table,
+            n_t,
+            symmetric,
         )
         if n_t == n_top:
             for r in range(n_loc):
@@ -787,7 +833,9 @@ def _accumulate_tiers(
 
 
 @njit(cache=True, nogil=True)
-def _legendre_project(mu_half: np.ndarray, w_half: np.ndarray, f: np.ndarray, lmax: int) -> np.ndarray:
+def _legendre_project(
+    mu_half: np.ndarray, w_half: np.ndarray, f: np.ndarray, lmax: int
+) -> np.ndarray:
     """Legendre coefficients beta_l = (2l+1)/2 int f P_l dmu, l = 0..lmax.
 
     ``f`` holds values at +mu_half followed by values at -mu_half (Gauss

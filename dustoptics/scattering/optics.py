@@ -216,7 +216,9 @@ def resolve_refractive_index(
         label = _describe(refractive_index)
     elif np.ndim(refractive_index) == 0:
         try:
-            m = np.full(wavelength_nm.shape, complex(cast(complex, refractive_index)), dtype=np.complex128)
+            m = np.full(
+                wavelength_nm.shape, complex(cast(complex, refractive_index)), dtype=np.complex128
+            )
         except (TypeError, ValueError):
             raise ValueError(
                 "refractive_index must be a complex number, a sequence of complex numbers, "
@@ -234,9 +236,7 @@ def resolve_refractive_index(
     bad = ~(np.isfinite(m.real) & np.isfinite(m.imag))
     if bad.any():
         i = int(np.argmax(bad))
-        raise ValueError(
-            f"refractive_index must be finite; got {m[i]} at {wavelength_nm[i]} nm"
-        )
+        raise ValueError(f"refractive_index must be finite; got {m[i]} at {wavelength_nm[i]} nm")
     if np.any(m.imag < 0):
         i = int(np.argmax(m.imag < 0))
         raise ValueError(
@@ -326,7 +326,9 @@ def _angular_tiers(n_half: int) -> tuple[np.ndarray, ...]:
     mu_half = _gauss_angles(n_half)[0]
     tables = [_gauss_angles(int(t))[2].ravel() for t in sizes]
     maps = [
-        np.concatenate([r.ravel() for r in mie._interpolation_maps(*_gauss_angles(int(t))[:2], mu_half)])
+        np.concatenate(
+            [r.ravel() for r in mie._interpolation_maps(*_gauss_angles(int(t))[:2], mu_half)]
+        )
         for t in sizes[:-1]
     ]
     return (
@@ -405,7 +407,9 @@ def _cross_refinement_errors(
         z = pool[coarse[p]]
         e_ext = abs(a[1] + b[1] - z[1]) / total[1]
         e_sca = abs(a[2] + b[2] - z[2]) / total[2]
-        e_g = (abs(a[gnum] + b[gnum] - z[gnum]) + g * abs(a[norm] + b[norm] - z[norm])) / total[norm]
+        e_g = (abs(a[gnum] + b[gnum] - z[gnum]) + g * abs(a[norm] + b[norm] - z[norm])) / total[
+            norm
+        ]
         panel_error[p] = max(e_ext, e_sca, e_g)
         sums[0] += e_ext
         sums[1] += e_sca
@@ -574,7 +578,9 @@ def _accumulate_by_tier(
             x_top = max(x_top, x[j])
         panel_tier[p] = np.searchsorted(tiers, int(_n_max(x_top)) + 2)
         if panel_tier[p] == n_tiers:
-            raise ValueError("a panel's spheres need more orders than the largest angular tier holds")
+            raise ValueError(
+                "a panel's spheres need more orders than the largest angular tier holds"
+            )
         x_first[p] = x[p * nodes_per_panel]
         count[panel_tier[p] + 1] += 1
     # Panels are disjoint, and x grows along each panel's nodes, so ordering
@@ -599,8 +605,18 @@ def _accumulate_by_tier(
             panel_sorted[k * nodes_per_panel + i] = node_panel[j]
             node_tier[k * nodes_per_panel + i] = panel_tier[p]
     return mie._accumulate_tiers(
-        m, x_sorted, w_sorted, panel_sorted, node_tier, n_panels,
-        per_particle, tiers, tables, table_start, maps, map_start,
+        m,
+        x_sorted,
+        w_sorted,
+        panel_sorted,
+        node_tier,
+        n_panels,
+        per_particle,
+        tiers,
+        tables,
+        table_start,
+        maps,
+        map_start,
     )
 
 
@@ -661,7 +677,9 @@ class _WavelengthSolver:
             self.n_half = n_half
             self.mu_half, self.w_half = _gauss_angles(n_half)[:2]
             self.n_f = 2 * n_half
-            self.tiers, self._tables, self._table_start, self._maps, self._map_start = _angular_tiers(n_half)
+            self.tiers, self._tables, self._table_start, self._maps, self._map_start = (
+                _angular_tiers(n_half)
+            )
         else:
             # Summed at the output angles directly (few angles, or one sphere).
             self.table = mie.angular_table(mu_out, self.nmax)
@@ -684,7 +702,15 @@ class _WavelengthSolver:
         # batch wastes little.
         order = np.argsort(x, kind="stable")
         return mie._accumulate(
-            self.m, x[order], w[order], node_panel[order], n_panels, self.per_particle, table, n_mu, symmetric
+            self.m,
+            x[order],
+            w[order],
+            node_panel[order],
+            n_panels,
+            self.per_particle,
+            table,
+            n_mu,
+            symmetric,
         )
 
     def evaluate(self, lower: np.ndarray, upper: np.ndarray, *, angles: bool = True) -> np.ndarray:
@@ -702,8 +728,17 @@ class _WavelengthSolver:
         if not self.legendre:
             return self._accumulate(x, w, node_panel, lower.size, self.table, self.n_f, False)
         return _accumulate_by_tier(
-            self.m, x, w, node_panel, self.settings.nodes_per_panel, self.per_particle,
-            self.tiers, self._tables, self._table_start, self._maps, self._map_start,
+            self.m,
+            x,
+            w,
+            node_panel,
+            self.settings.nodes_per_panel,
+            self.per_particle,
+            self.tiers,
+            self._tables,
+            self._table_start,
+            self._maps,
+            self._map_start,
         )
 
     def halves(
@@ -711,7 +746,9 @@ class _WavelengthSolver:
     ) -> tuple[np.ndarray, np.ndarray]:
         """Rows for the left and right halves of each panel."""
         mid = 0.5 * (lower + upper)
-        rows = self.evaluate(np.concatenate([lower, mid]), np.concatenate([mid, upper]), angles=angles)
+        rows = self.evaluate(
+            np.concatenate([lower, mid]), np.concatenate([mid, upper]), angles=angles
+        )
         return rows[: lower.size], rows[lower.size :]
 
     def _phase_errors(
@@ -767,12 +804,25 @@ class _WavelengthSolver:
             # work for the default table.  Work per node grows with n_max
             # (the angular sum ~ n_max x angles), so a wide panel of large
             # spheres is split only if its error is worth it.
-            split, eval_lower, eval_upper = _choose_splits(panel_error, cost, tol, _KEEP_FRACTION, lower, upper)
+            split, eval_lower, eval_upper = _choose_splits(
+                panel_error, cost, tol, _KEEP_FRACTION, lower, upper
+            )
             rows = self.evaluate(eval_lower, eval_upper, angles=angles)
             new_cost = self._split_cost(eval_upper[eval_upper.size // 2 :], angles)
             pool, n_rows, coarse, left, right, lower, upper, cost = _apply_splits(
-                pool, n_rows, rows, split, coarse, left, right, lower, upper, cost, new_cost,
-                eval_lower, eval_upper,
+                pool,
+                n_rows,
+                rows,
+                split,
+                coarse,
+                left,
+                right,
+                lower,
+                upper,
+                cost,
+                new_cost,
+                eval_lower,
+                eval_upper,
             )
         order = np.argsort(lower, kind="stable")
         panels = np.column_stack([lower[order], upper[order]])
@@ -783,8 +833,15 @@ class _WavelengthSolver:
         if self.distribution.is_monodisperse:
             x = np.array([2.0 * np.pi * self.distribution.mean_radius_um / self.wavelength_um])
             rows = mie._accumulate(
-                self.m, x, np.ones(1), np.zeros(1, dtype=np.int64), 1, self.per_particle,
-                self.table, self.n_f, False,
+                self.m,
+                x,
+                np.ones(1),
+                np.zeros(1, dtype=np.int64),
+                1,
+                self.per_particle,
+                self.table,
+                self.n_f,
+                False,
             )
             run = _Run(rows[0], np.empty((0, 2)), 1, 0.0)
             return self.finish(run, _Run(rows[0, self.n_f :], run.panels_s, 1, 0.0))
@@ -800,7 +857,9 @@ class _WavelengthSolver:
         n_f = self.n_f
         f = phase_run.total[:n_f]
         if self.legendre:
-            beta = mie._legendre_project(self.mu_half, self.w_half, np.ascontiguousarray(f), 2 * self.nmax)
+            beta = mie._legendre_project(
+                self.mu_half, self.w_half, np.ascontiguousarray(f), 2 * self.nmax
+            )
             f = mie._legendre_evaluate(beta, self.mu_out)
         # Normalized with the phase run's own sums, so 2 pi int P dmu = 1 holds
         # for the nodes that made P.
@@ -902,17 +961,23 @@ def compute_optics(
             "distribution mixes Monodisperse and continuous modes, which the radius "
             f"quadrature does not support; got {distribution!r}"
         )
-    wl = default_wavelengths_nm() if wavelengths_nm is None else as_increasing_grid(
-        "wavelengths_nm", wavelengths_nm, unit="nm"
+    wl = (
+        default_wavelengths_nm()
+        if wavelengths_nm is None
+        else as_increasing_grid("wavelengths_nm", wavelengths_nm, unit="nm")
     )
     if wl[0] <= 0:
         raise ValueError(f"wavelengths_nm must be > 0 nm; got minimum {wl[0]!r}")
-    theta = default_theta_deg() if theta_deg is None else as_increasing_grid(
-        "theta_deg", theta_deg, low=0.0, high=180.0, unit="deg"
+    theta = (
+        default_theta_deg()
+        if theta_deg is None
+        else as_increasing_grid("theta_deg", theta_deg, low=0.0, high=180.0, unit="deg")
     )
     rtol = check_open_interval("rtol", rtol, 0.0, 0.1)
-    cross_rtol = rtol / 100.0 if cross_section_rtol is None else check_open_interval(
-        "cross_section_rtol", cross_section_rtol, 0.0, 0.1
+    cross_rtol = (
+        rtol / 100.0
+        if cross_section_rtol is None
+        else check_open_interval("cross_section_rtol", cross_section_rtol, 0.0, 0.1)
     )
     check_choice("weighting", weighting, WEIGHTINGS)
     settings = QuadratureSettings() if quadrature is None else quadrature
@@ -960,7 +1025,9 @@ def compute_optics(
     csca = np.array([r.csca for r in results])
     geometric = distribution.mean_cross_section_um2
     if not (np.all(np.isfinite(phase)) and np.all(phase > 0)):
-        raise FloatingPointError("phase function is not finite and positive; please report this input")
+        raise FloatingPointError(
+            "phase function is not finite and positive; please report this input"
+        )
     not_converged = (err_phase > rtol) | (err_cross > cross_rtol)
     if not_converged.any():
         bad = ", ".join(f"{w:g}" for w in wl[not_converged])

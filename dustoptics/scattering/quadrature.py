@@ -214,7 +214,9 @@ def size_parameter_at(s: np.ndarray | float, *, settings: QuadratureSettings) ->
     """Size parameter x at stretched coordinates s: the inverse of
     s(x) = x / x_c + ln(x / x_c), x = x_c omega(s) (Wright omega). [-]"""
     s = np.asarray(s, dtype=np.float64)
-    x = _unstretch(np.ascontiguousarray(s.ravel()), settings.transition_size_parameter).reshape(s.shape)
+    x = _unstretch(np.ascontiguousarray(s.ravel()), settings.transition_size_parameter).reshape(
+        s.shape
+    )
     return x[()] if x.ndim == 0 else x
 
 
@@ -350,6 +352,10 @@ def radius_nodes(
     )
     edges = np.linspace(edges0[0], edges0[-1], (edges0.size - 1) * 2**level + 1)
     nodes, _ = panel_nodes(
-        distribution, wavelength_nm=wavelength_nm, lower_s=edges[:-1], upper_s=edges[1:], settings=settings
+        distribution,
+        wavelength_nm=wavelength_nm,
+        lower_s=edges[:-1],
+        upper_s=edges[1:],
+        settings=settings,
     )
     return nodes

@@ -29,7 +29,9 @@ def test_exponential_column_length_is_scale_height():
     top = 30000.0
     quad, _ = integrate.quad(lambda z: math.exp(-z / 11000.0), 0.0, top)
     assert p.column_length_m(top_altitude_m=top) == pytest.approx(quad, rel=1e-12)
-    np.testing.assert_allclose(p.relative_density([0.0, 11000.0]), [1.0, math.exp(-1.0)], rtol=1e-15)
+    np.testing.assert_allclose(
+        p.relative_density([0.0, 11000.0]), [1.0, math.exp(-1.0)], rtol=1e-15
+    )
 
 
 def test_bruneton_ozone_layer():
@@ -38,10 +40,14 @@ def test_bruneton_ozone_layer():
     assert pytest.approx(300 * 2.687e20 / 15000.0) == BRUNETON2017_OZONE_PEAK_NUMBER_DENSITY_PER_M3
     # His two layers: h/15km - 2/3 below 25 km, -h/15km + 8/3 above (clamped to [0, 1]).
     z = np.array([0.0, 5000.0, 10000.0, 17500.0, 25000.0, 32500.0, 40000.0, 60000.0])
-    bruneton = np.clip(np.where(z < 25000.0, z / 15000.0 - 2.0 / 3.0, -z / 15000.0 + 8.0 / 3.0), 0.0, 1.0)
+    bruneton = np.clip(
+        np.where(z < 25000.0, z / 15000.0 - 2.0 / 3.0, -z / 15000.0 + 8.0 / 3.0), 0.0, 1.0
+    )
     np.testing.assert_allclose(BRUNETON2017_OZONE.relative_density(z), bruneton, atol=1e-15)
     # Half the layer: the rising half holds half the column (symmetric tent).
-    assert BRUNETON2017_OZONE.column_length_m(top_altitude_m=25000.0) == pytest.approx(7500.0, rel=1e-15)
+    assert BRUNETON2017_OZONE.column_length_m(top_altitude_m=25000.0) == pytest.approx(
+        7500.0, rel=1e-15
+    )
 
 
 def test_piecewise_linear_undefined_above_nonzero_last_node():
@@ -65,7 +71,9 @@ def test_multimodal_and_fixed_fraction():
     assert m.relative_density([0.0])[0] == pytest.approx(1.0)
     f = FixedFractionProfile(base=ExponentialProfile(scale_height_m=7994.0), fraction=6e-7)
     assert f.column_length_m() == 7994.0
-    assert f.number_density_per_m3(base_number_density_per_m3=2.545e25) == pytest.approx(6e-7 * 2.545e25)
+    assert f.number_density_per_m3(base_number_density_per_m3=2.545e25) == pytest.approx(
+        6e-7 * 2.545e25
+    )
     with pytest.raises(ValueError, match=r"fraction must be in \(0, 1\]; got 2.0"):
         FixedFractionProfile(base=ExponentialProfile(scale_height_m=1.0), fraction=2.0)
 
@@ -73,12 +81,20 @@ def test_multimodal_and_fixed_fraction():
 @pytest.mark.parametrize("tau", [0.05, 0.3, 1.0, 5.0])
 @pytest.mark.parametrize(
     "profile",
-    [ExponentialProfile(scale_height_m=11000.0), BRUNETON2017_OZONE,
-     MultiModalProfile(profiles=(ExponentialProfile(scale_height_m=2000.0), BRUNETON2017_OZONE), weights=(1.0, 2.0))],
+    [
+        ExponentialProfile(scale_height_m=11000.0),
+        BRUNETON2017_OZONE,
+        MultiModalProfile(
+            profiles=(ExponentialProfile(scale_height_m=2000.0), BRUNETON2017_OZONE),
+            weights=(1.0, 2.0),
+        ),
+    ],
 )
 def test_tau_to_n0_to_tau_round_trip(tau, profile):
     n0 = number_density_from_optical_depth(optical_depth=tau, cext_um2=7.3, profile=profile)
-    assert optical_depth(number_density_per_m3=n0, cext_um2=7.3, profile=profile) == pytest.approx(tau, rel=1e-14)
+    assert optical_depth(number_density_per_m3=n0, cext_um2=7.3, profile=profile) == pytest.approx(
+        tau, rel=1e-14
+    )
 
 
 def test_n0_hand_computation_and_numerical_column():
@@ -89,15 +105,18 @@ def test_n0_hand_computation_and_numerical_column():
     p = ExponentialProfile(scale_height_m=11000.0)
     top = 120000.0
     col, _ = integrate.quad(lambda z: n0 * math.exp(-z / 11000.0) * 10e-12, 0.0, top)
-    assert optical_depth(number_density_per_m3=n0, cext_um2=10.0, profile=p, top_altitude_m=top) == pytest.approx(
-        col, rel=1e-12
-    )
+    assert optical_depth(
+        number_density_per_m3=n0, cext_um2=10.0, profile=p, top_altitude_m=top
+    ) == pytest.approx(col, rel=1e-12)
 
 
 def test_mass_loading():
     # Hand computation: N0 H <V> rho_p with <V> in m^3.
     m = mass_loading_kg_m2(
-        number_density_per_m3=2e6, scale_height_m=11000.0, mean_volume_um3=30.0, particle_density_kg_m3=2500.0
+        number_density_per_m3=2e6,
+        scale_height_m=11000.0,
+        mean_volume_um3=30.0,
+        particle_density_kg_m3=2500.0,
     )
     assert m == pytest.approx(2e6 * 11000.0 * 30.0e-18 * 2500.0, rel=1e-15)
 
@@ -105,9 +124,18 @@ def test_mass_loading():
 @pytest.mark.parametrize(
     ("kwargs", "match"),
     [
-        ({"optical_depth": -0.5, "cext_um2": 1.0, "scale_height_m": 1e4}, r"optical_depth must be > 0; got -0.5"),
-        ({"optical_depth": 0.5, "cext_um2": 1.0, "scale_height_m": -1e4}, r"scale_height_m must be > 0 m; got -10000.0"),
-        ({"optical_depth": 0.5, "cext_um2": 0.0, "scale_height_m": 1e4}, r"cext_um2 must be > 0 um\^2"),
+        (
+            {"optical_depth": -0.5, "cext_um2": 1.0, "scale_height_m": 1e4},
+            r"optical_depth must be > 0; got -0.5",
+        ),
+        (
+            {"optical_depth": 0.5, "cext_um2": 1.0, "scale_height_m": -1e4},
+            r"scale_height_m must be > 0 m; got -10000.0",
+        ),
+        (
+            {"optical_depth": 0.5, "cext_um2": 0.0, "scale_height_m": 1e4},
+            r"cext_um2 must be > 0 um\^2",
+        ),
         ({"optical_depth": 0.5, "cext_um2": 1.0}, r"exactly one of profile or scale_height_m"),
     ],
 )
@@ -117,14 +145,18 @@ def test_bad_column_input(kwargs, match):
 
 
 def test_sample_profile_for_cosmoscout():
-    s = sample_profile(ExponentialProfile(scale_height_m=8000.0), top_altitude_m=80000.0, n_altitudes=1024)
+    s = sample_profile(
+        ExponentialProfile(scale_height_m=8000.0), top_altitude_m=80000.0, n_altitudes=1024
+    )
     assert s.altitude_m.size == 1024 and s.relative_density.max() == 1.0 and s.peak == 1.0
     assert np.all(np.diff(s.relative_density) < 0)
     # A grid that misses the ozone peak at 25 km: samples rescaled, peak < 1 reported.
     o = sample_profile(BRUNETON2017_OZONE, top_altitude_m=80000.0, n_altitudes=1000)
     assert o.relative_density.max() == 1.0
     assert o.peak < 1.0
-    np.testing.assert_allclose(o.relative_density * o.peak, BRUNETON2017_OZONE.relative_density(o.altitude_m))
+    np.testing.assert_allclose(
+        o.relative_density * o.peak, BRUNETON2017_OZONE.relative_density(o.altitude_m)
+    )
     with pytest.raises(ValueError, match=r"n_altitudes must be an integer >= 2"):
         sample_profile(BRUNETON2017_OZONE, top_altitude_m=80000.0, n_altitudes=1)
     with pytest.raises(ValueError, match=r"zero everywhere"):

@@ -169,7 +169,9 @@ def test_pressure_temperature_and_number_density_give_same_beta():
 def test_rayleigh_bad_input():
     with pytest.raises(ValueError, match=r"model must be one of 'penndorf1957'.*got 'air'"):
         rayleigh_beta_per_m(550.0, model="air")
-    with pytest.raises(ValueError, match=r"outside the data of material 'air-edlen1953'.*\[200, 20000\]"):
+    with pytest.raises(
+        ValueError, match=r"outside the data of material 'air-edlen1953'.*\[200, 20000\]"
+    ):
         rayleigh_beta_per_m(150.0, model="costa2021")
     with pytest.raises(ValueError, match=r"outside the data of material 'co2-bideaumehu1973'"):
         rayleigh_beta_per_m(2000.0, model="costa2021-mars")
@@ -178,9 +180,13 @@ def test_rayleigh_bad_input():
     with pytest.raises(ValueError, match=r"must be given together"):
         rayleigh_beta_per_m(550.0, pressure_pa=610.0)
     with pytest.raises(ValueError, match=r"not both"):
-        rayleigh_beta_per_m(550.0, number_density_per_m3=1e23, pressure_pa=610.0, temperature_k=215.0)
+        rayleigh_beta_per_m(
+            550.0, number_density_per_m3=1e23, pressure_pa=610.0, temperature_k=215.0
+        )
     with pytest.raises(ValueError, match=r"wavelength_nm must be > 0 nm"):
-        rayleigh_cross_section_m2(wavelength_nm=-1.0, refractivity=3e-4, number_density_per_m3=2.5e25)
+        rayleigh_cross_section_m2(
+            wavelength_nm=-1.0, refractivity=3e-4, number_density_per_m3=2.5e25
+        )
 
 
 def test_rayleigh_table():
@@ -189,7 +195,9 @@ def test_rayleigh_table():
     t = gas.table(wl, theta_deg=np.linspace(0.0, 180.0, 181))
     np.testing.assert_allclose(t.beta_sca_per_m, gas.beta_sca_per_m(wl), rtol=1e-12)
     np.testing.assert_array_equal(t.beta_abs_per_m, 0.0)
-    np.testing.assert_allclose(phase.sphere_integral(t.phase, theta_deg=t.theta_deg), 1.0, rtol=1e-12)
+    np.testing.assert_allclose(
+        phase.sphere_integral(t.phase, theta_deg=t.theta_deg), 1.0, rtol=1e-12
+    )
     # Penndorf's shape: P(0)/P(90) = 1 + 0.932.
     assert t.phase[0, 0] / t.phase[0, 90] == pytest.approx(1.932, rel=1e-12)
     np.testing.assert_array_equal(t.g, 0.0)
@@ -198,7 +206,10 @@ def test_rayleigh_table():
 def test_collienne_coefficients_only_at_published_wavelengths():
     t = gases.collienne2013_table()
     np.testing.assert_allclose(t.beta_sca_per_m, [5.75e-6, 13.57e-6, 19.918e-6], rtol=1e-15)
-    with pytest.raises(ValueError, match=r"published only at wavelength_nm in \[440.0, 510.0, 680.0\]; got \[550.0\]"):
+    with pytest.raises(
+        ValueError,
+        match=r"published only at wavelength_nm in \[440.0, 510.0, 680.0\]; got \[550.0\]",
+    ):
         gases.collienne2013_beta_per_m([440.0, 550.0])
 
 
@@ -208,13 +219,19 @@ def test_collienne_coefficients_only_at_published_wavelengths():
 def test_kobe_ozone_hand_computation():
     # Kobe 2026, 11.5.1: sigma (4.5e-26, 1.9e-25, 3.1e-25) m^2 times N_s = 2.545e25 m^-3
     # gives his beta_O = (1.15, 4.84, 7.89) m^-1 (3 printed digits).
-    beta = ozone_beta_abs_per_m([475.0, 510.0, 650.0], cross_section=KOBE2026_OZONE, number_density_per_m3=2.545e25)
-    np.testing.assert_allclose(beta, [4.5e-26 * 2.545e25, 1.9e-25 * 2.545e25, 3.1e-25 * 2.545e25], rtol=1e-15)
+    beta = ozone_beta_abs_per_m(
+        [475.0, 510.0, 650.0], cross_section=KOBE2026_OZONE, number_density_per_m3=2.545e25
+    )
+    np.testing.assert_allclose(
+        beta, [4.5e-26 * 2.545e25, 1.9e-25 * 2.545e25, 3.1e-25 * 2.545e25], rtol=1e-15
+    )
     np.testing.assert_allclose(beta, [1.15, 4.84, 7.89], rtol=5e-3)
 
 
 def test_kobe_ozone_only_at_its_three_wavelengths():
-    with pytest.raises(ValueError, match=r"published only at wavelength_nm in \[475.0, 510.0, 650.0\]"):
+    with pytest.raises(
+        ValueError, match=r"published only at wavelength_nm in \[475.0, 510.0, 650.0\]"
+    ):
         KOBE2026_OZONE([500.0])
 
 
@@ -230,17 +247,22 @@ def test_ozone_csv_round_trip_and_interpolation(tmp_path):
     # Linear interpolation at the midpoint, cm^2 -> m^2 (x 1e-4): hand computation.
     assert xs(550.0) == pytest.approx(3.0e-25, rel=1e-12)
     n_o3 = 6e-7 * 2.545e25
-    assert ozone_beta_abs_per_m(550.0, cross_section=xs, number_density_per_m3=n_o3) == pytest.approx(
-        3.0e-25 * n_o3, rel=1e-12
-    )
-    with pytest.raises(ValueError, match=r"outside the ozone cross-section 'o3': valid range \[500, 600\] nm"):
+    assert ozone_beta_abs_per_m(
+        550.0, cross_section=xs, number_density_per_m3=n_o3
+    ) == pytest.approx(3.0e-25 * n_o3, rel=1e-12)
+    with pytest.raises(
+        ValueError, match=r"outside the ozone cross-section 'o3': valid range \[500, 600\] nm"
+    ):
         xs([450.0])
 
 
 @pytest.mark.parametrize(
     ("text", "match"),
     [
-        ("wavelength_nm,sigma_m2\n500,1e-25\n600,2e-25\n", r"comment lines \(#\) giving the citation"),
+        (
+            "wavelength_nm,sigma_m2\n500,1e-25\n600,2e-25\n",
+            r"comment lines \(#\) giving the citation",
+        ),
         ("# cite\nlambda,sigma_m2\n500,1e-25\n", r"header must be 'wavelength_nm,sigma_m2'"),
         ("# cite\nwavelength_nm,sigma_m2\n500,abc\n", r":3: not numbers"),
         ("# cite\nwavelength_nm,sigma_m2\n600,1e-25\n500,1e-25\n", r"strictly increasing"),
@@ -263,16 +285,28 @@ def test_ozone_csv_reads_shared_bruneton_spectrum():
 
 
 def test_ozone_table_absorbs_only():
-    t = gases.ozone_table([475.0, 510.0, 650.0], cross_section=KOBE2026_OZONE, number_density_per_m3=1.527e19)
+    t = gases.ozone_table(
+        [475.0, 510.0, 650.0], cross_section=KOBE2026_OZONE, number_density_per_m3=1.527e19
+    )
     np.testing.assert_array_equal(t.beta_sca_per_m, 0.0)
-    np.testing.assert_allclose(t.beta_abs_per_m, KOBE2026_OZONE([475.0, 510.0, 650.0]) * 1.527e19, rtol=1e-12)
+    np.testing.assert_allclose(
+        t.beta_abs_per_m, KOBE2026_OZONE([475.0, 510.0, 650.0]) * 1.527e19, rtol=1e-12
+    )
     np.testing.assert_allclose(t.phase, 1.0 / (4.0 * math.pi))
 
 
 def test_ozone_cross_section_validation():
     with pytest.raises(ValueError, match=r"citation must name the source"):
-        OzoneCrossSection(name="x", wavelength_nm=[500.0, 600.0], sigma_m2=[1e-25, 1e-25], citation=" ")
+        OzoneCrossSection(
+            name="x", wavelength_nm=[500.0, 600.0], sigma_m2=[1e-25, 1e-25], citation=" "
+        )
     with pytest.raises(ValueError, match=r"interpolation must be one of 'linear', 'points'"):
-        OzoneCrossSection(name="x", wavelength_nm=[500.0, 600.0], sigma_m2=[1e-25, 1e-25], citation="c", interpolation="cubic")
+        OzoneCrossSection(
+            name="x",
+            wavelength_nm=[500.0, 600.0],
+            sigma_m2=[1e-25, 1e-25],
+            citation="c",
+            interpolation="cubic",
+        )
     with pytest.raises(ValueError, match=r"number_density_per_m3 must be > 0"):
         ozone_beta_abs_per_m(475.0, cross_section=KOBE2026_OZONE, number_density_per_m3=-1.0)

@@ -40,7 +40,12 @@ def _costa_eq19(rho, tan_b):
     b = math.atan(tan_b)
     c = math.cos(b) / rho
     e = math.exp(-rho * tan_b)
-    return 2 - 4 * e * c * math.sin(rho - b) - 4 * e * c**2 * math.cos(rho - 2 * b) + 4 * c**2 * math.cos(2 * b)
+    return (
+        2
+        - 4 * e * c * math.sin(rho - b)
+        - 4 * e * c**2 * math.cos(rho - 2 * b)
+        + 4 * c**2 * math.cos(2 * b)
+    )
 
 
 @pytest.mark.parametrize("m", [1.52 + 0.006j, 1.33 + 0.0j, 1.1 + 0.05j])
@@ -55,8 +60,12 @@ def test_ada_limits():
     # Small spheres, k = 0: Q -> rho^2 / 2 (series of eq. 19); large: Q -> 2 (extinction paradox).
     r = np.array([1e-4, 1e-3])
     rho = 4 * math.pi * r * 1000.0 * 0.5 / 550.0
-    np.testing.assert_allclose(ada_qext(wavelength_nm=550.0, radius_um=r, refractive_index=1.5), rho**2 / 2, rtol=2e-3)
-    assert ada_qext(wavelength_nm=550.0, radius_um=500.0, refractive_index=1.5 + 0.01j) == pytest.approx(2.0, abs=1e-6)
+    np.testing.assert_allclose(
+        ada_qext(wavelength_nm=550.0, radius_um=r, refractive_index=1.5), rho**2 / 2, rtol=2e-3
+    )
+    assert ada_qext(
+        wavelength_nm=550.0, radius_um=500.0, refractive_index=1.5 + 0.01j
+    ) == pytest.approx(2.0, abs=1e-6)
     with pytest.raises(ValueError, match=r"n > 1 for the anomalous diffraction"):
         ada_qext(wavelength_nm=550.0, radius_um=1.0, refractive_index=0.9)
     with pytest.raises(ValueError, match=r"k >= 0"):
@@ -68,7 +77,13 @@ def test_ada_polydisperse_quadrature_against_scipy_quad():
     m = 1.52 + 0.006j
 
     def integrand(r):
-        return dist.pdf(r) * math.pi * r * r * float(ada_qext(wavelength_nm=550.0, radius_um=r, refractive_index=m))
+        return (
+            dist.pdf(r)
+            * math.pi
+            * r
+            * r
+            * float(ada_qext(wavelength_nm=550.0, radius_um=r, refractive_index=m))
+        )
 
     ref, _ = integrate.quad(integrand, 1e-6, 60.0, limit=400, epsabs=0.0, epsrel=1e-11)
     got = ada_cext_um2(wavelength_nm=[550.0], refractive_index=m, distribution=dist)[0]
@@ -99,11 +114,16 @@ def test_ada_against_exact_mie(m, r_eff_um, low, high):
 def test_costa_turbidity_hand_computation():
     # Eq. (17) at 550 nm, T = 2, nu = 4, K = 0.16: 0.434 * 0.65e-16 * pi * (2 pi / 550e-9)^2 * 0.16.
     expected = 0.434 * 0.65e-16 * math.pi * (2 * math.pi / 550e-9) ** 2 * 0.16
-    got = costa2021_turbidity_beta_sca_per_m(550.0, turbidity=2.0, junge_exponent=4.0, k_factor=0.16)
+    got = costa2021_turbidity_beta_sca_per_m(
+        550.0, turbidity=2.0, junge_exponent=4.0, k_factor=0.16
+    )
     assert got == pytest.approx(expected, rel=1e-14)
     for kwargs, match in [
         ({"turbidity": 1.0, "junge_exponent": 4.0, "k_factor": 0.1}, r"turbidity must be > 1"),
-        ({"turbidity": 2.0, "junge_exponent": 7.0, "k_factor": 0.1}, r"junge_exponent must be in \[2, 6\]; got 7.0"),
+        (
+            {"turbidity": 2.0, "junge_exponent": 7.0, "k_factor": 0.1},
+            r"junge_exponent must be in \[2, 6\]; got 7.0",
+        ),
         ({"turbidity": 2.0, "junge_exponent": 4.0, "k_factor": [0.1, 0.2]}, r"one per wavelength"),
     ]:
         with pytest.raises(ValueError, match=match):

@@ -27,11 +27,15 @@ WL15 = np.linspace(360.0, 830.0, 15)  # CosmoScout's default wavelength set
 def dust_table() -> Table:
     dist = do.ModifiedGamma(r_eff_um=1.6, v_eff=0.2)
     optics = do.compute_optics(do.mars_dust(), dist, WL15, np.linspace(0.0, 180.0, 181), rtol=1e-3)
-    return Table.from_optics(optics, name="blue-moon-dust", inputs={"test": "mars dust, r_eff 1.6, v_eff 0.2"})
+    return Table.from_optics(
+        optics, name="blue-moon-dust", inputs={"test": "mars dust, r_eff 1.6, v_eff 0.2"}
+    )
 
 
 def test_mars_set_passes_reader_rules(dust_table, tmp_path):
-    mars = atm.mars_atmosphere(dust_table=dust_table, optical_depth=0.5, reference_wavelength_nm=550.0)
+    mars = atm.mars_atmosphere(
+        dust_table=dust_table, optical_depth=0.5, reference_wavelength_nm=550.0
+    )
     files = atm.write_atmosphere(mars, tmp_path)
     assert check_cosmoscout_set(tmp_path) == ["mars_aerosols", "mars_molecules"]
     settings = json.loads((tmp_path / "mars_settings.json").read_text())
@@ -42,12 +46,16 @@ def test_mars_set_passes_reader_rules(dust_table, tmp_path):
         for key in ("phase", "betaSca", "betaAbs", "density"):
             assert (tmp_path / settings[entry][key]).is_file()
     assert "ozone" not in settings
-    assert settings["ior"] == pytest.approx(gases.get_rayleigh_model("costa2021-mars").refractivity(550.0))
+    assert settings["ior"] == pytest.approx(
+        gases.get_rayleigh_model("costa2021-mars").refractivity(550.0)
+    )
     assert files[-1].name == "mars_settings.json"
 
 
 def test_mars_dust_reproduces_optical_depth(dust_table, tmp_path):
-    mars = atm.mars_atmosphere(dust_table=dust_table, optical_depth=0.7, reference_wavelength_nm=550.0)
+    mars = atm.mars_atmosphere(
+        dust_table=dust_table, optical_depth=0.7, reference_wavelength_nm=550.0
+    )
     dust = mars.constituent("aerosols")
     cext_550 = float(np.interp(550.0, dust_table.wavelength_nm, dust_table.cext_um2))
     tau = optical_depth(
@@ -87,7 +95,9 @@ def test_mars_collienne_molecules(tmp_path):
     dust = Table.from_optics(optics, name="dust", inputs={"test": 1})
     mars = atm.mars_atmosphere(dust_table=dust, molecules="collienne2013")
     np.testing.assert_allclose(
-        mars.constituent("molecules").table.beta_sca_per_m, [5.75e-6, 13.57e-6, 19.918e-6], rtol=1e-15
+        mars.constituent("molecules").table.beta_sca_per_m,
+        [5.75e-6, 13.57e-6, 19.918e-6],
+        rtol=1e-15,
     )
     atm.write_atmosphere(mars, tmp_path)
     check_cosmoscout_set(tmp_path)
@@ -115,7 +125,9 @@ def test_kobe_earth_with_ozone(tmp_path):
 
 
 def test_earth_with_tabulated_ozone_and_bruneton_layer(tmp_path):
-    xs = gases.read_ozone_csv(shared_path("reference-data", "spectra", "ozone_xsec_bruneton_pas_233K.csv"))
+    xs = gases.read_ozone_csv(
+        shared_path("reference-data", "spectra", "ozone_xsec_bruneton_pas_233K.csv")
+    )
     earth = atm.earth_atmosphere(
         wavelength_nm=WL15,
         molecules="penndorf1957",
@@ -131,18 +143,25 @@ def test_earth_with_tabulated_ozone_and_bruneton_layer(tmp_path):
     z = np.linspace(0.0, 80e3, 1024)
     n_z = BRUNETON2017_OZONE_PEAK_NUMBER_DENSITY_PER_M3 * BRUNETON2017_OZONE.relative_density(z)
     np.testing.assert_allclose(
-        np.outer(ozone.density, ozone.beta_abs_per_m), np.outer(n_z, xs(WL15)), rtol=1e-12, atol=1e-30
+        np.outer(ozone.density, ozone.beta_abs_per_m),
+        np.outer(n_z, xs(WL15)),
+        rtol=1e-12,
+        atol=1e-30,
     )
 
 
 def test_bad_input(dust_table):
     with pytest.raises(ValueError, match=r"optical_depth must be > 0; got -0.5"):
         atm.mars_atmosphere(dust_table=dust_table, optical_depth=-0.5)
-    with pytest.raises(ValueError, match=r"reference_wavelength_nm must lie within .*\[360, 830\] nm.*880"):
+    with pytest.raises(
+        ValueError, match=r"reference_wavelength_nm must lie within .*\[360, 830\] nm.*880"
+    ):
         atm.mars_atmosphere(dust_table=dust_table, reference_wavelength_nm=880.0)
     with pytest.raises(ValueError, match=r"scale_height_m must be > 0 m"):
         atm.mars_atmosphere(dust_table=dust_table, dust_scale_height_m=-1.0)
-    with pytest.raises(ValueError, match=r"molecules must be one of 'costa2021-mars', 'collienne2013'"):
+    with pytest.raises(
+        ValueError, match=r"molecules must be one of 'costa2021-mars', 'collienne2013'"
+    ):
         atm.mars_atmosphere(dust_table=dust_table, molecules="kobe2026")
     with pytest.raises(ValueError, match=r"published only at wavelength_nm"):
         atm.earth_atmosphere(wavelength_nm=[450.0, 550.0])  # Kobe's ozone at his 3 wavelengths only

@@ -63,7 +63,9 @@ def test_duplicate_targets_are_refused(tmp_path):
         write_files({tmp_path / "a": b"1", tmp_path / "sub" / ".." / "a": b"2"})
 
 
-@pytest.mark.parametrize("error", [OSError(28, "No space left on device (simulated)"), KeyboardInterrupt()])
+@pytest.mark.parametrize(
+    "error", [OSError(28, "No space left on device (simulated)"), KeyboardInterrupt()]
+)
 def test_failure_while_staging_leaves_nothing(tmp_path, error):
     def failing(path: Path) -> None:
         path.write_bytes(b"half a file")

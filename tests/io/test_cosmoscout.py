@@ -40,9 +40,7 @@ def _table(
     theta = np.linspace(0.0, 180.0, n_theta)
     mu = np.cos(np.deg2rad(theta))
     phase = np.tile(3.0 / (16.0 * np.pi) * (1.0 + mu**2), (len(WAVELENGTHS_NM), 1))
-    phase[1] *= np.linspace(
-        1.1, 0.9, n_theta
-    )  # a different shape per wavelength (resampling test)
+    phase[1] *= np.linspace(1.1, 0.9, n_theta)  # a different shape per wavelength (resampling test)
     n = len(WAVELENGTHS_NM)
     return Table(
         name=name,
@@ -92,12 +90,8 @@ def _reader_rules(directory, names) -> None:
             nm = [float(np.float32(row[0])) * 1e9 for row in cells]
             if reference is None:
                 reference = nm
-            assert nm == reference, (
-                path.name
-            )  # identical in every file, not merely close
-    assert np.allclose(
-        reference, WAVELENGTHS_NM, rtol=1e-7
-    )  # float32 has 24 bits: rtol 6e-8
+            assert nm == reference, path.name  # identical in every file, not merely close
+    assert np.allclose(reference, WAVELENGTHS_NM, rtol=1e-7)  # float32 has 24 bits: rtol 6e-8
 
 
 # ------------------------------------------------------------------ writing
@@ -122,12 +116,8 @@ def test_headers_and_wavelength_text(aerosols, tmp_path):
         f"{t:.1f}" for t in range(181)
     )  # lambda,0.0,1.0,...,180.0
     assert [row.split(",")[0] for row in phase[1:]] == ["4.4e-7", "5.5e-7", "6.8e-7"]
-    assert (tmp_path / "dust_scattering.csv").read_text().splitlines()[
-        0
-    ] == "lambda,beta_sca"
-    assert (tmp_path / "dust_absorption.csv").read_text().splitlines()[
-        0
-    ] == "lambda,beta_abs"
+    assert (tmp_path / "dust_scattering.csv").read_text().splitlines()[0] == "lambda,beta_sca"
+    assert (tmp_path / "dust_absorption.csv").read_text().splitlines()[0] == "lambda,beta_abs"
     assert (tmp_path / "dust_density.csv").read_text().splitlines()[0] == "density"
     assert cosmoscout_wavelength_text(552.5) == "5.525e-7"
 
@@ -146,19 +136,13 @@ def test_phase_on_a_subset_grid_is_exact(aerosols, tmp_path):
     write_cosmoscout_constituent(aerosols, tmp_path, name="dust", density=DENSITY)
     back = read_cosmoscout_constituent(tmp_path, "dust")
     np.testing.assert_array_equal(back.theta_deg, np.linspace(0.0, 180.0, 181))
-    np.testing.assert_array_equal(
-        back.phase, aerosols.phase[:, ::2]
-    )  # 1 deg of a 0.5 deg grid
+    np.testing.assert_array_equal(back.phase, aerosols.phase[:, ::2])  # 1 deg of a 0.5 deg grid
 
 
 def test_other_angle_counts_interpolate_linearly(aerosols, tmp_path):
-    write_cosmoscout_constituent(
-        aerosols, tmp_path, name="dust", density=DENSITY, n_theta=7
-    )
+    write_cosmoscout_constituent(aerosols, tmp_path, name="dust", density=DENSITY, n_theta=7)
     back = read_cosmoscout_constituent(tmp_path, "dust")
-    np.testing.assert_array_equal(
-        back.theta_deg, [0.0, 30.0, 60.0, 90.0, 120.0, 150.0, 180.0]
-    )
+    np.testing.assert_array_equal(back.theta_deg, [0.0, 30.0, 60.0, 90.0, 120.0, 150.0, 180.0])
     np.testing.assert_array_equal(back.phase, aerosols.phase_at(back.theta_deg))
 
 
@@ -203,9 +187,7 @@ def test_mismatched_wavelengths_are_refused(aerosols, tmp_path):
     with pytest.raises(
         ValueError, match="'haze' has wavelengths .* 'dust' has .*identical wavelengths"
     ):
-        write_cosmoscout_set(
-            tmp_path, {"dust": (aerosols, DENSITY), "haze": (shifted, DENSITY)}
-        )
+        write_cosmoscout_set(tmp_path, {"dust": (aerosols, DENSITY), "haze": (shifted, DENSITY)})
     assert list(tmp_path.iterdir()) == []
 
 
@@ -239,9 +221,7 @@ def test_bad_name_or_angle_count(aerosols, tmp_path, name, n_theta):
 def test_set_is_written_all_or_nothing(aerosols, ozone, tmp_path):
     (tmp_path / "ozone_density.csv").write_text("keep me\n")
     with pytest.raises(FileExistsError, match="ozone_density.csv"):
-        write_cosmoscout_set(
-            tmp_path, {"aerosols": (aerosols, DENSITY), "ozone": (ozone, DENSITY)}
-        )
+        write_cosmoscout_set(tmp_path, {"aerosols": (aerosols, DENSITY), "ozone": (ozone, DENSITY)})
     assert [p.name for p in tmp_path.iterdir()] == ["ozone_density.csv"]
     write_cosmoscout_set(
         tmp_path,
@@ -256,9 +236,7 @@ def test_set_is_written_all_or_nothing(aerosols, ozone, tmp_path):
 
 @pytest.fixture
 def written(aerosols, ozone, tmp_path):
-    write_cosmoscout_set(
-        tmp_path, {"aerosols": (aerosols, DENSITY), "ozone": (ozone, DENSITY)}
-    )
+    write_cosmoscout_set(tmp_path, {"aerosols": (aerosols, DENSITY), "ozone": (ozone, DENSITY)})
     return tmp_path
 
 

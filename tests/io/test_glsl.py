@@ -59,8 +59,11 @@ def mie_table() -> Table:
 
 
 def hg_table(
-    *, g: tuple[float, ...] = (0.8, 0.7, 0.6), wavelength_nm: tuple[float, ...] = (440.0, 550.0, 680.0),
-    n_theta: int = 181, cross_sections: bool = False,
+    *,
+    g: tuple[float, ...] = (0.8, 0.7, 0.6),
+    wavelength_nm: tuple[float, ...] = (440.0, 550.0, 680.0),
+    n_theta: int = 181,
+    cross_sections: bool = False,
 ) -> Table:
     """Phase-only (or with made-up cross-sections) table of Henyey-Greenstein functions."""
     theta = np.linspace(0.0, 180.0, n_theta)
@@ -68,7 +71,10 @@ def hg_table(
     phase = np.array([henyey_greenstein(mu, g=x) for x in g])
     extra = {}
     if cross_sections:
-        extra = {"cext_um2": np.linspace(2.0, 1.0, len(g)), "csca_um2": np.linspace(1.8, 0.95, len(g))}
+        extra = {
+            "cext_um2": np.linspace(2.0, 1.0, len(g)),
+            "csca_um2": np.linspace(1.8, 0.95, len(g)),
+        }
     return Table(
         name="hg",
         wavelength_nm=np.array(wavelength_nm),
@@ -84,7 +90,9 @@ def parse_array(source: str, name: str = "MIE_PHASE") -> np.ndarray:
     """The float32 values of the snippet's constant array, parsed from its literals."""
     body = source.split(f"const vec3 {name}[")[1].split(");")[0]
     rows = re.findall(r"vec3\(([^)]*)\)", body)
-    return np.array([[np.float32(float(v)) for v in row.split(",")] for row in rows], dtype=np.float32)
+    return np.array(
+        [[np.float32(float(v)) for v in row.split(",")] for row in rows], dtype=np.float32
+    )
 
 
 # ---------------------------------------------------------------- content
@@ -93,7 +101,17 @@ def parse_array(source: str, name: str = "MIE_PHASE") -> np.ndarray:
 def test_float_literals_round_trip_exactly() -> None:
     # Values across float32's range, including the extremes and a denormal.
     values = np.array(
-        [0.0, 1.0, 0.1, 1 / 3, 2.0**-149, np.finfo(np.float32).max, 1e-12, 7.957747e-02, 13.71990818],
+        [
+            0.0,
+            1.0,
+            0.1,
+            1 / 3,
+            2.0**-149,
+            np.finfo(np.float32).max,
+            1e-12,
+            7.957747e-02,
+            13.71990818,
+        ],
         dtype=np.float32,
     )
     for v in values:
@@ -109,7 +127,9 @@ def test_snippet_layout_and_values(mie_table: Table) -> None:
     assert src.isascii() and src.endswith("}\n")
     assert "const int MIE_PHASE_N = 721;" in src
     assert "vec3 MiePhaseFunction(float nu)" in src
-    assert f"// input_hash (SHA-256 of the table's inputs): {mie_table.provenance.input_hash}" in src
+    assert (
+        f"// input_hash (SHA-256 of the table's inputs): {mie_table.provenance.input_hash}" in src
+    )
     assert "2 pi int_{-1}^{1} P(mu) dmu = 1 (per steradian)" in src
     assert "resolution: 0.25 deg, 721 samples" in src
     assert "the table's own 721 angles (no resampling)" in src
@@ -122,8 +142,16 @@ def test_snippet_layout_and_values(mie_table: Table) -> None:
     np.testing.assert_array_equal(ch.phase, expected)
     np.testing.assert_array_equal(ch.g, mie_table.g[[2, 1, 0]])
     np.testing.assert_array_equal(ch.cext_m2, mie_table.cext_um2[[2, 1, 0]] * 1e-12)
-    for name in ("MIE_G", "MIE_CEXT_M2", "MIE_CSCA_M2", "MIE_CABS_M2", "MIE_SSA",
-                 "MIE_BETA_EXT_PER_M", "MIE_BETA_SCA_PER_M", "MIE_BETA_ABS_PER_M"):
+    for name in (
+        "MIE_G",
+        "MIE_CEXT_M2",
+        "MIE_CSCA_M2",
+        "MIE_CABS_M2",
+        "MIE_SSA",
+        "MIE_BETA_EXT_PER_M",
+        "MIE_BETA_SCA_PER_M",
+        "MIE_BETA_ABS_PER_M",
+    ):
         assert f"const vec3 {name} = vec3(" in src
     beta = re.search(r"const vec3 MIE_BETA_EXT_PER_M = vec3\(([^)]*)\)", src).group(1)
     np.testing.assert_array_equal(
@@ -168,8 +196,7 @@ def test_prefix_and_function_name_let_two_snippets_coexist() -> None:
     assert "const vec3 DUST_PHASE[DUST_PHASE_N]" in b and "vec3 DustPhase(float nu)" in b
     assert "MIE_" not in b and "MiePhaseFunction" not in b
     _compile(
-        "#version 330 core\n" + a + b
-        + "in float nu;\nout vec4 colour;\n"
+        "#version 330 core\n" + a + b + "in float nu;\nout vec4 colour;\n"
         "void main() { colour = vec4(MiePhaseFunction(nu) + DustPhase(nu), 1.0); }\n",
         "frag",
     )
@@ -178,7 +205,10 @@ def test_prefix_and_function_name_let_two_snippets_coexist() -> None:
 @pytest.mark.parametrize(
     ("kwargs", "message"),
     [
-        ({"channels_nm": (700.0, 550.0, 440.0)}, r"channels_nm\[0\] = 700 nm is outside the table's wavelength range 440-680 nm"),
+        (
+            {"channels_nm": (700.0, 550.0, 440.0)},
+            r"channels_nm\[0\] = 700 nm is outside the table's wavelength range 440-680 nm",
+        ),
         ({"channels_nm": (430.0, 550.0, 440.0)}, r"channels_nm\[0\] = 430 nm is outside"),
         ({"channels_nm": (680.0, 550.0)}, "channels_nm must be three wavelengths"),
         ({"channels_nm": (680.0, 550.0, 440.0), "colour": "cie1931"}, "either channels_nm"),
@@ -187,7 +217,10 @@ def test_prefix_and_function_name_let_two_snippets_coexist() -> None:
         ({"resolution_deg": 0.7}, "resolution_deg must divide 180 deg"),
         ({"resolution_deg": 0.0}, "resolution_deg must be > 0"),
         ({"prefix": "2MIE"}, "prefix must be a valid GLSL identifier"),
-        ({"prefix": "MIE_"}, "prefix must be a valid GLSL identifier"),  # MIE__PHASE: '__' is reserved
+        (
+            {"prefix": "MIE_"},
+            "prefix must be a valid GLSL identifier",
+        ),  # MIE__PHASE: '__' is reserved
         ({"function_name": "gl_Phase"}, "function_name must be a valid GLSL identifier"),
         ({"function_name": "float"}, "function_name must be a valid GLSL identifier"),
         ({"function_name": "MIE_PHASE"}, "function_name must differ"),
@@ -223,7 +256,9 @@ def test_write_glsl_atomic_and_no_overwrite(tmp_path, mie_table: Table) -> None:
     assert path.read_text(encoding="ascii") == glsl_snippet(mie_table)  # untouched
     write_glsl(mie_table, tmp_path / "out", resolution_deg=1.0, overwrite=True)
     assert "const int MIE_PHASE_N = 181;" in path.read_text(encoding="ascii")
-    (explicit,) = write_glsl(mie_table, tmp_path / "dust.glsl", colour="cie1931", min_band_coverage=0.0)
+    (explicit,) = write_glsl(
+        mie_table, tmp_path / "dust.glsl", colour="cie1931", min_band_coverage=0.0
+    )
     assert explicit == tmp_path / "dust.glsl"
     assert [p.name for p in tmp_path.iterdir() if p.name.endswith(".tmp")] == []
 
@@ -236,7 +271,12 @@ def _compile(source: str, stage: str) -> None:
     if exe is None:
         pytest.skip("glslang-tools (glslangValidator) not installed")
     result = subprocess.run(
-        [exe, "--stdin", "-S", stage], check=False, input=source, capture_output=True, text=True, timeout=120
+        [exe, "--stdin", "-S", stage],
+        check=False,
+        input=source,
+        capture_output=True,
+        text=True,
+        timeout=120,
     )
     assert result.returncode == 0, result.stdout + result.stderr
 
@@ -260,7 +300,9 @@ void main() {
 
 @pytest.mark.parametrize("acos", ["polynomial", "builtin"])
 @pytest.mark.parametrize("colour", [None, "cie1931"])
-def test_glslang_compiles_fragment_and_compute(mie_table: Table, acos: str, colour: str | None) -> None:
+def test_glslang_compiles_fragment_and_compute(
+    mie_table: Table, acos: str, colour: str | None
+) -> None:
     src = glsl_snippet(mie_table, acos=acos, colour=colour, min_band_coverage=0.0)
     _compile("#version 330 core\n" + src + FRAGMENT_MAIN, "frag")
     _compile("#version 450\n" + src + FRAGMENT_MAIN, "frag")
@@ -330,7 +372,9 @@ def _acos32(c: np.ndarray) -> np.ndarray:
     return np.where(c < 0, np.float32(math.pi) - theta, theta).astype(np.float32)
 
 
-def _reference32(table32: np.ndarray, nu: np.ndarray, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _reference32(
+    table32: np.ndarray, nu: np.ndarray, theta: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """The shader's interpolation in numpy float32, given its angle ``theta``; also P[i+1] - P[i]."""
     n = table32.shape[0]
     scale = np.float32((n - 1) / math.pi)
@@ -371,7 +415,9 @@ void main() {
 
 
 @pytest.mark.parametrize("colour", [None, "cie1931"])
-def test_shader_matches_numpy_float32_interpolation(gl, mie_table: Table, colour: str | None) -> None:
+def test_shader_matches_numpy_float32_interpolation(
+    gl, mie_table: Table, colour: str | None
+) -> None:
     """Polynomial acos: the shader equals numpy's float32 evaluation of the same operations.
 
     Tolerance (per value): 4 float32 ulps of the larger neighbour (two products and
@@ -409,9 +455,10 @@ def test_shader_matches_table_interpolation_float64(gl, mie_table: Table) -> Non
     exact = mie_table.phase_at(np.minimum(theta, 180.0))[[2, 1, 0]].T
     ch = glsl_channels(mie_table)
     _, step, x = _reference32(ch.phase, nu, _acos32(np.clip(nu, np.float32(-1), np.float32(1))))
-    tol = 4 * np.spacing(np.abs(exact).astype(np.float32)) + step * (
-        2.5e-7 * 720 / math.pi + 8 * EPS32 * np.maximum(x, 1.0)
-    )[:, None]
+    tol = (
+        4 * np.spacing(np.abs(exact).astype(np.float32))
+        + step * (2.5e-7 * 720 / math.pi + 8 * EPS32 * np.maximum(x, 1.0))[:, None]
+    )
     diff = np.abs(got[:, :3] - exact)
     assert np.all(diff <= tol), f"max excess {np.max(diff - tol)}"
     print(f"max shader - float64 table: {np.max(diff / np.abs(exact)):.2e} relative")

@@ -20,7 +20,13 @@ from dustoptics.io import FORMATS, FormatError
 from dustoptics.io.hdf5 import CONVENTIONS, DERIVED, read_hdf5, write_hdf5
 from dustoptics.table import UNITS, Source, Table
 
-STORED_PER_WAVELENGTH = ("g", "cext_um2", "csca_um2", "error_estimate", "cross_section_error_estimate")
+STORED_PER_WAVELENGTH = (
+    "g",
+    "cext_um2",
+    "csca_um2",
+    "error_estimate",
+    "cross_section_error_estimate",
+)
 
 
 @pytest.fixture(scope="module")
@@ -71,7 +77,12 @@ def test_round_trip_is_bit_exact_with_provenance(table, written):
 def test_phase_only_table_round_trip(rayleigh, tmp_path):
     path = write_hdf5(rayleigh, tmp_path / "r.h5")
     with h5py.File(path, "r") as f:
-        assert set(f) == {"wavelength_nm", "theta_deg", "phase", "g"}  # nothing derived, no cross-sections
+        assert set(f) == {
+            "wavelength_nm",
+            "theta_deg",
+            "phase",
+            "g",
+        }  # nothing derived, no cross-sections
     assert read_hdf5(path).equals(rayleigh)
 
 
@@ -99,7 +110,10 @@ def test_layout_units_and_compression(table, written):
             assert f[key].attrs["derived_from"] == DERIVED[key]
         phase = f["phase"]
         assert (phase.compression, phase.shuffle) == ("gzip", True)
-        assert [d[0].name for d in phase.dims] == ["/wavelength_nm", "/theta_deg"]  # attached scales
+        assert [d[0].name for d in phase.dims] == [
+            "/wavelength_nm",
+            "/theta_deg",
+        ]  # attached scales
         assert f["wavelength_nm"].is_scale and f["theta_deg"].is_scale
         assert phase.id.get_storage_size() < phase.nbytes  # compressed
         np.testing.assert_array_equal(f["beta_sca_per_m"][()], table.beta_sca_per_m)
@@ -136,11 +150,16 @@ def test_xarray_h5netcdf_reads_labelled_data(table, written):
 def test_h5dump_reads_the_file(table, written):
     if shutil.which("h5dump") is None:
         pytest.skip("hdf5-tools (h5dump) not installed")
-    header = subprocess.run(["h5dump", "-H", str(written)], capture_output=True, text=True, check=True).stdout
+    header = subprocess.run(
+        ["h5dump", "-H", str(written)], capture_output=True, text=True, check=True
+    ).stdout
     assert 'DATASET "phase"' in header and "DATASPACE  SIMPLE { ( 3, 181 ) / ( 3, 181 ) }" in header
     assert 'ATTRIBUTE "DIMENSION_LIST"' in header and 'ATTRIBUTE "units"' in header
     properties = subprocess.run(
-        ["h5dump", "-p", "-H", "-d", "/phase", str(written)], capture_output=True, text=True, check=True
+        ["h5dump", "-p", "-H", "-d", "/phase", str(written)],
+        capture_output=True,
+        text=True,
+        check=True,
     ).stdout
     assert "PREPROCESSING SHUFFLE" in properties and "COMPRESSION DEFLATE" in properties
     data = subprocess.run(
@@ -227,7 +246,10 @@ def _edit(path, change) -> None:
             r"variable 'csca_um2' has shape \(2,\); expected \(3,\)",
         ),
         (
-            lambda f: (f.__delitem__("g"), f.create_dataset("g", data=np.array([b"a", b"b", b"c"]))),
+            lambda f: (
+                f.__delitem__("g"),
+                f.create_dataset("g", data=np.array([b"a", b"b", b"c"])),
+            ),
             "variable 'g' must hold floats",
         ),
     ],

@@ -112,7 +112,9 @@ def test_wavelength_labels_are_integers_when_integral(table, tmp_path):
 
 
 def test_registry_entry(table, tmp_path):
-    assert [p.name for p in FORMATS["csv"](table, tmp_path, overwrite=False)] == list(SEED_CSV_FILES)
+    assert [p.name for p in FORMATS["csv"](table, tmp_path, overwrite=False)] == list(
+        SEED_CSV_FILES
+    )
 
 
 # ------------------------------------------------------------------ the seed's layout
@@ -137,7 +139,9 @@ def test_reads_the_seed_phase_table():
     np.testing.assert_array_equal(seed.wavelength_nm, do.optics.default_wavelengths_nm())
     np.testing.assert_array_equal(seed.theta_deg, np.linspace(0.0, 180.0, 1800))
     assert seed.phase.shape == (48, 1800)
-    assert seed.phase[0, 0] == 27.69420224644522  # first data cell of the seed's file, 360 nm forward
+    assert (
+        seed.phase[0, 0] == 27.69420224644522
+    )  # first data cell of the seed's file, 360 nm forward
 
 
 # ------------------------------------------------------------------ summary
@@ -263,7 +267,11 @@ def test_truncated_file_mid_row(written):
         (PHASE_FILENAME, lambda t: t.splitlines()[0] + "\n", "no data rows"),
         (PHASE_FILENAME, lambda t: "", "empty"),
         (PHASE_FILENAME, lambda t: t.replace(",440,550", ",550,440", 1), "strictly increasing"),
-        (PHASE_FILENAME, lambda t: t.replace(",440,550", ",440,560", 1), "differ from those listed"),
+        (
+            PHASE_FILENAME,
+            lambda t: t.replace(",440,550", ",440,560", 1),
+            "differ from those listed",
+        ),
         (EXTINCTION_FILENAME, lambda t: t.replace(",g\n", "\n", 1), "missing column.*g"),
         (
             EXTINCTION_FILENAME,
@@ -273,16 +281,22 @@ def test_truncated_file_mid_row(written):
         (EXTINCTION_FILENAME, lambda t: t.rstrip("\n"), "does not end with a newline"),
         (
             EXTINCTION_FILENAME,
-            lambda t: "\n".join(
-                ",".join(cells[:-2] + ["0.5"] + cells[-1:]) if i == 1 else ",".join(cells)
-                for i, cells in enumerate(line.split(",") for line in t.splitlines())
-            )
-            + "\n",
+            lambda t: (
+                "\n".join(
+                    ",".join(cells[:-2] + ["0.5"] + cells[-1:]) if i == 1 else ",".join(cells)
+                    for i, cells in enumerate(line.split(",") for line in t.splitlines())
+                )
+                + "\n"
+            ),
             r"column ssa disagrees .* 440\.0 nm: file 0\.5",
         ),
         (SUMMARY_FILENAME, lambda t: t[: len(t) // 2], "not a valid JSON table summary"),
         (SUMMARY_FILENAME, lambda t: t.replace('"r_eff_um": 1.6', '"r_eff_um": 1.7'), "altered"),
-        (SUMMARY_FILENAME, lambda t: t.replace('"format_version": 2', '"format_version": 1'), "version 1"),
+        (
+            SUMMARY_FILENAME,
+            lambda t: t.replace('"format_version": 2', '"format_version": 1'),
+            "version 1",
+        ),
     ],
 )
 def test_malformed_files_name_the_file_and_problem(written, name, edit, message):

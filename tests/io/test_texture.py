@@ -33,7 +33,9 @@ def make_table(n_theta: int = 181) -> Table:
         g=g,
         provenance=Provenance(
             inputs={"model": "henyey_greenstein", "g": g.tolist()},
-            sources=(Source(name="hg", role="phase function", citation="Henyey & Greenstein 1941"),),
+            sources=(
+                Source(name="hg", role="phase function", citation="Henyey & Greenstein 1941"),
+            ),
         ),
     )
 
@@ -61,7 +63,9 @@ def test_theta_round_trip_and_sidecar(tmp_path) -> None:
     assert meta["gl"]["width"] == 361 and meta["gl"]["height"] == 3
     assert meta["sha256"] == hashlib.sha256(data).hexdigest()
     assert meta["axes"][0]["unit"] == "nm" and meta["axes"][1]["unit"] == "deg"
-    assert meta["sampling_description"].startswith("uniform in theta_deg from 0 (forward, column 0) to 180")
+    assert meta["sampling_description"].startswith(
+        "uniform in theta_deg from 0 (forward, column 0) to 180"
+    )
     assert meta["unit"] == "sr^-1"
     assert meta["normalization"] == "2 pi int_{-1}^{1} P(mu) dmu = 1 (per steradian)"
     assert meta["table"] == "hg test/1"
@@ -85,7 +89,9 @@ def test_cos_sampling_values_and_endpoints(tmp_path) -> None:
     np.testing.assert_array_equal(tex.phase[:, -1], table.phase[:, -1].astype(np.float32))
     meta = tex.metadata
     assert meta["axes"][1]["name"] == "mu"
-    assert "from 1 (forward, column 0) to -1 (backward, column 2048)" in meta["sampling_description"]
+    assert (
+        "from 1 (forward, column 0) to -1 (backward, column 2048)" in meta["sampling_description"]
+    )
     # Linear in mu at 2049 samples: HG g = 0.8 loses its peak's curvature; the
     # trapezoid integral (exact for that interpolation) is recorded, near 1.
     np.testing.assert_allclose(meta["sphere_integral_of_samples"], 1.0, atol=2e-3)
@@ -109,13 +115,17 @@ def test_no_overwrite_without_force(tmp_path) -> None:
     assert raw.read_bytes() == before
     write_texture(table, tmp_path, n_angles=181, overwrite=True)
     assert len(raw.read_bytes()) == 3 * 181 * 4
-    assert sorted(p.name for p in tmp_path.iterdir()) == sorted([raw.name, side.name])  # no temporaries
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(
+        [raw.name, side.name]
+    )  # no temporaries
 
 
 def test_truncated_raw_file_is_a_clear_error(tmp_path) -> None:
     raw, side = write_texture(make_table(), tmp_path)
     raw.write_bytes(raw.read_bytes()[:-4])
-    with pytest.raises(FormatError, match=r"truncated: 8648 bytes, but shape \[3, 721\] of float32 needs 8652"):
+    with pytest.raises(
+        FormatError, match=r"truncated: 8648 bytes, but shape \[3, 721\] of float32 needs 8652"
+    ):
         read_texture(side)
 
 

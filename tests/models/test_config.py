@@ -45,7 +45,9 @@ def _line_of(text: str, fragment: str) -> int:
     for i, line in enumerate(lines, start=1):
         if line.startswith(fragment):
             return i
-    return next(i for i, ln in enumerate(lines, start=1) if fragment in ln and not ln.startswith("#"))
+    return next(
+        i for i, ln in enumerate(lines, start=1) if fragment in ln and not ln.startswith("#")
+    )
 
 
 def _short(value: object) -> str | None:
@@ -59,7 +61,9 @@ def _edit(text: str, old: str, new: str) -> str:
     lines = text.splitlines(keepends=True)
     hits = [i for i, ln in enumerate(lines) if ln.startswith(old)]
     if not hits:
-        hits = [i for i, ln in enumerate(lines) if old in ln and not ln.lstrip().startswith(("#", '"'))]
+        hits = [
+            i for i, ln in enumerate(lines) if old in ln and not ln.lstrip().startswith(("#", '"'))
+        ]
     assert hits, old
     for i in hits:
         lines[i] = lines[i].replace(old, new, 1)
@@ -78,51 +82,135 @@ BLUE = presets.preset_text("blue-moons")
     ("text", "key", "fragment", "reason"),
     [
         # unknown key, inside the second array-of-tables element; allowed keys listed
-        (_edit(COSMO, "v_eff = 0.35", "v_eff = 0.35\nr_eff = 3"), "size_distribution.modes[1].r_eff",
-         "r_eff = 3", "unknown key .*allowed keys: model, r_eff_um, v_eff, relative_number_density"),
+        (
+            _edit(COSMO, "v_eff = 0.35", "v_eff = 0.35\nr_eff = 3"),
+            "size_distribution.modes[1].r_eff",
+            "r_eff = 3",
+            "unknown key .*allowed keys: model, r_eff_um, v_eff, relative_number_density",
+        ),
         # out of range
-        (_edit(BLUE, "v_eff = 0.2 ", "v_eff = 0.7 "), "size_distribution.v_eff", "v_eff = 0.7",
-         r"must be in the open interval \(0, 0.5\); got 0.7"),
-        (_edit(COSMO, "v_eff = 0.35", "v_eff = -0.35"), "size_distribution.modes[1].v_eff",
-         "v_eff = -0.35", "must be > 0; got -0.35"),
-        (_edit(COLLIENNE, "g = 0.8", "g = 1.0"), "phase.g", "g = 1.0",
-         r"must be in the open interval \(-1.0, 1.0\); got 1.0"),
+        (
+            _edit(BLUE, "v_eff = 0.2 ", "v_eff = 0.7 "),
+            "size_distribution.v_eff",
+            "v_eff = 0.7",
+            r"must be in the open interval \(0, 0.5\); got 0.7",
+        ),
+        (
+            _edit(COSMO, "v_eff = 0.35", "v_eff = -0.35"),
+            "size_distribution.modes[1].v_eff",
+            "v_eff = -0.35",
+            "must be > 0; got -0.35",
+        ),
+        (
+            _edit(COLLIENNE, "g = 0.8", "g = 1.0"),
+            "phase.g",
+            "g = 1.0",
+            r"must be in the open interval \(-1.0, 1.0\); got 1.0",
+        ),
         (_edit(COLLIENNE, "g = 0.8", "g = -1.5"), "phase.g", "g = -1.5", "open interval"),
-        (_edit(HYBRID, "weight = 0.5", "weight = 1.5"), "phase.weight", "weight = 1.5",
-         r"must be in the closed interval \[0, 1\]; got 1.5"),
-        (_edit(HYBRID, "weight = 0.5", "weight = -0.1"), "phase.weight", "weight = -0.1", "closed interval"),
-        (_edit(BLUE, "hematite_fraction = 0.03", "hematite_fraction = 1.03"), "material.hematite_fraction",
-         "hematite_fraction = 1.03", r"closed interval \[0, 1\]"),
+        (
+            _edit(HYBRID, "weight = 0.5", "weight = 1.5"),
+            "phase.weight",
+            "weight = 1.5",
+            r"must be in the closed interval \[0, 1\]; got 1.5",
+        ),
+        (
+            _edit(HYBRID, "weight = 0.5", "weight = -0.1"),
+            "phase.weight",
+            "weight = -0.1",
+            "closed interval",
+        ),
+        (
+            _edit(BLUE, "hematite_fraction = 0.03", "hematite_fraction = 1.03"),
+            "material.hematite_fraction",
+            "hematite_fraction = 1.03",
+            r"closed interval \[0, 1\]",
+        ),
         (_edit(BLUE, "rtol = 1e-4", "rtol = 0.5"), "optics.rtol", "rtol = 0.5", "open interval"),
-        (_edit(BLUE, "n_theta = 1801", "n_theta = 1"), "optics.n_theta", "n_theta = 1", "integer >= 2"),
+        (
+            _edit(BLUE, "n_theta = 1801", "n_theta = 1"),
+            "optics.n_theta",
+            "n_theta = 1",
+            "integer >= 2",
+        ),
         # wrong type
-        (_edit(BLUE, "rtol = 1e-4", 'rtol = "small"'), "optics.rtol", 'rtol = "small"',
-         "must be a number; got 'small' \\(string\\)"),
-        (_edit(BLUE, "n_theta = 1801", "n_theta = 1801.0"), "optics.n_theta", "n_theta = 1801.0",
-         "must be an integer"),
-        (_edit(BLUE, "r_eff_um = 1.6", "r_eff_um = true"), "size_distribution.r_eff_um", "r_eff_um = true",
-         "must be a number; got True \\(boolean\\)"),
+        (
+            _edit(BLUE, "rtol = 1e-4", 'rtol = "small"'),
+            "optics.rtol",
+            'rtol = "small"',
+            "must be a number; got 'small' \\(string\\)",
+        ),
+        (
+            _edit(BLUE, "n_theta = 1801", "n_theta = 1801.0"),
+            "optics.n_theta",
+            "n_theta = 1801.0",
+            "must be an integer",
+        ),
+        (
+            _edit(BLUE, "r_eff_um = 1.6", "r_eff_um = true"),
+            "size_distribution.r_eff_um",
+            "r_eff_um = true",
+            "must be a number; got True \\(boolean\\)",
+        ),
         # bad choice: lists the valid ones
-        (_edit(BLUE, 'weighting = "scattering"', 'weighting = "area"'), "optics.weighting",
-         'weighting = "area"', "must be one of 'scattering', 'number'; got 'area'"),
-        (_edit(BLUE, 'model = "mie"', 'model = "miie"'), "phase.model", 'model = "miie"',
-         "must be one of 'mie', 'hybrid', 'costa2021_mars_dhg', "),
-        (_edit(HYBRID, 'outside = "clamp"', 'outside = "extrapolate"'), "phase.outside",
-         'outside = "extrapolate"', "must be one of 'quadratic', 'clamp', 'error'"),
+        (
+            _edit(BLUE, 'weighting = "scattering"', 'weighting = "area"'),
+            "optics.weighting",
+            'weighting = "area"',
+            "must be one of 'scattering', 'number'; got 'area'",
+        ),
+        (
+            _edit(BLUE, 'model = "mie"', 'model = "miie"'),
+            "phase.model",
+            'model = "miie"',
+            "must be one of 'mie', 'hybrid', 'costa2021_mars_dhg', ",
+        ),
+        (
+            _edit(HYBRID, 'outside = "clamp"', 'outside = "extrapolate"'),
+            "phase.outside",
+            'outside = "extrapolate"',
+            "must be one of 'quadratic', 'clamp', 'error'",
+        ),
         # grid checks
-        (_edit(BLUE, "step = 10 }", "step = 7 }"), "optics.wavelengths_nm.step", "step = 7",
-         "whole steps"),
-        (_edit(BLUE, "{ start = 360, stop = 830, step = 10 }", "[550, 450]"), "optics.wavelengths_nm",
-         "wavelengths_nm = [550, 450]", "strictly increasing"),
-        (_edit(BLUE, "n_theta = 1801", "n_theta = 1801\ntheta_step_deg = 0.1"), "optics.theta_step_deg",
-         "theta_step_deg = 0.1", "not both"),
-        (_edit(BLUE, "n_theta = 1801", "theta_step_deg = 0.7"), "optics.theta_step_deg",
-         "theta_step_deg = 0.7", "divide 180"),
+        (
+            _edit(BLUE, "step = 10 }", "step = 7 }"),
+            "optics.wavelengths_nm.step",
+            "step = 7",
+            "whole steps",
+        ),
+        (
+            _edit(BLUE, "{ start = 360, stop = 830, step = 10 }", "[550, 450]"),
+            "optics.wavelengths_nm",
+            "wavelengths_nm = [550, 450]",
+            "strictly increasing",
+        ),
+        (
+            _edit(BLUE, "n_theta = 1801", "n_theta = 1801\ntheta_step_deg = 0.1"),
+            "optics.theta_step_deg",
+            "theta_step_deg = 0.1",
+            "not both",
+        ),
+        (
+            _edit(BLUE, "n_theta = 1801", "theta_step_deg = 0.7"),
+            "optics.theta_step_deg",
+            "theta_step_deg = 0.7",
+            "divide 180",
+        ),
         # options an analytic model does not use are errors, not ignored
-        (_edit(COLLIENNE, "[optics]", '[optics]\nweighting = "number"'), "optics.weighting",
-         'weighting = "number"', "not used by phase.model = 'cornette_shanks1992'"),
-        (_edit(COLLIENNE, 'name = "collienne"', 'name = "collienne"\nnumber_density_per_m3 = 1e8'), "number_density_per_m3",
-         "number_density_per_m3", "not used"),
+        (
+            _edit(COLLIENNE, "[optics]", '[optics]\nweighting = "number"'),
+            "optics.weighting",
+            'weighting = "number"',
+            "not used by phase.model = 'cornette_shanks1992'",
+        ),
+        (
+            _edit(
+                COLLIENNE, 'name = "collienne"', 'name = "collienne"\nnumber_density_per_m3 = 1e8'
+            ),
+            "number_density_per_m3",
+            "number_density_per_m3",
+            "not used",
+        ),
     ],
     ids=_short,
 )
@@ -141,7 +229,11 @@ def test_errors_name_key_and_line(text: str, key: str, fragment: str, reason: st
     [
         # missing keys point at the table header they belong in
         (_edit(COSMO, "r_eff_um = 1.4", ""), "size_distribution.modes[1].r_eff_um", None),
-        (_edit(BLUE, 'model = "modified_gamma"', ""), "size_distribution.model", "[size_distribution]"),
+        (
+            _edit(BLUE, 'model = "modified_gamma"', ""),
+            "size_distribution.model",
+            "[size_distribution]",
+        ),
         (_edit(COLLIENNE, "g = 0.8", ""), "phase.g", "[phase]"),
         (_edit(BLUE, "[material]", "[materials]"), "materials", "[materials]"),
     ],
@@ -152,7 +244,11 @@ def test_missing_and_unknown_keys(text: str, key: str, header: str | None) -> No
         parse_config(text)
     assert info.value.key == key
     if header is None:  # the second [[size_distribution.modes]] header
-        lines = [i for i, ln in enumerate(text.splitlines(), 1) if ln.startswith("[[size_distribution.modes]]")]
+        lines = [
+            i
+            for i, ln in enumerate(text.splitlines(), 1)
+            if ln.startswith("[[size_distribution.modes]]")
+        ]
         assert info.value.line == lines[1]
     else:
         assert info.value.line == _line_of(text, header)
@@ -165,7 +261,9 @@ def test_missing_top_level_key_has_no_line() -> None:
 
 
 def test_unknown_top_level_key_lists_allowed() -> None:
-    with pytest.raises(ConfigError, match="unknown key; allowed keys: name, description, choices") as info:
+    with pytest.raises(
+        ConfigError, match="unknown key; allowed keys: name, description, choices"
+    ) as info:
         parse_config('name = "x"\ndescription = "x"\ncolour = "red"\n')
     assert (info.value.key, info.value.line) == ("colour", 3)
 
@@ -210,13 +308,18 @@ def test_line_scanner_ignores_brackets_and_keys_in_strings() -> None:
 
 
 def test_defaults_filled_in() -> None:
-    config = parse_config('name = "d"\ndescription = "d"\n[material]\nmodel = "mars_dust"\n'
-                          '[size_distribution]\nmodel = "modified_gamma"\nr_eff_um = 1.6\nv_eff = 0.2\n')
+    config = parse_config(
+        'name = "d"\ndescription = "d"\n[material]\nmodel = "mars_dust"\n'
+        '[size_distribution]\nmodel = "modified_gamma"\nr_eff_um = 1.6\nv_eff = 0.2\n'
+    )
     inputs = config.to_inputs()
     assert inputs["phase"] == {"model": "mie"}
     assert inputs["material"] == {
-        "model": "mars_dust", "hematite_fraction": 0.03, "host_index": {"n": 1.5, "k": 0.0},
-        "hematite": "hematite-querry1985-extraordinary", "rule": "maxwell_garnett",
+        "model": "mars_dust",
+        "hematite_fraction": 0.03,
+        "host_index": {"n": 1.5, "k": 0.0},
+        "hematite": "hematite-querry1985-extraordinary",
+        "rule": "maxwell_garnett",
     }
     assert inputs["optics"]["weighting"] == "scattering"
     assert inputs["optics"]["rtol"] == 1e-4
@@ -237,7 +340,11 @@ def test_equivalent_spellings_give_the_same_inputs() -> None:
         _edit(BLUE, "n_theta = 1801", "theta_step_deg = 0.1"),
         _edit(BLUE, "{ start = 360, stop = 830, step = 10 }", f"[{wl}]"),
         _edit(BLUE, "host_index = { n = 1.5, k = 0.0 }", "host_index = 1.5"),
-        _edit(BLUE, 'hematite = "querry-extraordinary"', 'hematite = "hematite-querry1985-extraordinary"'),
+        _edit(
+            BLUE,
+            'hematite = "querry-extraordinary"',
+            'hematite = "hematite-querry1985-extraordinary"',
+        ),
         _edit(BLUE, 'description = "', 'description = "edited: '),
     ]
     for text in variants:
@@ -248,26 +355,37 @@ def test_hybrid_defaults_weight_and_analytic() -> None:
     text = _edit(HYBRID, "weight = 0.5", "").replace('analytic = "costa2021_mars_dhg"', "")
     text = text.replace('outside = "clamp"', "")
     ph = parse_config(text).phase
-    assert (ph.weight, ph.analytic, dict(ph.parameters)) == (0.5, "costa2021_mars_dhg", {"outside": "quadratic"})
+    assert (ph.weight, ph.analytic, dict(ph.parameters)) == (
+        0.5,
+        "costa2021_mars_dhg",
+        {"outside": "quadratic"},
+    )
 
 
 def test_material_forms() -> None:
     catalogue = BLUE.replace(
-        '[material]\nmodel = "mars_dust"', '[material]\nmodel = "catalogue"\nname = "magnetite-querry1985"\n#'
+        '[material]\nmodel = "mars_dust"',
+        '[material]\nmodel = "catalogue"\nname = "magnetite-querry1985"\n#',
     )
     catalogue = "\n".join(
-        ln for ln in catalogue.splitlines()
+        ln
+        for ln in catalogue.splitlines()
         if not ln.startswith(("hematite_fraction", "host_index", "hematite =", "rule ="))
     )
     assert parse_config(catalogue).material.build().name == "magnetite-querry1985"
     bad = catalogue.replace('name = "magnetite-querry1985"', 'name = "unobtainium"')
-    with pytest.raises(ConfigError, match="material.name: must be one of 'hematite-querry1985-extraordinary'"):
+    with pytest.raises(
+        ConfigError, match="material.name: must be one of 'hematite-querry1985-extraordinary'"
+    ):
         parse_config(bad)
     constant = parse_config(SMALL).material
     assert constant.build() == complex(1.5, 0.01)
     with pytest.raises(ConfigError, match=r"material.k: must be >= 0"):
         parse_config(SMALL.replace("k = 0.01", "k = -0.01"))
-    with pytest.raises(ConfigError, match=r"material.hematite_fraction: unknown key for material.model = 'constant'; allowed keys: model, n, k"):
+    with pytest.raises(
+        ConfigError,
+        match=r"material.hematite_fraction: unknown key for material.model = 'constant'; allowed keys: model, n, k",
+    ):
         parse_config(SMALL.replace("k = 0.01", "k = 0.01\nhematite_fraction = 0.1"))
 
 
@@ -287,14 +405,18 @@ def test_mean_cosine_of_sampled_henyey_greenstein() -> None:
     """HG(g) sampled at 0.1 deg and renormalized: mean cosine g to the sampling error."""
     theta = np.linspace(0, 180, 1801)
     for g in (-0.3, 0.0, 0.5, 0.8):
-        p = phase.renormalize(phase.tabulate(phase.henyey_greenstein, theta_deg=theta, g=g), theta_deg=theta)
+        p = phase.renormalize(
+            phase.tabulate(phase.henyey_greenstein, theta_deg=theta, g=g), theta_deg=theta
+        )
         assert phase.mean_cosine(p, theta_deg=theta) == pytest.approx(g, abs=1e-5)
 
 
 def test_progress_does_not_change_the_result() -> None:
     config = parse_config(SMALL)
     calls: list[tuple[int, int]] = []
-    with_progress = build_table(config, workers=1, progress=lambda done, total: calls.append((done, total)))
+    with_progress = build_table(
+        config, workers=1, progress=lambda done, total: calls.append((done, total))
+    )
     plain = build_table(config, workers=2)
     assert calls[0] == (0, 10) and calls[-1] == (10, 10)
     assert [d for d, _ in calls] == sorted(d for d, _ in calls) and len(calls) >= 3
@@ -304,8 +426,14 @@ def test_progress_does_not_change_the_result() -> None:
 
 
 def test_number_density_and_sources() -> None:
-    table = build_table(parse_config(SMALL.replace('description = "test dust"',
-                                                   'description = "test dust"\nnumber_density_per_m3 = 2e8')))
+    table = build_table(
+        parse_config(
+            SMALL.replace(
+                'description = "test dust"',
+                'description = "test dust"\nnumber_density_per_m3 = 2e8',
+            )
+        )
+    )
     assert table.number_density_per_m3 == 2e8
     np.testing.assert_allclose(table.beta_ext_per_m, 2e8 * table.cext_um2 * 1e-12, rtol=1e-15)
     roles = [s.role for s in table.provenance.sources]
@@ -313,11 +441,15 @@ def test_number_density_and_sources() -> None:
 
 
 def test_analytic_model_table() -> None:
-    text = ('name = "hg"\ndescription = "HG"\n[optics]\nwavelengths_nm = [500, 600]\nn_theta = 721\n'
-            '[phase]\nmodel = "henyey_greenstein"\ng = 0.6\n')
+    text = (
+        'name = "hg"\ndescription = "HG"\n[optics]\nwavelengths_nm = [500, 600]\nn_theta = 721\n'
+        '[phase]\nmodel = "henyey_greenstein"\ng = 0.6\n'
+    )
     table = build_table(parse_config(text))
     assert table.cext_um2 is None and table.phase.shape == (2, 721)
-    np.testing.assert_allclose(phase.sphere_integral(table.phase, theta_deg=table.theta_deg), 1.0, rtol=1e-13)
+    np.testing.assert_allclose(
+        phase.sphere_integral(table.phase, theta_deg=table.theta_deg), 1.0, rtol=1e-13
+    )
     np.testing.assert_allclose(table.g, 0.6, atol=1e-4)
     assert any("from the analytic formula" in n for n in table.provenance.notes)
     assert table.provenance.sources[0].name == "henyey_greenstein"

@@ -16,7 +16,15 @@ from dustoptics.scattering import phase
 from dustoptics.scattering.phase import ExtrapolationWarning
 from dustoptics.table import Table, canonical_json
 
-NAMES = ["blue-moons", "blue-moons-seed", "collienne", "cosmoscout-mars", "costa", "hybrid", "hybrid-seed"]
+NAMES = [
+    "blue-moons",
+    "blue-moons-seed",
+    "collienne",
+    "cosmoscout-mars",
+    "costa",
+    "hybrid",
+    "hybrid-seed",
+]
 
 
 #: cosmoscout-mars's coarse log-normal mode reaches radii of ~70 um (the radius
@@ -43,8 +51,6 @@ def _build(name: str) -> tuple[Table, list[warnings.WarningMessage]]:
 
 
 @pytest.fixture(scope="module")
-
-
 def built() -> dict[str, tuple[Table, list[warnings.WarningMessage]]]:
     """Each preset built once per module (with its warnings)."""
     return {name: _build(name) for name in NAMES}
@@ -56,17 +62,15 @@ def test_list_presets() -> None:
 
 
 @pytest.mark.parametrize("bad", ["blue-moon", "", "BLUE-MOONS", None])
-
-
 def test_unknown_preset_lists_valid_names(bad) -> None:
     for function in (presets.preset_text, presets.load_preset, presets.build_preset):
-        with pytest.raises(ValueError, match=r"unknown preset .*valid presets: blue-moons, blue-moons-seed, "):
+        with pytest.raises(
+            ValueError, match=r"unknown preset .*valid presets: blue-moons, blue-moons-seed, "
+        ):
             function(bad)
 
 
 @pytest.mark.parametrize("name", NAMES)
-
-
 def test_preset_text_is_a_config_with_its_name_and_citations(name: str) -> None:
     text = presets.preset_text(name)
     assert text.startswith(f"# {name}:")
@@ -89,8 +93,6 @@ def test_preset_text_is_a_config_with_its_name_and_citations(name: str) -> None:
         ("cosmoscout-mars", ("CosmoScout VR", "Ehlers", "Querry")),
     ],
 )
-
-
 def test_sources_cited(name: str, authors: tuple[str, ...]) -> None:
     citations = " ".join(s.citation for s in presets.load_preset(name).sources)
     for author in authors:
@@ -98,8 +100,6 @@ def test_sources_cited(name: str, authors: tuple[str, ...]) -> None:
 
 
 @pytest.mark.parametrize("name", NAMES)
-
-
 def test_every_preset_builds(built, name: str) -> None:
     table, _ = built[name]
     config = _preset_config(name)
@@ -114,13 +114,19 @@ def test_every_preset_builds(built, name: str) -> None:
 
 
 @pytest.mark.parametrize("name", NAMES)
-
-
 def test_building_twice_is_identical_to_the_byte(built, name: str) -> None:
     first, _ = built[name]
     second, _ = _build(name)
-    for key in ("wavelength_nm", "theta_deg", "phase", "g", "cext_um2", "csca_um2", "error_estimate",
-                "cross_section_error_estimate"):
+    for key in (
+        "wavelength_nm",
+        "theta_deg",
+        "phase",
+        "g",
+        "cext_um2",
+        "csca_um2",
+        "error_estimate",
+        "cross_section_error_estimate",
+    ):
         a, b = getattr(first, key), getattr(second, key)
         assert (a is None) == (b is None), key
         if a is not None:
@@ -158,16 +164,19 @@ def _costa_table(wavelength_nm: np.ndarray, theta_deg: np.ndarray, outside: str)
         warnings.simplefilter("ignore", ExtrapolationWarning)
         spec = phase.costa2021_mars_dhg(wavelength_nm, outside=outside)
     raw = phase.tabulate(
-        phase.dhg_costa2021, theta_deg=theta_deg,
-        g1=spec.g1[:, None], g2=spec.g2[:, None], alpha=spec.alpha[:, None],
+        phase.dhg_costa2021,
+        theta_deg=theta_deg,
+        g1=spec.g1[:, None],
+        g2=spec.g2[:, None],
+        alpha=spec.alpha[:, None],
     )
     return phase.renormalize(raw, theta_deg=theta_deg)
 
 
-@pytest.mark.parametrize(("name", "mie", "outside"), [("hybrid-seed", "blue-moons-seed", "quadratic"),
-                                                      ("hybrid", "blue-moons", "clamp")])
-
-
+@pytest.mark.parametrize(
+    ("name", "mie", "outside"),
+    [("hybrid-seed", "blue-moons-seed", "quadratic"), ("hybrid", "blue-moons", "clamp")],
+)
 def test_hybrid_is_the_renormalized_half_blend(built, name: str, mie: str, outside: str) -> None:
     """Identity: the hybrid preset is 0.5 renorm(P_mie) + 0.5 renorm(P_costa),
     renormalized, with g its mean cosine and the Mie cross-sections."""
@@ -195,7 +204,9 @@ def test_hybrid_uses_the_costa_preset_table(built) -> None:
     """Both use outside='clamp' on the same grid, so hybrid's analytic part is costa's table."""
     hyb, costa, mie = built["hybrid"][0], built["costa"][0], built["blue-moons"][0]
     theta = hyb.theta_deg
-    expected = phase.hybrid(phase.renormalize(mie.phase, theta_deg=theta), costa.phase, theta_deg=theta)
+    expected = phase.hybrid(
+        phase.renormalize(mie.phase, theta_deg=theta), costa.phase, theta_deg=theta
+    )
     np.testing.assert_array_equal(hyb.phase, expected)
 
 
@@ -223,7 +234,9 @@ def test_collienne_is_cornette_shanks_08(built) -> None:
 def test_cosmoscout_mars_inputs(built) -> None:
     inputs = presets.load_preset("cosmoscout-mars").to_inputs()
     modes = inputs["size_distribution"]["modes"]
-    assert [(m["model"], m["r_eff_um"], m["v_eff"], m["relative_number_density"]) for m in modes] == [
+    assert [
+        (m["model"], m["r_eff_um"], m["v_eff"], m["relative_number_density"]) for m in modes
+    ] == [
         ("modified_log_normal", 0.04, 0.1, 1000.0),
         ("modified_log_normal", 1.4, 0.35, 1.0),
     ]
@@ -234,11 +247,19 @@ def test_cosmoscout_mars_inputs(built) -> None:
 
 
 def test_seed_and_physical_presets_differ_only_in_weighting_and_angles() -> None:
-    seed, physical = presets.load_preset("blue-moons-seed").to_inputs(), presets.load_preset("blue-moons").to_inputs()
+    seed, physical = (
+        presets.load_preset("blue-moons-seed").to_inputs(),
+        presets.load_preset("blue-moons").to_inputs(),
+    )
     assert seed["material"] == physical["material"]
     assert seed["size_distribution"] == physical["size_distribution"]
-    assert (seed["optics"]["weighting"], physical["optics"]["weighting"]) == ("number", "scattering")
+    assert (seed["optics"]["weighting"], physical["optics"]["weighting"]) == (
+        "number",
+        "scattering",
+    )
     assert (seed["optics"]["n_theta"], physical["optics"]["n_theta"]) == (1800, 1801)
-    assert seed["optics"]["wavelengths_nm"] == physical["optics"]["wavelengths_nm"] == list(
-        np.arange(360.0, 831.0, 10.0)
+    assert (
+        seed["optics"]["wavelengths_nm"]
+        == physical["optics"]["wavelengths_nm"]
+        == list(np.arange(360.0, 831.0, 10.0))
     )

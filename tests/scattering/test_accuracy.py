@@ -25,7 +25,9 @@ import dustoptics as do
 THETA = np.linspace(0.0, 180.0, 181)
 
 
-def brute_force(m: complex, r_eff: float, v_eff: float, wavelength_nm: float, *, dx_panel: float = 0.25):
+def brute_force(
+    m: complex, r_eff: float, v_eff: float, wavelength_nm: float, *, dx_panel: float = 0.25
+):
     shape = (1 - 2 * v_eff) / v_eff
     scale = r_eff * v_eff
     r_lo = stats.gamma(shape + 2).ppf(1e-10) * scale
@@ -85,7 +87,9 @@ def test_default_settings_reach_targets(m, r_eff, v_eff, wavelengths, dx_panel) 
     dust = do.mars_dust() if m == "mars" else m
     t = do.compute_optics(dust, do.ModifiedGamma(r_eff_um=r_eff, v_eff=v_eff), wavelengths, THETA)
     for i, wl in enumerate(wavelengths):
-        check(t, i, brute_force(complex(t.refractive_index[i]), r_eff, v_eff, wl, dx_panel=dx_panel))
+        check(
+            t, i, brute_force(complex(t.refractive_index[i]), r_eff, v_eff, wl, dx_panel=dx_panel)
+        )
 
 
 @pytest.mark.slow

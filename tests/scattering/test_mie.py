@@ -35,7 +35,9 @@ def half_unit_significant(value: float, digits: int) -> float:
     return 0.5 * 10.0 ** (np.floor(np.log10(abs(value))) - (digits - 1)) if value else 0.0
 
 
-def assert_published(computed: float, text: str, what: str, *, significant: int | None = None) -> None:
+def assert_published(
+    computed: float, text: str, what: str, *, significant: int | None = None
+) -> None:
     """|computed - published| within half a unit of the last digit that carries
     information: the last printed one, or the last of ``significant`` figures
     when the source states that precision (MIEV0: 7; a printed "50102220.0"
@@ -90,9 +92,18 @@ def bessel_closed_form(m: complex, x: float, n_terms: int = 12) -> tuple[float, 
     c = 2.0 / x**2
     qext = c * np.sum((2 * n + 1) * (a + b).real)
     qsca = c * np.sum((2 * n + 1) * (abs(a) ** 2 + abs(b) ** 2))
-    gq = 2 * c * (
-        np.sum(n[:-1] * (n[:-1] + 2) / (n[:-1] + 1) * (a[:-1] * np.conj(a[1:]) + b[:-1] * np.conj(b[1:])).real)
-        + np.sum((2 * n + 1) / (n * (n + 1)) * (a * np.conj(b)).real)
+    gq = (
+        2
+        * c
+        * (
+            np.sum(
+                n[:-1]
+                * (n[:-1] + 2)
+                / (n[:-1] + 1)
+                * (a[:-1] * np.conj(a[1:]) + b[:-1] * np.conj(b[1:])).real
+            )
+            + np.sum((2 * n + 1) / (n * (n + 1)) * (a * np.conj(b)).real)
+        )
     )
     return float(qext), float(qsca), float(gq)
 
@@ -171,7 +182,9 @@ def test_wiscombe1979_efficiencies() -> None:
         label = f"Wiscombe 1979 {row['case']}"
         assert_published(t.qext[0], row["Qext"], label + " Qext")
         assert_published(t.qsca[0], row["Qsca"], label + " Qsca")
-        assert_published(t.cabs_um2[0] / t.mean_geometric_cross_section_um2, row["Qabs"], label + " Qabs")
+        assert_published(
+            t.cabs_um2[0] / t.mean_geometric_cross_section_um2, row["Qabs"], label + " Qabs"
+        )
         assert_published(t.g[0], row["g"], label + " g")
 
 
@@ -190,8 +203,12 @@ def test_wiscombe1979_angular_intensity() -> None:
         for value, row in zip(s11, case_rows):
             text = row["S11"]
             # 6 significant figures: half a unit in the 6th digit, relative.
-            tol = 0.5 * 10.0 ** (np.floor(np.log10(abs(float(text)))) - 5) + 1e-12 * abs(float(text))
-            assert abs(value - float(text)) <= tol, f"{case} theta={row['theta_deg']}: {value} vs {text}"
+            tol = 0.5 * 10.0 ** (np.floor(np.log10(abs(float(text)))) - 5) + 1e-12 * abs(
+                float(text)
+            )
+            assert abs(value - float(text)) <= tol, (
+                f"{case} theta={row['theta_deg']}: {value} vs {text}"
+            )
 
 
 def test_bohren_huffman_sample() -> None:
@@ -210,15 +227,25 @@ def test_bohren_huffman_sample() -> None:
     assert_published(t.qext[0], data["scalars"]["Qext"], "B&H Qext")
     assert_published(t.qsca[0], data["scalars"]["Qsca"], "B&H Qsca")
     # Radar backscatter efficiency 4 |S1(180)|^2 / x^2 = 4 pi Q_sca P(180 deg).
-    assert_published(4.0 * np.pi * t.qsca[0] * t.phase[0, -1], data["scalars"]["Qback"], "B&H Qback")
+    assert_published(
+        4.0 * np.pi * t.qsca[0] * t.phase[0, -1], data["scalars"]["Qback"], "B&H Qback"
+    )
     ratio = t.phase[0] / t.phase[0, 0]
     for value, row in zip(ratio, table):
-        assert_published(value, row["S11_over_S11_0deg"], f"B&H S11 ratio at {row['theta_deg']} deg")
+        assert_published(
+            value, row["S11_over_S11_0deg"], f"B&H S11 ratio at {row['theta_deg']} deg"
+        )
 
 
 @pytest.mark.parametrize(
     ("m", "x"),
-    [(1.5 + 0.01j, 0.3), (1.52 + 0.005j, 12.0), (2.5 + 1.0j, 40.0), (1.33 + 1e-8j, 150.0), (0.9 + 0.0j, 5.0)],
+    [
+        (1.5 + 0.01j, 0.3),
+        (1.52 + 0.005j, 12.0),
+        (2.5 + 1.0j, 40.0),
+        (1.33 + 1e-8j, 150.0),
+        (0.9 + 0.0j, 5.0),
+    ],
 )
 def test_monodisperse_equals_miepython(m: complex, x: float) -> None:
     """compute_optics with a Monodisperse distribution is single-sphere Mie (miepython)."""
@@ -278,7 +305,11 @@ def test_batch_equals_one_sphere_at_a_time(m: complex) -> None:
     (Agreement is 1e-13 of the largest coefficient; alone and in a batch, the
     continued fraction starts at different orders.)"""
     rng = np.random.default_rng(3)
-    x = np.sort(np.concatenate([rng.uniform(0.5, 3.0, 5), rng.uniform(20.0, 40.0, 6), rng.uniform(90, 130, 5)]))
+    x = np.sort(
+        np.concatenate(
+            [rng.uniform(0.5, 3.0, 5), rng.uniform(20.0, 40.0, 6), rng.uniform(90, 130, 5)]
+        )
+    )
     a, b, nmax = coefficients(m, x)
     assert x.size == mie.LANES
     for s in range(x.size):
@@ -357,7 +388,9 @@ def test_interpolation_maps_reproduce_polynomials(n_in: int, n_out: int) -> None
     np.testing.assert_allclose(moved[0], expected, rtol=0, atol=1e-10 * np.abs(expected).max())
     # A grid onto itself is the identity (each output angle is a node; the
     # parity split and recombination round in the last bit).
-    same = mie._legendre_regrid(np.ascontiguousarray(rows), *mie._interpolation_maps(mu_in, w_half, mu_in))
+    same = mie._legendre_regrid(
+        np.ascontiguousarray(rows), *mie._interpolation_maps(mu_in, w_half, mu_in)
+    )
     np.testing.assert_allclose(same[0], rows[0], rtol=0, atol=4e-16 * np.abs(rows).max())
 
 
@@ -376,13 +409,17 @@ def test_tiers_equal_the_full_grid(per_particle: bool) -> None:
     assert sizes.size >= 3 and sizes[-1] == n_full
     # Three panels of 16 nodes: small spheres on the smallest tier, middling
     # on the next, large on the full grid (each tier holds n_max + 2 orders).
-    x = np.concatenate([np.linspace(1.0, 3.0, 16), np.linspace(15.0, 18.0, 16), np.linspace(55.0, 70.0, 16)])
+    x = np.concatenate(
+        [np.linspace(1.0, 3.0, 16), np.linspace(15.0, 18.0, 16), np.linspace(55.0, 70.0, 16)]
+    )
     w = np.linspace(0.5, 1.5, x.size)
     panel = np.repeat(np.arange(3), 16)
     tier = np.repeat([0, 1, sizes.size - 1], 16)
     for t, hi in zip((0, 1, sizes.size - 1), (3.0, 18.0, 70.0)):
         assert mie.wiscombe_nmax(hi) + 2 <= sizes[t]
-    fast = mie._accumulate_tiers(m, x, w, panel, tier, 3, per_particle, sizes, tables, table_start, maps, map_start)
+    fast = mie._accumulate_tiers(
+        m, x, w, panel, tier, 3, per_particle, sizes, tables, table_start, maps, map_start
+    )
     full_table = _gauss_angles(n_full)[2]
     simple = mie._accumulate(m, x, w, panel, 3, per_particle, full_table, n_full, True)
     assert fast.shape == simple.shape == (3, 2 * n_full + mie.N_SUMS)

@@ -57,8 +57,16 @@ def test_identities(r_eff, v_eff, n, k, wavelength, weighting) -> None:
 @settings(max_examples=20, deadline=None)
 @given(
     dist=st.one_of(
-        st.builds(lambda a, b: do.ModifiedGamma(r_eff_um=a, v_eff=b), st.floats(0.05, 5), st.floats(0.02, 0.45)),
-        st.builds(lambda a, b: do.ModifiedLogNormal(r_eff_um=a, v_eff=b), st.floats(0.05, 5), st.floats(0.02, 1.0)),
+        st.builds(
+            lambda a, b: do.ModifiedGamma(r_eff_um=a, v_eff=b),
+            st.floats(0.05, 5),
+            st.floats(0.02, 0.45),
+        ),
+        st.builds(
+            lambda a, b: do.ModifiedLogNormal(r_eff_um=a, v_eff=b),
+            st.floats(0.05, 5),
+            st.floats(0.02, 1.0),
+        ),
     ),
     wavelength=st.floats(300.0, 1000.0),
     level=st.integers(0, 2),
@@ -85,7 +93,9 @@ def test_doubling_nodes_stays_within_error_estimate(weighting: str) -> None:
     dist = do.ModifiedGamma(r_eff_um=1.6, v_eff=0.2)
     mat = do.mars_dust()
     wavelengths = [440.0, 680.0]
-    t = do.compute_optics(mat, dist, wavelengths, np.linspace(0, 180, 181), weighting=weighting, workers=1)
+    t = do.compute_optics(
+        mat, dist, wavelengths, np.linspace(0, 180, 181), weighting=weighting, workers=1
+    )
     assert np.all(t.converged)
     for i, wl in enumerate(wavelengths):
         solver = _WavelengthSolver(
@@ -101,7 +111,11 @@ def test_doubling_nodes_stays_within_error_estimate(weighting: str) -> None:
             lo, hi = panels[:, 0], panels[:, 1]
             edges = lo[:, None] + (hi - lo)[:, None] * np.array([0.0, 0.25, 0.5, 0.75, 1.0])
             rows = solver.evaluate(edges[:, :-1].ravel(), edges[:, 1:].ravel(), angles=angles)
-            runs.append(_Run(rows.sum(axis=0), panels, 4 * panels.shape[0] * t.settings.nodes_per_panel, 0.0))
+            runs.append(
+                _Run(
+                    rows.sum(axis=0), panels, 4 * panels.shape[0] * t.settings.nodes_per_panel, 0.0
+                )
+            )
         finer = solver.finish(*runs)
         assert finer.n_nodes == 2 * t.n_nodes[i]
         assert finer.cross_section_n_nodes == 2 * t.cross_section_n_nodes[i]
@@ -112,7 +126,12 @@ def test_doubling_nodes_stays_within_error_estimate(weighting: str) -> None:
 
 
 def test_deterministic_and_independent_of_threads() -> None:
-    args = (do.mars_dust(), do.ModifiedGamma(r_eff_um=0.8, v_eff=0.2), [400.0, 500.0, 600.0], np.linspace(0, 180, 91))
+    args = (
+        do.mars_dust(),
+        do.ModifiedGamma(r_eff_um=0.8, v_eff=0.2),
+        [400.0, 500.0, 600.0],
+        np.linspace(0, 180, 91),
+    )
     a = do.compute_optics(*args, rtol=1e-3, workers=1)
     b = do.compute_optics(*args, rtol=1e-3, workers=2)
     assert a.phase.tobytes() == b.phase.tobytes()
@@ -183,14 +202,23 @@ def test_seed_used_number_not_cross_section_weighting() -> None:
     theta = seed.index.to_numpy(dtype=float)
     cols = ["360", "550", "680"]
     t = do.compute_optics(
-        do.mars_dust(), do.ModifiedGamma(r_eff_um=1.6, v_eff=0.2), [360.0, 550.0, 680.0], theta, rtol=1e-3
+        do.mars_dust(),
+        do.ModifiedGamma(r_eff_um=1.6, v_eff=0.2),
+        [360.0, 550.0, 680.0],
+        theta,
+        rtol=1e-3,
     )
     median = np.median(np.abs(t.phase / seed[cols].to_numpy().T - 1), axis=1)
     assert np.all((median > 0.15) & (median < 0.40)), median
     # BRIEF section 2: at 360 nm the physical forward peak is 67.3 sr^-1 and the
     # number-weighted one 28.6 sr^-1 (deterministic; the seed's noisy table has 27.7).
     number = do.compute_optics(
-        do.mars_dust(), do.ModifiedGamma(r_eff_um=1.6, v_eff=0.2), [360.0], [0.0], rtol=1e-4, weighting="number"
+        do.mars_dust(),
+        do.ModifiedGamma(r_eff_um=1.6, v_eff=0.2),
+        [360.0],
+        [0.0],
+        rtol=1e-4,
+        weighting="number",
     )
     assert abs(t.phase[0, 0] - 67.3) <= 0.05
     assert abs(number.phase[0, 0] - 28.6) <= 0.05
@@ -218,7 +246,10 @@ def test_seed_used_number_not_cross_section_weighting() -> None:
         (
             {
                 "distribution": do.MultiModal(
-                    modes=(do.Monodisperse(radius_um=1.0), do.ModifiedGamma(r_eff_um=0.5, v_eff=0.1)),
+                    modes=(
+                        do.Monodisperse(radius_um=1.0),
+                        do.ModifiedGamma(r_eff_um=0.5, v_eff=0.1),
+                    ),
                     relative_number_densities=(1.0, 1.0),
                 )
             },
@@ -317,7 +348,9 @@ def test_split_bookkeeping_equals_the_numpy_formula():
     lower, upper = edges[:-1], edges[1:]
     panel_error = rng.uniform(0.0, 0.3, n_p) * tol
     cost = rng.uniform(1.0, 50.0, n_p)
-    split, eval_lower, eval_upper = _choose_splits(panel_error, cost, tol, keep_fraction, lower, upper)
+    split, eval_lower, eval_upper = _choose_splits(
+        panel_error, cost, tol, keep_fraction, lower, upper
+    )
 
     badness = panel_error / tol
     order = np.argsort(-badness / cost, kind="stable")
@@ -340,7 +373,19 @@ def test_split_bookkeeping_equals_the_numpy_formula():
     rows = rng.uniform(size=(2 * k, width))
     new_cost = rng.uniform(1.0, 50.0, k)
     got = _apply_splits(
-        pool.copy(), n_rows, rows, split, coarse, left, right, lower, upper, cost, new_cost, eval_lower, eval_upper
+        pool.copy(),
+        n_rows,
+        rows,
+        split,
+        coarse,
+        left,
+        right,
+        lower,
+        upper,
+        cost,
+        new_cost,
+        eval_lower,
+        eval_upper,
     )
     grown, rows_after, got_coarse, got_left, got_right, got_lower, got_upper, got_cost = got
     keep = np.ones(n_p, dtype=bool)
@@ -348,9 +393,15 @@ def test_split_bookkeeping_equals_the_numpy_formula():
     assert rows_after == n_rows + 2 * k
     np.testing.assert_array_equal(grown[:n_rows], pool[:n_rows])
     np.testing.assert_array_equal(grown[n_rows:rows_after], rows)
-    np.testing.assert_array_equal(got_coarse, np.concatenate([coarse[keep], left[split], right[split]]))
-    np.testing.assert_array_equal(got_left, np.concatenate([left[keep], np.arange(n_rows, n_rows + k)]))
-    np.testing.assert_array_equal(got_right, np.concatenate([right[keep], np.arange(n_rows + k, n_rows + 2 * k)]))
+    np.testing.assert_array_equal(
+        got_coarse, np.concatenate([coarse[keep], left[split], right[split]])
+    )
+    np.testing.assert_array_equal(
+        got_left, np.concatenate([left[keep], np.arange(n_rows, n_rows + k)])
+    )
+    np.testing.assert_array_equal(
+        got_right, np.concatenate([right[keep], np.arange(n_rows + k, n_rows + 2 * k)])
+    )
     np.testing.assert_array_equal(got_lower, np.concatenate([lower[keep], new_lower]))
     np.testing.assert_array_equal(got_upper, np.concatenate([upper[keep], new_upper]))
     np.testing.assert_array_equal(got_cost, np.concatenate([cost[keep], new_cost]))
@@ -377,7 +428,9 @@ def test_accumulate_by_tier_equals_the_full_grid(per_particle: bool):
     w = np.linspace(0.5, 1.5, x.size)
     node_panel = np.repeat(np.arange(len(shuffled)), per)
     fast = _accumulate_by_tier(m, x, w, node_panel, per, per_particle, *tiers)
-    simple = mie._accumulate(m, x, w, node_panel, len(shuffled), per_particle, _gauss_angles(n_full)[2], n_full, True)
+    simple = mie._accumulate(
+        m, x, w, node_panel, len(shuffled), per_particle, _gauss_angles(n_full)[2], n_full, True
+    )
     assert fast.shape == simple.shape
     for p in range(len(shuffled)):
         np.testing.assert_allclose(fast[p], simple[p], rtol=0, atol=1e-10 * np.abs(simple[p]).max())
@@ -391,4 +444,6 @@ def test_accumulate_by_tier_rejects_spheres_beyond_the_largest_tier():
 
     x = np.linspace(100.0, 110.0, 8)  # n_max ~ 130 > 96
     with pytest.raises(ValueError, match="largest angular tier"):
-        _accumulate_by_tier(1.5 + 0.01j, x, np.ones(8), np.zeros(8, dtype=np.int64), 8, False, *_angular_tiers(96))
+        _accumulate_by_tier(
+            1.5 + 0.01j, x, np.ones(8), np.zeros(8, dtype=np.int64), 8, False, *_angular_tiers(96)
+        )

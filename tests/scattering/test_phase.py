@@ -134,8 +134,10 @@ def test_registry_covers_every_model() -> None:
 def test_reference_quadrature_is_accurate() -> None:
     """The composite Gauss-Legendre agrees with adaptive quad on a sharp lobe."""
     for g in (0.99, -0.99, 0.95, 0.3):
+
         def f(m, g=g):
             return (1 - g * g) / (1 + g * g - 2 * g * m) ** 1.5 / FOUR_PI
+
         assert sphere_moment(f(MU_NODES)) == pytest.approx(sphere_quad(f), abs=1e-12)
         assert sphere_moment(f(MU_NODES), 1) == pytest.approx(g, abs=1e-12)
 
@@ -169,8 +171,10 @@ def test_normalized_and_mean_cosine(name: str, data: st.DataObject) -> None:
 )
 def test_normalized_by_adaptive_quad(name: str, params: dict) -> None:
     model = ANALYTIC_MODELS[name]
+
     def f(m):
         return model.phase(m, **params)
+
     assert sphere_quad(f) == pytest.approx(1.0, abs=1e-9)
     assert sphere_quad(f, 1) == pytest.approx(model.asymmetry(**params), abs=1e-9)
 
@@ -649,10 +653,17 @@ def test_mean_cosine_is_exact_for_linear_interpolation() -> None:
     """Against scipy quad of the piecewise-linear-in-theta function (independent)."""
     theta = np.array([0.0, 3.0, 10.0, 45.0, 90.0, 91.0, 150.0, 180.0])
     values = np.array([[9.0, 5.0, 2.0, 0.5, 0.1, 0.1, 0.05, 0.2]])
-    expected = 2 * math.pi * integrate.quad(
-        lambda t: np.interp(t, np.deg2rad(theta), values[0]) * math.sin(t) * math.cos(t),
-        0.0, math.pi, points=np.deg2rad(theta[1:-1]), epsabs=1e-14, epsrel=1e-13, limit=200,
-    )[0]
+    expected = (
+        2
+        * math.pi
+        * integrate.quad(
+            lambda t: np.interp(t, np.deg2rad(theta), values[0]) * math.sin(t) * math.cos(t),
+            0.0,
+            math.pi,
+            points=np.deg2rad(theta[1:-1]),
+            epsabs=1e-14,
+            epsrel=1e-13,
+            limit=200,
+        )[0]
+    )
     assert do_phase.mean_cosine(values, theta_deg=theta)[0] == pytest.approx(expected, rel=1e-11)
-
-

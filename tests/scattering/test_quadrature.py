@@ -28,7 +28,12 @@ def test_wright_omega_equals_scipy_to_the_bit():
     edges = np.array([-50.0, -2.0, 1.0])
     near = (edges[:, None] + np.linspace(-1e-9, 1e-9, 201)[None, :]).ravel()
     s = np.concatenate(
-        [rng.uniform(-60.0, 10.0, 200_000), rng.uniform(10.0, 2000.0, 100_000), near, [1e20, 2e20, 1e300]]
+        [
+            rng.uniform(-60.0, 10.0, 200_000),
+            rng.uniform(10.0, 2000.0, 100_000),
+            near,
+            [1e20, 2e20, 1e300],
+        ]
     )
     np.testing.assert_array_equal(_unstretch(s, 1.0), wrightomega(s))
     assert np.isnan(_wright_omega(np.nan))
