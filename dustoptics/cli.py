@@ -361,7 +361,10 @@ def _add_format_options(p: argparse.ArgumentParser, *, default: str | None) -> N
         help="wavelengths of the three channels [nm] (default 680,550,440)",
     )
     g.add_argument(
-        "--colour", choices=["cie1931"], help="CIE 1931 colour bands instead of three wavelengths"
+        "--colour",
+        choices=["cie1931-xyz", "linear-srgb-astmg173"],
+        help="colour channels instead of three wavelengths: CIE 1931 XYZ bands, or linear sRGB of the "
+        "table lit by the ASTM G173 sun (a renderer with a white sun reproduces the spectral colour)",
     )
     g.add_argument(
         "--resolution-deg",

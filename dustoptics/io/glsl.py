@@ -14,8 +14,9 @@ cross-sections, single-scattering albedo and volume coefficients.
 
 Channels
 --------
-Either three wavelengths (``channels_nm``, any order) or three colour bands
-(``colour="cie1931"``):
+Either three wavelengths (``channels_nm``, any order) or three colour channels
+(``colour="cie1931-xyz"`` or ``colour="linear-srgb-astmg173"``), all made by
+:func:`dustoptics.colour.channel_weights`:
 
 - A channel wavelength that is on the table's grid takes the table's row
   unchanged; one between two grid wavelengths takes the linear interpolation
@@ -23,11 +24,15 @@ Either three wavelengths (``channels_nm``, any order) or three colour bands
   nonnegative, normalized phase function, and cross-sections and g are
   interpolated the same way).  A wavelength outside the table's range is an
   error: nothing is extrapolated.
-- Colour bands average the table over wavelength with the CIE 1931 2-degree
-  colour-matching functions x̄, ȳ, z̄ as weights
-  (:func:`dustoptics.colour.band_weights`, which defines the quadrature), in
-  the channel order x, y, z (long, middle, short wavelengths: the roles of
-  R, G, B).
+- ``"cie1931-xyz"`` averages the table over wavelength with the CIE 1931
+  2-degree colour-matching functions x̄, ȳ, z̄ (the CIE's 1 nm table) as
+  weights, in the channel order x, y, z (long, middle, short wavelengths: the
+  roles of R, G, B); ``"linear-srgb-astmg173"`` gives linear sRGB channels of
+  the table lit by the ASTM G173 sun, white-balanced to the sun, so that a
+  renderer with a white sun reproduces the spectral single-scattering colour.
+- With cross-sections in the table, each channel's phase function is
+  weighted by the scattering cross-section
+  (:func:`dustoptics.colour.channel_phase`).
 
 Angles
 ------
@@ -53,8 +58,8 @@ from typing import Any
 
 import numpy as np
 
-from dustoptics._validation import as_float_array, check_choice, check_positive
-from dustoptics.colour import CMF_MODELS, band_weights
+from dustoptics._validation import check_choice, check_positive
+from dustoptics.colour import CHANNEL_MODES, DEFAULT_CHANNELS_NM, channel_phase, channel_weights
 from dustoptics.io import register_format
 from dustoptics.io._atomic import write_files
 from dustoptics.io.texture import _safe_stem
@@ -74,10 +79,12 @@ __all__ = [
 ]
 
 #: The seed shader's channels R, G, B. [nm]
-DEFAULT_CHANNELS_NM = (680.0, 550.0, 440.0)
 
 #: The seed shader's angular step (721 samples over 0..180 deg). [deg]
 DEFAULT_RESOLUTION_DEG = 0.25
+
+# Colour modes of ``colour=`` (the three-wavelength mode is ``channels_nm``).
+_COLOUR_MODES = tuple(m for m in CHANNEL_MODES if m != "wavelengths")
 
 #: How the snippet computes acos: its own polynomial (default) or GLSL's builtin.
 ACOS_METHODS = ("polynomial", "builtin")
@@ -240,15 +247,17 @@ class GLSLChannels:
     Attributes
     ----------
     mode : str
-        ``"wavelengths"`` or ``"cie1931"`` (colour bands).
+        One of :data:`dustoptics.colour.CHANNEL_MODES`.
     wavelength_nm : numpy.ndarray, shape (3,)
         The channel wavelengths, or each band's weighted mean wavelength. [nm]
     descriptions : tuple of str
         How each channel was made from the table (grid member, interpolated
         between two wavelengths with their weights, or band weighting).
     weights : numpy.ndarray, shape (3, n_wavelength)
-        Nonnegative weights over the table's wavelengths, rows summing to 1:
-        every channel quantity is ``weights @`` the table's rows. [-]
+        Weights over the table's wavelengths, rows summing to 1 (nonnegative
+        except for linear sRGB): every channel cross-section and g is
+        ``weights @`` the table's rows; the phase function is weighted by
+        scattering as well (:func:`dustoptics.colour.channel_phase`). [-]
     theta_deg : numpy.ndarray, shape (n_angles,)
         The uniform angle grid of the array, 0 to 180. [deg]
     phase : numpy.ndarray of float32, shape (n_angles, 3)
@@ -327,41 +336,6 @@ def _fmt_nm(x: float) -> str:
     return f"{x:g}"
 
 
-def _wavelength_weights(
-    wavelength_nm: np.ndarray, channels_nm: Any
-) -> tuple[np.ndarray, np.ndarray, tuple[str, ...]]:
-    """Linear-interpolation weights of three channel wavelengths over the grid."""
-    ch = as_float_array("channels_nm", channels_nm)
-    if ch.shape != (3,):
-        raise ValueError(
-            f"channels_nm must be three wavelengths (one per vec3 component) [nm]; got {ch.tolist()}"
-        )
-    low, high = float(wavelength_nm[0]), float(wavelength_nm[-1])
-    weights = np.zeros((3, wavelength_nm.size))
-    descriptions = []
-    for c, lam in enumerate(ch):
-        if not low <= lam <= high:
-            raise ValueError(
-                f"channels_nm[{c}] = {lam:g} nm is outside the table's wavelength range "
-                f"{_fmt_nm(low)}-{_fmt_nm(high)} nm; nothing is extrapolated (choose channels "
-                "within the range or compute the table at wider wavelengths)"
-            )
-        hit = np.flatnonzero(wavelength_nm == lam)
-        if hit.size:
-            weights[c, hit[0]] = 1.0
-            descriptions.append(f"{_fmt_nm(lam)} nm: the table's row at {_fmt_nm(lam)} nm")
-            continue
-        i = int(np.searchsorted(wavelength_nm, lam)) - 1
-        a, b = float(wavelength_nm[i]), float(wavelength_nm[i + 1])
-        t = (lam - a) / (b - a)
-        weights[c, i], weights[c, i + 1] = 1.0 - t, t
-        descriptions.append(
-            f"{_fmt_nm(lam)} nm: linear in wavelength between the table's rows at "
-            f"{_fmt_nm(a)} nm (weight {1.0 - t:.6g}) and {_fmt_nm(b)} nm (weight {t:.6g})"
-        )
-    return weights, ch, tuple(descriptions)
-
-
 def glsl_channels(
     table: Any,
     *,
@@ -380,9 +354,9 @@ def glsl_channels(
         Channel wavelengths in vec3 order, within the table's wavelength
         range; default (680, 550, 440) (the seed's R, G, B) unless ``colour``
         is given. [nm]
-    colour : {"cie1931"}, optional
-        Colour bands instead of wavelengths: averages weighted by the CIE 1931
-        2-degree x̄, ȳ, z̄ (see :func:`dustoptics.colour.band_weights`).
+    colour : {"cie1931-xyz", "linear-srgb-astmg173"}, optional
+        Colour channels instead of wavelengths (see
+        :func:`dustoptics.colour.channel_weights`).
         Not together with ``channels_nm``.
     resolution_deg : float
         Angular step of the array; must divide 180. Default 0.25. [deg]
@@ -402,27 +376,29 @@ def glsl_channels(
     n_angles = _grid_count(resolution_deg)
     wavelength = np.asarray(table.wavelength_nm, dtype=np.float64)
     if colour is not None:
-        check_choice("colour", colour, CMF_MODELS)
-        bands = band_weights(wavelength, model=colour, min_coverage=min_band_coverage)
-        weights = np.array(bands.weights)
-        centres = np.array(bands.centroid_nm)
-        descriptions = tuple(
-            f"band weighted by CIE 1931 2-deg {name} over {_fmt_nm(max(wavelength[0], 360.0))}-"
-            f"{_fmt_nm(min(wavelength[-1], 830.0))} nm (mean wavelength {centre:.2f} nm, "
-            f"{100.0 * cov:.3f} % of the function's 360-830 nm integral)"
-            for name, centre, cov in zip(bands.names, centres, bands.coverage)
-        )
-        mode = colour
+        check_choice("colour", colour, _COLOUR_MODES)
+        chosen = channel_weights(wavelength, mode=colour, min_coverage=min_band_coverage)
     else:
-        weights, centres, descriptions = _wavelength_weights(
-            wavelength, DEFAULT_CHANNELS_NM if channels_nm is None else channels_nm
+        chosen = channel_weights(
+            wavelength,
+            mode="wavelengths",
+            channels_nm=DEFAULT_CHANNELS_NM if channels_nm is None else channels_nm,
         )
-        mode = "wavelengths"
+    weights = np.array(chosen.weights)
+    centres = np.array(chosen.centroid_nm)
+    descriptions = chosen.descriptions
+    mode = chosen.mode
     theta = np.linspace(0.0, 180.0, n_angles)
-    phase64 = weights @ np.asarray(table.phase_at(theta), dtype=np.float64)  # (3, n_angles)
+    # Scattering-weighted channels when the table has cross-sections, so that
+    # csca_c * P_c is the channel of csca * P (see dustoptics.colour.channel_phase).
+    phase64 = channel_phase(
+        chosen, np.asarray(table.phase_at(theta), dtype=np.float64), csca_um2=table.csca_um2
+    )
     phase32 = np.ascontiguousarray(phase64.T.astype(np.float32))
     integral = np.asarray(sphere_integral(phase32.T.astype(np.float64), theta_deg=theta))
-    g = weights @ np.asarray(table.g, dtype=np.float64)
+    g = channel_phase(
+        chosen, np.asarray(table.g, dtype=np.float64)[:, None], csca_um2=table.csca_um2
+    )[:, 0]
     cext = csca = None
     if table.cext_um2 is not None:
         cext = weights @ np.asarray(table.cext_um2, dtype=np.float64) * _UM2_TO_M2
@@ -481,9 +457,9 @@ def glsl_snippet(
         grid (its row is used as it is) or between two grid wavelengths
         (linear interpolation in wavelength); default (680, 550, 440), the
         seed's R, G, B. [nm]
-    colour : {"cie1931"}, optional
+    colour : {"cie1931-xyz", "linear-srgb-astmg173"}, optional
         Colour bands instead: averages over wavelength weighted by the CIE
-        1931 2-degree x̄, ȳ, z̄ (:func:`dustoptics.colour.band_weights`).
+        1931 2-degree observer (:func:`dustoptics.colour.channel_weights`).
     resolution_deg : float
         Angular step of the array; must divide 180.  Default 0.25 (721
         samples, the seed's). [deg]
@@ -548,7 +524,7 @@ def glsl_snippet(
     Examples
     --------
     >>> src = glsl_snippet(table)                                        # doctest: +SKIP
-    >>> src_colour = glsl_snippet(table, colour="cie1931", prefix="DUST_RGB",
+    >>> src_colour = glsl_snippet(table, colour="cie1931-xyz", prefix="DUST_RGB",
     ...                           function_name="DustPhase")              # doctest: +SKIP
     """
     from dustoptics import __version__
@@ -602,12 +578,7 @@ def glsl_snippet(
             + " (wavelengths)"
         )
     else:
-        channel_line = (
-            "channels (.x, .y, .z): CIE 1931 2-degree colour bands xbar, ybar, zbar; each channel = "
-            "int P(lambda) w(lambda) dlambda / int w(lambda) dlambda, P linear in lambda between "
-            "table rows, w from Wyman, Sloan & Shirley, JCGT 2(2), 2013 (multi-lobe fit), "
-            "no illuminant"
-        )
+        channel_line = f"channels (.x, .y, .z): {ch.mode} (dustoptics.colour.channel_weights)"
     lines = [
         f"// dustoptics {__version__}: phase function of table {_text(table.name)} for GLSL.",
         f"// input_hash (SHA-256 of the table's inputs): {table.provenance.input_hash}",
@@ -640,7 +611,7 @@ def glsl_snippet(
             "vec3",
             names["WAVELENGTH_NM"],
             _vec3(ch.wavelength_nm),
-            "[nm]" if ch.mode == "wavelengths" else "band mean wavelengths [nm]",
+            "[nm]" if ch.mode == "wavelengths" else "weighted mean wavelengths [nm]",
         ),
         _const("vec3", names["G"], _vec3(ch.g), "asymmetry parameter [-]"),
     ]

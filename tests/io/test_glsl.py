@@ -185,8 +185,8 @@ def test_resampling_and_interpolated_channel() -> None:
 
 def test_deterministic_bytes(mie_table: Table) -> None:
     assert glsl_snippet(mie_table) == glsl_snippet(mie_table)
-    assert glsl_snippet(mie_table, colour="cie1931", min_band_coverage=0.0) == glsl_snippet(
-        mie_table, colour="cie1931", min_band_coverage=0.0
+    assert glsl_snippet(mie_table, colour="cie1931-xyz", min_band_coverage=0.0) == glsl_snippet(
+        mie_table, colour="cie1931-xyz", min_band_coverage=0.0
     )
 
 
@@ -211,9 +211,9 @@ def test_prefix_and_function_name_let_two_snippets_coexist() -> None:
         ),
         ({"channels_nm": (430.0, 550.0, 440.0)}, r"channels_nm\[0\] = 430 nm is outside"),
         ({"channels_nm": (680.0, 550.0)}, "channels_nm must be three wavelengths"),
-        ({"channels_nm": (680.0, 550.0, 440.0), "colour": "cie1931"}, "either channels_nm"),
-        ({"colour": "srgb"}, "colour must be one of 'cie1931'"),
-        ({"colour": "cie1931"}, r"holds only \(xbar 0\.93"),
+        ({"channels_nm": (680.0, 550.0, 440.0), "colour": "cie1931-xyz"}, "either channels_nm"),
+        ({"colour": "srgb"}, "colour must be one of 'cie1931-xyz'"),
+        ({"colour": "cie1931-xyz"}, r"holds only \(xbar 0\.93"),
         ({"resolution_deg": 0.7}, "resolution_deg must divide 180 deg"),
         ({"resolution_deg": 0.0}, "resolution_deg must be > 0"),
         ({"prefix": "2MIE"}, "prefix must be a valid GLSL identifier"),
@@ -232,19 +232,20 @@ def test_errors_name_parameter_value_and_allowed(kwargs: dict, message: str) -> 
         glsl_snippet(hg_table(), **kwargs)
 
 
-def test_colour_channels_of_grey_table_equal_the_table() -> None:
-    # Identity: the same phase function at every wavelength gives it back in each band.
+@pytest.mark.parametrize("colour", ["cie1931-xyz", "linear-srgb-astmg173"])
+def test_colour_channels_of_grey_table_equal_the_table(colour: str) -> None:
+    # Identity: the same phase function at every wavelength gives it back in each channel.
     wl = tuple(np.arange(360.0, 831.0, 10.0))
     table = hg_table(g=(0.7,) * len(wl), wavelength_nm=wl)
-    ch = glsl_channels(table, colour="cie1931")
+    ch = glsl_channels(table, colour=colour)
     single = table.phase_at(np.linspace(0.0, 180.0, 721))[0].astype(np.float32)
     for c in range(3):
-        # Weights sum to 1 to rounding: 4 float32 ulps covers the float64 sum's error.
-        np.testing.assert_allclose(ch.phase[:, c], single, rtol=4 * EPS32, atol=0)
-    np.testing.assert_allclose(ch.g, 0.7, rtol=1e-14)
-    src = glsl_snippet(table, colour="cie1931")
-    assert "CIE 1931 2-degree colour bands xbar, ybar, zbar" in src
-    assert "Wyman, Sloan & Shirley, JCGT 2(2), 2013" in src
+        # Weights sum to 1 to rounding (sRGB weights have negative lobes, whose
+        # sum of magnitudes is below 3): 8 float32 ulps covers the float64 sum's error.
+        np.testing.assert_allclose(ch.phase[:, c], single, rtol=8 * EPS32, atol=0)
+    np.testing.assert_allclose(ch.g, 0.7, rtol=1e-13)
+    src = glsl_snippet(table, colour=colour)
+    assert f"channels (.x, .y, .z): {colour}" in src
 
 
 def test_write_glsl_atomic_and_no_overwrite(tmp_path, mie_table: Table) -> None:
@@ -257,7 +258,7 @@ def test_write_glsl_atomic_and_no_overwrite(tmp_path, mie_table: Table) -> None:
     write_glsl(mie_table, tmp_path / "out", resolution_deg=1.0, overwrite=True)
     assert "const int MIE_PHASE_N = 181;" in path.read_text(encoding="ascii")
     (explicit,) = write_glsl(
-        mie_table, tmp_path / "dust.glsl", colour="cie1931", min_band_coverage=0.0
+        mie_table, tmp_path / "dust.glsl", colour="cie1931-xyz", min_band_coverage=0.0
     )
     assert explicit == tmp_path / "dust.glsl"
     assert [p.name for p in tmp_path.iterdir() if p.name.endswith(".tmp")] == []
@@ -299,7 +300,7 @@ void main() {
 
 
 @pytest.mark.parametrize("acos", ["polynomial", "builtin"])
-@pytest.mark.parametrize("colour", [None, "cie1931"])
+@pytest.mark.parametrize("colour", [None, "cie1931-xyz", "linear-srgb-astmg173"])
 def test_glslang_compiles_fragment_and_compute(
     mie_table: Table, acos: str, colour: str | None
 ) -> None:
@@ -414,7 +415,7 @@ void main() {
     assert got[722, 3] == np.float32(1e6)
 
 
-@pytest.mark.parametrize("colour", [None, "cie1931"])
+@pytest.mark.parametrize("colour", [None, "cie1931-xyz", "linear-srgb-astmg173"])
 def test_shader_matches_numpy_float32_interpolation(
     gl, mie_table: Table, colour: str | None
 ) -> None:
