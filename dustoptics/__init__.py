@@ -49,7 +49,7 @@ from dustoptics.particles.sizedist import (
     SizeDistribution,
 )
 from dustoptics.scattering import mie, optics, phase, quadrature
-from dustoptics.scattering.optics import ConvergenceWarning, OpticsTable, compute_optics
+from dustoptics.scattering.optics import ConvergenceWarning, compute_optics
 from dustoptics.scattering.phase import (
     cornette_shanks1992,
     costa2021_mars_dhg,
@@ -78,7 +78,6 @@ __all__ = [
     "ModifiedLogNormal",
     "Monodisperse",
     "MultiModal",
-    "OpticsTable",
     "OrientationAverage",
     "Provenance",
     "QuadratureSettings",

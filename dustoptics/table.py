@@ -14,7 +14,10 @@ Stored quantities (and their units)
 ``cext_um2`` and ``csca_um2`` [um^2] (mean cross-sections per particle),
 ``g`` [-] (asymmetry parameter of ``phase``), the quadrature's error
 estimates [-], ``mean_geometric_cross_section_um2`` [um^2] (pi <r^2>) and
-``number_density_per_m3`` [m^-3].
+``number_density_per_m3`` [m^-3]; for tables computed by
+:func:`~dustoptics.scattering.optics.compute_optics` also the refractive index
+m = n + i k used at each wavelength [-] and the radius-node counts of its
+quadrature [-].
 
 Everything else is derived, never stored twice: ``cabs_um2 = cext - csca``,
 ``ssa = csca / cext``, ``qext = cext / (pi <r^2>)``, and
@@ -23,9 +26,13 @@ file can never hold an albedo that disagrees with its cross-sections.
 
 Provenance
 ----------
-:class:`Provenance` records every input parameter (``inputs``, a JSON-ready
-mapping), the sources with their citations, the software versions, the
-quadrature settings and the achieved error.  :attr:`Provenance.input_hash` is
+:class:`Provenance` records every input parameter in ``inputs``, a
+JSON-ready mapping (for a table from
+:func:`~dustoptics.scattering.optics.compute_optics`: the refractive index with
+its description and values, the size distribution and its parameters, the
+grids, the weighting and the quadrature settings), the sources with their
+citations, the software versions, the quadrature's achieved error and node
+counts, and notes.  :attr:`Provenance.input_hash` is
 the SHA-256 of the canonical JSON of ``inputs`` (sorted keys, shortest
 round-trip floats): two tables built from the same inputs carry the same hash,
 whatever the software version or the machine.
@@ -39,13 +46,17 @@ from collections.abc import Mapping
 from dataclasses import asdict, dataclass, field, is_dataclass, replace
 from importlib.metadata import PackageNotFoundError
 from importlib.metadata import version as _dist_version
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from dustoptics._validation import as_float_array, check_positive
 
+if TYPE_CHECKING:  # the computation imports this module, not the other way round
+    from dustoptics.scattering.optics import QuadratureDiagnostics
+
 __all__ = [
+    "DEFAULT_NAME",
     "PHASE_NORMALIZATION",
     "SOFTWARE",
     "UNITS",
@@ -81,6 +92,10 @@ UNITS: Mapping[str, tuple[str, str]] = {
         "1",
         "estimated error of cext, csca (relative) and g (absolute)",
     ),
+    "n_nodes": ("1", "radius nodes of the quadrature of the phase function"),
+    "cross_section_n_nodes": ("1", "radius nodes of the quadrature of the cross-sections and g"),
+    "refractive_index_real": ("1", "real part n of the refractive index m = n + i k"),
+    "refractive_index_imag": ("1", "imaginary part k >= 0 of the refractive index m = n + i k"),
     "mean_geometric_cross_section_um2": ("um^2", "pi <r^2> of the size distribution"),
     "number_density_per_m3": ("m^-3", "number density at which beta is given"),
     "beta_ext_per_m": ("m^-1", "extinction coefficient N cext"),
@@ -245,25 +260,68 @@ def _per_wavelength(name: str, value: Any, n: int) -> np.ndarray | None:
     return arr
 
 
-@dataclass(frozen=True, eq=False)
+def _node_counts(name: str, value: Any, n: int) -> np.ndarray | None:
+    if value is None:
+        return None
+    arr = np.asarray(value)
+    if arr.shape != (n,) or arr.dtype.kind not in "iu" or np.any(arr < 1):
+        raise ValueError(
+            f"{name} must be {n} positive integers, one per wavelength; got {arr.dtype} of shape {arr.shape}"
+        )
+    return arr.astype(np.int64)
+
+
+def _refractive_index(value: Any, n: int) -> np.ndarray | None:
+    if value is None:
+        return None
+    try:
+        arr = np.array(value, dtype=np.complex128)
+    except (TypeError, ValueError):
+        raise ValueError(
+            f"refractive_index must be complex numbers m = n + i k; got {value!r}"
+        ) from None
+    if arr.shape != (n,):
+        raise ValueError(
+            f"refractive_index must have shape ({n},), one value per wavelength; got {arr.shape}"
+        )
+    if not (np.all(np.isfinite(arr.real)) and np.all(np.isfinite(arr.imag))):
+        raise ValueError("refractive_index must be finite")
+    if np.any(arr.real <= 0) or np.any(arr.imag < 0):
+        raise ValueError("refractive_index must have n > 0 and k >= 0 (m = n + i k)")
+    return arr
+
+
+#: Default :attr:`Table.name` when none is given.
+DEFAULT_NAME = "table"
+
+#: Stored per-wavelength float fields of a :class:`Table` (None when absent).
+_FLOAT_FIELDS = ("g", "cext_um2", "csca_um2", "error_estimate", "cross_section_error_estimate")
+_COUNT_FIELDS = ("n_nodes", "cross_section_n_nodes")
+
+
+@dataclass(frozen=True, eq=False, kw_only=True)
 class Table:
     """One constituent's optical table over wavelength and scattering angle.
 
-    Construct it from computed results (:meth:`from_optics`) or read it from a
-    file; every array is validated and stored read-only.
+    :func:`dustoptics.compute_optics` returns one, readers return one
+    (:func:`dustoptics.open_table`), and every exporter, :mod:`dustoptics.compare`
+    and :mod:`dustoptics.plot` take one.  Every array is validated and stored
+    read-only.  All arguments are keyword-only.
 
     Attributes
     ----------
-    name : str
-        Name of the table (a preset name, or what the user chose).
     wavelength_nm : numpy.ndarray, shape (n_wavelength,)
         Strictly increasing vacuum wavelengths. [nm]
     theta_deg : numpy.ndarray, shape (n_theta,)
-        Strictly increasing scattering angles from 0 to 180. [deg]
+        Strictly increasing scattering angles within [0, 180], 0 = forward;
+        tables for renderers span 0 to 180 (:attr:`spans_sphere`). [degree]
     phase : numpy.ndarray, shape (n_wavelength, n_theta)
         Phase function, 2 pi int P dmu = 1. [sr^-1]
     g : numpy.ndarray, shape (n_wavelength,)
         Asymmetry parameter of ``phase``. [-]
+    name : str
+        Name of the table (a preset name, or what the user chose); default
+        ``"table"``.
     cext_um2, csca_um2 : numpy.ndarray or None
         Mean extinction and scattering cross-sections per particle, or None
         for a phase-function-only table (e.g. an analytic model). [um^2]
@@ -271,26 +329,39 @@ class Table:
         Estimated largest relative error of ``phase`` per wavelength. [-]
     cross_section_error_estimate : numpy.ndarray or None
         Estimated error of the cross-sections (relative) and g (absolute). [-]
+    n_nodes, cross_section_n_nodes : numpy.ndarray of int or None
+        Radius nodes of the quadrature that gave the phase function, and of
+        the (finer) one that gave the cross-sections and g, per wavelength. [-]
+    refractive_index : numpy.ndarray of complex or None
+        m = n + i k (k >= 0) used at each wavelength. [-]
     mean_geometric_cross_section_um2 : float or None
         pi <r^2> of the size distribution (None for molecules). [um^2]
     number_density_per_m3 : float or None
         Number density at which the ``beta_*`` coefficients are given. [m^-3]
     provenance : Provenance
         Inputs, sources, versions, quadrature and notes.
+    diagnostics : QuadratureDiagnostics or None
+        The radius panels, quadrature settings and size distribution of the
+        computation that made the table (in memory only: files do not store
+        them, :meth:`equals` ignores them; they follow from the provenance).
     """
 
-    name: str
     wavelength_nm: np.ndarray
     theta_deg: np.ndarray
     phase: np.ndarray
     g: np.ndarray
+    name: str = DEFAULT_NAME
     cext_um2: np.ndarray | None = None
     csca_um2: np.ndarray | None = None
     error_estimate: np.ndarray | None = None
     cross_section_error_estimate: np.ndarray | None = None
+    n_nodes: np.ndarray | None = None
+    cross_section_n_nodes: np.ndarray | None = None
+    refractive_index: np.ndarray | None = None
     mean_geometric_cross_section_um2: float | None = None
     number_density_per_m3: float | None = None
     provenance: Provenance = field(default_factory=Provenance)
+    diagnostics: QuadratureDiagnostics | None = field(default=None, repr=False)
 
     def __post_init__(self) -> None:
         if not isinstance(self.name, str) or not self.name:
@@ -303,13 +374,13 @@ class Table:
         if np.any(np.diff(wl) <= 0):
             raise ValueError("wavelength_nm must be strictly increasing")
         theta = as_float_array("theta_deg", self.theta_deg)
-        if theta.ndim != 1 or theta.size < 2:
+        if theta.ndim != 1 or theta.size < 1:
             raise ValueError(
-                f"theta_deg must be a 1-D array of at least 2 angles; got shape {theta.shape}"
+                f"theta_deg must be a non-empty 1-D array of angles; got shape {theta.shape}"
             )
-        if theta[0] != 0.0 or theta[-1] != 180.0 or np.any(np.diff(theta) <= 0):
+        if theta[0] < 0.0 or theta[-1] > 180.0 or np.any(np.diff(theta) <= 0):
             raise ValueError(
-                "theta_deg must increase strictly from exactly 0 to exactly 180 deg; "
+                "theta_deg must increase strictly within [0, 180] degree; "
                 f"got {theta[0]!r} .. {theta[-1]!r}"
             )
         phase = as_float_array("phase", self.phase)
@@ -321,18 +392,14 @@ class Table:
         if not np.all(np.isfinite(phase)) or np.any(phase < 0):
             raise ValueError("phase must be finite and nonnegative [sr^-1]")
         n = wl.size
-        arrays: dict[str, Any] = {
-            "wavelength_nm": wl,
-            "theta_deg": theta,
-            "phase": phase,
-            "g": _per_wavelength("g", self.g, n),
-            "cext_um2": _per_wavelength("cext_um2", self.cext_um2, n),
-            "csca_um2": _per_wavelength("csca_um2", self.csca_um2, n),
-            "error_estimate": _per_wavelength("error_estimate", self.error_estimate, n),
-            "cross_section_error_estimate": _per_wavelength(
-                "cross_section_error_estimate", self.cross_section_error_estimate, n
-            ),
-        }
+        arrays: dict[str, Any] = {"wavelength_nm": wl, "theta_deg": theta, "phase": phase}
+        for key in _FLOAT_FIELDS:
+            arrays[key] = _per_wavelength(key, getattr(self, key), n)
+        for key in _COUNT_FIELDS:
+            arrays[key] = _node_counts(key, getattr(self, key), n)
+        arrays["refractive_index"] = _refractive_index(self.refractive_index, n)
+        if arrays["g"] is None:
+            raise ValueError("g must be given, one asymmetry parameter per wavelength")
         if (arrays["cext_um2"] is None) != (arrays["csca_um2"] is None):
             raise ValueError("cext_um2 and csca_um2 must both be given or both be None")
         if arrays["cext_um2"] is not None:
@@ -356,67 +423,24 @@ class Table:
             )
         for key, arr in arrays.items():
             if arr is not None:
-                arr = np.array(arr, dtype=np.float64, copy=True)
+                arr = np.array(arr, copy=True)
                 arr.setflags(write=False)
             object.__setattr__(self, key, arr)
 
-    # ------------------------------------------------------------ construction
-
-    @classmethod
-    def from_optics(
-        cls,
-        optics: Any,
-        *,
-        name: str,
-        inputs: Mapping[str, Any],
-        sources: tuple[Source, ...] = (),
-        notes: tuple[str, ...] = (),
-        number_density_per_m3: float | None = None,
-    ) -> Table:
-        """A table from :func:`dustoptics.scattering.optics.compute_optics` results.
-
-        Parameters
-        ----------
-        optics : dustoptics.scattering.optics.OpticsTable
-            Computed optics.
-        name : str
-            Table name.
-        inputs : Mapping
-            Every input parameter, JSON-ready (hashed into the provenance).
-        sources : tuple of Source
-            Materials and models with citations.
-        notes : tuple of str
-            Remarks recorded in the provenance.
-        number_density_per_m3 : float, optional
-            Number density for the ``beta_*`` coefficients. [m^-3]
-        """
-        quadrature = {
-            "weighting": optics.weighting,
-            "rtol": float(optics.rtol),
-            "cross_section_rtol": float(optics.cross_section_rtol),
-            "settings": plain(optics.settings),
-            "n_nodes": np.asarray(optics.n_nodes, dtype=np.int64).tolist(),
-            "converged": bool(np.all(optics.converged)),
-        }
-        return cls(
-            name=name,
-            wavelength_nm=optics.wavelength_nm,
-            theta_deg=optics.theta_deg,
-            phase=optics.phase,
-            g=optics.g,
-            cext_um2=optics.cext_um2,
-            csca_um2=optics.csca_um2,
-            error_estimate=optics.error_estimate,
-            cross_section_error_estimate=optics.cross_section_error_estimate,
-            mean_geometric_cross_section_um2=float(optics.mean_geometric_cross_section_um2),
-            number_density_per_m3=number_density_per_m3,
-            provenance=Provenance(
-                inputs=inputs, sources=sources, quadrature=quadrature, notes=notes
-            ),
-        )
-
     def replace(self, **changes: Any) -> Table:
-        """A copy with some fields changed (validated again)."""
+        """A copy with some fields changed (validated again).
+
+        The in-memory :attr:`diagnostics` describe the computation that made
+        the numbers, so they are dropped when the phase function or the
+        cross-sections change, unless ``changes`` gives them.
+        """
+        if "diagnostics" not in changes and changes.keys() & {
+            "phase",
+            "wavelength_nm",
+            "cext_um2",
+            "csca_um2",
+        }:
+            changes["diagnostics"] = None
         return replace(self, **changes)
 
     # ------------------------------------------------------------ derived
@@ -425,6 +449,11 @@ class Table:
     def mu(self) -> np.ndarray:
         """cos(theta). [-]"""
         return np.cos(np.deg2rad(self.theta_deg))
+
+    @property
+    def spans_sphere(self) -> bool:
+        """Whether the angles run from exactly 0 to exactly 180 degree (all directions)."""
+        return bool(self.theta_deg[0] == 0.0 and self.theta_deg[-1] == 180.0)
 
     @property
     def has_cross_sections(self) -> bool:
@@ -503,24 +532,48 @@ class Table:
             return None
         return float(np.max(self.error_estimate))
 
+    @property
+    def converged(self) -> np.ndarray:
+        """Whether each wavelength reached the quadrature's tolerances.
+
+        Raises
+        ------
+        ValueError
+            The table records no error estimates or no tolerances (it was not
+            computed by quadrature).
+        """
+        q = self.provenance.quadrature
+        if (
+            self.error_estimate is None
+            or self.cross_section_error_estimate is None
+            or "rtol" not in q
+        ):
+            raise ValueError(
+                f"table {self.name!r} was not computed by quadrature; it has no convergence record"
+            )
+        return (self.error_estimate <= q["rtol"]) & (
+            self.cross_section_error_estimate <= q["cross_section_rtol"]
+        )
+
     def equals(self, other: Table) -> bool:
-        """Whether two tables hold bit-identical data and equal provenance."""
+        """Whether two tables hold bit-identical data and equal provenance.
+
+        :attr:`diagnostics` (in memory only) are not compared.
+        """
         if not isinstance(other, Table):
             return False
         for key in (
             "wavelength_nm",
             "theta_deg",
             "phase",
-            "g",
-            "cext_um2",
-            "csca_um2",
-            "error_estimate",
-            "cross_section_error_estimate",
+            *_FLOAT_FIELDS,
+            *_COUNT_FIELDS,
+            "refractive_index",
         ):
             a, b = getattr(self, key), getattr(other, key)
             if (a is None) != (b is None):
                 return False
-            if a is not None and not np.array_equal(a, b):
+            if a is not None and (a.dtype != b.dtype or not np.array_equal(a, b)):
                 return False
         return (
             self.name == other.name
@@ -538,26 +591,75 @@ class Table:
 
         Parameters
         ----------
-        theta_deg : array_like
-            Angles within [0, 180]. [deg]
+        theta_deg : float or array_like
+            Angles within the table's range (0 to 180 for a table that
+            :attr:`spans_sphere`). [degree]
 
         Returns
         -------
-        numpy.ndarray, shape (n_wavelength, n_angles)
-            Interpolated phase function. [sr^-1]
+        numpy.ndarray, shape (n_wavelength,) + numpy.shape(theta_deg)
+            Interpolated phase function: one value per wavelength for a scalar
+            angle, a row per wavelength for a 1-D array of angles. [sr^-1]
+
+        Examples
+        --------
+        >>> import dustoptics as do
+        >>> t = do.Table(wavelength_nm=[550.0], theta_deg=[0.0, 90.0, 180.0],
+        ...              phase=[[0.2, 0.05, 0.1]], g=[0.5])
+        >>> t.phase_at(45.0)
+        array([0.125])
+        >>> t.phase_at([45.0, 135.0]).shape
+        (1, 2)
         """
         t = as_float_array("theta_deg", theta_deg)
-        if t.ndim != 1 or not np.all(np.isfinite(t)) or np.any((t < 0) | (t > 180)):
-            raise ValueError("theta_deg must be a 1-D array of angles within [0, 180] deg")
         grid = self.theta_deg
+        if t.ndim > 1 or np.any((t < grid[0]) | (t > grid[-1])):
+            raise ValueError(
+                "theta_deg must be an angle or a 1-D array of angles within "
+                f"[{grid[0]:g}, {grid[-1]:g}] degree, the table's range (no extrapolation); "
+                f"got {theta_deg!r}"
+            )
+        if grid.size == 1:
+            return self.phase[:, np.zeros(t.shape, dtype=np.intp)]
         i = np.clip(np.searchsorted(grid, t, side="right") - 1, 0, grid.size - 2)
         frac = (t - grid[i]) / (grid[i + 1] - grid[i])
         return self.phase[:, i] * (1.0 - frac) + self.phase[:, i + 1] * frac
 
     def __repr__(self) -> str:
-        kind = "phase + cross-sections" if self.has_cross_sections else "phase only"
-        return (
-            f"Table(name={self.name!r}, {self.wavelength_nm.size} wavelengths "
-            f"{self.wavelength_nm[0]:g}-{self.wavelength_nm[-1]:g} nm, "
-            f"{self.theta_deg.size} angles, {kind}, input_hash={self.provenance.input_hash[:12]})"
-        )
+        wl, theta = self.wavelength_nm, self.theta_deg
+        lines = [
+            f"<dustoptics.Table {self.name!r}: {wl.size} wavelengths {wl[0]:g}-{wl[-1]:g} nm "
+            f"x {theta.size} angles {theta[0]:g}-{theta[-1]:g} degree>"
+        ]
+        if self.has_cross_sections:
+            assert self.cext_um2 is not None
+            ssa = self.ssa
+            lines.append(
+                f"  cext {self.cext_um2.min():.4g}-{self.cext_um2.max():.4g} um2, "
+                f"ssa {ssa.min():.4g}-{ssa.max():.4g}, g {self.g.min():.4g}-{self.g.max():.4g}"
+            )
+        else:
+            lines.append(f"  phase function only, g {self.g.min():.4g}-{self.g.max():.4g}")
+        inputs = self.provenance.inputs
+        described = []
+        if isinstance(inputs.get("refractive_index"), Mapping):
+            described.append(f"m: {inputs['refractive_index'].get('description', '?')}")
+        if isinstance(inputs.get("size_distribution"), Mapping):
+            dist = inputs["size_distribution"]
+            params = ", ".join(
+                f"{k}={v:g}" if isinstance(v, float) else f"{k}={v}"
+                for k, v in dist.get("parameters", {}).items()
+            )
+            described.append(f"{dist.get('model', '?')}({params})")
+        if described:
+            lines.append("  " + "; ".join(described))
+        if self.error_estimate is not None:
+            q = self.provenance.quadrature
+            rtol = f" (rtol {q['rtol']:g})" if "rtol" in q else ""
+            nodes = ""
+            if self.n_nodes is not None:
+                nodes = f", {int(self.n_nodes.min())}-{int(self.n_nodes.max())} radius nodes"
+            weighting = f"{q['weighting']}-weighted, " if "weighting" in q else ""
+            lines.append(f"  {weighting}phase error <= {self.achieved_error:.2g}{rtol}{nodes}")
+        lines.append(f"  input_hash {self.provenance.input_hash[:12]}")
+        return "\n".join(lines)

@@ -31,7 +31,7 @@ What is measured, and how
    very nodes and weights of dustoptics' returned quadratures: the
    C_sca-weighted phase function at the 1,801 angles on the phase-function
    nodes, <C_ext>, <C_sca> and g on the cross-section nodes.  The nodes are
-   rebuilt from the table's ``quadrature_panels`` and ``cross_section_panels``
+   rebuilt from the panels in the table's ``diagnostics``
    with ``panel_nodes``.  A gets the final nodes for free (dustoptics also
    evaluates what it needs to find them).
    Timed on 3 wavelengths spread over the range (1 with ``--quick``) and
@@ -358,8 +358,8 @@ def converged_nodes(table, i: int) -> tuple[object, object]:
     """The radius nodes dustoptics used at wavelength index i: (phase nodes, cross-section nodes).
 
     Each final panel's halves carry the Gauss-Legendre rule, so
-    ``panel_nodes`` on the halves of ``quadrature_panels`` (phase function)
-    and of ``cross_section_panels`` (cross-sections and g) rebuilds them.
+    ``panel_nodes`` on the halves of ``diagnostics.panels`` (phase function)
+    and of ``diagnostics.cross_section_panels`` (cross-sections and g) rebuilds them.
     """
     wl = float(table.wavelength_nm[i])
 
@@ -367,15 +367,15 @@ def converged_nodes(table, i: int) -> tuple[object, object]:
         lower, upper = panels[:, 0], panels[:, 1]
         mid = 0.5 * (lower + upper)
         nodes, _ = quadrature.panel_nodes(
-            table.distribution,
+            table.diagnostics.distribution,
             wavelength_nm=wl,
             lower_s=np.concatenate([lower, mid]),
             upper_s=np.concatenate([mid, upper]),
-            settings=table.settings,
+            settings=table.diagnostics.settings,
         )
         return nodes
 
-    return rebuild(table.quadrature_panels[i]), rebuild(table.cross_section_panels[i])
+    return rebuild(table.diagnostics.panels[i]), rebuild(table.diagnostics.cross_section_panels[i])
 
 
 def baseline_a(

@@ -416,7 +416,7 @@ def mars_atmosphere(
     ----------
     dust_table : Table
         Dust optics with cross-sections (e.g. from
-        :func:`dustoptics.scattering.optics.compute_optics` via ``Table.from_optics``);
+        :func:`dustoptics.scattering.optics.compute_optics`);
         its wavelengths are the atmosphere's.
     optical_depth : float, default 0.5
         Vertical dust optical depth at ``reference_wavelength_nm`` (clear

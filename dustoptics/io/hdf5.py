@@ -88,6 +88,7 @@ DERIVED: dict[str, str] = {
 
 _PER_WAVELENGTH = ("g", "cext_um2", "csca_um2", "error_estimate", "cross_section_error_estimate")
 _SCALARS = ("mean_geometric_cross_section_um2", "number_density_per_m3")
+_COUNTS = ("n_nodes", "cross_section_n_nodes")
 _DIMS = ("wavelength_nm", "theta_deg")
 _FILE_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]*")
 #: Largest number of float64 values per chunk of ``phase`` (1 MiB).
@@ -161,10 +162,21 @@ def _writer(table: Table) -> Callable[[Path], None]:
             phase.dims[0].attach_scale(scales["wavelength_nm"])
             phase.dims[1].attach_scale(scales["theta_deg"])
             per_wavelength = {key: getattr(table, key) for key in _PER_WAVELENGTH}
+            if table.refractive_index is not None:
+                per_wavelength["refractive_index_real"] = table.refractive_index.real
+                per_wavelength["refractive_index_imag"] = table.refractive_index.imag
             per_wavelength.update(_derived_values(table))
             for key, values in per_wavelength.items():
                 if values is not None:
                     dataset(key, values).dims[0].attach_scale(scales["wavelength_nm"])
+            for key in _COUNTS:
+                values = getattr(table, key)
+                if values is not None:
+                    ds = f.create_dataset(
+                        key, data=np.asarray(values, dtype="<i8"), track_times=False
+                    )
+                    _attrs(ds, key)
+                    ds.dims[0].attach_scale(scales["wavelength_nm"])
             for key in _SCALARS:
                 value = getattr(table, key)
                 if value is not None:
@@ -203,8 +215,7 @@ def write_hdf5(table: Table, path: str | os.PathLike[str], *, overwrite: bool = 
     >>> import dustoptics as do
     >>> from dustoptics.table import Table
     >>> from dustoptics.io.hdf5 import write_hdf5, read_hdf5
-    >>> o = do.compute_optics(1.5 + 0.01j, do.Monodisperse(radius_um=0.5), [550.0], [0.0, 180.0])
-    >>> t = Table.from_optics(o, name="demo", inputs={"m": [1.5, 0.01], "radius_um": 0.5})
+    >>> t = do.compute_optics(1.5 + 0.01j, do.Monodisperse(radius_um=0.5), [550.0], [0.0, 180.0], name="demo")
     >>> read_hdf5(write_hdf5(t, "demo.h5")).equals(t)      # doctest: +SKIP
     True
     """
@@ -262,7 +273,7 @@ def _read_attr(path: Path, f: Any, key: str) -> str:
 
 
 def _read_array(
-    path: Path, f: Any, key: str, shape: tuple[int, ...] | None, *, required: bool
+    path: Path, f: Any, key: str, shape: tuple[int, ...] | None, *, required: bool, kind: str = "f"
 ) -> Any:
     h5py = _h5py()
     if key not in f:
@@ -272,8 +283,9 @@ def _read_array(
     obj = f[key]
     if not isinstance(obj, h5py.Dataset):
         raise FormatError(f"{path}: {key!r} is not a dataset")
-    if obj.dtype.kind != "f":
-        raise FormatError(f"{path}: variable {key!r} must hold floats; got dtype {obj.dtype}")
+    if obj.dtype.kind != kind:
+        wanted = "floats" if kind == "f" else "integers"
+        raise FormatError(f"{path}: variable {key!r} must hold {wanted}; got dtype {obj.dtype}")
     if shape is not None and obj.shape != shape:
         raise FormatError(f"{path}: variable {key!r} has shape {obj.shape}; expected {shape}")
     try:
@@ -282,7 +294,7 @@ def _read_array(
         raise FormatError(
             f"{path}: variable {key!r} cannot be read (damaged or truncated?): {exc}"
         ) from None
-    return np.asarray(data, dtype=np.float64)
+    return np.asarray(data, dtype=np.float64 if kind == "f" else np.int64)
 
 
 def _check_derived(path: Path, f: Any, table: Table) -> None:
@@ -365,6 +377,15 @@ def read_hdf5(path: str | os.PathLike[str]) -> Table:
             }
             for key in _PER_WAVELENGTH[1:]:
                 fields[key] = _read_array(path, f, key, n_wl, required=False)
+            for key in _COUNTS:
+                fields[key] = _read_array(path, f, key, n_wl, required=False, kind="i")
+            n = _read_array(path, f, "refractive_index_real", n_wl, required=False)
+            k = _read_array(path, f, "refractive_index_imag", n_wl, required=False)
+            if (n is None) != (k is None):
+                raise FormatError(
+                    f"{path}: refractive_index_real and _imag must both be present or neither"
+                )
+            fields["refractive_index"] = None if n is None or k is None else n + 1j * k
             for key in _SCALARS:
                 value = _read_array(path, f, key, (), required=False)
                 fields[key] = None if value is None else float(value)

@@ -196,6 +196,16 @@ def _summary_bytes(table: Table, hashes: dict[str, str]) -> bytes:
         "wavelength_nm": table.wavelength_nm.tolist(),
         "error_estimate": _optional_list(table.error_estimate),
         "cross_section_error_estimate": _optional_list(table.cross_section_error_estimate),
+        "n_nodes": None if table.n_nodes is None else table.n_nodes.tolist(),
+        "cross_section_n_nodes": None
+        if table.cross_section_n_nodes is None
+        else table.cross_section_n_nodes.tolist(),
+        "refractive_index_real": None
+        if table.refractive_index is None
+        else table.refractive_index.real.tolist(),
+        "refractive_index_imag": None
+        if table.refractive_index is None
+        else table.refractive_index.imag.tolist(),
     }
     if not table.has_cross_sections:
         per_wavelength["g"] = table.g.tolist()
@@ -278,8 +288,7 @@ def write_seed_csv(
     >>> import dustoptics as do
     >>> from dustoptics.table import Table
     >>> from dustoptics.io.seed_csv import write_seed_csv
-    >>> o = do.compute_optics(1.5 + 0.01j, do.Monodisperse(radius_um=0.5), [550.0], [0.0, 180.0])
-    >>> t = Table.from_optics(o, name="demo", inputs={"m": [1.5, 0.01], "radius_um": 0.5})
+    >>> t = do.compute_optics(1.5 + 0.01j, do.Monodisperse(radius_um=0.5), [550.0], [0.0, 180.0], name="demo")
     >>> [p.name for p in write_seed_csv(t, "out")]        # doctest: +SKIP
     ['MiePhaseFunctionSpectrum.csv', 'MieExtinctionSpectrum.csv', 'table_summary.json']
     """
@@ -527,6 +536,20 @@ def read_seed_csv(directory: str | os.PathLike[str], *, verify: bool = True) -> 
         value = per_wavelength.get(key)
         return None if value is None else np.array(value, dtype=np.float64)
 
+    def counts(key: str) -> np.ndarray | None:
+        value = per_wavelength.get(key)
+        if value is not None and not all(type(v) is int for v in value):
+            raise FormatError(f"{summary_path}: per_wavelength.{key} must be a list of integers")
+        return None if value is None else np.array(value, dtype=np.int64)
+
+    def refractive_index() -> np.ndarray | None:
+        n, k = array("refractive_index_real"), array("refractive_index_imag")
+        if (n is None) != (k is None):
+            raise FormatError(
+                f"{summary_path}: refractive_index_real and _imag must both be given or neither"
+            )
+        return None if n is None or k is None else n + 1j * k
+
     listed = _guard(summary_path, lambda: array("wavelength_nm"))
     if listed is None or not np.array_equal(listed, phase.wavelength_nm):
         raise FormatError(
@@ -560,6 +583,9 @@ def read_seed_csv(directory: str | os.PathLike[str], *, verify: bool = True) -> 
             phase=phase.phase,
             error_estimate=array("error_estimate"),
             cross_section_error_estimate=array("cross_section_error_estimate"),
+            n_nodes=counts("n_nodes"),
+            cross_section_n_nodes=counts("cross_section_n_nodes"),
+            refractive_index=refractive_index(),
             mean_geometric_cross_section_um2=summary["mean_geometric_cross_section_um2"],
             number_density_per_m3=summary["number_density_per_m3"],
             provenance=Provenance.from_dict(summary["provenance"]),

@@ -89,7 +89,7 @@ import re
 import tomllib
 import warnings
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field
 from pathlib import Path
 from types import MappingProxyType
 from typing import Any, Final
@@ -111,7 +111,6 @@ from dustoptics.scattering import phase as _phase
 from dustoptics.scattering.optics import (
     WEIGHTINGS,
     ConvergenceWarning,
-    OpticsTable,
     compute_optics,
 )
 from dustoptics.table import Provenance, Source, Table
@@ -1079,50 +1078,23 @@ def _analytic_table(
     return _phase.renormalize(raw, theta_deg=theta), exact, source
 
 
-def _concatenate(parts: list[OpticsTable]) -> OpticsTable:
-    """One OpticsTable from tables over consecutive wavelength chunks."""
-    if len(parts) == 1:
-        return parts[0]
-    first = parts[0]
-    values: dict[str, Any] = {}
-    for f in fields(OpticsTable):
-        value = getattr(first, f.name)
-        if f.name == "quadrature_panels":
-            values[f.name] = tuple(p for part in parts for p in part.quadrature_panels)
-        elif f.name == "theta_deg":
-            values[f.name] = value
-        elif isinstance(value, np.ndarray):
-            values[f.name] = np.concatenate([getattr(part, f.name) for part in parts], axis=0)
-        else:
-            values[f.name] = value
-    return OpticsTable(**values)
-
-
 def _compute_mie(
     config: BuildConfig, workers: int | None, progress: Callable[[int, int], None] | None
-) -> OpticsTable:
+) -> Table:
     assert config.material is not None and config.size_distribution is not None
-    wl = config.wavelengths_nm
-    kwargs: dict[str, Any] = {
-        "refractive_index": config.material.build(),
-        "distribution": config.size_distribution.build(),
-        "theta_deg": config.theta_deg,
-        "rtol": config.optics.rtol,
-        "weighting": config.optics.weighting,
-        "cross_section_rtol": config.optics.cross_section_rtol,
-        "workers": workers,
-    }
-    if progress is None:
-        return compute_optics(wavelengths_nm=wl, **kwargs)
-    # Each wavelength is computed independently (compute_optics's contract),
-    # so chunks give the same bits as one call; they only add progress reports.
-    chunk = max(4 * (workers or os.cpu_count() or 1), -(-wl.size // 8))
-    progress(0, wl.size)
-    parts = []
-    for start in range(0, wl.size, chunk):
-        parts.append(compute_optics(wavelengths_nm=wl[start : start + chunk], **kwargs))
-        progress(min(start + chunk, wl.size), wl.size)
-    return _concatenate(parts)
+    assert config.optics.rtol is not None and config.optics.weighting is not None
+    return compute_optics(
+        config.material.build(),
+        config.size_distribution.build(),
+        config.wavelengths_nm,
+        config.theta_deg,
+        config.optics.rtol,
+        config.optics.weighting,
+        cross_section_rtol=config.optics.cross_section_rtol,
+        workers=workers,
+        name=config.name,
+        progress=progress,
+    )
 
 
 def _add_sources(sources: list[Source], *extra: Source) -> None:
@@ -1183,32 +1155,15 @@ def build_table(
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         if ph.uses_mie:
-            optics = _compute_mie(config, workers, progress)
-            assert config.material is not None and config.size_distribution is not None
-            material = config.material.build()
-            distribution = config.size_distribution.build()
-            _add_sources(
-                sources,
-                Source(
-                    name=getattr(material, "name", str(material)),
-                    role="refractive index",
-                    citation=getattr(
-                        material, "citation", "constant refractive index from the configuration"
-                    ),
-                ),
-                Source(
-                    name=distribution.model,
-                    role="size distribution",
-                    citation=distribution.citation,
-                ),
-            )
+            table = _compute_mie(config, workers, progress)
+            _add_sources(sources, *table.provenance.sources)
             if ph.model == "hybrid":
                 assert ph.analytic is not None and ph.weight is not None
                 p_analytic, _, analytic_source = _analytic_table(
                     config, ph.analytic, ph.parameters, wl, theta
                 )
                 _add_sources(sources, analytic_source)
-                p_mie = _phase.renormalize(optics.phase, theta_deg=theta)
+                p_mie = _phase.renormalize(table.phase, theta_deg=theta)
                 blended = _phase.hybrid(p_mie, p_analytic, theta_deg=theta, weight=ph.weight)
                 notes.append(
                     f"phase: hybrid renormalize((1 - w) P_mie + w P_{ph.analytic}) with w = {ph.weight:g}, "
@@ -1216,22 +1171,8 @@ def build_table(
                     "mean cosine of the blended table (exact for linear interpolation in theta); "
                     "cross-sections and error estimates are the Mie computation's"
                 )
-                base = Table.from_optics(
-                    optics,
-                    name=config.name,
-                    inputs=inputs,
-                    sources=tuple(sources),
-                    number_density_per_m3=config.number_density_per_m3,
-                )
-                table = base.replace(phase=blended, g=_phase.mean_cosine(blended, theta_deg=theta))
-            else:
-                table = Table.from_optics(
-                    optics,
-                    name=config.name,
-                    inputs=inputs,
-                    sources=tuple(sources),
-                    number_density_per_m3=config.number_density_per_m3,
-                )
+                table = table.replace(phase=blended, g=_phase.mean_cosine(blended, theta_deg=theta))
+            table = table.replace(number_density_per_m3=config.number_density_per_m3)
         else:
             assert ph.analytic is not None
             if progress is not None:
@@ -1267,7 +1208,7 @@ def build_table(
     provenance = table.provenance
     table = table.replace(
         provenance=Provenance(
-            inputs=provenance.inputs,
+            inputs=inputs,
             sources=tuple(sources),
             software=provenance.software,
             quadrature=provenance.quadrature,

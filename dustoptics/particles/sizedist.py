@@ -46,7 +46,7 @@ from __future__ import annotations
 
 import math
 from abc import ABC, abstractmethod
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
@@ -69,6 +69,7 @@ __all__ = [
     "Monodisperse",
     "MultiModal",
     "SizeDistribution",
+    "from_dict",
 ]
 
 FloatOrArray = float | NDArray[np.float64]
@@ -966,3 +967,57 @@ class MultiModal(SizeDistribution):
         out = super(MultiModal, self).to_dict()
         out["modes"] = [mode.to_dict() for mode in self.modes]
         return out
+
+
+def from_dict(data: Mapping[str, Any]) -> SizeDistribution:
+    """The size distribution a :meth:`SizeDistribution.to_dict` record describes.
+
+    Parameters
+    ----------
+    data : Mapping
+        ``model`` (one of the models' names) and ``parameters`` (the
+        constructor's arguments); a ``multimodal`` record also ``modes``.
+
+    Returns
+    -------
+    SizeDistribution
+        Equal to the distribution that wrote the record.
+
+    Raises
+    ------
+    ValueError
+        Unknown model, missing or unexpected parameters.
+
+    Examples
+    --------
+    >>> from_dict(ModifiedGamma(r_eff_um=1.6, v_eff=0.2).to_dict())
+    ModifiedGamma(r_eff_um=1.6, v_eff=0.2)
+    """
+    models: dict[str, type[SizeDistribution]] = {
+        cls.model: cls
+        for cls in (ModifiedGamma, Gamma, LogNormal, ModifiedLogNormal, Monodisperse, MultiModal)
+    }
+    model = data.get("model") if isinstance(data, Mapping) else None
+    if model not in models:
+        raise ValueError(
+            f"size distribution model must be one of {', '.join(map(repr, models))}; got {model!r}"
+        )
+    parameters = data.get("parameters")
+    if not isinstance(parameters, Mapping):
+        raise ValueError(
+            f"size distribution record needs a 'parameters' mapping; got {parameters!r}"
+        )
+    try:
+        if model == MultiModal.model:
+            modes = data.get("modes")
+            if not isinstance(modes, list):
+                raise ValueError(f"a multimodal record needs a list of 'modes'; got {modes!r}")
+            return MultiModal(
+                modes=tuple(from_dict(mode) for mode in modes),
+                relative_number_densities=parameters["relative_number_densities"],
+            )
+        return models[model](**parameters)
+    except (KeyError, TypeError) as exc:
+        raise ValueError(
+            f"size distribution record for {model!r} has wrong parameters: {exc}"
+        ) from None

@@ -45,6 +45,7 @@ from numba import njit
 from dustoptics._validation import as_increasing_grid, check_choice, check_open_interval
 from dustoptics.particles.materials import RefractiveIndex, get_material
 from dustoptics.particles.sizedist import SizeDistribution
+from dustoptics.particles.sizedist import from_dict as _distribution_from_dict
 from dustoptics.scattering import mie
 from dustoptics.scattering.quadrature import (
     QuadratureSettings,
@@ -54,13 +55,15 @@ from dustoptics.scattering.quadrature import (
     panel_nodes,
     size_parameter_at,
 )
+from dustoptics.table import DEFAULT_NAME, Provenance, Source, Table, plain
 
 __all__ = [
     "ConvergenceWarning",
-    "OpticsTable",
+    "QuadratureDiagnostics",
     "compute_optics",
     "default_theta_deg",
     "default_wavelengths_nm",
+    "recompute",
     "resolve_refractive_index",
 ]
 
@@ -94,103 +97,58 @@ def default_theta_deg() -> np.ndarray:
     return np.linspace(0.0, 180.0, 1801)
 
 
-@dataclass(frozen=True)
-class OpticsTable:
-    """Polydisperse optical properties over wavelength (and angle).
+@dataclass(frozen=True, eq=False)
+class QuadratureDiagnostics:
+    """Where :func:`compute_optics` put its radius nodes, per wavelength.
+
+    Kept in memory with the :class:`~dustoptics.table.Table` (its
+    ``diagnostics``) for scripts that study the quadrature
+    (``scripts/benchmark.py`` rebuilds the nodes from it); files do not store
+    it, since it follows from the table's provenance.
 
     Attributes
     ----------
-    wavelength_nm : numpy.ndarray, shape (n_wavelength,)
-        Vacuum wavelengths. [nm]
-    theta_deg : numpy.ndarray, shape (n_theta,)
-        Scattering angles, 0 = forward. [deg]
-    phase : numpy.ndarray, shape (n_wavelength, n_theta)
-        Phase function, normalized so that 2 pi int P dmu = 1. [sr^-1]
-    cext_um2, csca_um2, cabs_um2 : numpy.ndarray, shape (n_wavelength,)
-        Mean extinction, scattering and absorption cross-sections per particle. [um^2]
-    qext, qsca : numpy.ndarray
-        Area-weighted efficiencies <C> / (pi <r^2>). [-]
-    ssa : numpy.ndarray
-        Single-scattering albedo <C_sca> / <C_ext>. [-]
-    g : numpy.ndarray
-        Asymmetry parameter, 2 pi int P mu dmu. [-]
-    error_estimate : numpy.ndarray
-        Estimated largest relative error of the phase function at any angle:
-        the summed differences between each radius panel's Gauss rule and the
-        rules on its two halves (an upper estimate for the returned table, which
-        uses the halves). [-]
-    cross_section_error_estimate : numpy.ndarray
-        The same for <C_ext> and <C_sca> (relative) and g (absolute). [-]
-    n_nodes : numpy.ndarray
-        Radius nodes of the quadrature that gave the phase function, per
-        wavelength. [-]
-    cross_section_n_nodes : numpy.ndarray
-        Radius nodes of the (separate, finer) quadrature that gave the
-        cross-sections and g, per wavelength. [-]
-    quadrature_panels : tuple of numpy.ndarray
+    settings : QuadratureSettings
+        Radius node placement.
+    distribution : SizeDistribution
+        The size distribution.
+    panels : tuple of numpy.ndarray
         Per wavelength, the phase function's final panels (shape (n_panels, 2))
         in the stretched variable s of :mod:`dustoptics.scattering.quadrature`; each
         panel's two halves carry the Gauss-Legendre rule that gave the table,
         so ``quadrature.panel_nodes`` on the halves reproduces the nodes. [-]
     cross_section_panels : tuple of numpy.ndarray
         The same for the cross-sections and g. [-]
-    refractive_index : numpy.ndarray
-        m = n + i k used at each wavelength. [-]
-    mean_geometric_cross_section_um2 : float
-        pi <r^2> of the distribution (analytic), the area in Q = <C>/(pi <r^2>). [um^2]
-    weighting : str
-        ``"scattering"`` or ``"number"`` (see module docstring).
-    rtol, cross_section_rtol : float
-        Tolerances the quadrature was asked to reach. [-]
-    settings : QuadratureSettings
-        Radius node placement.
-    distribution : SizeDistribution
-        The size distribution.
-    material : str
-        Description of the refractive index source.
     """
 
-    wavelength_nm: np.ndarray
-    theta_deg: np.ndarray
-    phase: np.ndarray
-    cext_um2: np.ndarray
-    csca_um2: np.ndarray
-    cabs_um2: np.ndarray
-    qext: np.ndarray
-    qsca: np.ndarray
-    ssa: np.ndarray
-    g: np.ndarray
-    error_estimate: np.ndarray
-    cross_section_error_estimate: np.ndarray
-    n_nodes: np.ndarray
-    cross_section_n_nodes: np.ndarray
-    quadrature_panels: tuple[np.ndarray, ...] = field(repr=False)
+    settings: QuadratureSettings
+    distribution: SizeDistribution
+    panels: tuple[np.ndarray, ...] = field(repr=False)
     cross_section_panels: tuple[np.ndarray, ...] = field(repr=False)
-    refractive_index: np.ndarray = field(repr=False)
-    mean_geometric_cross_section_um2: float
-    weighting: str
-    rtol: float
-    cross_section_rtol: float
-    settings: QuadratureSettings = field(repr=False)
-    distribution: SizeDistribution = field(repr=False)
-    material: str = ""
-
-    @property
-    def mu(self) -> np.ndarray:
-        """cos(theta). [-]"""
-        return np.cos(np.deg2rad(self.theta_deg))
-
-    @property
-    def converged(self) -> np.ndarray:
-        """Whether each wavelength reached both tolerances."""
-        return (self.error_estimate <= self.rtol) & (
-            self.cross_section_error_estimate <= self.cross_section_rtol
-        )
 
 
 def _describe(obj: Any) -> str:
     name = getattr(obj, "name", None)
-    return str(name) if name else repr(obj)
+    if name:
+        return str(name)
+    qualname = getattr(obj, "__qualname__", None)
+    if qualname:
+        return f"callable {getattr(obj, '__module__', '?')}.{qualname}"
+    return repr(obj)
+
+
+def _index_source(refractive_index: RefractiveIndexLike, label: str) -> Source:
+    """The refractive index as a provenance source, with its citation."""
+    if isinstance(refractive_index, str):
+        refractive_index = get_material(refractive_index)
+    citation = (
+        getattr(refractive_index, "citation", "")
+        if isinstance(refractive_index, RefractiveIndex)
+        else ""
+    )
+    if not citation:
+        citation = "given by the caller (no citation recorded)"
+    return Source(name=label, role="refractive index", citation=citation)
 
 
 def resolve_refractive_index(
@@ -889,7 +847,7 @@ class _WavelengthSolver:
 def compute_optics(
     refractive_index: RefractiveIndexLike,
     distribution: SizeDistribution,
-    wavelengths_nm: Sequence[float] | np.ndarray | None = None,
+    wavelength_nm: Sequence[float] | np.ndarray | None = None,
     theta_deg: Sequence[float] | np.ndarray | None = None,
     rtol: float = 1e-4,
     weighting: str = "scattering",
@@ -897,7 +855,10 @@ def compute_optics(
     cross_section_rtol: float | None = None,
     quadrature: QuadratureSettings | None = None,
     workers: int | None = None,
-) -> OpticsTable:
+    name: str = DEFAULT_NAME,
+    progress: Callable[[int, int], None] | None = None,
+    wavelengths_nm: Sequence[float] | np.ndarray | None = None,
+) -> Table:
     """Polydisperse Mie optics of spheres, converged over the size distribution.
 
     Parameters
@@ -909,11 +870,11 @@ def compute_optics(
         callable ``wavelength_nm -> complex``. [-]
     distribution : SizeDistribution
         Number size distribution, e.g. ``ModifiedGamma(r_eff_um=1.6, v_eff=0.2)``.
-    wavelengths_nm : array_like, optional
+    wavelength_nm : array_like, optional
         Strictly increasing wavelengths; default 360, 370, ..., 830. [nm]
     theta_deg : array_like, optional
         Strictly increasing scattering angles in [0, 180]; default 0 to 180 in
-        0.1 deg steps (1,801 angles). [deg]
+        0.1 degree steps (1,801 angles). [degree]
     rtol : float
         Target for the largest relative change of the phase function at any
         angle between successive quadrature refinements. [-]
@@ -929,10 +890,24 @@ def compute_optics(
         Threads over wavelengths (default: all cores).  Each wavelength is
         computed by one thread in a fixed order, so results are the same to the
         bit whatever the count.
+    name : str, optional
+        The table's name (default ``"table"``).
+    progress : callable, optional
+        Called as ``progress(done, total)`` with the number of wavelengths
+        done, first with 0 and last with ``total``.  It does not change the
+        result.
+    wavelengths_nm : array_like, optional
+        Deprecated spelling of ``wavelength_nm``.
 
     Returns
     -------
-    OpticsTable
+    Table
+        Phase function, cross-sections, g, error estimates, node counts and
+        the refractive index used, per wavelength; its provenance records the
+        call (the refractive index's description, citation and values, the
+        size distribution and its parameters, the grids, the weighting, the
+        tolerances and quadrature settings) with the achieved error and the
+        software versions, and its ``diagnostics`` the radius panels.
 
     Raises
     ------
@@ -952,6 +927,17 @@ def compute_optics(
     >>> round(float(t.qext[0]), 6)
     3.092896
     """
+    if wavelengths_nm is not None:
+        if wavelength_nm is not None:
+            raise TypeError(
+                "give wavelength_nm only (wavelengths_nm is its deprecated spelling), not both"
+            )
+        warnings.warn(
+            "compute_optics(wavelengths_nm=...) is deprecated; use wavelength_nm=",
+            DeprecationWarning,
+            stacklevel=2,
+        )
+        wavelength_nm = wavelengths_nm
     if not isinstance(distribution, SizeDistribution):
         raise ValueError(
             f"distribution must be a dustoptics SizeDistribution (e.g. ModifiedGamma); got {distribution!r}"
@@ -963,15 +949,15 @@ def compute_optics(
         )
     wl = (
         default_wavelengths_nm()
-        if wavelengths_nm is None
-        else as_increasing_grid("wavelengths_nm", wavelengths_nm, unit="nm")
+        if wavelength_nm is None
+        else as_increasing_grid("wavelength_nm", wavelength_nm, unit="nm")
     )
     if wl[0] <= 0:
-        raise ValueError(f"wavelengths_nm must be > 0 nm; got minimum {wl[0]!r}")
+        raise ValueError(f"wavelength_nm must be > 0 nm; got minimum {wl[0]!r}")
     theta = (
         default_theta_deg()
         if theta_deg is None
-        else as_increasing_grid("theta_deg", theta_deg, low=0.0, high=180.0, unit="deg")
+        else as_increasing_grid("theta_deg", theta_deg, low=0.0, high=180.0, unit="degree")
     )
     rtol = check_open_interval("rtol", rtol, 0.0, 0.1)
     cross_rtol = (
@@ -987,6 +973,10 @@ def compute_optics(
         workers = os.cpu_count() or 1
     elif not (isinstance(workers, int) and workers >= 1):
         raise ValueError(f"workers must be a positive integer; got {workers!r}")
+    if not isinstance(name, str) or not name:
+        raise ValueError(f"name must be a non-empty string; got {name!r}")
+    if progress is not None and not callable(progress):
+        raise TypeError(f"progress must be a callable progress(done, total); got {progress!r}")
     m, label = resolve_refractive_index(refractive_index, wl)
 
     mu_out = np.cos(np.deg2rad(theta))
@@ -1003,6 +993,12 @@ def compute_optics(
         )
         return solver.solve(rtol, cross_rtol)
 
+    def report(done: int) -> None:
+        if progress is not None:
+            progress(done, wl.size)
+
+    report(0)
+    results: list[_Result] = []
     n_threads = min(workers, wl.size)
     if n_threads > 1:
         # In a process that has not computed a table yet, the first wavelength
@@ -1012,18 +1008,21 @@ def compute_optics(
         # _phase_refinement_errors from Python, so its signatures say whether
         # one has run; kernels called only from compiled code keep none.)
         # Each wavelength's result is the same either way.
-        first = [] if _phase_refinement_errors.signatures else [one(0)]
+        if not _phase_refinement_errors.signatures:
+            results.append(one(0))
+            report(1)
         with ThreadPoolExecutor(max_workers=n_threads) as pool:
-            results = first + list(pool.map(one, range(len(first), wl.size)))
+            for result in pool.map(one, range(len(results), wl.size)):
+                results.append(result)
+                report(len(results))
     else:
-        results = [one(i) for i in range(wl.size)]
+        for i in range(wl.size):
+            results.append(one(i))
+            report(i + 1)
 
     err_phase = np.array([r.err_phase for r in results])
     err_cross = np.array([r.err_cross for r in results])
     phase = np.vstack([r.phase for r in results])
-    cext = np.array([r.cext for r in results])
-    csca = np.array([r.csca for r in results])
-    geometric = distribution.mean_cross_section_um2
     if not (np.all(np.isfinite(phase)) and np.all(phase > 0)):
         raise FloatingPointError(
             "phase function is not finite and positive; please report this input"
@@ -1038,29 +1037,134 @@ def compute_optics(
             ConvergenceWarning,
             stacklevel=2,
         )
-    return OpticsTable(
+    n_nodes = np.array([r.n_nodes for r in results], dtype=np.int64)
+    cross_n_nodes = np.array([r.cross_section_n_nodes for r in results], dtype=np.int64)
+    inputs = {
+        "refractive_index": {"description": label, "n": m.real, "k": m.imag},
+        "size_distribution": distribution.to_dict(),
+        "wavelength_nm": wl,
+        "theta_deg": theta,
+        "weighting": weighting,
+        "rtol": rtol,
+        "cross_section_rtol": cross_rtol,
+        "quadrature": settings,
+    }
+    record = {
+        "method": "adaptive Gauss-Legendre panels over radius (dustoptics.scattering.quadrature), "
+        "error = summed differences of each panel's rule and the rules on its halves",
+        "weighting": weighting,
+        "rtol": rtol,
+        "cross_section_rtol": cross_rtol,
+        "settings": settings,
+        "converged": not bool(not_converged.any()),
+        "max_error_estimate": float(err_phase.max()),
+        "max_cross_section_error_estimate": float(err_cross.max()),
+        "n_nodes_total": int(n_nodes.sum()),
+        "cross_section_n_nodes_total": int(cross_n_nodes.sum()),
+    }
+    sources = (
+        _index_source(refractive_index, label),
+        Source(name=distribution.model, role="size distribution", citation=distribution.citation),
+    )
+    return Table(
+        name=name,
         wavelength_nm=wl,
         theta_deg=theta,
         phase=phase,
-        cext_um2=cext,
-        csca_um2=csca,
-        cabs_um2=cext - csca,
-        qext=cext / geometric,
-        qsca=csca / geometric,
-        ssa=csca / cext,
         g=np.array([r.g for r in results]),
+        cext_um2=np.array([r.cext for r in results]),
+        csca_um2=np.array([r.csca for r in results]),
         error_estimate=err_phase,
         cross_section_error_estimate=err_cross,
-        n_nodes=np.array([r.n_nodes for r in results]),
-        cross_section_n_nodes=np.array([r.cross_section_n_nodes for r in results]),
-        quadrature_panels=tuple(r.panels_s for r in results),
-        cross_section_panels=tuple(r.cross_section_panels_s for r in results),
+        n_nodes=n_nodes,
+        cross_section_n_nodes=cross_n_nodes,
         refractive_index=m,
-        mean_geometric_cross_section_um2=float(geometric),
-        weighting=weighting,
-        rtol=rtol,
-        cross_section_rtol=cross_rtol,
-        settings=settings,
-        distribution=distribution,
-        material=label,
+        mean_geometric_cross_section_um2=float(distribution.mean_cross_section_um2),
+        provenance=Provenance(inputs=plain(inputs), sources=sources, quadrature=plain(record)),
+        diagnostics=QuadratureDiagnostics(
+            settings=settings,
+            distribution=distribution,
+            panels=tuple(r.panels_s for r in results),
+            cross_section_panels=tuple(r.cross_section_panels_s for r in results),
+        ),
+    )
+
+
+def recompute(
+    provenance: Provenance, *, workers: int | None = None, name: str = DEFAULT_NAME
+) -> Table:
+    """Compute a table again from the provenance :func:`compute_optics` recorded.
+
+    The provenance alone suffices: its inputs hold the refractive index's
+    values at every wavelength (whatever the source: catalogue, mixture,
+    constant or callable), the size distribution's model and parameters, the
+    grids, weighting, tolerances and quadrature settings.  With the same
+    software versions the result is the same table to the bit, and its
+    provenance is the original's (inputs, sources, notes) with the new run's
+    software versions and quadrature record.
+
+    Parameters
+    ----------
+    provenance : Provenance
+        ``table.provenance`` of a table from :func:`compute_optics` (not of a
+        configuration's table, whose inputs are the configuration; rebuild
+        those with :func:`dustoptics.models.config.build_table`).
+    workers : int, optional
+        Threads over wavelengths (does not change the result).
+    name : str, optional
+        The new table's name.
+
+    Returns
+    -------
+    Table
+
+    Raises
+    ------
+    ValueError
+        The provenance was not recorded by :func:`compute_optics`.
+    """
+    if not isinstance(provenance, Provenance):
+        raise TypeError(
+            f"provenance must be a dustoptics Provenance; got {type(provenance).__name__}"
+        )
+    inputs = provenance.inputs
+    required = (
+        "refractive_index",
+        "size_distribution",
+        "wavelength_nm",
+        "theta_deg",
+        "weighting",
+        "rtol",
+        "cross_section_rtol",
+        "quadrature",
+    )
+    missing = [key for key in required if key not in inputs]
+    if missing:
+        raise ValueError(
+            f"provenance inputs lack {', '.join(missing)}: it was not recorded by compute_optics "
+            "(a configuration's table is rebuilt with build_table)"
+        )
+    index = inputs["refractive_index"]
+    m = np.asarray(index["n"], dtype=np.float64) + 1j * np.asarray(index["k"], dtype=np.float64)
+    table = compute_optics(
+        m.tolist(),
+        _distribution_from_dict(inputs["size_distribution"]),
+        inputs["wavelength_nm"],
+        inputs["theta_deg"],
+        inputs["rtol"],
+        inputs["weighting"],
+        cross_section_rtol=inputs["cross_section_rtol"],
+        quadrature=QuadratureSettings(**inputs["quadrature"]),
+        workers=workers,
+        name=name,
+    )
+    # The same values of m; only the caller's description of them is restored.
+    return table.replace(
+        provenance=Provenance(
+            inputs=inputs,
+            sources=provenance.sources,
+            software=table.provenance.software,
+            quadrature=table.provenance.quadrature,
+            notes=provenance.notes,
+        )
     )

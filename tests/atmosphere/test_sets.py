@@ -26,9 +26,8 @@ WL15 = np.linspace(360.0, 830.0, 15)  # CosmoScout's default wavelength set
 @pytest.fixture(scope="module")
 def dust_table() -> Table:
     dist = do.ModifiedGamma(r_eff_um=1.6, v_eff=0.2)
-    optics = do.compute_optics(do.mars_dust(), dist, WL15, np.linspace(0.0, 180.0, 181), rtol=1e-3)
-    return Table.from_optics(
-        optics, name="blue-moon-dust", inputs={"test": "mars dust, r_eff 1.6, v_eff 0.2"}
+    return do.compute_optics(
+        do.mars_dust(), dist, WL15, np.linspace(0.0, 180.0, 181), rtol=1e-3, name="blue-moon-dust"
     )
 
 
@@ -91,8 +90,9 @@ def test_mars_collienne_molecules(tmp_path):
     # Collienne's coefficients exist only at 440, 510, 680 nm: a 3-wavelength set.
     wl = np.array([440.0, 510.0, 680.0])
     dist = do.ModifiedGamma(r_eff_um=1.6, v_eff=0.2)
-    optics = do.compute_optics(1.52 + 0.006j, dist, wl, np.linspace(0.0, 180.0, 181), rtol=1e-3)
-    dust = Table.from_optics(optics, name="dust", inputs={"test": 1})
+    dust = do.compute_optics(
+        1.52 + 0.006j, dist, wl, np.linspace(0.0, 180.0, 181), rtol=1e-3, name="dust"
+    )
     mars = atm.mars_atmosphere(dust_table=dust, molecules="collienne2013")
     np.testing.assert_allclose(
         mars.constituent("molecules").table.beta_sca_per_m,

@@ -31,7 +31,7 @@ from dustoptics.io.glsl import (
     write_glsl,
 )
 from dustoptics.scattering.phase import henyey_greenstein
-from dustoptics.table import Provenance, Source, Table
+from dustoptics.table import Provenance, Table
 
 EPS32 = float(np.finfo(np.float32).eps)  # 2^-23: float32 spacing at 1
 
@@ -48,14 +48,9 @@ def mie_table() -> Table:
         [440.0, 550.0, 680.0],
         np.linspace(0.0, 180.0, 721),
         rtol=1e-3,
-    )
-    return Table.from_optics(
-        optics,
         name="test-dust",
-        inputs={"m": "1.5+0.01j", "r_eff_um": 1.0, "v_eff": 0.2, "rtol": 1e-3},
-        sources=(Source(name="constant", role="refractive index", citation="test value"),),
-        number_density_per_m3=1e6,
     )
+    return optics.replace(number_density_per_m3=1e6)
 
 
 def hg_table(

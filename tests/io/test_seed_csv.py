@@ -27,7 +27,7 @@ from dustoptics.io.seed_csv import (
     read_seed_csv,
     write_seed_csv,
 )
-from dustoptics.table import Source, Table
+from dustoptics.table import Table
 
 PER_WAVELENGTH = ("g", "cext_um2", "csca_um2", "error_estimate", "cross_section_error_estimate")
 
@@ -37,26 +37,23 @@ def table() -> Table:
     optics = do.compute_optics(
         do.mars_dust(),
         do.ModifiedGamma(r_eff_um=1.6, v_eff=0.2),
-        wavelengths_nm=[440.0, 550.0],
+        wavelength_nm=[440.0, 550.0],
         theta_deg=np.linspace(0.0, 180.0, 19),
         rtol=1e-3,
         weighting="scattering",
         workers=1,
-    )
-    return Table.from_optics(
-        optics,
         name="mars-dust",
-        inputs={"r_eff_um": 1.6, "v_eff": 0.2, "preset": "test"},
-        sources=(Source("querry1985", "refractive index", "M. R. Querry, CRDC-CR-85034 (1985)"),),
-        notes=("computed for the tests",),
-        number_density_per_m3=1e8,
     )
+    return optics.replace(number_density_per_m3=1e8)
 
 
 def _regridded(table: Table, wavelengths_nm: np.ndarray) -> Table:
     """The table's numbers repeated onto another wavelength grid (layout tests only)."""
     idx = np.arange(wavelengths_nm.size) % table.wavelength_nm.size
-    changes = {name: getattr(table, name)[idx] for name in PER_WAVELENGTH}
+    changes = {
+        name: getattr(table, name)[idx]
+        for name in (*PER_WAVELENGTH, "n_nodes", "cross_section_n_nodes", "refractive_index")
+    }
     return table.replace(wavelength_nm=wavelengths_nm, phase=table.phase[idx], **changes)
 
 

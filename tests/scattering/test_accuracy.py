@@ -57,7 +57,7 @@ def brute_force(
     return {"cext": s_ext, "csca": s_sca, "g": s_gsca / s_sca, "phase": p_sum / s_sca}
 
 
-def check(t: do.OpticsTable, i: int, ref: dict) -> None:
+def check(t: do.Table, i: int, ref: dict) -> None:
     assert np.max(np.abs(t.phase[i] / ref["phase"] - 1)) <= 1e-4
     assert t.cext_um2[i] == pytest.approx(ref["cext"], rel=1e-6)
     assert t.csca_um2[i] == pytest.approx(ref["csca"], rel=1e-6)

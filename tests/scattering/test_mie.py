@@ -56,7 +56,7 @@ def read_csv(name: str) -> list[dict[str, str]]:
         return list(csv.DictReader(row for row in fh if not row.startswith("#")))
 
 
-def monodisperse(m: complex, x: float, theta_deg: np.ndarray | None = None) -> do.OpticsTable:
+def monodisperse(m: complex, x: float, theta_deg: np.ndarray | None = None) -> do.Table:
     radius_um = x * WAVELENGTH_NM * 1e-3 / (2.0 * np.pi)
     theta = np.array([0.0, 180.0]) if theta_deg is None else theta_deg
     return do.compute_optics(m, do.Monodisperse(radius_um=radius_um), [WAVELENGTH_NM], theta)

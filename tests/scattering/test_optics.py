@@ -104,16 +104,22 @@ def test_doubling_nodes_stays_within_error_estimate(weighting: str) -> None:
             mu_out=t.mu,
             distribution=dist,
             per_particle=weighting == "number",
-            settings=t.settings,
+            settings=t.diagnostics.settings,
         )
         runs = []
-        for panels, angles in ((t.quadrature_panels[i], True), (t.cross_section_panels[i], False)):
+        for panels, angles in (
+            (t.diagnostics.panels[i], True),
+            (t.diagnostics.cross_section_panels[i], False),
+        ):
             lo, hi = panels[:, 0], panels[:, 1]
             edges = lo[:, None] + (hi - lo)[:, None] * np.array([0.0, 0.25, 0.5, 0.75, 1.0])
             rows = solver.evaluate(edges[:, :-1].ravel(), edges[:, 1:].ravel(), angles=angles)
             runs.append(
                 _Run(
-                    rows.sum(axis=0), panels, 4 * panels.shape[0] * t.settings.nodes_per_panel, 0.0
+                    rows.sum(axis=0),
+                    panels,
+                    4 * panels.shape[0] * t.diagnostics.settings.nodes_per_panel,
+                    0.0,
                 )
             )
         finer = solver.finish(*runs)
@@ -227,12 +233,12 @@ def test_seed_used_number_not_cross_section_weighting() -> None:
 @pytest.mark.parametrize(
     ("kwargs", "match"),
     [
-        ({"wavelengths_nm": []}, "wavelengths_nm must not be empty"),
-        ({"wavelengths_nm": [550.0, 450.0]}, "strictly increasing"),
-        ({"wavelengths_nm": [550.0, np.nan]}, "finite"),
-        ({"wavelengths_nm": [-5.0]}, "wavelengths_nm must be > 0"),
-        ({"theta_deg": [0.0, 190.0]}, r"theta_deg \[deg\] must be <= 180"),
-        ({"theta_deg": [-1.0, 10.0]}, r"theta_deg \[deg\] must be >= 0"),
+        ({"wavelength_nm": []}, "wavelength_nm must not be empty"),
+        ({"wavelength_nm": [550.0, 450.0]}, "strictly increasing"),
+        ({"wavelength_nm": [550.0, np.nan]}, "finite"),
+        ({"wavelength_nm": [-5.0]}, "wavelength_nm must be > 0"),
+        ({"theta_deg": [0.0, 190.0]}, r"theta_deg \[degree\] must be <= 180"),
+        ({"theta_deg": [-1.0, 10.0]}, r"theta_deg \[degree\] must be >= 0"),
         ({"rtol": 0.0}, "rtol must be in the open interval"),
         ({"rtol": float("nan")}, "rtol must be a finite"),
         ({"weighting": "area"}, "weighting must be one of 'scattering', 'number'"),
@@ -242,7 +248,7 @@ def test_seed_used_number_not_cross_section_weighting() -> None:
         ({"refractive_index": [1.5, 1.5]}, "one value per wavelength"),
         ({"refractive_index": "unobtainium"}, "unobtainium"),
         ({"distribution": 1.6}, "distribution must be a dustoptics SizeDistribution"),
-        ({"wavelengths_nm": [100.0]}, "range"),
+        ({"wavelength_nm": [100.0]}, "range"),
         (
             {
                 "distribution": do.MultiModal(
@@ -261,7 +267,7 @@ def test_bad_input_raises(kwargs: dict, match: str) -> None:
     call = {
         "refractive_index": do.mars_dust(),
         "distribution": do.ModifiedGamma(r_eff_um=0.5, v_eff=0.1),
-        "wavelengths_nm": [550.0],
+        "wavelength_nm": [550.0],
         "theta_deg": [0.0, 90.0, 180.0],
     }
     call.update(kwargs)

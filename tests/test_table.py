@@ -1,0 +1,206 @@
+"""The one Table: what compute_optics returns, its provenance, repr and interpolation."""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+
+import dustoptics as do
+from dustoptics.scattering.optics import recompute
+from dustoptics.table import Table
+
+THETA = np.linspace(0.0, 180.0, 91)
+WAVELENGTHS = [440.0, 550.0, 680.0]
+
+
+@pytest.fixture(scope="module")
+def table() -> Table:
+    return do.compute_optics(
+        do.mars_dust(),
+        do.ModifiedGamma(r_eff_um=1.6, v_eff=0.2),
+        WAVELENGTHS,
+        THETA,
+        rtol=1e-3,
+        workers=1,
+    )
+
+
+def test_compute_optics_returns_the_table(table: Table) -> None:
+    assert type(table) is Table
+    assert table.name == "table"
+    assert not hasattr(do, "OpticsTable")
+    # Every per-wavelength diagnostic is a field of the table.
+    assert table.n_nodes.dtype == np.int64 and np.all(table.n_nodes >= 16)
+    assert np.all(table.cross_section_n_nodes >= table.n_nodes)
+    np.testing.assert_array_equal(table.refractive_index, do.mars_dust()(np.array(WAVELENGTHS)))
+    assert np.all(table.converged)
+
+
+def test_provenance_is_filled_from_the_call(table: Table) -> None:
+    p = table.provenance
+    inputs = p.inputs
+    assert inputs["refractive_index"]["description"] == do.mars_dust().name
+    np.testing.assert_array_equal(inputs["refractive_index"]["n"], table.refractive_index.real)
+    np.testing.assert_array_equal(inputs["refractive_index"]["k"], table.refractive_index.imag)
+    assert inputs["size_distribution"]["model"] == "modified_gamma"
+    assert inputs["size_distribution"]["parameters"] == {"r_eff_um": 1.6, "v_eff": 0.2}
+    assert inputs["wavelength_nm"] == WAVELENGTHS
+    assert inputs["theta_deg"] == THETA.tolist()
+    assert (inputs["weighting"], inputs["rtol"], inputs["cross_section_rtol"]) == (
+        "scattering",
+        1e-3,
+        1e-5,
+    )
+    assert inputs["quadrature"]["nodes_per_panel"] == do.QuadratureSettings().nodes_per_panel
+    assert [s.role for s in p.sources] == ["refractive index", "size distribution"]
+    assert p.sources[0].citation == do.mars_dust().citation
+    assert p.quadrature["max_error_estimate"] == table.achieved_error
+    assert p.quadrature["n_nodes_total"] == int(table.n_nodes.sum())
+    assert p.quadrature["converged"] is True
+    assert set(p.software) >= {"dustoptics", "numpy", "numba"}
+    assert len(p.input_hash) == 64
+
+
+@pytest.mark.parametrize(
+    ("index", "description"),
+    [
+        (1.5 + 0.01j, "constant m = (1.5+0.01j)"),
+        ([1.5 + 0.01j, 1.51 + 0.01j], "per-wavelength values given by the caller"),
+        ("hematite-querry1985-ordinary", "hematite-querry1985-ordinary"),
+    ],
+)
+def test_refractive_index_description(index, description) -> None:
+    t = do.compute_optics(index, do.Monodisperse(radius_um=0.5), [500.0, 600.0], [0.0, 180.0])
+    assert t.provenance.inputs["refractive_index"]["description"] == description
+
+
+def test_callable_refractive_index_is_described_and_recorded() -> None:
+    def dust_index(wavelength_nm: float) -> complex:
+        return 1.5 + 1e-5j * wavelength_nm
+
+    t = do.compute_optics(dust_index, do.Monodisperse(radius_um=0.5), [500.0, 600.0], [0.0, 180.0])
+    assert t.provenance.inputs["refractive_index"]["description"].endswith("dust_index")
+    assert t.provenance.inputs["refractive_index"]["k"] == [0.005, 0.006]
+    assert t.provenance.sources[0].citation == "given by the caller (no citation recorded)"
+
+
+def test_recompute_from_provenance_alone_gives_the_same_bytes(table: Table, tmp_path) -> None:
+    again = recompute(table.provenance)
+    assert again.equals(table)
+    do.io.write_hdf5(table, tmp_path / "a.h5")
+    do.io.write_hdf5(again, tmp_path / "b.h5")
+    assert (tmp_path / "a.h5").read_bytes() == (tmp_path / "b.h5").read_bytes()
+
+
+def test_recompute_refuses_a_configuration_provenance() -> None:
+    with pytest.raises(ValueError, match="lack .* not recorded by compute_optics"):
+        recompute(do.Provenance(inputs={"name": "costa"}))
+
+
+def test_diagnostics_rebuild_the_nodes(table: Table) -> None:
+    d = table.diagnostics
+    assert d.distribution == do.ModifiedGamma(r_eff_um=1.6, v_eff=0.2)
+    for i, panels in enumerate(d.panels):
+        # Each final panel's two halves carry nodes_per_panel nodes each.
+        assert 2 * panels.shape[0] * d.settings.nodes_per_panel == table.n_nodes[i]
+    # Changing the numbers drops the diagnostics of the run that made them.
+    assert table.replace(phase=table.phase * 1.0).diagnostics is None
+    assert table.replace(name="x").diagnostics is d
+
+
+def test_repr_is_short_and_says_what_the_table_is(table: Table) -> None:
+    text = repr(table)
+    assert len(text.splitlines()) <= 6 and len(text) < 600
+    assert "3 wavelengths 440-680 nm x 91 angles" in text
+    assert "modified_gamma(r_eff_um=1.6, v_eff=0.2)" in text
+    assert table.provenance.input_hash[:12] in text
+
+
+def test_phase_at_scalar_and_array(table: Table) -> None:
+    # 44 degree is on the grid (2 degree steps): the stored column, unchanged.
+    np.testing.assert_array_equal(table.phase_at(44.0), table.phase[:, 22])
+    assert table.phase_at(45.0).shape == (3,)
+    # Midway between grid angles: the mean of the neighbours (linear in angle).
+    np.testing.assert_allclose(
+        table.phase_at(45.0), 0.5 * (table.phase[:, 22] + table.phase[:, 23]), rtol=1e-15
+    )
+    assert table.phase_at([45.0, 90.0]).shape == (3, 2)
+    np.testing.assert_array_equal(table.phase_at(np.array([0.0, 180.0])), table.phase[:, [0, -1]])
+
+
+@pytest.mark.parametrize("bad", [-1.0, 181.0, [[10.0]], np.nan, "ten"])
+def test_phase_at_refuses_bad_angles(table: Table, bad) -> None:
+    with pytest.raises(ValueError, match="theta_deg"):
+        table.phase_at(bad)
+
+
+def test_phase_at_does_not_extrapolate_a_partial_grid() -> None:
+    t = Table(wavelength_nm=[550.0], theta_deg=[10.0, 20.0], phase=[[1.0, 2.0]], g=[0.1])
+    assert not t.spans_sphere
+    np.testing.assert_array_equal(t.phase_at(15.0), [1.5])
+    with pytest.raises(
+        ValueError, match=r"within \[10, 20\] degree, the table's range \(no extrapolation\)"
+    ):
+        t.phase_at(5.0)
+
+
+def test_argument_and_attribute_names_agree() -> None:
+    t = do.compute_optics(
+        1.5 + 0.01j, do.Monodisperse(radius_um=0.5), wavelength_nm=[550.0], theta_deg=[0.0, 180.0]
+    )
+    np.testing.assert_array_equal(t.wavelength_nm, [550.0])
+    with pytest.warns(
+        DeprecationWarning, match=r"wavelengths_nm=\.\.\.\) is deprecated; use wavelength_nm="
+    ):
+        old = do.compute_optics(
+            1.5 + 0.01j,
+            do.Monodisperse(radius_um=0.5),
+            wavelengths_nm=[550.0],
+            theta_deg=[0.0, 180.0],
+        )
+    assert old.equals(t)
+    with pytest.raises(TypeError, match="not both"):
+        do.compute_optics(1.5, do.Monodisperse(radius_um=0.5), [550.0], wavelengths_nm=[550.0])
+
+
+def test_progress_reports_every_wavelength_in_order() -> None:
+    calls = []
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        do.compute_optics(
+            1.5 + 0.01j,
+            do.ModifiedGamma(r_eff_um=0.5, v_eff=0.1),
+            [450.0, 550.0, 650.0],
+            [0.0, 180.0],
+            rtol=1e-3,
+            workers=2,
+            progress=lambda done, total: calls.append((done, total)),
+        )
+    assert calls == [(0, 3), (1, 3), (2, 3), (3, 3)]
+
+
+def test_derived_quantities_are_derived_from_the_stored_ones(table: Table) -> None:
+    np.testing.assert_array_equal(table.cabs_um2, table.cext_um2 - table.csca_um2)
+    np.testing.assert_array_equal(table.ssa, table.csca_um2 / table.cext_um2)
+    np.testing.assert_array_equal(
+        table.qext, table.cext_um2 / table.mean_geometric_cross_section_um2
+    )
+    dense = table.replace(number_density_per_m3=1e6)
+    np.testing.assert_array_equal(dense.beta_ext_per_m, table.cext_um2 * 1e-12 * 1e6)
+
+
+@pytest.mark.parametrize(
+    ("changes", "match"),
+    [
+        ({"name": ""}, "name must be a non-empty string"),
+        ({"n_nodes": [1.5, 2.0, 3.0]}, "n_nodes must be 3 positive integers"),
+        ({"refractive_index": [1.5 - 0.1j] * 3}, "k >= 0"),
+        ({"refractive_index": [1.5]}, r"refractive_index must have shape \(3,\)"),
+        ({"theta_deg": np.linspace(-1.0, 180.0, 91)}, r"within \[0, 180\] degree"),
+    ],
+)
+def test_bad_fields_are_refused(table: Table, changes, match) -> None:
+    with pytest.raises(ValueError, match=match):
+        table.replace(**changes)
