@@ -90,7 +90,7 @@ _COLOUR_MODES = tuple(m for m in CHANNEL_MODES if m != "wavelengths")
 ACOS_METHODS = ("polynomial", "builtin")
 
 #: Coefficients a0..a7 of acos(x) = sqrt(1 - x) (a0 + a1 x + ... + a7 x^7), 0 <= x <= 1,
-#: |error| <= 2e-8 rad: M. Abramowitz and I. A. Stegun, Handbook of Mathematical
+#: absolute error <= 2e-8 rad: M. Abramowitz and I. A. Stegun, Handbook of Mathematical
 #: Functions (1964), formula 4.4.46 (after C. Hastings, 1955).
 ACOS_AS4446 = (
     1.5707963050,

@@ -4,7 +4,7 @@ This module knows nothing of units, materials or size distributions.  Its
 kernels take plain arrays (complex refractive index ``m``, size parameters
 ``x = 2 pi r / lambda``, quadrature weights, direction cosines ``mu``) and are
 compiled with numba (``cache=True``, no ``fastmath``: fast-math reassociation
-breaks identities such as Re(a_n) = |a_n|^2 for a lossless sphere).
+breaks identities such as ``Re(a_n) = |a_n|^2`` for a lossless sphere).
 
 Conventions (Bohren & Huffman 1983, chapter 4): time dependence exp(-i w t), so
 an absorbing sphere has m = n + i k with k >= 0; scattering amplitudes S1, S2 in
@@ -460,7 +460,7 @@ class SingleSphere:
         Complex scattering amplitudes (van de Hulst, dimensionless; Bohren &
         Huffman's exp(-i w t) convention, m = n + i k). [-]
     phase : numpy.ndarray
-        Phase function (|S1|^2 + |S2|^2) / (2 x^2 Q_sca pi), normalized so that
+        Phase function ``(|S1|^2 + |S2|^2) / (2 x^2 Q_sca pi)``, normalized so that
         2 pi int P dmu = 1. [sr^-1]
     """
 

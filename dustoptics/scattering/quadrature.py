@@ -29,7 +29,7 @@ below r_lo lies at most ``tail_fraction`` of the moment that normalizes the
 average (number for number weighting, area for cross-section weighting), and
 above r_hi at most ``tail_fraction`` of the fourth moment.  The forward peak
 of the phase function, the quantity most sensitive to large spheres, scales as
-the fourth moment (|S(0)|^2 ~ x^4 Q_ext^2 / 4, with Q_ext -> 2); every other
+the fourth moment (``|S(0)|^2 ~ x^4 Q_ext^2 / 4``, with Q_ext -> 2); every other
 polydisperse quantity (cross-sections ~ r^2, the number-weighted phase
 function ~ r^2 forward) with a lower one, and the tail fraction of a moment
 grows with its order, so bounding the fourth bounds them all.  (The sixth
@@ -75,16 +75,6 @@ class QuadratureSettings:
         Panel width at refinement level 0, in the stretched variable s; above
         the transition it is a width in size parameter divided by
         ``transition_size_parameter``. [-]
-
-    Notes
-    -----
-    The defaults (16 nodes, level-0 panels 32 wide) start coarse and let the
-    adaptive refinement put nodes where the integrand needs them.  Measured
-    for Mars dust (r_eff 1.6 and 4 um, rtol 1e-4), against references at
-    rtol 1e-7: the same accuracy (phase function 0.5-4e-6, 25-100x inside its
-    estimate) as 8 nodes on panels 2 wide, with 2.5x less time for the storm
-    dust, whose level-0 panels at 2 wide spent most of the work on large
-    spheres in the tail.
     transition_size_parameter : float
         x_c, where node spacing changes from logarithmic to uniform in x. [-]
     tail_fraction : float
@@ -96,6 +86,16 @@ class QuadratureSettings:
     min_panels : int
         Fewest panels at level 0, so that even a narrow distribution spanning a
         small range of s is resolved before any comparison of levels. [-]
+
+    Notes
+    -----
+    The defaults (16 nodes, level-0 panels 32 wide) start coarse and let the
+    adaptive refinement put nodes where the integrand needs them.  Measured
+    for Mars dust (r_eff 1.6 and 4 um, rtol 1e-4), against references at
+    rtol 1e-7: the same accuracy (phase function 0.5-4e-6, 25-100x inside its
+    estimate) as 8 nodes on panels 2 wide, with 2.5x less time for the storm
+    dust, whose level-0 panels at 2 wide spent most of the work on large
+    spheres in the tail.
     """
 
     nodes_per_panel: int = 16
