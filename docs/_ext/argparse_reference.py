@@ -65,7 +65,9 @@ class ArgparseReference(Directive):
     has_content = False
 
     def _section(self, title: str, ident: str) -> nodes.section:
-        section = nodes.section(ids=[nodes.make_id(ident)], names=[nodes.fully_normalize_name(ident)])
+        section = nodes.section(
+            ids=[nodes.make_id(ident)], names=[nodes.fully_normalize_name(ident)]
+        )
         section += nodes.title(text=title)
         return section
 
@@ -74,7 +76,8 @@ class ArgparseReference(Directive):
         out: list[nodes.Node] = []
         for group in parser._action_groups:
             actions = [
-                a for a in group._group_actions
+                a
+                for a in group._group_actions
                 if not isinstance(a, (argparse._HelpAction, argparse._SubParsersAction))
                 and a.help != argparse.SUPPRESS
             ]

@@ -19,7 +19,7 @@ import os
 import shlex
 import tempfile
 import time
-from typing import Any
+from typing import Any, ClassVar
 
 from docutils import nodes
 from docutils.parsers.rst import Directive, directives
@@ -40,7 +40,10 @@ class DustopticsCommand(Directive):
 
     required_arguments = 1
     final_argument_whitespace = True
-    option_spec = {"status": directives.nonnegative_int, "hide-output": directives.flag}
+    option_spec: ClassVar[dict[str, Any]] = {
+        "status": directives.nonnegative_int,
+        "hide-output": directives.flag,
+    }
 
     def run(self) -> list[nodes.Node]:
         node = command_block("", "")
@@ -68,7 +71,11 @@ def _run_command(node: command_block) -> None:
     if status != node["status"]:
         logger.warning(
             "dustoptics %s exited %s (expected %s): %s",
-            " ".join(node["argv"]), status, node["status"], err.getvalue().strip(), location=node,
+            " ".join(node["argv"]),
+            status,
+            node["status"],
+            err.getvalue().strip(),
+            location=node,
         )
 
 
@@ -86,8 +93,10 @@ def _run_doctest(node: nodes.doctest_block, globs: dict[str, Any], docname: str)
 def run_examples(app: Sphinx, doctree: nodes.document) -> None:
     # Docstrings' examples (autodoc) are run by the test suite (pytest --doctest-modules).
     blocks = [
-        n for n in doctree.findall()
-        if isinstance(n, (nodes.doctest_block, command_block)) and "docstring of" not in (n.source or "")
+        n
+        for n in doctree.findall()
+        if isinstance(n, (nodes.doctest_block, command_block))
+        and "docstring of" not in (n.source or "")
     ]
     if not blocks:
         return
@@ -111,7 +120,9 @@ def run_examples(app: Sphinx, doctree: nodes.document) -> None:
                 plt.close("all")
             except ImportError:
                 pass
-    logger.info("ran %d examples of %s in %.1f s", len(blocks), docname, time.perf_counter() - start)
+    logger.info(
+        "ran %d examples of %s in %.1f s", len(blocks), docname, time.perf_counter() - start
+    )
 
 
 def setup(app: Sphinx) -> dict[str, Any]:

@@ -22,8 +22,10 @@ dist = do.ModifiedGamma(r_eff_um=1.6, v_eff=0.2)
 theta_deg = np.concatenate([np.arange(0.0, 30.0, 0.1), np.arange(30.0, 180.5, 1.0)])
 wavelengths_nm = np.arange(360.0, 831.0, 10.0)
 table = do.compute_optics(dust, dist, wavelengths_nm, theta_deg)
-print(f"{table.phase.shape[0]} wavelengths x {table.phase.shape[1]} angles, "
-      f"largest error estimate {table.error_estimate.max():.1e}")
+print(
+    f"{table.phase.shape[0]} wavelengths x {table.phase.shape[1]} angles, "
+    f"largest error estimate {table.error_estimate.max():.1e}"
+)
 
 # %%
 # Left: within a few degrees of the forward direction the phase function is
@@ -66,4 +68,6 @@ blue = int(np.flatnonzero(wavelengths_nm == 440.0)[0])
 red = int(np.flatnonzero(wavelengths_nm == 680.0)[0])
 for angle in (0.0, 2.0, 5.0, 10.0, 20.0, 40.0, 90.0):
     j = int(np.flatnonzero(np.isclose(table.theta_deg, angle))[0])
-    print(f"theta {angle:4.0f} degree: P(440 nm) / P(680 nm) = {table.phase[blue, j] / table.phase[red, j]:.2f}")
+    print(
+        f"theta {angle:4.0f} degree: P(440 nm) / P(680 nm) = {table.phase[blue, j] / table.phase[red, j]:.2f}"
+    )

@@ -16,12 +16,14 @@ import numpy as np
 import dustoptics as do
 
 dust = do.mars_dust(hematite_fraction=0.03, host_index=1.5, hematite="querry-extraordinary")
-theta_deg = np.linspace(0.0, 180.0, 721)   # 0.25 degree steps, the seed shader's
+theta_deg = np.linspace(0.0, 180.0, 721)  # 0.25 degree steps, the seed shader's
 storm = do.compute_optics(dust, do.ModifiedGamma(r_eff_um=4.0, v_eff=0.3), theta_deg=theta_deg)
 clear = do.compute_optics(dust, do.ModifiedGamma(r_eff_um=1.6, v_eff=0.2), theta_deg=theta_deg)
 for name, t in (("storm", storm), ("clear", clear)):
-    print(f"{name}: {t.n_nodes.min()}-{t.n_nodes.max()} radius nodes, "
-          f"error estimate <= {t.error_estimate.max():.1e}")
+    print(
+        f"{name}: {t.n_nodes.min()}-{t.n_nodes.max()} radius nodes, "
+        f"error estimate <= {t.error_estimate.max():.1e}"
+    )
 
 # %%
 # Phase functions at three wavelengths, and the spectra of the
@@ -34,7 +36,13 @@ ax = axes[0, 0]
 for wavelength_nm, colour in [(440.0, "tab:blue"), (550.0, "tab:green"), (680.0, "tab:red")]:
     i = int(np.flatnonzero(storm.wavelength_nm == wavelength_nm)[0])
     ax.plot(theta_deg, storm.phase[i], color=colour, label=f"storm {wavelength_nm:.0f} nm")
-    ax.plot(theta_deg, clear.phase[i], color=colour, linestyle=":", label=f"clear {wavelength_nm:.0f} nm")
+    ax.plot(
+        theta_deg,
+        clear.phase[i],
+        color=colour,
+        linestyle=":",
+        label=f"clear {wavelength_nm:.0f} nm",
+    )
 ax.set_yscale("log")
 ax.set_xlim(0, 180)
 ax.set_xlabel("scattering angle theta [degree]")
@@ -45,8 +53,18 @@ for ax, key, label in [
     (axes[1, 0], "g", "asymmetry parameter g [-]"),
     (axes[1, 1], "qext", "extinction efficiency Q_ext [-]"),
 ]:
-    ax.plot(storm.wavelength_nm, getattr(storm, key), color="tab:brown", label="storm, r_eff 4 um, v_eff 0.3")
-    ax.plot(clear.wavelength_nm, getattr(clear, key), color="tab:gray", label="clear, r_eff 1.6 um, v_eff 0.2")
+    ax.plot(
+        storm.wavelength_nm,
+        getattr(storm, key),
+        color="tab:brown",
+        label="storm, r_eff 4 um, v_eff 0.3",
+    )
+    ax.plot(
+        clear.wavelength_nm,
+        getattr(clear, key),
+        color="tab:gray",
+        label="clear, r_eff 1.6 um, v_eff 0.2",
+    )
     ax.set_xlabel("wavelength [nm]")
     ax.set_ylabel(label)
     ax.legend(fontsize="x-small")

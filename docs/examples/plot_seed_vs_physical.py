@@ -19,8 +19,8 @@ import numpy as np
 from dustoptics.compare import compare_tables
 from dustoptics.models import presets
 
-seed = presets.build_preset("blue-moons-seed")   # number weighting, 48 x 1,800
-physical = presets.build_preset("blue-moons")    # scattering weighting, 48 x 1,801
+seed = presets.build_preset("blue-moons-seed")  # number weighting, 48 x 1,800
+physical = presets.build_preset("blue-moons")  # scattering weighting, 48 x 1,801
 print(seed)
 print(physical)
 
@@ -40,10 +40,19 @@ print(comparison.to_frame()[rows].round(3).to_string(index=False))
 fig, (ax_phase, ax_ratio) = plt.subplots(1, 2, figsize=(10, 4.2), layout="constrained")
 for wavelength_nm, colour in [(440.0, "tab:blue"), (550.0, "tab:green"), (680.0, "tab:red")]:
     i = int(np.flatnonzero(physical.wavelength_nm == wavelength_nm)[0])
-    ax_phase.plot(physical.theta_deg, physical.phase[i], color=colour,
-                  label=f"{wavelength_nm:.0f} nm, scattering weighted")
-    ax_phase.plot(seed.theta_deg, seed.phase[i], color=colour, linestyle="--",
-                  label=f"{wavelength_nm:.0f} nm, number weighted (seed)")
+    ax_phase.plot(
+        physical.theta_deg,
+        physical.phase[i],
+        color=colour,
+        label=f"{wavelength_nm:.0f} nm, scattering weighted",
+    )
+    ax_phase.plot(
+        seed.theta_deg,
+        seed.phase[i],
+        color=colour,
+        linestyle="--",
+        label=f"{wavelength_nm:.0f} nm, number weighted (seed)",
+    )
 ax_phase.set_yscale("log")
 ax_phase.set_xlim(0, 180)
 ax_phase.set_xlabel("scattering angle theta [degree]")
@@ -51,13 +60,21 @@ ax_phase.set_ylabel("phase function P [sr$^{-1}$]")
 ax_phase.set_title("Blue Moon's dust: phase functions")
 ax_phase.legend(fontsize="x-small")
 
-ax_ratio.plot(comparison.wavelength_nm, comparison.forward_peak_ratio, color="black",
-              label="forward peak ratio P_phys(0) / P_seed(0)")
+ax_ratio.plot(
+    comparison.wavelength_nm,
+    comparison.forward_peak_ratio,
+    color="black",
+    label="forward peak ratio P_phys(0) / P_seed(0)",
+)
 ax_ratio.set_xlabel("wavelength [nm]")
 ax_ratio.set_ylabel("forward peak ratio [-]")
 ax_diff = ax_ratio.twinx()
-ax_diff.plot(comparison.wavelength_nm, 100 * comparison.median_rel_diff, color="tab:purple",
-             label="median |P_phys - P_seed| / P_seed")
+ax_diff.plot(
+    comparison.wavelength_nm,
+    100 * comparison.median_rel_diff,
+    color="tab:purple",
+    label="median |P_phys - P_seed| / P_seed",
+)
 ax_diff.set_ylabel("median relative difference [%]", color="tab:purple")
 ax_ratio.set_title("physical against seed, per wavelength")
 ax_ratio.legend(loc="upper right", fontsize="x-small")
