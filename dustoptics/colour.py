@@ -173,7 +173,8 @@ def cmf_cie1931(wavelength_nm: Any) -> np.ndarray:
     Returns
     -------
     numpy.ndarray, shape ``wavelength_nm.shape + (3,)``
-        x̄, ȳ, z̄ (last axis), read linearly between the 1 nm samples [1]_. [-]
+        x̄, ȳ, z̄ (last axis), read linearly between the 1 nm samples of CIE
+        018:2019 (the module's reference [1]). [-]
 
     Raises
     ------

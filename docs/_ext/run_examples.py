@@ -91,16 +91,17 @@ def _run_doctest(node: nodes.doctest_block, globs: dict[str, Any], docname: str)
 
 
 def run_examples(app: Sphinx, doctree: nodes.document) -> None:
-    # Docstrings' examples (autodoc) are run by the test suite (pytest --doctest-modules).
+    # Only the page's own examples: docstrings' examples (autodoc) are run by the
+    # test suite (pytest --doctest-modules).
+    docname = app.env.docname
+    own = str(app.env.doc2path(docname))
     blocks = [
         n
         for n in doctree.findall()
-        if isinstance(n, (nodes.doctest_block, command_block))
-        and "docstring of" not in (n.source or "")
+        if isinstance(n, (nodes.doctest_block, command_block)) and n.source == own
     ]
     if not blocks:
         return
-    docname = app.env.docname
     start = time.perf_counter()
     globs: dict[str, Any] = {"__name__": f"docs.{docname.replace('/', '.')}"}
     cwd = os.getcwd()
