@@ -53,6 +53,7 @@ import numpy as np
 from dustoptics._validation import as_float_array, check_positive
 
 if TYPE_CHECKING:  # the computation imports this module, not the other way round
+    from dustoptics.scattering.fit import FitResult
     from dustoptics.scattering.optics import QuadratureDiagnostics
 
 __all__ = [
@@ -624,6 +625,29 @@ class Table:
         i = np.clip(np.searchsorted(grid, t, side="right") - 1, 0, grid.size - 2)
         frac = (t - grid[i]) / (grid[i + 1] - grid[i])
         return self.phase[:, i] * (1.0 - frac) + self.phase[:, i + 1] * frac
+
+    def fit(
+        self,
+        *,
+        model: str,
+        colour: str | None = None,
+        channels_nm: Any = None,
+        forward_cutoff_deg: float = 0.0,
+    ) -> FitResult:
+        """Fit an analytic phase function per wavelength or per colour channel.
+
+        Delegates to :func:`dustoptics.scattering.fit.fit_table`, which
+        documents the models, the loss and the reported errors.
+        """
+        from dustoptics.scattering.fit import fit_table
+
+        return fit_table(
+            self,
+            model=model,
+            colour=colour,
+            channels_nm=channels_nm,
+            forward_cutoff_deg=forward_cutoff_deg,
+        )
 
     def __repr__(self) -> str:
         wl, theta = self.wavelength_nm, self.theta_deg

@@ -635,6 +635,27 @@ def measure_scaling(dust: DustOptics, quick: bool) -> dict:
     return out
 
 
+def measure_fits(table, repeats: int) -> dict:
+    """Step 7: analytic phase functions fitted to the default table, every wavelength."""
+    from dustoptics.scattering.fit import FIT_MODELS, fit_table
+
+    fit_table(table, model="hg")  # first call: imports
+    out = {}
+    for model in FIT_MODELS:
+        log(f"fit {model} to 48 x {N_THETA_DEFAULT} ...")
+        best = float("inf")
+        for _ in range(max(repeats, 3)):
+            start = time.perf_counter()
+            result = fit_table(table, model=model)
+            best = min(best, time.perf_counter() - start)
+        out[model] = {
+            "time_s": best,
+            "median_rms_relative_error": float(np.median(result.rms_relative_error)),
+            "max_relative_error": float(np.max(result.max_relative_error)),
+        }
+    return out
+
+
 # --------------------------------------------------------------------------- report
 
 
@@ -824,6 +845,16 @@ def format_report(res: dict) -> str:
     def mb(v: float | None) -> str:
         return "n/a" if v is None else f"{v:.0f} MB"
 
+    if "fits" in res:
+        head("7. Analytic phase-function fits to the default table (all wavelengths, best of 3)")
+        d_warm = res["dustoptics_default"]["warm_s"]
+        for model, f in res["fits"].items():
+            row(
+                f"{model}",
+                f"{f['time_s']:.3f} s ({f['time_s'] / d_warm:.2f} x the table's warm time); "
+                f"median rms rel. error {f['median_rms_relative_error']:.3f}",
+            )
+
     head("6. Peak memory (ru_maxrss)")
     row("this process, after the warm default runs", mb(mem["main_after_warm_mb"]))
     row("cold subprocess (default table), own peak", mb(mem["cold_process_mb"]))
@@ -878,6 +909,7 @@ def run(quick: bool, repeats: int) -> dict:
     res["baseline_a"], res["baseline_b"] = public(a), public(b)
     res["storm"] = measure_storm(dust, repeats)
     res["scaling"] = measure_scaling(dust, quick)
+    res["fits"] = measure_fits(table, repeats)
     res["memory"] = {
         "main_after_warm_mb": default["maxrss_after_warm_mb"],
         "cold_process_mb": res["cold_process"]["maxrss_mb"],

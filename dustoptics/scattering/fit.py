@@ -1,0 +1,724 @@
+"""Analytic phase functions fitted to a table, per wavelength or per colour channel.
+
+Engines without a lookup table take one analytic phase function: Unreal's sky
+and Bevy's atmosphere an HG or Cornette-Shanks g, OpenSpace and CosmoScout VR a
+double HG.  :func:`fit_phase` finds the parameters of such a model that best
+match each row of a tabulated phase function; :func:`fit_table` does it for a
+:class:`~dustoptics.table.Table` per wavelength or per output channel
+(:func:`dustoptics.colour.channel_weights`).
+
+Models (:data:`FIT_MODELS`; parameters, valid range)
+----------------------------------------------------
+``"henyey-greenstein"``      HG(g); g in (-1, 1).
+``"dhg-costa2021"``          alpha HG(g1) + (1 - alpha) HG(g2), as OpenSpace and
+                             CosmoScout VR evaluate it; g1, g2 in (-1, 1),
+                             alpha in (0, 1); reported with g1 >= g2 (the
+                             forward lobe first; the function is symmetric
+                             under swapping the lobes with alpha -> 1 - alpha).
+``"dhg-kobe2026"``           (1 - f) HG(g1) + f HG(g2), g1 in [0, 1), g2 in
+                             (-1, 0], f in (0, 1) (Kobe's convention: a
+                             forward lobe and a backward one).
+``"cornette-shanks1992"``    Cornette-Shanks(g); g in (-1, 1).
+``"hg-draine-jendersie-deon2023"``
+                             (1 - w_D) HG(g_HG) + w_D Draine(g_D, alpha);
+                             g_HG, g_D in (-1, 1), alpha in (-1, 200), w_D in
+                             (0, 1).
+``"two-term-hg-hapke2012"``  Hapke's two-term HG in scattering angle:
+                             (1 - c)/2 HG(b) + (1 + c)/2 HG(-b); b in [0, 1),
+                             c in (-1, 1) (c > 0: backward lobe dominates, as
+                             Hapke's phase-angle form states it).
+
+Loss
+----
+The residual at angle ``theta_j`` is the relative error
+``r_j = M_j / T_j - 1`` of the model ``M`` against the table ``T``, and the
+loss is its mean square over solid angle,
+``L = sum_j w_j r_j^2 / sum_j w_j``, with ``w_j`` the solid angle each sample
+stands for when the table is read linearly in angle (the weights of
+:func:`dustoptics.scattering.phase.sphere_integral`).  The model is compared as
+it would be tabulated: sampled at the table's angles and scaled to the
+table's own sphere integral under the same weights (1 for a renormalized
+table), so a table made from one of the models, renormalized or sampled
+as is, is recovered to round-off.
+
+Forward peak: it is weighted by its solid angle like any other direction, in
+relative terms, so the loss asks for the same relative accuracy everywhere.
+Mie diffraction peaks that a model cannot follow cost only their small solid
+angle (a few degrees around 0); angles below ``forward_cutoff_deg`` (default
+0, none) can be left out entirely (as a delta-M truncation would treat them).
+The reported errors are over all angles whatever the cutoff, so a missed peak
+shows in ``max_relative_error``.
+
+Method
+------
+Deterministic and vectorized over rows: Levenberg-Marquardt on the residual
+vector in unbounded variables (each bounded parameter is an affine tanh of
+one), Jacobian by central differences, a fixed iteration budget, started
+from the table's Legendre moments (for two-lobe models, the two-node Gauss
+rule matching the moments 1-3: ``<P_l>`` of HG(g) is ``g^l``) and from a few
+fixed points; the best result of all starts is kept.  No random starts.  A
+model that cannot represent a table returns its best parameters and their
+(large) errors, never NaN.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from dustoptics._validation import as_float_array, check_choice, check_closed_interval
+from dustoptics.scattering.phase import _draine, _draine_mean, _hg, _linear_theta_weights
+
+__all__ = [
+    "FIT_MODELS",
+    "FIT_MODEL_ALIASES",
+    "FitResult",
+    "fit_phase",
+    "fit_table",
+]
+
+FloatArray = np.ndarray
+
+
+@dataclass(frozen=True)
+class _Parameter:
+    name: str
+    low: float
+    high: float
+
+
+@dataclass(frozen=True)
+class _Model:
+    name: str
+    formula: str
+    citation: str
+    parameters: tuple[_Parameter, ...]
+    evaluate: Callable[[FloatArray, FloatArray], FloatArray]  # (mu (m,), p (n, k)) -> (n, m)
+    asymmetry: Callable[[FloatArray], FloatArray]  # p (n, k) -> (n,)
+    starts: Callable[[FloatArray], list[FloatArray]]  # moments (n, 4) -> starts (n, k)
+    canonical: Callable[[FloatArray], FloatArray] = lambda p: p
+
+
+def _col(p: FloatArray, i: int) -> FloatArray:
+    return p[:, i : i + 1]
+
+
+def _gauss_two_node(m: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """Nodes x1 >= x2 and weight of x1 of the two-node rule with moments m1..m3 (m0 = 1).
+
+    Falls back to (m1 + s, m1 - s, 1/2), s = sqrt(max(m2 - m1^2, 0)), where the
+    moments are not those of two nodes.
+    """
+    m1, m2, m3 = m[:, 1], m[:, 2], m[:, 3]
+    var = m2 - m1 * m1
+    det = np.where(np.abs(var) > 1e-12, var, 1e-12)
+    a = (m3 - m1 * m2) / det  # x^2 = a x + b for both nodes
+    b = (m2 * m2 - m1 * m3) / det
+    disc = a * a + 4.0 * b
+    ok = (disc > 0) & (var > 1e-12)
+    root = np.sqrt(np.where(ok, disc, 0.0))
+    x1 = np.where(ok, 0.5 * (a + root), m1 + np.sqrt(np.maximum(var, 0.0)))
+    x2 = np.where(ok, 0.5 * (a - root), m1 - np.sqrt(np.maximum(var, 0.0)))
+    span = np.where(np.abs(x1 - x2) > 1e-12, x1 - x2, 1.0)
+    w1 = np.where(ok, (m1 - x2) / span, 0.5)
+    return x1, x2, w1
+
+
+def _clip_g(x: FloatArray) -> FloatArray:
+    return np.clip(x, -0.98, 0.98)
+
+
+def _const(n: int, *values: float) -> FloatArray:
+    return np.tile(np.array(values, dtype=np.float64), (n, 1))
+
+
+def _hg_starts(m: FloatArray) -> list[FloatArray]:
+    n = m.shape[0]
+    return [_clip_g(m[:, 1:2]), _const(n, 0.5), _const(n, -0.3)]
+
+
+def _cs_asymmetry(p: FloatArray) -> FloatArray:
+    g = p[:, 0]
+    return 3.0 * g * (4.0 + g * g) / (5.0 * (2.0 + g * g))
+
+
+def _cs_evaluate(mu: FloatArray, p: FloatArray) -> FloatArray:
+    g = _col(p, 0)
+    return 1.5 * (1.0 + mu * mu) / (2.0 + g * g) * _hg(mu, g)
+
+
+def _cs_starts(m: FloatArray) -> list[FloatArray]:
+    n = m.shape[0]
+    # Invert the CS mean cosine on a fine grid (monotonic in g): start at the table's g.
+    grid = np.linspace(-0.98, 0.98, 197)
+    gcs = _cs_asymmetry(grid[:, None])
+    start = np.interp(np.clip(m[:, 1], gcs[0], gcs[-1]), gcs, grid)[:, None]
+    return [start, _const(n, 0.5), _const(n, -0.3)]
+
+
+def _dhg_costa_evaluate(mu: FloatArray, p: FloatArray) -> FloatArray:
+    a = _col(p, 2)
+    return a * _hg(mu, _col(p, 0)) + (1.0 - a) * _hg(mu, _col(p, 1))
+
+
+def _dhg_costa_canonical(p: FloatArray) -> FloatArray:
+    out = p.copy()
+    swap = p[:, 0] < p[:, 1]
+    out[swap, 0], out[swap, 1], out[swap, 2] = p[swap, 1], p[swap, 0], 1.0 - p[swap, 2]
+    return out
+
+
+def _dhg_starts(m: FloatArray) -> list[FloatArray]:
+    n = m.shape[0]
+    x1, x2, w1 = _gauss_two_node(m)
+    moment = np.stack([_clip_g(x1), _clip_g(x2), np.clip(w1, 0.02, 0.98)], axis=1)
+    g = _clip_g(m[:, 1])
+    return [
+        moment,
+        np.stack([np.clip(g + 0.2, -0.9, 0.95), np.clip(g - 0.4, -0.9, 0.9), np.full(n, 0.7)], 1),
+        _const(n, 0.8, -0.2, 0.9),
+        _const(n, 0.6, 0.1, 0.5),
+    ]
+
+
+def _dhg_kobe_evaluate(mu: FloatArray, p: FloatArray) -> FloatArray:
+    f = _col(p, 2)
+    return (1.0 - f) * _hg(mu, _col(p, 0)) + f * _hg(mu, _col(p, 1))
+
+
+def _dhg_kobe_starts(m: FloatArray) -> list[FloatArray]:
+    n = m.shape[0]
+    x1, x2, w1 = _gauss_two_node(m)
+    moment = np.stack(
+        [np.clip(x1, 0.02, 0.98), np.clip(x2, -0.98, -0.02), np.clip(1.0 - w1, 0.02, 0.98)], 1
+    )
+    g = np.clip(m[:, 1], 0.05, 0.95)
+    return [moment, np.stack([g, np.full(n, -0.3), np.full(n, 0.1)], 1), _const(n, 0.8, -0.5, 0.3)]
+
+
+def _hgd_evaluate(mu: FloatArray, p: FloatArray) -> FloatArray:
+    w = _col(p, 3)
+    return (1.0 - w) * _hg(mu, _col(p, 0)) + w * _draine(mu, _col(p, 1), _col(p, 2))
+
+
+def _hgd_asymmetry(p: FloatArray) -> FloatArray:
+    w = p[:, 3]
+    return (1.0 - w) * p[:, 0] + w * _draine_mean(p[:, 1], p[:, 2])
+
+
+def _hgd_starts(m: FloatArray) -> list[FloatArray]:
+    n = m.shape[0]
+    x1, x2, w1 = _gauss_two_node(m)
+    moment = np.stack(
+        [_clip_g(x1), _clip_g(x2), np.full(n, 1.0), np.clip(1.0 - w1, 0.02, 0.98)], axis=1
+    )
+    return [moment, _const(n, 0.9, 0.5, 10.0, 0.5), _const(n, 0.6, -0.2, 1.0, 0.3)]
+
+
+def _tthg_evaluate(mu: FloatArray, p: FloatArray) -> FloatArray:
+    b, c = _col(p, 0), _col(p, 1)
+    return 0.5 * (1.0 - c) * _hg(mu, b) + 0.5 * (1.0 + c) * _hg(mu, -b)
+
+
+def _tthg_starts(m: FloatArray) -> list[FloatArray]:
+    n = m.shape[0]
+    # <P_1> = -c b, <P_2> = b^2: b from the second moment, c from the first.
+    b = np.clip(np.sqrt(np.clip(m[:, 2], 0.0, None)), 0.02, 0.98)
+    c = np.clip(-m[:, 1] / b, -0.98, 0.98)
+    return [np.stack([b, c], 1), _const(n, 0.5, -0.5), _const(n, 0.9, -0.9)]
+
+
+_G = (-1.0, 1.0)
+_MODELS: dict[str, _Model] = {
+    m.name: m
+    for m in (
+        _Model(
+            "henyey-greenstein",
+            "HG(g) = (1 - g^2) / (4 pi (1 + g^2 - 2 g mu)^(3/2))",
+            "L. G. Henyey and J. L. Greenstein, Astrophys. J. 93, 70-83 (1941), doi:10.1086/144246",
+            (_Parameter("g", *_G),),
+            lambda mu, p: _hg(mu, _col(p, 0)),
+            lambda p: p[:, 0],
+            _hg_starts,
+        ),
+        _Model(
+            "dhg-costa2021",
+            "alpha HG(g1) + (1 - alpha) HG(g2)",
+            "J. Costa et al., IEEE TVCG 27(2), 785-795 (2021), doi:10.1109/TVCG.2020.3030333",
+            (_Parameter("g1", *_G), _Parameter("g2", *_G), _Parameter("alpha", 0.0, 1.0)),
+            _dhg_costa_evaluate,
+            lambda p: p[:, 2] * p[:, 0] + (1.0 - p[:, 2]) * p[:, 1],
+            _dhg_starts,
+            _dhg_costa_canonical,
+        ),
+        _Model(
+            "dhg-kobe2026",
+            "(1 - f) HG(g1) + f HG(g2), g1 >= 0 >= g2",
+            "Kobe (2026), master's thesis (the seed's third source)",
+            (_Parameter("g1", 0.0, 1.0), _Parameter("g2", -1.0, 0.0), _Parameter("f", 0.0, 1.0)),
+            _dhg_kobe_evaluate,
+            lambda p: (1.0 - p[:, 2]) * p[:, 0] + p[:, 2] * p[:, 1],
+            _dhg_kobe_starts,
+        ),
+        _Model(
+            "cornette-shanks1992",
+            "3 (1 - g^2) (1 + mu^2) / (8 pi (2 + g^2) (1 + g^2 - 2 g mu)^(3/2))",
+            "W. M. Cornette and J. G. Shanks, Appl. Opt. 31(16), 3152-3160 (1992), "
+            "doi:10.1364/AO.31.003152",
+            (_Parameter("g", *_G),),
+            _cs_evaluate,
+            _cs_asymmetry,
+            _cs_starts,
+        ),
+        _Model(
+            "hg-draine-jendersie-deon2023",
+            "(1 - w_d) HG(g_hg) + w_d Draine(g_d, alpha), "
+            "Draine(g, a) = HG(g) (1 + a mu^2) / (1 + a (1 + 2 g^2) / 3)",
+            "J. Jendersie and E. d'Eon, ACM SIGGRAPH 2023 Talks, doi:10.1145/3587421.3595409",
+            (
+                _Parameter("g_hg", *_G),
+                _Parameter("g_d", *_G),
+                _Parameter("alpha", -1.0, 200.0),
+                _Parameter("w_d", 0.0, 1.0),
+            ),
+            _hgd_evaluate,
+            _hgd_asymmetry,
+            _hgd_starts,
+        ),
+        _Model(
+            "two-term-hg-hapke2012",
+            "(1 - c)/2 HG(b) + (1 + c)/2 HG(-b) (scattering angle; Hapke's phase angle is "
+            "180 deg - theta)",
+            "B. Hapke, Theory of Reflectance and Emittance Spectroscopy, 2nd ed., Cambridge "
+            "University Press (2012), doi:10.1017/CBO9781139025683, section 6.4.2",
+            (_Parameter("b", 0.0, 1.0), _Parameter("c", -1.0, 1.0)),
+            _tthg_evaluate,
+            lambda p: -p[:, 1] * p[:, 0],
+            _tthg_starts,
+        ),
+    )
+}
+
+#: Models :func:`fit_phase` fits, named by author and year.
+FIT_MODELS = tuple(_MODELS)
+
+#: Short names accepted for :data:`FIT_MODELS`.
+FIT_MODEL_ALIASES = {
+    "hg": "henyey-greenstein",
+    "dhg": "dhg-costa2021",
+    "dhg-kobe": "dhg-kobe2026",
+    "cs": "cornette-shanks1992",
+    "hg-draine": "hg-draine-jendersie-deon2023",
+    "tthg": "two-term-hg-hapke2012",
+}
+
+_SCREEN_ITERATIONS = 10  # from every start, on every _SCREEN_STRIDE-th angle
+_SCREEN_STRIDE = 8
+_ITERATIONS = 150  # the best start, on the same angles
+_POLISH_ITERATIONS = 150  # then on all angles (only rows not yet converged cost time)
+_STEP = 1e-8  # forward-difference step in the unbounded variables
+_U_MAX = 12.0  # tanh(12) = 1 - 7.6e-11: parameters stay strictly inside their ranges
+
+
+@dataclass(frozen=True)
+class FitResult:
+    """Parameters of an analytic phase function fitted to rows of a table.
+
+    Attributes
+    ----------
+    model : str
+        One of :data:`FIT_MODELS`.
+    formula : str
+        The model, in words and symbols.
+    citation : str
+        Where the model comes from.
+    parameter_names : tuple of str
+        Names of the columns of ``parameters``.
+    parameters : numpy.ndarray, shape (n_rows, n_parameters)
+        Best parameters, each row within the model's valid ranges. [-]
+    labels : tuple of str
+        What each row is (``"550 nm"``, ``"R"``, ...).
+    wavelength_nm : numpy.ndarray, shape (n_rows,)
+        Wavelength of each row (a channel's weighted mean wavelength). [nm]
+    max_relative_error : numpy.ndarray, shape (n_rows,)
+        Largest ``|M / T - 1|`` over the table's angles. [-]
+    median_relative_error : numpy.ndarray, shape (n_rows,)
+        Median ``|M / T - 1|`` over the angles. [-]
+    rms_relative_error : numpy.ndarray, shape (n_rows,)
+        Square root of the loss (solid-angle weighted). [-]
+    g_model : numpy.ndarray, shape (n_rows,)
+        Mean cosine of the analytic model with these parameters. [-]
+    g_error : numpy.ndarray, shape (n_rows,)
+        Mean cosine of the model as tabulated minus the table's, both read
+        linearly in angle (:func:`~dustoptics.scattering.phase.mean_cosine`). [-]
+    loss : str
+        The loss, in words.
+    forward_cutoff_deg : float
+        Angles below this were left out of the loss. [deg]
+    """
+
+    model: str
+    formula: str
+    citation: str
+    parameter_names: tuple[str, ...]
+    parameters: FloatArray
+    labels: tuple[str, ...]
+    wavelength_nm: FloatArray
+    max_relative_error: FloatArray
+    median_relative_error: FloatArray
+    rms_relative_error: FloatArray
+    g_model: FloatArray
+    g_error: FloatArray
+    loss: str
+    forward_cutoff_deg: float
+
+    def parameter(self, name: str) -> FloatArray:
+        """One parameter over the rows, by name."""
+        check_choice("name", name, self.parameter_names)
+        return self.parameters[:, self.parameter_names.index(name)]
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready mapping: model, parameters and errors per row."""
+        rows = []
+        for i, label in enumerate(self.labels):
+            rows.append(
+                {
+                    "label": label,
+                    "wavelength_nm": (
+                        float(self.wavelength_nm[i]) if np.isfinite(self.wavelength_nm[i]) else None
+                    ),
+                    "parameters": {
+                        n: float(self.parameters[i, k]) for k, n in enumerate(self.parameter_names)
+                    },
+                    "max_relative_error": float(self.max_relative_error[i]),
+                    "median_relative_error": float(self.median_relative_error[i]),
+                    "rms_relative_error": float(self.rms_relative_error[i]),
+                    "g_model": float(self.g_model[i]),
+                    "g_error": float(self.g_error[i]),
+                }
+            )
+        return {
+            "model": self.model,
+            "formula": self.formula,
+            "citation": self.citation,
+            "normalization": "2 pi int_{-1}^{1} P(mu) dmu = 1 (per steradian); mu = cos(theta), "
+            "theta = 0 forward",
+            "loss": self.loss,
+            "forward_cutoff_deg": self.forward_cutoff_deg,
+            "rows": rows,
+        }
+
+
+def resolve_model(model: str) -> str:
+    """Full model name of ``model`` (a name of :data:`FIT_MODELS` or an alias)."""
+    name = FIT_MODEL_ALIASES.get(model, model)
+    check_choice("model", name, FIT_MODELS + tuple(FIT_MODEL_ALIASES))
+    return name
+
+
+def _to_u(model: _Model, p: FloatArray) -> FloatArray:
+    low = np.array([q.low for q in model.parameters])
+    high = np.array([q.high for q in model.parameters])
+    s = np.clip(2.0 * (p - low) / (high - low) - 1.0, -math.tanh(_U_MAX), math.tanh(_U_MAX))
+    return np.arctanh(s)
+
+
+def _to_p(model: _Model, u: FloatArray) -> FloatArray:
+    low = np.array([q.low for q in model.parameters])
+    high = np.array([q.high for q in model.parameters])
+    return low + (high - low) * 0.5 * (np.tanh(np.clip(u, -_U_MAX, _U_MAX)) + 1.0)
+
+
+def _tabulated(
+    model: _Model, mu: FloatArray, w: FloatArray, p: FloatArray, table: FloatArray
+) -> FloatArray:
+    """The model sampled at the table's angles, scaled to the table's sphere integral.
+
+    Both integrals use the same weights ``w`` (linear in angle), so a table
+    that is the model, renormalized or not, is matched exactly.
+    """
+    f = model.evaluate(mu, p)
+    return f * ((table @ w) / (f @ w))[:, None]
+
+
+def _residuals(
+    model: _Model,
+    mu: FloatArray,
+    w: FloatArray,
+    sqrt_w: FloatArray,
+    table: FloatArray,
+    u: FloatArray,
+) -> FloatArray:
+    return (_tabulated(model, mu, w, _to_p(model, u), table) / table - 1.0) * sqrt_w
+
+
+def _levenberg_marquardt(
+    model: _Model,
+    mu: FloatArray,
+    w: FloatArray,
+    sqrt_w: FloatArray,
+    table: FloatArray,
+    u0: FloatArray,
+    iterations: int,
+) -> tuple[FloatArray, FloatArray]:
+    """Minimize sum r^2 per row from u0 (n, k); returns u and the loss per row.
+
+    Rows stop once a step no longer lowers their loss by 1e-12 of itself, the
+    step is below 1e-15 of the variables or the damping exceeds 1e6 (a stall); only the other
+    rows are computed on.
+    """
+    n, k = u0.shape
+    u = u0.copy()
+    r = _residuals(model, mu, w, sqrt_w, table, u)
+    cost = np.einsum("ij,ij->i", r, r)
+    cost = np.where(np.isfinite(cost), cost, np.inf)
+    lam = np.full(n, 1e-3)
+    active = np.isfinite(cost)
+    eye = np.eye(k)
+    for _ in range(iterations):
+        idx = np.flatnonzero(active)
+        if idx.size == 0:
+            break
+        ui, ri, ti = u[idx], r[idx], table[idx]
+        jac = np.empty((idx.size, ri.shape[1], k))
+        for j in range(k):
+            shifted = ui.copy()
+            shifted[:, j] += _STEP
+            jac[:, :, j] = (_residuals(model, mu, w, sqrt_w, ti, shifted) - ri) / _STEP
+        jtj = np.einsum("nmi,nmj->nij", jac, jac)
+        jtr = np.einsum("nmi,nm->ni", jac, ri)
+        diag = np.maximum(np.einsum("nii->ni", jtj), 1e-30)
+        a = jtj + lam[idx, None, None] * (eye[None] * diag[:, :, None])
+        step = -np.linalg.solve(a, jtr[:, :, None])[:, :, 0]
+        trial = ui + step
+        r_trial = _residuals(model, mu, w, sqrt_w, ti, trial)
+        cost_trial = np.einsum("ij,ij->i", r_trial, r_trial)
+        old = cost[idx]
+        better = np.isfinite(cost_trial) & (cost_trial <= old)
+        u[idx] = np.where(better[:, None], trial, ui)
+        r[idx] = np.where(better[:, None], r_trial, ri)
+        cost[idx] = np.where(better, cost_trial, old)
+        lam[idx] = np.where(better, np.maximum(lam[idx] / 3.0, 1e-12), lam[idx] * 4.0)
+        small = np.all(np.abs(step) <= 1e-15 * np.maximum(1.0, np.abs(ui)), axis=1)
+        done = (better & (old - cost_trial <= 1e-12 * old)) | (lam[idx] > 1e6) | small
+        active[idx[done]] = False
+    return u, cost
+
+
+def _moments(theta_deg: FloatArray, phase: FloatArray) -> FloatArray:
+    """Legendre moments <P_0..P_3> of each row (read linearly in angle)."""
+    mu = np.cos(np.deg2rad(theta_deg))
+    w = 2.0 * math.pi * _linear_theta_weights(theta_deg)
+    legendre = np.stack([np.ones_like(mu), mu, 1.5 * mu * mu - 0.5, 2.5 * mu**3 - 1.5 * mu])
+    return (phase * w) @ legendre.T
+
+
+def fit_phase(
+    theta_deg: Any,
+    phase: Any,
+    *,
+    model: str,
+    forward_cutoff_deg: float = 0.0,
+    labels: Sequence[str] | None = None,
+    wavelength_nm: Any = None,
+) -> FitResult:
+    """Fit an analytic phase function to each row of a phase table.
+
+    Parameters
+    ----------
+    theta_deg : array_like, shape (m,)
+        Scattering angles, strictly increasing from 0 to 180. [deg]
+    phase : array_like, shape (n, m) or (m,)
+        Phase function rows, positive, normalized to 1 over the sphere. [sr^-1]
+    model : str
+        One of :data:`FIT_MODELS` or an alias in :data:`FIT_MODEL_ALIASES`.
+    forward_cutoff_deg : float
+        Leave angles below this out of the loss (default 0: none). [deg]
+    labels : sequence of str, optional
+        Names of the rows (default ``"row 0"``, ...).
+    wavelength_nm : array_like, shape (n,), optional
+        Wavelength of each row, recorded in the result (NaN if not given). [nm]
+
+    Returns
+    -------
+    FitResult
+
+    Raises
+    ------
+    ValueError
+        For an unknown model, angles that do not run from 0 to 180, a phase
+        function that is not positive and finite, or a cutoff outside [0, 90).
+
+    Notes
+    -----
+    The loss, its treatment of the forward peak, the starts and the optimizer
+    are described in the module docstring.
+
+    Examples
+    --------
+    >>> from dustoptics.scattering.phase import henyey_greenstein
+    >>> theta = np.linspace(0.0, 180.0, 721)
+    >>> p = henyey_greenstein(np.cos(np.deg2rad(theta)), g=0.6)
+    >>> r = fit_phase(theta, p, model="hg")
+    >>> bool(abs(r.parameters[0, 0] - 0.6) < 1e-12 and r.max_relative_error[0] < 1e-12)
+    True
+    """
+    name = resolve_model(model)
+    spec = _MODELS[name]
+    theta = as_float_array("theta_deg", theta_deg, ndim=1)
+    if theta.size < 3 or theta[0] != 0.0 or theta[-1] != 180.0 or np.any(np.diff(theta) <= 0):
+        raise ValueError(
+            "theta_deg must be strictly increasing from exactly 0 to exactly 180 deg with at "
+            f"least 3 angles; got {theta.size} angles from {theta[0]:g} to {theta[-1]:g}"
+        )
+    table = as_float_array("phase", phase)
+    if table.ndim == 1:
+        table = table[None, :]
+    if table.ndim != 2 or table.shape[1] != theta.size:
+        raise ValueError(
+            f"phase must have shape (n_rows, {theta.size}) (angles last); got {np.shape(phase)}"
+        )
+    if np.any(table <= 0.0):
+        raise ValueError(
+            "phase must be positive at every angle for a relative-error fit; got a minimum of "
+            f"{table.min():g} sr^-1"
+        )
+    cutoff = check_closed_interval("forward_cutoff_deg", forward_cutoff_deg, 0.0, 89.999)
+    n = table.shape[0]
+    row_labels = tuple(labels) if labels is not None else tuple(f"row {i}" for i in range(n))
+    if len(row_labels) != n:
+        raise ValueError(f"labels must name the {n} rows; got {len(row_labels)}")
+    lam = (
+        np.full(n, np.nan)
+        if wavelength_nm is None
+        else as_float_array("wavelength_nm", wavelength_nm, ndim=1)
+    )
+    if lam.shape != (n,):
+        raise ValueError(f"wavelength_nm must have {n} values; got {lam.shape}")
+
+    mu = np.cos(np.deg2rad(theta))
+    w = _linear_theta_weights(theta)
+    w_loss = np.where(theta >= cutoff, w, 0.0) if cutoff > 0 else w
+    sqrt_w = np.sqrt(w_loss / w_loss.sum())
+    best_u = np.zeros((n, len(spec.parameters)))
+    best_cost = np.full(n, np.inf)
+    # Starts are screened on every few angles (the table's own subgrid, with
+    # its own weights), then the best is polished on all angles.
+    sub = np.unique(np.concatenate([np.arange(0, theta.size, _SCREEN_STRIDE), [theta.size - 1]]))
+    w_sub = _linear_theta_weights(theta[sub])
+    w_sub_loss = np.where(theta[sub] >= cutoff, w_sub, 0.0) if cutoff > 0 else w_sub
+    sqrt_w_sub = np.sqrt(w_sub_loss / w_sub_loss.sum())
+    with np.errstate(all="ignore"):  # trial steps that leave the valid range are rejected
+        for start in spec.starts(_moments(theta, table)):
+            u, cost = _levenberg_marquardt(
+                spec,
+                mu[sub],
+                w_sub,
+                sqrt_w_sub,
+                table[:, sub],
+                _to_u(spec, start),
+                _SCREEN_ITERATIONS,
+            )
+            better = cost < best_cost
+            best_u = np.where(better[:, None], u, best_u)
+            best_cost = np.where(better, cost, best_cost)
+        best_u, _ = _levenberg_marquardt(
+            spec, mu[sub], w_sub, sqrt_w_sub, table[:, sub], best_u, _ITERATIONS
+        )
+        best_u, best_cost = _levenberg_marquardt(
+            spec, mu, w, sqrt_w, table, best_u, _POLISH_ITERATIONS
+        )
+    params = spec.canonical(_to_p(spec, best_u))
+    model_tab = _tabulated(spec, mu, w, params, table)
+    rel = np.abs(model_tab / table - 1.0)
+    g_table = 0.5 * math.pi * (table @ _linear_theta_weights(2.0 * theta))
+    g_model_tab = 0.5 * math.pi * (model_tab @ _linear_theta_weights(2.0 * theta))
+    for array in (params, lam):
+        array.setflags(write=False)
+    loss = (
+        "mean over solid angle of (M/T - 1)^2, M the model sampled at the table's angles and "
+        "scaled to the table's sphere integral (both read linearly in angle), T the table"
+        + (f"; angles below {cutoff:g} deg left out" if cutoff > 0 else "; all angles")
+    )
+    return FitResult(
+        model=name,
+        formula=spec.formula,
+        citation=spec.citation,
+        parameter_names=tuple(q.name for q in spec.parameters),
+        parameters=params,
+        labels=row_labels,
+        wavelength_nm=lam,
+        max_relative_error=rel.max(axis=1),
+        median_relative_error=np.median(rel, axis=1),
+        rms_relative_error=np.sqrt(
+            np.einsum("ij,ij->i", rel * rel, np.broadcast_to(sqrt_w**2, rel.shape))
+        ),
+        g_model=spec.asymmetry(params),
+        g_error=g_model_tab - g_table,
+        loss=loss,
+        forward_cutoff_deg=cutoff,
+    )
+
+
+def fit_table(
+    table: Any,
+    *,
+    model: str,
+    colour: str | None = None,
+    channels_nm: Any = None,
+    forward_cutoff_deg: float = 0.0,
+) -> FitResult:
+    """Fit an analytic phase function to a table per wavelength, or per channel.
+
+    Parameters
+    ----------
+    table : dustoptics.table.Table
+        The table.
+    model : str
+        One of :data:`FIT_MODELS` or an alias.
+    colour : {"wavelengths", "cie1931-xyz", "linear-srgb-astmg173"}, optional
+        Fit three channels (:func:`dustoptics.colour.channel_weights`; the
+        phase function of each weighted by scattering when the table has
+        cross-sections, :func:`dustoptics.colour.channel_phase`) instead of
+        every wavelength.
+    channels_nm : sequence of 3 floats, optional
+        Channel wavelengths for ``colour="wavelengths"`` (default 680, 550,
+        440 nm). [nm]
+    forward_cutoff_deg : float
+        As for :func:`fit_phase`. [deg]
+
+    Returns
+    -------
+    FitResult
+        One row per wavelength, or per channel.
+    """
+    from dustoptics.colour import channel_phase, channel_weights
+
+    theta = np.asarray(table.theta_deg, dtype=np.float64)
+    lam = np.asarray(table.wavelength_nm, dtype=np.float64)
+    if colour is None:
+        if channels_nm is not None:
+            raise ValueError("channels_nm needs colour='wavelengths'")
+        return fit_phase(
+            theta,
+            table.phase,
+            model=model,
+            forward_cutoff_deg=forward_cutoff_deg,
+            labels=[f"{v:g} nm" for v in lam],
+            wavelength_nm=lam,
+        )
+    resolve_model(model)
+    channels = channel_weights(lam, mode=colour, channels_nm=channels_nm)
+    phase = channel_phase(channels, table.phase, csca_um2=table.csca_um2)
+    return fit_phase(
+        theta,
+        phase,
+        model=model,
+        forward_cutoff_deg=forward_cutoff_deg,
+        labels=list(channels.names),
+        wavelength_nm=channels.centroid_nm,
+    )
