@@ -21,6 +21,16 @@ command line.
 from importlib.metadata import PackageNotFoundError
 from importlib.metadata import version as _version
 
+try:
+    __version__ = _version("dustoptics")
+except PackageNotFoundError:  # running from a source tree that was never installed
+    __version__ = "0.0.0+unknown"
+
+# Before any kernel is defined: where numba caches them (never inside site-packages).
+from dustoptics import _numba_cache
+
+_numba_cache.configure(__version__)
+
 from dustoptics import atmosphere, colour, compare, io, models, particles, scattering, table
 from dustoptics.atmosphere import column, gases, parametric
 from dustoptics.compare import compare_tables
@@ -61,11 +71,6 @@ from dustoptics.scattering.phase import (
 )
 from dustoptics.scattering.quadrature import QuadratureSettings
 from dustoptics.table import Provenance, Source, Table
-
-try:
-    __version__ = _version("dustoptics")
-except PackageNotFoundError:  # running from a source tree that was never installed
-    __version__ = "0.0.0+unknown"
 
 __all__ = [
     "ConstantIndex",

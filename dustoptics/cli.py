@@ -4,7 +4,7 @@ Usage::
 
     dustoptics build [NAME_OR_CONFIG] [--out DIR] [--format FMT[,FMT...]] [--force] [--quiet]
     dustoptics build mars|earth [--out DIR] [--dust PRESET] [--optical-depth TAU] [--force]
-    dustoptics export FILE.h5 --out DIR --format FMT[,FMT...] [--force]
+    dustoptics export FILE --out DIR --format FMT[,FMT...] [--force]
     dustoptics info FILE
     dustoptics plot FILE --kind {phase,polar,map,spectra} [--wavelengths-nm LIST] --out FIG.png|.svg
     dustoptics presets [--show NAME]
@@ -33,21 +33,26 @@ import argparse
 import json
 import os
 import sys
+import tempfile
 import time
 import warnings
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, TextIO
 
 import numpy as np
 
-__all__ = ["TableBuilder", "build_atmosphere", "main", "read_table"]
+__all__ = ["Placement", "TableBuilder", "build_atmosphere", "main", "place_outputs", "read_table"]
 
 PROG = "dustoptics"
 
 #: Formats written by ``build`` when ``--format`` is not given.
 DEFAULT_FORMATS = ("hdf5", "csv")
+
+#: About how long the first build compiles the kernels (``scripts/benchmark.py``,
+#: row "compile time, empty numba cache", on a 2-core machine). [s]
+COMPILE_ESTIMATE_S = 10
 
 
 class UsageError(ValueError):
@@ -151,10 +156,19 @@ class TableBuilder:
 
     def build(self) -> Any:
         """Compute the table, reporting progress per wavelength."""
+        from dustoptics import _numba_cache
         from dustoptics.models import config
 
         start = time.perf_counter()
         tty = self.progress is not None and self.progress.isatty()
+        compiling = self.config.phase.uses_mie and not _numba_cache.kernels_compiled()
+        if compiling and self.progress is not None:
+            print(
+                f"{PROG}: compiling the Mie kernels (once per install, about "
+                f"{COMPILE_ESTIMATE_S} s; cached in {_numba_cache.cache_dir()}) ...",
+                file=self.progress,
+            )
+            self.progress.flush()
 
         def report(done: int, total: int) -> None:
             if self.progress is None:
@@ -169,7 +183,16 @@ class TableBuilder:
                 )
                 self.progress.flush()
 
-        return config.build_table(self.config, progress=report)
+        table = config.build_table(self.config, progress=report)
+        if compiling:
+            _numba_cache.mark_compiled()
+            if self.progress is not None:
+                print(
+                    f"{PROG}: this first build took {time.perf_counter() - start:.1f} s; later "
+                    "builds load the compiled kernels from the cache",
+                    file=self.progress,
+                )
+        return table
 
 
 #: Names ``build`` treats as whole CosmoScout VR atmosphere sets.
@@ -248,6 +271,85 @@ def write_formats(
             write(table, out_dir, format=name, overwrite=overwrite, **options.for_format(name))
         )
     return written
+
+
+@dataclass(frozen=True)
+class Placement:
+    """What :func:`place_outputs` did: files written, and files left as they were."""
+
+    written: tuple[Path, ...]
+    unchanged: tuple[Path, ...]
+
+
+def _same_table(existing: Path, staged: Path) -> bool:
+    """Both HDF5 files hold the same table (:func:`dustoptics.compare.table_differences`)."""
+    from dustoptics.compare import table_differences
+    from dustoptics.io import FormatError, read_hdf5
+
+    if existing.suffix.lower() not in (".h5", ".hdf5", ".nc"):
+        return False
+    try:
+        return not table_differences(read_hdf5(existing), read_hdf5(staged))
+    except (FormatError, OSError):
+        return False
+
+
+def place_outputs(
+    render: Callable[[Path], Sequence[Path]], out_dir: Path, *, force: bool
+) -> Placement:
+    """Write the files ``render(directory)`` writes, into ``out_dir``, as ``build`` and ``export`` do.
+
+    ``render`` writes into an empty temporary directory; each of its files is
+    then compared with the file of the same name in ``out_dir``:
+
+    - none there: the file is written;
+    - the same bytes, or an HDF5 file that holds the same table (same inputs
+      and grids, numbers equal to 1e-9 relative; only the recorded software
+      versions differ): the existing file is left untouched ("up to date");
+    - anything else: replaced with ``force``, otherwise :class:`FileExistsError`
+      naming every such file, before anything is written.
+
+    The new files appear together or not at all (:mod:`dustoptics.io._atomic`).
+    Other files in ``out_dir`` are left alone.
+    """
+    from dustoptics.io._atomic import write_files
+
+    with tempfile.TemporaryDirectory(prefix="dustoptics-") as tmp:
+        staging = Path(tmp).resolve()
+        contents: dict[Path, bytes] = {}
+        unchanged: list[Path] = []
+        conflicts: list[Path] = []
+        for path in render(staging):
+            target = out_dir / Path(path).resolve().relative_to(staging)
+            data = Path(path).read_bytes()
+            if target.is_file():
+                if target.read_bytes() == data or _same_table(target, Path(path)):
+                    unchanged.append(target)
+                    continue
+                conflicts.append(target)
+            contents[target] = data
+        if conflicts and not force:
+            raise FileExistsError(
+                "these files exist and differ from the new ones; use --force to replace them: "
+                + ", ".join(repr(str(c)) for c in conflicts)
+            )
+        written = write_files(contents, overwrite=force) if contents else []
+    return Placement(written=tuple(written), unchanged=tuple(unchanged))
+
+
+def _report_placement(
+    args: argparse.Namespace, name: str, out_dir: Path, placed: Placement
+) -> None:
+    if placed.written:
+        _say(args, f"{name}: wrote {len(placed.written)} files to {out_dir}")
+        for path in placed.written:
+            _say(args, f"  {path}")
+    if placed.unchanged:
+        _say(
+            args, f"{name}: {len(placed.unchanged)} files up to date in {out_dir} (left untouched)"
+        )
+        for path in placed.unchanged:
+            _say(args, f"  {path}")
 
 
 def describe(table: Any) -> str:
@@ -342,13 +444,13 @@ def _positive_int(text: str) -> int:
     return value
 
 
-def _add_format_options(p: argparse.ArgumentParser, *, default: str | None) -> None:
+def _add_format_options(p: argparse.ArgumentParser, *, default: str | None, required: bool) -> None:
     help_default = f" (default {default})" if default else ""
     p.add_argument(
         "--format",
         type=_formats,
-        default=_formats(default) if default else None,
-        required=default is None,
+        default=None,
+        required=required,
         metavar="FMT[,FMT...]",
         help=f"output formats: hdf5, csv, cosmoscout, glsl, texture{help_default}",
     )
@@ -446,10 +548,11 @@ def _parser() -> argparse.ArgumentParser:
         type=Path,
         default=Path("tables"),
         metavar="DIR",
-        help="output directory; files go to DIR/NAME/ (default ./tables)",
+        help="output directory; files go to DIR/NAME/ (default ./tables); files that "
+        "already hold the same table are left untouched",
     )
     p.add_argument("--quiet", action="store_true", help="no progress or summary output")
-    _add_format_options(p, default=",".join(DEFAULT_FORMATS))
+    _add_format_options(p, default=",".join(DEFAULT_FORMATS), required=False)
     g = p.add_argument_group(
         "atmosphere sets ('build mars', 'build earth': CosmoScout VR's full set)"
     )
@@ -480,11 +583,19 @@ def _parser() -> argparse.ArgumentParser:
         help="Earth: ozone cross-sections (see dustoptics.atmosphere.gases.read_ozone_csv) in Bruneton's layer",
     )
 
-    p = sub.add_parser("export", help="convert an HDF5 table into other formats")
-    p.add_argument("file", type=Path, metavar="FILE.h5")
-    p.add_argument("--out", type=Path, required=True, metavar="DIR", help="output directory")
+    p = sub.add_parser("export", help="convert a table file into other formats")
+    p.add_argument(
+        "file", type=Path, metavar="FILE", help="HDF5 file, seed-CSV directory or its summary"
+    )
+    p.add_argument(
+        "--out",
+        type=Path,
+        required=True,
+        metavar="DIR",
+        help="output directory; files go to DIR/NAME/, NAME the table's name (as for build)",
+    )
     p.add_argument("--quiet", action="store_true", help="no summary output")
-    _add_format_options(p, default=None)
+    _add_format_options(p, default=None, required=True)
 
     p = sub.add_parser("info", help="what a table file holds and how it was made")
     p.add_argument(
@@ -555,10 +666,12 @@ def _say(args: argparse.Namespace, text: str) -> None:
         print(text)
 
 
-def _format_options(args: argparse.Namespace, table: Any) -> tuple[Any, FormatOptions]:
+def _format_options(
+    args: argparse.Namespace, table: Any, formats: Sequence[str]
+) -> tuple[Any, FormatOptions]:
     """The table (with a number density if given) and the writers' options."""
     density = None
-    if "cosmoscout" in args.format:
+    if "cosmoscout" in formats:
         from dustoptics.atmosphere.column import ExponentialProfile, sample_profile
 
         if args.number_density_per_m3 is not None:
@@ -588,6 +701,12 @@ def _format_options(args: argparse.Namespace, table: Any) -> tuple[Any, FormatOp
 def _cmd_build_atmosphere(args: argparse.Namespace) -> int:
     from dustoptics.atmosphere import sets as atmosphere
 
+    if args.format is not None and args.format != ("cosmoscout",):
+        raise UsageError(
+            f"'build {args.name}' writes CosmoScout VR's atmosphere set (format cosmoscout); "
+            f"--format {','.join(args.format)} is not available for a set. Build a table "
+            "('dustoptics build PRESET --format ...') to get the other formats"
+        )
     atm = build_atmosphere(
         args.name,
         dust=args.dust,
@@ -597,10 +716,10 @@ def _cmd_build_atmosphere(args: argparse.Namespace) -> int:
         progress=None if args.quiet else sys.stderr,
     )
     out_dir = args.out / args.name
-    written = atmosphere.write_atmosphere(atm, out_dir, overwrite=args.force)
-    _say(args, f"{args.name}: wrote {len(written)} files (CosmoScout VR set) to {out_dir}")
-    for path in written:
-        _say(args, f"  {path}")
+    placed = place_outputs(
+        lambda directory: atmosphere.write_atmosphere(atm, directory), out_dir, force=args.force
+    )
+    _report_placement(args, f"{args.name} (CosmoScout VR set)", out_dir, placed)
     return 0
 
 
@@ -608,32 +727,31 @@ def _cmd_build(args: argparse.Namespace) -> int:
     if args.name in ATMOSPHERES:
         return _cmd_build_atmosphere(args)
     builder = TableBuilder.from_name(args.name, progress=None if args.quiet else sys.stderr)
-    out_dir = args.out / builder.name
-    if out_dir.exists() and any(out_dir.iterdir()) and not args.force:
-        raise FileExistsError(f"{str(out_dir)!r} already holds files; use --force to replace them")
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         table = builder.build()
     for w in caught:
         print(f"{PROG}: warning: {w.message}", file=sys.stderr)
-    table, options = _format_options(args, table)
-    written = write_formats(table, out_dir, args.format, overwrite=args.force, options=options)
-    _say(args, f"{builder.name}: wrote {len(written)} files to {out_dir}")
-    for path in written:
-        _say(args, f"  {path}")
+    return _write_table(args, table, args.format or DEFAULT_FORMATS)
+
+
+def _write_table(args: argparse.Namespace, table: Any, formats: Sequence[str]) -> int:
+    """``build`` and ``export``: the table's files go into ``--out DIR`` / the table's name."""
+    table, options = _format_options(args, table, formats)
+    out_dir = args.out / table.name
+    placed = place_outputs(
+        lambda directory: write_formats(
+            table, directory, formats, overwrite=False, options=options
+        ),
+        out_dir,
+        force=args.force,
+    )
+    _report_placement(args, table.name, out_dir, placed)
     return 0
 
 
 def _cmd_export(args: argparse.Namespace) -> int:
-    from dustoptics.io import read_hdf5
-
-    table = read_hdf5(args.file)
-    table, options = _format_options(args, table)
-    written = write_formats(table, args.out, args.format, overwrite=args.force, options=options)
-    _say(args, f"{table.name}: wrote {len(written)} files to {args.out}")
-    for path in written:
-        _say(args, f"  {path}")
-    return 0
+    return _write_table(args, read_table(args.file), args.format)
 
 
 def _cmd_info(args: argparse.Namespace) -> int:

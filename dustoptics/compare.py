@@ -27,7 +27,31 @@ from numpy.typing import ArrayLike
 from dustoptics._validation import _show
 from dustoptics.table import Table
 
-__all__ = ["TableComparison", "compare_tables"]
+__all__ = [
+    "ESTIMATE_RTOL",
+    "SAME_TABLE_RTOL",
+    "TableComparison",
+    "compare_tables",
+    "table_differences",
+]
+
+#: Relative tolerance under which two tables of the same inputs are the same
+#: table: far below the tables' 1e-4 accuracy, far above the last-bit
+#: differences a different CPU or library build may give. [-]
+SAME_TABLE_RTOL = 1e-9
+#: The error estimates are differences of nearly equal quadrature sums, so
+#: round-off moves them ~1000x more (measured: 1.7e-9 from a change in how one
+#: complex division rounds); they are compared to this looser tolerance. [-]
+ESTIMATE_RTOL = 1e-6
+
+_SAME_TABLE_ARRAYS = (
+    "phase",
+    "g",
+    "cext_um2",
+    "csca_um2",
+    "error_estimate",
+    "cross_section_error_estimate",
+)
 
 
 def _readonly(values: Any) -> np.ndarray:
@@ -95,9 +119,13 @@ class TableComparison:
         """The comparison as a pandas DataFrame, one row per wavelength.
 
         Columns ``wavelength_nm`` [nm], ``forward_peak_ratio``, ``g_a``,
-        ``g_b``, ``median_rel_diff`` and ``max_rel_diff`` [-].
+        ``g_b``, ``median_rel_diff`` and ``max_rel_diff`` [-].  Needs pandas
+        (the ``pandas`` extra).
         """
-        import pandas as pd
+        try:
+            import pandas as pd
+        except ImportError:
+            raise ImportError("to_frame needs pandas: pip install 'dustoptics[pandas]'") from None
 
         return pd.DataFrame({key: np.array(getattr(self, key)) for key in self._COLUMNS})
 
@@ -197,3 +225,47 @@ def compare_tables(a: Table, b: Table, *, theta_deg: ArrayLike | None = None) ->
         max_rel_diff=np.max(rel, axis=1),
         interpolated=interpolated,
     )
+
+
+def table_differences(stored: Table, fresh: Table) -> list[str]:
+    """What differs between two tables that should be the same (empty: the same table).
+
+    The same table means: the same inputs (:attr:`Provenance.input_hash
+    <dustoptics.table.Provenance.input_hash>`), the same grids, and numbers
+    equal to :data:`SAME_TABLE_RTOL` relative (error estimates:
+    :data:`ESTIMATE_RTOL`).  The software versions a table records are not
+    compared: a table rebuilt by another version that gives the same numbers is
+    the same table.  ``scripts/build_tables.py --check`` and ``dustoptics
+    build`` (an existing file that holds the same table is up to date) use it.
+
+    Examples
+    --------
+    >>> import dustoptics as do
+    >>> t = do.compute_optics(1.5 + 0.01j, do.Monodisperse(radius_um=0.5), [550.0], [0.0, 180.0])
+    >>> table_differences(t, t)
+    []
+    """
+    name = fresh.name
+    problems = []
+    if stored.provenance.input_hash != fresh.provenance.input_hash:
+        problems.append(
+            f"{name}: inputs changed (input hash {stored.provenance.input_hash[:12]} "
+            f"stored, {fresh.provenance.input_hash[:12]} now)"
+        )
+    for grid in ("wavelength_nm", "theta_deg"):
+        if not np.array_equal(getattr(stored, grid), getattr(fresh, grid)):
+            problems.append(f"{name}: {grid} grid changed")
+            return problems
+    for key in _SAME_TABLE_ARRAYS:
+        a, b = getattr(stored, key), getattr(fresh, key)
+        if (a is None) != (b is None):
+            problems.append(f"{name}: {key} present in one table only")
+        elif a is not None and not np.allclose(
+            a,
+            b,
+            rtol=ESTIMATE_RTOL if key.endswith("error_estimate") else SAME_TABLE_RTOL,
+            atol=0.0,
+        ):
+            worst = float(np.max(np.abs(a - b) / np.maximum(np.abs(b), np.finfo(float).tiny)))
+            problems.append(f"{name}: {key} differs by up to {worst:.2e} relative")
+    return problems

