@@ -241,9 +241,11 @@ def table_differences(stored: Table, fresh: Table) -> list[str]:
     Examples
     --------
     >>> import dustoptics as do
-    >>> t = do.compute_optics(1.5 + 0.01j, do.Monodisperse(radius_um=0.5), [550.0], [0.0, 180.0])
+    >>> t = do.build_preset("costa")
     >>> table_differences(t, t)
     []
+    >>> table_differences(t, t.replace(g=t.g * (1 + 1e-6)))
+    ['costa: g differs by up to 1.00e-06 relative']
     """
     name = fresh.name
     problems = []
