@@ -196,10 +196,7 @@ class TableBuilder:
 
 
 #: Names ``build`` treats as whole CosmoScout VR atmosphere sets.
-ATMOSPHERES = ("mars", "earth")
-
-#: CosmoScout VR's default wavelength set: 15 evenly spaced over 360-830 nm. [nm]
-COSMOSCOUT_WAVELENGTHS_NM = tuple(np.linspace(360.0, 830.0, 15).tolist())
+ATMOSPHERES = ("mars", "earth", "earth-kobe2026")
 
 
 def build_atmosphere(
@@ -218,25 +215,25 @@ def build_atmosphere(
     VR's 15 wavelengths with angles every 0.1 deg (a superset of the files'
     1 deg), its number density set by the vertical ``optical_depth`` at
     ``reference_wavelength_nm`` (<C_ext> computed there exactly).
-    Earth: Kobe 2026's air, aerosols and ozone on his three wavelengths, or,
-    with ``ozone_csv`` (:func:`dustoptics.atmosphere.gases.read_ozone_csv`), that
-    spectrum in Bruneton's ozone layer on the 15 wavelengths.
+    Earth: standard air (Penndorf 1957, King factor), Kobe's aerosols and the
+    shipped ozone spectrum (Serdyuchenko et al. 2014) in Bruneton's layer on
+    CosmoScout VR's 15 wavelengths; ``ozone_csv``
+    (:func:`dustoptics.atmosphere.gases.read_ozone_csv`) replaces the ozone
+    spectrum.  "earth-kobe2026": Kobe 2026's air, aerosols and ozone on his
+    three wavelengths.
     """
     from dataclasses import replace
 
-    from dustoptics.atmosphere import column, gases
+    from dustoptics.atmosphere import gases
     from dustoptics.atmosphere import sets as atmosphere
     from dustoptics.table import Table
 
+    if name == "earth-kobe2026":
+        return atmosphere.earth_atmosphere_kobe2026()
     if name == "earth":
         if ozone_csv is None:
             return atmosphere.earth_atmosphere()
-        return atmosphere.earth_atmosphere(
-            wavelength_nm=COSMOSCOUT_WAVELENGTHS_NM,
-            ozone=gases.read_ozone_csv(ozone_csv),
-            ozone_profile=column.BRUNETON2017_OZONE,
-            ozone_number_density_per_m3=column.BRUNETON2017_OZONE_PEAK_NUMBER_DENSITY_PER_M3,
-        )
+        return atmosphere.earth_atmosphere(ozone=gases.read_ozone_csv(ozone_csv))
     builder = TableBuilder.from_name(dust, progress=progress)
     cfg = builder.config
     if not cfg.phase.uses_mie:
@@ -244,7 +241,10 @@ def build_atmosphere(
             f"dust {dust!r} has no cross-sections (a phase-function-only model); choose a Mie preset"
         )
     grid = replace(
-        cfg, optics=replace(cfg.optics, wavelengths_nm=COSMOSCOUT_WAVELENGTHS_NM, n_theta=1801)
+        cfg,
+        optics=replace(
+            cfg.optics, wavelengths_nm=atmosphere.COSMOSCOUT_WAVELENGTHS_NM, n_theta=1801
+        ),
     )
     dust_table: Table = TableBuilder(grid, progress=progress).build()
     reference = replace(
@@ -565,9 +565,9 @@ def _parser() -> argparse.ArgumentParser:
     g.add_argument(
         "--optical-depth",
         type=_positive_float,
-        default=0.5,
         metavar="TAU",
-        help="Mars vertical dust optical depth (default 0.5; clear seasons 0.3-1)",
+        help="vertical optical depth: of the Mars dust (default 0.5; clear seasons 0.3-1), or, "
+        "for one preset with --format cosmoscout, sets its number density (recorded in the provenance)",
     )
     g.add_argument(
         "--reference-wavelength-nm",
@@ -674,17 +674,30 @@ def _format_options(
     if "cosmoscout" in formats:
         from dustoptics.atmosphere.column import ExponentialProfile, sample_profile
 
+        tau = getattr(args, "optical_depth", None)
+        if tau is not None and args.number_density_per_m3 is not None:
+            raise UsageError("give --optical-depth or --number-density-per-m3, not both")
+        profile = ExponentialProfile(scale_height_m=args.scale_height_m)
+        if tau is not None:
+            from dustoptics.atmosphere.sets import with_optical_depth
+
+            table = with_optical_depth(
+                table,
+                optical_depth=tau,
+                reference_wavelength_nm=args.reference_wavelength_nm,
+                profile=profile,
+                top_altitude_m=args.top_altitude_m,
+            )
         if args.number_density_per_m3 is not None:
             table = table.replace(number_density_per_m3=args.number_density_per_m3)
         if table.number_density_per_m3 is None:
             raise UsageError(
                 "the cosmoscout format needs a number density for beta [m^-1]: give "
-                "--number-density-per-m3 or number_density_per_m3 in the configuration"
+                "--optical-depth (with --reference-wavelength-nm), --number-density-per-m3 or "
+                "number_density_per_m3 in the configuration"
             )
         samples = sample_profile(
-            ExponentialProfile(scale_height_m=args.scale_height_m),
-            top_altitude_m=args.top_altitude_m,
-            n_altitudes=args.n_altitudes,
+            profile, top_altitude_m=args.top_altitude_m, n_altitudes=args.n_altitudes
         )
         density = samples.relative_density
     options = FormatOptions(
@@ -710,7 +723,7 @@ def _cmd_build_atmosphere(args: argparse.Namespace) -> int:
     atm = build_atmosphere(
         args.name,
         dust=args.dust,
-        optical_depth=args.optical_depth,
+        optical_depth=0.5 if args.optical_depth is None else args.optical_depth,
         reference_wavelength_nm=args.reference_wavelength_nm,
         ozone_csv=args.ozone_csv,
         progress=None if args.quiet else sys.stderr,

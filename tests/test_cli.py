@@ -16,6 +16,7 @@ import pytest
 
 import dustoptics as do
 from dustoptics import cli
+from dustoptics.atmosphere.sets import COSMOSCOUT_WAVELENGTHS_NM
 from dustoptics.io import read_hdf5, read_seed_csv, read_texture
 from dustoptics.io.cosmoscout import check_cosmoscout_set, read_cosmoscout_constituent
 from dustoptics.models import presets
@@ -248,6 +249,27 @@ def test_cosmoscout_without_number_density_is_a_usage_error(config, tmp_path, ca
     )
 
 
+def test_single_preset_cosmoscout_from_optical_depth(config, tmp_path):
+    out = tmp_path / "out"
+    args = ["--format", "hdf5,cosmoscout", "--optical-depth", "0.4", "--scale-height-m", "11100"]
+    assert _build(config, out, *args) == 0
+    table = read_hdf5(out / "small-dust" / "small-dust.h5")
+    column = table.provenance.inputs["column"]
+    assert column["optical_depth"] == 0.4 and column["reference_wavelength_nm"] == 550.0
+    # Identity: tau = N0 <C_ext>(550 nm) L, L = H (1 - exp(-top / H)), top 120 km.
+    length = 11100.0 * (1 - np.exp(-120e3 / 11100.0))
+    tau = table.number_density_per_m3 * table.cext_um2[1] * 1e-12 * length
+    np.testing.assert_allclose(tau, 0.4, rtol=1e-12)
+    both = [*args, "--number-density-per-m3", "1e8", "--force"]
+    assert _build(config, out, *both) == 2
+
+
+def test_build_earth_kobe2026_keeps_his_three_wavelengths(tmp_path):
+    assert cli.main(["build", "earth-kobe2026", "--out", str(tmp_path), "--quiet"]) == 0
+    mol = read_cosmoscout_constituent(tmp_path / "earth-kobe2026", "earth-kobe2026_molecules")
+    np.testing.assert_allclose(mol.wavelength_m, [475e-9, 510e-9, 650e-9], rtol=1e-6)
+
+
 def test_physics_error_exits_1_without_traceback(tmp_path, capsys):
     path = tmp_path / "uv.toml"
     path.write_text(SMALL.replace("[440.0, 550.0, 680.0]", "[100.0, 550.0]"), encoding="utf-8")
@@ -389,6 +411,6 @@ def read_hdf5_free_csca(cfg, i):
     from dataclasses import replace
 
     grid = replace(
-        cfg, optics=replace(cfg.optics, wavelengths_nm=cli.COSMOSCOUT_WAVELENGTHS_NM, n_theta=1801)
+        cfg, optics=replace(cfg.optics, wavelengths_nm=COSMOSCOUT_WAVELENGTHS_NM, n_theta=1801)
     )
     return do.config.build_table(grid).csca_um2[i] * 1e-12

@@ -50,7 +50,9 @@ Models (:data:`RAYLEIGH_MODELS`, :func:`get_rayleigh_model`)
 Absorbing gases
 ---------------
 Ozone absorbs without scattering, ``beta_abs = sigma(lambda) N_O3``
-(:func:`ozone_beta_abs_per_m`).  Cross-sections come from a user CSV file
+(:func:`ozone_beta_abs_per_m`).  Cross-sections come from the shipped
+spectrum of Serdyuchenko et al. 2014 at 233 K in 10 nm bins
+(:func:`ozone_serdyuchenko2014`), a user CSV file
 (:func:`read_ozone_csv`, format below) or Kobe's three published values
 (:data:`KOBE2026_OZONE`), which are usable only at their own wavelengths.
 
@@ -89,11 +91,13 @@ References
 
 from __future__ import annotations
 
+import functools
 import math
 import os
 import re
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, replace
+from importlib import resources
 from pathlib import Path
 from types import MappingProxyType
 from typing import Any, Final
@@ -123,6 +127,7 @@ __all__ = [
     "MARS_SURFACE_TEMPERATURE_K",
     "RAYLEIGH_MODELS",
     "RAYLEIGH_PHASE_MODELS",
+    "SERDYUCHENKO_2014",
     "ConstantRefractivity",
     "OzoneCrossSection",
     "RayleighModel",
@@ -132,6 +137,7 @@ __all__ = [
     "ideal_gas_number_density_per_m3",
     "king_factor",
     "ozone_beta_abs_per_m",
+    "ozone_serdyuchenko2014",
     "ozone_table",
     "rayleigh_beta_per_m",
     "rayleigh_cross_section_m2",
@@ -950,6 +956,54 @@ KOBE2026_OZONE: Final = OzoneCrossSection(
 #: Kobe's ozone number density as a fraction of the air (Rayleigh) density:
 #: 6e-7 ("0.00006 %"), Kobe 2026 section 11.5.1. [-]
 KOBE2026_OZONE_FRACTION: Final = 6e-7
+
+
+#: Citation of the shipped ozone spectrum (:func:`ozone_serdyuchenko2014`).
+SERDYUCHENKO_2014: Final = (
+    'A. Serdyuchenko, V. Gorshelev, M. Weber, W. Chehade and J. P. Burrows, "High spectral '
+    'resolution ozone absorption cross-sections - Part 2: Temperature dependence," Atmos. Meas. '
+    "Tech. 7, 625-636 (2014), doi:10.5194/amt-7-625-2014; 233 K, 10 nm bin means as in E. Bruneton, "
+    "precomputed_atmospheric_scattering (2017, BSD-3-Clause), demo/demo.cc kOzoneCrossSection"
+)
+
+
+@functools.cache
+def ozone_serdyuchenko2014() -> OzoneCrossSection:
+    """The ozone absorption spectrum the package ships: Serdyuchenko et al. 2014 at 233 K.
+
+    48 values, the means of the measured 233 K spectrum over 10 nm bins
+    [L, L + 10) nm for L = 360, 370, ..., 830, as Bruneton's precomputed
+    atmospheric scattering demo (BSD-3-Clause) lists them and uses them: each
+    bin's mean at its start wavelength L, linear between them (so the range is
+    360-830 nm).  The file, with its citation, licence and provenance, is
+    ``dustoptics/refractive_indices/spectra/ozone_serdyuchenko2014_233K_10nm.csv``.
+
+    Returns
+    -------
+    OzoneCrossSection
+        ``sigma_m2`` per molecule. [m^2]
+
+    Examples
+    --------
+    >>> o3 = ozone_serdyuchenko2014()
+    >>> float(o3(600.0))  # the Chappuis band's peak region
+    5.019e-25
+    """
+    text = (
+        resources.files("dustoptics.refractive_indices")
+        .joinpath("spectra", "ozone_serdyuchenko2014_233K_10nm.csv")
+        .read_text(encoding="utf-8")
+    )
+    lines = [ln for ln in text.splitlines() if ln and not ln.startswith("#")]
+    if lines[0] != "bin_start_nm,bin_end_nm,cross_section_m2":  # pragma: no cover - shipped file
+        raise RuntimeError(f"unexpected header of the shipped ozone spectrum: {lines[0]!r}")
+    rows = np.array([[float(v) for v in ln.split(",")] for ln in lines[1:]])
+    return OzoneCrossSection(
+        name="ozone-serdyuchenko2014-233K",
+        wavelength_nm=rows[:, 0],
+        sigma_m2=rows[:, 2],
+        citation=SERDYUCHENKO_2014,
+    )
 
 
 def read_ozone_csv(path: str | os.PathLike[str], *, name: str | None = None) -> OzoneCrossSection:

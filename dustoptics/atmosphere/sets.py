@@ -18,12 +18,15 @@ Builders (the presets of the seeds)
     table computed by the caller (any dust preset), whose number density is
     set from a measured optical depth at a reference wavelength.
 :func:`earth_atmosphere`
-    Air molecules (``"kobe2026"``, ``"costa2021"`` or ``"penndorf1957"``),
-    aerosols (a table, or Kobe's constant coefficients) and ozone (Kobe's
-    three cross-sections at 6e-7 of the air density, or any
-    :class:`~dustoptics.atmosphere.gases.OzoneCrossSection` with any profile, e.g.
-    Bruneton's layer).  With the defaults it is Kobe's Earth with ozone, on
-    his three wavelengths 475, 510, 650 nm.
+    Air molecules (``"penndorf1957"``: standard air with the King factor, by
+    default; ``"costa2021"`` or ``"kobe2026"``), aerosols (a table, or Kobe's
+    constant coefficients) and ozone (the shipped Serdyuchenko et al. 2014
+    spectrum in Bruneton's layer by default, or any
+    :class:`~dustoptics.atmosphere.gases.OzoneCrossSection` with any profile),
+    on CosmoScout VR's 15 wavelengths 360-830 nm by default.
+:func:`earth_atmosphere_kobe2026`
+    Kobe's Earth on his three wavelengths 475, 510, 650 nm (his air without
+    the King factor, his three ozone cross-sections at 6e-7 of the air).
 
 Planet settings (the seeds' renderer configurations and CosmoScout VR's)
 ------------------------------------------------------------------------
@@ -62,6 +65,8 @@ from numpy.typing import ArrayLike
 from dustoptics._validation import as_increasing_grid, check_choice, check_positive
 from dustoptics.atmosphere import gases
 from dustoptics.atmosphere.column import (
+    BRUNETON2017_OZONE,
+    BRUNETON2017_OZONE_PEAK_NUMBER_DENSITY_PER_M3,
     DensityProfile,
     ExponentialProfile,
     FixedFractionProfile,
@@ -73,14 +78,18 @@ from dustoptics.table import Provenance, Source, Table
 
 __all__ = [
     "CONSTITUENT_ROLES",
+    "COSMOSCOUT_WAVELENGTHS_NM",
     "EARTH_MOLECULE_MODELS",
     "KOBE2026_AEROSOL_BETA_SCA_PER_M",
+    "KOBE2026_WAVELENGTHS_NM",
     "MARS_MOLECULE_MODELS",
     "Atmosphere",
     "Constituent",
     "earth_atmosphere",
+    "earth_atmosphere_kobe2026",
     "mars_atmosphere",
     "settings_json",
+    "with_optical_depth",
     "write_atmosphere",
 ]
 
@@ -114,6 +123,12 @@ _EARTH_RADIUS_M: Final = 6371e3
 _EARTH_TOP_M: Final = 6451e3
 _EARTH_SUN_DISTANCE_M: Final = 149.6e9
 _N_ALTITUDES: Final = 1024
+
+#: CosmoScout VR's default wavelengths: 15 evenly spaced from 360 to 830 nm. [nm]
+COSMOSCOUT_WAVELENGTHS_NM: Final = tuple(np.linspace(360.0, 830.0, 15).tolist())
+
+#: Kobe's three wavelengths (his ozone cross-sections exist only there). [nm]
+KOBE2026_WAVELENGTHS_NM: Final = (475.0, 510.0, 650.0)
 
 
 @dataclass(frozen=True)
@@ -367,6 +382,80 @@ def write_atmosphere(
 # ---------------------------------------------------------------- builders
 
 
+def with_optical_depth(
+    table: Table,
+    *,
+    optical_depth: float,
+    reference_wavelength_nm: float,
+    profile: DensityProfile,
+    top_altitude_m: float,
+    reference_cext_um2: float | None = None,
+) -> Table:
+    """The table with the number density that gives a vertical optical depth.
+
+    ``N0 = tau / (<C_ext>(lambda_ref) L)`` with ``L`` the profile's column
+    length up to ``top_altitude_m``
+    (:func:`~dustoptics.atmosphere.column.number_density_from_optical_depth`).
+    The optical depth, its wavelength, ``<C_ext>`` there, the profile and the
+    column top are recorded in the provenance (``inputs["column"]`` and a
+    note), so the file says where its number density came from.
+
+    Parameters
+    ----------
+    table : Table
+        A table with cross-sections.
+    optical_depth : float
+        Vertical optical depth at ``reference_wavelength_nm``, > 0. [-]
+    reference_wavelength_nm : float
+        Within the table's wavelengths; ``<C_ext>`` is read linearly between
+        rows unless ``reference_cext_um2`` gives it. [nm]
+    profile : DensityProfile
+        The constituent's relative density profile.
+    top_altitude_m : float
+        Top of the column above the surface. [m]
+    reference_cext_um2 : float, optional
+        ``<C_ext>`` at the reference wavelength, computed exactly there. [um^2]
+
+    Returns
+    -------
+    Table
+    """
+    tau = check_positive("optical_depth", optical_depth)
+    cext = (
+        _cext_at(table, reference_wavelength_nm)
+        if reference_cext_um2 is None
+        else check_positive("reference_cext_um2", reference_cext_um2, unit="um^2")
+    )
+    n0 = number_density_from_optical_depth(
+        optical_depth=tau, cext_um2=cext, profile=profile, top_altitude_m=top_altitude_m
+    )
+    column = {
+        "optical_depth": tau,
+        "reference_wavelength_nm": float(reference_wavelength_nm),
+        "reference_cext_um2": cext,
+        "cext_source": "given (computed at the reference wavelength)"
+        if reference_cext_um2 is not None
+        else "the table's rows, linear in wavelength",
+        "profile": repr(profile),
+        "top_altitude_m": float(top_altitude_m),
+        "number_density_per_m3": n0,
+    }
+    prov = table.provenance
+    note = (
+        f"number density {n0:.6g} m^-3 from vertical optical depth {tau:g} at "
+        f"{float(reference_wavelength_nm):g} nm (<C_ext> = {cext:.6g} um^2, {profile!r}, "
+        f"column top {float(top_altitude_m):g} m)"
+    )
+    provenance = Provenance(
+        inputs={**prov.inputs, "column": column},
+        sources=prov.sources,
+        software=prov.software,
+        quadrature=prov.quadrature,
+        notes=(*prov.notes, note),
+    )
+    return table.replace(number_density_per_m3=n0, provenance=provenance)
+
+
 def _cext_at(table: Table, wavelength_nm: float) -> float:
     wl = table.wavelength_nm
     w = check_positive("reference_wavelength_nm", wavelength_nm, unit="nm")
@@ -463,17 +552,14 @@ def mars_atmosphere(
         if dust_profile is not None
         else ExponentialProfile(scale_height_m=dust_scale_height_m)
     )
-    n0 = number_density_from_optical_depth(
+    dust = with_optical_depth(
+        dust_table,
         optical_depth=optical_depth,
-        cext_um2=(
-            _cext_at(dust_table, reference_wavelength_nm)
-            if reference_cext_um2 is None
-            else check_positive("reference_cext_um2", reference_cext_um2, unit="um^2")
-        ),
+        reference_wavelength_nm=reference_wavelength_nm,
+        reference_cext_um2=reference_cext_um2,
         profile=profile,
         top_altitude_m=top,
     )
-    dust = dust_table.replace(number_density_per_m3=n0)
     mol_table, mol_name, refractivity = _molecules(molecules, MARS_MOLECULE_MODELS, wl)
     h_mol = (
         molecules_scale_height_m
@@ -538,15 +624,18 @@ def _kobe_aerosols(wl: np.ndarray, *, g: float) -> Table:
     )
 
 
+_SHIPPED_OZONE: Final = "serdyuchenko2014"
+
+
 def earth_atmosphere(
     *,
-    wavelength_nm: ArrayLike = (475.0, 510.0, 650.0),
-    molecules: str | gases.RayleighModel = "kobe2026",
+    wavelength_nm: ArrayLike = COSMOSCOUT_WAVELENGTHS_NM,
+    molecules: str | gases.RayleighModel = "penndorf1957",
     molecules_scale_height_m: float | None = None,
     aerosol_table: Table | None = None,
     aerosol_profile: DensityProfile | None = None,
     aerosol_g: float = 0.76,
-    ozone: gases.OzoneCrossSection | None = gases.KOBE2026_OZONE,
+    ozone: gases.OzoneCrossSection | str | None = _SHIPPED_OZONE,
     ozone_profile: DensityProfile | None = None,
     ozone_number_density_per_m3: float | None = None,
     planet_radius_m: float = _EARTH_RADIUS_M,
@@ -557,11 +646,13 @@ def earth_atmosphere(
 
     Parameters
     ----------
-    wavelength_nm : array_like, default (475, 510, 650)
-        Strictly increasing wavelengths (Kobe's three by default; his ozone
-        cross-sections exist only there). [nm]
-    molecules : {"kobe2026", "costa2021", "penndorf1957"} or RayleighModel
-        Molecule model.
+    wavelength_nm : array_like, default COSMOSCOUT_WAVELENGTHS_NM
+        Strictly increasing wavelengths; CosmoScout VR's 15 from 360 to 830 nm
+        by default. [nm]
+    molecules : {"penndorf1957", "costa2021", "kobe2026"} or RayleighModel
+        Molecule model; default standard air with the King factor
+        (Edlén 1953 index, delta = 0.035, 0 degC and 101325 Pa), within
+        3.1e-4 of Penndorf's 1957 table over 360-800 nm (tested).
     molecules_scale_height_m : float, optional
         Default by model: 7994 m (Kobe), 7995.75 m (Costa), 8000 m. [m]
     aerosol_table : Table, optional
@@ -573,15 +664,18 @@ def earth_atmosphere(
         Default exponential, 1200 m (Kobe, Bruneton).
     aerosol_g : float, default 0.76
         Cornette-Shanks ``g`` of the default aerosols. [-]
-    ozone : OzoneCrossSection or None, default KOBE2026_OZONE
-        Ozone cross-sections; None for no ozone.
+    ozone : OzoneCrossSection, "serdyuchenko2014" or None
+        Ozone cross-sections: by default the shipped spectrum
+        (:func:`~dustoptics.atmosphere.gases.ozone_serdyuchenko2014`); None
+        for no ozone.
     ozone_profile : DensityProfile, optional
-        Default Kobe's: the molecules' profile at 6e-7 of their density
-        (:class:`~dustoptics.atmosphere.column.FixedFractionProfile`).  For any other
-        profile give ``ozone_number_density_per_m3``.
+        Default Bruneton's layer
+        (:data:`~dustoptics.atmosphere.column.BRUNETON2017_OZONE`), at its
+        peak density of 300 Dobson units unless ``ozone_number_density_per_m3``
+        is given.  A :class:`~dustoptics.atmosphere.column.FixedFractionProfile`
+        (Kobe's: 6e-7 of the molecules) takes its density from the molecules.
     ozone_number_density_per_m3 : float, optional
-        Ozone density where ``ozone_profile`` is 1 (e.g.
-        :data:`~dustoptics.atmosphere.column.BRUNETON2017_OZONE_PEAK_NUMBER_DENSITY_PER_M3`). [m^-3]
+        Ozone density where ``ozone_profile`` is 1. [m^-3]
     planet_radius_m, atmosphere_radius_m : float
         Default 6371 km and 6451 km (CosmoScout VR). [m]
     name : str, default "earth"
@@ -615,12 +709,13 @@ def earth_atmosphere(
             else ExponentialProfile(scale_height_m=1200.0),
         ),
     ]
+    if isinstance(ozone, str):
+        check_choice("ozone", ozone, (_SHIPPED_OZONE,))
+        ozone = gases.ozone_serdyuchenko2014()
     if ozone is not None:
-        profile = (
-            ozone_profile
-            if ozone_profile is not None
-            else FixedFractionProfile(base=mol_profile, fraction=gases.KOBE2026_OZONE_FRACTION)
-        )
+        profile = ozone_profile if ozone_profile is not None else BRUNETON2017_OZONE
+        if profile is BRUNETON2017_OZONE and ozone_number_density_per_m3 is None:
+            ozone_number_density_per_m3 = BRUNETON2017_OZONE_PEAK_NUMBER_DENSITY_PER_M3
         if isinstance(profile, FixedFractionProfile):
             if ozone_number_density_per_m3 is not None:
                 raise ValueError(
@@ -654,4 +749,25 @@ def earth_atmosphere(
         constituents=tuple(cons),
         sun_distance_m=_EARTH_SUN_DISTANCE_M,
         refractivity=refractivity,
+    )
+
+
+def earth_atmosphere_kobe2026(*, name: str = "earth-kobe2026") -> Atmosphere:
+    """Kobe's Earth: his air, aerosols and ozone on his three wavelengths.
+
+    Wavelengths 475, 510, 650 nm; molecules ``"kobe2026"`` (n = 1.0003 at
+    N_s = 2.545e25 m^-3, no King factor: 3.6 % above Penndorf's standard air
+    at 510 nm), scale height 7994 m; Kobe's constant aerosols; his three ozone
+    cross-sections at 6e-7 of the air density (Kobe 2026, sections 10.4, 11.3,
+    11.5).
+    """
+    return earth_atmosphere(
+        wavelength_nm=KOBE2026_WAVELENGTHS_NM,
+        molecules="kobe2026",
+        ozone=gases.KOBE2026_OZONE,
+        ozone_profile=FixedFractionProfile(
+            base=ExponentialProfile(scale_height_m=_MOLECULE_SCALE_HEIGHT_M["kobe2026"]),
+            fraction=gases.KOBE2026_OZONE_FRACTION,
+        ),
+        name=name,
     )

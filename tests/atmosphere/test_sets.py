@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 
 import numpy as np
+import pandas as pd
 import pytest
 from _shared import shared_path
 
@@ -21,6 +22,7 @@ from dustoptics.io.cosmoscout import check_cosmoscout_set, read_cosmoscout_const
 from dustoptics.table import Table
 
 WL15 = np.linspace(360.0, 830.0, 15)  # CosmoScout's default wavelength set
+SPECTRA_DIR = ("reference-data", "spectra")
 
 
 @pytest.fixture(scope="module")
@@ -104,7 +106,7 @@ def test_mars_collienne_molecules(tmp_path):
 
 
 def test_kobe_earth_with_ozone(tmp_path):
-    earth = atm.earth_atmosphere()
+    earth = atm.earth_atmosphere_kobe2026(name="earth")
     atm.write_atmosphere(earth, tmp_path)
     assert check_cosmoscout_set(tmp_path) == ["earth_aerosols", "earth_molecules", "earth_ozone"]
     settings = json.loads((tmp_path / "earth_settings.json").read_text())
@@ -150,6 +152,71 @@ def test_earth_with_tabulated_ozone_and_bruneton_layer(tmp_path):
     )
 
 
+def test_default_earth_is_cosmoscouts_15_wavelengths_with_standard_air_and_ozone(tmp_path):
+    """CosmoScout VR's 15 wavelengths, Penndorf standard air, shipped ozone in Bruneton's layer."""
+    earth = atm.earth_atmosphere()
+    np.testing.assert_allclose(earth.wavelength_nm, np.linspace(360.0, 830.0, 15), rtol=1e-15)
+    atm.write_atmosphere(earth, tmp_path)
+    assert check_cosmoscout_set(tmp_path) == ["earth_aerosols", "earth_molecules", "earth_ozone"]
+    # Molecules against Penndorf 1957 Table III (0 degC, 1013.25 hPa; shared copy),
+    # interpolated log-log between its 10 nm rows, 360-800 nm (its 810-830 nm rows are
+    # not a Rayleigh law, see test_gases): within 0.5 %.
+    ref = pd.read_csv(
+        shared_path("reference-data", "spectra", "rayleigh_penndorf1957_bruneton_clearsky.csv"),
+        comment="#",
+    )
+    wl, beta_ref = ref["wavelength_nm"].to_numpy(), ref["beta_rayleigh_per_m_0C"].to_numpy()
+    mol = earth.constituent("molecules").table
+    inside = mol.wavelength_nm <= 800.0
+    expected = np.exp(np.interp(np.log(mol.wavelength_nm), np.log(wl), np.log(beta_ref)))
+    dev = np.abs(mol.beta_sca_per_m / expected - 1.0)[inside]
+    assert dev.max() < 5e-3  # measured 2.5e-4 (at 561 nm; log-log interpolation included)
+    # Ozone: shipped spectrum at the bin starts (Bruneton's values, read independently).
+    o3 = pd.read_csv(shared_path(*SPECTRA_DIR, "ozone_xsec_bruneton_pas_233K.csv"), comment="#")
+    sigma = np.interp(earth.wavelength_nm, o3["wavelength_nm"], o3["sigma_O3_m2"])
+    ozone = earth.constituent("ozone").table
+    np.testing.assert_allclose(
+        ozone.beta_abs_per_m, sigma * BRUNETON2017_OZONE_PEAK_NUMBER_DENSITY_PER_M3, rtol=1e-12
+    )
+
+
+def test_shipped_ozone_against_serdyuchenko_293K_bins():
+    """The shipped 233 K bin means against the 293 K measurement binned the same way.
+
+    Serdyuchenko et al. 2014 (raw 293 K samples, shared copy) averaged over
+    [L, L + 10) nm here: in the Chappuis band (500-700 nm) the temperature
+    dependence is small (their Part 2: a few percent); measured 0.2-4.6 %.
+    """
+    raw = pd.read_csv(
+        shared_path(*SPECTRA_DIR, "ozone_xsec_serdyuchenko2014_293K_raw_355-845nm.csv"),
+        comment="#",
+    )
+    lam, sigma_cm2 = raw["wavelength_nm"].to_numpy(), raw["sigma_O3_cm2"].to_numpy()
+    shipped = gases.ozone_serdyuchenko2014()
+    starts = np.arange(500.0, 700.0, 10.0)
+    binned = np.array([sigma_cm2[(lam >= a) & (lam < a + 10.0)].mean() * 1e-4 for a in starts])
+    np.testing.assert_allclose(shipped(starts), binned, rtol=0.05)
+
+
+def test_optical_depth_recorded_in_provenance(dust_table):
+    profile = ExponentialProfile(scale_height_m=11100.0)
+    t = atm.with_optical_depth(
+        dust_table,
+        optical_depth=0.6,
+        reference_wavelength_nm=550.0,
+        profile=profile,
+        top_altitude_m=120e3,
+    )
+    column = t.provenance.inputs["column"]
+    assert column["optical_depth"] == 0.6 and column["reference_wavelength_nm"] == 550.0
+    assert any("optical depth 0.6 at 550 nm" in n for n in t.provenance.notes)
+    # Identity: tau = N0 <C_ext> L, L = H (1 - exp(-top / H)).
+    cext = np.interp(550.0, dust_table.wavelength_nm, dust_table.cext_um2) * 1e-12
+    length = 11100.0 * (1 - np.exp(-120e3 / 11100.0))
+    np.testing.assert_allclose(t.number_density_per_m3 * cext * length, 0.6, rtol=1e-12)
+    assert t.provenance.input_hash != dust_table.provenance.input_hash
+
+
 def test_bad_input(dust_table):
     with pytest.raises(ValueError, match=r"optical_depth must be > 0; got -0.5"):
         atm.mars_atmosphere(dust_table=dust_table, optical_depth=-0.5)
@@ -164,7 +231,7 @@ def test_bad_input(dust_table):
     ):
         atm.mars_atmosphere(dust_table=dust_table, molecules="kobe2026")
     with pytest.raises(ValueError, match=r"published only at wavelength_nm"):
-        atm.earth_atmosphere(wavelength_nm=[450.0, 550.0])  # Kobe's ozone at his 3 wavelengths only
+        atm.earth_atmosphere(wavelength_nm=[450.0, 550.0], ozone=gases.KOBE2026_OZONE)
     with pytest.raises(ValueError, match=r"ozone_number_density_per_m3 is required"):
         atm.earth_atmosphere(ozone_profile=ExponentialProfile(scale_height_m=5000.0))
     with pytest.raises(ValueError, match=r"atmosphere_radius_m must exceed planet_radius_m"):
