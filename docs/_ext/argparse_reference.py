@@ -39,6 +39,11 @@ def _subcommands(parser: argparse.ArgumentParser) -> list[tuple[str, str, argpar
     return out
 
 
+def _usage(parser: argparse.ArgumentParser) -> nodes.literal_block:
+    text = parser.format_usage().strip()
+    return nodes.literal_block(text, text, language="text")
+
+
 def _invocation(action: argparse.Action, formatter: argparse.HelpFormatter) -> str:
     if not action.option_strings:
         return formatter._metavar_formatter(action, action.dest)(1)[0]
@@ -101,7 +106,7 @@ class ArgparseReference(Directive):
         parser = _load(self.arguments[0])
         prog = parser.prog
         result: list[nodes.Node] = []
-        result.append(nodes.literal_block(text=parser.format_usage().strip()))
+        result.append(_usage(parser))
         if parser.description:
             result.append(nodes.paragraph(text=parser.description))
         result += self._arguments(parser)
@@ -109,7 +114,7 @@ class ArgparseReference(Directive):
             section = self._section(f"{prog} {name}", f"{prog}-{name}")
             if help_text:
                 section += nodes.paragraph(text=help_text[:1].upper() + help_text[1:] + ".")
-            section += nodes.literal_block(text=sub.format_usage().strip())
+            section += _usage(sub)
             for node in self._arguments(sub):
                 section += node
             result.append(section)

@@ -1,7 +1,8 @@
 """Run every example of the pages while Sphinx reads them.
 
-Each page's ``>>>`` blocks (doctest syntax; they also pass under Sphinx's own
-``-b doctest`` builder) run in page order with one namespace per page, and each
+Each page's ``>>>`` blocks (doctest syntax, run by the standard library's
+:mod:`doctest` with ELLIPSIS and NORMALIZE_WHITESPACE) run in page order with
+one namespace per page, and each
 ``.. dustoptics-command:: ARGS`` runs ``dustoptics ARGS`` through
 :func:`dustoptics.cli.main` and shows the command with its real output.  A page
 runs in a fresh temporary directory, so files that its examples write
