@@ -9,24 +9,26 @@ match each row of a tabulated phase function; :func:`fit_table` does it for a
 
 Models (:data:`FIT_MODELS`; parameters, valid range)
 ----------------------------------------------------
-``"henyey-greenstein"``      HG(g); g in (-1, 1).
-``"dhg-costa2021"``          alpha HG(g1) + (1 - alpha) HG(g2), as OpenSpace and
-                             CosmoScout VR evaluate it; g1, g2 in (-1, 1),
-                             alpha in (0, 1); reported with g1 >= g2 (the
-                             forward lobe first; the function is symmetric
-                             under swapping the lobes with alpha -> 1 - alpha).
-``"dhg-kobe2026"``           (1 - f) HG(g1) + f HG(g2), g1 in [0, 1), g2 in
-                             (-1, 0], f in (0, 1) (Kobe's convention: a
-                             forward lobe and a backward one).
-``"cornette-shanks1992"``    Cornette-Shanks(g); g in (-1, 1).
-``"hg-draine-jendersie-deon2023"``
-                             (1 - w_D) HG(g_HG) + w_D Draine(g_D, alpha);
-                             g_HG, g_D in (-1, 1), alpha in (-1, 200), w_D in
-                             (0, 1).
-``"two-term-hg-hapke2012"``  Hapke's two-term HG in scattering angle:
-                             (1 - c)/2 HG(b) + (1 + c)/2 HG(-b); b in [0, 1),
-                             c in (-1, 1) (c > 0: backward lobe dominates, as
-                             Hapke's phase-angle form states it).
+::
+
+    "henyey-greenstein"          HG(g); g in (-1, 1).
+    "dhg-costa2021"              alpha HG(g1) + (1 - alpha) HG(g2), as OpenSpace and
+                                 CosmoScout VR evaluate it; g1, g2 in (-1, 1),
+                                 alpha in (0, 1); reported with g1 >= g2 (the
+                                 forward lobe first; the function is symmetric
+                                 under swapping the lobes with alpha -> 1 - alpha).
+    "dhg-kobe2026"               (1 - f) HG(g1) + f HG(g2), g1 in [0, 1), g2 in
+                                 (-1, 0], f in (0, 1) (Kobe's convention: a
+                                 forward lobe and a backward one).
+    "cornette-shanks1992"        Cornette-Shanks(g); g in (-1, 1).
+    "hg-draine-jendersie-deon2023"
+                                 (1 - w_D) HG(g_HG) + w_D Draine(g_D, alpha);
+                                 g_HG, g_D in (-1, 1), alpha in (-1, 200), w_D in
+                                 (0, 1).
+    "two-term-hg-hapke2012"      Hapke's two-term HG in scattering angle:
+                                 (1 - c)/2 HG(b) + (1 + c)/2 HG(-b); b in [0, 1),
+                                 c in (-1, 1) (c > 0: backward lobe dominates, as
+                                 Hapke's phase-angle form states it).
 
 Loss
 ----
