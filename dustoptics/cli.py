@@ -714,10 +714,11 @@ def _format_options(
 def _cmd_build_atmosphere(args: argparse.Namespace) -> int:
     from dustoptics.atmosphere import sets as atmosphere
 
-    if args.format is not None and args.format != ("cosmoscout",):
+    if args.format is not None and not set(args.format) <= {"cosmoscout", "bruneton"}:
         raise UsageError(
-            f"'build {args.name}' writes CosmoScout VR's atmosphere set (format cosmoscout); "
-            f"--format {','.join(args.format)} is not available for a set. Build a table "
+            f"'build {args.name}' writes CosmoScout VR's atmosphere set (format cosmoscout), and "
+            f"with --format bruneton also Bruneton's model parameters; --format "
+            f"{','.join(args.format)} is not available for a set. Build a table "
             "('dustoptics build PRESET --format ...') to get the other formats"
         )
     atm = build_atmosphere(
@@ -729,9 +730,16 @@ def _cmd_build_atmosphere(args: argparse.Namespace) -> int:
         progress=None if args.quiet else sys.stderr,
     )
     out_dir = args.out / args.name
-    placed = place_outputs(
-        lambda directory: atmosphere.write_atmosphere(atm, directory), out_dir, force=args.force
-    )
+
+    def write(directory: Path) -> list[Path]:
+        written = atmosphere.write_atmosphere(atm, directory)
+        if args.format is not None and "bruneton" in args.format:
+            from dustoptics.io.bruneton import write_bruneton
+
+            written += write_bruneton(atm, directory)
+        return written
+
+    placed = place_outputs(write, out_dir, force=args.force)
     _report_placement(args, f"{args.name} (CosmoScout VR set)", out_dir, placed)
     return 0
 

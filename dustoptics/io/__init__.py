@@ -17,6 +17,10 @@ replace existing files unless asked to (``overwrite=True``).  Readers raise
   :func:`write_glsl`).
 - :mod:`~dustoptics.io.texture`: a raw little-endian float32 texture (angle x
   wavelength) with a JSON sidecar (:func:`write_texture`, :func:`read_texture`).
+- :mod:`~dustoptics.io.bruneton`: the parameters of Bruneton's precomputed
+  atmospheric scattering (2017) for a whole atmosphere
+  (:func:`~dustoptics.io.bruneton.write_bruneton`) or, as the ``bruneton``
+  format, one aerosol table's Mie part and phase-function snippet.
 
 :data:`FORMATS` maps a format name (the command line's ``--format``) to a
 writer ``writer(table, out_dir, *, overwrite=False, **options) -> list[Path]``
@@ -61,7 +65,7 @@ def write(
     return FORMATS[format](table, out_dir, overwrite=overwrite, **options)
 
 
-from dustoptics.io import cosmoscout, glsl, hdf5, seed_csv, texture
+from dustoptics.io import bruneton, cosmoscout, glsl, hdf5, seed_csv, texture
 from dustoptics.io.cosmoscout import (
     CosmoScoutConstituent,
     check_cosmoscout_set,
@@ -79,6 +83,7 @@ __all__ = [
     "CosmoScoutConstituent",
     "FormatError",
     "Writer",
+    "bruneton",
     "check_cosmoscout_set",
     "cosmoscout",
     "glsl",

@@ -1,0 +1,240 @@
+"""Bruneton (2017) precomputed atmospheric scattering: parameters, C++ header, GLSL change."""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import re
+import shutil
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from dustoptics import io as dio
+from dustoptics.atmosphere import sets as atm
+from dustoptics.atmosphere.column import (
+    BRUNETON2017_OZONE,
+    ExponentialProfile,
+    MultiModalProfile,
+    PiecewiseLinearProfile,
+)
+from dustoptics.cli import main
+from dustoptics.colour import solar_irradiance_astm_g173
+from dustoptics.io.bruneton import (
+    ASTRONOMICAL_UNIT_M,
+    bruneton_cpp,
+    bruneton_density_layers,
+    bruneton_parameters,
+    bruneton_phase_glsl,
+    write_bruneton,
+)
+from dustoptics.io.hdf5 import read_hdf5
+
+TABLES = Path(__file__).resolve().parents[2] / "tables"
+GXX = shutil.which("g++")
+GLSLANG = shutil.which("glslangValidator")
+# A checkout of github.com/ebruneton/precomputed_atmospheric_scattering, if the
+# environment names one: the tests then compile against his own files too.
+BRUNETON_REPO = os.environ.get("DUSTOPTICS_BRUNETON_REPO")
+
+
+def _his_density(layers, h):
+    """Bruneton's GetProfileDensity, written from his definitions.glsl comments."""
+
+    def layer(lay, x):
+        return np.clip(
+            lay.exp_term * np.exp(lay.exp_scale_per_m * x)
+            + lay.linear_term_per_m * x
+            + lay.constant_term,
+            0.0,
+            1.0,
+        )
+
+    if len(layers) == 1:
+        return layer(layers[0], h)
+    return np.where(h < layers[0].width_m, layer(layers[0], h), layer(layers[1], h))
+
+
+@pytest.fixture(scope="module")
+def mars():
+    dust = read_hdf5(TABLES / "blue-moons" / "blue-moons.h5")
+    return atm.mars_atmosphere(dust_table=dust, optical_depth=0.5)
+
+
+def test_density_layers_match_his_demo_and_the_profiles() -> None:
+    # Bruneton's demo.cc: ozone layers (25 km, 0, 0, 1/15 km, -2/3) and (0, 0, 0, -1/15 km, 8/3);
+    # Rayleigh (0, 1, -1/8 km, 0, 0).
+    (low, high) = bruneton_density_layers(BRUNETON2017_OZONE, top_altitude_m=60e3)
+    assert low.width_m == 25000.0
+    np.testing.assert_allclose(
+        [low.linear_term_per_m, low.constant_term, high.linear_term_per_m, high.constant_term],
+        [1 / 15000, -2 / 3, -1 / 15000, 8 / 3],
+        rtol=1e-14,
+    )
+    (ray,) = bruneton_density_layers(ExponentialProfile(scale_height_m=8000.0), top_altitude_m=6e4)
+    assert (ray.width_m, ray.exp_term, ray.exp_scale_per_m) == (0.0, 1.0, -1 / 8000.0)
+    h = np.linspace(0.0, 60e3, 601)
+    for profile in (BRUNETON2017_OZONE, ExponentialProfile(scale_height_m=11100.0)):
+        layers = bruneton_density_layers(profile, top_altitude_m=60e3)
+        np.testing.assert_allclose(
+            _his_density(layers, h), profile.relative_density(h), atol=1e-12, rtol=0
+        )
+    with pytest.raises(ValueError, match="at most two layers"):
+        bruneton_density_layers(
+            PiecewiseLinearProfile(
+                altitude_m=(0.0, 1e3, 2e3, 3e3, 4e3), density=(1.0, 0.5, 0.8, 0.2, 0.0)
+            ),
+            top_altitude_m=6e4,
+        )
+    two_modes = MultiModalProfile(
+        profiles=(ExponentialProfile(scale_height_m=1e3), ExponentialProfile(scale_height_m=8e3)),
+        weights=(0.5, 0.5),
+    )
+    with pytest.raises(ValueError, match="cannot be written as Bruneton's DensityProfileLayer"):
+        bruneton_density_layers(two_modes, top_altitude_m=6e4)
+
+
+def test_parameters_of_the_mars_set(mars) -> None:
+    p = bruneton_parameters(mars)
+    dust = mars.constituent("aerosols").table
+    mol = mars.constituent("molecules").table
+    np.testing.assert_array_equal(p.mie_scattering_per_m, dust.beta_sca_per_m)
+    np.testing.assert_array_equal(p.mie_extinction_per_m, dust.beta_ext_per_m)
+    np.testing.assert_array_equal(p.rayleigh_scattering_per_m, mol.beta_sca_per_m)
+    np.testing.assert_array_equal(p.absorption_extinction_per_m, 0.0)  # no ozone on Mars
+    # Sun at 227.9e9 m: irradiance (1 au / d)^2 = 0.431 of ASTM G173's, radius 1 au / d of 0.00935/2.
+    scale = ASTRONOMICAL_UNIT_M / 227.9e9
+    np.testing.assert_allclose(
+        p.solar_irradiance_w_m2_nm, solar_irradiance_astm_g173(p.wavelength_nm) * scale**2
+    )
+    assert p.sun_angular_radius_rad == pytest.approx(0.00935 / 2 * scale, rel=1e-15)
+    assert (p.bottom_radius_m, p.top_radius_m) == (3390e3, 3510e3)
+    assert p.max_sun_zenith_angle_rad == pytest.approx(math.radians(102.0))
+    # The Cornette-Shanks g is the fit at 550 nm, with its errors reported.
+    fit = dust.fit(model="cs", colour="wavelengths", channels_nm=(550.0, 550.0, 550.0))
+    assert p.mie_phase_function_g == fit.parameters[0, 0]
+    assert 0 < p.mie_phase_function_g < 1
+    assert p.mie_phase_function_fit["row"]["max_relative_error"] > 0
+    names = set(p.to_dict())
+    assert {
+        "wavelengths",
+        "solar_irradiance",
+        "sun_angular_radius",
+        "bottom_radius",
+        "top_radius",
+        "rayleigh_density",
+        "rayleigh_scattering",
+        "mie_density",
+        "mie_scattering",
+        "mie_extinction",
+        "mie_phase_function_g",
+        "absorption_density",
+        "absorption_extinction",
+        "ground_albedo",
+        "max_sun_zenith_angle",
+        "length_unit_in_meters",
+    } <= names
+
+
+def test_earth_set_carries_the_ozone_layer() -> None:
+    p = bruneton_parameters(atm.earth_atmosphere())
+    assert len(p.absorption_density) == 2
+    ozone = atm.earth_atmosphere().constituent("ozone").table
+    np.testing.assert_array_equal(p.absorption_extinction_per_m, ozone.beta_abs_per_m)
+    # Kobe's aerosols are Cornette-Shanks g = 0.76: the fit recovers it to round-off.
+    assert p.mie_phase_function_g == pytest.approx(0.76, abs=1e-12)
+    with pytest.raises(ValueError, match="rendering wavelengths"):
+        bruneton_parameters(atm.earth_atmosphere_kobe2026())  # 475-650 nm only
+    with pytest.raises(ValueError, match=r"max_sun_zenith_angle_deg must be in \(90, 180\]"):
+        bruneton_parameters(atm.earth_atmosphere(), max_sun_zenith_angle_deg=80.0)
+
+
+# Stand-in for his atmosphere/model.h, written from the constructor's documented
+# parameter list (types and order), for machines without his repository.
+_STAND_IN = """
+#include <vector>
+namespace atmosphere {
+class DensityProfileLayer {
+ public:
+  DensityProfileLayer(double, double, double, double, double) {}
+};
+class Model {
+ public:
+  Model(const std::vector<double>&, const std::vector<double>&, double, double, double,
+        const std::vector<DensityProfileLayer>&, const std::vector<double>&,
+        const std::vector<DensityProfileLayer>&, const std::vector<double>&,
+        const std::vector<double>&, double, const std::vector<DensityProfileLayer>&,
+        const std::vector<double>&, const std::vector<double>&, double, double, unsigned int,
+        bool, bool) {}
+};
+}  // namespace atmosphere
+"""
+
+
+@pytest.mark.skipif(GXX is None, reason="g++ not installed")
+def test_cpp_header_compiles(tmp_path: Path, mars) -> None:
+    (tmp_path / "params.h").write_text(bruneton_cpp(bruneton_parameters(mars)))
+    main_cc = "int main() { delete dustoptics_mars::MakeModel(); return 0; }\n"
+    (tmp_path / "stand_in.cc").write_text(_STAND_IN + '#include "params.h"\n' + main_cc)
+    subprocess.run(
+        [GXX, "-std=c++11", "-fsyntax-only", str(tmp_path / "stand_in.cc")],
+        check=True,
+        capture_output=True,
+    )
+    if BRUNETON_REPO:  # his own model.h (it includes glad.h from external/glad/include)
+        real = tmp_path / "real.cc"
+        real.write_text('#include "atmosphere/model.h"\n#include "params.h"\n' + main_cc)
+        include = [
+            f"-I{BRUNETON_REPO}",
+            f"-I{BRUNETON_REPO}/external/glad/include",
+            f"-I{tmp_path}",
+        ]
+        subprocess.run([GXX, "-std=c++11", "-fsyntax-only", *include, str(real)], check=True)
+
+
+@pytest.mark.skipif(GLSLANG is None, reason="glslangValidator not installed (glslang-tools)")
+def test_glsl_one_line_change_compiles(tmp_path: Path, mars) -> None:
+    snippet = bruneton_phase_glsl(mars.constituent("aerosols").table)
+    change = re.search(r"//   (vec3 MiePhaseFunction.*)", snippet)
+    assert change is not None
+    # His definitions.glsl spells the types as macros (Number float, vec3 spectra); a
+    # caller multiplies the result by a vec3 of Mie scattering, as his functions do.
+    src = (
+        "#version 330\n#define Number float\n"
+        + snippet
+        + change.group(1)
+        + "\nout vec4 c;\nuniform vec3 mie;\n"
+        + "void main() { c = vec4(mie * MiePhaseFunction(0.8, 0.3), 1.0); }\n"
+    )
+    frag = tmp_path / "change.frag"
+    frag.write_text(src)
+    subprocess.run([GLSLANG, str(frag)], check=True, capture_output=True)
+
+
+def test_write_bruneton_and_cli(tmp_path: Path, mars) -> None:
+    written = write_bruneton(mars, tmp_path / "a")
+    assert sorted(p.name for p in written) == [
+        "mars_bruneton.json",
+        "mars_bruneton_mie_phase.glsl",
+        "mars_bruneton_parameters.h",
+    ]
+    data = json.loads((tmp_path / "a" / "mars_bruneton.json").read_text())
+    assert data["units"]["solar_irradiance"] == "W m-2 nm-1"
+    assert data["provenance"]["aerosols"]["input_hash"]
+    with pytest.raises(FileExistsError):
+        write_bruneton(mars, tmp_path / "a")
+    out = tmp_path / "cli"
+    argv = ["build", "earth", "--format", "cosmoscout,bruneton", "--out", str(out), "--quiet"]
+    assert main(argv) == 0
+    assert (out / "earth" / "earth_bruneton.json").exists()
+    assert (out / "earth" / "earth_ozone_absorption.csv").exists()
+    # One table as the registered "bruneton" format: its Mie part and phase snippet.
+    dust = mars.constituent("aerosols").table
+    files = dio.write(dust, tmp_path / "t", format="bruneton")
+    mie = json.loads(next(p for p in files if p.suffix == ".json").read_text())
+    np.testing.assert_array_equal(mie["mie_scattering"], dust.beta_sca_per_m)
+    with pytest.raises(ValueError, match="needs cross-sections and a number density"):
+        dio.write(read_hdf5(TABLES / "costa" / "costa.h5"), tmp_path / "u", format="bruneton")
