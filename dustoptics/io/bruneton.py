@@ -236,27 +236,44 @@ def bruneton_density_layers(
 class BrunetonParameters:
     """The arguments of Bruneton's ``atmosphere::Model`` for one atmosphere.
 
-    Attributes (his parameter names, SI units; per-wavelength arrays share
-    ``wavelength_nm``)
-    ---------------------------------------------------------------------
+    His parameter names, SI units; the per-wavelength arrays share
+    ``wavelength_nm``.
+
+    Attributes
+    ----------
     name : str
-    wavelength_nm : numpy.ndarray [nm]
-    solar_irradiance_w_m2_nm : numpy.ndarray [W m^-2 nm^-1]
-    sun_angular_radius_rad : float [rad]
-    bottom_radius_m, top_radius_m : float [m]
+        The atmosphere's name.
+    wavelength_nm : numpy.ndarray
+        ``wavelengths``. [nm]
+    solar_irradiance_w_m2_nm : numpy.ndarray
+        ``solar_irradiance`` at the planet. [W m^-2 nm^-1]
+    sun_angular_radius_rad : float
+        ``sun_angular_radius``. [rad]
+    bottom_radius_m, top_radius_m : float
+        ``bottom_radius``, ``top_radius``. [m]
     rayleigh_density : tuple of BrunetonLayer
-    rayleigh_scattering_per_m : numpy.ndarray [m^-1]
+        ``rayleigh_density``.
+    rayleigh_scattering_per_m : numpy.ndarray
+        ``rayleigh_scattering`` where the density is 1. [m^-1]
     mie_density : tuple of BrunetonLayer
-    mie_scattering_per_m, mie_extinction_per_m : numpy.ndarray [m^-1]
+        ``mie_density``.
+    mie_scattering_per_m, mie_extinction_per_m : numpy.ndarray
+        ``mie_scattering``, ``mie_extinction`` where the density is 1. [m^-1]
     mie_phase_function_g : float
-        Cornette-Shanks g fitted to the aerosols at 550 nm. [-]
+        ``mie_phase_function_g``: Cornette-Shanks g fitted to the aerosols
+        at 550 nm. [-]
     mie_phase_function_fit : dict
-        That fit's parameters and errors (:meth:`FitResult.to_dict`).
+        That fit's parameters and errors (``FitResult.to_dict``).
     absorption_density : tuple of BrunetonLayer
-    absorption_extinction_per_m : numpy.ndarray [m^-1]
-    ground_albedo : numpy.ndarray [-]
-    max_sun_zenith_angle_rad : float [rad]
-    length_unit_in_meters : float [m]
+        ``absorption_density``.
+    absorption_extinction_per_m : numpy.ndarray
+        ``absorption_extinction`` where the density is 1. [m^-1]
+    ground_albedo : numpy.ndarray
+        ``ground_albedo``. [-]
+    max_sun_zenith_angle_rad : float
+        ``max_sun_zenith_angle``. [rad]
+    length_unit_in_meters : float
+        ``length_unit_in_meters``. [m]
     provenance : dict
         Sources, input hashes and notes of the constituents' tables.
     """
