@@ -452,7 +452,7 @@ def _add_format_options(p: argparse.ArgumentParser, *, default: str | None, requ
         default=None,
         required=required,
         metavar="FMT[,FMT...]",
-        help=f"output formats: hdf5, csv, cosmoscout, glsl, texture{help_default}",
+        help=f"output formats: netcdf (.nc), hdf5 (.h5, the same format), csv, cosmoscout, glsl, texture{help_default}",
     )
     p.add_argument("--force", action="store_true", help="replace existing output files")
     g = p.add_argument_group("glsl")

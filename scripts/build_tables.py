@@ -5,10 +5,10 @@ Usage::
     python scripts/build_tables.py           # rebuild every preset into tables/NAME/
     python scripts/build_tables.py --check   # exit 1 if any table is out of date
 
-Each preset (``dustoptics presets``) is written as ``tables/NAME/NAME.h5``
-(the full table with its provenance) and ``tables/NAME/NAME_phase.glsl`` (the
+Each preset (``dustoptics presets``) is written as ``tables/NAME/NAME.nc``
+(the full table with its provenance, CF-1.10 netCDF-4) and ``tables/NAME/NAME_phase.glsl`` (the
 shader snippet at its defaults).  ``--check`` recomputes every preset and
-compares it with the stored HDF5 file: the inputs (their hash) must be equal
+compares it with the stored file: the inputs (their hash) must be equal
 and the numbers equal to 1e-9 relative (error estimates: 1e-6; far below the tables' 1e-4 accuracy,
 far above the last-bit differences a different CPU or library build may
 give), so a change of code or preset that moves a table fails the check.
@@ -22,7 +22,7 @@ import sys
 from pathlib import Path
 
 from dustoptics.compare import table_differences
-from dustoptics.io import read_hdf5, write_glsl, write_hdf5
+from dustoptics.io import open_table, write_glsl
 from dustoptics.models import presets
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
@@ -30,8 +30,8 @@ TABLES = REPO_ROOT / "tables"
 
 
 def table_path(name: str, root: Path = TABLES) -> Path:
-    """The stored HDF5 file of preset ``name``."""
-    return root / name / f"{name}.h5"
+    """The stored table file of preset ``name``."""
+    return root / name / f"{name}.nc"
 
 
 def differences(name: str, root: Path = TABLES) -> list[str]:
@@ -39,7 +39,7 @@ def differences(name: str, root: Path = TABLES) -> list[str]:
     path = table_path(name, root)
     if not path.exists():
         return [f"{path} is missing"]
-    return table_differences(read_hdf5(path), presets.build_preset(name))
+    return table_differences(open_table(path), presets.build_preset(name))
 
 
 def build(names: list[str], root: Path = TABLES) -> None:
@@ -47,7 +47,7 @@ def build(names: list[str], root: Path = TABLES) -> None:
     for name in names:
         table = presets.build_preset(name)
         out = root / name
-        write_hdf5(table, table_path(name, root), overwrite=True)
+        table.save(table_path(name, root), overwrite=True)
         write_glsl(table, out, overwrite=True)
         print(f"{name}: {out}")
 

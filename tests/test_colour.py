@@ -25,7 +25,7 @@ from dustoptics.colour import (
     xyz_to_linear_srgb,
     xyz_weights,
 )
-from dustoptics.io.hdf5 import read_hdf5
+from dustoptics.io import read_hdf5
 
 TABLES = Path(__file__).resolve().parents[1] / "tables"
 
@@ -168,7 +168,7 @@ def test_single_scattering_residual_of_blue_moons_table() -> None:
     wavelengths 680/550/440 nm, median 0.027, max 0.082 of Y; CIE XYZ bands put
     in R, G, B, median 0.086, max 0.153 of Y) are what the sRGB mode removes.
     """
-    table = read_hdf5(TABLES / "blue-moons" / "blue-moons.h5")
+    table = read_hdf5(TABLES / "blue-moons" / "blue-moons.nc")
     args = (table.wavelength_nm, table.theta_deg, table.phase)
     exact = single_scattering_residual(*args, mode="linear-srgb-astmg173", csca_um2=table.csca_um2)
     assert exact.max_relative_error < 1e-13

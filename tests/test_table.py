@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import warnings
 
 import numpy as np
@@ -204,3 +205,83 @@ def test_derived_quantities_are_derived_from_the_stored_ones(table: Table) -> No
 def test_bad_fields_are_refused(table: Table, changes, match) -> None:
     with pytest.raises(ValueError, match=match):
         table.replace(**changes)
+
+
+# ------------------------------------------------------------------ xarray and pandas
+
+
+def test_to_xarray_names_dimensions_units_and_provenance(table: Table) -> None:
+    ds = table.to_xarray()
+    assert ds.phase.dims == ("wavelength_nm", "theta_deg")
+    assert ds.wavelength_nm.attrs["units"] == "nm" and ds.theta_deg.attrs["units"] == "degree"
+    for name, var in ds.variables.items():
+        assert var.attrs["units"] and var.attrs["long_name"], name
+    assert ds.attrs["Conventions"] == "CF-1.10"
+    assert json.loads(ds.attrs["provenance"]) == table.provenance.to_dict()
+    np.testing.assert_array_equal(ds.ssa.values, table.ssa)  # derived ones are there to use
+    assert ds.n_nodes.dtype == np.int64
+
+
+def test_xarray_selection_and_interpolation_agree_with_the_table(table: Table) -> None:
+    ds = table.to_xarray()
+    angles = np.array([0.0, 0.7, 45.0, 133.3, 180.0])
+    interpolated = ds.phase.interp(theta_deg=angles).values  # linear in angle, like phase_at
+    np.testing.assert_allclose(interpolated, table.phase_at(angles), rtol=1e-14, atol=0)
+    np.testing.assert_array_equal(ds.phase.sel(wavelength_nm=550.0).values, table.phase[1])
+    # A selection is still a table: the stored quantities at those wavelengths.
+    part = Table.from_xarray(ds.isel(wavelength_nm=[0, 2]))
+    np.testing.assert_array_equal(part.wavelength_nm, [440.0, 680.0])
+    np.testing.assert_array_equal(part.cext_um2, table.cext_um2[[0, 2]])
+    np.testing.assert_array_equal(part.refractive_index, table.refractive_index[[0, 2]])
+
+
+def test_xarray_plots_with_labels_from_the_attributes(table: Table) -> None:
+    matplotlib = pytest.importorskip("matplotlib")
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    lines = table.to_xarray().phase.sel(wavelength_nm=550.0).plot()
+    axes = lines[0].axes
+    assert "[degree]" in axes.get_xlabel() and "[sr-1]" in axes.get_ylabel()
+    plt.close("all")
+
+
+def test_to_dataframe_has_the_per_wavelength_quantities(table: Table) -> None:
+    df = table.to_dataframe()
+    assert df.index.name == "wavelength_nm" and df.index.tolist() == WAVELENGTHS
+    for column in (
+        "g",
+        "cext_um2",
+        "csca_um2",
+        "cabs_um2",
+        "ssa",
+        "qext",
+        "error_estimate",
+        "n_nodes",
+    ):
+        np.testing.assert_array_equal(df[column].to_numpy(), getattr(table, column))
+    np.testing.assert_array_equal(
+        df["refractive_index_imag"].to_numpy(), table.refractive_index.imag
+    )
+    assert "beta_ext_per_m" not in df  # no number density, no volume coefficients
+
+
+def test_from_xarray_refuses_what_is_not_a_table(table: Table) -> None:
+    ds = table.to_xarray()
+    with pytest.raises(TypeError, match="ds must be an xarray.Dataset"):
+        Table.from_xarray(ds.phase)
+    with pytest.raises(
+        ValueError, match="not a dustoptics table: its dustoptics_schema attribute is None"
+    ):
+        Table.from_xarray(ds.drop_attrs())
+    converted = ds.assign(theta_deg=ds.theta_deg.assign_attrs(units="rad"))
+    with pytest.raises(ValueError, match="'theta_deg' must be in 'degree'; its units are 'rad'"):
+        Table.from_xarray(converted)
+    with pytest.raises(
+        ValueError, match=r"variables the table schema .* does not define: \['extra'\]"
+    ):
+        Table.from_xarray(ds.assign(extra=ds.g * 2))
+    with pytest.raises(
+        ValueError, match=r"'phase' must have dimensions \('wavelength_nm', 'theta_deg'\)"
+    ):
+        Table.from_xarray(ds.assign(phase=ds.phase.transpose()))

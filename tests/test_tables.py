@@ -34,9 +34,9 @@ def test_check_detects_a_stale_table(tmp_path):
     script = _script()
     script.build(["costa"], root=tmp_path)
     assert script.differences("costa", root=tmp_path) == []
-    stored = script.read_hdf5(script.table_path("costa", tmp_path))
+    stored = script.open_table(script.table_path("costa", tmp_path))
     stale = stored.replace(phase=stored.phase * (1 + 1e-6))
-    script.write_hdf5(stale, script.table_path("costa", tmp_path), overwrite=True)
+    stale.save(script.table_path("costa", tmp_path), overwrite=True)
     assert script.differences("costa", root=tmp_path) == [
         "costa: phase differs by up to 1.00e-06 relative"
     ]

@@ -5,8 +5,9 @@ directory, renamed into place; :mod:`dustoptics.io._atomic`) and refuses to
 replace existing files unless asked to (``overwrite=True``).  Readers raise
 :class:`FormatError` (a :class:`ValueError`) naming the file and the problem.
 
-- :mod:`~dustoptics.io.hdf5`: one netCDF-4 compatible HDF5 file
-  (:func:`write_hdf5`, :func:`read_hdf5`).
+- :mod:`~dustoptics.io.netcdf`: one CF-1.10 netCDF-4 file (``.nc``, or the same
+  bytes as ``.h5``), verified when read (:func:`open_table`, :func:`write_netcdf`,
+  :func:`read_netcdf`; :meth:`dustoptics.table.Table.save`).
 - :mod:`~dustoptics.io.seed_csv`: the seed framework's CSV files with a JSON
   provenance sidecar (:func:`write_seed_csv`, :func:`read_seed_csv`).
 - :mod:`~dustoptics.io.cosmoscout`: CosmoScout VR's per-constituent CSV set
@@ -65,7 +66,7 @@ def write(
     return FORMATS[format](table, out_dir, overwrite=overwrite, **options)
 
 
-from dustoptics.io import bruneton, cosmoscout, glsl, hdf5, seed_csv, texture
+from dustoptics.io import bruneton, cosmoscout, glsl, hdf5, netcdf, seed_csv, texture
 from dustoptics.io.cosmoscout import (
     CosmoScoutConstituent,
     check_cosmoscout_set,
@@ -74,7 +75,7 @@ from dustoptics.io.cosmoscout import (
     write_cosmoscout_set,
 )
 from dustoptics.io.glsl import glsl_snippet, write_glsl
-from dustoptics.io.hdf5 import read_hdf5, write_hdf5
+from dustoptics.io.netcdf import open_table, read_hdf5, read_netcdf, write_hdf5, write_netcdf
 from dustoptics.io.seed_csv import read_seed_csv, write_seed_csv
 from dustoptics.io.texture import read_texture, write_texture
 
@@ -88,9 +89,11 @@ __all__ = [
     "cosmoscout",
     "glsl",
     "glsl_snippet",
-    "hdf5",
+    "netcdf",
+    "open_table",
     "read_cosmoscout_constituent",
     "read_hdf5",
+    "read_netcdf",
     "read_seed_csv",
     "read_texture",
     "register_format",
@@ -101,6 +104,7 @@ __all__ = [
     "write_cosmoscout_set",
     "write_glsl",
     "write_hdf5",
+    "write_netcdf",
     "write_seed_csv",
     "write_texture",
 ]

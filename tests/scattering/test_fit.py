@@ -9,10 +9,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from dustoptics.io import read_hdf5
 
 from dustoptics.cli import main
 from dustoptics.io.fit import fit_constants, fit_json, write_fit
-from dustoptics.io.hdf5 import read_hdf5
 from dustoptics.scattering import phase as ph
 from dustoptics.scattering.fit import FIT_MODELS, fit_phase
 
@@ -92,7 +92,7 @@ def test_a_table_of_the_model_is_recovered(model: str) -> None:
 
 def test_costa_preset_recovered_to_round_off() -> None:
     """The `costa` preset is alpha HG(g1) + (1 - alpha) HG(g2), 48 wavelengths, 1,801 angles."""
-    table = read_hdf5(TABLES / "costa" / "costa.h5")
+    table = read_hdf5(TABLES / "costa" / "costa.nc")
     r = table.fit(model="dhg")
     assert r.model == "dhg-costa2021"
     assert r.max_relative_error.max() < 1e-13
@@ -120,7 +120,7 @@ def test_blue_moons_dhg_against_costa_published_parameters() -> None:
     table's (the loss is relative error, not g).  Costa's parameters were tuned by eye to
     images, not fitted to Mie; under our loss the fit must beat them.
     """
-    table = read_hdf5(TABLES / "blue-moons" / "blue-moons.h5")
+    table = read_hdf5(TABLES / "blue-moons" / "blue-moons.nc")
     r = table.fit(model="dhg-costa2021")
     costa = {440.0: (0.67, 0.094, 0.743), 550.0: (0.4, 0.094, 0.743), 680.0: (0.03, 0.094, 0.743)}
     for wl, (g1, g2, alpha) in costa.items():
@@ -151,7 +151,7 @@ def test_model_that_cannot_represent_the_table_returns_its_best() -> None:
 
 
 def test_deterministic_and_parameters_in_range() -> None:
-    table = read_hdf5(TABLES / "blue-moons" / "blue-moons.h5")
+    table = read_hdf5(TABLES / "blue-moons" / "blue-moons.nc")
     a = table.fit(model="dhg-kobe2026")
     b = table.fit(model="dhg-kobe2026")
     np.testing.assert_array_equal(a.parameters, b.parameters)
@@ -160,7 +160,7 @@ def test_deterministic_and_parameters_in_range() -> None:
 
 
 def test_channels_and_forward_cutoff() -> None:
-    table = read_hdf5(TABLES / "blue-moons" / "blue-moons.h5")
+    table = read_hdf5(TABLES / "blue-moons" / "blue-moons.nc")
     r = table.fit(model="hg", colour="linear-srgb-astmg173")
     assert r.labels == ("R", "G", "B")
     assert r.wavelength_nm[0] > r.wavelength_nm[1] > r.wavelength_nm[2]
@@ -208,7 +208,7 @@ GLSLANG = shutil.which("glslangValidator")
 @pytest.mark.skipif(GLSLANG is None, reason="glslangValidator not installed (Debian glslang-tools)")
 @pytest.mark.parametrize("rows", [3, 48])
 def test_glsl_and_hlsl_constants_compile(tmp_path: Path, rows: int) -> None:
-    table = read_hdf5(TABLES / "costa" / "costa.h5")
+    table = read_hdf5(TABLES / "costa" / "costa.nc")
     r = table.fit(model="dhg", colour="wavelengths") if rows == 3 else table.fit(model="dhg")
     glsl = fit_constants(r, language="glsl")
     use = "DUST_G1" if rows == 3 else "vec3(DUST_G1[0], DUST_ALPHA[1], DUST_WAVELENGTH_NM[47])"
@@ -233,7 +233,7 @@ def test_wgsl_constants_validate() -> None:
         device = adapter.request_device_sync()
     except Exception as exc:  # no Vulkan driver: nothing to validate with
         pytest.skip(f"no wgpu adapter ({exc}); needs Mesa lavapipe (mesa-vulkan-drivers)")
-    table = read_hdf5(TABLES / "costa" / "costa.h5")
+    table = read_hdf5(TABLES / "costa" / "costa.nc")
     for r in (table.fit(model="dhg", colour="wavelengths"), table.fit(model="hg")):
         use = "DUST_G1.x" if r.parameters.shape[0] == 3 else "DUST_G[47]"
         if r.model == "dhg-costa2021":
@@ -247,7 +247,7 @@ def test_wgsl_constants_validate() -> None:
 
 
 def test_cli_fit_prints_and_writes(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    path = TABLES / "costa" / "costa.h5"
+    path = TABLES / "costa" / "costa.nc"
     assert (
         main(
             ["fit", str(path), "--model", "dhg", "--colour", "wavelengths", "--out", str(tmp_path)]
