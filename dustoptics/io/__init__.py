@@ -89,6 +89,7 @@ __all__ = [
     "cosmoscout",
     "glsl",
     "glsl_snippet",
+    "hdf5",
     "netcdf",
     "open_table",
     "read_cosmoscout_constituent",

@@ -60,7 +60,7 @@ def _his_density(layers, h):
 
 @pytest.fixture(scope="module")
 def mars():
-    dust = read_hdf5(TABLES / "blue-moons" / "blue-moons.h5")
+    dust = read_hdf5(TABLES / "blue-moons" / "blue-moons.nc")
     return atm.mars_atmosphere(dust_table=dust, optical_depth=0.5)
 
 
@@ -237,4 +237,4 @@ def test_write_bruneton_and_cli(tmp_path: Path, mars) -> None:
     mie = json.loads(next(p for p in files if p.suffix == ".json").read_text())
     np.testing.assert_array_equal(mie["mie_scattering"], dust.beta_sca_per_m)
     with pytest.raises(ValueError, match="needs cross-sections and a number density"):
-        dio.write(read_hdf5(TABLES / "costa" / "costa.h5"), tmp_path / "u", format="bruneton")
+        dio.write(read_hdf5(TABLES / "costa" / "costa.nc"), tmp_path / "u", format="bruneton")
