@@ -814,9 +814,13 @@ def _accumulate_tiers(
             n_t,
             symmetric,
         )
+        # Rows are copied element by element: numba's array-to-slice assignment
+        # compiles a shape-mismatch message (string formatting), about 2 s.
         if n_t == n_top:
             for r in range(n_loc):
-                out[panel_of[r]] = rows[r]
+                p = panel_of[r]
+                for c in range(out.shape[1]):
+                    out[p, c] = rows[r, c]
         else:
             size = n_t * n_top
             r_even = maps[map_start[t] : map_start[t] + size].reshape((n_t, n_top))
@@ -824,8 +828,10 @@ def _accumulate_tiers(
             moved = _legendre_regrid(np.ascontiguousarray(rows[:, : 2 * n_t]), r_even, r_odd)
             for r in range(n_loc):
                 p = panel_of[r]
-                out[p, : 2 * n_top] = moved[r]
-                out[p, 2 * n_top :] = rows[r, 2 * n_t :]
+                for c in range(2 * n_top):
+                    out[p, c] = moved[r, c]
+                for c in range(N_SUMS):
+                    out[p, 2 * n_top + c] = rows[r, 2 * n_t + c]
         for r in range(n_loc):
             local[panel_of[r]] = -1
         j0 = j1

@@ -341,7 +341,12 @@ def _phase_refinement_errors(
             worst = max(worst, d)
         panel_error[p] = worst + rel_norm
         norm_sum += rel_norm
-    return total, panel_error, np.max(column) + norm_sum
+    # max over mu as np.max would (a NaN propagates), without its generic compile.
+    worst_sum = column[0]
+    for i in range(1, n_f):
+        if column[i] > worst_sum or column[i] != column[i]:
+            worst_sum = column[i]
+    return total, panel_error, worst_sum + norm_sum
 
 
 @njit(cache=True, nogil=True)
@@ -376,6 +381,67 @@ def _cross_refinement_errors(
 
 
 @njit(cache=True, nogil=True)
+def _stable_argsort(keys: np.ndarray) -> np.ndarray:
+    """np.argsort(keys, kind="mergesort") for 1-d float64 keys (stable, NaN last).
+
+    A bottom-up merge sort of the indices.  Written out because numba's
+    generic merge sort compiles for about 2 s; a stable sort's order is
+    unique, so the result is the same.
+    """
+    n = keys.shape[0]
+    order = np.arange(n)
+    scratch = np.empty(n, dtype=np.int64)
+    width = 1
+    while width < n:
+        for lo in range(0, n, 2 * width):
+            mid = min(lo + width, n)
+            hi = min(lo + 2 * width, n)
+            i = lo
+            j = mid
+            k = lo
+            while i < mid and j < hi:
+                a = keys[order[i]]
+                b = keys[order[j]]
+                # b < a, with NaN after every number: take from the right only then.
+                if b < a or (a != a and b == b):
+                    scratch[k] = order[j]
+                    j += 1
+                else:
+                    scratch[k] = order[i]
+                    i += 1
+                k += 1
+            while i < mid:
+                scratch[k] = order[i]
+                i += 1
+                k += 1
+            while j < hi:
+                scratch[k] = order[j]
+                j += 1
+                k += 1
+        order, scratch = scratch, order
+        width *= 2
+    return order
+
+
+@njit(cache=True, nogil=True)
+def _search_left(a: np.ndarray, v: float) -> int:
+    """np.searchsorted(a, v) (side "left", NaN sorted last) for increasing float64 ``a``.
+
+    Written out because numba's searchsorted compiles comparisons for every
+    numeric type, complex included (about 1 s).
+    """
+    lo = 0
+    hi = a.shape[0]
+    while lo < hi:
+        mid = (lo + hi) // 2
+        if a[mid] < v or (v != v and a[mid] == a[mid]):
+            lo = mid + 1
+        else:
+            hi = mid
+    return lo
+
+
+@njit(cache=True, nogil=True)
 def _choose_splits(
     panel_error: np.ndarray,
     cost: np.ndarray,
@@ -394,9 +460,9 @@ def _choose_splits(
     new panels first).
     """
     badness = panel_error / tol
-    order = np.argsort(-badness / cost, kind="mergesort")
+    order = _stable_argsort(-badness / cost)
     cumulative = np.cumsum(badness[order])
-    n_split = min(np.searchsorted(cumulative, cumulative[-1] - keep_fraction) + 1, order.shape[0])
+    n_split = min(_search_left(cumulative, cumulative[-1] - keep_fraction) + 1, order.shape[0])
     chosen = np.zeros(badness.shape[0], dtype=np.bool_)
     for i in range(n_split):
         chosen[order[i]] = True
@@ -534,7 +600,12 @@ def _accumulate_by_tier(
         x_top = x[p * nodes_per_panel]
         for j in range(p * nodes_per_panel, (p + 1) * nodes_per_panel):
             x_top = max(x_top, x[j])
-        panel_tier[p] = np.searchsorted(tiers, int(_n_max(x_top)) + 2)
+        # The first tier that holds n_max + 2 orders (np.searchsorted, side "left").
+        need = int(_n_max(x_top)) + 2
+        t = 0
+        while t < n_tiers and tiers[t] < need:
+            t += 1
+        panel_tier[p] = t
         if panel_tier[p] == n_tiers:
             raise ValueError(
                 "a panel's spheres need more orders than the largest angular tier holds"
@@ -547,7 +618,7 @@ def _accumulate_by_tier(
     for t in range(n_tiers):
         count[t + 1] += count[t]
     by_tier = np.empty(n_panels, dtype=np.int64)
-    for p in np.argsort(x_first, kind="mergesort"):
+    for p in _stable_argsort(x_first):
         by_tier[count[panel_tier[p]]] = p
         count[panel_tier[p]] += 1
     x_sorted = np.empty(x.shape[0])
