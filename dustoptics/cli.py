@@ -99,6 +99,23 @@ class FormatOptions:
     sampling: str | None = None
     n_angles: int | None = None
     density: np.ndarray | None = None
+    #: The density profile's parameters (cosmoscout), as recorded in provenance.
+    profile: dict[str, Any] | None = None
+
+    def recorded(self, name: str) -> dict[str, Any]:
+        """The options given for format ``name`` that change the numbers it writes.
+
+        :func:`write_formats` adds them to the table's provenance inputs (key
+        ``"export"``), so that the input hash a file records changes with them.
+        Writers' defaults are stated in the files themselves and not repeated.
+        """
+        if name == "cosmoscout":
+            return dict(self.profile or {})
+        return {
+            key: list(value) if isinstance(value, tuple) else value
+            for key, value in self.for_format(name).items()
+            if value is not None
+        }
 
     def for_format(self, name: str) -> dict[str, Any]:
         """Keyword options for the writer of format ``name``."""
@@ -262,15 +279,41 @@ def build_atmosphere(
 def write_formats(
     table: Any, out_dir: Path, formats: Sequence[str], *, overwrite: bool, options: FormatOptions
 ) -> list[Path]:
-    """Write ``table`` into ``out_dir`` in every format; returns the paths written."""
+    """Write ``table`` into ``out_dir`` in every format; returns the paths written.
+
+    The options that change a format's numbers (:meth:`FormatOptions.recorded`)
+    are added to the provenance inputs of the table that format's writer gets,
+    under ``"export"``: the files record them, and their input hash changes
+    with them.
+    """
     from dustoptics.io import write
 
     written: list[Path] = []
     for name in formats:
+        recorded = options.recorded(name)
+        table_for_format = (
+            with_inputs(table, export={"format": name, **recorded}) if recorded else table
+        )
         written.extend(
-            write(table, out_dir, format=name, overwrite=overwrite, **options.for_format(name))
+            write(
+                table_for_format,
+                out_dir,
+                format=name,
+                overwrite=overwrite,
+                **options.for_format(name),
+            )
         )
     return written
+
+
+def with_inputs(table: Any, *, note: str | None = None, **inputs: Any) -> Any:
+    """``table`` with ``inputs`` added to its provenance inputs (hence a new input hash),
+    and ``note`` added to its notes.  For the command line's own inputs."""
+    from dataclasses import replace
+
+    prov = table.provenance
+    notes = prov.notes if note is None else (*prov.notes, note)
+    return table.replace(provenance=replace(prov, inputs={**prov.inputs, **inputs}, notes=notes))
 
 
 @dataclass(frozen=True)
@@ -491,7 +534,8 @@ def _add_format_options(p: argparse.ArgumentParser, *, default: str | None, requ
         "--number-density-per-m3",
         type=_positive_float,
         metavar="N0",
-        help="number density at the surface [m^-3] (overrides the configuration's)",
+        help="number density at the surface [m^-3] (overrides the configuration's; recorded "
+        "in the table's provenance)",
     )
     g.add_argument(
         "--scale-height-m",
@@ -669,8 +713,9 @@ def _say(args: argparse.Namespace, text: str) -> None:
 def _format_options(
     args: argparse.Namespace, table: Any, formats: Sequence[str]
 ) -> tuple[Any, FormatOptions]:
-    """The table (with a number density if given) and the writers' options."""
+    """The table and the writers' options."""
     density = None
+    profile = None
     if "cosmoscout" in formats:
         from dustoptics.atmosphere.column import ExponentialProfile, sample_profile
 
@@ -688,8 +733,6 @@ def _format_options(
                 profile=profile,
                 top_altitude_m=args.top_altitude_m,
             )
-        if args.number_density_per_m3 is not None:
-            table = table.replace(number_density_per_m3=args.number_density_per_m3)
         if table.number_density_per_m3 is None:
             raise UsageError(
                 "the cosmoscout format needs a number density for beta [m^-1]: give "
@@ -700,7 +743,14 @@ def _format_options(
             profile, top_altitude_m=args.top_altitude_m, n_altitudes=args.n_altitudes
         )
         density = samples.relative_density
+        profile = {
+            "density_profile": "exponential",
+            "scale_height_m": args.scale_height_m,
+            "top_altitude_m": args.top_altitude_m,
+            "n_altitudes": args.n_altitudes,
+        }
     options = FormatOptions(
+        profile=profile,
         channels_nm=args.channels_nm,
         colour=args.colour,
         resolution_deg=args.resolution_deg,
@@ -729,30 +779,101 @@ def _cmd_build_atmosphere(args: argparse.Namespace) -> int:
         ozone_csv=args.ozone_csv,
         progress=None if args.quiet else sys.stderr,
     )
+    record = set_provenance(atm, set_inputs(args))
     out_dir = args.out / args.name
 
-    def write(directory: Path) -> list[Path]:
+    def render(directory: Path) -> list[Path]:
+        from dustoptics.io._atomic import write_files
+
         written = atmosphere.write_atmosphere(atm, directory)
         if args.format is not None and "bruneton" in args.format:
             from dustoptics.io.bruneton import write_bruneton
 
             written += write_bruneton(atm, directory)
-        return written
+        path = directory / f"{atm.name}{SET_PROVENANCE_SUFFIX}"
+        return written + write_files({path: record.encode("utf-8")})
 
-    placed = place_outputs(write, out_dir, force=args.force)
+    placed = place_outputs(render, out_dir, force=args.force)
     _report_placement(args, f"{args.name} (CosmoScout VR set)", out_dir, placed)
     return 0
+
+
+#: File of a set's provenance, beside CosmoScout VR's files: ``<name>_provenance.json``.
+SET_PROVENANCE_SUFFIX = "_provenance.json"
+
+
+def set_inputs(args: argparse.Namespace) -> dict[str, Any]:
+    """The command-line inputs of ``build mars|earth`` that change the set's numbers."""
+    import hashlib
+
+    inputs: dict[str, Any] = {"set": args.name}
+    if args.name == "mars":
+        inputs.update(
+            dust=args.dust,
+            optical_depth=0.5 if args.optical_depth is None else args.optical_depth,
+            reference_wavelength_nm=args.reference_wavelength_nm,
+        )
+    elif args.ozone_csv is not None:
+        data = Path(args.ozone_csv).read_bytes()
+        inputs["ozone_csv"] = {
+            "path": str(args.ozone_csv),
+            "sha256": hashlib.sha256(data).hexdigest(),
+        }
+    return inputs
+
+
+def set_provenance(atm: Any, inputs: dict[str, Any]) -> str:
+    """JSON record of a set: the command's inputs, each constituent's table provenance
+    and number density, and an input hash over the inputs and the constituents' hashes."""
+    import hashlib
+
+    from dustoptics.table import canonical_json
+
+    constituents = {
+        c.role: {
+            "table": c.table.name,
+            "number_density_per_m3": c.table.number_density_per_m3,
+            "provenance": c.table.provenance.to_dict(),
+        }
+        for c in atm.constituents
+    }
+    hashed = {
+        **inputs,
+        "constituents": {role: c["provenance"]["input_hash"] for role, c in constituents.items()},
+        "number_densities_per_m3": {
+            role: c["number_density_per_m3"] for role, c in constituents.items()
+        },
+    }
+    record = {
+        "format": "dustoptics atmosphere set provenance",
+        "set": atm.name,
+        "inputs": hashed,
+        "input_hash": hashlib.sha256(canonical_json(hashed).encode("utf-8")).hexdigest(),
+        "constituents": constituents,
+    }
+    return json.dumps(record, indent=2, sort_keys=True, allow_nan=False) + "\n"
 
 
 def _cmd_build(args: argparse.Namespace) -> int:
     if args.name in ATMOSPHERES:
         return _cmd_build_atmosphere(args)
-    builder = TableBuilder.from_name(args.name, progress=None if args.quiet else sys.stderr)
+    from dataclasses import replace
+
+    from dustoptics.models.config import PresetCopyWarning
+
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
+        builder = TableBuilder.from_name(args.name, progress=None if args.quiet else sys.stderr)
+        if args.number_density_per_m3 is not None:
+            # An input of the table: recorded in its provenance like the configuration's own.
+            builder.config = replace(
+                builder.config, number_density_per_m3=args.number_density_per_m3
+            )
         table = builder.build()
     for w in caught:
         print(f"{PROG}: warning: {w.message}", file=sys.stderr)
+        if issubclass(w.category, PresetCopyWarning):
+            table = with_inputs(table, note=f"warning: {w.message}")
     return _write_table(args, table, args.format or DEFAULT_FORMATS)
 
 
@@ -772,7 +893,13 @@ def _write_table(args: argparse.Namespace, table: Any, formats: Sequence[str]) -
 
 
 def _cmd_export(args: argparse.Namespace) -> int:
-    return _write_table(args, read_table(args.file), args.format)
+    table = read_table(args.file)
+    if args.number_density_per_m3 is not None:
+        table = with_inputs(
+            table.replace(number_density_per_m3=args.number_density_per_m3),
+            number_density_per_m3=args.number_density_per_m3,
+        )
+    return _write_table(args, table, args.format)
 
 
 def _cmd_info(args: argparse.Namespace) -> int:

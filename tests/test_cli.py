@@ -68,8 +68,11 @@ def test_build_writes_every_format_and_they_agree(config, tmp_path, capsys):
     csv = read_seed_csv(folder)
     assert h5.equals(csv)
     assert h5.number_density_per_m3 == 1e8
-    # The table is what the library computes from the same configuration.
-    ref = do.config.build_table(do.config.load_config(config))
+    # The table is what the library computes from the same configuration, the number
+    # density given on the command line included (an input: it is in the input hash).
+    ref = do.config.build_table(
+        dataclasses.replace(do.config.load_config(config), number_density_per_m3=1e8)
+    )
     np.testing.assert_array_equal(h5.phase, ref.phase)
     assert h5.provenance.input_hash == ref.provenance.input_hash
     assert "MiePhaseFunction" in (folder / "small-dust_phase.glsl").read_text()
@@ -414,3 +417,136 @@ def read_hdf5_free_csca(cfg, i):
         cfg, optics=replace(cfg.optics, wavelengths_nm=COSMOSCOUT_WAVELENGTHS_NM, n_theta=1801)
     )
     return do.config.build_table(grid).csca_um2[i] * 1e-12
+
+
+# ------------------------------------------------------------------ provenance of CLI inputs
+
+
+def test_number_density_option_is_recorded_and_changes_the_input_hash(config, tmp_path):
+    """--number-density-per-m3 changes numbers (beta = N C): build and export record it."""
+    assert _build(config, tmp_path / "plain", "--format", "hdf5") == 0
+    assert (
+        _build(config, tmp_path / "dense", "--format", "hdf5", "--number-density-per-m3", "2e8")
+        == 0
+    )
+    plain = read_hdf5(tmp_path / "plain" / "small-dust" / "small-dust.h5")
+    dense = read_hdf5(tmp_path / "dense" / "small-dust" / "small-dust.h5")
+    assert plain.provenance.inputs["number_density_per_m3"] is None
+    assert dense.provenance.inputs["number_density_per_m3"] == 2e8
+    assert dense.number_density_per_m3 == 2e8
+    assert dense.provenance.input_hash != plain.provenance.input_hash
+    # export: the same record for the same input.
+    source = tmp_path / "plain" / "small-dust" / "small-dust.h5"
+    argv = ["export", str(source), "--out", str(tmp_path / "exp"), "--format", "hdf5", "--quiet"]
+    assert cli.main([*argv, "--number-density-per-m3", "2e8"]) == 0
+    exported = read_hdf5(tmp_path / "exp" / "small-dust" / "small-dust.h5")
+    assert exported.number_density_per_m3 == 2e8
+    assert exported.provenance.input_hash == dense.provenance.input_hash
+
+
+def test_format_options_that_change_numbers_are_recorded_per_format(config, tmp_path):
+    """--channels-nm changes the GLSL constants and --n-angles the texture: each file records
+    its own options (and an input hash that changes with them); the HDF5 file is unaffected."""
+    assert _build(config, tmp_path / "a", "--format", "hdf5,glsl,texture") == 0
+    options = ["--channels-nm", "600,500,450", "--n-angles", "181"]
+    assert _build(config, tmp_path / "b", "--format", "hdf5,glsl,texture", *options) == 0
+    a, b = tmp_path / "a" / "small-dust", tmp_path / "b" / "small-dust"
+    assert (a / "small-dust.h5").read_bytes() == (b / "small-dust.h5").read_bytes()
+    table_hash = read_hdf5(a / "small-dust.h5").provenance.input_hash
+
+    def glsl_hash(folder):
+        text = (folder / "small-dust_phase.glsl").read_text()
+        return text.split("input_hash (SHA-256 of the table's inputs): ")[1].split()[0]
+
+    assert glsl_hash(a) == table_hash  # no option given: the table's own hash
+    assert glsl_hash(b) != table_hash
+    sidecar = json.loads((b / "small-dust_phase_theta.json").read_text())
+    assert sidecar["provenance"]["inputs"]["export"] == {"format": "texture", "n_angles": 181}
+    assert sidecar["input_hash"] != table_hash
+    glsl_inputs = do.table.canonical_json(
+        {
+            **read_hdf5(a / "small-dust.h5").provenance.inputs,
+            "export": {"format": "glsl", "channels_nm": [600.0, 500.0, 450.0]},
+        }
+    )
+    import hashlib
+
+    assert glsl_hash(b) == hashlib.sha256(glsl_inputs.encode()).hexdigest()
+
+
+def test_edited_copy_of_a_preset_warns_and_says_so_in_provenance(tmp_path, capsys):
+    """presets --show gives a copy; edited but still carrying the preset's name, sources and
+    choices, it warns (and the table's notes say so); with labels of its own, it does not."""
+    assert cli.main(["presets", "--show", "costa"]) == 0
+    text = capsys.readouterr().out
+    unchanged = tmp_path / "unchanged.toml"
+    unchanged.write_text(text, encoding="utf-8")
+    assert (
+        cli.main(["build", str(unchanged), "--out", str(tmp_path / "u"), "--format", "hdf5"]) == 0
+    )
+    assert "warning" not in capsys.readouterr().err
+
+    edited_text = text.replace("n_theta = 1801", "n_theta = 181", 1)
+    assert edited_text != text
+    edited = tmp_path / "edited.toml"
+    edited.write_text(edited_text, encoding="utf-8")
+    assert cli.main(["build", str(edited), "--out", str(tmp_path / "e"), "--format", "hdf5"]) == 0
+    err = capsys.readouterr().err
+    assert "dustoptics: warning: configuration" in err
+    assert "of preset 'costa' but its optics differ" in err
+    table = read_hdf5(tmp_path / "e" / "costa" / "costa.h5")
+    assert any("of preset 'costa' but its optics differ" in n for n in table.provenance.notes)
+
+    relabelled = tmp_path / "mine.toml"
+    relabelled.write_text(_relabel(edited_text), encoding="utf-8")
+    assert (
+        cli.main(["build", str(relabelled), "--out", str(tmp_path / "m"), "--format", "hdf5"]) == 0
+    )
+    assert "warning" not in capsys.readouterr().err
+
+
+def _relabel(text: str) -> str:
+    """The TOML with its own name and without the preset's sources and choices."""
+    import tomllib
+
+    data = tomllib.loads(text)
+    out = ['name = "my-dust"', 'description = "an edited copy, relabelled"']
+    for section in ("material", "size_distribution", "optics", "phase"):
+        if section in data:
+            out.append(f"[{section}]")
+            out += [f"{k} = {_toml(v)}" for k, v in data[section].items()]
+    return "\n".join(out) + "\n"
+
+
+def _toml(value) -> str:
+    if isinstance(value, str):
+        return json.dumps(value)
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, dict):
+        return "{ " + ", ".join(f"{k} = {_toml(v)}" for k, v in value.items()) + " }"
+    if isinstance(value, list):
+        return "[" + ", ".join(_toml(v) for v in value) + "]"
+    return repr(value)
+
+
+def test_set_provenance_records_the_command_inputs(config, tmp_path):
+    """build mars writes <name>_provenance.json: --optical-depth and --dust are recorded and the
+    set's input hash changes with them."""
+    base = ["--quiet", "--dust", str(config)]
+    assert (
+        cli.main(["build", "mars", "--out", str(tmp_path / "a"), *base, "--optical-depth", "0.5"])
+        == 0
+    )
+    assert (
+        cli.main(["build", "mars", "--out", str(tmp_path / "b"), *base, "--optical-depth", "0.7"])
+        == 0
+    )
+    a = json.loads((tmp_path / "a" / "mars" / "mars_provenance.json").read_text())
+    b = json.loads((tmp_path / "b" / "mars" / "mars_provenance.json").read_text())
+    assert a["inputs"]["optical_depth"] == 0.5 and b["inputs"]["optical_depth"] == 0.7
+    assert a["inputs"]["dust"] == str(config)
+    assert a["input_hash"] != b["input_hash"]
+    n_a = a["constituents"]["aerosols"]["number_density_per_m3"]
+    n_b = b["constituents"]["aerosols"]["number_density_per_m3"]
+    assert n_b / n_a == pytest.approx(0.7 / 0.5, rel=1e-12)  # N0 is proportional to tau

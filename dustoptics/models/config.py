@@ -123,10 +123,12 @@ __all__ = [
     "ModeConfig",
     "OpticsConfig",
     "PhaseConfig",
+    "PresetCopyWarning",
     "SizeDistributionConfig",
     "build_table",
     "load_config",
     "parse_config",
+    "preset_copy_problems",
 ]
 
 #: Schema identifier recorded in every table's inputs.
@@ -1032,8 +1034,81 @@ def parse_config(text: str, *, source: str = "<string>") -> BuildConfig:
     )
 
 
+class PresetCopyWarning(UserWarning):
+    """A configuration file labels its table with a preset's name, sources or choices
+    although its parameters differ from that preset's."""
+
+
+#: The sections of a configuration that determine its numbers (see BuildConfig.to_inputs).
+_COMPUTATIONAL_KEYS: Final = (
+    "material",
+    "size_distribution",
+    "optics",
+    "phase",
+    "number_density_per_m3",
+)
+
+
+def preset_copy_problems(config: BuildConfig) -> list[str]:
+    """How ``config`` still carries the labels of a preset whose parameters it changed.
+
+    ``dustoptics presets --show NAME > my.toml`` gives a copy to edit.  Once
+    its parameters are edited, the preset's ``name``, ``sources`` and
+    ``choices`` describe another model: kept, they would label the table with
+    citations and choices that are not its own.  A configuration counts as a
+    copy of a preset when it has the preset's name, or both its sources and its
+    choices (presets may share publications).  Empty when ``config`` is a
+    preset itself, an unchanged copy of one, or has labels of its own.
+
+    Examples
+    --------
+    >>> from dataclasses import replace
+    >>> from dustoptics.models import presets
+    >>> preset = presets.load_preset("blue-moons")
+    >>> preset_copy_problems(preset)
+    []
+    >>> edited = replace(preset, number_density_per_m3=1e8)
+    >>> print(preset_copy_problems(edited)[0])  # doctest: +ELLIPSIS
+    carries the name, sources and choices of preset 'blue-moons' but its number_density_per_m3 differ...
+    """
+    from dustoptics.models import presets
+
+    inputs = config.to_inputs()
+    problems = []
+    for name in presets.list_presets():
+        preset = presets.load_preset(name)
+        labels = [
+            label
+            for label, same in (
+                ("name", config.name == preset.name),
+                ("sources", bool(preset.sources) and config.sources == preset.sources),
+                ("choices", bool(preset.choices) and config.choices == preset.choices),
+            )
+            if same
+        ]
+        # Presets may share their publications (hybrid, hybrid-seed): a copy is one that
+        # kept the preset's name, or both its sources and its choices.
+        if "name" not in labels and len(labels) < 2:
+            continue
+        theirs = preset.to_inputs()
+        changed = [key for key in _COMPUTATIONAL_KEYS if inputs.get(key) != theirs.get(key)]
+        if not changed:
+            continue
+        carried = labels[0] if len(labels) == 1 else ", ".join(labels[:-1]) + " and " + labels[-1]
+        problems.append(
+            f"carries the {carried} of preset {name!r} but its {', '.join(changed)} differ "
+            "from the preset's: the table would be labelled with a model it is not. Give "
+            "the configuration its own name, and sources and choices that describe it"
+        )
+    return problems
+
+
 def load_config(path: str | os.PathLike[str]) -> BuildConfig:
     """Read and validate a TOML build configuration file (UTF-8).
+
+    A file that still carries the name, sources or choices of a preset whose
+    parameters it changed (an edited copy of ``dustoptics presets --show``)
+    gives a :class:`PresetCopyWarning` (:func:`preset_copy_problems`).
 
     Raises
     ------
@@ -1043,7 +1118,10 @@ def load_config(path: str | os.PathLike[str]) -> BuildConfig:
         If the file cannot be read.
     """
     p = Path(path)
-    return parse_config(p.read_text(encoding="utf-8"), source=str(p))
+    config = parse_config(p.read_text(encoding="utf-8"), source=str(p))
+    for problem in preset_copy_problems(config):
+        warnings.warn(f"configuration {str(p)!r} {problem}", PresetCopyWarning, stacklevel=2)
+    return config
 
 
 # ------------------------------------------------------------------- building

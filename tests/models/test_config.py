@@ -458,3 +458,23 @@ def test_analytic_model_table() -> None:
 def test_build_rejects_non_config() -> None:
     with pytest.raises(TypeError, match="config must be a BuildConfig"):
         build_table({"name": "x"})  # type: ignore[arg-type]
+
+
+def test_preset_copy_problems_flag_edited_copies_only():
+    """An edited copy keeping a preset's name, or both its sources and choices, is flagged;
+    the presets themselves (hybrid and hybrid-seed share sources) and relabelled copies not."""
+    from dataclasses import replace
+
+    from dustoptics.models.config import preset_copy_problems
+
+    for name in presets.list_presets():
+        assert preset_copy_problems(presets.load_preset(name)) == []
+    preset = presets.load_preset("blue-moons")
+    edited = replace(preset, number_density_per_m3=1e8)
+    assert preset_copy_problems(replace(edited, name="mine")) == [
+        "carries the sources and choices of preset 'blue-moons' but its number_density_per_m3 "
+        "differ from the preset's: the table would be labelled with a model it is not. Give the "
+        "configuration its own name, and sources and choices that describe it"
+    ]
+    assert preset_copy_problems(replace(edited, name="mine", choices=("my own",))) == []
+    assert preset_copy_problems(replace(preset, name="mine")) == []  # unchanged numbers
