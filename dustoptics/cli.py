@@ -927,7 +927,7 @@ def _format_options(
 ) -> tuple[Any, FormatOptions]:
     """The table and the writers' options."""
     density = None
-    profile = None
+    profile_inputs = None
     if "cosmoscout" in formats:
         from dustoptics.atmosphere.column import ExponentialProfile, sample_profile
 
@@ -955,14 +955,14 @@ def _format_options(
             profile, top_altitude_m=args.top_altitude_m, n_altitudes=args.n_altitudes
         )
         density = samples.relative_density
-        profile = {
+        profile_inputs = {
             "density_profile": "exponential",
             "scale_height_m": args.scale_height_m,
             "top_altitude_m": args.top_altitude_m,
             "n_altitudes": args.n_altitudes,
         }
     options = FormatOptions(
-        profile=profile,
+        profile=profile_inputs,
         channels_nm=args.channels_nm,
         colour=args.colour,
         resolution_deg=args.resolution_deg,
