@@ -208,37 +208,115 @@ def phase_function(table: Table, *, wavelengths_nm: Any = None, polar: bool = Fa
     """
     table = _check_table(table)
     indices = _wavelength_indices(table, wavelengths_nm)
-    polar = bool(polar)
     mpl = _matplotlib()
-    fig = _new_figure(mpl, size=(7.0, 4.0) if polar else (7.0, 4.5))
-    ax: Any = fig.add_subplot(projection="polar" if polar else None)  # PolarAxes when polar
+    if polar:
+        return _polar_phase_function(mpl, table, indices)
+    fig = _new_figure(mpl, size=(7.0, 4.5))
+    ax: Any = fig.add_subplot()
+    for i, colour in zip(indices, _wavelength_colours(mpl, table, indices)):
+        ax.plot(
+            table.theta_deg,
+            table.phase[i],
+            color=colour,
+            linewidth=1.2,
+            label=f"{table.wavelength_nm[i]:g} nm",
+        )
+    ax.set_yscale("log", nonpositive="mask")
+    ax.set_xlim(0.0, 180.0)
+    ax.set_xticks(np.arange(0.0, 181.0, 30.0))
+    ax.set_xlabel(_LABEL_THETA)
+    ax.set_ylabel(_LABEL_PHASE)
+    ax.grid(True, which="major", linewidth=0.4, alpha=0.5)
+    ax.legend(title="wavelength", fontsize="small")
+    ax.set_title(f"{table.name}: phase function")
+    return fig
+
+
+def _wavelength_colours(mpl: Any, table: Table, indices: np.ndarray) -> list[Any]:
+    """viridis by wavelength, the same colour for a wavelength in every figure."""
     wl = table.wavelength_nm
     cmap = mpl.colormaps["viridis"]
     span = wl[-1] - wl[0]
-    for i in indices:
-        colour = cmap(0.0 if span == 0 else 0.9 * (wl[i] - wl[0]) / span)
-        x = np.deg2rad(table.theta_deg) if polar else table.theta_deg
-        ax.plot(x, table.phase[i], color=colour, linewidth=1.2, label=f"{wl[i]:g} nm")
-    if polar:
-        ax.set_thetamin(0.0)
-        ax.set_thetamax(180.0)
-        ax.set_rscale("log")
-        # The half disc leaves the lower half of the axes box empty: pull the
-        # angle label up under the disc.
-        ax.set_xlabel(_LABEL_THETA, labelpad=-40)
-        ax.set_ylabel(_LABEL_PHASE, labelpad=28)
-        ax.legend(
-            title="wavelength", loc="upper left", bbox_to_anchor=(1.02, 1.0), fontsize="small"
+    return [cmap(0.0 if span == 0 else 0.9 * (wl[i] - wl[0]) / span) for i in indices]
+
+
+def _polar_phase_function(mpl: Any, table: Table, indices: np.ndarray) -> Figure:
+    """Half-disc polar plot: theta from 0 (forward, right) to 180 deg, log radius P.
+
+    The half disc fills the figure: matplotlib places a partial polar wedge
+    inside its axes box by its own rules, so the wedge is measured once drawn
+    and the box moved and scaled to put the wedge on the intended rectangle
+    (the box's empty part then lies outside the figure).  The radius runs
+    over whole decades from the decade below the smallest value drawn, and its
+    labels sit along the backward (180 deg) baseline, where the curves stay
+    near the centre, one label per decade.
+    """
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    width_in, height_in = 8.0, 4.6
+    fig = mpl.figure.Figure(figsize=(width_in, height_in))
+    FigureCanvasAgg(fig)
+    disc_in = 5.3  # diameter of the half disc [in]
+    # The half disc's rectangle (figure fraction): left, baseline, width, height.
+    box_w, box_h = disc_in / width_in, disc_in / 2 / height_in
+    target = (0.05, 0.2, box_w, box_h)
+    centre = (target[0] + box_w / 2, target[1])  # baseline centre
+    ax: Any = fig.add_axes((0.1, 0.1, 0.5, 0.5), projection="polar")
+    drawn = table.phase[indices]
+    positive = drawn[drawn > 0]
+    low = 10.0 ** np.floor(np.log10(positive.min())) if positive.size else 1e-3
+    high = 10.0 ** np.ceil(np.log10(positive.max())) if positive.size else 1.0
+    theta = np.deg2rad(table.theta_deg)
+    for i, colour in zip(indices, _wavelength_colours(mpl, table, indices)):
+        ax.plot(
+            theta,
+            table.phase[i],
+            color=colour,
+            linewidth=1.2,
+            label=f"{table.wavelength_nm[i]:g} nm",
         )
-    else:
-        ax.set_yscale("log", nonpositive="mask")
-        ax.set_xlim(0.0, 180.0)
-        ax.set_xticks(np.arange(0.0, 181.0, 30.0))
-        ax.set_xlabel(_LABEL_THETA)
-        ax.set_ylabel(_LABEL_PHASE)
-        ax.grid(True, which="major", linewidth=0.4, alpha=0.5)
-        ax.legend(title="wavelength", fontsize="small")
-    ax.set_title(f"{table.name}: phase function")
+    ax.set_thetamin(0.0)
+    ax.set_thetamax(180.0)
+    fig.canvas.draw()  # the wedge's path is set when drawn
+    wedge = ax.patch.get_window_extent(fig.canvas.get_renderer())
+    wedge = wedge.transformed(fig.transFigure.inverted())
+    pos = ax.get_position()
+    sx, sy = target[2] / wedge.width, target[3] / wedge.height
+    ax.set_position(
+        (
+            target[0] - (wedge.x0 - pos.x0) * sx,
+            target[1] - (wedge.y0 - pos.y0) * sy,
+            pos.width * sx,
+            pos.height * sy,
+        )
+    )
+    ax.set_rscale("log")
+    ax.set_rlim(low, high)
+    decades = 10.0 ** np.arange(np.log10(low), np.log10(high) + 0.5)
+    ax.set_thetagrids(np.arange(0.0, 181.0, 30.0))
+    ax.set_rticks(decades[1:])
+    # A wedge's radial labels go on its edge spines: the end spine is theta = 180 deg.
+    ax.tick_params(axis="y", labelsize="small", labelleft=False, labelright=True)
+    ax.grid(True, linewidth=0.4, alpha=0.6)
+    # Axis labels and title where the figure has room (the axes box reaches past it).
+    ax.set_xlabel(_LABEL_THETA + ", 0 = forward", fontsize="small")
+    ax.xaxis.set_label_coords(centre[0] + box_w / 4, centre[1] - 0.1, transform=fig.transFigure)
+    ax.set_ylabel(_LABEL_PHASE + ", log radius", fontsize="small", rotation=0)
+    ax.yaxis.set_label_coords(centre[0] - box_w / 4, centre[1] - 0.1, transform=fig.transFigure)
+    for label in (ax.xaxis.label, ax.yaxis.label):
+        label.set_verticalalignment("top")
+        label.set_horizontalalignment("center")
+    position = ax.get_position()
+    ax.set_title(
+        f"{table.name}: phase function", y=(0.93 - position.y0) / position.height, va="bottom"
+    )
+    ax.legend(
+        title="wavelength",
+        loc="upper left",
+        bbox_to_anchor=(centre[0] + box_w / 2 + 0.03, centre[1] + box_h),
+        bbox_transform=fig.transFigure,
+        fontsize="small",
+    )
     return fig
 
 

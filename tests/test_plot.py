@@ -118,6 +118,30 @@ def test_phase_function_polar(mpl, table):
     assert np.rad2deg(ax.get_xlim()[1]) == pytest.approx(180.0)
 
 
+def test_polar_half_disc_fills_the_figure_and_its_labels_do_not_overlap(mpl, table):
+    """The half disc spans most of the figure's width, inside the figure; the radial tick
+    labels (one per decade) and the axis labels are inside the figure and apart."""
+    fig = plot.phase_function(table, polar=True)
+    (ax,) = fig.axes
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    figure_box = fig.bbox
+    wedge = ax.patch.get_window_extent(renderer)
+    assert wedge.width >= 0.6 * figure_box.width
+    assert wedge.height >= 0.5 * figure_box.height
+    assert figure_box.x0 <= wedge.x0 and wedge.x1 <= figure_box.x1
+    assert figure_box.y0 <= wedge.y0 and wedge.y1 <= figure_box.y1
+    labels = [t for t in ax.get_yticklabels() if t.get_visible() and t.get_text()]
+    labels += [ax.xaxis.label, ax.yaxis.label, ax.title]
+    boxes = [t.get_window_extent(renderer) for t in labels]
+    assert len(boxes) >= 5
+    for i, a in enumerate(boxes):
+        assert figure_box.x0 <= a.x0 and a.x1 <= figure_box.x1, labels[i].get_text()
+        assert figure_box.y0 <= a.y0 and a.y1 <= figure_box.y1, labels[i].get_text()
+        for b in boxes[i + 1 :]:
+            assert not a.overlaps(b), (labels[i].get_text(), a, b)
+
+
 def test_phase_function_wavelength_not_in_grid_lists_the_nearest(table):
     # Checked before matplotlib is needed: runs without it too.
     with pytest.raises(
