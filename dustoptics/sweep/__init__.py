@@ -1,0 +1,15 @@
+"""Sweeps over dust models: one labelled dataset over any numeric inputs, on Dask.
+
+:func:`sweep` computes a configuration (:mod:`dustoptics.models.config`)
+over axes of its inputs (:mod:`dustoptics.sweep.spec`), sharing the Mie work
+of points that differ only in their size distribution
+(:mod:`dustoptics.sweep.shared`), on a Dask cluster, stored chunk by chunk in
+a resumable Zarr store (:mod:`dustoptics.sweep.run`); :mod:`dustoptics.sweep.lookup`
+turns a sweep over effective radius into a 3-D texture for renderers.  Needs
+the ``sweep`` extra (dask[distributed], xarray, zarr).
+"""
+
+from dustoptics.sweep.run import compute_chunk, sweep
+from dustoptics.sweep.spec import Axis, SweepSpec, load_sweep
+
+__all__ = ["Axis", "SweepSpec", "compute_chunk", "load_sweep", "sweep"]

@@ -1,0 +1,557 @@
+"""Running a sweep on Dask, stored chunk by chunk, resumable.
+
+The points of a sweep are cut into chunks: one value of every axis that
+changes more than the size distribution (so that a chunk's points share one
+refractive index and their spheres, :mod:`dustoptics.sweep.shared`), up to
+``max_points`` points along the size axes, and a block of wavelengths.  A
+chunk is one Dask task and one chunk of every array in the Zarr store.  The
+client submits the chunks that the store does not hold yet, and writes each
+one as it finishes: its arrays first, then a completion marker (a small file
+written to a temporary name and renamed).  A chunk without its marker is
+computed again, whatever its arrays hold, so a stopped or crashed sweep
+resumes where it stopped and no half-written chunk is ever counted; a worker
+that dies is replaced and its tasks run elsewhere (Dask's scheduler).
+
+Values depend only on the sweep and its chunks along the size axes, never on
+the number of workers, the scheduler, the order in which chunks finish or
+the wavelength blocks (each wavelength is computed independently): the same
+sweep gives the same bytes.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import shutil
+import sys
+import time
+import warnings
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import Any, TextIO
+
+import numpy as np
+
+from dustoptics.io._atomic import write_files
+from dustoptics.models.config import BuildConfig, build_table
+from dustoptics.scattering.optics import resolve_refractive_index
+from dustoptics.scattering.quadrature import QuadratureSettings
+from dustoptics.sweep.spec import SweepSpec, load_sweep, parse_point
+from dustoptics.table import Provenance, canonical_json, software_versions
+
+__all__ = ["ChunkResult", "compute_chunk", "sweep"]
+
+#: Variables per point and wavelength (besides ``phase``), with units and meaning.
+_PER_WAVELENGTH = {
+    "cext_um2": ("um2", "mean extinction cross-section per particle"),
+    "csca_um2": ("um2", "mean scattering cross-section per particle"),
+    "g": ("1", "asymmetry parameter 2 pi int P mu dmu"),
+    "error_estimate": ("1", "estimated largest relative error of the phase function at any angle"),
+    "cross_section_error_estimate": ("1", "estimated error of cext, csca (relative) and g (absolute)"),
+    "n_nodes": ("1", "radius nodes of the quadrature of the phase function"),
+}
+
+_MARKERS = "sweep-done"
+_IDENTITY = "sweep-identity.json"
+
+
+def _require_extra() -> tuple[Any, Any, Any]:
+    """xarray, zarr and dask.distributed, or an ImportError naming the extra."""
+    try:
+        import distributed
+        import xarray
+        import zarr
+    except ImportError as exc:
+        raise ImportError(
+            f"sweeps need the 'sweep' extra (dask[distributed], xarray, zarr): "
+            f"pip install 'dustoptics[sweep]' ({exc})"
+        ) from None
+    return xarray, zarr, distributed
+
+
+# ---------------------------------------------------------------------- one chunk
+
+
+@dataclass(frozen=True)
+class ChunkResult:
+    """What a task returns: its arrays and the work it did.
+
+    Attributes
+    ----------
+    arrays : Mapping
+        ``phase`` (points, wavelengths, angles) and the variables of
+        :data:`_PER_WAVELENGTH` (points, wavelengths), points in C order of
+        the chunk.
+    spheres_computed, spheres_weighted : int
+        Spheres whose Mie sums were computed, and sphere-distribution pairs
+        weighted (equal without sharing). [-]
+    seconds : float
+        Time the task took on its worker. [s]
+    """
+
+    arrays: Mapping[str, np.ndarray]
+    spheres_computed: int
+    spheres_weighted: int
+    seconds: float
+
+
+def _shareable(config: BuildConfig) -> bool:
+    return (
+        config.phase.model == "mie"
+        and config.size_distribution is not None
+        and config.size_distribution.build().has_density
+    )
+
+
+def compute_chunk(
+    points: Sequence[Mapping[str, Any]], wl_start: int, wl_stop: int, *, shared: bool = True
+) -> ChunkResult:
+    """Compute one chunk: points (TOML data) at wavelengths ``[wl_start, wl_stop)``.
+
+    With ``shared`` (and a polydisperse Mie model), the points, which differ
+    only in their size distribution, share their spheres
+    (:func:`dustoptics.sweep.shared.solve_shared`); otherwise each point is
+    :func:`dustoptics.models.config.build_table` at those wavelengths, equal
+    to the bit to the same wavelengths of a single build.
+    """
+    start = time.perf_counter()
+    configs = [parse_point(p) for p in points]
+    wl_all = configs[0].wavelengths_nm
+    wl = wl_all[wl_start:wl_stop]
+    theta = configs[0].theta_deg
+    n_p, n_w = len(configs), wl.size
+    arrays = {"phase": np.empty((n_p, n_w, theta.size))}
+    arrays.update({k: np.full((n_p, n_w), np.nan) for k in _PER_WAVELENGTH})
+    computed = weighted = 0
+    if shared and all(_shareable(c) for c in configs):
+        from dustoptics.sweep.shared import solve_shared
+
+        first = configs[0]
+        assert first.material is not None and first.optics.rtol is not None
+        m, _ = resolve_refractive_index(first.material.build(), wl)
+        mu = np.cos(np.deg2rad(theta))
+        dists = [c.size_distribution.build() for c in configs]  # type: ignore[union-attr]
+        for w in range(n_w):
+            results, stats = solve_shared(
+                m=complex(m[w]), wavelength_nm=float(wl[w]), mu_out=mu, distributions=dists,
+                per_particle=first.optics.weighting == "number", settings=QuadratureSettings(),
+                rtol=first.optics.rtol, cross_rtol=float(first.optics.cross_section_rtol),
+            )
+            computed += stats.spheres_computed
+            weighted += stats.spheres_weighted
+            for p, r in enumerate(results):
+                if not (np.all(np.isfinite(r.phase)) and np.all(r.phase > 0)):
+                    raise FloatingPointError("phase function is not finite and positive; please report this input")
+                arrays["phase"][p, w] = r.phase
+                arrays["cext_um2"][p, w] = r.cext
+                arrays["csca_um2"][p, w] = r.csca
+                arrays["g"][p, w] = r.g
+                arrays["error_estimate"][p, w] = r.err_phase
+                arrays["cross_section_error_estimate"][p, w] = r.err_cross
+                arrays["n_nodes"][p, w] = r.n_nodes
+    else:
+        for p, config in enumerate(configs):
+            part = replace(config, optics=replace(config.optics, wavelengths_nm=tuple(float(x) for x in wl)))
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                table = build_table(part, workers=1)
+            arrays["phase"][p] = table.phase
+            arrays["g"][p] = table.g
+            for name in ("cext_um2", "csca_um2", "error_estimate", "cross_section_error_estimate"):
+                value = getattr(table, name)
+                if value is not None:
+                    arrays[name][p] = value
+            n_nodes = table.provenance.quadrature.get("n_nodes")
+            if n_nodes is not None:
+                arrays["n_nodes"][p] = n_nodes
+                computed += int(np.sum(n_nodes))
+                weighted += int(np.sum(n_nodes))
+    return ChunkResult(arrays, computed, weighted, time.perf_counter() - start)
+
+
+# ---------------------------------------------------------------------- layout
+
+
+@dataclass(frozen=True)
+class _Layout:
+    """Chunks of the sweep: per axis the chunk length, and wavelengths per chunk."""
+
+    spec: SweepSpec
+    axis_chunks: tuple[int, ...]
+    wl_chunk: int
+    n_wl: int
+
+    @property
+    def grid(self) -> tuple[int, ...]:
+        """Chunks along each axis, then along wavelength."""
+        return tuple(-(-n // c) for n, c in zip(self.spec.shape, self.axis_chunks)) + (-(-self.n_wl // self.wl_chunk),)
+
+    def chunks(self) -> list[tuple[int, ...]]:
+        return list(np.ndindex(*self.grid))
+
+    def region(self, chunk: Sequence[int]) -> tuple[slice, ...]:
+        """The chunk's slices: one per axis, then wavelength."""
+        out = [slice(i * c, min((i + 1) * c, n)) for i, c, n in zip(chunk, self.axis_chunks, self.spec.shape)]
+        w = chunk[-1]
+        out.append(slice(w * self.wl_chunk, min((w + 1) * self.wl_chunk, self.n_wl)))
+        return tuple(out)
+
+    def name(self, chunk: Sequence[int]) -> str:
+        return ".".join(str(i) for i in chunk)
+
+
+def _layout(spec: SweepSpec, n_wl: int, chunk_wavelengths: int | None, max_points: int) -> _Layout:
+    chunks = []
+    budget = max_points
+    for axis in spec.axes:
+        if not axis.size_only:
+            chunks.append(1)
+    size_axes = [i for i, a in enumerate(spec.axes) if a.size_only]
+    sizes = {i: len(spec.axes[i].values) for i in size_axes}
+    # Full size axes from the last (fastest) one, the first that does not fit cut into blocks.
+    per_axis = {}
+    for i in reversed(size_axes):
+        if sizes[i] <= budget:
+            per_axis[i] = sizes[i]
+            budget //= sizes[i]
+        else:
+            per_axis[i] = max(1, budget)
+            budget = 1
+    chunks = [per_axis.get(i, 1) for i in range(len(spec.axes))]
+    wl = chunk_wavelengths if chunk_wavelengths is not None else max(1, math.ceil(n_wl / 12))
+    return _Layout(spec, tuple(chunks), min(wl, n_wl), n_wl)
+
+
+# ---------------------------------------------------------------------- store
+
+
+def _template(spec: SweepSpec, configs: list[BuildConfig], layout: _Layout, method: str) -> Any:
+    """The Dataset's coordinates, per-point variables and attributes, with
+    lazy (unwritten) placeholders for the computed arrays."""
+    import dask.array as da
+    import xarray as xr
+
+    first = configs[0]
+    dims = tuple(a.key for a in spec.axes)
+    shape = spec.shape
+    wl = first.wavelengths_nm
+    theta = first.theta_deg
+    chunks = layout.axis_chunks
+    coords: dict[str, Any] = {a.key: (a.key, np.array(a.values), {"long_name": f"swept input {a.key}"}) for a in spec.axes}
+    coords["wavelength_nm"] = ("wavelength_nm", wl, {"units": "nm", "long_name": "vacuum wavelength"})
+    coords["theta_deg"] = ("theta_deg", theta, {"units": "degree", "long_name": "scattering angle, 0 = forward"})
+    data: dict[str, Any] = {
+        "phase": (
+            dims + ("wavelength_nm", "theta_deg"),
+            da.full(shape + (wl.size, theta.size), np.nan, chunks=chunks + (layout.wl_chunk, theta.size)),
+            {"units": "sr-1", "long_name": "phase function, 2 pi int_{-1}^{1} P(mu) dmu = 1 (per steradian)"},
+        )
+    }
+    for name, (units, meaning) in _PER_WAVELENGTH.items():
+        data[name] = (
+            dims + ("wavelength_nm",),
+            da.full(shape + (wl.size,), np.nan, chunks=chunks + (layout.wl_chunk,)),
+            {"units": units, "long_name": meaning},
+        )
+    geometric = np.full(shape, np.nan)
+    provenance = np.empty(shape, dtype=object)
+    sources: dict[str, Any] = {}
+    for index, config in zip(spec.indices(), configs):
+        inputs = config.to_inputs()
+        record = Provenance(inputs=inputs)
+        provenance[index] = canonical_json({"inputs": inputs, "input_hash": record.input_hash})
+        if config.size_distribution is not None:
+            geometric[index] = config.size_distribution.build().mean_cross_section_um2
+        for s in config.sources:
+            sources[s.citation] = {"name": s.name, "role": s.role, "citation": s.citation}
+    data["mean_geometric_cross_section_um2"] = (
+        dims, geometric, {"units": "um2", "long_name": "pi <r^2> of the size distribution"}
+    )
+    data["provenance"] = (
+        dims, provenance.astype(str),
+        {"long_name": "inputs of the point (canonical JSON) and their SHA-256, as a single build records them"},
+    )
+    attrs = {
+        "title": f"dustoptics sweep of {first.name}",
+        "source": f"dustoptics {software_versions().get('dustoptics', '?')}",
+        "sweep": spec.identity(),
+        "method": method,
+        "software": json.dumps(software_versions(), sort_keys=True),
+        "sources": json.dumps(list(sources.values())),
+        "accuracy": (
+            "each point's error_estimate (phase function, relative, max over angle) and "
+            "cross_section_error_estimate (cext, csca relative, g absolute) are its own quadrature's; "
+            + (
+                "shared radius nodes (dustoptics.sweep.shared): a point differs from a single build "
+                "of the same configuration by at most the sum of the two error estimates"
+                if method == "shared"
+                else "independent builds: every point equals a single build of its configuration to the bit"
+            )
+        ),
+    }
+    return xr.Dataset({k: v for k, v in data.items()}, coords=coords, attrs=attrs)
+
+
+def _markers(store: Path) -> Path:
+    return store / _MARKERS
+
+
+def _done(store: Path, layout: _Layout) -> set[str]:
+    directory = _markers(store)
+    if not directory.is_dir():
+        return set()
+    names = {layout.name(c) for c in layout.chunks()}
+    return {p.name for p in directory.iterdir() if p.name in names}
+
+
+def _open_store(store: Path, template: Any, identity: str) -> None:
+    """Create the store, or check that an existing one holds this sweep."""
+    marker = store / _IDENTITY
+    if store.exists():
+        if not marker.is_file():
+            raise ValueError(
+                f"{str(store)!r} exists and is not a dustoptics sweep store; remove it or choose another path"
+            )
+        if marker.read_text(encoding="utf-8") != identity:
+            raise ValueError(
+                f"{str(store)!r} holds a different sweep (other configuration, axes or chunks); "
+                "remove it or choose another path"
+            )
+        return
+    partial = store.with_name(store.name + ".creating")
+    if partial.exists():
+        shutil.rmtree(partial)
+    template.to_zarr(partial, compute=False, mode="w", zarr_format=2, consolidated=True)
+    write_files({partial / _IDENTITY: identity.encode("utf-8")})
+    os.replace(partial, store)
+
+
+def _write_chunk(store: Path, layout: _Layout, chunk: tuple[int, ...], result: ChunkResult) -> None:
+    """The chunk's arrays, then its completion marker (written last, atomically)."""
+    import zarr
+
+    group = zarr.open_group(str(store), mode="r+", zarr_format=2)
+    region = layout.region(chunk)
+    shape = tuple(s.stop - s.start for s in region[:-1])
+    for name, values in result.arrays.items():
+        n_w = region[-1].stop - region[-1].start
+        group[name][region] = values.reshape(shape + (n_w,) + values.shape[2:])
+    record = {
+        "chunk": list(chunk),
+        "seconds": result.seconds,
+        "spheres_computed": result.spheres_computed,
+        "spheres_weighted": result.spheres_weighted,
+    }
+    write_files({_markers(store) / layout.name(chunk): json.dumps(record, sort_keys=True).encode("utf-8")}, overwrite=True)
+
+
+# ---------------------------------------------------------------------- progress
+
+
+class _Progress:
+    """``sweep: N/M point-wavelengths (P %), elapsed, ETA`` on a stream."""
+
+    def __init__(self, stream: TextIO | None, callback: Callable[[int, int], None] | None, total: int, done: int):
+        self.stream = stream
+        self.callback = callback
+        self.total = total
+        self.done = done
+        self.start_done = done
+        self.start = time.perf_counter()
+        self.tty = stream is not None and hasattr(stream, "isatty") and stream.isatty()
+        self.report()
+
+    def add(self, n: int) -> None:
+        self.done += n
+        self.report()
+
+    def report(self) -> None:
+        if self.callback is not None:
+            self.callback(self.done, self.total)
+        if self.stream is None:
+            return
+        elapsed = time.perf_counter() - self.start
+        rate = (self.done - self.start_done) / elapsed if elapsed > 0 else 0.0
+        eta = f"{(self.total - self.done) / rate:.0f} s" if rate > 0 else "?"
+        width = 24
+        filled = int(width * self.done / max(1, self.total))
+        bar = "#" * filled + "." * (width - filled)
+        end = "\n" if (self.done == self.total or not self.tty) else "\r"
+        print(
+            f"sweep [{bar}] {self.done}/{self.total} point-wavelengths "
+            f"({100.0 * self.done / max(1, self.total):.0f} %), {elapsed:.0f} s elapsed, ETA {eta}",
+            end=end, file=self.stream,
+        )
+        self.stream.flush()
+
+
+# ---------------------------------------------------------------------- the sweep
+
+
+def _client(client: Any, workers: int | None, distributed: Any) -> tuple[Any, list[Any]]:
+    """A Client (and what to close afterwards) for ``client``: None (a local
+    cluster of worker processes), an address, or a Client."""
+    if client is None:
+        n = workers or os.cpu_count() or 1
+        cluster = distributed.LocalCluster(
+            n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None, silence_logs=40
+        )
+        c = distributed.Client(cluster)
+        return c, [c, cluster]
+    if isinstance(client, str):
+        c = distributed.Client(client)
+        return c, [c]
+    if isinstance(client, distributed.Client):
+        return client, []
+    raise TypeError(f"client must be None, a scheduler address 'tcp://HOST:PORT' or a dask.distributed.Client; got {client!r}")
+
+
+def sweep(
+    config: Any,
+    over: Mapping[str, Any] | None = None,
+    *,
+    out: str | os.PathLike[str] | None = None,
+    client: Any = None,
+    workers: int | None = None,
+    shared: bool = True,
+    chunk_wavelengths: int | None = None,
+    max_points: int = 400,
+    progress: TextIO | Callable[[int, int], None] | None = sys.stderr,
+) -> Any:
+    """Compute a configuration over axes of its inputs: one labelled dataset.
+
+    Parameters
+    ----------
+    config : str, os.PathLike or BuildConfig
+        A preset name, a TOML file (whose ``[sweep]`` table gives axes), TOML
+        text, or a configuration object (:mod:`dustoptics.models.config`).
+    over : Mapping, optional
+        Axes: dotted TOML keys -> values (a list, or ``{"start", "stop",
+        "num"}``), e.g. ``{"size_distribution.r_eff_um": [0.5, 1, 2, 4],
+        "size_distribution.v_eff": [0.1, 0.2]}``; see :mod:`dustoptics.sweep.spec`.
+    out : str or os.PathLike, optional
+        Store: a Zarr directory, written chunk by chunk and resumed when it
+        exists, or a ``.nc`` file (netCDF-4, written at the end from a Zarr
+        working store ``OUT.zarr-partial`` that makes it resumable too).
+        None: nothing is written; the result is returned in memory.
+    client : None, str or dask.distributed.Client, optional
+        Where to compute: None starts a local cluster of ``workers`` worker
+        processes (one thread each); a ``tcp://HOST:PORT`` address connects
+        to that scheduler; or a Client.
+    workers : int, optional
+        Worker processes of the local cluster (default: all cores).
+    shared : bool
+        Share radius nodes across points that differ only in their size
+        distribution (:mod:`dustoptics.sweep.shared`).  False builds every
+        point independently: each then equals a single build to the bit.
+    chunk_wavelengths : int, optional
+        Wavelengths per chunk (default: the wavelengths in 12 blocks).
+    max_points : int
+        Most points of a chunk along the size-distribution axes.
+    progress : stream or callable, optional
+        Progress bar (points x wavelengths done, elapsed time, remaining time)
+        on a stream (default stderr), a callable ``progress(done, total)``, or
+        None.
+
+    Returns
+    -------
+    xarray.Dataset
+        Dimensions: the axes (named by their keys), ``wavelength_nm``,
+        ``theta_deg``.  ``phase`` [sr^-1], ``cext_um2``, ``csca_um2``
+        [um^2], ``g``, ``error_estimate``, ``cross_section_error_estimate``,
+        ``n_nodes``, per point ``mean_geometric_cross_section_um2`` [um^2]
+        and ``provenance`` (its inputs and their hash), attributes with the
+        sweep, software versions, sources and the accuracy statement.  For a
+        Zarr ``out``, the dataset opened from the store.
+
+    Raises
+    ------
+    ValueError
+        An invalid axis or value (before any work: the message names the
+        axis, the value and its range), or a store holding another sweep.
+    ImportError
+        Without the ``sweep`` extra.
+    """
+    xr, _, distributed = _require_extra()
+    if not isinstance(max_points, int) or isinstance(max_points, bool) or max_points < 1:
+        raise ValueError(f"max_points must be a positive integer; got {max_points!r}")
+    if chunk_wavelengths is not None and (
+        not isinstance(chunk_wavelengths, int) or isinstance(chunk_wavelengths, bool) or chunk_wavelengths < 1
+    ):
+        raise ValueError(f"chunk_wavelengths must be a positive integer; got {chunk_wavelengths!r}")
+    if workers is not None and (not isinstance(workers, int) or isinstance(workers, bool) or workers < 1):
+        raise ValueError(f"workers must be a positive integer; got {workers!r}")
+    spec, configs = _load(config, over)
+    layout = _layout(spec, configs[0].wavelengths_nm.size, chunk_wavelengths, max_points)
+    method = "shared" if shared and all(_shareable(c) for c in configs) else "independent"
+    template = _template(spec, configs, layout, method)
+    identity = canonical_json({
+        "sweep": spec.identity(), "method": method, "chunks": list(layout.axis_chunks),
+        "wavelengths_per_chunk": layout.wl_chunk,
+    })
+    netcdf = out is not None and str(out).endswith(".nc")
+    temporary = None
+    if out is None:
+        import tempfile
+
+        temporary = tempfile.mkdtemp(prefix="dustoptics-sweep-")
+        store = Path(temporary) / "sweep.zarr"
+    else:
+        store = Path(str(out) + ".zarr-partial") if netcdf else Path(out)
+    try:
+        _open_store(store, template, identity)
+        done = _done(store, layout)
+        todo = [c for c in layout.chunks() if layout.name(c) not in done]
+        n_wl_theta = layout.n_wl
+        total = spec.n_points * n_wl_theta
+
+        def size(chunk: tuple[int, ...]) -> int:
+            return int(np.prod([s.stop - s.start for s in layout.region(chunk)]))
+
+        stream = progress if progress is not None and hasattr(progress, "write") else None
+        callback = progress if callable(progress) and stream is None else None
+        bar = _Progress(stream, callback, total, total - sum(size(c) for c in todo))
+        if todo:
+            c, to_close = _client(client, workers, distributed)
+            try:
+                indices = list(spec.indices())
+                flat = np.arange(spec.n_points).reshape(spec.shape)
+                futures = {}
+                for chunk in todo:
+                    region = layout.region(chunk)
+                    points = [spec.point_data(indices[i]) for i in flat[region[:-1]].ravel()]
+                    future = c.submit(
+                        compute_chunk, points, region[-1].start, region[-1].stop, shared=shared,
+                        pure=False, key=f"dustoptics-sweep-{layout.name(chunk)}-{os.getpid()}-{time.time_ns()}",
+                    )
+                    futures[future] = chunk
+                for future in distributed.as_completed(futures):
+                    chunk = futures[future]
+                    _write_chunk(store, layout, chunk, future.result())
+                    future.release()
+                    bar.add(size(chunk))
+            finally:
+                for obj in to_close:
+                    obj.close()
+        if netcdf:
+            assert out is not None
+            ds = xr.open_zarr(store, consolidated=True).load()
+            target = Path(out)
+            partial = target.with_name(target.name + ".partial")
+            ds.to_netcdf(partial, engine="h5netcdf")
+            os.replace(partial, target)
+            shutil.rmtree(store)
+            return xr.open_dataset(target, engine="h5netcdf")
+        if temporary is not None:
+            return xr.open_zarr(store, consolidated=True).load()
+        return xr.open_zarr(store, consolidated=True)
+    finally:
+        if temporary is not None:
+            shutil.rmtree(temporary, ignore_errors=True)
+
+
+def _load(config: Any, over: Mapping[str, Any] | None) -> tuple[SweepSpec, list[BuildConfig]]:
+    spec = load_sweep(config, over)
+    return spec, [parse_point(spec.point_data(i)) for i in spec.indices()]
