@@ -9,6 +9,7 @@ Usage::
     dustoptics plot FILE --kind {phase,polar,map,spectra} [--wavelengths-nm LIST] --out FIG.png|.svg
     dustoptics presets [--show NAME]
     dustoptics materials
+    dustoptics sweep CONFIG --out STORE [--scheduler ADDRESS] [--workers N] [--quiet]
     dustoptics --version
 
 ``build`` computes a preset (``dustoptics presets``) or a TOML configuration
@@ -19,6 +20,9 @@ and writes it into ``DIR/NAME/`` in each format of :data:`dustoptics.io.FORMATS`
 aerosols, ozone, densities and the settings JSON).  ``export`` turns
 an HDF5 table into other formats in ``DIR``; ``info`` says what a table file
 holds and how it was made; ``plot`` draws it (needs the ``plot`` extra).
+``sweep`` computes a configuration over the axes of its ``[sweep]`` table
+into a resumable Zarr store (or a ``.nc`` file) on Dask (needs the ``sweep``
+extra; :func:`dustoptics.sweep.sweep`).
 
 Exit status: 0 on success, 1 on failure (an output exists without ``--force``,
 a damaged input file, an input the physics rejects), 2 on a usage error
@@ -911,6 +915,35 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--prefix", default="DUST", help="name prefix of the shader constants")
     p.add_argument("--out", type=Path, metavar="DIR", help="write JSON, GLSL, HLSL and WGSL there")
     p.add_argument("--force", action="store_true", help="replace existing files")
+
+    p = sub.add_parser(
+        "sweep",
+        help="compute a configuration over its [sweep] axes on Dask (needs the 'sweep' extra)",
+    )
+    p.add_argument(
+        "config",
+        metavar="CONFIG",
+        help="TOML configuration file with a [sweep] table, or a preset name",
+    )
+    p.add_argument(
+        "--out",
+        type=Path,
+        required=True,
+        metavar="STORE",
+        help="Zarr store directory (resumed if it exists), or FILE.nc for netCDF",
+    )
+    p.add_argument(
+        "--scheduler",
+        metavar="ADDRESS",
+        help="dask.distributed scheduler, tcp://HOST:PORT (default: a local cluster)",
+    )
+    p.add_argument(
+        "--workers",
+        type=_positive_int,
+        metavar="N",
+        help="worker processes of the local cluster (default: all cores)",
+    )
+    p.add_argument("--quiet", action="store_true", help="no progress or summary output")
     return parser
 
 
@@ -1197,6 +1230,20 @@ def _cmd_fit(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_sweep(args: argparse.Namespace) -> int:
+    from dustoptics.sweep import sweep
+
+    ds = sweep(
+        args.config,
+        out=args.out,
+        client=args.scheduler,
+        workers=args.workers,
+        progress=None if args.quiet else sys.stderr,
+    )
+    _say(args, f"sweep: {dict(ds.sizes)} in {args.out}")
+    return 0
+
+
 _COMMANDS = {
     "fit": _cmd_fit,
     "build": _cmd_build,
@@ -1205,6 +1252,7 @@ _COMMANDS = {
     "plot": _cmd_plot,
     "presets": _cmd_presets,
     "materials": _cmd_materials,
+    "sweep": _cmd_sweep,
 }
 
 

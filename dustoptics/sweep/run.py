@@ -49,7 +49,10 @@ _PER_WAVELENGTH = {
     "csca_um2": ("um2", "mean scattering cross-section per particle"),
     "g": ("1", "asymmetry parameter 2 pi int P mu dmu"),
     "error_estimate": ("1", "estimated largest relative error of the phase function at any angle"),
-    "cross_section_error_estimate": ("1", "estimated error of cext, csca (relative) and g (absolute)"),
+    "cross_section_error_estimate": (
+        "1",
+        "estimated error of cext, csca (relative) and g (absolute)",
+    ),
     "n_nodes": ("1", "radius nodes of the quadrature of the phase function"),
 }
 
@@ -135,15 +138,22 @@ def compute_chunk(
         dists = [c.size_distribution.build() for c in configs]  # type: ignore[union-attr]
         for w in range(n_w):
             results, stats = solve_shared(
-                m=complex(m[w]), wavelength_nm=float(wl[w]), mu_out=mu, distributions=dists,
-                per_particle=first.optics.weighting == "number", settings=QuadratureSettings(),
-                rtol=first.optics.rtol, cross_rtol=float(first.optics.cross_section_rtol),
+                m=complex(m[w]),
+                wavelength_nm=float(wl[w]),
+                mu_out=mu,
+                distributions=dists,
+                per_particle=first.optics.weighting == "number",
+                settings=QuadratureSettings(),
+                rtol=first.optics.rtol,
+                cross_rtol=float(first.optics.cross_section_rtol),
             )
             computed += stats.spheres_computed
             weighted += stats.spheres_weighted
             for p, r in enumerate(results):
                 if not (np.all(np.isfinite(r.phase)) and np.all(r.phase > 0)):
-                    raise FloatingPointError("phase function is not finite and positive; please report this input")
+                    raise FloatingPointError(
+                        "phase function is not finite and positive; please report this input"
+                    )
                 arrays["phase"][p, w] = r.phase
                 arrays["cext_um2"][p, w] = r.cext
                 arrays["csca_um2"][p, w] = r.csca
@@ -153,7 +163,9 @@ def compute_chunk(
                 arrays["n_nodes"][p, w] = r.n_nodes
     else:
         for p, config in enumerate(configs):
-            part = replace(config, optics=replace(config.optics, wavelengths_nm=tuple(float(x) for x in wl)))
+            part = replace(
+                config, optics=replace(config.optics, wavelengths_nm=tuple(float(x) for x in wl))
+            )
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
                 table = build_table(part, workers=1)
@@ -186,14 +198,19 @@ class _Layout:
     @property
     def grid(self) -> tuple[int, ...]:
         """Chunks along each axis, then along wavelength."""
-        return tuple(-(-n // c) for n, c in zip(self.spec.shape, self.axis_chunks)) + (-(-self.n_wl // self.wl_chunk),)
+        return tuple(-(-n // c) for n, c in zip(self.spec.shape, self.axis_chunks)) + (
+            -(-self.n_wl // self.wl_chunk),
+        )
 
     def chunks(self) -> list[tuple[int, ...]]:
         return list(np.ndindex(*self.grid))
 
     def region(self, chunk: Sequence[int]) -> tuple[slice, ...]:
         """The chunk's slices: one per axis, then wavelength."""
-        out = [slice(i * c, min((i + 1) * c, n)) for i, c, n in zip(chunk, self.axis_chunks, self.spec.shape)]
+        out = [
+            slice(i * c, min((i + 1) * c, n))
+            for i, c, n in zip(chunk, self.axis_chunks, self.spec.shape)
+        ]
         w = chunk[-1]
         out.append(slice(w * self.wl_chunk, min((w + 1) * self.wl_chunk, self.n_wl)))
         return tuple(out)
@@ -239,14 +256,29 @@ def _template(spec: SweepSpec, configs: list[BuildConfig], layout: _Layout, meth
     wl = first.wavelengths_nm
     theta = first.theta_deg
     chunks = layout.axis_chunks
-    coords: dict[str, Any] = {a.key: (a.key, np.array(a.values), {"long_name": f"swept input {a.key}"}) for a in spec.axes}
-    coords["wavelength_nm"] = ("wavelength_nm", wl, {"units": "nm", "long_name": "vacuum wavelength"})
-    coords["theta_deg"] = ("theta_deg", theta, {"units": "degree", "long_name": "scattering angle, 0 = forward"})
+    coords: dict[str, Any] = {
+        a.key: (a.key, np.array(a.values), {"long_name": f"swept input {a.key}"}) for a in spec.axes
+    }
+    coords["wavelength_nm"] = (
+        "wavelength_nm",
+        wl,
+        {"units": "nm", "long_name": "vacuum wavelength"},
+    )
+    coords["theta_deg"] = (
+        "theta_deg",
+        theta,
+        {"units": "degree", "long_name": "scattering angle, 0 = forward"},
+    )
     data: dict[str, Any] = {
         "phase": (
             dims + ("wavelength_nm", "theta_deg"),
-            da.full(shape + (wl.size, theta.size), np.nan, chunks=chunks + (layout.wl_chunk, theta.size)),
-            {"units": "sr-1", "long_name": "phase function, 2 pi int_{-1}^{1} P(mu) dmu = 1 (per steradian)"},
+            da.full(
+                shape + (wl.size, theta.size), np.nan, chunks=chunks + (layout.wl_chunk, theta.size)
+            ),
+            {
+                "units": "sr-1",
+                "long_name": "phase function, 2 pi int_{-1}^{1} P(mu) dmu = 1 (per steradian)",
+            },
         )
     }
     for name, (units, meaning) in _PER_WAVELENGTH.items():
@@ -267,11 +299,16 @@ def _template(spec: SweepSpec, configs: list[BuildConfig], layout: _Layout, meth
         for s in config.sources:
             sources[s.citation] = {"name": s.name, "role": s.role, "citation": s.citation}
     data["mean_geometric_cross_section_um2"] = (
-        dims, geometric, {"units": "um2", "long_name": "pi <r^2> of the size distribution"}
+        dims,
+        geometric,
+        {"units": "um2", "long_name": "pi <r^2> of the size distribution"},
     )
     data["provenance"] = (
-        dims, provenance.astype(str),
-        {"long_name": "inputs of the point (canonical JSON) and their SHA-256, as a single build records them"},
+        dims,
+        provenance.astype(str),
+        {
+            "long_name": "inputs of the point (canonical JSON) and their SHA-256, as a single build records them"
+        },
     )
     attrs = {
         "title": f"dustoptics sweep of {first.name}",
@@ -344,7 +381,10 @@ def _write_chunk(store: Path, layout: _Layout, chunk: tuple[int, ...], result: C
         "spheres_computed": result.spheres_computed,
         "spheres_weighted": result.spheres_weighted,
     }
-    write_files({_markers(store) / layout.name(chunk): json.dumps(record, sort_keys=True).encode("utf-8")}, overwrite=True)
+    write_files(
+        {_markers(store) / layout.name(chunk): json.dumps(record, sort_keys=True).encode("utf-8")},
+        overwrite=True,
+    )
 
 
 # ---------------------------------------------------------------------- progress
@@ -353,7 +393,13 @@ def _write_chunk(store: Path, layout: _Layout, chunk: tuple[int, ...], result: C
 class _Progress:
     """``sweep: N/M point-wavelengths (P %), elapsed, ETA`` on a stream."""
 
-    def __init__(self, stream: TextIO | None, callback: Callable[[int, int], None] | None, total: int, done: int):
+    def __init__(
+        self,
+        stream: TextIO | None,
+        callback: Callable[[int, int], None] | None,
+        total: int,
+        done: int,
+    ):
         self.stream = stream
         self.callback = callback
         self.total = total
@@ -382,7 +428,8 @@ class _Progress:
         print(
             f"sweep [{bar}] {self.done}/{self.total} point-wavelengths "
             f"({100.0 * self.done / max(1, self.total):.0f} %), {elapsed:.0f} s elapsed, ETA {eta}",
-            end=end, file=self.stream,
+            end=end,
+            file=self.stream,
         )
         self.stream.flush()
 
@@ -396,7 +443,11 @@ def _client(client: Any, workers: int | None, distributed: Any) -> tuple[Any, li
     if client is None:
         n = workers or os.cpu_count() or 1
         cluster = distributed.LocalCluster(
-            n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None, silence_logs=40
+            n_workers=n,
+            threads_per_worker=1,
+            processes=True,
+            dashboard_address=None,
+            silence_logs=40,
         )
         c = distributed.Client(cluster)
         return c, [c, cluster]
@@ -405,7 +456,9 @@ def _client(client: Any, workers: int | None, distributed: Any) -> tuple[Any, li
         return c, [c]
     if isinstance(client, distributed.Client):
         return client, []
-    raise TypeError(f"client must be None, a scheduler address 'tcp://HOST:PORT' or a dask.distributed.Client; got {client!r}")
+    raise TypeError(
+        f"client must be None, a scheduler address 'tcp://HOST:PORT' or a dask.distributed.Client; got {client!r}"
+    )
 
 
 def sweep(
@@ -478,19 +531,27 @@ def sweep(
     if not isinstance(max_points, int) or isinstance(max_points, bool) or max_points < 1:
         raise ValueError(f"max_points must be a positive integer; got {max_points!r}")
     if chunk_wavelengths is not None and (
-        not isinstance(chunk_wavelengths, int) or isinstance(chunk_wavelengths, bool) or chunk_wavelengths < 1
+        not isinstance(chunk_wavelengths, int)
+        or isinstance(chunk_wavelengths, bool)
+        or chunk_wavelengths < 1
     ):
         raise ValueError(f"chunk_wavelengths must be a positive integer; got {chunk_wavelengths!r}")
-    if workers is not None and (not isinstance(workers, int) or isinstance(workers, bool) or workers < 1):
+    if workers is not None and (
+        not isinstance(workers, int) or isinstance(workers, bool) or workers < 1
+    ):
         raise ValueError(f"workers must be a positive integer; got {workers!r}")
     spec, configs = _load(config, over)
     layout = _layout(spec, configs[0].wavelengths_nm.size, chunk_wavelengths, max_points)
     method = "shared" if shared and all(_shareable(c) for c in configs) else "independent"
     template = _template(spec, configs, layout, method)
-    identity = canonical_json({
-        "sweep": spec.identity(), "method": method, "chunks": list(layout.axis_chunks),
-        "wavelengths_per_chunk": layout.wl_chunk,
-    })
+    identity = canonical_json(
+        {
+            "sweep": spec.identity(),
+            "method": method,
+            "chunks": list(layout.axis_chunks),
+            "wavelengths_per_chunk": layout.wl_chunk,
+        }
+    )
     netcdf = out is not None and str(out).endswith(".nc")
     temporary = None
     if out is None:
@@ -523,8 +584,13 @@ def sweep(
                     region = layout.region(chunk)
                     points = [spec.point_data(indices[i]) for i in flat[region[:-1]].ravel()]
                     future = c.submit(
-                        compute_chunk, points, region[-1].start, region[-1].stop, shared=shared,
-                        pure=False, key=f"dustoptics-sweep-{layout.name(chunk)}-{os.getpid()}-{time.time_ns()}",
+                        compute_chunk,
+                        points,
+                        region[-1].start,
+                        region[-1].stop,
+                        shared=shared,
+                        pure=False,
+                        key=f"dustoptics-sweep-{layout.name(chunk)}-{os.getpid()}-{time.time_ns()}",
                     )
                     futures[future] = chunk
                 for future in distributed.as_completed(futures):

@@ -86,7 +86,7 @@ def _cell_intensities(
     cost more than their sums.
     """
     n_nodes = x.shape[0]
-    n_f = (2 * n_mu if symmetric else n_mu)
+    n_f = 2 * n_mu if symmetric else n_mu
     intens = np.zeros((n_nodes, n_f))
     qext = np.empty(n_nodes)
     qsca = np.empty(n_nodes)
@@ -116,7 +116,9 @@ def _cell_intensities(
             gq[j] = ws[mie._GQ + s]
             if n_mu > 0:
                 scratch[:] = 0.0
-                mie._add_sphere(scratch, 1.0, x_b[s], nmax_b[s], ws, s, False, table, n_mu, symmetric, coef, acc)
+                mie._add_sphere(
+                    scratch, 1.0, x_b[s], nmax_b[s], ws, s, False, table, n_mu, symmetric, coef, acc
+                )
                 intens[j] = scratch[:n_f]
     return intens, qext, qsca, gq
 
@@ -269,7 +271,9 @@ class _Distribution:
         self.request: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
 
 
-def _tree_cells(s_lo: float, s_hi: float, settings: QuadratureSettings) -> tuple[np.ndarray, np.ndarray]:
+def _tree_cells(
+    s_lo: float, s_hi: float, settings: QuadratureSettings
+) -> tuple[np.ndarray, np.ndarray]:
     """The cells of the coarsest tree level that covers [s_lo, s_hi] with at
     least ``min_panels`` cells (at most max_level levels below the root)."""
     width = settings.panel_width
@@ -327,7 +331,9 @@ def solve_shared(
     states = []
     nmax = 0
     for dist in distributions:
-        edges = initial_panels(dist, wavelength_nm=wavelength_nm, settings=settings, lower_moment=lower_moment)
+        edges = initial_panels(
+            dist, wavelength_nm=wavelength_nm, settings=settings, lower_moment=lower_moment
+        )
         lower, upper = _tree_cells(float(edges[0]), float(edges[-1]), settings)
         state = _Distribution(dist, lower, upper)
         state.max_panels = lower.size * 2**settings.max_level
@@ -336,8 +342,12 @@ def solve_shared(
         nmax = max(nmax, mie.wiscombe_nmax(max(x_top, 1e-3) * 1.0001 + 1.0))
     # The grid a single build would use for the group's largest sphere.
     group = _GroupSolver(
-        m=m, wavelength_nm=wavelength_nm, mu_out=mu_out, n_half=16 * ((nmax + 1 + 15) // 16),
-        per_particle=per_particle, settings=settings,
+        m=m,
+        wavelength_nm=wavelength_nm,
+        mu_out=mu_out,
+        n_half=16 * ((nmax + 1 + 15) // 16),
+        per_particle=per_particle,
+        settings=settings,
     )
     return _solve_group(group, states, rtol=rtol, cross_rtol=cross_rtol)
 
@@ -346,7 +356,12 @@ def _solve_group(
     group: _GroupSolver, states: list[_Distribution], *, rtol: float, cross_rtol: float
 ) -> tuple[list[_Result], SharedStatistics]:
     """Lockstep refinement of distributions that share a grid (see :func:`solve_shared`)."""
-    m, wavelength_nm, settings, per_particle = group.m, group.wavelength_nm, group.settings, group.per_particle
+    m, wavelength_nm, settings, per_particle = (
+        group.m,
+        group.wavelength_nm,
+        group.settings,
+        group.per_particle,
+    )
     npc = settings.nodes_per_panel
     store = _Store(npc, group.n_f)
     weighted = 0
@@ -371,7 +386,9 @@ def _solve_group(
         store.n = base + len(new)
         lo = np.array([k[0] for k in new], dtype=np.float64)
         hi = np.array([k[1] for k in new], dtype=np.float64)
-        nodes, _ = panel_nodes(states[0].dist, wavelength_nm=wavelength_nm, lower_s=lo, upper_s=hi, settings=settings)
+        nodes, _ = panel_nodes(
+            states[0].dist, wavelength_nm=wavelength_nm, lower_s=lo, upper_s=hi, settings=settings
+        )
         store.nodes[base * npc : store.n * npc, 0] = nodes.size_parameter
         cells = np.concatenate([np.arange(base, store.n), np.array(upgrade, dtype=np.int64)])
         rows = (cells[:, None] * npc + np.arange(npc)).ravel()
@@ -381,7 +398,11 @@ def _solve_group(
         order = np.argsort(x, kind="stable")
         rows = rows[order]
         intens, qext, qsca, gq = _cell_intensities(
-            m, np.ascontiguousarray(x[order]), group.table, group.n_mu if angles else 0, group.legendre
+            m,
+            np.ascontiguousarray(x[order]),
+            group.table,
+            group.n_mu if angles else 0,
+            group.legendre,
         )
         store.nodes[rows, 1] = qext
         store.nodes[rows, 2] = qsca
@@ -392,15 +413,29 @@ def _solve_group(
             store.spheres_angles += cells.size * npc
         store.spheres_sums += len(new) * npc
 
-    def rows(state: _Distribution, lower: np.ndarray, upper: np.ndarray, angles: bool) -> np.ndarray:
+    def rows(
+        state: _Distribution, lower: np.ndarray, upper: np.ndarray, angles: bool
+    ) -> np.ndarray:
         nonlocal weighted
-        cells = np.array([store.key[k] for k in zip(lower.tolist(), upper.tolist())], dtype=np.int64)
-        nodes, _ = panel_nodes(state.dist, wavelength_nm=wavelength_nm, lower_s=lower, upper_s=upper, settings=settings)
+        cells = np.array(
+            [store.key[k] for k in zip(lower.tolist(), upper.tolist())], dtype=np.int64
+        )
+        nodes, _ = panel_nodes(
+            state.dist, wavelength_nm=wavelength_nm, lower_s=lower, upper_s=upper, settings=settings
+        )
         weighted += cells.size * npc
         used = store.n * npc
         return _cell_rows(
-            cells, nodes.weight, per_particle, angles, npc, store.nodes[:used, 0], store.nodes[:used, 1],
-            store.nodes[:used, 2], store.nodes[:used, 3], store.intens[:used],
+            cells,
+            nodes.weight,
+            per_particle,
+            angles,
+            npc,
+            store.nodes[:used, 0],
+            store.nodes[:used, 1],
+            store.nodes[:used, 2],
+            store.nodes[:used, 3],
+            store.intens[:used],
         )
 
     def halves_of(lower: np.ndarray, upper: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -462,10 +497,25 @@ def _solve_group(
                 assert st.request is not None
                 split, eval_lower, eval_upper = st.request
                 new_rows = rows(st, eval_lower, eval_upper, angles)
-                new_cost = _panel_cost(eval_upper[eval_upper.size // 2 :], settings.transition_size_parameter, angles)
-                (st.pool, st.n_rows, st.coarse, st.left, st.right, st.lower, st.upper, st.cost) = _apply_splits(
-                    st.pool, st.n_rows, new_rows, split, st.coarse, st.left, st.right, st.lower, st.upper,
-                    st.cost, new_cost, eval_lower, eval_upper,
+                new_cost = _panel_cost(
+                    eval_upper[eval_upper.size // 2 :], settings.transition_size_parameter, angles
+                )
+                (st.pool, st.n_rows, st.coarse, st.left, st.right, st.lower, st.upper, st.cost) = (
+                    _apply_splits(
+                        st.pool,
+                        st.n_rows,
+                        new_rows,
+                        split,
+                        st.coarse,
+                        st.left,
+                        st.right,
+                        st.lower,
+                        st.upper,
+                        st.cost,
+                        new_cost,
+                        eval_lower,
+                        eval_upper,
+                    )
                 )
             active = still
 
@@ -480,6 +530,8 @@ def _solve_group(
         assert phase_run is not None and st.run is not None
         results.append(group.finish(phase_run, st.run))
     stats = SharedStatistics(
-        spheres_computed=store.spheres_sums, spheres_with_angles=store.spheres_angles, spheres_weighted=weighted
+        spheres_computed=store.spheres_sums,
+        spheres_with_angles=store.spheres_angles,
+        spheres_weighted=weighted,
     )
     return results, stats

@@ -9,7 +9,7 @@ takes.  Any numeric input can be an axis::
     size_distribution.v_eff                 [-]
     size_distribution.modes[1].r_eff_um     [um] (a mode of a multimodal distribution)
     material.hematite_fraction              [-]
-    material.host_index                     [-] (or material.host_index.n, .k)
+    material.host_index.n                   [-] (and material.host_index.k)
     optics.rtol                             [-]
 
 In a TOML file the axes go into a ``[sweep]`` table, as lists or as evenly
@@ -97,7 +97,11 @@ def _toml_value(value: Any) -> str:
     if isinstance(value, str):
         return json.dumps(value, ensure_ascii=False)
     if isinstance(value, Mapping):
-        return "{" + ", ".join(f"{_toml_key(str(k))} = {_toml_value(v)}" for k, v in value.items()) + "}"
+        return (
+            "{"
+            + ", ".join(f"{_toml_key(str(k))} = {_toml_value(v)}" for k, v in value.items())
+            + "}"
+        )
     if isinstance(value, (list, tuple)):
         return "[" + ", ".join(_toml_value(v) for v in value) + "]"
     raise TypeError(f"cannot write {value!r} ({type(value).__name__}) as TOML")
@@ -145,9 +149,10 @@ def _strip_sweep_table(text: str) -> str:
         stripped = raw.strip()
         at_top = depth == 0 and state["string"] is None
         if at_top and stripped.startswith("["):
-            inside = re.match(r"^\[\s*sweep\s*\]", stripped) is not None or re.match(
-                r"^\[\[?\s*sweep\s*\.", stripped
-            ) is not None
+            inside = (
+                re.match(r"^\[\s*sweep\s*\]", stripped) is not None
+                or re.match(r"^\[\[?\s*sweep\s*\.", stripped) is not None
+            )
         depth += _scan(raw, state)
         out.append("" if inside else raw)
     return "\n".join(out) + ("\n" if text.endswith("\n") else "")
@@ -191,7 +196,9 @@ def _set(data: dict[str, Any], key: str, value: float) -> None:
         last = depth == len(parts) - 1
         where = ".".join(f"{n}" + ("" if i is None else f"[{i}]") for n, i in parts[: depth + 1])
         if not isinstance(node, dict):
-            raise ValueError(f"sweep axis {key!r}: {where.rsplit('.', 1)[0]!r} is not a table of the configuration")
+            raise ValueError(
+                f"sweep axis {key!r}: {where.rsplit('.', 1)[0]!r} is not a table of the configuration"
+            )
         if last and index is None:
             node[name] = value
             return
@@ -239,8 +246,12 @@ def _axis_values(key: str, raw: Any) -> tuple[float, ...]:
 
 
 def _number(key: str, value: Any) -> float:
-    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)):
-        raise TypeError(f"sweep axis {key!r}: values must be numbers; got {value!r} ({type(value).__name__})")
+    if isinstance(value, (bool, np.bool_)) or not isinstance(
+        value, (int, float, np.integer, np.floating)
+    ):
+        raise TypeError(
+            f"sweep axis {key!r}: values must be numbers; got {value!r} ({type(value).__name__})"
+        )
     out = float(value)
     if not math.isfinite(out):
         raise ValueError(f"sweep axis {key!r}: values must be finite; got {value!r}")
@@ -303,7 +314,9 @@ class SweepSpec:
 
     def identity(self) -> str:
         """Canonical JSON of the base and the axes: what a stored sweep must match to resume."""
-        return canonical_json({"base": plain(self.base), "axes": [[a.key, list(a.values)] for a in self.axes]})
+        return canonical_json(
+            {"base": plain(self.base), "axes": [[a.key, list(a.values)] for a in self.axes]}
+        )
 
 
 def parse_point(data: Mapping[str, Any], *, source: str = "<sweep point>") -> BuildConfig:
@@ -336,7 +349,9 @@ def _base_from(config: Any) -> tuple[dict[str, Any], dict[str, Any], str]:
         table = data.pop("sweep", {})
         if not isinstance(table, Mapping):
             raise ConfigError("must be a table [sweep]", key="sweep", line=None, source=source)
-        base = parse_config(_strip_sweep_table(text), source=source)  # the base's own errors, with lines
+        base = parse_config(
+            _strip_sweep_table(text), source=source
+        )  # the base's own errors, with lines
         return config_data(base), dict(table), source
     raise TypeError(
         f"config must be a preset name, a TOML file path, TOML text or a BuildConfig; got {type(config).__name__}"
@@ -373,7 +388,9 @@ def load_sweep(config: Any, over: Mapping[str, Any] | None = None) -> SweepSpec:
     raw = _flatten_sweep_table(table)
     if over is not None:
         if not isinstance(over, Mapping):
-            raise TypeError(f"over must be a mapping of dotted keys to values; got {type(over).__name__}")
+            raise TypeError(
+                f"over must be a mapping of dotted keys to values; got {type(over).__name__}"
+            )
         raw.update({str(k): v for k, v in over.items()})
     if not raw:
         raise ValueError("a sweep needs at least one axis: give over={...} or a [sweep] table")
@@ -381,7 +398,19 @@ def load_sweep(config: Any, over: Mapping[str, Any] | None = None) -> SweepSpec:
     for key, values in raw.items():
         _path(key)
         current = _get(base, key)
-        if current is not None and (isinstance(current, bool) or not isinstance(current, (int, float))):
+        if isinstance(current, Mapping):
+            numbers = [
+                k
+                for k, v in current.items()
+                if isinstance(v, (int, float)) and not isinstance(v, bool)
+            ]
+            raise ValueError(
+                f"sweep axis {key!r} names a table of the configuration, not a number; "
+                f"sweep one of its numbers: {', '.join(f'{key}.{k}' for k in numbers)}"
+            )
+        if current is not None and (
+            isinstance(current, bool) or not isinstance(current, (int, float))
+        ):
             raise ValueError(
                 f"sweep axis {key!r} is not a numeric input of the configuration (its value is {current!r})"
             )
@@ -412,7 +441,9 @@ def _validate(spec: SweepSpec) -> None:
             config = parse_point(data)
         except ConfigError as exc:
             where = ", ".join(f"{a.key} = {a.values[i]!r}" for a, i in zip(spec.axes, index))
-            raise ValueError(f"sweep point ({where}) is not a valid configuration: {exc.key}: {exc.reason}") from None
+            raise ValueError(
+                f"sweep point ({where}) is not a valid configuration: {exc.key}: {exc.reason}"
+            ) from None
         if config.material is not None:
             materials.setdefault(canonical_json(config.material.to_inputs()), (config, index))
     for config, index in materials.values():
