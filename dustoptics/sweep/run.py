@@ -132,7 +132,8 @@ def compute_chunk(
         from dustoptics.sweep.shared import solve_shared
 
         first = configs[0]
-        assert first.material is not None and first.optics.rtol is not None
+        assert first.material is not None
+        assert first.optics.rtol is not None and first.optics.cross_section_rtol is not None
         m, _ = resolve_refractive_index(first.material.build(), wl)
         mu = np.cos(np.deg2rad(theta))
         dists = [c.size_distribution.build() for c in configs]  # type: ignore[union-attr]
@@ -145,7 +146,7 @@ def compute_chunk(
                 per_particle=first.optics.weighting == "number",
                 settings=QuadratureSettings(),
                 rtol=first.optics.rtol,
-                cross_rtol=float(first.optics.cross_section_rtol),
+                cross_rtol=first.optics.cross_section_rtol,
             )
             computed += stats.spheres_computed
             weighted += stats.spheres_weighted
@@ -328,7 +329,7 @@ def _template(spec: SweepSpec, configs: list[BuildConfig], layout: _Layout, meth
             )
         ),
     }
-    return xr.Dataset({k: v for k, v in data.items()}, coords=coords, attrs=attrs)
+    return xr.Dataset(data, coords=coords, attrs=attrs)
 
 
 def _markers(store: Path) -> Path:
@@ -374,7 +375,8 @@ def _write_chunk(store: Path, layout: _Layout, chunk: tuple[int, ...], result: C
     shape = tuple(s.stop - s.start for s in region[:-1])
     for name, values in result.arrays.items():
         n_w = region[-1].stop - region[-1].start
-        group[name][region] = values.reshape(shape + (n_w,) + values.shape[2:])
+        array: Any = group[name]
+        array[region] = values.reshape(shape + (n_w,) + values.shape[2:])
     record = {
         "chunk": list(chunk),
         "seconds": result.seconds,
@@ -571,8 +573,8 @@ def sweep(
         def size(chunk: tuple[int, ...]) -> int:
             return int(np.prod([s.stop - s.start for s in layout.region(chunk)]))
 
-        stream = progress if progress is not None and hasattr(progress, "write") else None
-        callback = progress if callable(progress) and stream is None else None
+        stream: Any = progress if progress is not None and hasattr(progress, "write") else None
+        callback: Any = progress if callable(progress) and stream is None else None
         bar = _Progress(stream, callback, total, total - sum(size(c) for c in todo))
         if todo:
             c, to_close = _client(client, workers, distributed)

@@ -326,7 +326,6 @@ def solve_shared(
         returns it (read by :func:`dustoptics.scattering.optics.compute_optics`'s
         assembly), and the work done.
     """
-    npc = settings.nodes_per_panel
     lower_moment = 0 if per_particle else 2
     states = []
     nmax = 0

@@ -230,8 +230,8 @@ def _axis_values(key: str, raw: Any) -> tuple[float, ...]:
         if isinstance(num, bool) or not isinstance(num, int) or num < 1:
             raise ValueError(f"sweep axis {key!r}: num must be an integer >= 1; got {num!r}")
         start, stop = (_number(key, raw[k]) for k in ("start", "stop"))
-        values = np.linspace(start, stop, num) if num > 1 else np.array([start])
-        return tuple(float(v) for v in values)
+        grid = np.linspace(start, stop, num) if num > 1 else np.array([start])
+        return tuple(float(v) for v in grid)
     if isinstance(raw, (str, bytes)) or not isinstance(raw, Sequence | np.ndarray):
         raise TypeError(
             f"sweep axis {key!r}: values must be a list of numbers or a range "
