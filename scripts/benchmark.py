@@ -3,6 +3,7 @@
 Usage::
 
     python scripts/benchmark.py [--quick] [--json OUT.json] [--repeats N]
+    python scripts/benchmark.py --sweep [--quick] [--json OUT.json]
 
 Everything below is measured in one run on one machine, and printed as a plain
 text table (progress goes to stderr); ``--json`` writes the same figures with
@@ -73,6 +74,23 @@ What is measured, and how
 
 Storm dust (r_eff 4 um, v_eff 0.3, 48 x 1,801, rtol 1e-4) is timed warm like
 the default table: best of N.
+
+7. Sweeps (``--sweep``, which runs this section alone: the full rows take
+   about 15 minutes on 2 cores; the issue's 100-point sweep).  The blue-moons
+   preset (Mars dust, 48 x 1,801, rtol 1e-4) over r_eff = linspace(0.5, 4,
+   10) um x v_eff = linspace(0.1, 0.4, 10) (``--quick``: 5 x 5 points on 12
+   of the 48 wavelengths).
+
+   * shared vs independent, in this process on one thread: the sweep's task
+     function (``dustoptics.sweep.compute_chunk``) on all points and
+     wavelengths at once, against ``build_table`` of each point (workers=1);
+     the Mie spheres each computes; the largest difference of the two
+     phase functions relative to the sum of their error estimates.
+   * on Dask: ``dustoptics.sweep.sweep`` into a Zarr store on a LocalCluster
+     of 1 and of 2 worker processes (one thread each) and of 1 process with
+     2 threads, each cluster started and its workers' kernels loaded before
+     the clock starts; scaling 1 -> 2 processes; scheduling overhead = 1 -
+     (summed task time on the workers) / (wall time x workers).
 
 Timings are wall-clock (``time.perf_counter``); dustoptics runs on all cores,
 the miepython baselines on one, as their users would run them.  Other load on
@@ -948,6 +966,204 @@ def run(quick: bool, repeats: int) -> dict:
     return res
 
 
+SWEEP_TARGET_RATIO, SWEEP_GOAL_RATIO = 2.0, 3.0
+SWEEP_TARGET_SCALING = 1.8
+SWEEP_TARGET_OVERHEAD = 0.10
+
+
+def _sweep_points(quick: bool) -> tuple[list[dict], list[str], dict]:
+    """TOML data of the benchmark sweep's points, and the sweep's axes."""
+    from dustoptics.sweep.spec import load_sweep
+
+    n = 5 if quick else 10
+    over = {
+        "size_distribution.r_eff_um": np.linspace(0.5, 4.0, n).tolist(),
+        "size_distribution.v_eff": np.linspace(0.1, 0.4, n).tolist(),
+    }
+    config = do.presets.load_preset("blue-moons")
+    if quick:
+        from dataclasses import replace
+
+        wl = spread(config.wavelengths_nm, 12)
+        config = replace(
+            config, optics=replace(config.optics, wavelengths_nm=tuple(float(x) for x in wl))
+        )
+    spec = load_sweep(config, over)
+    return (
+        [spec.point_data(i) for i in spec.indices()],
+        list(over),
+        {"config": config, "over": over},
+    )
+
+
+def _warm_workers(client) -> None:
+    """Load every kernel on every worker (from numba's cache) before timing."""
+
+    def warm() -> None:
+        from dustoptics.sweep.shared import solve_shared
+
+        mu = np.cos(np.deg2rad(np.linspace(0.0, 180.0, 1801)))
+        solve_shared(
+            m=1.5 + 0.01j,
+            wavelength_nm=550.0,
+            mu_out=mu,
+            distributions=[do.ModifiedGamma(r_eff_um=1.0, v_eff=0.2)],
+            per_particle=False,
+            settings=QuadratureSettings(),
+            rtol=1e-3,
+            cross_rtol=1e-5,
+        )
+
+    client.run(warm)
+
+
+def _timed_sweep(case: dict, *, processes: bool, n_workers: int, threads: int) -> dict:
+    import distributed
+
+    from dustoptics.sweep import sweep
+
+    with tempfile.TemporaryDirectory() as tmp:
+        with (
+            distributed.LocalCluster(
+                n_workers=n_workers,
+                threads_per_worker=threads,
+                processes=processes,
+                dashboard_address=None,
+                silence_logs=50,
+            ) as cluster,
+            distributed.Client(cluster) as client,
+        ):
+            _warm_workers(client)
+            t0 = time.perf_counter()
+            sweep(
+                case["config"], case["over"], out=Path(tmp) / "s.zarr", client=client, progress=None
+            )
+            wall = time.perf_counter() - t0
+        markers = [
+            json.loads(p.read_text()) for p in (Path(tmp) / "s.zarr" / "sweep-done").iterdir()
+        ]
+    busy = sum(m["seconds"] for m in markers)
+    lanes = n_workers * threads
+    return {
+        "wall_s": wall,
+        "tasks": len(markers),
+        "task_s": busy,
+        "lanes": lanes,
+        "overhead": 1.0 - busy / (wall * lanes),
+    }
+
+
+def measure_sweep(quick: bool) -> dict:
+    """Section 7: shared vs independent builds, and the sweep on Dask."""
+    from dustoptics.models.config import build_table
+    from dustoptics.sweep import compute_chunk
+    from dustoptics.sweep.spec import parse_point
+
+    points, axes, case = _sweep_points(quick)
+    n_wl = case["config"].wavelengths_nm.size
+    log(f"sweep: {len(points)} points x {n_wl} wavelengths, shared, one thread ...")
+    compute_chunk(points[:1], 0, 1)  # kernels loaded
+    t0 = time.perf_counter()
+    shared = compute_chunk(points, 0, n_wl)
+    shared_s = time.perf_counter() - t0
+    log(f"sweep: {shared_s:.1f} s; {len(points)} independent builds, one thread ...")
+    t0 = time.perf_counter()
+    worst = 0.0
+    nodes = 0
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        for p, data in enumerate(points):
+            table = build_table(parse_point(data), workers=1)
+            nodes += int(np.sum(table.n_nodes))
+            diff = np.max(np.abs(shared.arrays["phase"][p] / table.phase - 1.0), axis=1)
+            bound = shared.arrays["error_estimate"][p] + table.error_estimate
+            worst = max(worst, float(np.max(diff / bound)))
+    independent_s = time.perf_counter() - t0
+    log(f"sweep: {independent_s:.1f} s; on Dask ...")
+    res = {
+        "points": len(points),
+        "wavelengths": int(n_wl),
+        "angles": 1801,
+        "axes": axes,
+        "shared_s": shared_s,
+        "independent_s": independent_s,
+        "ratio": independent_s / shared_s,
+        "spheres_computed_shared": shared.spheres_computed,
+        "spheres_weighted_shared": shared.spheres_weighted,
+        "phase_difference_over_estimates_max": worst,
+    }
+    res["dask_processes_1"] = _timed_sweep(case, processes=True, n_workers=1, threads=1)
+    res["dask_processes_2"] = _timed_sweep(case, processes=True, n_workers=2, threads=1)
+    res["dask_threads_2"] = _timed_sweep(case, processes=False, n_workers=1, threads=2)
+    res["scaling_1_to_2_processes"] = (
+        res["dask_processes_1"]["wall_s"] / res["dask_processes_2"]["wall_s"]
+    )
+    res["processes_over_threads"] = (
+        res["dask_threads_2"]["wall_s"] / res["dask_processes_2"]["wall_s"]
+    )
+    return res
+
+
+def format_sweep(res: dict, quick: bool, mach: dict) -> str:
+    lines = ["dustoptics sweep benchmark" + ("  (--quick)" if quick else ""), "=" * 26]
+
+    def row(label: str, value: str) -> None:
+        lines.append(f"  {label:<62} {value}")
+
+    row("cores (os.cpu_count)", str(mach["cpu_count"]))
+    row(
+        "load average at start (1, 5, 15 min)",
+        ", ".join(f"{x:.2f}" for x in mach["load_average"]) if mach["load_average"] else "n/a",
+    )
+    lines.append("")
+    lines.append(
+        f"7. Sweep: {res['points']} points ({' x '.join(res['axes'])}), "
+        f"{res['wavelengths']} wavelengths x {res['angles']} angles, blue-moons"
+    )
+    row("shared nodes, one thread (compute_chunk)", f"{res['shared_s']:.1f} s")
+    row("independent builds, one thread (build_table per point)", f"{res['independent_s']:.1f} s")
+    row("ratio independent / shared", f"{res['ratio']:.2f}x")
+    row(
+        "spheres computed / sphere-distribution pairs weighted (shared)",
+        f"{res['spheres_computed_shared']:,} / {res['spheres_weighted_shared']:,}",
+    )
+    row(
+        "max |shared / single - 1| over (sum of error estimates)",
+        f"{res['phase_difference_over_estimates_max']:.2f}",
+    )
+    for key, label in (
+        ("dask_processes_1", "Dask LocalCluster, 1 process"),
+        ("dask_processes_2", "Dask LocalCluster, 2 processes"),
+        ("dask_threads_2", "Dask LocalCluster, 1 process x 2 threads"),
+    ):
+        d = res[key]
+        row(label, f"{d['wall_s']:.1f} s, {d['tasks']} tasks, overhead {100 * d['overhead']:.1f} %")
+    row("scaling 1 -> 2 processes", f"{res['scaling_1_to_2_processes']:.2f}x")
+    row("2 threads time / 2 processes time", f"{res['processes_over_threads']:.2f}")
+    lines.append("")
+    checks = [
+        (
+            f"shared >= {SWEEP_TARGET_RATIO:g}x faster than independent (aim {SWEEP_GOAL_RATIO:g}x)",
+            res["ratio"] >= SWEEP_TARGET_RATIO,
+            f"{res['ratio']:.2f}x",
+        ),
+        (
+            f"scaling 1 -> 2 processes >= {SWEEP_TARGET_SCALING:g}x",
+            res["scaling_1_to_2_processes"] >= SWEEP_TARGET_SCALING,
+            f"{res['scaling_1_to_2_processes']:.2f}x",
+        ),
+        (
+            f"scheduling overhead < {100 * SWEEP_TARGET_OVERHEAD:.0f} % on 2 processes",
+            res["dask_processes_2"]["overhead"] < SWEEP_TARGET_OVERHEAD,
+            f"{100 * res['dask_processes_2']['overhead']:.1f} %",
+        ),
+    ]
+    lines.append("Targets (issue 19)")
+    for label, ok, value in checks:
+        lines.append(f"  {'PASS' if ok else 'FAIL'}  {label:<62} {value}")
+    return "\n".join(lines)
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
         description="Benchmark dustoptics against miepython baselines (see the module docstring)."
@@ -962,7 +1178,24 @@ def main(argv: list[str] | None = None) -> int:
         default=None,
         help="warm repeats of the default and storm tables (default 3, 1 with --quick)",
     )
+    parser.add_argument(
+        "--sweep",
+        action="store_true",
+        help="only the sweep rows (section 7, ~15 min on 2 cores; --quick ~2 min); needs the 'sweep' extra",
+    )
     args = parser.parse_args(argv)
+    if args.sweep:
+        t0 = time.perf_counter()
+        mach = machine_info()
+        sweep_res = measure_sweep(args.quick)
+        print(format_sweep(sweep_res, args.quick, mach))
+        print(f"(benchmark ran {time.perf_counter() - t0:.0f} s)")
+        if args.json is not None:
+            args.json.write_text(
+                json.dumps({"machine": mach, "sweep": sweep_res}, indent=2, sort_keys=True) + "\n"
+            )
+            log(f"wrote {args.json}")
+        return 0
     repeats = args.repeats if args.repeats is not None else (1 if args.quick else 3)
     if repeats < 1:
         parser.error("--repeats must be >= 1")

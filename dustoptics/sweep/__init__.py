@@ -9,7 +9,8 @@ turns a sweep over effective radius into a 3-D texture for renderers.  Needs
 the ``sweep`` extra (dask[distributed], xarray, zarr).
 """
 
+from dustoptics.sweep.lookup import write_lookup
 from dustoptics.sweep.run import compute_chunk, sweep
 from dustoptics.sweep.spec import Axis, SweepSpec, load_sweep
 
-__all__ = ["Axis", "SweepSpec", "compute_chunk", "load_sweep", "sweep"]
+__all__ = ["Axis", "SweepSpec", "compute_chunk", "load_sweep", "sweep", "write_lookup"]

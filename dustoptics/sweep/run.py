@@ -176,11 +176,10 @@ def compute_chunk(
                 value = getattr(table, name)
                 if value is not None:
                     arrays[name][p] = value
-            n_nodes = table.provenance.quadrature.get("n_nodes")
-            if n_nodes is not None:
-                arrays["n_nodes"][p] = n_nodes
-                computed += int(np.sum(n_nodes))
-                weighted += int(np.sum(n_nodes))
+            if table.n_nodes is not None:
+                arrays["n_nodes"][p] = table.n_nodes
+                computed += int(np.sum(table.n_nodes))
+                weighted += int(np.sum(table.n_nodes))
     return ChunkResult(arrays, computed, weighted, time.perf_counter() - start)
 
 
