@@ -78,7 +78,7 @@ def _lookup_arrays(
             f"the sweep has other axes with several values ({', '.join(f'{d}: {ds.sizes[d]}' for d in wide)}); "
             f"select one value of each first, e.g. ds.isel({{{wide[0]!r}: 0}})"
         )
-    ds = ds.isel({d: 0 for d in others})
+    ds = ds.isel(dict.fromkeys(others, 0))
     radii = np.asarray(ds[axis].values, dtype=np.float64)
     if radii.size < 2 or np.any(np.diff(radii) <= 0):
         raise ValueError(

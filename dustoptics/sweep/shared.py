@@ -46,6 +46,7 @@ from dustoptics.particles.sizedist import SizeDistribution
 from dustoptics.scattering import mie
 from dustoptics.scattering.optics import (
     _KEEP_FRACTION,
+    _angular_tiers,
     _apply_splits,
     _choose_splits,
     _cross_refinement_errors,
@@ -68,39 +69,45 @@ __all__ = ["SharedStatistics", "solve_shared"]
 
 @njit(cache=True, nogil=True)
 def _cell_intensities(
-    m: complex, x: np.ndarray, table: np.ndarray, n_mu: int, symmetric: bool
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    m: complex,
+    x: np.ndarray,
+    node_tier: np.ndarray,
+    tier_size: np.ndarray,
+    tables: np.ndarray,
+    table_start: np.ndarray,
+    symmetric: bool,
+    out: np.ndarray,
+    out_rows: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Unweighted intensities and efficiencies of spheres of size parameters ``x``.
 
-    For each sphere, I(mu) = |S1|^2 + |S2|^2 at the first ``n_mu`` angles of
-    ``table`` (:func:`mie.angular_table`; +mu then -mu if ``symmetric``;
-    ``n_mu`` = 0: efficiencies only), computed by :func:`mie._add_sphere`
-    with weight 1, so that c I afterwards is the number the kernel adds for
-    a sphere of weight c.  Give the spheres sorted by size, so that each
-    batch of Mie coefficients holds spheres of similar n_max.  Returns I
-    (one row per sphere), Q_ext, Q_sca and g Q_sca.
-
-    Every sphere is summed on the full angular grid: the tiers of a single
-    build (:func:`mie._accumulate_tiers`) pay off for a panel's summed row,
-    moved to the full grid once, not for single spheres, whose move would
-    cost more than their sums.
+    Sphere j is summed on tier ``node_tier[j]`` (< 0: efficiencies only): the
+    grid of ``tier_size[t]`` angles (half-grid angles if ``symmetric``) whose
+    :func:`mie.angular_table` is ``tables[table_start[t]:table_start[t + 1]]``
+    (flattened), as in :func:`mie._accumulate_tiers`.  I(mu) = |S1|^2 +
+    |S2|^2 there (+mu then -mu if ``symmetric``) is computed by
+    :func:`mie._add_sphere` with weight 1, so that c I afterwards is the
+    number the kernel adds for a sphere of weight c, and written to the
+    first values of ``out[out_rows[j]]``.  Give the spheres sorted by size,
+    so that each batch of Mie coefficients holds spheres of similar n_max.
+    Returns Q_ext, Q_sca and g Q_sca.
     """
     n_nodes = x.shape[0]
-    n_f = 2 * n_mu if symmetric else n_mu
-    intens = np.zeros((n_nodes, n_f))
     qext = np.empty(n_nodes)
     qsca = np.empty(n_nodes)
     gq = np.empty(n_nodes)
     if n_nodes == 0:
-        return intens, qext, qsca, gq
+        return qext, qsca, gq
     x_top = x[0]
     for j in range(n_nodes):
         x_top = max(x_top, x[j])
     nmax_all = mie.wiscombe_nmax(x_top)
     ws = mie._workspace(nmax_all)
     coef = np.empty((nmax_all + 4, 4))
-    acc = np.empty(table.shape[1] if n_mu > 0 else 0)
-    scratch = np.empty(n_f + mie.N_SUMS)
+    n_top = tier_size[tier_size.shape[0] - 1]
+    n_pad = mie.BLOCK * ((n_top + mie.BLOCK - 1) // mie.BLOCK)
+    acc = np.empty(8 * n_pad)
+    scratch = np.empty(2 * n_top + mie.N_SUMS)
     x_b = np.empty(mie.LANES)
     nmax_b = np.empty(mie.LANES, dtype=np.int64)
     for j0 in range(0, n_nodes, mie.LANES):
@@ -114,13 +121,23 @@ def _cell_intensities(
             qext[j] = ws[mie._QEXT + s]
             qsca[j] = ws[mie._QSCA + s]
             gq[j] = ws[mie._GQ + s]
-            if n_mu > 0:
-                scratch[:] = 0.0
-                mie._add_sphere(
-                    scratch, 1.0, x_b[s], nmax_b[s], ws, s, False, table, n_mu, symmetric, coef, acc
-                )
-                intens[j] = scratch[:n_f]
-    return intens, qext, qsca, gq
+            t = node_tier[j]
+            if t < 0:
+                continue
+            n_t = tier_size[t]
+            width = 8 * mie.BLOCK * ((n_t + mie.BLOCK - 1) // mie.BLOCK)
+            flat = tables[table_start[t] : table_start[t + 1]]
+            table = flat.reshape((flat.shape[0] // width, width))
+            n_f = 2 * n_t if symmetric else n_t
+            row = scratch[: n_f + mie.N_SUMS]
+            row[:] = 0.0
+            mie._add_sphere(
+                row, 1.0, x_b[s], nmax_b[s], ws, s, False, table, n_t, symmetric, coef, acc[:width]
+            )
+            target = out[out_rows[j]]
+            for k in range(n_f):
+                target[k] = row[k]
+    return qext, qsca, gq
 
 
 @njit(cache=True, nogil=True)
@@ -135,21 +152,24 @@ def _cell_rows(
     qsca: np.ndarray,
     gq: np.ndarray,
     intens: np.ndarray,
+    n_f_cell: np.ndarray,
 ) -> np.ndarray:
     """One distribution's rows for the cells ``cells`` (indices into the store).
 
     Node i of row r has weight ``w[r * nodes_per_cell + i]``; node j of the
     store has size parameter ``x[j]``, efficiencies ``qext[j]``, ``qsca[j]``,
-    ``gq[j]`` (g Q_sca) and intensities ``intens[j]`` on the output grid.
-    Each row holds the weighted intensities (if ``angles``) and the sums of
-    :func:`mie._accumulate`, sphere after sphere in order of size, with the
-    expressions of :func:`mie._add_sphere`.
+    ``gq[j]`` (g Q_sca) and intensities ``intens[j, :n_f_cell[c]]`` on its
+    cell's tier.  Each row holds the weighted intensities on the cell's tier
+    (if ``angles``; the caller moves them to the full grid) and, in its last
+    N_SUMS columns, the sums of :func:`mie._accumulate`, sphere after sphere
+    in order of size, with the expressions of :func:`mie._add_sphere`.
     """
     n_f = intens.shape[1] if angles else 0
     out = np.zeros((cells.shape[0], n_f + mie.N_SUMS))
     for r in range(cells.shape[0]):
         c = cells[r]
         row = out[r]
+        n_c = n_f_cell[c] if angles else 0
         for i in range(nodes_per_cell):
             j = c * nodes_per_cell + i
             wj = w[r * nodes_per_cell + i]
@@ -163,22 +183,24 @@ def _cell_rows(
             if angles:
                 cj = wj / (2.0 * np.pi * x2 * qsca[j]) if per_particle else wj
                 values = intens[j]
-                for k in range(n_f):
+                for k in range(n_c):
                     row[k] += cj * values[k]
     return out
 
 
 class _Store:
     """Spheres of the cells computed so far, in arrays grown by doubling:
-    per node x, Q_ext, Q_sca, g Q_sca and the intensities on the output grid
-    (undefined until a cell is computed with angles)."""
+    per node x, Q_ext, Q_sca, g Q_sca and the intensities on its cell's
+    angular tier (undefined until the cell is computed with angles)."""
 
     def __init__(self, nodes_per_cell: int, n_f: int) -> None:
         self.npc = nodes_per_cell
         self.key: dict[tuple[float, float], int] = {}
         self.n = 0  # cells
         self.has_angles = np.zeros(0, dtype=np.bool_)
-        self.nodes = np.empty((0, 4))  # x, qext, qsca, gq
+        self.tier = np.zeros(0, dtype=np.int64)  # -1: no angles
+        self.n_f = np.zeros(0, dtype=np.int64)  # angular values on the cell's tier
+        self.nodes = np.empty((4, 0))  # x, qext, qsca, gq
         self.intens = np.empty((0, n_f))
         self.spheres_angles = 0
         self.spheres_sums = 0
@@ -192,8 +214,14 @@ class _Store:
         grown = np.zeros(size, dtype=np.bool_)
         grown[: self.n] = self.has_angles[: self.n]
         self.has_angles = grown
-        nodes = np.empty((size * self.npc, 4))
-        nodes[:used] = self.nodes[:used]
+        tier = np.full(size, -1, dtype=np.int64)
+        tier[: self.n] = self.tier[: self.n]
+        self.tier = tier
+        n_f = np.zeros(size, dtype=np.int64)
+        n_f[: self.n] = self.n_f[: self.n]
+        self.n_f = n_f
+        nodes = np.empty((4, size * self.npc))
+        nodes[:, :used] = self.nodes[:, :used]
         self.nodes = nodes
         intens = np.empty((size * self.npc, self.intens.shape[1]))
         intens[:used] = self.intens[:used]
@@ -246,13 +274,43 @@ class _GroupSolver(_WavelengthSolver):
         self.legendre = n_half < mu_out.size
         if self.legendre:
             self.n_half = n_half
-            self.mu_half, self.w_half, self.table = _gauss_angles(n_half)
-            self.n_mu = n_half
+            self.mu_half, self.w_half = _gauss_angles(n_half)[:2]
             self.n_f = 2 * n_half
+            self.tiers, self._tables, self._table_start, self._maps, self._map_start = (
+                _angular_tiers(n_half)
+            )
+            # The maps from each lower tier to the full grid, as matrices.
+            self.regrid = []
+            for t, n_t in enumerate(self.tiers[:-1]):
+                size = int(n_t) * n_half
+                start = int(self._map_start[t])
+                self.regrid.append(
+                    (
+                        self._maps[start : start + size].reshape(int(n_t), n_half),
+                        self._maps[start + size : start + 2 * size].reshape(int(n_t), n_half),
+                    )
+                )
         else:
-            self.table = mie.angular_table(mu_out, self.nmax)
-            self.n_mu = mu_out.size
+            # Few output angles: one tier, the output angles themselves.
+            table = mie.angular_table(mu_out, self.nmax)
             self.n_f = mu_out.size
+            self.tiers = np.array([mu_out.size], dtype=np.int64)
+            self._tables = table.ravel()
+            self._table_start = np.array([0, table.size], dtype=np.int64)
+            self.regrid = []
+
+    def to_full_grid(self, rows: np.ndarray, tier: np.ndarray) -> None:
+        """Move the angular values of ``rows`` (in place) from their tiers to
+        the full grid by the maps of :func:`mie._interpolation_maps` (exact for
+        the spheres' polynomials), as :func:`mie._accumulate_tiers` does."""
+        n_top = self.n_f // 2
+        for t, (r_even, r_odd) in enumerate(self.regrid):
+            idx = np.flatnonzero(tier == t)
+            if idx.size == 0:
+                continue
+            n_t = r_even.shape[0]
+            block = np.ascontiguousarray(rows[idx, : 2 * n_t])
+            rows[idx, : 2 * n_top] = mie._legendre_regrid(block, r_even, r_odd)
 
 
 class _Distribution:
@@ -388,26 +446,42 @@ def _solve_group(
         nodes, _ = panel_nodes(
             states[0].dist, wavelength_nm=wavelength_nm, lower_s=lo, upper_s=hi, settings=settings
         )
-        store.nodes[base * npc : store.n * npc, 0] = nodes.size_parameter
+        store.nodes[0, base * npc : store.n * npc] = nodes.size_parameter
         cells = np.concatenate([np.arange(base, store.n), np.array(upgrade, dtype=np.int64)])
-        rows = (cells[:, None] * npc + np.arange(npc)).ravel()
-        x = store.nodes[rows, 0]
+        node_rows = (cells[:, None] * npc + np.arange(npc)).ravel()
+        x = store.nodes[0, node_rows]
+        if angles and group.legendre:
+            # The smallest tier that holds n_max + 2 orders of the cell's
+            # largest sphere, as :func:`_accumulate_by_tier` chooses.
+            x_top = x.reshape(-1, npc).max(axis=1)
+            n_needed = (x_top + 4.05 * np.cbrt(x_top) + 2.0).astype(np.int64) + 2
+            tier = np.searchsorted(group.tiers, n_needed).astype(np.int64)
+            if np.any(tier >= group.tiers.size):
+                raise ValueError("a cell's spheres need more orders than the largest tier holds")
+        else:
+            tier = np.full(cells.size, 0 if angles else -1, dtype=np.int64)
+        if angles:
+            store.tier[cells] = tier
+            store.n_f[cells] = group.tiers[tier] * (2 if group.legendre else 1)
         # By size, so that each batch of Mie coefficients holds spheres of
         # similar n_max.
         order = np.argsort(x, kind="stable")
-        rows = rows[order]
-        intens, qext, qsca, gq = _cell_intensities(
+        node_rows = node_rows[order]
+        qext, qsca, gq = _cell_intensities(
             m,
             np.ascontiguousarray(x[order]),
-            group.table,
-            group.n_mu if angles else 0,
+            np.repeat(tier, npc)[order],
+            group.tiers,
+            group._tables,
+            group._table_start,
             group.legendre,
+            store.intens,
+            node_rows,
         )
-        store.nodes[rows, 1] = qext
-        store.nodes[rows, 2] = qsca
-        store.nodes[rows, 3] = gq
+        store.nodes[1, node_rows] = qext
+        store.nodes[2, node_rows] = qsca
+        store.nodes[3, node_rows] = gq
         if angles:
-            store.intens[rows] = intens
             store.has_angles[cells] = True
             store.spheres_angles += cells.size * npc
         store.spheres_sums += len(new) * npc
@@ -424,18 +498,22 @@ def _solve_group(
         )
         weighted += cells.size * npc
         used = store.n * npc
-        return _cell_rows(
+        out = _cell_rows(
             cells,
             nodes.weight,
             per_particle,
             angles,
             npc,
-            store.nodes[:used, 0],
-            store.nodes[:used, 1],
-            store.nodes[:used, 2],
-            store.nodes[:used, 3],
+            store.nodes[0, :used],
+            store.nodes[1, :used],
+            store.nodes[2, :used],
+            store.nodes[3, :used],
             store.intens[:used],
+            store.n_f[: store.n],
         )
+        if angles:
+            group.to_full_grid(out, store.tier[cells])
+        return out
 
     def halves_of(lower: np.ndarray, upper: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         mid = 0.5 * (lower + upper)
@@ -447,6 +525,9 @@ def _solve_group(
         hl, hu = halves_of(st.lower, st.upper)
         lo_all += [st.lower, hl]
         hi_all += [st.upper, hu]
+    # Room for the refinement to come: untouched pages of np.empty cost
+    # nothing, while growing by copies would touch every page again.
+    store.reserve(32 * sum(st.lower.size for st in states))
     ensure(np.concatenate(lo_all), np.concatenate(hi_all), True)
     for st in states:
         hl, hu = halves_of(st.lower, st.upper)

@@ -110,7 +110,7 @@ void main() {
 
 
 def test_glslang_compiles(lookup):
-    stem, paths = lookup
+    _, paths = lookup
     source = paths[2].read_text()
     _compile("#version 330 core\n" + source + FRAGMENT, "frag")
     _compile("#version 430\n" + source + COMPUTE, "comp")
@@ -138,7 +138,7 @@ def test_runs_in_llvmpipe_and_matches_the_interpolation(lookup):
         pytest.skip(
             f"EGL OpenGL 4.3 context failed ({exc}); needs Mesa EGL (libegl1, libegl-mesa0)"
         )
-    stem, paths = lookup
+    _, paths = lookup
     side = json.loads(paths[1].read_text())
     raw = paths[0].read_bytes()
     data = np.frombuffer(raw, dtype="<f4").reshape(side["shape"])
