@@ -75,7 +75,7 @@ What is measured, and how
 Storm dust (r_eff 4 um, v_eff 0.3, 48 x 1,801, rtol 1e-4) is timed warm like
 the default table: best of N.
 
-7. Sweeps (``--sweep``, which runs this section alone: the full rows take
+8. Sweeps (``--sweep``, which runs this section alone: the full rows take
    about 15 minutes on 2 cores; the issue's 100-point sweep).  The blue-moons
    preset (Mars dust, 48 x 1,801, rtol 1e-4) over r_eff = linspace(0.5, 4,
    10) um x v_eff = linspace(0.1, 0.4, 10) (``--quick``: 5 x 5 points on 12
@@ -1054,7 +1054,7 @@ def _timed_sweep(case: dict, *, processes: bool, n_workers: int, threads: int) -
 
 
 def measure_sweep(quick: bool) -> dict:
-    """Section 7: shared vs independent builds, and the sweep on Dask."""
+    """Section 8: shared vs independent builds, and the sweep on Dask."""
     from dustoptics.models.config import build_table
     from dustoptics.sweep import compute_chunk
     from dustoptics.sweep.spec import parse_point
@@ -1117,7 +1117,7 @@ def format_sweep(res: dict, quick: bool, mach: dict) -> str:
     )
     lines.append("")
     lines.append(
-        f"7. Sweep: {res['points']} points ({' x '.join(res['axes'])}), "
+        f"8. Sweep: {res['points']} points ({' x '.join(res['axes'])}), "
         f"{res['wavelengths']} wavelengths x {res['angles']} angles, blue-moons"
     )
     row("shared nodes, one thread (compute_chunk)", f"{res['shared_s']:.1f} s")
@@ -1181,7 +1181,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument(
         "--sweep",
         action="store_true",
-        help="only the sweep rows (section 7, ~15 min on 2 cores; --quick ~2 min); needs the 'sweep' extra",
+        help="only the sweep rows (section 8, ~15 min on 2 cores; --quick ~2 min); needs the 'sweep' extra",
     )
     args = parser.parse_args(argv)
     if args.sweep:
