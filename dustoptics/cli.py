@@ -228,9 +228,13 @@ def build_atmosphere(
     optical_depth: float = 0.5,
     reference_wavelength_nm: float = 550.0,
     ozone_csv: str | os.PathLike[str] | None = None,
+    wavelength_nm: tuple[float, ...] | None = None,
     progress: TextIO | None = None,
 ) -> Any:
-    """The atmosphere set ``name`` ("mars" or "earth").
+    """The atmosphere set ``name`` ("mars", "earth" or "earth-kobe2026").
+
+    ``wavelength_nm`` replaces CosmoScout VR's 15 wavelengths of "mars" and
+    "earth" (Kobe's set has his three only).
 
     Mars: CO2 molecules (Costa et al. 2021 corrected to Martian conditions)
     and the dust of preset or configuration ``dust``, computed at CosmoScout
@@ -250,12 +254,16 @@ def build_atmosphere(
     from dustoptics.atmosphere import sets as atmosphere
     from dustoptics.table import Table
 
+    grid_nm = atmosphere.COSMOSCOUT_WAVELENGTHS_NM if wavelength_nm is None else wavelength_nm
     if name == "earth-kobe2026":
+        if wavelength_nm is not None:
+            raise UsageError(
+                "earth-kobe2026 has Kobe's three wavelengths only; drop --wavelengths-nm"
+            )
         return atmosphere.earth_atmosphere_kobe2026()
     if name == "earth":
-        if ozone_csv is None:
-            return atmosphere.earth_atmosphere()
-        return atmosphere.earth_atmosphere(ozone=gases.read_ozone_csv(ozone_csv))
+        ozone = "serdyuchenko2014" if ozone_csv is None else gases.read_ozone_csv(ozone_csv)
+        return atmosphere.earth_atmosphere(wavelength_nm=grid_nm, ozone=ozone)
     builder = TableBuilder.from_name(dust, progress=progress)
     cfg = builder.config
     if not cfg.phase.uses_mie:
@@ -264,9 +272,7 @@ def build_atmosphere(
         )
     grid = replace(
         cfg,
-        optics=replace(
-            cfg.optics, wavelengths_nm=atmosphere.COSMOSCOUT_WAVELENGTHS_NM, n_theta=1801
-        ),
+        optics=replace(cfg.optics, wavelengths_nm=tuple(float(w) for w in grid_nm), n_theta=1801),
     )
     dust_table: Table = TableBuilder(grid, progress=progress).build()
     reference = replace(
@@ -836,6 +842,12 @@ def _parser() -> argparse.ArgumentParser:
         help="wavelength of that optical depth [nm] (default 550)",
     )
     g.add_argument(
+        "--wavelengths-nm",
+        type=_float_list,
+        metavar="L1,L2,...",
+        help="wavelengths of the mars and earth sets [nm] (default CosmoScout VR's 15, 360-830)",
+    )
+    g.add_argument(
         "--ozone-csv",
         type=Path,
         metavar="FILE",
@@ -1022,6 +1034,7 @@ def _cmd_build_atmosphere(args: argparse.Namespace) -> int:
         optical_depth=0.5 if args.optical_depth is None else args.optical_depth,
         reference_wavelength_nm=args.reference_wavelength_nm,
         ozone_csv=args.ozone_csv,
+        wavelength_nm=args.wavelengths_nm,
         progress=None if args.quiet else sys.stderr,
     )
     record = set_provenance(atm, set_inputs(args))
@@ -1052,6 +1065,8 @@ def set_inputs(args: argparse.Namespace) -> dict[str, Any]:
     import hashlib
 
     inputs: dict[str, Any] = {"set": args.name}
+    if getattr(args, "wavelengths_nm", None) is not None:
+        inputs["wavelengths_nm"] = list(args.wavelengths_nm)
     if args.name == "mars":
         inputs.update(
             dust=args.dust,

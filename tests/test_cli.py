@@ -267,6 +267,15 @@ def test_single_preset_cosmoscout_from_optical_depth(config, tmp_path):
     assert _build(config, out, *both) == 2
 
 
+def test_build_earth_on_any_grid(tmp_path):
+    argv = ["build", "earth", "--wavelengths-nm", "400,500,600,700", "--out", str(tmp_path)]
+    assert cli.main([*argv, "--quiet"]) == 0
+    mol = read_cosmoscout_constituent(tmp_path / "earth", "earth_molecules")
+    np.testing.assert_allclose(mol.wavelength_m, [400e-9, 500e-9, 600e-9, 700e-9], rtol=1e-6)
+    bad = ["build", "earth-kobe2026", "--wavelengths-nm", "400,500", "--out", str(tmp_path)]
+    assert cli.main(bad) == 2
+
+
 def test_build_earth_kobe2026_keeps_his_three_wavelengths(tmp_path):
     assert cli.main(["build", "earth-kobe2026", "--out", str(tmp_path), "--quiet"]) == 0
     mol = read_cosmoscout_constituent(tmp_path / "earth-kobe2026", "earth-kobe2026_molecules")
