@@ -56,6 +56,9 @@ html_theme = "alabaster"
 html_theme_options = {
     "description": "Exact, reproducible optics of atmospheric dust",
     "fixed_sidebar": True,
+    # Room for 100-column code (the project's line length) beside the sidebar.
+    "page_width": "1240px",
+    "sidebar_width": "250px",
 }
 html_title = f"dustoptics {release}"
 html_show_sourcelink = False

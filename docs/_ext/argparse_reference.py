@@ -39,8 +39,14 @@ def _subcommands(parser: argparse.ArgumentParser) -> list[tuple[str, str, argpar
     return out
 
 
+#: Width of the usage text: the page's column, whatever the terminal of the build.
+USAGE_WIDTH = 72
+
+
 def _usage(parser: argparse.ArgumentParser) -> nodes.literal_block:
-    text = parser.format_usage().strip()
+    formatter = argparse.HelpFormatter(parser.prog, width=USAGE_WIDTH)
+    formatter.add_usage(parser.usage, parser._actions, parser._mutually_exclusive_groups)
+    text = formatter.format_help().strip()
     return nodes.literal_block(text, text, language="text")
 
 
@@ -88,7 +94,10 @@ class ArgparseReference(Directive):
             ]
             if not actions:
                 continue
-            out.append(nodes.rubric(text=group.title[:1].upper() + group.title[1:]))
+            title = group.title or ""
+            if title in ("options", "positional arguments"):  # argparse's own titles
+                title = title.capitalize()
+            out.append(nodes.rubric(text=title))
             items = nodes.definition_list()
             for action in actions:
                 item = nodes.definition_list_item()
