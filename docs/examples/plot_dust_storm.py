@@ -72,9 +72,8 @@ fig.suptitle("Mars dust: storm against clear season")
 plt.show()
 
 # %%
-# The same table from the command line: copy a preset, change its size
-# distribution and build it::
+# The same table from the command line: write a configuration file with its
+# own name, description and sources, the same material and the storm's size
+# distribution (:doc:`/howto/scientist` shows one), and build it::
 #
-#     dustoptics presets --show blue-moons > storm.toml
-#     # edit: name = "storm", r_eff_um = 4.0, v_eff = 0.3
 #     dustoptics build storm.toml --out tables
