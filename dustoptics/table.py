@@ -722,8 +722,8 @@ class Table:
     def save(self, path: str | os.PathLike[str], *, overwrite: bool = False) -> Any:
         """Write the table to one file; the format follows the suffix.
 
-        ``.nc`` (the default choice) and ``.h5`` / ``.hdf5`` are the same
-        CF-1.10 netCDF-4 file (:mod:`dustoptics.io.netcdf`); read it back with
+        ``.nc`` (the default: a path without a suffix gets it), ``.h5``,
+        ``.hdf5`` and ``.nc4`` are the same CF-1.10 netCDF-4 file (:mod:`dustoptics.io.netcdf`); read it back with
         :func:`dustoptics.open_table`.  The write is atomic and byte
         reproducible (same table, same bytes).
 

@@ -264,6 +264,8 @@ write_hdf5 = write_netcdf
 def save_table(table: Table, path: str | os.PathLike[str], *, overwrite: bool = False) -> Path:
     """:meth:`Table.save <dustoptics.table.Table.save>`: write ``path`` in the format of its suffix.
 
+    A path without a suffix gets ``.nc``, the default format.
+
     Raises
     ------
     ValueError
@@ -273,6 +275,8 @@ def save_table(table: Table, path: str | os.PathLike[str], *, overwrite: bool = 
     """
     _check_table(table)
     target = Path(path)
+    if not target.suffix:
+        target = target.with_name(target.name + SUFFIXES[0])
     if target.suffix.lower() not in SUFFIXES:
         raise ValueError(
             f"path {str(target)!r}: unknown table file suffix {target.suffix!r}; use one of "

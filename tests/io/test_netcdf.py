@@ -273,7 +273,12 @@ def test_registry_writes_name_nc_and_name_h5(table, tmp_path):
         FORMATS["netcdf"](table, tmp_path)
 
 
-@pytest.mark.parametrize("name", ["t.csv", "t.json", "t", "t.nc.tmp"])
+def test_save_without_a_suffix_writes_nc(table, tmp_path):
+    path = table.save(tmp_path / "mars-dust")
+    assert path == tmp_path / "mars-dust.nc" and open_table(path).equals(table)
+
+
+@pytest.mark.parametrize("name", ["t.csv", "t.json", "t.glsl", "t.nc.tmp"])
 def test_save_refuses_an_unknown_suffix_and_writes_nothing(table, tmp_path, name):
     with pytest.raises(ValueError, match=r"unknown table file suffix .* use one of \.nc, \.h5"):
         table.save(tmp_path / "sub" / name)
