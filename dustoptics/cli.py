@@ -823,7 +823,7 @@ def _parser() -> argparse.ArgumentParser:
     )
     g.add_argument(
         "--dust",
-        default="blue-moons",
+        default=None,
         metavar="PRESET_OR_CONFIG",
         help="Mars dust model (default blue-moons)",
     )
@@ -1030,7 +1030,7 @@ def _cmd_build_atmosphere(args: argparse.Namespace) -> int:
         )
     atm = build_atmosphere(
         args.name,
-        dust=args.dust,
+        dust="blue-moons" if args.dust is None else args.dust,
         optical_depth=0.5 if args.optical_depth is None else args.optical_depth,
         reference_wavelength_nm=args.reference_wavelength_nm,
         ozone_csv=args.ozone_csv,
@@ -1069,7 +1069,7 @@ def set_inputs(args: argparse.Namespace) -> dict[str, Any]:
         inputs["wavelengths_nm"] = list(args.wavelengths_nm)
     if args.name == "mars":
         inputs.update(
-            dust=args.dust,
+            dust="blue-moons" if args.dust is None else args.dust,
             optical_depth=0.5 if args.optical_depth is None else args.optical_depth,
             reference_wavelength_nm=args.reference_wavelength_nm,
         )
@@ -1114,7 +1114,39 @@ def set_provenance(atm: Any, inputs: dict[str, Any]) -> str:
     return json.dumps(record, indent=2, sort_keys=True, allow_nan=False) + "\n"
 
 
+#: Options of ``build`` that only a table's formats use, and those only a set uses.
+_TABLE_OPTIONS = (
+    "channels_nm",
+    "colour",
+    "resolution_deg",
+    "sampling",
+    "n_angles",
+    "number_density_per_m3",
+)
+_SET_OPTIONS = ("dust", "ozone_csv")
+
+
+def _refuse_unused_options(args: argparse.Namespace) -> None:
+    """An option given where it changes nothing is a usage error, never silently ignored."""
+
+    def given(names: Sequence[str]) -> list[str]:
+        return ["--" + n.replace("_", "-") for n in names if getattr(args, n, None) is not None]
+
+    if args.name in ATMOSPHERES:
+        unused = given(_TABLE_OPTIONS)
+        unused += given(("dust", "optical_depth") if args.name == "earth" else ("ozone_csv",))
+        where = f"'build {args.name}' (an atmosphere set)"
+    else:
+        unused = given(_SET_OPTIONS)
+        if args.optical_depth is not None and "cosmoscout" not in (args.format or ()):
+            unused.append("--optical-depth")
+        where = f"'build {args.name}' with --format {','.join(args.format or DEFAULT_FORMATS)}"
+    if unused:
+        raise UsageError(f"{', '.join(unused)} changes nothing in {where}; remove it")
+
+
 def _cmd_build(args: argparse.Namespace) -> int:
+    _refuse_unused_options(args)
     if args.name in ATMOSPHERES:
         return _cmd_build_atmosphere(args)
     from dataclasses import replace

@@ -620,3 +620,24 @@ def test_info_refuses_what_dustoptics_does_not_write(tmp_path, capsys):
     assert "not a file dustoptics writes" in capsys.readouterr().err
     assert cli.main(["info", str(tmp_path)]) == 1
     assert "holds no file dustoptics writes" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    ("argv", "named"),
+    [
+        (["build", "mars", "--channels-nm", "600,500,450"], "--channels-nm"),
+        (["build", "mars", "--number-density-per-m3", "1e8"], "--number-density-per-m3"),
+        (["build", "mars", "--ozone-csv", "o3.csv"], "--ozone-csv"),
+        (["build", "earth", "--dust", "hybrid"], "--dust"),
+        (["build", "earth", "--optical-depth", "0.3"], "--optical-depth"),
+        (["build", "costa", "--dust", "hybrid"], "--dust"),
+        (["build", "costa", "--optical-depth", "0.3"], "--optical-depth"),
+        (["build", "costa", "--format", "glsl", "--optical-depth", "0.3"], "--optical-depth"),
+    ],
+)
+def test_options_that_would_change_nothing_are_refused(argv, named, tmp_path, capsys):
+    """One grammar: an option is honoured or refused, never silently ignored."""
+    assert cli.main([*argv, "--out", str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert f"{named} changes nothing in 'build {argv[1]}'" in err
+    assert not any(tmp_path.iterdir())
