@@ -1123,7 +1123,7 @@ _TABLE_OPTIONS = (
     "n_angles",
     "number_density_per_m3",
 )
-_SET_OPTIONS = ("dust", "ozone_csv")
+_SET_OPTIONS = ("dust", "ozone_csv", "wavelengths_nm")
 
 
 def _refuse_unused_options(args: argparse.Namespace) -> None:

@@ -631,6 +631,7 @@ def test_info_refuses_what_dustoptics_does_not_write(tmp_path, capsys):
         (["build", "earth", "--dust", "hybrid"], "--dust"),
         (["build", "earth", "--optical-depth", "0.3"], "--optical-depth"),
         (["build", "costa", "--dust", "hybrid"], "--dust"),
+        (["build", "costa", "--wavelengths-nm", "400,500"], "--wavelengths-nm"),
         (["build", "costa", "--optical-depth", "0.3"], "--optical-depth"),
         (["build", "costa", "--format", "glsl", "--optical-depth", "0.3"], "--optical-depth"),
     ],
