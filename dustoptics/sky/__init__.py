@@ -1,0 +1,24 @@
+"""The sky a table makes: spectral radiative transfer and pictures.
+
+- :mod:`~dustoptics.sky.medium`: an atmosphere set as a scattering medium
+  (per-constituent optics, Legendre moments, delta-M truncation, slant columns);
+- :mod:`~dustoptics.sky.orders`: multiple scattering by successive orders
+  (discrete ordinates, Fourier series in azimuth, pseudo-spherical beam);
+- :mod:`~dustoptics.sky.render`: radiance along lines of sight through the
+  spherical shell (exact single scattering plus the diffuse source).
+"""
+
+from dustoptics.sky import medium, orders, render
+from dustoptics.sky.medium import Medium
+from dustoptics.sky.orders import DiffuseField, solve_orders
+from dustoptics.sky.render import line_of_sight_radiance
+
+__all__ = [
+    "DiffuseField",
+    "Medium",
+    "line_of_sight_radiance",
+    "medium",
+    "orders",
+    "render",
+    "solve_orders",
+]

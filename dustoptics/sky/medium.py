@@ -1,0 +1,386 @@
+"""The atmosphere as a scattering medium: per-constituent optics and columns.
+
+A :class:`Medium` is what the radiative transfer needs from an
+:class:`~dustoptics.atmosphere.sets.Atmosphere`, once, at its wavelengths:
+
+- per constituent c, the cross-sections per particle ``sigma_ext[c, lambda]``
+  and ``sigma_sca[c, lambda]`` [m^2], the number density ``N0[c]`` [m^-3] where
+  its relative density is 1, and the relative density ``rho_c(z)`` tabulated
+  on a fine altitude grid;
+- the Legendre moments ``chi[c, lambda, l]`` of each phase function,
+  ``P(mu) = (1 / 4 pi) sum_l (2 l + 1) chi_l P_l(mu)`` with ``chi_0 = 1``
+  (``chi_1 = g``), projected from the table by Gauss-Legendre quadrature;
+- the delta-M truncation (Wiscombe 1977) of each phase function to the
+  ``2 n_streams`` moments that the discrete-ordinate multiple-scattering
+  solver resolves: ``f = chi_{2N}``, ``sigma'_sca = (1 - f) sigma_sca``,
+  ``sigma'_ext = sigma_ext - f sigma_sca``, ``chi'_l = (chi_l - f) / (1 - f)``.
+  Because each constituent is truncated on its own, the scaled extinction of
+  any path is again a sum of cross-sections times column amounts, so one
+  table of slant columns (:class:`SlantColumns`) gives both the true and the
+  scaled transmittance of every path.
+
+References
+----------
+.. [1] W. J. Wiscombe, "The delta-M method: rapid yet accurate radiative flux
+   calculations for strongly asymmetric phase functions," J. Atmos. Sci. 34,
+   1408-1422 (1977), doi:10.1175/1520-0469(1977)034<1408:TDMRYA>2.0.CO;2.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Final
+
+import math
+
+import numba
+import numpy as np
+from numpy.polynomial import legendre
+from scipy.special import roots_legendre
+
+from dustoptics.atmosphere.sets import Atmosphere
+from dustoptics.table import Table
+
+__all__ = ["Medium", "SlantColumns", "legendre_moments"]
+
+_UM2_TO_M2: Final = 1e-12
+#: Gauss-Legendre nodes used to project a tabulated phase function on P_l.
+_PROJECTION_NODES: Final = 4096
+#: Altitude samples of the relative densities (linear interpolation between).
+_N_DENSITY_SAMPLES: Final = 4001
+
+
+def legendre_moments(table: Table, n_moments: int) -> np.ndarray:
+    """Legendre moments ``chi_l = 2 pi int P(mu) P_l(mu) dmu`` of a table.
+
+    The table's phase function is read as a renderer reads it (linear in
+    angle between its samples, :meth:`~dustoptics.table.Table.phase_at`) and
+    projected with a 4,096-node Gauss-Legendre rule in ``mu``.
+
+    Parameters
+    ----------
+    table : Table
+        Phase function normalized to 1 over the sphere. [sr^-1]
+    n_moments : int
+        Number of moments ``l = 0 .. n_moments - 1``.
+
+    Returns
+    -------
+    numpy.ndarray, shape (n_wavelength, n_moments)
+        ``chi_l``; ``chi_0`` is the table's normalization (1 to its accuracy),
+        ``chi_1`` its asymmetry parameter g. [-]
+    """
+    mu, w = roots_legendre(_PROJECTION_NODES)
+    theta = np.rad2deg(np.arccos(mu))
+    p = table.phase_at(theta)
+    vander = legendre.legvander(mu, n_moments - 1)
+    return 2.0 * np.pi * (p * w) @ vander
+
+
+@dataclass(frozen=True)
+class SlantColumns:
+    """Column amounts ``int rho_c ds`` along straight rays, tabulated.
+
+    Rays start at radius ``r`` with cosine ``mu`` of their zenith angle and run
+    to the top of the atmosphere; a ray that meets the ground has an infinite
+    column (no light gets through).  Radii are tabulated on ``radius_m`` and
+    cosines on a grid that is dense near the horizon; lookups interpolate
+    linearly (:meth:`columns`).
+
+    Attributes
+    ----------
+    radius_m : numpy.ndarray, shape (n_r,)
+        Radii from the ground to the top. [m]
+    mu : numpy.ndarray, shape (n_mu,)
+        Increasing cosines of the ray's zenith angle, -1 .. 1. [-]
+    column_m : numpy.ndarray, shape (n_constituent, n_r, n_mu)
+        ``int rho_c ds`` [m], ``inf`` where the ray meets the ground.
+    """
+
+    radius_m: np.ndarray
+    mu: np.ndarray
+    column_m: np.ndarray
+
+    def columns(self, radius_m: np.ndarray, mu: np.ndarray) -> np.ndarray:
+        """Columns [m] of rays from ``radius_m`` with zenith cosine ``mu``.
+
+        Returns an array of shape ``(n_constituent,) + radius_m.shape``.
+        """
+        r = np.clip(radius_m, self.radius_m[0], self.radius_m[-1])
+        ir = np.clip(np.searchsorted(self.radius_m, r) - 1, 0, self.radius_m.size - 2)
+        fr = (r - self.radius_m[ir]) / (self.radius_m[ir + 1] - self.radius_m[ir])
+        m = np.clip(mu, -1.0, 1.0)
+        im = np.clip(np.searchsorted(self.mu, m) - 1, 0, self.mu.size - 2)
+        fm = (m - self.mu[im]) / (self.mu[im + 1] - self.mu[im])
+        c = self.column_m
+        # Bilinear weights over the finite corners only: next to the rays that
+        # meet the ground (infinite columns) a grazing ray takes the columns
+        # of its grazing neighbours.
+        num = np.zeros((c.shape[0],) + np.shape(r))
+        den = np.zeros(np.shape(r))
+        for di, dj, weight in (
+            (0, 0, (1 - fr) * (1 - fm)),
+            (1, 0, fr * (1 - fm)),
+            (0, 1, (1 - fr) * fm),
+            (1, 1, fr * fm),
+        ):
+            value = c[:, ir + di, im + dj]
+            ok = np.isfinite(value[0])
+            num += np.where(ok, value, 0.0) * weight
+            den += np.where(ok, weight, 0.0)
+        hits = (m < 0) & (r * np.sqrt(np.maximum(0.0, 1.0 - m * m)) < self.radius_m[0])
+        with np.errstate(invalid="ignore", divide="ignore"):
+            out = np.where(den > 0, num / np.where(den > 0, den, 1.0), np.inf)
+        return np.where(hits, np.inf, out)
+
+
+@dataclass(frozen=True)
+class Medium:
+    """Optics and geometry of an atmosphere at its wavelengths.
+
+    Build it with :meth:`from_atmosphere`.
+
+    Attributes
+    ----------
+    name : str
+        The atmosphere's name.
+    wavelength_nm : numpy.ndarray, shape (n_wavelength,)
+        Wavelengths. [nm]
+    planet_radius_m, top_altitude_m : float
+        Ground radius and atmosphere thickness. [m]
+    roles : tuple of str
+        Constituent roles (``molecules``, ``aerosols``, ``ozone``).
+    tables : tuple of Table
+        The constituents' tables (phase functions for single scattering).
+    number_density_per_m3 : numpy.ndarray, shape (n_constituent,)
+        N0 of each constituent. [m^-3]
+    sigma_ext_m2, sigma_sca_m2 : numpy.ndarray, shape (n_constituent, n_wavelength)
+        Cross-sections per particle. [m^2]
+    chi : numpy.ndarray, shape (n_constituent, n_wavelength, n_moments)
+        Legendre moments of the phase functions (zeros for ozone). [-]
+    truncation : numpy.ndarray, shape (n_constituent, n_wavelength)
+        Delta-M forward-peak fraction f. [-]
+    altitude_m : numpy.ndarray, shape (n_z,)
+        Fine altitude grid of the relative densities. [m]
+    relative_density : numpy.ndarray, shape (n_constituent, n_z)
+        rho_c on ``altitude_m``. [-]
+    slant : SlantColumns
+        Column amounts along rays.
+    n_streams : int
+        Discrete ordinates per hemisphere of the multiple-scattering solver.
+    """
+
+    name: str
+    wavelength_nm: np.ndarray
+    planet_radius_m: float
+    top_altitude_m: float
+    roles: tuple[str, ...]
+    tables: tuple[Table, ...]
+    number_density_per_m3: np.ndarray
+    sigma_ext_m2: np.ndarray
+    sigma_sca_m2: np.ndarray
+    chi: np.ndarray
+    truncation: np.ndarray
+    altitude_m: np.ndarray
+    relative_density: np.ndarray
+    slant: SlantColumns
+    n_streams: int
+
+    @classmethod
+    def from_atmosphere(
+        cls,
+        atmosphere: Atmosphere,
+        *,
+        n_streams: int = 8,
+        n_radii: int = 96,
+        n_mu: int = 512,
+    ) -> Medium:
+        """The medium of an atmosphere set.
+
+        Parameters
+        ----------
+        atmosphere : Atmosphere
+            Constituents with cross-sections, number densities and profiles.
+        n_streams : int
+            Discrete ordinates per hemisphere (moments kept: ``2 n_streams``).
+        n_radii, n_mu : int
+            Grid of the slant-column table (radius, zenith cosine).
+        """
+        if not isinstance(atmosphere, Atmosphere):
+            raise TypeError(f"atmosphere must be an Atmosphere; got {type(atmosphere).__name__}")
+        if not (isinstance(n_streams, int) and 2 <= n_streams <= 32):
+            raise ValueError(f"n_streams must be an integer in [2, 32]; got {n_streams!r}")
+        top = float(atmosphere.thickness_m)
+        radius = float(atmosphere.planet_radius_m)
+        n_mom = 2 * n_streams + 1
+        roles, tables, n0, ext, sca, chi = [], [], [], [], [], []
+        for c in atmosphere.constituents:
+            t = c.table
+            assert t.cext_um2 is not None and t.csca_um2 is not None
+            assert t.number_density_per_m3 is not None
+            roles.append(c.role)
+            tables.append(t)
+            n0.append(t.number_density_per_m3)
+            ext.append(t.cext_um2 * _UM2_TO_M2)
+            sca.append(t.csca_um2 * _UM2_TO_M2)
+            chi.append(
+                legendre_moments(t, n_mom)
+                if np.any(t.csca_um2 > 0)
+                else np.zeros((t.wavelength_nm.size, n_mom))
+            )
+        chi_arr = np.array(chi)
+        # The projected chi_0 is 1 to the table's accuracy; make it exact so
+        # that scattering conserves energy in the solver.
+        scatters = np.array([np.any(t.csca_um2 > 0) for t in tables])
+        chi_arr[scatters] /= chi_arr[scatters, :, :1]
+        f = np.clip(chi_arr[:, :, 2 * n_streams], 0.0, 1.0 - 1e-9)
+        altitude = _altitude_grid(top, _N_DENSITY_SAMPLES)
+        rho = np.array([c.profile.relative_density(altitude) for c in atmosphere.constituents])
+        slant = _slant_columns(altitude, rho, radius, top, n_radii=n_radii, n_mu=n_mu)
+        return cls(
+            name=atmosphere.name,
+            wavelength_nm=np.array(atmosphere.wavelength_nm, dtype=float),
+            planet_radius_m=radius,
+            top_altitude_m=top,
+            roles=tuple(roles),
+            tables=tuple(tables),
+            number_density_per_m3=np.array(n0, dtype=float),
+            sigma_ext_m2=np.array(ext),
+            sigma_sca_m2=np.array(sca),
+            chi=chi_arr,
+            truncation=f,
+            altitude_m=altitude,
+            relative_density=rho,
+            slant=slant,
+            n_streams=n_streams,
+        )
+
+    # ------------------------------------------------------------ derived
+
+    @property
+    def scaled_sigma_ext_m2(self) -> np.ndarray:
+        """Delta-M extinction cross-sections ``sigma_ext - f sigma_sca``. [m^2]"""
+        return self.sigma_ext_m2 - self.truncation * self.sigma_sca_m2
+
+    @property
+    def scaled_sigma_sca_m2(self) -> np.ndarray:
+        """Delta-M scattering cross-sections ``(1 - f) sigma_sca``. [m^2]"""
+        return (1.0 - self.truncation) * self.sigma_sca_m2
+
+    @property
+    def scaled_chi(self) -> np.ndarray:
+        """Delta-M moments ``(chi_l - f) / (1 - f)``, l < 2 n_streams. [-]"""
+        f = self.truncation[:, :, None]
+        return (self.chi[:, :, : 2 * self.n_streams] - f) / (1.0 - f)
+
+    def density(self, altitude_m: np.ndarray) -> np.ndarray:
+        """Number densities ``N0 rho_c(z)``, shape (n_constituent,) + z.shape. [m^-3]"""
+        z = np.asarray(altitude_m, dtype=float)
+        rho = np.array(
+            [np.interp(z, self.altitude_m, r, left=r[0], right=0.0) for r in self.relative_density]
+        )
+        return rho * self.number_density_per_m3.reshape((-1,) + (1,) * z.ndim)
+
+    def vertical_optical_depth(self) -> np.ndarray:
+        """Vertical optical depth of each constituent, shape (n_constituent, n_wavelength). [-]"""
+        col = np.trapezoid(self.relative_density, self.altitude_m, axis=1)
+        return self.sigma_ext_m2 * (self.number_density_per_m3 * col)[:, None]
+
+    def transmittance(
+        self, radius_m: np.ndarray, mu: np.ndarray, *, scaled: bool = False
+    ) -> np.ndarray:
+        """Transmittance to the top of the atmosphere along rays.
+
+        Returns shape ``(n_wavelength,) + radius_m.shape``; 0 for rays that
+        meet the ground.
+        """
+        col = self.slant.columns(np.asarray(radius_m, float), np.asarray(mu, float))
+        sigma = self.scaled_sigma_ext_m2 if scaled else self.sigma_ext_m2
+        amount = col * self.number_density_per_m3.reshape((-1,) + (1,) * (col.ndim - 1))
+        finite = np.isfinite(amount).all(axis=0)
+        tau = np.einsum("cl,c...->l...", sigma, np.where(np.isfinite(amount), amount, 0.0))
+        return np.where(finite, np.exp(-tau), 0.0)
+
+
+def _altitude_grid(top: float, n: int) -> np.ndarray:
+    # Dense near the ground, where the densities change fastest.
+    u = np.linspace(0.0, 1.0, n)
+    a = 5.0
+    return top * np.expm1(a * u) / np.expm1(a)
+
+
+def _slant_columns(
+    altitude: np.ndarray,
+    rho: np.ndarray,
+    radius: float,
+    top: float,
+    *,
+    n_radii: int,
+    n_mu: int,
+) -> SlantColumns:
+    """Tabulate ``int rho ds`` along rays (compiled Gauss-Legendre sums)."""
+    r_grid = radius + _altitude_grid(top, n_radii)
+    # Cosines dense near the horizon (where columns change fastest).
+    u = np.linspace(-1.0, 1.0, n_mu)
+    mu_grid = np.sign(u) * np.abs(u) ** 3
+    x, w = legendre.leggauss(_SLANT_NODES)
+    out = _slant_kernel(
+        r_grid, mu_grid, 0.5 * (x + 1.0), 0.5 * w, altitude, np.ascontiguousarray(rho), radius, top
+    )
+    return SlantColumns(radius_m=r_grid, mu=mu_grid, column_m=out)
+
+
+#: Gauss-Legendre nodes on each part of a slant path.
+_SLANT_NODES: Final = 160
+
+
+@numba.njit(cache=True, nogil=True)
+def _slant_kernel(
+    r_grid: np.ndarray,
+    mu_grid: np.ndarray,
+    t: np.ndarray,
+    w: np.ndarray,
+    altitude: np.ndarray,
+    rho: np.ndarray,
+    radius: float,
+    top: float,
+) -> np.ndarray:
+    # The path is split at the perigee of a downward ray; on each part the
+    # substitution s = s0 + span t^2 puts the nodes densely where the ray is
+    # lowest (the densities fall off with altitude).
+    n_c = rho.shape[0]
+    r_top = radius + top
+    out = np.zeros((n_c, r_grid.size, mu_grid.size))
+    nz = altitude.size
+    for i in range(r_grid.size):
+        r = r_grid[i]
+        for j in range(mu_grid.size):
+            m = mu_grid[j]
+            if m < 0.0 and r * math.sqrt(max(0.0, 1.0 - m * m)) < radius:
+                for c in range(n_c):
+                    out[c, i, j] = np.inf
+                continue
+            length = -r * m + math.sqrt(max(r * r * (m * m - 1.0) + r_top * r_top, 0.0))
+            s_p = max(-r * m, 0.0)
+            for part in range(2):
+                if part == 0:
+                    lo, hi = 0.0, s_p
+                else:
+                    lo, hi = s_p, length
+                span = hi - lo
+                if span <= 0.0:
+                    continue
+                for q in range(t.size):
+                    if part == 0:
+                        s = hi - span * t[q] * t[q]
+                    else:
+                        s = lo + span * t[q] * t[q]
+                    ds = span * 2.0 * t[q] * w[q]
+                    h = math.sqrt(max(r * r + s * s + 2.0 * r * m * s, 0.0)) - radius
+                    k = np.searchsorted(altitude, h) - 1
+                    k = min(max(k, 0), nz - 2)
+                    f = (h - altitude[k]) / (altitude[k + 1] - altitude[k])
+                    f = min(max(f, 0.0), 1.0)
+                    for c in range(n_c):
+                        out[c, i, j] += (rho[c, k] * (1.0 - f) + rho[c, k + 1] * f) * ds
+    return out

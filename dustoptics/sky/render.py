@@ -1,0 +1,360 @@
+"""Sky radiance seen by an observer: integration along lines of sight.
+
+For each viewing direction the radiance reaching the observer is integrated
+along the straight line of sight through the spherical shell, to the top of
+the atmosphere or to the ground:
+
+    L = int beta_sca,c(s) P_c(Theta) F0 T_sun(s) T(0, s) ds                (single scattering)
+      + int sum_c N_c(s) sigma'_sca,c J'_c(s, mu_s, phi_s) T'(0, s) ds       (orders >= 2)
+      + T(0, s_g) (A / pi) E_ground                                          (the ground)
+
+The first term is exact: every constituent's tabulated phase function at the
+scattering angle ``Theta`` (the angle between the view and the Sun), the
+Sun's transmittance along its real spherical path to each point (true
+extinction) and the true transmittance back to the observer.  The second uses
+the converged diffuse field of :mod:`dustoptics.sky.orders` (delta-M scaled
+problem, pseudo-spherical beam): its source function ``J'`` at each point's
+altitude, in the local direction of propagation and azimuth from the local
+Sun, attenuated with the scaled extinction (the truncated forward peak is not
+removed from a beam, as in Nakajima & Tanaka's TMS correction).  Only the
+multiple-scattering source takes the column above the observer as laterally
+uniform; single scattering and every transmittance are spherical.
+
+Radiances are per unit solar irradiance normal to the beam (``F0 = 1``):
+[sr^-1].  The direct Sun is not included.
+
+References
+----------
+.. [1] T. Nakajima and M. Tanaka, "Algorithms for radiative intensity
+   calculations in moderately thick atmospheres using a truncation
+   approximation," J. Quant. Spectrosc. Radiat. Transfer 40, 51-69 (1988),
+   doi:10.1016/0022-4073(88)90031-3.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Final
+
+import numba
+import numpy as np
+
+from dustoptics.sky.medium import Medium
+from dustoptics.sky.orders import DiffuseField, normalized_legendre
+
+__all__ = ["line_of_sight_radiance", "source_table"]
+
+#: Samples of the direction-cosine grid of the multiple-scattering source.
+N_SOURCE_MU: Final = 181
+#: Samples along each line of sight.
+N_PATH: Final = 160
+
+
+def source_table(medium: Medium, field: DiffuseField) -> np.ndarray:
+    """The multiple-scattering source per constituent on a grid of cosines.
+
+    ``J_c^m(level, mu) = (1/2) sum_l (2 l + 1) chi'_{c,l} L_l^m(mu) M_l^m(level)``,
+    on ``mu = linspace(-1, 1, N_SOURCE_MU)`` (direction of propagation).
+
+    Returns
+    -------
+    numpy.ndarray, shape (n_constituent, n_modes, n_wavelength, n_level, N_SOURCE_MU)
+        Per unit scaled scattering cross-section and number density. [sr^-1]
+    """
+    n_mom = 2 * medium.n_streams
+    grid = np.linspace(-1.0, 1.0, N_SOURCE_MU)
+    lam = normalized_legendre(n_mom, grid)  # (m, l, u)
+    two_l = 2.0 * np.arange(n_mom) + 1.0
+    chi = 0.5 * two_l * medium.scaled_chi  # (c, x, l)
+    return np.einsum("cxl,mxkl,mlu->cmxku", chi, field.moments, lam)
+
+
+@numba.njit(cache=True, nogil=True)
+def _interp_columns(
+    r: float,
+    mu: float,
+    radius_grid: np.ndarray,
+    mu_grid: np.ndarray,
+    columns: np.ndarray,
+    out: np.ndarray,
+) -> bool:
+    """Slant columns from (r, mu) to the top; False if the ray meets the ground."""
+    r_ground = radius_grid[0]
+    if mu < 0.0 and r * math.sqrt(max(0.0, 1.0 - mu * mu)) < r_ground:
+        return False
+    nr = radius_grid.shape[0]
+    nm = mu_grid.shape[0]
+    rr = min(max(r, radius_grid[0]), radius_grid[nr - 1])
+    ir = np.searchsorted(radius_grid, rr) - 1
+    ir = min(max(ir, 0), nr - 2)
+    fr = (rr - radius_grid[ir]) / (radius_grid[ir + 1] - radius_grid[ir])
+    mm = min(max(mu, -1.0), 1.0)
+    im = np.searchsorted(mu_grid, mm) - 1
+    im = min(max(im, 0), nm - 2)
+    fm = (mm - mu_grid[im]) / (mu_grid[im + 1] - mu_grid[im])
+    den = 0.0
+    for c in range(columns.shape[0]):
+        out[c] = 0.0
+    for corner in range(4):
+        di = corner & 1
+        dj = corner >> 1
+        wgt = (fr if di else 1.0 - fr) * (fm if dj else 1.0 - fm)
+        v0 = columns[0, ir + di, im + dj]
+        if math.isinf(v0):
+            continue
+        den += wgt
+        for c in range(columns.shape[0]):
+            out[c] += wgt * columns[c, ir + di, im + dj]
+    if den <= 0.0:
+        return False
+    for c in range(columns.shape[0]):
+        out[c] /= den
+    return True
+
+
+@numba.njit(cache=True, nogil=True, parallel=True)
+def _radiance_kernel(
+    mu_view: np.ndarray,
+    phi_view: np.ndarray,
+    r0: float,
+    mu_sun: float,
+    r_top: float,
+    altitude: np.ndarray,
+    density: np.ndarray,
+    n0: np.ndarray,
+    sig_ext: np.ndarray,
+    sig_sca: np.ndarray,
+    sig_ext_scaled: np.ndarray,
+    sig_sca_scaled: np.ndarray,
+    phase_ss: np.ndarray,
+    radius_grid: np.ndarray,
+    mu_grid: np.ndarray,
+    columns: np.ndarray,
+    level_altitude: np.ndarray,
+    source: np.ndarray,
+    ground_albedo: np.ndarray,
+    ground_diffuse: np.ndarray,
+    n_path: int,
+) -> np.ndarray:
+    n_rays = mu_view.shape[0]
+    n_c, nwl = sig_ext.shape
+    n_modes = source.shape[1]
+    n_lev = level_altitude.shape[0]
+    n_u = source.shape[4]
+    r_ground = radius_grid[0]
+    out = np.zeros((n_rays, nwl))
+    sin_sun = math.sqrt(max(0.0, 1.0 - mu_sun * mu_sun))
+    for ray in numba.prange(n_rays):
+        mv = mu_view[ray]
+        sv = math.sqrt(max(0.0, 1.0 - mv * mv))
+        cos_theta = mv * mu_sun + sv * sin_sun * math.cos(phi_view[ray])
+        # Length of the line of sight: to the ground or to the top.
+        b = r0 * mv
+        disc_g = b * b - (r0 * r0 - r_ground * r_ground)
+        hits_ground = mv < 0.0 and disc_g >= 0.0
+        if hits_ground:
+            s_end = -b - math.sqrt(disc_g)
+        else:
+            s_end = -b + math.sqrt(max(0.0, b * b + r_top * r_top - r0 * r0))
+        tau = np.zeros(nwl)
+        tau_s = np.zeros(nwl)
+        prev_e = np.zeros(nwl)
+        prev_ms = np.zeros(nwl)
+        prev_be = np.zeros(nwl)
+        prev_bes = np.zeros(nwl)
+        acc = np.zeros(nwl)
+        col = np.zeros(n_c)
+        dens = np.zeros(n_c)
+        cosm = np.zeros(n_modes)
+        s_prev = 0.0
+        a = 6.0
+        norm = math.expm1(a)
+        for i in range(n_path + 1):
+            s = s_end * math.expm1(a * i / n_path) / norm
+            x_r = math.sqrt(max(r0 * r0 + s * s + 2.0 * r0 * s * mv, 0.0))
+            z = x_r - r_ground
+            mu_loc = (r0 * mv + s) / x_r
+            mus_loc = (r0 * mu_sun + s * cos_theta) / x_r
+            # Densities at the point (linear in altitude).
+            iz = np.searchsorted(altitude, z) - 1
+            iz = min(max(iz, 0), altitude.shape[0] - 2)
+            fz = (z - altitude[iz]) / (altitude[iz + 1] - altitude[iz])
+            fz = min(max(fz, 0.0), 1.0)
+            for c in range(n_c):
+                dens[c] = density[c, iz] * (1.0 - fz) + density[c, iz + 1] * fz
+            lit = _interp_columns(x_r, mus_loc, radius_grid, mu_grid, columns, col)
+            # Local azimuth between the view and the Sun (cosine), for the
+            # Fourier series of the diffuse source.
+            sl = math.sqrt(max(0.0, 1.0 - mu_loc * mu_loc))
+            ssl = math.sqrt(max(0.0, 1.0 - mus_loc * mus_loc))
+            if sl * ssl > 1e-12:
+                cphi = (cos_theta - mu_loc * mus_loc) / (sl * ssl)
+                cphi = min(max(cphi, -1.0), 1.0)
+            else:
+                cphi = 1.0
+            phi = math.acos(cphi)
+            for m in range(n_modes):
+                cosm[m] = math.cos(m * phi)
+            # Source direction of propagation: toward the observer, -view.
+            u = (-mu_loc + 1.0) * 0.5 * (n_u - 1)
+            iu = min(max(int(u), 0), n_u - 2)
+            fu = u - iu
+            # Level interval (levels run from the top down).
+            k = 0
+            while k < n_lev - 2 and level_altitude[k + 1] > z:
+                k += 1
+            fk = (level_altitude[k] - z) / (level_altitude[k] - level_altitude[k + 1])
+            fk = min(max(fk, 0.0), 1.0)
+            for x in range(nwl):
+                be = 0.0
+                bes = 0.0
+                ss = 0.0
+                ms = 0.0
+                t_sun = 0.0
+                if lit:
+                    tau_sun = 0.0
+                    for c in range(n_c):
+                        tau_sun += sig_ext[c, x] * col[c] * n0[c]
+                    t_sun = math.exp(-tau_sun)
+                for c in range(n_c):
+                    be += sig_ext[c, x] * dens[c]
+                    bes += sig_ext_scaled[c, x] * dens[c]
+                    ss += sig_sca[c, x] * dens[c] * phase_ss[ray, c, x]
+                    jm = 0.0
+                    for m in range(n_modes):
+                        j0 = source[c, m, x, k, iu] * (1.0 - fu) + source[c, m, x, k, iu + 1] * fu
+                        j1 = (
+                            source[c, m, x, k + 1, iu] * (1.0 - fu)
+                            + source[c, m, x, k + 1, iu + 1] * fu
+                        )
+                        jm += (j0 * (1.0 - fk) + j1 * fk) * cosm[m]
+                    ms += sig_sca_scaled[c, x] * dens[c] * jm
+                e_ss = ss * t_sun
+                if i > 0:
+                    ds = s - s_prev
+                    tau[x] += 0.5 * (prev_be[x] + be) * ds
+                    tau_s[x] += 0.5 * (prev_bes[x] + bes) * ds
+                    cur_ss = e_ss * math.exp(-tau[x])
+                    cur_ms = ms * math.exp(-tau_s[x])
+                    acc[x] += 0.5 * (prev_e[x] + cur_ss) * ds + 0.5 * (prev_ms[x] + cur_ms) * ds
+                    prev_e[x] = cur_ss
+                    prev_ms[x] = cur_ms
+                else:
+                    prev_e[x] = e_ss
+                    prev_ms[x] = ms
+                prev_be[x] = be
+                prev_bes[x] = bes
+            s_prev = s
+        if hits_ground:
+            x_r = r_ground
+            mus_g = (r0 * mu_sun + s_end * cos_theta) / x_r
+            lit = mus_g > 0.0 and _interp_columns(
+                x_r, mus_g, radius_grid, mu_grid, columns, col
+            )
+            for x in range(nwl):
+                direct = 0.0
+                if lit:
+                    tau_sun = 0.0
+                    for c in range(n_c):
+                        tau_sun += sig_ext_scaled[c, x] * col[c] * n0[c]
+                    direct = mus_g * math.exp(-tau_sun)
+                e_g = ground_albedo[x] / math.pi * (direct + ground_diffuse[x])
+                acc[x] += e_g * math.exp(-tau_s[x])
+        for x in range(nwl):
+            out[ray, x] = acc[x]
+    return out
+
+
+def line_of_sight_radiance(
+    medium: Medium,
+    field: DiffuseField,
+    *,
+    view_zenith_deg: np.ndarray,
+    view_azimuth_deg: np.ndarray,
+    observer_altitude_m: float = 2.0,
+    n_path: int = N_PATH,
+) -> np.ndarray:
+    """Sky radiance in viewing directions from an observer in the atmosphere.
+
+    Parameters
+    ----------
+    medium : Medium
+        The atmosphere's optics.
+    field : DiffuseField
+        The converged diffuse field for the Sun's zenith angle at the observer.
+    view_zenith_deg : array_like
+        Zenith angles of the viewing directions, 0 .. 180. [deg]
+    view_azimuth_deg : array_like
+        Azimuths of the viewing directions from the Sun's azimuth (same
+        shape). [deg]
+    observer_altitude_m : float
+        Observer above the ground, below the top. [m]
+    n_path : int
+        Samples along each line of sight.
+
+    Returns
+    -------
+    numpy.ndarray, shape view_zenith_deg.shape + (n_wavelength,)
+        Radiance per unit solar irradiance. [sr^-1]
+    """
+    vz = np.asarray(view_zenith_deg, dtype=float)
+    va = np.asarray(view_azimuth_deg, dtype=float)
+    if vz.shape != va.shape:
+        raise ValueError(
+            f"view_zenith_deg and view_azimuth_deg must have the same shape; got {vz.shape} "
+            f"and {va.shape}"
+        )
+    if not (np.all(np.isfinite(vz)) and np.all((vz >= 0) & (vz <= 180))):
+        raise ValueError("view_zenith_deg must be finite and within [0, 180] deg")
+    if not np.all(np.isfinite(va)):
+        raise ValueError("view_azimuth_deg must be finite")
+    h = float(observer_altitude_m)
+    if not (0.0 <= h < medium.top_altitude_m):
+        raise ValueError(
+            f"observer_altitude_m must be within [0, {medium.top_altitude_m:g}) m (inside the "
+            f"atmosphere); got {observer_altitude_m!r}"
+        )
+    mu_view = np.cos(np.deg2rad(vz)).ravel()
+    phi_view = np.deg2rad(va).ravel()
+    mu_sun = field.mu0
+    cos_theta = np.clip(
+        mu_view * mu_sun
+        + np.sqrt(1 - mu_view**2) * math.sqrt(max(0.0, 1 - mu_sun**2)) * np.cos(phi_view),
+        -1.0,
+        1.0,
+    )
+    theta = np.rad2deg(np.arccos(cos_theta))
+    phase = np.stack(
+        [
+            t.phase_at(theta).T if np.any(t.csca_um2 > 0) else np.zeros((theta.size, t.wavelength_nm.size))
+            for t in medium.tables
+        ],
+        axis=1,
+    )  # (ray, c, x)
+    density = medium.density(medium.altitude_m)
+    source = source_table(medium, field)
+    ground_diffuse = field.flux_down_diffuse[:, -1]
+    out = _radiance_kernel(
+        mu_view,
+        phi_view,
+        medium.planet_radius_m + h,
+        mu_sun,
+        medium.planet_radius_m + medium.top_altitude_m,
+        medium.altitude_m,
+        np.ascontiguousarray(density),
+        medium.number_density_per_m3,
+        medium.sigma_ext_m2,
+        medium.sigma_sca_m2,
+        medium.scaled_sigma_ext_m2,
+        medium.scaled_sigma_sca_m2,
+        np.ascontiguousarray(phase),
+        medium.slant.radius_m,
+        medium.slant.mu,
+        medium.slant.column_m,
+        field.altitude_m,
+        np.ascontiguousarray(source),
+        field.ground_albedo,
+        ground_diffuse,
+        int(n_path),
+    )
+    return out.reshape(vz.shape + (medium.wavelength_nm.size,))
