@@ -47,7 +47,7 @@ __all__ = ["line_of_sight_radiance", "source_table"]
 #: Samples of the direction-cosine grid of the multiple-scattering source.
 N_SOURCE_MU: Final = 181
 #: Samples along each line of sight.
-N_PATH: Final = 160
+N_PATH: Final = 96
 
 
 def source_table(medium: Medium, field: DiffuseField) -> np.ndarray:
@@ -138,9 +138,9 @@ def _radiance_kernel(
 ) -> np.ndarray:
     n_rays = mu_view.shape[0]
     n_c, nwl = sig_ext.shape
-    n_modes = source.shape[1]
+    n_modes = source.shape[3]
     n_lev = level_altitude.shape[0]
-    n_u = source.shape[4]
+    n_u = source.shape[1]
     r_ground = radius_grid[0]
     out = np.zeros((n_rays, nwl))
     sin_sun = math.sqrt(max(0.0, 1.0 - mu_sun * mu_sun))
@@ -205,45 +205,56 @@ def _radiance_kernel(
                 k += 1
             fk = (level_altitude[k] - z) / (level_altitude[k] - level_altitude[k + 1])
             fk = min(max(fk, 0.0), 1.0)
-            for x in range(nwl):
-                be = 0.0
-                bes = 0.0
-                ss = 0.0
-                ms = 0.0
-                t_sun = 0.0
-                if lit:
+            # Scattering and extinction at the point, wavelength innermost.
+            tsun = np.zeros(nwl)
+            if lit:
+                for x in range(nwl):
                     tau_sun = 0.0
                     for c in range(n_c):
                         tau_sun += sig_ext[c, x] * col[c] * n0[c]
-                    t_sun = math.exp(-tau_sun)
-                for c in range(n_c):
-                    be += sig_ext[c, x] * dens[c]
-                    bes += sig_ext_scaled[c, x] * dens[c]
-                    ss += sig_sca[c, x] * dens[c] * phase_ss[ray, c, x]
-                    jm = 0.0
-                    for m in range(n_modes):
-                        j0 = source[c, m, x, k, iu] * (1.0 - fu) + source[c, m, x, k, iu + 1] * fu
-                        j1 = (
-                            source[c, m, x, k + 1, iu] * (1.0 - fu)
-                            + source[c, m, x, k + 1, iu + 1] * fu
-                        )
-                        jm += (j0 * (1.0 - fk) + j1 * fk) * cosm[m]
-                    ms += sig_sca_scaled[c, x] * dens[c] * jm
-                e_ss = ss * t_sun
+                    tsun[x] = math.exp(-tau_sun)
+            be = np.zeros(nwl)
+            bes = np.zeros(nwl)
+            ss = np.zeros(nwl)
+            ms = np.zeros(nwl)
+            for c in range(n_c):
+                d = dens[c]
+                if d == 0.0:
+                    continue
+                jm = np.zeros(nwl)
+                for m in range(n_modes):
+                    cm = cosm[m]
+                    w0 = cm * (1.0 - fk) * (1.0 - fu)
+                    w1 = cm * (1.0 - fk) * fu
+                    w2 = cm * fk * (1.0 - fu)
+                    w3 = cm * fk * fu
+                    s00 = source[k, iu, c, m]
+                    s01 = source[k, iu + 1, c, m]
+                    s10 = source[k + 1, iu, c, m]
+                    s11 = source[k + 1, iu + 1, c, m]
+                    for x in range(nwl):
+                        jm[x] += w0 * s00[x] + w1 * s01[x] + w2 * s10[x] + w3 * s11[x]
+                for x in range(nwl):
+                    be[x] += sig_ext[c, x] * d
+                    bes[x] += sig_ext_scaled[c, x] * d
+                    ss[x] += sig_sca[c, x] * d * phase_ss[ray, c, x]
+                    ms[x] += sig_sca_scaled[c, x] * d * jm[x]
+            for x in range(nwl):
+                e_ss = ss[x] * tsun[x]
                 if i > 0:
                     ds = s - s_prev
-                    tau[x] += 0.5 * (prev_be[x] + be) * ds
-                    tau_s[x] += 0.5 * (prev_bes[x] + bes) * ds
+                    tau[x] += 0.5 * (prev_be[x] + be[x]) * ds
+                    tau_s[x] += 0.5 * (prev_bes[x] + bes[x]) * ds
                     cur_ss = e_ss * math.exp(-tau[x])
-                    cur_ms = ms * math.exp(-tau_s[x])
+                    cur_ms = ms[x] * math.exp(-tau_s[x])
                     acc[x] += 0.5 * (prev_e[x] + cur_ss) * ds + 0.5 * (prev_ms[x] + cur_ms) * ds
                     prev_e[x] = cur_ss
                     prev_ms[x] = cur_ms
                 else:
                     prev_e[x] = e_ss
-                    prev_ms[x] = ms
-                prev_be[x] = be
-                prev_bes[x] = bes
+                    prev_ms[x] = ms[x]
+                prev_be[x] = be[x]
+                prev_bes[x] = bes[x]
             s_prev = s
         if hits_ground:
             x_r = r_ground
@@ -352,7 +363,7 @@ def line_of_sight_radiance(
         medium.slant.mu,
         medium.slant.column_m,
         field.altitude_m,
-        np.ascontiguousarray(source),
+        np.ascontiguousarray(source.transpose(3, 4, 0, 1, 2)),  # (level, mu, c, m, x)
         field.ground_albedo,
         ground_diffuse,
         int(n_path),
