@@ -48,7 +48,7 @@ from typing import Any, TextIO
 
 import numpy as np
 
-__all__ = ["Placement", "TableBuilder", "build_atmosphere", "main", "place_outputs", "read_table"]
+__all__ = ["Placement", "SkyJob", "TableBuilder", "build_atmosphere", "main", "place_outputs", "read_table"]
 
 PROG = "dustoptics"
 
@@ -956,7 +956,145 @@ def _parser() -> argparse.ArgumentParser:
         help="worker processes of the local cluster (default: all cores)",
     )
     p.add_argument("--quiet", action="store_true", help="no progress or summary output")
+    _add_sky_parser(sub)
     return parser
+
+
+def _add_sky_parser(sub: Any) -> None:
+    p = sub.add_parser(
+        "sky", help="render the sky an atmosphere makes: images, data and the thesis's comparisons"
+    )
+    skies = p.add_subparsers(dest="sky_command", metavar="{mars,earth,compare}", required=True)
+    for planet in ("mars", "earth"):
+        q = skies.add_parser(planet, help=f"spectral sky of {planet} over an observer near the ground")
+        if planet == "mars":
+            q.add_argument(
+                "--dust", default="hybrid", metavar="PRESET",
+                help="dust model (a preset: collienne, costa, blue-moons, hybrid, ...; default hybrid)",
+            )
+            q.add_argument(
+                "--optical-depth", type=_positive_float, default=0.5, metavar="TAU",
+                help="vertical dust optical depth at 550 nm (default 0.5)",
+            )
+        q.add_argument(
+            "--sun-elevation", type=float, default=10.0 if planet == "mars" else 45.0,
+            metavar="DEG", help="Sun elevation [degree], -10 .. 90",
+        )
+        q.add_argument(
+            "--albedo", type=float, default=0.2, metavar="A", help="Lambertian ground albedo (default 0.2)"
+        )
+        q.add_argument("--size", type=_positive_int, default=512, metavar="PX", help="fisheye size [pixels]")
+        q.add_argument("--exposure", type=_positive_float, metavar="E",
+                       help="display white at Y * E = 1 (default: the 99th percentile of the sky is white)")
+        q.add_argument("--sunset", action="store_true",
+                       help="also a sunset sequence, Sun elevation 20 to -2 degree, at one exposure")
+        q.add_argument("--out", type=Path, required=True, metavar="DIR", help="output directory")
+        q.add_argument("--force", action="store_true", help="replace existing files")
+        q.add_argument("--quiet", action="store_true", help="no summary output")
+    q = skies.add_parser("compare", help="the seed thesis's comparisons of the Mars dust models")
+    q.add_argument("--models", type=lambda t: tuple(x.strip() for x in t.split(",") if x.strip()),
+                   default=None, metavar="LIST", help="presets (default collienne,costa,blue-moons,hybrid)")
+    q.add_argument("--optical-depth", type=_positive_float, default=0.5, metavar="TAU",
+                   help="vertical dust optical depth at 550 nm (default 0.5)")
+    q.add_argument("--sun-elevation", type=float, default=10.0, metavar="DEG",
+                   help="Sun elevation of the radiance and luminance comparisons [degree]")
+    q.add_argument("--out", type=Path, required=True, metavar="DIR", help="output directory")
+    q.add_argument("--force", action="store_true", help="replace existing files")
+    q.add_argument("--quiet", action="store_true", help="no summary output")
+
+
+#: Sun elevations of ``sky --sunset``. [degree]
+_SUNSET_ELEVATIONS_DEG = (20.0, 10.0, 5.0, 2.0, 0.0, -2.0)
+
+
+class SkyJob:
+    """The ``sky`` command's work: atmosphere, sky, pictures and data, as files."""
+
+    def __init__(self, args: argparse.Namespace) -> None:
+        self.args = args
+
+    @property
+    def name(self) -> str:
+        """File-name stem: the atmosphere's name, or ``mars-comparison``."""
+        if self.args.sky_command == "compare":
+            return "mars-comparison"
+        return f"mars-{self.args.dust}" if self.args.sky_command == "mars" else "earth"
+
+    def targets(self) -> list[Path]:
+        """Every file the job writes (known before any work)."""
+        out, stem = self.args.out, self.name
+        if self.args.sky_command == "compare":
+            kinds = ["radiance", "luminance", "chromaticity", "transmittance"]
+            return [out / f"{stem}.nc"] + [out / f"{stem}_{k}.png" for k in kinds]
+        names = [f"{stem}_sky.nc", f"{stem}_fisheye.png", f"{stem}_panorama.png"]
+        if self.args.sunset:
+            names += [f"{stem}_sunset_{e:+05.1f}.png" for e in _SUNSET_ELEVATIONS_DEG]
+        return [out / n for n in names]
+
+    def atmosphere(self) -> Any:
+        from dustoptics.atmosphere import sets
+        from dustoptics.sky.compare import mars_sky_atmosphere
+
+        if self.args.sky_command == "mars":
+            return mars_sky_atmosphere(self.args.dust, optical_depth=self.args.optical_depth)
+        return sets.earth_atmosphere()
+
+    def files(self) -> dict[Path, bytes]:
+        from dustoptics.sky import Medium
+        from dustoptics.sky.scene import png_bytes, sky_radiance
+
+        a = self.args
+        if not (-10.0 <= a.sun_elevation <= 90.0):
+            raise UsageError(f"--sun-elevation must be within [-10, 90] degree; got {a.sun_elevation!r}")
+        if not (0.0 <= a.albedo <= 1.0):
+            raise UsageError(f"--albedo must be within [0, 1]; got {a.albedo!r}")
+        atm = self.atmosphere()
+        medium = Medium.from_atmosphere(atm)
+        sky = sky_radiance(medium, sun_elevation_deg=a.sun_elevation, ground_albedo=a.albedo)
+        exposure = a.exposure if a.exposure is not None else sky.default_exposure()
+        stem = a.out / atm.name
+        out = {
+            stem.with_name(f"{atm.name}_sky.nc"): bytes(sky.to_xarray().to_netcdf(engine="scipy")),
+            stem.with_name(f"{atm.name}_fisheye.png"): png_bytes(sky.fisheye(size=a.size, exposure=exposure)),
+            stem.with_name(f"{atm.name}_panorama.png"): png_bytes(sky.panorama(exposure=exposure)),
+        }
+        if a.sunset:
+            for elev in _SUNSET_ELEVATIONS_DEG:
+                s = sky_radiance(medium, sun_elevation_deg=elev, ground_albedo=a.albedo)
+                out[stem.with_name(f"{atm.name}_sunset_{elev:+05.1f}.png")] = png_bytes(
+                    s.panorama(exposure=exposure)
+                )
+        return out
+
+    def comparison_files(self) -> dict[Path, bytes]:
+        import io as _io
+
+        from dustoptics.sky.compare import MARS_MODELS, compare_mars_models, plot_comparison
+
+        a = self.args
+        ds = compare_mars_models(
+            models=a.models or MARS_MODELS,
+            optical_depth=a.optical_depth,
+            sun_elevation_deg=a.sun_elevation,
+        )
+        out = {a.out / "mars-comparison.nc": bytes(ds.to_netcdf(engine="scipy"))}
+        for name, fig in plot_comparison(ds).items():
+            buf = _io.BytesIO()
+            fig.savefig(buf, format="png", dpi=110, metadata={"Software": None})
+            out[a.out / f"mars-comparison_{name}.png"] = buf.getvalue()
+        return out
+
+
+def _cmd_sky(args: argparse.Namespace) -> int:
+    from dustoptics.io._atomic import check_targets, write_files
+
+    job = SkyJob(args)
+    check_targets(job.targets(), overwrite=args.force)  # before any work
+    files = job.comparison_files() if args.sky_command == "compare" else job.files()
+    assert sorted(files) == sorted(job.targets())
+    for path in write_files(files, overwrite=args.force):
+        _say(args, f"wrote {path}")
+    return 0
 
 
 # ---------------------------------------------------------------------- commands
@@ -1300,6 +1438,7 @@ _COMMANDS = {
     "presets": _cmd_presets,
     "materials": _cmd_materials,
     "sweep": _cmd_sweep,
+    "sky": _cmd_sky,
 }
 
 

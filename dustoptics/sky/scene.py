@@ -27,7 +27,7 @@ from dustoptics.sky.medium import Medium
 from dustoptics.sky.orders import solve_orders
 from dustoptics.sky.render import line_of_sight_radiance
 
-__all__ = ["ILLUMINANT", "SkyRadiance", "default_view_zenith_deg", "sky_radiance"]
+__all__ = ["ILLUMINANT", "SkyRadiance", "default_view_zenith_deg", "png_bytes", "sky_radiance"]
 
 #: Spectrum of the sunlight that lights every sky (shape only; see colour).
 ILLUMINANT: Final = "astm-g173"
@@ -184,6 +184,58 @@ class SkyRadiance:
         aa, ee = np.meshgrid(azi, elev)
         return self._display(self.at(90.0 - ee, aa), e)
 
+    def to_xarray(self) -> Any:
+        """The sky as an ``xarray.Dataset`` (radiance, XYZ, chromaticity)."""
+        import xarray as xr
+
+        xyz = self.xyz()
+        dims = ("view_zenith_angle", "view_azimuth_angle")
+        return xr.Dataset(
+            {
+                "radiance": (
+                    dims + ("wavelength",),
+                    self.radiance,
+                    {
+                        "units": "sr-1",
+                        "long_name": "sky radiance per unit solar irradiance normal to the beam",
+                    },
+                ),
+                "luminance_factor": (
+                    dims,
+                    xyz[..., 1],
+                    {"units": "sr-1", "long_name": "CIE Y under ASTM G-173 sunlight per solar Y"},
+                ),
+                "chromaticity_x": (dims, xyz[..., 0] / xyz.sum(-1), {"units": "1"}),
+                "chromaticity_y": (dims, xyz[..., 1] / xyz.sum(-1), {"units": "1"}),
+                "sun_transmittance": (
+                    ("wavelength",),
+                    self.sun_transmittance,
+                    {"units": "1", "long_name": "direct transmittance of the Sun to the observer"},
+                ),
+                "ground_albedo": (("wavelength",), self.ground_albedo, {"units": "1"}),
+            },
+            coords={
+                "view_zenith_angle": (
+                    "view_zenith_angle", self.view_zenith_deg, {"units": "degree"}
+                ),
+                "view_azimuth_angle": (
+                    "view_azimuth_angle",
+                    self.view_azimuth_deg,
+                    {"units": "degree", "long_name": "azimuth from the Sun's"},
+                ),
+                "wavelength": ("wavelength", self.wavelength_nm, {"units": "nm"}),
+            },
+            attrs={
+                "title": f"sky of {self.name}",
+                "sun_zenith_angle_degree": self.sun_zenith_deg,
+                "observer_altitude_m": self.observer_altitude_m,
+                "orders_of_scattering": self.n_orders,
+                "orders_error_estimate": self.error_estimate,
+                "orders_tolerance": self.tol,
+                "illuminant": "ASTM G-173 extraterrestrial (shape), CIE 1931 2-degree observer",
+            },
+        )
+
     def _display(self, spectra: np.ndarray, exposure: float) -> np.ndarray:
         rgb = colour.xyz_to_display(self.xyz(spectra), exposure=exposure)
         return np.round(rgb * 255.0).astype(np.uint8)
@@ -261,3 +313,19 @@ def sky_radiance(
         error_estimate=float(np.max(field.error_estimate)),
         tol=float(tol),
     )
+
+
+def png_bytes(rgb: np.ndarray) -> bytes:
+    """PNG file contents of an 8-bit RGB image, without time stamps (same bytes each time).
+
+    Needs the ``plot`` extra (matplotlib).
+    """
+    import io as _io
+
+    try:
+        import matplotlib.image
+    except ImportError as exc:  # pragma: no cover - depends on the extra
+        raise ImportError("writing PNG images needs matplotlib: pip install 'dustoptics[plot]'") from exc
+    buf = _io.BytesIO()
+    matplotlib.image.imsave(buf, rgb, format="png", metadata={"Software": None})
+    return buf.getvalue()
