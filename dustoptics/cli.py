@@ -48,7 +48,15 @@ from typing import Any, TextIO
 
 import numpy as np
 
-__all__ = ["Placement", "SkyJob", "TableBuilder", "build_atmosphere", "main", "place_outputs", "read_table"]
+__all__ = [
+    "Placement",
+    "SkyJob",
+    "TableBuilder",
+    "build_atmosphere",
+    "main",
+    "place_outputs",
+    "read_table",
+]
 
 PROG = "dustoptics"
 
@@ -966,38 +974,76 @@ def _add_sky_parser(sub: Any) -> None:
     )
     skies = p.add_subparsers(dest="sky_command", metavar="{mars,earth,compare}", required=True)
     for planet in ("mars", "earth"):
-        q = skies.add_parser(planet, help=f"spectral sky of {planet} over an observer near the ground")
+        q = skies.add_parser(
+            planet, help=f"spectral sky of {planet} over an observer near the ground"
+        )
         if planet == "mars":
             q.add_argument(
-                "--dust", default="hybrid", metavar="PRESET",
+                "--dust",
+                default="hybrid",
+                metavar="PRESET",
                 help="dust model (a preset: collienne, costa, blue-moons, hybrid, ...; default hybrid)",
             )
             q.add_argument(
-                "--optical-depth", type=_positive_float, default=0.5, metavar="TAU",
+                "--optical-depth",
+                type=_positive_float,
+                default=0.5,
+                metavar="TAU",
                 help="vertical dust optical depth at 550 nm (default 0.5)",
             )
         q.add_argument(
-            "--sun-elevation", type=float, default=10.0 if planet == "mars" else 45.0,
-            metavar="DEG", help="Sun elevation [degree], -10 .. 90",
+            "--sun-elevation",
+            type=float,
+            default=10.0 if planet == "mars" else 45.0,
+            metavar="DEG",
+            help="Sun elevation [degree], -10 .. 90",
         )
         q.add_argument(
-            "--albedo", type=float, default=0.2, metavar="A", help="Lambertian ground albedo (default 0.2)"
+            "--albedo",
+            type=float,
+            default=0.2,
+            metavar="A",
+            help="Lambertian ground albedo (default 0.2)",
         )
-        q.add_argument("--size", type=_positive_int, default=512, metavar="PX", help="fisheye size [pixels]")
-        q.add_argument("--exposure", type=_positive_float, metavar="E",
-                       help="display white at Y * E = 1 (default: the 99th percentile of the sky is white)")
-        q.add_argument("--sunset", action="store_true",
-                       help="also a sunset sequence, Sun elevation 20 to -2 degree, at one exposure")
+        q.add_argument(
+            "--size", type=_positive_int, default=512, metavar="PX", help="fisheye size [pixels]"
+        )
+        q.add_argument(
+            "--exposure",
+            type=_positive_float,
+            metavar="E",
+            help="display white at Y * E = 1 (default: the 99th percentile of the sky is white)",
+        )
+        q.add_argument(
+            "--sunset",
+            action="store_true",
+            help="also a sunset sequence, Sun elevation 20 to -2 degree, at one exposure",
+        )
         q.add_argument("--out", type=Path, required=True, metavar="DIR", help="output directory")
         q.add_argument("--force", action="store_true", help="replace existing files")
         q.add_argument("--quiet", action="store_true", help="no summary output")
     q = skies.add_parser("compare", help="the seed thesis's comparisons of the Mars dust models")
-    q.add_argument("--models", type=lambda t: tuple(x.strip() for x in t.split(",") if x.strip()),
-                   default=None, metavar="LIST", help="presets (default collienne,costa,blue-moons,hybrid)")
-    q.add_argument("--optical-depth", type=_positive_float, default=0.5, metavar="TAU",
-                   help="vertical dust optical depth at 550 nm (default 0.5)")
-    q.add_argument("--sun-elevation", type=float, default=10.0, metavar="DEG",
-                   help="Sun elevation of the radiance and luminance comparisons [degree]")
+    q.add_argument(
+        "--models",
+        type=lambda t: tuple(x.strip() for x in t.split(",") if x.strip()),
+        default=None,
+        metavar="LIST",
+        help="presets (default collienne,costa,blue-moons,hybrid)",
+    )
+    q.add_argument(
+        "--optical-depth",
+        type=_positive_float,
+        default=0.5,
+        metavar="TAU",
+        help="vertical dust optical depth at 550 nm (default 0.5)",
+    )
+    q.add_argument(
+        "--sun-elevation",
+        type=float,
+        default=10.0,
+        metavar="DEG",
+        help="Sun elevation of the radiance and luminance comparisons [degree]",
+    )
     q.add_argument("--out", type=Path, required=True, metavar="DIR", help="output directory")
     q.add_argument("--force", action="store_true", help="replace existing files")
     q.add_argument("--quiet", action="store_true", help="no summary output")
@@ -1045,7 +1091,9 @@ class SkyJob:
 
         a = self.args
         if not (-10.0 <= a.sun_elevation <= 90.0):
-            raise UsageError(f"--sun-elevation must be within [-10, 90] degree; got {a.sun_elevation!r}")
+            raise UsageError(
+                f"--sun-elevation must be within [-10, 90] degree; got {a.sun_elevation!r}"
+            )
         if not (0.0 <= a.albedo <= 1.0):
             raise UsageError(f"--albedo must be within [0, 1]; got {a.albedo!r}")
         atm = self.atmosphere()
@@ -1055,7 +1103,9 @@ class SkyJob:
         stem = a.out / atm.name
         out = {
             stem.with_name(f"{atm.name}_sky.nc"): bytes(sky.to_xarray().to_netcdf(engine="scipy")),
-            stem.with_name(f"{atm.name}_fisheye.png"): png_bytes(sky.fisheye(size=a.size, exposure=exposure)),
+            stem.with_name(f"{atm.name}_fisheye.png"): png_bytes(
+                sky.fisheye(size=a.size, exposure=exposure)
+            ),
             stem.with_name(f"{atm.name}_panorama.png"): png_bytes(sky.panorama(exposure=exposure)),
         }
         if a.sunset:

@@ -38,7 +38,7 @@ from typing import Any, Final
 
 import numpy as np
 
-from dustoptics._validation import check_choice, check_positive
+from dustoptics._validation import check_positive
 from dustoptics.atmosphere.sets import Atmosphere, mars_atmosphere
 from dustoptics.sky.medium import Medium
 from dustoptics.sky.scene import SkyRadiance, sky_radiance
@@ -111,8 +111,10 @@ def mars_sky_atmosphere(
     grid = _grid(COMPARISON_WAVELENGTHS_NM) if wavelength_nm is None else tuple(wavelength_nm)
     dust = _preset_table(model, grid)
     if not dust.has_cross_sections:
-        mie = cross_sections if cross_sections is not None else _preset_table(
-            _MIE_CROSS_SECTIONS, grid
+        mie = (
+            cross_sections
+            if cross_sections is not None
+            else _preset_table(_MIE_CROSS_SECTIONS, grid)
         )
         if not np.array_equal(mie.wavelength_nm, dust.wavelength_nm):
             raise ValueError("cross_sections must be on the model's wavelengths")
@@ -129,7 +131,9 @@ def mars_sky_atmosphere(
     )
 
 
-def _scattering_angle(view_zenith: np.ndarray, view_azimuth: np.ndarray, sun_zenith: float) -> np.ndarray:
+def _scattering_angle(
+    view_zenith: np.ndarray, view_azimuth: np.ndarray, sun_zenith: float
+) -> np.ndarray:
     mv = np.cos(np.deg2rad(view_zenith))
     ms = math.cos(math.radians(sun_zenith))
     c = mv * ms + np.sqrt(1 - mv**2) * math.sqrt(1 - ms**2) * np.cos(np.deg2rad(view_azimuth))
@@ -232,12 +236,18 @@ def compare_mars_models(
             "radiance_almucantar": (
                 ("model", "almucantar_azimuth", "wavelength"),
                 stack("almucantar"),
-                {"units": "sr-1", "long_name": "sky radiance per unit solar irradiance, almucantar"},
+                {
+                    "units": "sr-1",
+                    "long_name": "sky radiance per unit solar irradiance, almucantar",
+                },
             ),
             "radiance_principal_plane": (
                 ("model", "principal_plane_angle", "wavelength"),
                 stack("principal"),
-                {"units": "sr-1", "long_name": "sky radiance per unit solar irradiance, principal plane"},
+                {
+                    "units": "sr-1",
+                    "long_name": "sky radiance per unit solar irradiance, principal plane",
+                },
             ),
             "relative_luminance": (
                 ("model", "view_zenith_angle", "view_azimuth_angle"),
@@ -345,7 +355,10 @@ def plot_comparison(ds: Any) -> dict[str, Any]:
     figs["radiance"] = fig
 
     fig, axes = plt.subplots(
-        1, len(models), figsize=(3.2 * len(models), 3.4), subplot_kw={"projection": "polar"},
+        1,
+        len(models),
+        figsize=(3.2 * len(models), 3.4),
+        subplot_kw={"projection": "polar"},
         constrained_layout=True,
     )
     axes = np.atleast_1d(axes)

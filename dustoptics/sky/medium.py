@@ -28,10 +28,9 @@ References
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Final
-
-import math
 
 import numba
 import numpy as np
@@ -231,7 +230,7 @@ class Medium:
         chi_arr = np.array(chi)
         # The projected chi_0 is 1 to the table's accuracy; make it exact so
         # that scattering conserves energy in the solver.
-        scatters = np.array([np.any(t.csca_um2 > 0) for t in tables])
+        scatters = np.array([_scatters(t) for t in tables])
         chi_arr[scatters] /= chi_arr[scatters, :, :1]
         f = np.clip(chi_arr[:, :, 2 * n_streams], 0.0, 1.0 - 1e-9)
         altitude = _altitude_grid(top, _N_DENSITY_SAMPLES)
@@ -300,6 +299,10 @@ class Medium:
         finite = np.isfinite(amount).all(axis=0)
         tau = np.einsum("cl,c...->l...", sigma, np.where(np.isfinite(amount), amount, 0.0))
         return np.where(finite, np.exp(-tau), 0.0)
+
+
+def _scatters(table: Table) -> bool:
+    return table.csca_um2 is not None and bool(np.any(table.csca_um2 > 0))
 
 
 def _altitude_grid(top: float, n: int) -> np.ndarray:
@@ -377,7 +380,7 @@ def _slant_kernel(
                         s = lo + span * t[q] * t[q]
                     ds = span * 2.0 * t[q] * w[q]
                     h = math.sqrt(max(r * r + s * s + 2.0 * r * m * s, 0.0)) - radius
-                    k = np.searchsorted(altitude, h) - 1
+                    k = int(np.searchsorted(altitude, h)) - 1
                     k = min(max(k, 0), nz - 2)
                     f = (h - altitude[k]) / (altitude[k + 1] - altitude[k])
                     f = min(max(f, 0.0), 1.0)

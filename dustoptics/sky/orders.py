@@ -265,16 +265,17 @@ def solve_orders(
     # First order: the Sun's beam scattered once, at each layer's two levels.
     dm0 = np.where(np.arange(n_mom) == 0, 1.0, 2.0)
     # beam[m, x, k, d] = (2 - d_m0)/(4 pi) sum_l (2l+1) chi_l omega L(mu_d) L(-mu0)
-    beam = np.einsum("xkl,mld,ml->mxkd", coef, lam, lam0) * (dm0 / (2.0 * np.pi))[
-        :, None, None, None
-    ]
+    beam = (
+        np.einsum("xkl,mld,ml->mxkd", coef, lam, lam0) * (dm0 / (2.0 * np.pi))[:, None, None, None]
+    )
     j_top = beam * t_sun[None, :, :-1, None]
     j_bot = beam * t_sun[None, :, 1:, None]
     flux_prev = max(mu0, 0.0) * t_sun[:, -1]  # direct beam at the ground
     prev_norm = None
     err = np.full(nwl, np.inf)
-    order = 0
+    n_orders = 0
     for order in range(1, _MAX_ORDERS + 1):
+        n_orders = order
         field = _sweep(j_top, j_bot, e, a_exit, b_enter, albedo, flux_prev, n)
         total += field
         norm = np.abs(field).max(axis=(0, 2, 3))
@@ -284,7 +285,8 @@ def solve_orders(
                 r = np.where(prev_norm > 0, norm / np.where(prev_norm > 0, prev_norm, 1.0), 0.0)
                 err = np.where(
                     ref > 0,
-                    norm * np.where(r < 1, r / (1 - np.minimum(r, 1 - 1e-12)), np.inf)
+                    norm
+                    * np.where(r < 1, r / (1 - np.minimum(r, 1 - 1e-12)), np.inf)
                     / np.where(ref > 0, ref, 1.0),
                     0.0,
                 )
@@ -313,7 +315,7 @@ def solve_orders(
         moments=moments,
         sun_transmittance=t_sun,
         ground_albedo=albedo,
-        n_orders=order,
+        n_orders=n_orders,
         error_estimate=np.where(np.isfinite(err), err, 0.0),
         geometry=geometry,
     )

@@ -216,7 +216,9 @@ class SkyRadiance:
             },
             coords={
                 "view_zenith_angle": (
-                    "view_zenith_angle", self.view_zenith_deg, {"units": "degree"}
+                    "view_zenith_angle",
+                    self.view_zenith_deg,
+                    {"units": "degree"},
                 ),
                 "view_azimuth_angle": (
                     "view_azimuth_angle",
@@ -279,14 +281,14 @@ def sky_radiance(
     medium = atmosphere if isinstance(atmosphere, Medium) else Medium.from_atmosphere(atmosphere)
     elev = check_closed_interval("sun_elevation_deg", sun_elevation_deg, -10.0, 90.0)
     step = check_closed_interval("azimuth_step_deg", azimuth_step_deg, 0.05, 45.0)
-    zen = default_view_zenith_deg() if view_zenith_deg is None else np.asarray(view_zenith_deg, float)
+    zen = (
+        default_view_zenith_deg() if view_zenith_deg is None else np.asarray(view_zenith_deg, float)
+    )
     if zen.ndim != 1 or zen.size < 2 or np.any(np.diff(zen) <= 0) or zen[0] < 0 or zen[-1] > 90:
         raise ValueError("view_zenith_deg must increase strictly within [0, 90] deg")
-    n_az = int(round(180.0 / step)) + 1
+    n_az = round(180.0 / step) + 1
     azi = np.linspace(0.0, 180.0, n_az)
-    field = solve_orders(
-        medium, sun_zenith_deg=90.0 - elev, ground_albedo=ground_albedo, tol=tol
-    )
+    field = solve_orders(medium, sun_zenith_deg=90.0 - elev, ground_albedo=ground_albedo, tol=tol)
     zz, aa = np.meshgrid(zen, azi, indexing="ij")
     radiance = line_of_sight_radiance(
         medium,
@@ -325,7 +327,10 @@ def png_bytes(rgb: np.ndarray) -> bytes:
     try:
         import matplotlib.image
     except ImportError as exc:  # pragma: no cover - depends on the extra
-        raise ImportError("writing PNG images needs matplotlib: pip install 'dustoptics[plot]'") from exc
+        raise ImportError(
+            "writing PNG images needs matplotlib: pip install 'dustoptics[plot]'"
+        ) from exc
     buf = _io.BytesIO()
-    matplotlib.image.imsave(buf, rgb, format="png", metadata={"Software": None})
+    no_stamp: dict[str, Any] = {"Software": None}  # same bytes on every run
+    matplotlib.image.imsave(buf, rgb, format="png", metadata=no_stamp)
     return buf.getvalue()

@@ -1,0 +1,43 @@
+"""``dustoptics sky``: files written whole, errors before any work."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from dustoptics import cli
+
+xr = pytest.importorskip("xarray")
+mpl_image = pytest.importorskip("matplotlib.image")
+
+
+def test_sky_earth_writes_images_and_data(tmp_path: Path) -> None:
+    out = tmp_path / "sky"
+    argv = ["sky", "earth", "--sun-elevation", "30", "--size", "64", "--out", str(out), "--quiet"]
+    assert cli.main(argv) == 0
+    names = sorted(p.name for p in out.iterdir())
+    assert names == ["earth_fisheye.png", "earth_panorama.png", "earth_sky.nc"]
+    img = mpl_image.imread(out / "earth_fisheye.png")
+    assert img.shape[:2] == (64, 64)
+    ds = xr.open_dataset(out / "earth_sky.nc", engine="scipy")
+    assert ds.radiance.attrs["units"] == "sr-1"
+    assert np.all(ds.radiance.values >= 0)
+    # Zenith of a clear Earth sky: bluer than the sunlight's white.
+    assert float(ds.chromaticity_x[0, 0]) < 0.30
+    # Existing files are not replaced without --force (exit 1), before any work.
+    assert cli.main(argv) == 1
+    assert cli.main([*argv, "--force"]) == 0
+
+
+@pytest.mark.parametrize(
+    "extra",
+    [["--sun-elevation", "-40"], ["--albedo", "2"]],
+)
+def test_sky_usage_errors(
+    tmp_path: Path, extra: list[str], capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert cli.main(["sky", "earth", "--out", str(tmp_path / "x"), *extra]) == 2
+    assert "error" in capsys.readouterr().err
+    assert not (tmp_path / "x").exists()
