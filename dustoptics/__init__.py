@@ -31,7 +31,7 @@ from dustoptics import _numba_cache
 
 _numba_cache.configure(__version__)
 
-from dustoptics import atmosphere, colour, compare, io, models, particles, scattering, table
+from dustoptics import atmosphere, colour, compare, io, models, particles, scattering, sky, table
 from dustoptics.atmosphere import column, gases, parametric
 from dustoptics.compare import compare_tables
 from dustoptics.io.netcdf import open_table
@@ -130,6 +130,7 @@ __all__ = [
     "read_index_csv",
     "renormalize",
     "scattering",
+    "sky",
     "sizedist",
     "sphere_integral",
     "table",
