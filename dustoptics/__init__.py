@@ -130,8 +130,8 @@ __all__ = [
     "read_index_csv",
     "renormalize",
     "scattering",
-    "sky",
     "sizedist",
+    "sky",
     "sphere_integral",
     "table",
 ]
