@@ -112,6 +112,8 @@ class FormatOptions:
     sampling: str | None = None
     n_angles: int | None = None
     density: np.ndarray | None = None
+    prefix: str | None = None
+    glsl_version: str | None = None
     #: The density profile's parameters (cosmoscout), as recorded in provenance.
     profile: dict[str, Any] | None = None
 
@@ -132,10 +134,17 @@ class FormatOptions:
 
     def for_format(self, name: str) -> dict[str, Any]:
         """Keyword options for the writer of format ``name``."""
-        if name == "glsl":
+        if name in ("glsl", "hlsl", "wgsl"):
             out: dict[str, Any] = {"channels_nm": self.channels_nm, "colour": self.colour}
             if self.resolution_deg is not None:
                 out["resolution_deg"] = self.resolution_deg
+            if self.prefix is not None:
+                # Every identifier prefixed, the lookup too (MIE keeps the seed's names).
+                out["prefix"] = self.prefix
+                if self.prefix != "MIE":
+                    out["function_name"] = f"{self.prefix}_MiePhaseFunction"
+            if name == "glsl" and self.glsl_version is not None:
+                out["version"] = self.glsl_version
             return out
         if name == "texture":
             out = {}
@@ -724,10 +733,10 @@ def _add_format_options(p: argparse.ArgumentParser, *, default: str | None, requ
         default=None,
         required=required,
         metavar="FMT[,FMT...]",
-        help=f"output formats: netcdf (.nc), hdf5 (.h5, the same format), csv, cosmoscout, glsl, texture{help_default}",
+        help=f"output formats: netcdf (.nc), hdf5 (.h5, the same format), csv, cosmoscout, glsl, hlsl, wgsl, texture{help_default}",
     )
     p.add_argument("--force", action="store_true", help="replace existing output files")
-    g = p.add_argument_group("glsl")
+    g = p.add_argument_group("glsl, hlsl, wgsl")
     g.add_argument(
         "--channels-nm",
         type=_float_list,
@@ -745,6 +754,17 @@ def _add_format_options(p: argparse.ArgumentParser, *, default: str | None, requ
         type=_positive_float,
         metavar="DEG",
         help="angular step of the constant array [deg] (default 0.25)",
+    )
+    g.add_argument(
+        "--prefix",
+        metavar="NAME",
+        help="prefix of every identifier: NAME_PHASE, ..., NAME_MiePhaseFunction (default MIE, "
+        "with the seed's MiePhaseFunction)",
+    )
+    g.add_argument(
+        "--glsl-version",
+        choices=["130", "100"],
+        help="glsl: 130 = GLSL 1.30+ and ES 3.00+ (default); 100 = GLSL ES 1.00 (WebGL 1)",
     )
     g = p.add_argument_group("texture")
     g.add_argument(
@@ -1202,6 +1222,8 @@ def _format_options(
         sampling=args.sampling,
         n_angles=args.n_angles,
         density=density,
+        prefix=args.prefix,
+        glsl_version=args.glsl_version,
     )
     return table, options
 

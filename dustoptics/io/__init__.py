@@ -13,9 +13,12 @@ replace existing files unless asked to (``overwrite=True``).  Readers raise
 - :mod:`~dustoptics.io.cosmoscout`: CosmoScout VR's per-constituent CSV set
   (:func:`write_cosmoscout_constituent`, :func:`write_cosmoscout_set`,
   :func:`read_cosmoscout_constituent`, :func:`check_cosmoscout_set`).
-- :mod:`~dustoptics.io.glsl`: a GLSL snippet with the phase function as a
-  constant array and ``vec3 MiePhaseFunction(float nu)`` (:func:`glsl_snippet`,
-  :func:`write_glsl`).
+- :mod:`~dustoptics.io.shader`: the phase function as shader source, one
+  generator for GLSL (1.30+ and ES 1.00), HLSL and WGSL, each with the seed's
+  lookup ``MiePhaseFunction(nu)`` (:func:`shader_source`, :func:`write_shader`;
+  formats ``hlsl`` and ``wgsl``).
+- :mod:`~dustoptics.io.glsl`: the GLSL snippet (format ``glsl``:
+  :func:`glsl_snippet`, :func:`write_glsl`).
 - :mod:`~dustoptics.io.texture`: a raw little-endian float32 texture (angle x
   wavelength) with a JSON sidecar (:func:`write_texture`, :func:`read_texture`).
 - :mod:`~dustoptics.io.bruneton`: the parameters of Bruneton's precomputed
@@ -66,7 +69,7 @@ def write(
     return FORMATS[format](table, out_dir, overwrite=overwrite, **options)
 
 
-from dustoptics.io import bruneton, cosmoscout, glsl, hdf5, netcdf, seed_csv, texture
+from dustoptics.io import bruneton, cosmoscout, glsl, hdf5, netcdf, seed_csv, shader, texture
 from dustoptics.io.cosmoscout import (
     CosmoScoutConstituent,
     check_cosmoscout_set,
@@ -77,6 +80,7 @@ from dustoptics.io.cosmoscout import (
 from dustoptics.io.glsl import glsl_snippet, write_glsl
 from dustoptics.io.netcdf import open_table, read_hdf5, read_netcdf, write_hdf5, write_netcdf
 from dustoptics.io.seed_csv import read_seed_csv, write_seed_csv
+from dustoptics.io.shader import shader_source, write_shader
 from dustoptics.io.texture import read_texture, write_texture
 
 __all__ = [
@@ -99,6 +103,8 @@ __all__ = [
     "read_texture",
     "register_format",
     "seed_csv",
+    "shader",
+    "shader_source",
     "texture",
     "write",
     "write_cosmoscout_constituent",
@@ -107,5 +113,6 @@ __all__ = [
     "write_hdf5",
     "write_netcdf",
     "write_seed_csv",
+    "write_shader",
     "write_texture",
 ]
