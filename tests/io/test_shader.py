@@ -384,9 +384,9 @@ def test_cli_export_writes_every_language_with_prefix(tmp_path) -> None:
         )
         == 0
     )
-    names = sorted(p.name for p in out.iterdir())
+    names = sorted(p.name for p in (out / "hg").iterdir())
     assert names == ["hg_phase.hlsl", "hg_phase.wgsl", "hg_phase_es100.glsl"]
-    for path in out.iterdir():
+    for path in (out / "hg").iterdir():
         text = path.read_text()
         assert "DUST_MiePhaseFunction(" in text and "MIE_" not in text
     assert main(["export", str(h5), "--out", str(out), "--format", "wgsl,msl"]) == 2
