@@ -15,7 +15,8 @@ Usage::
 ``build`` computes a preset (``dustoptics presets``) or a TOML configuration
 file (:mod:`dustoptics.models.config`; copy a preset with ``presets --show NAME``)
 and writes it into ``DIR/NAME/`` in each format of :data:`dustoptics.io.FORMATS`
-(``hdf5``, ``csv``, ``cosmoscout``, ``glsl``, ``texture``); ``build mars`` and
+(``hdf5``, ``csv``, ``cosmoscout``, ``glsl``, ``hlsl``, ``wgsl``, ``texture``,
+``ktx2``, ``exr``, ``npy``, ...); ``build mars`` and
 ``build earth`` write CosmoScout VR's whole atmosphere set (molecules,
 aerosols, ozone, densities and the settings JSON).  ``export`` turns
 an HDF5 table into other formats in ``DIR``; ``info`` says what a table file
@@ -114,6 +115,8 @@ class FormatOptions:
     density: np.ndarray | None = None
     prefix: str | None = None
     glsl_version: str | None = None
+    layout: str | None = None
+    precision: str | None = None
     #: The density profile's parameters (cosmoscout), as recorded in provenance.
     profile: dict[str, Any] | None = None
 
@@ -145,6 +148,12 @@ class FormatOptions:
                     out["function_name"] = f"{self.prefix}_MiePhaseFunction"
             if name == "glsl" and self.glsl_version is not None:
                 out["version"] = self.glsl_version
+            return out
+        if name in ("ktx2", "exr", "npy"):
+            out = {"channels_nm": self.channels_nm, "colour": self.colour}
+            for key in ("layout", "sampling", "n_angles", "precision"):
+                if getattr(self, key) is not None:
+                    out[key] = getattr(self, key)
             return out
         if name == "texture":
             out = {}
@@ -766,7 +775,7 @@ def _add_format_options(p: argparse.ArgumentParser, *, default: str | None, requ
         choices=["130", "100"],
         help="glsl: 130 = GLSL 1.30+ and ES 3.00+ (default); 100 = GLSL ES 1.00 (WebGL 1)",
     )
-    g = p.add_argument_group("texture")
+    g = p.add_argument_group("texture, ktx2, exr, npy (channels: --channels-nm, --colour)")
     g.add_argument(
         "--sampling",
         choices=["theta", "cos"],
@@ -777,6 +786,16 @@ def _add_format_options(p: argparse.ArgumentParser, *, default: str | None, requ
         type=_positive_int,
         metavar="N",
         help="samples along the angle axis (default 721)",
+    )
+    g.add_argument(
+        "--layout",
+        choices=["rgb", "wavelength"],
+        help="ktx2, exr, npy: angle x RGB (default) or angle x wavelength",
+    )
+    g.add_argument(
+        "--precision",
+        choices=["float32", "float16"],
+        help="ktx2, exr, npy: sample type (default float32)",
     )
     g = p.add_argument_group("cosmoscout (beta in m^-1 needs a number density)")
     g.add_argument(
@@ -1224,6 +1243,8 @@ def _format_options(
         density=density,
         prefix=args.prefix,
         glsl_version=args.glsl_version,
+        layout=args.layout,
+        precision=args.precision,
     )
     return table, options
 

@@ -21,6 +21,12 @@ replace existing files unless asked to (``overwrite=True``).  Readers raise
   :func:`glsl_snippet`, :func:`write_glsl`).
 - :mod:`~dustoptics.io.texture`: a raw little-endian float32 texture (angle x
   wavelength) with a JSON sidecar (:func:`write_texture`, :func:`read_texture`).
+- :mod:`~dustoptics.io.phase_texture`: the texture engines load (angle x
+  wavelength or angle x RGB, theta or cos(theta) columns, float32 or float16)
+  with its metadata, written by :mod:`~dustoptics.io.ktx2` (KTX 2.0, the
+  sampling rule in its key/value data), :mod:`~dustoptics.io.exr` (OpenEXR,
+  in a header attribute; the ``textures`` extra) and :mod:`~dustoptics.io.npy`
+  (``.npy`` with a JSON sidecar): formats ``ktx2``, ``exr``, ``npy``.
 - :mod:`~dustoptics.io.bruneton`: the parameters of Bruneton's precomputed
   atmospheric scattering (2017) for a whole atmosphere
   (:func:`~dustoptics.io.bruneton.write_bruneton`) or, as the ``bruneton``
@@ -69,7 +75,20 @@ def write(
     return FORMATS[format](table, out_dir, overwrite=overwrite, **options)
 
 
-from dustoptics.io import bruneton, cosmoscout, glsl, hdf5, netcdf, seed_csv, shader, texture
+from dustoptics.io import (
+    bruneton,
+    cosmoscout,
+    exr,
+    glsl,
+    hdf5,
+    ktx2,
+    netcdf,
+    npy,
+    phase_texture,
+    seed_csv,
+    shader,
+    texture,
+)
 from dustoptics.io.cosmoscout import (
     CosmoScoutConstituent,
     check_cosmoscout_set,
@@ -77,8 +96,11 @@ from dustoptics.io.cosmoscout import (
     write_cosmoscout_constituent,
     write_cosmoscout_set,
 )
+from dustoptics.io.exr import write_exr
 from dustoptics.io.glsl import glsl_snippet, write_glsl
 from dustoptics.io.netcdf import open_table, read_hdf5, read_netcdf, write_hdf5, write_netcdf
+from dustoptics.io.ktx2 import write_ktx2
+from dustoptics.io.npy import write_npy
 from dustoptics.io.seed_csv import read_seed_csv, write_seed_csv
 from dustoptics.io.shader import shader_source, write_shader
 from dustoptics.io.texture import read_texture, write_texture
@@ -91,11 +113,15 @@ __all__ = [
     "bruneton",
     "check_cosmoscout_set",
     "cosmoscout",
+    "exr",
     "glsl",
     "glsl_snippet",
     "hdf5",
+    "ktx2",
     "netcdf",
+    "npy",
     "open_table",
+    "phase_texture",
     "read_cosmoscout_constituent",
     "read_hdf5",
     "read_netcdf",
@@ -109,9 +135,12 @@ __all__ = [
     "write",
     "write_cosmoscout_constituent",
     "write_cosmoscout_set",
+    "write_exr",
     "write_glsl",
     "write_hdf5",
+    "write_ktx2",
     "write_netcdf",
+    "write_npy",
     "write_seed_csv",
     "write_shader",
     "write_texture",
