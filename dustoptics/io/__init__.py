@@ -98,8 +98,8 @@ from dustoptics.io.cosmoscout import (
 )
 from dustoptics.io.exr import write_exr
 from dustoptics.io.glsl import glsl_snippet, write_glsl
-from dustoptics.io.netcdf import open_table, read_hdf5, read_netcdf, write_hdf5, write_netcdf
 from dustoptics.io.ktx2 import write_ktx2
+from dustoptics.io.netcdf import open_table, read_hdf5, read_netcdf, write_hdf5, write_netcdf
 from dustoptics.io.npy import write_npy
 from dustoptics.io.seed_csv import read_seed_csv, write_seed_csv
 from dustoptics.io.shader import shader_source, write_shader
