@@ -126,7 +126,7 @@ REQUIREMENTS = {
 MAX_SAMPLES = {"hlsl": 4096}
 
 #: Coefficients a0..a7 of acos(x) = sqrt(1 - x) (a0 + a1 x + ... + a7 x^7), 0 <= x <= 1,
-#: |error| <= 2e-8 rad: M. Abramowitz and I. A. Stegun, Handbook of Mathematical
+#: absolute error <= 2e-8 rad: M. Abramowitz and I. A. Stegun, Handbook of Mathematical
 #: Functions (1964), formula 4.4.46 (after C. Hastings, 1955).
 ACOS_AS4446 = (
     1.5707963050,
@@ -906,17 +906,18 @@ class _Syntax:
         return f"{self.vec3}(" + ", ".join(self.lit(v) for v in values) + ")"
 
     def const(self, kind: str, name: str, value: str, comment: str) -> str:
-        """One module-scope constant (kind: "float", "int" or "vec3") with its comment."""
+        """One module-scope constant (kind: "float", "int" or "vec3") with its comment, if any."""
+        tail = f"  // {comment}" if comment else ""
         if self.language == "wgsl":
             wgsl_type = {"float": "f32", "int": "i32", "vec3": self.vec3}[kind]
-            return f"const {name}: {wgsl_type} = {value};  // {comment}"
+            return f"const {name}: {wgsl_type} = {value};{tail}"
         if self.language == "hlsl":
             hlsl_type = {"float": "float", "int": "int", "vec3": self.vec3}[kind]
-            return f"static const {hlsl_type} {name} = {value};  // {comment}"
+            return f"static const {hlsl_type} {name} = {value};{tail}"
         glsl_type = {"float": "float", "int": "int", "vec3": "vec3"}[kind]
         if self.language == "glsl100" and kind != "int":
             glsl_type = "highp " + glsl_type
-        return f"const {glsl_type} {name} = {value};  // {comment}"
+        return f"const {glsl_type} {name} = {value};{tail}"
 
 
 _SYNTAX = {
@@ -1208,7 +1209,7 @@ def shader_source(
             else "Abramowitz & Stegun 4.4.46 polynomial"
         ),
         "",
-        sx.const("int", names["PHASE_N"], str(n), "number of samples N"),
+        sx.const("int", names["PHASE_N"], str(n), ""),  # N, the number of samples
         sx.const(
             "float",
             names["PHASE_INDEX_PER_RAD"],
