@@ -1353,6 +1353,10 @@ _TABLE_OPTIONS = (
     "sampling",
     "n_angles",
     "number_density_per_m3",
+    "prefix",
+    "glsl_version",
+    "layout",
+    "precision",
 )
 _SET_OPTIONS = ("dust", "ozone_csv", "wavelengths_nm")
 
