@@ -108,6 +108,30 @@ def _shareable(config: BuildConfig) -> bool:
     )
 
 
+def _parse_points(points: Sequence[Mapping[str, Any]]) -> list[BuildConfig]:
+    """Validated configurations of points; those that differ from the first
+    only in their size distribution reuse the first's other parts (validating
+    the distribution alone is 100x faster than the whole text)."""
+    from dustoptics.models.config import _Context, _parse_size_distribution
+
+    first = parse_point(points[0])
+    rest = {k: v for k, v in points[0].items() if k != "size_distribution"}
+    configs = [first]
+    for p in points[1:]:
+        if {
+            k: v for k, v in p.items() if k != "size_distribution"
+        } == rest and "size_distribution" in p:
+            ctx = _Context("", "<sweep point>")
+            configs.append(
+                replace(
+                    first, size_distribution=_parse_size_distribution(ctx, p["size_distribution"])
+                )
+            )
+        else:
+            configs.append(parse_point(p))
+    return configs
+
+
 def compute_chunk(
     points: Sequence[Mapping[str, Any]], wl_start: int, wl_stop: int, *, shared: bool = True
 ) -> ChunkResult:
@@ -120,7 +144,7 @@ def compute_chunk(
     to the bit to the same wavelengths of a single build.
     """
     start = time.perf_counter()
-    configs = [parse_point(p) for p in points]
+    configs = _parse_points(points)
     wl_all = configs[0].wavelengths_nm
     wl = wl_all[wl_start:wl_stop]
     theta = configs[0].theta_deg
