@@ -379,3 +379,31 @@ def test_cli_writes_every_container(tmp_path) -> None:
     ]
     assert main(too_wide) == 1  # refused before writing: the files already there are untouched
     assert sorted(p.name for p in (out / "hg").iterdir()) == names
+
+
+def test_exr_without_openexr_names_the_extra(tmp_path, monkeypatch) -> None:
+    import builtins
+
+    real_import = builtins.__import__
+
+    def no_openexr(name, *args, **kwargs):
+        if name == "OpenEXR":
+            raise ImportError("No module named 'OpenEXR'")
+        return real_import(name, *args, **kwargs)
+
+    monkeypatch.setattr(builtins, "__import__", no_openexr)
+    with pytest.raises(ImportError, match=r"pip install 'dustoptics\[textures\]'"):
+        write_exr(TABLE, tmp_path / "out")
+    assert not (tmp_path / "out").exists()
+
+
+def test_container_limits_are_checked() -> None:
+    from dustoptics.io.phase_texture import check_dimensions
+
+    # KTX2 stores the width as uint32, OpenEXR its data window as int32.
+    with pytest.raises(ValueError, match="exceeds the KTX2 container's limit of 4294967295 texels"):
+        check_dimensions(2**32, 1, max_dimension=2**40, container="KTX2", container_limit=2**32 - 1)
+    with pytest.raises(ValueError, match=r"height \(rows\) = 2147483648 exceeds the OpenEXR"):
+        check_dimensions(
+            2, 2**31, max_dimension=2**40, container="OpenEXR", container_limit=2**31 - 1
+        )
