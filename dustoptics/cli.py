@@ -45,7 +45,7 @@ import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, TextIO
+from typing import Any, NoReturn, TextIO
 
 import numpy as np
 
@@ -178,9 +178,12 @@ class TableBuilder:
         Where to report progress (None: silent).
     """
 
-    def __init__(self, config: Any, *, progress: TextIO | None = None) -> None:
+    def __init__(
+        self, config: Any, *, progress: TextIO | None = None, allow_large: bool = False
+    ) -> None:
         self.config = config
         self.progress = progress
+        self.allow_large = allow_large
 
     @classmethod
     def from_name(cls, name_or_config: str, *, progress: TextIO | None = None) -> TableBuilder:
@@ -231,7 +234,7 @@ class TableBuilder:
                 )
                 self.progress.flush()
 
-        table = config.build_table(self.config, progress=report)
+        table = config.build_table(self.config, progress=report, allow_large=self.allow_large)
         if compiling:
             _numba_cache.mark_compiled()
             if self.progress is not None:
@@ -314,32 +317,43 @@ def build_atmosphere(
 
 
 def write_formats(
-    table: Any, out_dir: Path, formats: Sequence[str], *, overwrite: bool, options: FormatOptions
+    table: Any,
+    out_dir: Path,
+    formats: Sequence[str],
+    *,
+    overwrite: bool,
+    options: FormatOptions,
+    root: Path | None = None,
 ) -> list[Path]:
-    """Write ``table`` into ``out_dir`` in every format; returns the paths written.
+    """Write ``table`` into ``out_dir`` in every format, as one set; returns the paths written.
 
     The options that change a format's numbers (:meth:`FormatOptions.recorded`)
     are added to the provenance inputs of the table that format's writer gets,
     under ``"export"``: the files record them, and their input hash changes
-    with them.
+    with them.  Every path must stay inside ``root`` (default ``out_dir``);
+    the set is written whole or not at all
+    (:func:`dustoptics.io._atomic.file_set`).
     """
     from dustoptics.io import write
+    from dustoptics.io._atomic import file_set
 
     written: list[Path] = []
-    for name in formats:
-        recorded = options.recorded(name)
-        table_for_format = (
-            with_inputs(table, export={"format": name, **recorded}) if recorded else table
-        )
-        written.extend(
-            write(
-                table_for_format,
-                out_dir,
-                format=name,
-                overwrite=overwrite,
-                **options.for_format(name),
+    # One set: every format is prepared, then all are moved into place together.
+    with file_set(root if root is not None else out_dir, overwrite=overwrite):
+        for name in formats:
+            recorded = options.recorded(name)
+            table_for_format = (
+                with_inputs(table, export={"format": name, **recorded}) if recorded else table
             )
-        )
+            written.extend(
+                write(
+                    table_for_format,
+                    out_dir,
+                    format=name,
+                    overwrite=overwrite,
+                    **options.for_format(name),
+                )
+            )
     return written
 
 
@@ -433,7 +447,14 @@ def _report_placement(
 
 
 def describe(table: Any) -> str:
-    """What a table holds and how it was made, as text for ``info``."""
+    """What a table holds and how it was made, as text for ``info``.
+
+    Every line is passed through :func:`dustoptics.io._text.printable`:
+    control characters and escape sequences read from a file are shown
+    escaped, never sent to the terminal.
+    """
+    from dustoptics.io._text import printable
+
     prov = table.provenance
     wl, theta = table.wavelength_nm, table.theta_deg
     lines = [
@@ -473,7 +494,8 @@ def describe(table: Any) -> str:
         "  " + line
         for line in json.dumps(prov.to_dict()["inputs"], indent=2, sort_keys=True).splitlines()
     ]
-    return "\n".join(lines)
+    # Names, citations and notes come from the file: escape what a terminal would obey.
+    return "\n".join(printable(line) for line in lines)
 
 
 _COSMOSCOUT_FILE = re.compile(r"(?P<name>.+)_(phase|scattering|absorption|density)\.csv")
@@ -745,6 +767,11 @@ def _add_format_options(p: argparse.ArgumentParser, *, default: str | None, requ
         help=f"output formats: netcdf (.nc), hdf5 (.h5, the same format), csv, cosmoscout, glsl, hlsl, wgsl, texture{help_default}",
     )
     p.add_argument("--force", action="store_true", help="replace existing output files")
+    p.add_argument(
+        "--allow-large",
+        action="store_true",
+        help="go ahead beyond the memory (2 GiB) and work (about ten minutes) budget",
+    )
     g = p.add_argument_group("glsl, hlsl, wgsl")
     g.add_argument(
         "--channels-nm",
@@ -834,11 +861,20 @@ _FIT_MODEL_HELP = (
 )
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse with usage errors on one line: ``dustoptics: error: <message>``."""
+
+    def error(self, message: str) -> NoReturn:
+        from dustoptics.io._text import printable
+
+        self.exit(2, f"{PROG}: error: {printable(message)} (see '{self.prog} --help')\n")
+
+
 def _parser() -> argparse.ArgumentParser:
     from dustoptics import __version__
     from dustoptics.models.presets import DEFAULT_PRESET
 
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog=PROG,
         description="Exact, reproducible optics of atmospheric dust and lookup tables for renderers.",
     )
@@ -1396,6 +1432,8 @@ def _cmd_build(args: argparse.Namespace) -> int:
             builder.config = replace(
                 builder.config, number_density_per_m3=args.number_density_per_m3
             )
+        builder.allow_large = args.allow_large
+        _check_build_request(args, builder)
         table = builder.build()
     for w in caught:
         print(f"{PROG}: warning: {w.message}", file=sys.stderr)
@@ -1404,10 +1442,50 @@ def _cmd_build(args: argparse.Namespace) -> int:
     return _write_table(args, table, args.format or DEFAULT_FORMATS)
 
 
+def _check_build_request(args: argparse.Namespace, builder: TableBuilder) -> None:
+    """What the formats need and where the files go, checked before the table is computed."""
+    from dustoptics._validation import check_file_name, check_inside
+
+    if "cosmoscout" in (args.format or DEFAULT_FORMATS):
+        # What _format_options needs, checked before the table is computed.
+        from dustoptics.atmosphere.column import ExponentialProfile, sample_profile
+
+        if (
+            getattr(args, "optical_depth", None) is None
+            and args.number_density_per_m3 is None
+            and builder.config.number_density_per_m3 is None
+        ):
+            raise UsageError(
+                "the cosmoscout format needs a number density for beta [m^-1]: give "
+                "--optical-depth (with --reference-wavelength-nm), --number-density-per-m3 or "
+                "number_density_per_m3 in the configuration"
+            )
+        sample_profile(
+            ExponentialProfile(scale_height_m=args.scale_height_m),
+            top_altitude_m=args.top_altitude_m,
+            n_altitudes=args.n_altitudes,
+        )
+    if {"glsl", "hlsl", "wgsl"} & set(args.format or DEFAULT_FORMATS):
+        from dustoptics.io.shader import DEFAULT_RESOLUTION_DEG, check_shader_options
+
+        check_shader_options(
+            builder.config.wavelengths_nm,
+            channels_nm=args.channels_nm,
+            colour=args.colour,
+            resolution_deg=args.resolution_deg or DEFAULT_RESOLUTION_DEG,
+        )
+    # Where the files go is checked before any work, too.
+    check_inside(args.out, args.out / check_file_name("name", builder.name))
+
+
 def _write_table(args: argparse.Namespace, table: Any, formats: Sequence[str]) -> int:
     """``build`` and ``export``: the table's files go into ``--out DIR`` / the table's name."""
+    from dustoptics._validation import check_file_name, check_inside
+
     table, options = _format_options(args, table, formats)
-    out_dir = args.out / table.name
+    # The name may come from a file (export): it must not choose where files go.
+    out_dir = args.out / check_file_name("name", table.name)
+    check_inside(args.out, out_dir)
     placed = place_outputs(
         lambda directory: write_formats(
             table, directory, formats, overwrite=False, options=options
@@ -1430,7 +1508,11 @@ def _cmd_export(args: argparse.Namespace) -> int:
 
 
 def _cmd_info(args: argparse.Namespace) -> int:
-    print(describe_path(args.file))
+    from dustoptics.io._text import printable
+
+    # What a file says is shown, never obeyed: control characters and escape
+    # sequences are printed escaped, line by line.
+    print("\n".join(printable(line) for line in describe_path(args.file).split("\n")))
     return 0
 
 
@@ -1545,6 +1627,13 @@ def _silence_stdout() -> None:
     os.dup2(devnull, sys.stdout.fileno())
 
 
+def _one_line(exc: BaseException) -> str:
+    """An error message on one line (h5py's span several), control characters escaped."""
+    from dustoptics.io._text import printable
+
+    return printable(" ".join(str(exc).split()))
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run the command line; returns the exit status (0 ok, 1 failure, 2 usage).
 
@@ -1565,11 +1654,11 @@ def main(argv: list[str] | None = None) -> int:
         _silence_stdout()
         return 0
     except (UsageError, ConfigError) as exc:
-        print(f"{PROG}: error: {exc}", file=sys.stderr)
+        print(f"{PROG}: error: {_one_line(exc)}", file=sys.stderr)
         return 2
-    except (OSError, ValueError, ImportError) as exc:
+    except (OSError, ValueError, TypeError, ImportError) as exc:
         # FormatError is a ValueError; FileExistsError/PermissionError are OSErrors.
-        print(f"{PROG}: error: {exc}", file=sys.stderr)
+        print(f"{PROG}: error: {_one_line(exc)}", file=sys.stderr)
         return 1
 
 

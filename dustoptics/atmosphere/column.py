@@ -51,6 +51,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from dustoptics._validation import (
+    MAX_GRID_POINTS,
     _show,
     as_float_array,
     as_increasing_grid,
@@ -483,7 +484,7 @@ def sample_profile(
     top_altitude_m : float
         Last altitude (the atmosphere's top above the surface), > bottom. [m]
     n_altitudes : int, default 1024
-        Number of samples, >= 2 (CosmoScout's default 1024). [-]
+        Number of samples, 2 to 1,000,000 (CosmoScout's default 1024). [-]
     bottom_altitude_m : float, default 0
         First altitude. [m]
 
@@ -504,6 +505,8 @@ def sample_profile(
         or n_altitudes < 2
     ):
         raise ValueError(f"n_altitudes must be an integer >= 2; got {n_altitudes!r}")
+    if n_altitudes > MAX_GRID_POINTS:
+        raise ValueError(f"n_altitudes must be <= {MAX_GRID_POINTS}; got {n_altitudes!r}")
     bottom = check_real("bottom_altitude_m", bottom_altitude_m)
     top = check_positive("top_altitude_m", top_altitude_m, unit="m")
     if not 0.0 <= bottom < top:

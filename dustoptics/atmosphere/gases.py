@@ -1035,34 +1035,40 @@ def read_ozone_csv(path: str | os.PathLike[str], *, name: str | None = None) -> 
     wl: list[float] = []
     sigma: list[float] = []
     scale = 1.0
-    with p.open("r", encoding="utf-8") as fh:
-        for lineno, raw in enumerate(fh, start=1):
-            line = raw.strip()
-            if not line:
-                continue
-            if line.startswith("#"):
-                if header is None:
-                    citation.append(line.lstrip("#").strip())
-                continue
-            cells = [c.strip() for c in line.split(",")]
+    from dustoptics.io._atomic import FormatError
+    from dustoptics.io._text import read_checked
+
+    try:
+        content = read_checked(p).decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise FormatError(f"{p}: not UTF-8 text ({exc.reason} at byte {exc.start})") from None
+    for lineno, raw in enumerate(content.splitlines(), start=1):
+        line = raw.strip()
+        if not line:
+            continue
+        if line.startswith("#"):
             if header is None:
-                header = cells
-                m = _SIGMA_COLUMN.match(cells[1]) if len(cells) == 2 else None
-                if cells[0] != "wavelength_nm" or m is None:
-                    raise ValueError(
-                        f"{p}:{lineno}: header must be 'wavelength_nm,sigma_m2' or "
-                        f"'wavelength_nm,sigma_cm2'; got {line!r}"
-                    )
-                scale = 1.0 if m.group(1).lower() == "m2" else _CM2_TO_M2
-                continue
-            if len(cells) != 2:
-                raise ValueError(f"{p}:{lineno}: expected 2 columns; got {line!r}")
-            try:
-                w, s = float(cells[0]), float(cells[1])
-            except ValueError:
-                raise ValueError(f"{p}:{lineno}: not numbers: {line!r}") from None
-            wl.append(w)
-            sigma.append(s * scale)
+                citation.append(line.lstrip("#").strip())
+            continue
+        cells = [c.strip() for c in line.split(",")]
+        if header is None:
+            header = cells
+            m = _SIGMA_COLUMN.match(cells[1]) if len(cells) == 2 else None
+            if cells[0] != "wavelength_nm" or m is None:
+                raise ValueError(
+                    f"{p}:{lineno}: header must be 'wavelength_nm,sigma_m2' or "
+                    f"'wavelength_nm,sigma_cm2'; got {line!r}"
+                )
+            scale = 1.0 if m.group(1).lower() == "m2" else _CM2_TO_M2
+            continue
+        if len(cells) != 2:
+            raise ValueError(f"{p}:{lineno}: expected 2 columns; got {line!r}")
+        try:
+            w, s = float(cells[0]), float(cells[1])
+        except ValueError:
+            raise ValueError(f"{p}:{lineno}: not numbers: {line!r}") from None
+        wl.append(w)
+        sigma.append(s * scale)
     if header is None or not wl:
         raise ValueError(f"{p}: no header line and data rows found")
     cite = " ".join(c for c in citation if c)

@@ -365,17 +365,19 @@ def write_atmosphere(
         A target exists and ``overwrite`` is False (checked before anything
         is written).
     """
-    from dustoptics.io._atomic import check_targets, write_files
+    from dustoptics.io._atomic import check_targets, file_set, write_files
     from dustoptics.io.cosmoscout import write_cosmoscout_set
 
     root = Path(directory)
     settings_path = root / f"{atmosphere.name}_settings.json"
     check_targets([settings_path], overwrite=overwrite)
     text = settings_json(atmosphere, path_prefix=path_prefix)
-    written = write_cosmoscout_set(
-        root, atmosphere.cosmoscout_constituents(), n_theta=n_theta, overwrite=overwrite
-    )
-    written += write_files({settings_path: text.encode("utf-8")}, overwrite=overwrite)
+    # One set: the CSV files and the settings appear together or not at all.
+    with file_set(root, overwrite=overwrite):
+        written = write_cosmoscout_set(
+            root, atmosphere.cosmoscout_constituents(), n_theta=n_theta, overwrite=overwrite
+        )
+        written += write_files({settings_path: text.encode("utf-8")}, overwrite=overwrite)
     return written
 
 

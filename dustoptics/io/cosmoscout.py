@@ -493,7 +493,15 @@ def read_cosmoscout_constituent(
 def _reader_wavelengths_nm(path: Path) -> list[float]:
     """CosmoScout's reading of a file's first column: skip a line, float32(lambda) * 1e9."""
     out = []
-    for i, line in enumerate(path.read_text(encoding="ascii").splitlines()[1:], start=2):
+    from dustoptics.io._text import read_checked
+
+    try:
+        text = read_checked(path).decode("ascii")
+    except UnicodeDecodeError as exc:
+        raise FormatError(
+            f"{path}: not an ASCII CSV file ({exc.reason} at byte {exc.start})"
+        ) from None
+    for i, line in enumerate(text.splitlines()[1:], start=2):
         cell = line.split(",")[0]
         try:
             lam32 = np.float32(cell)

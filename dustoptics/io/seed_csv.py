@@ -50,8 +50,10 @@ from dustoptics.io._atomic import FormatError, write_files
 from dustoptics.io._text import (
     check_increasing,
     floats,
+    load_json,
     number,
     parse,
+    read_checked,
     read_rows,
     shift,
     wavelength_label,
@@ -426,7 +428,7 @@ def _verify_checksums(root: Path, summary: dict[str, Any]) -> None:
         entry = files.get(name)
         if not isinstance(entry, dict) or "sha256" not in entry:
             continue
-        actual = hashlib.sha256((root / name).read_bytes()).hexdigest()
+        actual = hashlib.sha256(read_checked(root / name)).hexdigest()
         if actual != entry["sha256"]:
             raise FormatError(
                 f"{root / name}: sha256 {actual} differs from the {entry['sha256']} recorded in "
@@ -441,9 +443,10 @@ def _read_summary(path: Path) -> dict[str, Any]:
             f"{PHASE_FILENAME} use read_phase_csv)"
         )
     try:
-        summary = json.loads(path.read_text(encoding="ascii"))
-    except (UnicodeDecodeError, ValueError) as exc:
-        raise FormatError(f"{path}: not a valid JSON table summary ({exc})") from None
+        summary = load_json(path, encoding="ascii")
+    except FormatError as exc:
+        detail = str(exc).removeprefix(f"{path}: ")
+        raise FormatError(f"{path}: not a valid JSON table summary ({detail})") from None
     if not isinstance(summary, dict):
         raise FormatError(f"{path}: not a table summary (expected a JSON object)")
     if summary.get("format") != FORMAT or summary.get("format_version") != FORMAT_VERSION:

@@ -56,11 +56,12 @@ import os
 import re
 from dataclasses import dataclass
 from pathlib import Path
+from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
 
-from dustoptics._validation import check_choice, check_positive
+from dustoptics._validation import MAX_GRID_POINTS, check_choice, check_positive
 from dustoptics.colour import (
     CHANNEL_MODES,
     DEFAULT_CHANNELS_NM,
@@ -82,6 +83,7 @@ __all__ = [
     "DEFAULT_RESOLUTION_DEG",
     "LANGUAGES",
     "ShaderChannels",
+    "check_shader_options",
     "choose_channels",
     "float_literal",
     "shader_channels",
@@ -776,6 +778,11 @@ def _channel_line(ch: ShaderChannels) -> str:
 def _grid_count(resolution_deg: Any) -> int:
     step = check_positive("resolution_deg", resolution_deg, unit="deg")
     intervals = 180.0 / step
+    if intervals + 1 > MAX_GRID_POINTS:
+        raise ValueError(
+            f"resolution_deg must give at most {MAX_GRID_POINTS} samples over 0-180 deg; got "
+            f"{resolution_deg!r} ({intervals + 1:.3g} samples)"
+        )
     n = round(intervals)
     if n < 1 or abs(intervals - n) > 1e-9 * n:
         raise ValueError(
@@ -783,6 +790,34 @@ def _grid_count(resolution_deg: Any) -> int:
             f"(e.g. 0.1, 0.25, 0.5, 1); got {resolution_deg!r} ({intervals:g} steps)"
         )
     return n + 1
+
+
+def check_shader_options(
+    wavelength_nm: Any,
+    *,
+    channels_nm: Any = None,
+    colour: str | None = None,
+    resolution_deg: float = DEFAULT_RESOLUTION_DEG,
+    min_band_coverage: float = 0.99,
+) -> None:
+    """Check a snippet's options against a table's wavelengths, before the table exists.
+
+    The command line calls it with a configuration's wavelength grid before
+    computing the table, so that options :func:`shader_channels` would refuse
+    (channels outside the grid, a colour mode whose bands the grid does not
+    cover, a resolution that does not divide 180 deg or gives more than
+    :data:`dustoptics._validation.MAX_GRID_POINTS` samples) fail before any work.
+
+    Raises
+    ------
+    ValueError
+        What :func:`shader_channels` would raise for these options.
+    """
+    _grid_count(resolution_deg)
+    grid = SimpleNamespace(wavelength_nm=np.asarray(wavelength_nm, dtype=np.float64))
+    choose_channels(
+        grid, channels_nm=channels_nm, colour=colour, min_band_coverage=min_band_coverage
+    )
 
 
 def shader_channels(

@@ -49,9 +49,10 @@ from typing import Any
 
 import numpy as np
 
-from dustoptics._validation import check_choice
+from dustoptics._validation import MAX_GRID_POINTS, check_choice
 from dustoptics.io import register_format
 from dustoptics.io._atomic import FormatError, write_files
+from dustoptics.io._text import load_json, read_checked
 from dustoptics.scattering.phase import sphere_integral
 from dustoptics.table import PHASE_NORMALIZATION
 
@@ -107,6 +108,10 @@ def _check_n_angles(n_angles: Any) -> int:
     if isinstance(n_angles, bool) or not isinstance(n_angles, (int, np.integer)) or n_angles < 2:
         raise ValueError(
             f"n_angles must be an integer >= 2 (both ends are sampled); got {n_angles!r}"
+        )
+    if n_angles > MAX_GRID_POINTS:
+        raise ValueError(
+            f"n_angles must be <= {MAX_GRID_POINTS} (samples of one texture row); got {n_angles!r}"
         )
     return int(n_angles)
 
@@ -363,9 +368,10 @@ def read_texture(sidecar_path: str | os.PathLike[str]) -> TextureData:
     """
     path = Path(sidecar_path)
     try:
-        meta = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise FormatError(f"{path}: cannot read the texture sidecar as JSON: {exc}") from None
+        meta = load_json(path)
+    except FormatError as exc:
+        detail = str(exc).removeprefix(f"{path}: ")
+        raise FormatError(f"{path}: cannot read the texture sidecar as JSON: {detail}") from None
     if not isinstance(meta, dict) or meta.get("format") != TEXTURE_FORMAT:
         found = meta.get("format") if isinstance(meta, dict) else type(meta).__name__
         raise FormatError(f"{path}: not a {TEXTURE_FORMAT!r} sidecar (format {found!r})")
@@ -388,17 +394,22 @@ def read_texture(sidecar_path: str | os.PathLike[str]) -> TextureData:
     if Path(raw_name).name != raw_name:
         raise FormatError(f"{path}: raw file name {raw_name!r} must not contain a directory")
     raw_path = path.parent / raw_name
+    expected = 4 * shape[0] * shape[1]
+    if min(shape) < 1:
+        raise FormatError(f"{path}: texture shape {list(shape)} must be positive")
     try:
-        data = raw_path.read_bytes()
+        size = raw_path.stat().st_size
     except OSError as exc:
         raise FormatError(f"{path}: cannot read the raw texture {raw_path}: {exc}") from None
-    expected = 4 * shape[0] * shape[1]
-    if len(data) != expected:
-        what = "truncated" if len(data) < expected else "longer than expected"
+    # Sizes compared before reading: a sidecar's shape cannot make the reader
+    # allocate more than the file holds.
+    if size != expected:
+        what = "truncated" if size < expected else "longer than expected"
         raise FormatError(
-            f"{raw_path}: raw texture is {what}: {len(data)} bytes, but shape {list(shape)} of "
+            f"{raw_path}: raw texture is {what}: {size} bytes, but shape {list(shape)} of "
             f"float32 needs {expected} bytes"
         )
+    data = read_checked(raw_path, limit=expected)
     actual = hashlib.sha256(data).hexdigest()
     if actual != digest:
         raise FormatError(

@@ -96,6 +96,12 @@ from typing import Any, Final
 
 import numpy as np
 
+from dustoptics._validation import (
+    MAX_GRID_POINTS,
+    check_budget,
+    check_file_name,
+    check_wavelength_unit,
+)
 from dustoptics.particles.materials import get_material, list_materials
 from dustoptics.particles.mixing import MARS_DUST_HEMATITE, MIXING_RULES, mars_dust
 from dustoptics.particles.sizedist import (
@@ -869,6 +875,12 @@ def _parse_wavelengths(ctx: _Context, value: Any) -> tuple[float, ...]:
         if stop < start:
             raise ctx.error(f"{key}.stop", f"must be >= start ({start:g} nm); got {stop:g}")
         intervals = (stop - start) / step
+        if intervals + 1 > MAX_GRID_POINTS:
+            raise ctx.error(
+                f"{key}.step",
+                f"gives {intervals + 1:.3g} wavelengths, more than {MAX_GRID_POINTS} (a larger step, "
+                "or a shorter range)",
+            )
         count = round(intervals)
         if abs(intervals - count) > 1e-9 * max(1.0, intervals):
             raise ctx.error(
@@ -881,6 +893,8 @@ def _parse_wavelengths(ctx: _Context, value: Any) -> tuple[float, ...]:
     items = _array(ctx, key, value)
     if not items:
         raise ctx.error(key, "must not be empty")
+    if len(items) > MAX_GRID_POINTS:
+        raise ctx.error(key, f"must hold at most {MAX_GRID_POINTS} wavelengths; got {len(items)}")
     values = [_positive(ctx, f"{key}[{i}]", x, "nm") for i, x in enumerate(items)]
     if any(b <= a for a, b in itertools.pairwise(values)):
         raise ctx.error(key, f"must be strictly increasing; got {items!r}")
@@ -904,6 +918,11 @@ def _parse_optics(ctx: _Context, value: Any, *, mie: bool, model: str) -> Optics
     if "theta_step_deg" in sec:
         step = _open(ctx, "optics.theta_step_deg", sec["theta_step_deg"], 0.0, 180.0 + 1e-9)
         intervals = 180.0 / step
+        if intervals + 1 > MAX_GRID_POINTS:
+            raise ctx.error(
+                "optics.theta_step_deg",
+                f"gives {intervals + 1:.3g} angles, more than {MAX_GRID_POINTS}; got {step:g}",
+            )
         if abs(intervals - round(intervals)) > 1e-9 * intervals:
             raise ctx.error(
                 "optics.theta_step_deg", f"must divide 180 deg into whole steps; got {step:g}"
@@ -911,6 +930,12 @@ def _parse_optics(ctx: _Context, value: Any, *, mie: bool, model: str) -> Optics
         n_theta = round(intervals) + 1
     else:
         n_theta = _integer(ctx, "optics.n_theta", sec.get("n_theta", _DEFAULT_N_THETA), 2)
+        if n_theta > MAX_GRID_POINTS:
+            raise ctx.error("optics.n_theta", f"must be <= {MAX_GRID_POINTS}; got {n_theta}")
+    try:
+        check_wavelength_unit("optics.wavelengths_nm", np.asarray(wavelengths))
+    except ValueError as exc:
+        raise ctx.error("optics.wavelengths_nm", str(exc).split(" ", 1)[1]) from None
     if not mie:
         return OpticsConfig(wavelengths, n_theta)
     weighting = _choice(ctx, "optics.weighting", sec.get("weighting", "scattering"), WEIGHTINGS)
@@ -999,6 +1024,10 @@ def parse_config(text: str, *, source: str = "<string>") -> BuildConfig:
         ) from None
     _known_keys(ctx, "", data, _TOP_KEYS)
     name = _string(ctx, "name", _required(ctx, "", data, "name"))
+    try:
+        check_file_name("name", name)
+    except ValueError as exc:
+        raise ctx.error("name", str(exc).split(" ", 1)[1]) from None
     description = _string(ctx, "description", _required(ctx, "", data, "description"))
     choices = tuple(
         _string(ctx, f"choices[{i}]", c)
@@ -1157,7 +1186,10 @@ def _analytic_table(
 
 
 def _compute_mie(
-    config: BuildConfig, workers: int | None, progress: Callable[[int, int], None] | None
+    config: BuildConfig,
+    workers: int | None,
+    progress: Callable[[int, int], None] | None,
+    allow_large: bool = False,
 ) -> Table:
     assert config.material is not None and config.size_distribution is not None
     assert config.optics.rtol is not None and config.optics.weighting is not None
@@ -1172,6 +1204,7 @@ def _compute_mie(
         workers=workers,
         name=config.name,
         progress=progress,
+        allow_large=allow_large,
     )
 
 
@@ -1188,6 +1221,7 @@ def build_table(
     *,
     workers: int | None = None,
     progress: Callable[[int, int], None] | None = None,
+    allow_large: bool = False,
 ) -> Table:
     """Compute the table a configuration describes.
 
@@ -1203,6 +1237,9 @@ def build_table(
         Called as ``progress(done, total)`` with the number of wavelengths
         done, first with ``done = 0`` and last with ``done = total``, e.g. to
         print a progress line.  It does not change the result.
+    allow_large : bool, optional
+        Go ahead beyond the memory and work budget
+        (:func:`dustoptics.scattering.optics.compute_optics`); default False.
 
     Returns
     -------
@@ -1230,10 +1267,18 @@ def build_table(
     sources = list(config.sources)
     notes = list(config.choices)
     ph = config.phase
+    # The table's own arrays (a Mie computation's estimate, grids and largest
+    # sphere, is compute_optics's, before any of its work).
+    check_budget(
+        "build_table",
+        8.0 * 8.0 * wl.size * theta.size,
+        allow_large=allow_large,
+        change=f"the table holds {wl.size} wavelengths x {theta.size} angles: use fewer",
+    )
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         if ph.uses_mie:
-            table = _compute_mie(config, workers, progress)
+            table = _compute_mie(config, workers, progress, allow_large)
             _add_sources(sources, *table.provenance.sources)
             if ph.model == "hybrid":
                 assert ph.analytic is not None and ph.weight is not None

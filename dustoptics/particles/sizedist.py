@@ -62,6 +62,10 @@ from dustoptics._validation import (
 )
 
 __all__ = [
+    "MAX_SIGMA",
+    "MIN_TAIL_FRACTION",
+    "MIN_V_EFF",
+    "RADIUS_RANGE_UM",
     "Gamma",
     "LogNormal",
     "ModifiedGamma",
@@ -97,8 +101,56 @@ def _scalar_or_array(values: NDArray[np.float64]) -> FloatOrArray:
     return float(values) if values.ndim == 0 else values
 
 
+#: Radii accepted for any size parameter of a distribution (r_eff, median,
+#: scale, a monodisperse radius): 1e-6 um (1 pm, below any atom) to 1e6 um
+#: (1 m).  Inside it every moment up to order 6 and every derived radius is a
+#: finite double; the work a computation needs is bounded separately
+#: (:func:`dustoptics.scattering.optics.estimate_cost`). [um]
+RADIUS_RANGE_UM = (1e-6, 1e6)
+
+#: Smallest effective variance accepted by :class:`ModifiedGamma` and
+#: :class:`ModifiedLogNormal` (and the matching bounds of :class:`Gamma`,
+#: shape <= 1e4 - 2, and :class:`LogNormal`, sigma >= 0.01).  Down to it the
+#: densities, moments and tail bounds keep full precision (the gamma log-density
+#: sums terms of size ``shape``, losing about ``shape * eps``: 1e-12 at 1e4);
+#: a narrower population is a :class:`Monodisperse` one to better than its
+#: 1 % width. [1]
+MIN_V_EFF = 1e-4
+
+#: Largest ``sigma`` of :class:`LogNormal` (geometric standard deviation
+#: e^3 = 20; v_eff = e^9 - 1 = 8.1e3, the largest :class:`ModifiedLogNormal`
+#: accepts): beyond it the sixth moment overflows for radii near the ends of
+#: :data:`RADIUS_RANGE_UM`. [1]
+MAX_SIGMA = 3.0
+
+#: Smallest ``tail_fraction`` (quantiles below it are not resolved in double
+#: precision: the quantile functions return 0 or overflow). [1]
+MIN_TAIL_FRACTION = 1e-15
+
+
+def _check_radius(name: str, value: Any) -> float:
+    out = check_positive(name, value, unit="um")
+    low, high = RADIUS_RANGE_UM
+    if not low <= out <= high:
+        raise ValueError(f"{name} must be in [{low:g}, {high:g}] um; got {value!r}")
+    return out
+
+
+def _check_v_eff(value: Any, high: float) -> float:
+    out = check_real("v_eff", value)
+    if not MIN_V_EFF <= out < high:
+        raise ValueError(
+            f"v_eff must be in [{MIN_V_EFF:g}, {high:g}) (narrower populations: use Monodisperse); "
+            f"got {value!r}"
+        )
+    return out
+
+
 def _check_tail_fraction(tail_fraction: Any) -> float:
-    return check_open_interval("tail_fraction", tail_fraction, 0.0, 0.5)
+    out = check_open_interval("tail_fraction", tail_fraction, 0.0, 0.5)
+    if out < MIN_TAIL_FRACTION:
+        raise ValueError(f"tail_fraction must be >= {MIN_TAIL_FRACTION:g}; got {tail_fraction!r}")
+    return out
 
 
 class SizeDistribution(ABC):
@@ -449,8 +501,9 @@ class ModifiedGamma(_GammaFamily):
     r_eff_um : float
         Effective radius ``a = <r^3>/<r^2>``, > 0. [um]
     v_eff : float
-        Effective variance ``b``, in the open interval (0, 0.5); at 0.5 the
-        shape reaches 0 and the distribution can no longer be normalized. [1]
+        Effective variance ``b``, in [:data:`MIN_V_EFF`, 0.5) = [1e-4, 0.5);
+        at 0.5 the shape reaches 0 and the distribution can no longer be
+        normalized. [1]
 
     Notes
     -----
@@ -481,8 +534,8 @@ class ModifiedGamma(_GammaFamily):
     v_eff: float = field()
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "r_eff_um", check_positive("r_eff_um", self.r_eff_um, unit="um"))
-        object.__setattr__(self, "v_eff", check_open_interval("v_eff", self.v_eff, 0.0, 0.5))
+        object.__setattr__(self, "r_eff_um", _check_radius("r_eff_um", self.r_eff_um))
+        object.__setattr__(self, "v_eff", _check_v_eff(self.v_eff, 0.5))
 
     @property
     def shape(self) -> float:
@@ -534,8 +587,15 @@ class Gamma(_GammaFamily):
     scale_um: float
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "shape", check_positive("shape", self.shape))
-        object.__setattr__(self, "scale_um", check_positive("scale_um", self.scale_um, unit="um"))
+        shape = check_positive("shape", self.shape)
+        if shape > 1.0 / MIN_V_EFF - 2.0:
+            raise ValueError(
+                f"shape must be <= {1.0 / MIN_V_EFF - 2.0:g} (v_eff >= {MIN_V_EFF:g}; narrower "
+                f"populations: use Monodisperse); got {self.shape!r}"
+            )
+        object.__setattr__(self, "shape", shape)
+        object.__setattr__(self, "scale_um", _check_radius("scale_um", self.scale_um))
+        _check_radius("r_eff_um (scale_um (shape + 2))", self.r_eff_um)
 
     def _shape_scale(self) -> tuple[float, float]:
         return self.shape, self.scale_um
@@ -617,9 +677,11 @@ class LogNormal(_LogNormalFamily):
     Parameters
     ----------
     median_radius_um : float
-        Median radius ``r_med = exp(mu)`` of the number distribution, > 0. [um]
+        Median radius ``r_med = exp(mu)`` of the number distribution, in
+        :data:`RADIUS_RANGE_UM`. [um]
     sigma : float
-        Standard deviation of ``ln r``, > 0.  It is the natural logarithm of
+        Standard deviation of ``ln r``, in [0.01, :data:`MAX_SIGMA`] (v_eff
+        from :data:`MIN_V_EFF` to 8.1e3).  It is the natural logarithm of
         the geometric standard deviation: ``sigma = ln(sigma_g)``, so a
         geometric standard deviation of 1.5 is ``sigma = 0.405``. [1]
 
@@ -645,9 +707,17 @@ class LogNormal(_LogNormalFamily):
         object.__setattr__(
             self,
             "median_radius_um",
-            check_positive("median_radius_um", self.median_radius_um, unit="um"),
+            _check_radius("median_radius_um", self.median_radius_um),
         )
-        object.__setattr__(self, "sigma", check_positive("sigma", self.sigma))
+        sigma = check_real("sigma", self.sigma)
+        low = math.sqrt(math.log1p(MIN_V_EFF))
+        if not low <= sigma <= MAX_SIGMA:
+            raise ValueError(
+                f"sigma must be in [{low:.6g}, {MAX_SIGMA:g}] (v_eff from {MIN_V_EFF:g} to "
+                f"{math.expm1(MAX_SIGMA**2):.3g}); got {self.sigma!r}"
+            )
+        object.__setattr__(self, "sigma", sigma)
+        _check_radius("r_eff_um (median exp(5 sigma^2 / 2))", self.r_eff_um)
 
     @property
     def geometric_std(self) -> float:
@@ -684,10 +754,9 @@ class ModifiedLogNormal(_LogNormalFamily):
     r_eff_um : float
         Effective radius ``<r^3>/<r^2>``, > 0. [um]
     v_eff : float
-        Effective variance, > 0.  Any positive value gives a valid
-        distribution (there is no upper bound, unlike :class:`ModifiedGamma`);
-        large values put the median far below ``r_eff``, since
-        ``median = r_eff (1 + v_eff)^(-5/2)``. [1]
+        Effective variance, in [:data:`MIN_V_EFF`, e^9 - 1 = 8.1e3] (sigma <=
+        :data:`MAX_SIGMA`); large values put the median far below ``r_eff``,
+        since ``median = r_eff (1 + v_eff)^(-5/2)``. [1]
 
     Notes
     -----
@@ -713,8 +782,11 @@ class ModifiedLogNormal(_LogNormalFamily):
     v_eff: float = field()
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "r_eff_um", check_positive("r_eff_um", self.r_eff_um, unit="um"))
-        object.__setattr__(self, "v_eff", check_positive("v_eff", self.v_eff))
+        object.__setattr__(self, "r_eff_um", _check_radius("r_eff_um", self.r_eff_um))
+        object.__setattr__(
+            self, "v_eff", _check_v_eff(self.v_eff, math.expm1(MAX_SIGMA**2) * (1 + 1e-12))
+        )
+        _check_radius("median_radius_um (r_eff (1 + v_eff)^(-5/2))", self.median_radius_um)
 
     @property
     def sigma(self) -> float:
@@ -753,7 +825,7 @@ class Monodisperse(SizeDistribution):
     Parameters
     ----------
     radius_um : float
-        Radius of every particle, > 0. [um]
+        Radius of every particle, in :data:`RADIUS_RANGE_UM` (1e-6 to 1e6). [um]
     """
 
     model: ClassVar[str] = "monodisperse"
@@ -762,9 +834,7 @@ class Monodisperse(SizeDistribution):
     radius_um: float
 
     def __post_init__(self) -> None:
-        object.__setattr__(
-            self, "radius_um", check_positive("radius_um", self.radius_um, unit="um")
-        )
+        object.__setattr__(self, "radius_um", _check_radius("radius_um", self.radius_um))
 
     @property
     def has_density(self) -> bool:
@@ -892,7 +962,10 @@ class MultiModal(SizeDistribution):
             )
         object.__setattr__(self, "modes", modes)
         object.__setattr__(self, "relative_number_densities", tuple(densities.tolist()))
-        object.__setattr__(self, "_weights", tuple((densities / densities.sum()).tolist()))
+        # Scaled by the largest first, so that densities near the float range's
+        # end (1e308) sum without overflow.
+        scaled = densities / densities.max()
+        object.__setattr__(self, "_weights", tuple((scaled / math.fsum(scaled)).tolist()))
 
     @property
     def number_fractions(self) -> tuple[float, ...]:

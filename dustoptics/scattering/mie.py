@@ -31,12 +31,14 @@ References
 
 from __future__ import annotations
 
+import numbers
 from dataclasses import dataclass
+from typing import Any, cast
 
 import numpy as np
 from numba import njit
 
-from dustoptics._validation import as_float_array, check_positive
+from dustoptics._validation import as_float_array, check_budget, check_positive
 
 __all__ = [
     "SingleSphere",
@@ -474,18 +476,78 @@ class SingleSphere:
     phase: np.ndarray
 
 
-def single_sphere(*, m: complex, x: float, mu: np.ndarray | float = 1.0) -> SingleSphere:
+#: Smallest size parameter accepted. [-]  The kernel agrees with the Rayleigh
+#: limit (Q_sca = 8/3 x^4 |K|^2, Q_abs = 4 x Im K, K = (m^2 - 1)/(m^2 + 2))
+#: down to x = 1e-30 (tests/scattering/test_mie.py) and fails below about
+#: 1e-60 (x^4 underflows); a sphere that small is far smaller than an atom at
+#: any optical wavelength.  It bounds a single sphere and every node of the
+#: radius quadrature (a distribution's lower tail).
+MIN_SIZE_PARAMETER = 1e-30
+
+#: Smallest index contrast |m - 1| accepted. [-]  The series loses about
+#: eps / |m - 1| of relative precision (measured: Q_sca scales as |m - 1|^2 to
+#: 1e-7 relative at |m - 1| = 1e-8); below 1e-6 a sphere scatters less than
+#: 1e-12 of its area and m = 1 scatters nothing at all, so no phase
+#: function is defined.
+MIN_INDEX_CONTRAST = 1e-6
+
+
+#: Largest |m| accepted. [-]  Beyond it m x overflows the recurrences' range
+#: for the size parameters of interest; metals in the infrared reach |m| ~ 100.
+MAX_INDEX = 1e4
+
+
+def check_sphere_inputs(m: Any, x: Any = None) -> complex:
+    """Validate a relative refractive index (and a size parameter) for the kernel.
+
+    Returns ``m`` as a complex number.  Raises TypeError for a value that is
+    not a number (strings, booleans, None) and ValueError for a non-finite m,
+    n <= 0, k < 0, |m - 1| < :data:`MIN_INDEX_CONTRAST`, or ``x`` outside
+    [:data:`MIN_SIZE_PARAMETER`, inf).
+    """
+    if isinstance(m, (str, bytes, bool, np.bool_)) or not isinstance(m, numbers.Number):
+        raise TypeError(f"m must be a complex number (m = n + i k); got {m!r} ({type(m).__name__})")
+    m = complex(cast(complex, m))
+    if not (np.isfinite(m.real) and np.isfinite(m.imag)):
+        raise ValueError(f"m must be a finite complex number; got {m!r}")
+    if m.real <= 0.0 or m.imag < 0.0:
+        raise ValueError(f"m must have n > 0 and k >= 0 (m = n + i k); got {m!r}")
+    if abs(m) > MAX_INDEX:
+        raise ValueError(f"m must have |m| <= {MAX_INDEX:g}; got {m!r}")
+    if abs(m - 1.0) < MIN_INDEX_CONTRAST:
+        raise ValueError(
+            f"m must differ from 1 by at least {MIN_INDEX_CONTRAST:g} (|m - 1| >= {MIN_INDEX_CONTRAST:g}; "
+            f"a sphere matched to its medium scatters nothing); got {m!r}"
+        )
+    if x is not None:
+        x = check_positive("x", x)
+        if x < MIN_SIZE_PARAMETER:
+            raise ValueError(
+                f"x must be >= {MIN_SIZE_PARAMETER:g} (smaller spheres are below the kernel's "
+                f"tested domain; use the Rayleigh limit); got {x!r}"
+            )
+    return m
+
+
+def single_sphere(
+    *, m: complex, x: float, mu: np.ndarray | float = 1.0, allow_large: bool = False
+) -> SingleSphere:
     """Scatter a plane wave off one homogeneous sphere (Lorenz-Mie theory).
 
     Parameters
     ----------
     m : complex
         Refractive index of the sphere relative to the medium, m = n + i k with
-        n > 0 and k >= 0. [-]
+        n > 0, k >= 0 and |m - 1| >= :data:`MIN_INDEX_CONTRAST`. [-]
     x : float
-        Size parameter 2 pi r / lambda (lambda in the medium), x > 0. [-]
+        Size parameter 2 pi r / lambda (lambda in the medium),
+        x >= :data:`MIN_SIZE_PARAMETER`. [-]
     mu : array_like
         Cosines of the scattering angles, in [-1, 1]. [-]
+    allow_large : bool, optional
+        Go ahead when the series' arrays (n_max orders at every angle) would
+        exceed :data:`dustoptics._validation.MEMORY_BUDGET_BYTES`; default
+        False, which raises :class:`~dustoptics._validation.BudgetError`.
 
     Returns
     -------
@@ -502,15 +564,20 @@ def single_sphere(*, m: complex, x: float, mu: np.ndarray | float = 1.0) -> Sing
     ----------
     Bohren & Huffman (1983), chapter 4; Wiscombe (1980), doi:10.1364/AO.19.001505.
     """
-    m = complex(m)
-    if not (np.isfinite(m.real) and np.isfinite(m.imag)):
-        raise ValueError(f"m must be a finite complex number; got {m!r}")
-    if m.real <= 0.0 or m.imag < 0.0:
-        raise ValueError(f"m must have n > 0 and k >= 0 (m = n + i k); got {m!r}")
-    x = check_positive("x", x)
+    m = check_sphere_inputs(m, x)
+    x = float(x)
     mu_arr = np.atleast_1d(as_float_array("mu", mu))
     if mu_arr.ndim != 1 or np.any(np.abs(mu_arr) > 1.0):
         raise ValueError(f"mu must be a 1-D array of cosines in [-1, 1]; got {mu!r}")
+    # Coefficients a_n, b_n and the recurrences (about 10 complex arrays of n_max),
+    # and pi_n, tau_n at every angle.
+    n_max = x + 4.05 * x ** (1.0 / 3.0) + 2.0
+    check_budget(
+        "single_sphere",
+        16.0 * n_max * (10.0 + 2.0 * mu_arr.size),
+        allow_large=allow_large,
+        change=f"x = {x:g} needs n_max = {n_max:.3g} orders: use a smaller sphere or fewer angles",
+    )
     qext, qsca, gq, s1, s2 = _single_sphere_kernel(m, x, mu_arr)
     phase = (np.abs(s1) ** 2 + np.abs(s2) ** 2) / (2.0 * np.pi * x * x * qsca)
     return SingleSphere(

@@ -11,9 +11,15 @@ distribution n(r) (normalized to 1) with the deterministic quadrature of
 
 with each sphere's phase function p normalized so that 2 pi int p dmu = 1; the
 table's phase function obeys the same normalization (per steradian).  The
-asymmetry parameter is g = 2 pi int P mu dmu of the tabulated P, i.e. the
+asymmetry parameter is g = 2 pi int P mu dmu of the exact P, i.e. the
 C_sca-weighted mean of the spheres' g for ``"scattering"`` and the plain number
-mean for ``"number"``.  Efficiencies are area weighted: Q = <C> / (pi <r^2>).
+mean for ``"number"``; it is summed on the cross-sections' radius quadrature
+(refined to ``cross_section_rtol``, absolute for g), not the phase function's
+(``rtol``).  So the mean cosine of the tabulated P differs from g by at most
+about ``error_estimate + cross_section_error_estimate`` (the two quadratures'
+errors; e.g. 1.1e-6 at rtol 1e-3 for r_eff 0.5 um, v_eff 0.125, m 2 + 0.0156i,
+639 nm), and g is the more accurate of the two.  Efficiencies are area
+weighted: Q = <C> / (pi <r^2>).
 
 ``weighting="number"`` is the seed thesis's model (Meyran 2022): an unweighted
 average of normalized phase functions, there computed from random radii.  It is
@@ -31,6 +37,8 @@ References
 
 from __future__ import annotations
 
+import math
+import numbers
 import os
 import warnings
 from collections.abc import Callable, Sequence
@@ -42,13 +50,22 @@ from typing import Any, NamedTuple, cast
 import numpy as np
 from numba import njit
 
-from dustoptics._validation import as_increasing_grid, check_choice, check_open_interval
+from dustoptics._validation import (
+    BudgetError,
+    as_increasing_grid,
+    check_budget,
+    check_choice,
+    check_open_interval,
+    check_wavelength_unit,
+)
 from dustoptics.particles.materials import RefractiveIndex, get_material
 from dustoptics.particles.sizedist import SizeDistribution
 from dustoptics.particles.sizedist import from_dict as _distribution_from_dict
 from dustoptics.scattering import mie
 from dustoptics.scattering.quadrature import (
+    _UPPER_MOMENT,
     QuadratureSettings,
+    _stretch,
     _wright_omega,
     gauss_legendre,
     initial_panels,
@@ -58,11 +75,14 @@ from dustoptics.scattering.quadrature import (
 from dustoptics.table import DEFAULT_NAME, Provenance, Source, Table, plain
 
 __all__ = [
+    "WORK_BUDGET",
     "ConvergenceWarning",
     "QuadratureDiagnostics",
+    "check_cost",
     "compute_optics",
     "default_theta_deg",
     "default_wavelengths_nm",
+    "estimate_cost",
     "recompute",
     "resolve_refractive_index",
 ]
@@ -170,9 +190,22 @@ def resolve_refractive_index(
         label = _describe(refractive_index)
     elif callable(refractive_index):
         # Any other callable is asked one wavelength at a time.
-        m = np.array([complex(refractive_index(float(w))) for w in wavelength_nm])
+        values = []
+        for w in wavelength_nm:
+            value = refractive_index(float(w))
+            if isinstance(value, (str, bytes, bool, np.bool_)) or not isinstance(
+                value, numbers.Number
+            ):
+                raise TypeError(
+                    f"refractive_index callable {_describe(refractive_index)} must return a complex "
+                    f"number (m = n + i k); got {value!r} ({type(value).__name__}) at {float(w)!r} nm"
+                )
+            values.append(complex(cast(complex, value)))
+        m = np.array(values, dtype=np.complex128)
         label = _describe(refractive_index)
     elif np.ndim(refractive_index) == 0:
+        if isinstance(refractive_index, (bytes, bool, np.bool_)):
+            raise TypeError(f"refractive_index must be a complex number; got {refractive_index!r}")
         try:
             m = np.full(
                 wavelength_nm.shape, complex(cast(complex, refractive_index)), dtype=np.complex128
@@ -184,7 +217,20 @@ def resolve_refractive_index(
             ) from None
         label = f"constant m = {complex(cast(complex, refractive_index))}"
     else:
-        m = np.array(refractive_index, dtype=np.complex128)
+        probe = np.asarray(refractive_index)
+        if probe.dtype.kind in "bUSVO" and not all(
+            isinstance(v, numbers.Number) and not isinstance(v, (bool, np.bool_))
+            for v in probe.ravel()
+        ):
+            raise TypeError(
+                f"refractive_index given as a sequence must hold complex numbers; got {refractive_index!r}"
+            )
+        try:
+            m = np.array(refractive_index, dtype=np.complex128)
+        except (TypeError, ValueError):
+            raise ValueError(
+                f"refractive_index must be a sequence of complex numbers; got {refractive_index!r}"
+            ) from None
         if m.shape != wavelength_nm.shape:
             raise ValueError(
                 "refractive_index given as a sequence must have one value per wavelength "
@@ -204,11 +250,18 @@ def resolve_refractive_index(
     if np.any(m.real <= 0):
         i = int(np.argmax(m.real <= 0))
         raise ValueError(f"refractive_index must have n > 0; got {m[i]} at {wavelength_nm[i]} nm")
-    if np.any(m == 1.0):
-        i = int(np.argmax(m == 1.0))
+    if np.any(np.abs(m) > mie.MAX_INDEX):
+        i = int(np.argmax(np.abs(m) > mie.MAX_INDEX))
         raise ValueError(
-            f"refractive_index m = 1 + 0i at {wavelength_nm[i]} nm scatters nothing: "
-            "no phase function is defined"
+            f"refractive_index must have |m| <= {mie.MAX_INDEX:g}; got {m[i]} at {wavelength_nm[i]} nm"
+        )
+    contrast = np.abs(m - 1.0) < mie.MIN_INDEX_CONTRAST
+    if np.any(contrast):
+        i = int(np.argmax(contrast))
+        raise ValueError(
+            f"refractive_index m = {m[i]} at {wavelength_nm[i]} nm is within {mie.MIN_INDEX_CONTRAST:g} "
+            "of 1: it scatters nothing (or next to nothing) and no phase function is defined; "
+            f"|m - 1| must be >= {mie.MIN_INDEX_CONTRAST:g}"
         )
     return m, label
 
@@ -915,6 +968,152 @@ class _WavelengthSolver:
         )
 
 
+#: Largest estimated work of one :func:`compute_optics` call without
+#: ``allow_large=True``, in sphere-order-angle terms (see
+#: :func:`estimate_cost`).  Measured on a loaded 2-core machine (scripts in
+#: the test suite's budget tests): 1-2e9 terms a second; the default Mars
+#: table (r_eff 1.6 um, v_eff 0.2) is about 3.5e9, r_eff 30 um, v_eff 0.1 on
+#: three wavelengths and 1,801 angles 1.2e11 (64 s).  1e12 is about ten
+#: minutes.
+WORK_BUDGET = 1e12
+
+
+class RequestCost(NamedTuple):
+    """What :func:`estimate_cost` expects a :func:`compute_optics` call to need."""
+
+    memory_bytes: float
+    work: float
+    min_size_parameter: float
+    max_size_parameter: float
+    initial_panels: float
+
+
+def estimate_cost(
+    distribution: SizeDistribution,
+    wavelength_nm: np.ndarray,
+    n_theta: int,
+    *,
+    settings: QuadratureSettings,
+    weighting: str,
+    workers: int,
+) -> RequestCost:
+    """Estimate the memory and work of :func:`compute_optics` before any is done.
+
+    From the truncated radius range (the distribution's analytic tail
+    bounds, as the quadrature places them), the smallest and largest
+    wavelengths give the size-parameter range [x_lo, x_hi]; the largest sphere
+    needs n_max = x_hi + 4.05 x_hi^(1/3) + 2 orders (Wiscombe 1980).  Memory:
+    each thread's angular tables (pi_n, tau_n at n_max orders and at the
+    output angles, or at 2 n_max Gauss angles when that is fewer) and its
+    level-0 panel rows, plus the tables returned.  Work: 16 times the level-0
+    nodes (the refinement's typical end) times orders times (angles + 8),
+    for every wavelength.  Nothing is allocated in proportion to the
+    estimate.
+
+    Raises
+    ------
+    ValueError
+        The distribution's radii overflow, or its size parameters leave the
+        kernel's domain (below :data:`dustoptics.scattering.mie.MIN_SIZE_PARAMETER`).
+    """
+    k_max = 2.0 * math.pi / (float(wavelength_nm[0]) * 1e-3)
+    k_min = 2.0 * math.pi / (float(wavelength_nm[-1]) * 1e-3)
+    try:
+        with np.errstate(all="raise"):
+            if distribution.is_monodisperse:
+                r_lo = r_hi = float(distribution.mean_radius_um)
+            else:
+                r_lo, r_hi = distribution.radius_bounds_um(
+                    tail_fraction=settings.tail_fraction,
+                    lower_moment=0 if weighting == "number" else 2,
+                    upper_moment=_UPPER_MOMENT,
+                )
+            float(distribution.mean_cross_section_um2)
+            x_lo, x_hi = k_min * r_lo, k_max * r_hi
+    except (OverflowError, ZeroDivisionError, FloatingPointError, ValueError) as exc:
+        raise ValueError(
+            f"distribution {distribution!r} is outside the range the quadrature can integrate "
+            f"({type(exc).__name__}: {exc}); choose radii between about 1e-3 and 1e3 um"
+        ) from None
+    if not (math.isfinite(x_lo) and math.isfinite(x_hi) and x_hi > 0):
+        raise ValueError(
+            f"distribution {distribution!r} gives size parameters {x_lo!r} .. {x_hi!r} at "
+            f"{wavelength_nm[0]:g} .. {wavelength_nm[-1]:g} nm, which are not finite and positive"
+        )
+    if x_lo < mie.MIN_SIZE_PARAMETER:
+        raise ValueError(
+            f"distribution {distribution!r}: its radii start at size parameter 2 pi r / lambda = "
+            f"{x_lo:.3g} (radius {r_lo:.3g} um at {wavelength_nm[-1]:g} nm), below "
+            f"{mie.MIN_SIZE_PARAMETER:g}, the kernel's tested domain; choose a larger radius, a "
+            "narrower distribution, or weighting='scattering' (whose lower tail is the area's)"
+        )
+    n_max = x_hi + 4.05 * x_hi ** (1.0 / 3.0) + 2.0
+    n_wl = int(wavelength_nm.size)
+    if distribution.is_monodisperse:
+        n_angles = float(n_theta)
+        panels = 1.0
+        nodes = 1.0
+    else:
+        x_c = settings.transition_size_parameter
+        width = float(_stretch(x_hi, x_c) - _stretch(k_max * r_lo, x_c))
+        panels = max(float(settings.min_panels), math.ceil(width / settings.panel_width))
+        # Level-0 nodes times 16: the adaptive refinement typically ends with
+        # 6-20 times the level-0 nodes (measured for r_eff 1.6-100 um).
+        nodes = panels * settings.nodes_per_panel * 16.0
+        n_angles = float(min(n_theta, 2.0 * (n_max + 16.0)))
+    tables = 2.0 * 2.0 * (n_max + 1.0) * n_angles * 8.0
+    rows = 4.0 * panels * (n_angles + 5.0) * 8.0 + 8.0 * 8.0 * nodes
+    memory = min(workers, n_wl) * (tables + rows) + 4.0 * n_wl * float(n_theta) * 8.0
+    # Per sphere and order: the coefficients (about 8 angle terms' worth) and the angular sums.
+    work = n_wl * nodes * n_max * (n_angles + 8.0)
+    return RequestCost(memory, work, x_lo, x_hi, panels)
+
+
+def check_cost(
+    distribution: SizeDistribution,
+    wl: np.ndarray,
+    n_theta: int,
+    *,
+    settings: QuadratureSettings,
+    weighting: str,
+    workers: int,
+    allow_large: bool,
+) -> RequestCost:
+    """:func:`estimate_cost`, then refuse a request beyond the budget.
+
+    Raises
+    ------
+    dustoptics._validation.BudgetError
+        Estimated memory above :data:`dustoptics._validation.MEMORY_BUDGET_BYTES`
+        or work above :data:`WORK_BUDGET`, and ``allow_large`` is False; the
+        message says what drives the estimate and what to change.
+    """
+    cost = estimate_cost(
+        distribution, wl, n_theta, settings=settings, weighting=weighting, workers=workers
+    )
+    check_budget(
+        "compute_optics",
+        cost.memory_bytes,
+        allow_large=allow_large,
+        change=(
+            f"the largest size parameter is {cost.max_size_parameter:.3g} (2 pi r / lambda at the "
+            "tail's largest radius and the shortest wavelength) and the grids hold "
+            f"{wl.size} wavelengths x {n_theta} angles: use fewer angles or wavelengths, a "
+            "smaller r_eff_um / v_eff or radius, longer wavelengths, or a wider panel_width"
+        ),
+    )
+    if cost.work > WORK_BUDGET and not allow_large:
+        raise BudgetError(
+            f"compute_optics would need about {cost.work:.3g} sphere-order-angle terms (largest size "
+            f"parameter {cost.max_size_parameter:.3g}, {cost.initial_panels:.0f} initial radius panels, "
+            f"{wl.size} wavelengths x {n_theta} angles), beyond the budget of {WORK_BUDGET:g} "
+            "(about ten minutes): use a smaller r_eff_um / v_eff or radius, longer or fewer "
+            "wavelengths, fewer angles or a wider panel_width, or pass allow_large=True "
+            "(--allow-large on the command line) to go ahead"
+        )
+    return cost
+
+
 def compute_optics(
     refractive_index: RefractiveIndexLike,
     distribution: SizeDistribution,
@@ -929,6 +1128,7 @@ def compute_optics(
     name: str = DEFAULT_NAME,
     progress: Callable[[int, int], None] | None = None,
     wavelengths_nm: Sequence[float] | np.ndarray | None = None,
+    allow_large: bool = False,
 ) -> Table:
     """Polydisperse Mie optics of spheres, converged over the size distribution.
 
@@ -969,6 +1169,12 @@ def compute_optics(
         result.
     wavelengths_nm : array_like, optional
         Deprecated spelling of ``wavelength_nm``.
+    allow_large : bool
+        Go ahead even when the estimated memory exceeds
+        :data:`dustoptics._validation.MEMORY_BUDGET_BYTES` (2 GiB) or the
+        estimated work exceeds :data:`WORK_BUDGET` (about ten minutes); see
+        :func:`estimate_cost`.  Default False: such a call raises
+        :class:`dustoptics._validation.BudgetError` before any work.
 
     Returns
     -------
@@ -983,7 +1189,14 @@ def compute_optics(
     Raises
     ------
     ValueError
-        Bad input (the message names the parameter, value and allowed range).
+        Bad input (the message names the parameter, value and allowed range):
+        also wavelengths plainly not in nanometres (all below 10 nm), an index
+        within :data:`dustoptics.scattering.mie.MIN_INDEX_CONTRAST` of 1, a
+        sphere below :data:`dustoptics.scattering.mie.MIN_SIZE_PARAMETER`,
+        and a request beyond the budget (:class:`~dustoptics._validation.BudgetError`).
+    TypeError
+        A string or boolean given as a number, ``weighting`` not a string, a
+        refractive-index callable that returns no number.
 
     Warns
     -----
@@ -1025,6 +1238,7 @@ def compute_optics(
     )
     if wl[0] <= 0:
         raise ValueError(f"wavelength_nm must be > 0 nm; got minimum {wl[0]!r}")
+    check_wavelength_unit("wavelength_nm", wl)
     theta = (
         default_theta_deg()
         if theta_deg is None
@@ -1036,7 +1250,11 @@ def compute_optics(
         if cross_section_rtol is None
         else check_open_interval("cross_section_rtol", cross_section_rtol, 0.0, 0.1)
     )
+    if not isinstance(weighting, str):
+        raise TypeError(f"weighting must be a str, one of {WEIGHTINGS}; got {weighting!r}")
     check_choice("weighting", weighting, WEIGHTINGS)
+    if not isinstance(allow_large, bool):
+        raise TypeError(f"allow_large must be True or False; got {allow_large!r}")
     settings = QuadratureSettings() if quadrature is None else quadrature
     if not isinstance(settings, QuadratureSettings):
         raise ValueError(f"quadrature must be a QuadratureSettings; got {quadrature!r}")
@@ -1048,6 +1266,15 @@ def compute_optics(
         raise ValueError(f"name must be a non-empty string; got {name!r}")
     if progress is not None and not callable(progress):
         raise TypeError(f"progress must be a callable progress(done, total); got {progress!r}")
+    cost = check_cost(
+        distribution,
+        wl,
+        theta.size,
+        settings=settings,
+        weighting=weighting,
+        workers=workers,
+        allow_large=allow_large,
+    )
     m, label = resolve_refractive_index(refractive_index, wl)
 
     mu_out = np.cos(np.deg2rad(theta))
@@ -1094,10 +1321,29 @@ def compute_optics(
     err_phase = np.array([r.err_phase for r in results])
     err_cross = np.array([r.err_cross for r in results])
     phase = np.vstack([r.phase for r in results])
-    if not (np.all(np.isfinite(phase)) and np.all(phase > 0)):
-        raise FloatingPointError(
-            "phase function is not finite and positive; please report this input"
+    cext = np.array([r.cext for r in results])
+    csca = np.array([r.csca for r in results])
+    finite = np.all(np.isfinite(phase)) and np.all(np.isfinite(cext)) and np.all(np.isfinite(csca))
+    if not (finite and np.all(phase > 0) and np.all(csca > 0)):
+        raise ValueError(
+            f"compute_optics: refractive_index {label} with distribution {distribution!r} at "
+            f"{wl[0]:g} .. {wl[-1]:g} nm gives a phase function or cross-section that is not finite "
+            "and positive: the input lies outside the kernel's tested domain "
+            f"(size parameters {cost.min_size_parameter:.3g} .. {cost.max_size_parameter:.3g})"
         )
+    # Absorption: <C_abs> = <C_ext> - <C_sca> >= 0.  With k = 0 it is exactly 0
+    # (no absorption, an identity of the physics); with k > 0 the difference
+    # is kept unless it is negative beyond round-off (1e-12 of <C_ext>), which
+    # would be a wrong number and raises.
+    cabs = np.where(m.imag == 0.0, 0.0, cext - csca)
+    cext = np.where(m.imag == 0.0, csca, cext)
+    if np.any(cabs < -1e-12 * cext):
+        i = int(np.argmax(cabs < -1e-12 * cext))
+        raise ValueError(
+            f"compute_optics: <C_abs> = {cabs[i]!r} um^2 < 0 at {wl[i]:g} nm for refractive_index "
+            f"{label} with distribution {distribution!r}: the input lies outside the kernel's tested domain"
+        )
+    csca = np.minimum(csca, cext)
     not_converged = (err_phase > rtol) | (err_cross > cross_rtol)
     if not_converged.any():
         bad = ", ".join(f"{w:g}" for w in wl[not_converged])
@@ -1143,8 +1389,8 @@ def compute_optics(
         theta_deg=theta,
         phase=phase,
         g=np.array([r.g for r in results]),
-        cext_um2=np.array([r.cext for r in results]),
-        csca_um2=np.array([r.csca for r in results]),
+        cext_um2=cext,
+        csca_um2=csca,
         error_estimate=err_phase,
         cross_section_error_estimate=err_cross,
         n_nodes=n_nodes,

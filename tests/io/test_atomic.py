@@ -11,7 +11,15 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from dustoptics.io import _text
-from dustoptics.io._atomic import FILE_MODE, FormatError, check_targets, write_files
+from dustoptics.io._atomic import (
+    FILE_MODE,
+    FormatError,
+    check_targets,
+    clean_leftovers,
+    file_set,
+    is_leftover,
+    write_files,
+)
 
 
 def _listing(directory: Path) -> list[str]:
@@ -32,8 +40,11 @@ def test_writes_bytes_and_callbacks(tmp_path):
     assert write_files({a: b"bytes\n", b: writer}) == [a, b]
     assert a.read_bytes() == b"bytes\n"
     assert b.read_bytes() == b"from a callback\n"
-    # The callback wrote a temporary file in the target directory, hidden and then renamed.
-    assert seen[0].parent == b.parent and seen[0].name.startswith(".b.h5.")
+    # The callback wrote the file in a hidden staging directory inside the target directory.
+    assert seen[0].parent.parent == b.parent and seen[0].parent.name.startswith(
+        ".dustoptics-stage-"
+    )
+    assert seen[0].name == "b.h5"
     assert stat.S_IMODE(a.stat().st_mode) == FILE_MODE == stat.S_IMODE(b.stat().st_mode)
     assert _listing(tmp_path / "out") == ["a.csv", "b.h5"]
 
@@ -104,15 +115,16 @@ def test_failure_mid_write_leaves_no_partial_set(tmp_path, monkeypatch, victim):
     assert _listing(tmp_path) == ["a", "b", "c"]
 
 
-def test_overwrite_failure_keeps_complete_files(tmp_path, monkeypatch):
-    """With overwrite=True a failed rename leaves each file complete (old or new), never partial."""
+@pytest.mark.parametrize("fail_at", [2, 3])
+def test_overwrite_failure_keeps_the_old_set(tmp_path, monkeypatch, fail_at):
+    """With overwrite=True a failed rename leaves the old set, whole."""
     for name in "ab":
         (tmp_path / name).write_text(f"old {name}\n")
     real, calls = os.replace, []
 
     def fail_second(*args):
         calls.append(args)
-        if len(calls) == 2:
+        if len(calls) == fail_at:
             raise OSError("simulated")
         return real(*args)
 
@@ -120,8 +132,10 @@ def test_overwrite_failure_keeps_complete_files(tmp_path, monkeypatch):
     with pytest.raises(OSError, match="simulated"):
         write_files({tmp_path / "a": b"new a\n", tmp_path / "b": b"new b\n"}, overwrite=True)
     assert _listing(tmp_path) == ["a", "b"]  # no temporary files
-    assert (tmp_path / "a").read_text() == "new a\n"
+    # The old set, whole: the file already replaced is put back from its link.
+    assert (tmp_path / "a").read_text() == "old a\n"
     assert (tmp_path / "b").read_text() == "old b\n"
+    assert len(calls) >= 2
 
 
 def test_format_error_is_a_value_error():
@@ -163,3 +177,141 @@ def test_read_rows_rejects_bad_files(tmp_path, data, message):
     path.write_bytes(data)
     with pytest.raises(FormatError, match=f"bad.csv: .*{message}"):
         _text.read_rows(path)
+
+
+# ------------------------------------------------------------------ sets, leftovers, locks
+
+
+def _kill_during(
+    tmp_path: Path, victim: str, nth: int, contents: dict, overwrite: bool = True
+) -> None:
+    """Run write_files in a forked child that dies (os._exit) at the nth call of os.<victim>."""
+    pid = os.fork()
+    if pid == 0:  # pragma: no cover - the child
+        real = getattr(os, victim)
+        calls = []
+
+        def die(*args, **kwargs):
+            calls.append(args)
+            if len(calls) == nth:
+                os._exit(9)
+            return real(*args, **kwargs)
+
+        setattr(os, victim, die)
+        try:
+            write_files(contents, overwrite=overwrite)
+        finally:
+            os._exit(0)
+    _, status = os.waitpid(pid, 0)
+    assert os.waitstatus_to_exitcode(status) == 9
+
+
+@pytest.mark.parametrize(
+    ("victim", "nth"), [("fsync", 2), ("replace", 1), ("replace", 2), ("replace", 3)]
+)
+def test_a_killed_write_leaves_the_old_or_the_new_set_after_the_next_run(tmp_path, victim, nth):
+    out = tmp_path / "out"
+    write_files({out / "a": b"old a\n", out / "b": b"old b\n", out / "c": b"old c\n"})
+    new = {out / "a": b"new a\n", out / "b": b"new b\n", out / "c": b"new c\n"}
+    _kill_during(tmp_path, victim, nth, new)
+    assert any(is_leftover(p.name) for p in out.iterdir())  # the kill left its staging
+    cleaned = clean_leftovers(out)
+    assert cleaned and _listing(out) == ["a", "b", "c"]
+    texts = {(out / n).read_text() for n in "abc"}
+    # Killed before the manifest: the old set; after it (while moving): rolled forward to the new.
+    assert texts in ({"old a\n", "old b\n", "old c\n"}, {"new a\n", "new b\n", "new c\n"})
+    if victim == "replace" and nth >= 2:
+        assert texts == {"new a\n", "new b\n", "new c\n"}
+
+
+def test_leftovers_do_not_block_a_rerun_and_are_cleaned(tmp_path):
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / ".a.h5.abcd1234.tmp").write_bytes(b"half")  # an earlier version's temporary
+    (out / ".dustoptics-stage-deadbeef").mkdir()  # a staging directory whose lock is free
+    (out / ".dustoptics-stage-deadbeef" / "a.h5").write_bytes(b"half")
+    write_files({out / "a.h5": b"whole\n"})
+    assert _listing(out) == ["a.h5"]
+
+
+def test_a_live_staging_directory_is_not_touched(tmp_path):
+    import fcntl
+
+    out = tmp_path / "out"
+    live = out / ".dustoptics-stage-alive123"
+    live.mkdir(parents=True)
+    fd = os.open(live, os.O_RDONLY)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX)
+        assert clean_leftovers(out) == []
+        write_files({out / "x": b"1\n"})
+        assert live.exists()
+    finally:
+        os.close(fd)
+    clean_leftovers(out)
+    assert not live.exists()
+
+
+def test_file_set_writes_all_or_nothing(tmp_path):
+    out = tmp_path / "out"
+    write_files({out / "a": b"old a\n", out / "b": b"old b\n"})
+    with pytest.raises(RuntimeError, match="third format"), file_set(out, overwrite=True):
+        write_files({out / "a": b"new a\n"}, overwrite=True)
+        write_files({out / "b": b"new b\n"}, overwrite=True)
+        raise RuntimeError("the third format rejects the table")
+    assert [(out / n).read_text() for n in "ab"] == ["old a\n", "old b\n"]
+    with file_set(out, overwrite=True):
+        write_files({out / "a": b"new a\n"}, overwrite=True)
+        assert (out / "a").read_text() == "old a\n"  # nothing written before the set is whole
+        write_files({out / "sub" / "b": b"new b\n"}, overwrite=True)
+    assert (out / "a").read_text() == "new a\n" and (out / "sub" / "b").read_text() == "new b\n"
+
+
+@pytest.mark.parametrize("name", ["../escaped", "/abs/olute"])
+def test_a_file_set_refuses_targets_outside_its_root(tmp_path, name):
+    out = tmp_path / "out"
+    with pytest.raises(ValueError, match="outside the output directory"), file_set(out):
+        write_files({out / name / "a.csv": b"x\n"})
+    assert not (tmp_path / "escaped").exists()
+
+
+def test_a_symlink_out_of_the_root_is_refused(tmp_path):
+    out, elsewhere = tmp_path / "out", tmp_path / "elsewhere"
+    out.mkdir()
+    elsewhere.mkdir()
+    (out / "name").symlink_to(elsewhere)
+    with pytest.raises(ValueError, match="outside the output directory"), file_set(out):
+        write_files({out / "name" / "a.csv": b"x\n"})
+    assert _listing(elsewhere) == []
+
+
+def test_concurrent_sets_never_mix(tmp_path):
+    """Processes replacing the same set at once: every file of the result comes from one of them."""
+    out = tmp_path / "out"
+    names = [f"f{i}" for i in range(6)]
+    pids = []
+    for k in range(4):
+        pid = os.fork()
+        if pid == 0:  # pragma: no cover - the child
+            try:
+                for _ in range(5):
+                    write_files({out / n: f"{k}\n".encode() for n in names}, overwrite=True)
+            finally:
+                os._exit(0)
+        pids.append(pid)
+    for pid in pids:
+        os.waitpid(pid, 0)
+    assert len({(out / n).read_text() for n in names}) == 1
+    assert _listing(out) == names
+
+
+def test_full_disk_leaves_the_old_set(tmp_path, monkeypatch):
+    out = tmp_path / "out"
+    write_files({out / "a": b"old a\n", out / "b": b"old b\n"})
+
+    def full(path: Path) -> None:
+        raise OSError(28, "No space left on device")
+
+    with pytest.raises(OSError, match="No space left"):
+        write_files({out / "a": b"new a\n", out / "b": full}, overwrite=True)
+    assert _listing(out) == ["a", "b"] and (out / "a").read_text() == "old a\n"

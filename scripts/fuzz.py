@@ -1,0 +1,634 @@
+"""Fuzz dustoptics: API calls, TOML configurations, command lines and damaged files.
+
+Usage::
+
+    python scripts/fuzz.py                      # the CI budget: seed 0, 8 cases per kind
+    python scripts/fuzz.py --cases 200 --seed 7 # a longer search
+    python scripts/fuzz.py --kinds api,files    # some kinds only
+
+Every case runs in a forked process with an address-space limit
+(``resource.setrlimit(RLIMIT_AS)``) and a timeout, and with the package's
+budgets lowered (memory :data:`CASE_MEMORY_BUDGET`, work
+:data:`CASE_WORK_BUDGET`), so that any accepted request is small and fast:
+a case that runs past the timeout or out of memory means the cost estimate
+let through a request it should have refused.  Outcomes:
+
+- ``ok``: a result (exit status 0 for a command line);
+- ``clean``: ValueError, TypeError or FormatError from the API, exit status 1
+  or 2 with exactly one line on stderr from the command line;
+- anything else is a failure: another exception or a traceback, a hang
+  (timeout), a memory blow-up (MemoryError or death by signal), a file
+  written outside ``--out``, or a set of files that changed partially when
+  the command failed.
+
+The cases are drawn from a seeded :class:`random.Random`, so a seed gives the
+same cases on every run; ``tests/test_fuzz.py`` runs the CI budget and
+extends it under ``pytest --hypothesis-profile=explore`` (more cases, a seed
+from the clock).  It exits 1 if any case failed and prints each failure with
+the code that reproduces it.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import io
+import json
+import os
+import random
+import resource
+import select
+import shutil
+import signal
+import sys
+import tempfile
+import time
+import traceback
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+#: Memory budget of the package inside a case (instead of 2 GiB). [bytes]
+CASE_MEMORY_BUDGET = 256 * 1024**2
+
+#: Work budget inside a case (instead of 1e12: about a second).
+CASE_WORK_BUDGET = 2e9
+
+#: Address space a case may add to what the warmed-up parent already maps. [bytes]
+CASE_ADDRESS_SPACE = 1536 * 1024**2
+
+#: Seconds before a case counts as a hang.
+CASE_TIMEOUT_S = 60.0
+
+KINDS = ("api", "config", "cli", "files")
+
+
+@dataclass(frozen=True)
+class Case:
+    """One input: a kind, a description that reproduces it, and the call."""
+
+    kind: str
+    description: str
+    run: Callable[[Path], Any]
+
+
+@dataclass(frozen=True)
+class Outcome:
+    case: Case
+    status: str  # "ok", "clean" or "failure"
+    detail: str
+    seconds: float
+
+
+# ------------------------------------------------------------------ running one case
+
+
+def _address_space_now() -> int:
+    with open("/proc/self/statm") as handle:
+        return int(handle.read().split()[0]) * resource.getpagesize()
+
+
+def _child(case: Case, workdir: Path, write_fd: int) -> None:  # pragma: no cover - runs forked
+    import dustoptics._validation as validation
+    import dustoptics.scattering.optics as optics
+
+    validation.MEMORY_BUDGET_BYTES = CASE_MEMORY_BUDGET
+    optics.WORK_BUDGET = CASE_WORK_BUDGET
+    limit = _address_space_now() + CASE_ADDRESS_SPACE
+    resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
+    os.chdir(workdir)
+    from dustoptics.io import FormatError
+
+    try:
+        result = case.run(workdir)
+        message = {"status": "ok", "detail": repr(result)[:300]}
+    except (FormatError, ValueError, TypeError) as exc:
+        text = str(exc)
+        status = "clean" if text and "Traceback" not in text else "failure"
+        message = {"status": status, "detail": f"{type(exc).__name__}: {text[:300]}"}
+    except MemoryError:
+        message = {"status": "failure", "detail": "MemoryError (beyond the address-space limit)"}
+    except BaseException:
+        message = {"status": "failure", "detail": traceback.format_exc()[-2000:]}
+    with os.fdopen(write_fd, "w") as pipe:
+        pipe.write(json.dumps(message))
+    os._exit(0)
+
+
+def run_case(case: Case, *, timeout_s: float = CASE_TIMEOUT_S) -> Outcome:
+    """Run ``case`` in a forked process with limits; classify what happened."""
+    workdir = Path(tempfile.mkdtemp(prefix="dustoptics-fuzz-"))
+    read_fd, write_fd = os.pipe()
+    start = time.perf_counter()
+    sys.stdout.flush()
+    sys.stderr.flush()
+    pid = os.fork()
+    if pid == 0:  # pragma: no cover - the child
+        os.close(read_fd)
+        try:
+            _child(case, workdir, write_fd)
+        finally:
+            os._exit(3)
+    os.close(write_fd)
+    chunks = []
+    status, detail = "failure", ""
+    deadline = start + timeout_s
+    with os.fdopen(read_fd, "r") as pipe:
+        while True:
+            left = deadline - time.perf_counter()
+            if left <= 0:
+                os.kill(pid, signal.SIGKILL)
+                detail = f"hang: no result within {timeout_s:g} s"
+                break
+            ready, _, _ = select.select([pipe], [], [], left)
+            if ready:
+                chunk = pipe.read()
+                chunks.append(chunk)
+                break
+    _, wait_status = os.waitpid(pid, 0)
+    seconds = time.perf_counter() - start
+    text = "".join(chunks)
+    if text:
+        message = json.loads(text)
+        status, detail = message["status"], message["detail"]
+    elif not detail:
+        if os.WIFSIGNALED(wait_status):
+            detail = f"killed by signal {os.WTERMSIG(wait_status)} (memory blow-up or crash)"
+        else:
+            detail = f"exited with status {os.waitstatus_to_exitcode(wait_status)} without a result"
+    shutil.rmtree(workdir, ignore_errors=True)
+    return Outcome(case, status, detail, seconds)
+
+
+# ------------------------------------------------------------------ command lines
+
+
+def _snapshot(root: Path) -> dict[str, bytes]:
+    out = {}
+    for path in sorted(root.rglob("*")):
+        if path.is_file() and not path.is_symlink():
+            out[str(path.relative_to(root))] = path.read_bytes()
+    return out
+
+
+def run_cli(workdir: Path, argv: list[str], out: str = "out") -> str:
+    """Run the command line in ``workdir`` and check the rules a command must keep.
+
+    Raises AssertionError (a failure) on a traceback, an exit status other
+    than 0, 1, 2, a failure with other than one stderr line, a file written
+    outside ``out``, or an output set changed by a failing command.
+    """
+    from dustoptics import cli
+
+    before_all = _snapshot(workdir)
+    out_dir = workdir / out
+    before_out = _snapshot(out_dir) if out_dir.exists() else {}
+    stdout, stderr = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(stdout), contextlib.redirect_stderr(stderr):
+        status = cli.main(argv)
+    err = stderr.getvalue()
+    assert status in (0, 1, 2), f"exit status {status}"
+    assert "Traceback" not in err, err
+    if status != 0:
+        lines = err.strip().splitlines()
+        assert len(lines) == 1 and lines[0].startswith("dustoptics: error: "), f"stderr: {err!r}"
+    after_all = _snapshot(workdir)
+    outside = [
+        name
+        for name, data in after_all.items()
+        if not name.startswith(f"{out}/") and before_all.get(name) != data
+    ]
+    assert not outside, f"files written outside --out: {outside}"
+    if status != 0:
+        after_out = _snapshot(out_dir) if out_dir.exists() else {}
+        changed = {
+            k for k in set(before_out) | set(after_out) if before_out.get(k) != after_out.get(k)
+        }
+        assert not changed, f"a failing command changed the set: {sorted(changed)}"
+        return f"exit {status}: {err.strip()[:200]}"
+    return "exit 0"
+
+
+# ------------------------------------------------------------------ generators
+
+#: Values that have broken numerical code before: edges of the float range,
+#: zero, signs, NaN, strings and booleans that Python would take as numbers.
+EDGE_NUMBERS: tuple[Any, ...] = (
+    0.0,
+    -1.0,
+    1e-300,
+    1e-100,
+    1e-30,
+    1e-15,
+    1e-9,
+    1e-4,
+    0.3,
+    0.4999999,
+    0.5,
+    1.0,
+    2.0,
+    10.0,
+    1e4,
+    1e12,
+    1e308,
+    float("nan"),
+    float("inf"),
+    "1.5",
+    True,
+    None,
+    [1.0],
+)
+
+
+def _number(rng: random.Random, typical: float) -> Any:
+    return rng.choice(EDGE_NUMBERS) if rng.random() < 0.7 else typical * rng.uniform(0.5, 2.0)
+
+
+def api_cases(rng: random.Random, n: int) -> list[Case]:
+    """compute_optics, single_sphere and the size distributions with edge values."""
+    cases = []
+    for _ in range(n):
+        choice = rng.randrange(6)
+        if choice == 0:
+            a, b = _number(rng, 1.0), _number(rng, 0.2)
+            code = f"do.ModifiedGamma(r_eff_um={a!r}, v_eff={b!r})"
+        elif choice == 1:
+            a, b = _number(rng, 1.0), _number(rng, 0.3)
+            code = f"do.ModifiedLogNormal(r_eff_um={a!r}, v_eff={b!r})"
+        elif choice == 2:
+            code = f"do.Monodisperse(radius_um={_number(rng, 0.5)!r})"
+        elif choice == 3:
+            code = (
+                f"do.LogNormal(median_radius_um={_number(rng, 0.5)!r}, sigma={_number(rng, 0.4)!r})"
+            )
+        elif choice == 4:
+            m = complex(
+                rng.choice((1.0, 1.5, 2.0, 1e300, 1.0 + 1e-9)), rng.choice((0.0, 1e-300, 0.01, 1.0))
+            )
+            code = f"mie.single_sphere(m={m!r}, x={_number(rng, 1.0)!r})"
+        else:
+            code = (
+                "do.MultiModal(modes=(do.ModifiedGamma(r_eff_um=1.0, v_eff=0.2), "
+                "do.ModifiedGamma(r_eff_um=0.1, v_eff=0.1)), "
+                f"relative_number_densities=({_number(rng, 1.0)!r}, {_number(rng, 1.0)!r}))"
+            )
+        if choice != 4 and rng.random() < 0.8:
+            wl = rng.choice(
+                ("[550.0]", "[0.44, 0.55]", "[1e-3]", "[True]", "[440.0, 680.0]", "[1e9]", "[-1.0]")
+            )
+            theta = rng.choice(("[0.0, 90.0, 180.0]", "[0.0, 180.0]", "None"))
+            m = rng.choice(
+                ("1.5 + 0.01j", "1.5", "1 + 1e-300j", "1e300", "'1.5'", "lambda w: None", "2 + 1j")
+            )
+            weighting = rng.choice(("'scattering'", "'number'", "['number']", "1"))
+            code = f"do.compute_optics({m}, {code}, {wl}, {theta}, rtol=1e-2, weighting={weighting}, workers=1)"
+        cases.append(Case("api", code, _evaluator(code)))
+    return cases
+
+
+def _evaluator(code: str) -> Callable[[Path], Any]:
+    def run(workdir: Path) -> Any:
+        import numpy as np
+
+        import dustoptics as do
+        from dustoptics.scattering import mie
+
+        result = eval(
+            code, {"do": do, "mie": mie, "np": np, "nan": float("nan"), "inf": float("inf")}
+        )
+        _check_result(result)
+        return result
+
+    return run
+
+
+def _check_result(result: Any) -> None:
+    """A returned table or sphere must hold physical numbers (no silent wrong values)."""
+    import numpy as np
+
+    for name in ("qext", "qsca", "cext_um2", "csca_um2", "cabs_um2", "phase"):
+        value = getattr(result, name, None)
+        if value is not None:
+            arr = np.asarray(value)
+            assert np.all(np.isfinite(arr)), f"{name} not finite: {arr}"
+            assert np.all(arr >= 0), f"{name} negative: {arr}"
+    ssa = getattr(result, "ssa", None)
+    if ssa is not None:
+        assert np.all((np.asarray(ssa) >= 0) & (np.asarray(ssa) <= 1)), f"ssa outside [0, 1]: {ssa}"
+    g = getattr(result, "g", None)
+    if g is not None:
+        assert np.all(np.abs(np.asarray(g)) <= 1), f"|g| > 1: {g}"
+
+
+SMALL_CONFIG = """\
+name = "fuzz"
+description = "a small table for the fuzz harness"
+
+[material]
+model = "constant"
+n = 1.5
+k = 0.001
+
+[size_distribution]
+model = "modified_gamma"
+r_eff_um = 0.5
+v_eff = 0.1
+
+[optics]
+rtol = 1e-2
+wavelengths_nm = [440.0, 550.0, 680.0]
+n_theta = 19
+
+[phase]
+model = "mie"
+"""
+
+#: Keys of :data:`SMALL_CONFIG` and TOML values to put there.
+CONFIG_EDITS: tuple[tuple[str, tuple[str, ...]], ...] = (
+    (
+        'name = "fuzz"',
+        (
+            'name = "../escaped"',
+            'name = "/tmp/abs"',
+            'name = "a\\u001b[31m"',
+            'name = ""',
+            'name = ".."',
+        ),
+    ),
+    (
+        "r_eff_um = 0.5",
+        (
+            "r_eff_um = 1e-300",
+            "r_eff_um = 1e308",
+            'r_eff_um = "1.5"',
+            "r_eff_um = true",
+            "r_eff_um = 1000.0",
+            "r_eff_um = -1.0",
+        ),
+    ),
+    (
+        "v_eff = 0.1",
+        ("v_eff = 1e-15", "v_eff = 0.5", "v_eff = 0.0", "v_eff = nan", "v_eff = 0.4999"),
+    ),
+    (
+        "n_theta = 19",
+        ("n_theta = 9223372036854775807", "n_theta = 1", "n_theta = 1.5", "n_theta = 100000000"),
+    ),
+    (
+        "wavelengths_nm = [440.0, 550.0, 680.0]",
+        (
+            "wavelengths_nm = [0.44, 0.55]",
+            "wavelengths_nm = []",
+            "wavelengths_nm = [true]",
+            "wavelengths_nm = { start = 1.0, stop = 1e12, step = 1.0 }",
+            "wavelengths_nm = [550.0, 440.0]",
+        ),
+    ),
+    ("k = 0.001", ("k = -1.0", "k = 1e300", "k = inf")),
+    ("rtol = 1e-2", ("rtol = 0.0", "rtol = 1e-300", 'rtol = "x"')),
+)
+
+
+def config_cases(rng: random.Random, n: int) -> list[Case]:
+    """TOML configurations with one or two values replaced, built by ``dustoptics build``."""
+    cases = []
+    for _ in range(n):
+        text = SMALL_CONFIG
+        for key, values in rng.sample(CONFIG_EDITS, rng.choice((1, 2))):
+            text = text.replace(key, rng.choice(values))
+        formats = rng.choice(("hdf5,csv", "csv", "hdf5,csv,cosmoscout", "texture,glsl"))
+
+        def run(workdir: Path, text: str = text, formats: str = formats) -> str:
+            (workdir / "fuzz.toml").write_text(text, encoding="utf-8")
+            return run_cli(
+                workdir, ["build", "fuzz.toml", "--out", "out", "--quiet", "--format", formats]
+            )
+
+        cases.append(Case("config", f"build --format {formats} of:\n{text}", run))
+    return cases
+
+
+CLI_ARGUMENTS: tuple[tuple[str, ...], ...] = (
+    ("--resolution-deg", "1e-9"),
+    ("--resolution-deg", "0"),
+    ("--n-angles", "100000000000"),
+    ("--n-angles", "-3"),
+    ("--channels-nm", "1e9,2,3"),
+    ("--channels-nm", "nan"),
+    ("--number-density-per-m3", "1e308"),
+    ("--n-altitudes", "9223372036854775807"),
+    ("--scale-height-m", "1e-300"),
+    ("--format", "nope"),
+    ("--format", ""),
+    ("--force",),
+    ("--sampling", "cos"),
+    ("--colour", "cie1931-xyz"),
+)
+
+
+def cli_cases(rng: random.Random, n: int) -> list[Case]:
+    """Command lines: export and build with edge option values, over an existing set."""
+    cases = []
+    for _ in range(n):
+        extra = [a for option in rng.sample(CLI_ARGUMENTS, rng.choice((1, 2, 3))) for a in option]
+        command = rng.choice(("export", "build"))
+        formats = rng.choice(("glsl", "texture", "csv,glsl", "hdf5,csv,texture", "cosmoscout"))
+
+        def run(
+            workdir: Path, extra: list[str] = extra, command: str = command, formats: str = formats
+        ) -> str:
+            table = _small_table()
+            from dustoptics.io import write_hdf5
+
+            write_hdf5(table, workdir / "in.h5")
+            (workdir / "fuzz.toml").write_text(SMALL_CONFIG, encoding="utf-8")
+            # An existing set the command may replace: it must stay whole if the command fails.
+            run_cli(workdir, ["export", "in.h5", "--out", "out", "--format", "hdf5,csv", "--quiet"])
+            source = "in.h5" if command == "export" else "fuzz.toml"
+            argv = [command, source, "--out", "out", "--format", formats, "--quiet", *extra]
+            if "--format" in extra:
+                argv = [command, source, "--out", "out", "--quiet", *extra]
+            return run_cli(workdir, argv)
+
+        cases.append(Case("cli", f"{command} --format {formats} {' '.join(extra)}", run))
+    return cases
+
+
+def _small_table() -> Any:
+    import dustoptics as do
+
+    return do.compute_optics(
+        1.5 + 0.01j,
+        do.ModifiedGamma(r_eff_um=0.5, v_eff=0.1),
+        [440.0, 550.0, 680.0],
+        [0.0, 45.0, 90.0, 135.0, 180.0],
+        rtol=1e-2,
+        workers=1,
+        name="fuzz",
+    )
+
+
+def _damage(rng: random.Random, data: bytes) -> tuple[bytes, str]:
+    kind = rng.randrange(7)
+    if kind == 0 and data:
+        i = rng.randrange(len(data))
+        return data[:i] + bytes([data[i] ^ (1 << rng.randrange(8))]) + data[
+            i + 1 :
+        ], f"bit flip at {i}"
+    if kind == 1:
+        i = rng.randrange(len(data) + 1)
+        return data[:i], f"truncated to {i} bytes"
+    if kind == 2:
+        return b"\n" * rng.choice((1, 5, 1000)), "blank lines"
+    if kind == 3:
+        return b"a," + b"9" * (200 * 1024) + b"\n", "a 200 KiB cell"
+    if kind == 4:
+        depth = rng.choice((100, 10_000, 100_000))
+        return b"[" * depth + b"]" * depth, f"JSON nested {depth} deep"
+    if kind == 5:
+        return data.replace(b"fuzz", b"\x1b]0;pwned\x07\x1b[2J"), "escape sequences in the name"
+    return data + data, "doubled"
+
+
+def files_cases(rng: random.Random, n: int) -> list[Case]:
+    """Damaged or crafted files given to every reader, and to ``info`` and ``export``."""
+    cases = []
+    for _ in range(n):
+        target = rng.choice(
+            (
+                "MiePhaseFunctionSpectrum.csv",
+                "MieExtinctionSpectrum.csv",
+                "table_summary.json",
+                "fuzz_phase_theta.json",
+                "fuzz_phase_theta.raw",
+                "ozone.csv",
+                "fuzz.h5",
+                "FIFO",
+                "/dev/zero",
+            )
+        )
+        seed = rng.randrange(2**32)
+
+        def run(workdir: Path, target: str = target, seed: int = seed) -> str:
+            from dustoptics.atmosphere.gases import read_ozone_csv
+            from dustoptics.io import (
+                read_seed_csv,
+                read_texture,
+                write_hdf5,
+                write_seed_csv,
+                write_texture,
+            )
+
+            table = _small_table()
+            d = workdir / "set"
+            write_seed_csv(table, d)
+            write_texture(table, d)
+            write_hdf5(table, d / "fuzz.h5")
+            (d / "ozone.csv").write_text(
+                "# a citation\nwavelength_nm,sigma_m2\n500,1e-25\n600,2e-25\n"
+            )
+            local = random.Random(seed)
+            if target == "FIFO":
+                os.mkfifo(d / "ozone.csv.fifo")
+                path = d / "ozone.csv.fifo"
+            elif target == "/dev/zero":
+                path = Path("/dev/zero")
+            else:
+                matches = sorted(d.glob(target if "*" in target else f"*{target}")) or [d / target]
+                path = matches[0]
+                data, _ = _damage(local, path.read_bytes() if path.exists() else b"")
+                path.write_bytes(data)
+            results = []
+            for reader in (read_seed_csv, read_texture, read_ozone_csv):
+                arg = (
+                    d
+                    if reader is read_seed_csv
+                    else (
+                        path
+                        if reader is read_ozone_csv or path.suffix == ".json"
+                        else d / "fuzz_phase_theta.json"
+                    )
+                )
+                try:
+                    reader(arg)
+                    results.append(f"{reader.__name__}: read")
+                except (ValueError, TypeError, FileNotFoundError) as exc:
+                    assert str(exc), f"{reader.__name__}: an empty message"
+                    results.append(f"{reader.__name__}: {type(exc).__name__}")
+            results.append(
+                run_cli(workdir, ["info", str(path if path.suffix in (".h5", ".json") else d)])
+            )
+            results.append(
+                run_cli(workdir, ["export", str(d / "fuzz.h5"), "--out", "out", "--format", "csv"])
+            )
+            return "; ".join(results)
+
+        cases.append(Case("files", f"damaged {target} (seed {seed})", run))
+    return cases
+
+
+GENERATORS = {"api": api_cases, "config": config_cases, "cli": cli_cases, "files": files_cases}
+
+
+def warm_up() -> None:
+    """Compile (or load) the kernels once, so that forked cases inherit them."""
+    _small_table()
+
+
+def fuzz(
+    seed: int,
+    cases_per_kind: int,
+    kinds: tuple[str, ...] = KINDS,
+    *,
+    timeout_s: float = CASE_TIMEOUT_S,
+    report: Callable[[Outcome], None] | None = None,
+) -> list[Outcome]:
+    """Run ``cases_per_kind`` cases of each kind from ``seed``; return every outcome."""
+    warm_up()
+    rng = random.Random(seed)
+    outcomes = []
+    for kind in kinds:
+        for case in GENERATORS[kind](rng, cases_per_kind):
+            outcome = run_case(case, timeout_s=timeout_s)
+            outcomes.append(outcome)
+            if report is not None:
+                report(outcome)
+    return outcomes
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--seed", type=int, default=0, help="random seed (default 0, the CI seed)")
+    parser.add_argument(
+        "--cases", type=int, default=8, help="cases per kind (default 8, the CI budget)"
+    )
+    parser.add_argument(
+        "--kinds", default=",".join(KINDS), help=f"comma-separated, from {', '.join(KINDS)}"
+    )
+    parser.add_argument("--timeout", type=float, default=CASE_TIMEOUT_S, help="seconds per case")
+    parser.add_argument("--verbose", action="store_true", help="print every case")
+    args = parser.parse_args(argv)
+    kinds = tuple(k for k in args.kinds.split(",") if k)
+
+    def report(outcome: Outcome) -> None:
+        if args.verbose or outcome.status == "failure":
+            print(
+                f"[{outcome.status}] {outcome.case.kind} {outcome.seconds:.2f} s: "
+                f"{outcome.case.description}\n    {outcome.detail}",
+                flush=True,
+            )
+
+    start = time.perf_counter()
+    outcomes = fuzz(args.seed, args.cases, kinds, timeout_s=args.timeout, report=report)
+    failures = [o for o in outcomes if o.status == "failure"]
+    counts = {s: sum(o.status == s for o in outcomes) for s in ("ok", "clean", "failure")}
+    print(
+        f"{len(outcomes)} cases (seed {args.seed}) in {time.perf_counter() - start:.1f} s: "
+        f"{counts['ok']} ok, {counts['clean']} clean errors, {counts['failure']} failures"
+    )
+    return 1 if failures else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

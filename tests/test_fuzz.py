@@ -1,0 +1,108 @@
+"""The fuzz harness (scripts/fuzz.py) at its CI budget, and checks that it can fail.
+
+CI runs seed 0 with 8 cases of each kind (API calls, TOML configurations,
+command lines, damaged files), each forked with an address-space limit and a
+timeout.  ``pytest --hypothesis-profile=explore`` runs 60 cases of each kind
+from a seed taken from the clock (printed, to reproduce a failure with
+``python scripts/fuzz.py --seed SEED --cases 60``).
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import sys
+import time
+from pathlib import Path
+
+import pytest
+from hypothesis import settings
+
+_SPEC = importlib.util.spec_from_file_location(
+    "dustoptics_fuzz", Path(__file__).resolve().parents[1] / "scripts" / "fuzz.py"
+)
+assert _SPEC is not None and _SPEC.loader is not None
+fuzz = importlib.util.module_from_spec(_SPEC)
+sys.modules[_SPEC.name] = fuzz  # dataclasses look their module up while being defined
+_SPEC.loader.exec_module(fuzz)
+
+
+def _exploring() -> bool:
+    return getattr(settings, "_current_profile", None) == "explore"
+
+
+def test_no_input_the_harness_generates_fails():
+    seed, cases = (int(time.time()), 60) if _exploring() else (0, 8)
+    outcomes = fuzz.fuzz(seed, cases)
+    failures = [
+        f"{o.case.kind}: {o.case.description}\n  {o.detail}"
+        for o in outcomes
+        if o.status == "failure"
+    ]
+    assert not failures, f"seed {seed}:\n" + "\n".join(failures)
+    assert len(outcomes) == 4 * cases
+    # Every kind reaches both results and clean errors (the generators are not all refused).
+    for kind in fuzz.KINDS:
+        statuses = {o.status for o in outcomes if o.case.kind == kind}
+        assert "ok" in statuses, kind
+
+
+def _case(run):
+    return fuzz.Case("test", "a case of the harness's own tests", run)
+
+
+def test_the_harness_sees_a_hang():
+    outcome = fuzz.run_case(_case(lambda workdir: time.sleep(30)), timeout_s=1.0)
+    assert outcome.status == "failure" and outcome.detail.startswith("hang")
+    assert outcome.seconds < 10
+
+
+def test_the_harness_sees_a_memory_blow_up():
+    def blow_up(workdir):
+        return bytearray(8 * 1024**3)
+
+    outcome = fuzz.run_case(_case(blow_up))
+    assert outcome.status == "failure" and "MemoryError" in outcome.detail
+
+
+@pytest.mark.parametrize(
+    ("error", "status"),
+    [
+        (ValueError("r_eff_um must be > 0 um; got -1.0"), "clean"),
+        (ZeroDivisionError("x"), "failure"),
+    ],
+)
+def test_the_harness_tells_clean_errors_from_tracebacks(error, status):
+    def raise_it(workdir):
+        raise error
+
+    assert fuzz.run_case(_case(raise_it)).status == status
+
+
+def test_the_harness_sees_a_file_outside_out_and_a_partial_set(monkeypatch):
+    from dustoptics import cli
+
+    def escapes(argv):
+        Path("escaped.csv").write_text("x\n")
+        return 0
+
+    def partial(argv):
+        Path("out").mkdir(exist_ok=True)
+        Path("out/a.csv").write_text("new\n")
+        print("dustoptics: error: failed half way", file=sys.stderr)
+        return 1
+
+    monkeypatch.setattr(cli, "main", escapes)
+    outcome = fuzz.run_case(_case(lambda workdir: fuzz.run_cli(workdir, ["build"])))
+    assert outcome.status == "failure" and "outside --out" in outcome.detail
+    monkeypatch.setattr(cli, "main", partial)
+    outcome = fuzz.run_case(_case(lambda workdir: fuzz.run_cli(workdir, ["build"])))
+    assert outcome.status == "failure" and "changed the set" in outcome.detail
+
+
+def test_the_harness_sees_a_silently_wrong_number():
+    class Wrong:
+        qext = -5.8e11
+        ssa = 1.5
+
+    with pytest.raises(AssertionError, match="negative"):
+        fuzz._check_result(Wrong())
