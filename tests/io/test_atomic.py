@@ -315,3 +315,70 @@ def test_full_disk_leaves_the_old_set(tmp_path, monkeypatch):
     with pytest.raises(OSError, match="No space left"):
         write_files({out / "a": b"new a\n", out / "b": full}, overwrite=True)
     assert _listing(out) == ["a", "b"] and (out / "a").read_text() == "old a\n"
+
+
+# ------------------------------------------------------------------ readers' limits (issue 15)
+
+
+def test_a_phase_csv_of_blank_lines_is_a_format_error(tmp_path):
+    from dustoptics.io.seed_csv import read_phase_csv
+
+    path = tmp_path / "MiePhaseFunctionSpectrum.csv"
+    path.write_text("\n\n\n")
+    with pytest.raises(FormatError, match="line 1 is blank"):
+        read_phase_csv(path)
+
+
+def test_a_cell_beyond_the_csv_field_limit_is_a_format_error(tmp_path):
+    path = tmp_path / "big.csv"
+    path.write_text("a," + "9" * (200 * 1024) + "\n")
+    with pytest.raises(FormatError, match="not a valid CSV file.*field larger than field limit"):
+        _text.read_rows(path)
+
+
+def test_too_many_cells_are_refused_before_parsing(tmp_path, monkeypatch):
+    monkeypatch.setattr(_text, "MAX_CSV_CELLS", 10)
+    path = tmp_path / "wide.csv"
+    path.write_text(",".join("1" * 20) + "\n")
+    with pytest.raises(FormatError, match="more than the 10"):
+        _text.read_rows(path)
+
+
+@pytest.mark.parametrize("special", ["fifo", "/dev/zero", "directory"])
+def test_fifos_devices_and_directories_are_refused_before_reading(tmp_path, special):
+    if special == "fifo":
+        path = tmp_path / "ozone.csv"
+        os.mkfifo(path)  # opening it for reading would block without O_NONBLOCK
+    elif special == "directory":
+        path = tmp_path
+    else:
+        path = Path(special)
+    with pytest.raises(FormatError, match="not a regular file"):
+        _text.read_checked(path)
+
+
+def test_a_file_beyond_the_size_limit_is_refused(tmp_path):
+    path = tmp_path / "big.json"
+    path.write_bytes(b" " * 1001)
+    with pytest.raises(FormatError, match="larger than the 1000-byte limit"):
+        _text.read_checked(path, limit=1000)
+
+
+def test_deeply_nested_json_is_refused_without_recursion(tmp_path):
+    from dustoptics.io import read_seed_csv
+
+    path = tmp_path / "table_summary.json"
+    path.write_text("[" * 100_000 + "]" * 100_000, encoding="ascii")
+    with pytest.raises(FormatError, match="nested deeper than 32"):
+        _text.load_json(path)
+    with pytest.raises(FormatError, match="not a valid JSON table summary"):
+        read_seed_csv(tmp_path)
+    path.write_text('{"a": "[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[["}', encoding="ascii")
+    assert _text.load_json(path) == {"a": "[" * 40}  # brackets inside strings do not count
+
+
+def test_printable_escapes_what_a_terminal_would_obey():
+    text = "name\x1b]0;title\x07\x1b[2J\x9b31m\u202eevil\r\n"
+    shown = _text.printable(text)
+    assert shown == "name\\x1b]0;title\\x07\\x1b[2J\\x9b31m\\u202eevil\\x0d\\x0a"
+    assert shown.isprintable()
