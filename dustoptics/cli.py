@@ -1034,7 +1034,7 @@ def _parser() -> argparse.ArgumentParser:
     )
     p.add_argument(
         "--workers",
-        type=_positive_int,
+        type=_worker_count,
         metavar="N",
         help="worker processes of the local cluster (default: all cores)",
     )
@@ -1592,6 +1592,17 @@ def _cmd_fit(args: argparse.Namespace) -> int:
         ):
             print(f"wrote {path}")
     return 0
+
+
+def _worker_count(text: str) -> int:
+    """``--workers``: an integer >= 1."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer; got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be an integer >= 1; got {text!r}")
+    return value
 
 
 def _cmd_sweep(args: argparse.Namespace) -> int:

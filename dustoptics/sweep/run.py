@@ -445,7 +445,10 @@ class _Progress:
             return
         elapsed = time.perf_counter() - self.start
         rate = (self.done - self.start_done) / elapsed if elapsed > 0 else 0.0
-        eta = f"{(self.total - self.done) / rate:.0f} s" if rate > 0 else "?"
+        if self.done == self.total:
+            eta = "0 s"
+        else:
+            eta = f"{(self.total - self.done) / rate:.0f} s" if rate > 0 else "?"
         width = 24
         filled = int(width * self.done / max(1, self.total))
         bar = "#" * filled + "." * (width - filled)
@@ -471,7 +474,7 @@ def _client(client: Any, workers: int | None, distributed: Any) -> tuple[Any, li
             n_workers=n,
             threads_per_worker=1,
             processes=True,
-            dashboard_address=None,
+            dashboard_address=":0",
             silence_logs=40,
         )
         c = distributed.Client(cluster)

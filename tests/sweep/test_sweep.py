@@ -399,3 +399,5 @@ def test_netcdf_output_and_cli(cluster, config_file, tmp_path):
         small_toml('\n[sweep]\n"size_distribution.v_eff" = [0.2, 0.6]\n'), encoding="utf-8"
     )
     assert main(["sweep", str(bad), "--out", str(tmp_path / "x.zarr"), "--quiet"]) == 1
+    assert not (tmp_path / "x.zarr").exists()
+    assert main(["sweep", str(path), "--out", str(tmp_path / "y.zarr"), "--workers", "0"]) == 2
