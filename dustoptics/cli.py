@@ -64,9 +64,10 @@ PROG = "dustoptics"
 #: Formats written by ``build`` when ``--format`` is not given.
 DEFAULT_FORMATS = ("hdf5", "csv")
 
-#: About how long the first build compiles the kernels (``scripts/benchmark.py``,
-#: row "compile time, empty numba cache", on a 2-core machine). [s]
-COMPILE_ESTIMATE_S = 10
+#: About how long the first build compiles the kernels: 12 s of CPU time measured
+#: on a 2-core machine (``/usr/bin/time`` of a first ``dustoptics build`` with an
+#: empty ``NUMBA_CACHE_DIR``, minus a warm build's), longer on a busy machine. [s]
+COMPILE_ESTIMATE_S = "10-15"
 
 
 class UsageError(ValueError):

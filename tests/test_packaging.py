@@ -340,3 +340,29 @@ def test_version_says_where_it_came_from():
         else r"\d+\.\d+\.\d+\.dev\d+\+g[0-9a-f]{7,}(\.d\d{8})?"
     )
     assert re.fullmatch(pattern, dustoptics.__version__), dustoptics.__version__
+
+
+def test_numba_cache_directory_choice(tmp_path, monkeypatch):
+    """The user's NUMBA_CACHE_DIR is kept; an install in site-packages caches per user and
+    version; a source checkout keeps numba's default (None)."""
+    from dustoptics import _numba_cache
+
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "mine"))
+    assert _numba_cache.configure("1.2.3") == tmp_path / "mine"
+
+    monkeypatch.delenv("NUMBA_CACHE_DIR")
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg"))
+    monkeypatch.setattr(_numba_cache.sys, "platform", "linux")
+    monkeypatch.setattr(_numba_cache, "_PACKAGE_DIR", tmp_path / "src" / "dustoptics")
+    assert _numba_cache.configure("1.2.3") is None
+    assert "NUMBA_CACHE_DIR" not in os.environ
+
+    site = tmp_path / "venv" / "lib" / "python3.11" / "site-packages" / "dustoptics"
+    monkeypatch.setattr(_numba_cache, "_PACKAGE_DIR", site)
+    chosen = _numba_cache.configure("1.2.3")
+    assert chosen == tmp_path / "xdg" / "dustoptics" / "numba-1.2.3"
+    assert chosen.is_dir() and os.environ["NUMBA_CACHE_DIR"] == str(chosen)
+    monkeypatch.delenv("NUMBA_CACHE_DIR")  # and back to this process's numba setting
+    from numba.core import config
+
+    config.reload_config()
