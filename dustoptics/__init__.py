@@ -39,6 +39,7 @@ from dustoptics.models import config, presets
 from dustoptics.models.config import build_table, load_config
 from dustoptics.models.presets import build_preset, list_presets
 from dustoptics.particles import materials, mixing, sizedist
+from dustoptics.particles.coated import CoatedSphere
 from dustoptics.particles.materials import (
     ConstantIndex,
     GasFormulaIndex,
@@ -49,17 +50,28 @@ from dustoptics.particles.materials import (
     list_materials,
     read_index_csv,
 )
-from dustoptics.particles.mixing import Mixture, bruggeman, mars_dust, maxwell_garnett
+from dustoptics.particles.mixing import (
+    MARS_DUST_DENSITY_KG_M3,
+    Mixture,
+    bruggeman,
+    mars_dust,
+    maxwell_garnett,
+)
 from dustoptics.particles.sizedist import (
+    DeirmendjianGamma,
+    DensityDistribution,
     Gamma,
     LogNormal,
     ModifiedGamma,
     ModifiedLogNormal,
     Monodisperse,
     MultiModal,
+    PowerLaw,
     SizeDistribution,
+    TabulatedDistribution,
+    Truncated,
 )
-from dustoptics.scattering import mie, optics, phase, quadrature
+from dustoptics.scattering import expansion, mie, optics, phase, quadrature
 from dustoptics.scattering.optics import ConvergenceWarning, compute_optics
 from dustoptics.scattering.phase import (
     cornette_shanks1992,
@@ -74,8 +86,12 @@ from dustoptics.scattering.quadrature import QuadratureSettings
 from dustoptics.table import Provenance, Source, Table
 
 __all__ = [
+    "MARS_DUST_DENSITY_KG_M3",
+    "CoatedSphere",
     "ConstantIndex",
     "ConvergenceWarning",
+    "DeirmendjianGamma",
+    "DensityDistribution",
     "Gamma",
     "GasFormulaIndex",
     "LogNormal",
@@ -85,13 +101,16 @@ __all__ = [
     "Monodisperse",
     "MultiModal",
     "OrientationAverage",
+    "PowerLaw",
     "Provenance",
     "QuadratureSettings",
     "RefractiveIndex",
     "SizeDistribution",
     "Source",
     "Table",
+    "TabulatedDistribution",
     "TabulatedIndex",
+    "Truncated",
     "__version__",
     "atmosphere",
     "bruggeman",
@@ -106,6 +125,7 @@ __all__ = [
     "cornette_shanks1992",
     "costa2021_mars_dhg",
     "double_henyey_greenstein",
+    "expansion",
     "gases",
     "get_material",
     "henyey_greenstein",

@@ -342,8 +342,37 @@ def _refractive_index(value: Any, n: int) -> np.ndarray | None:
 DEFAULT_NAME = "table"
 
 #: Stored per-wavelength float fields of a :class:`Table` (None when absent).
-_FLOAT_FIELDS = ("g", "cext_um2", "csca_um2", "error_estimate", "cross_section_error_estimate")
+_FLOAT_FIELDS = (
+    "g",
+    "cext_um2",
+    "csca_um2",
+    "error_estimate",
+    "cross_section_error_estimate",
+    "cback_um2",
+    "matrix_error_estimate",
+    "expansion_error_estimate",
+    "r_eff_quadrature_um",
+    "v_eff_quadrature",
+    "mean_volume_quadrature_um3",
+)
 _COUNT_FIELDS = ("n_nodes", "cross_section_n_nodes")
+#: Scattering-matrix elements besides F11 = phase, shape (n_wavelength, n_theta).
+MATRIX_FIELDS = ("f12", "f33", "f34")
+#: Expansion coefficients in generalized spherical functions, shape (n_wavelength, n_order).
+EXPANSION_FIELDS = ("alpha1", "alpha2", "alpha3", "alpha4", "beta1", "beta2")
+_M2_PER_KG = 1e6  # um^2 / (kg m^-3 um^3) -> m^2 kg^-1
+
+
+def _per_wavelength_2d(name: str, value: Any, n: int, m: int | None) -> np.ndarray | None:
+    if value is None:
+        return None
+    arr = as_float_array(name, value)
+    if arr.ndim != 2 or arr.shape[0] != n or (m is not None and arr.shape[1] != m):
+        want = f"({n}, {m})" if m is not None else f"({n}, n_order)"
+        raise ValueError(f"{name} must have shape {want}; got {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        raise ValueError(f"{name} must be finite")
+    return arr
 
 
 @dataclass(frozen=True, eq=False, kw_only=True)
@@ -385,6 +414,33 @@ class Table:
         pi <r^2> of the size distribution (None for molecules). [um^2]
     number_density_per_m3 : float or None
         Number density at which the ``beta_*`` coefficients are given. [m^-3]
+    f12, f33, f34 : numpy.ndarray or None, shape (n_wavelength, n_theta)
+        Scattering matrix of the population (``compute_optics(polarization=True)``),
+        normalized like ``phase`` (F11); F22 = F11 and F44 = F33 for spheres.
+        Bohren & Huffman's signs (F12 < 0 for Rayleigh scattering at 90
+        degree; see :mod:`dustoptics.scattering.expansion`). [sr^-1]
+    matrix_error_estimate : numpy.ndarray or None
+        Estimated largest error of F12, F33, F34 relative to F11 at the same
+        angle, per wavelength. [-]
+    alpha1, alpha2, alpha3, alpha4, beta1, beta2 : numpy.ndarray or None, shape (n_wavelength, n_order)
+        Expansion coefficients in generalized spherical functions
+        (``compute_optics(expansion=...)``), alpha1[:, 0] = 1, alpha1[:, 1] = 3 g;
+        DISORT's moments are alpha1_l / (2 l + 1)
+        (:func:`dustoptics.scattering.expansion.pmom_from_alpha1`). [-]
+    expansion_error_estimate : numpy.ndarray or None
+        Bound on the error of every coefficient divided by (2 l + 1), per
+        wavelength. [-]
+    cback_um2 : numpy.ndarray or None
+        Mean backscattering cross-section <C_back> = <4 pi dC_sca/dOmega(180 deg)>
+        per particle (Bohren & Huffman 1983, p. 122). [um^2]
+    r_eff_quadrature_um, v_eff_quadrature, mean_volume_quadrature_um3 : numpy.ndarray or None
+        Effective radius, effective variance and mean particle volume of the
+        radius nodes that gave the cross-sections, per wavelength (beside the
+        distribution's analytic ones, :attr:`mean_volume_um3`). [um], [-], [um^3]
+    mean_volume_um3 : float or None
+        4/3 pi <r^3> of the size distribution (analytic). [um^3]
+    particle_density_kg_m3 : float or None
+        Density of the particles' material, for the mass coefficients. [kg m^-3]
     provenance : Provenance
         Inputs, sources, versions, quadrature and notes.
     diagnostics : QuadratureDiagnostics or None
@@ -407,6 +463,23 @@ class Table:
     refractive_index: np.ndarray | None = None
     mean_geometric_cross_section_um2: float | None = None
     number_density_per_m3: float | None = None
+    cback_um2: np.ndarray | None = None
+    f12: np.ndarray | None = field(default=None, repr=False)
+    f33: np.ndarray | None = field(default=None, repr=False)
+    f34: np.ndarray | None = field(default=None, repr=False)
+    matrix_error_estimate: np.ndarray | None = None
+    alpha1: np.ndarray | None = field(default=None, repr=False)
+    alpha2: np.ndarray | None = field(default=None, repr=False)
+    alpha3: np.ndarray | None = field(default=None, repr=False)
+    alpha4: np.ndarray | None = field(default=None, repr=False)
+    beta1: np.ndarray | None = field(default=None, repr=False)
+    beta2: np.ndarray | None = field(default=None, repr=False)
+    expansion_error_estimate: np.ndarray | None = None
+    r_eff_quadrature_um: np.ndarray | None = None
+    v_eff_quadrature: np.ndarray | None = None
+    mean_volume_quadrature_um3: np.ndarray | None = None
+    mean_volume_um3: float | None = None
+    particle_density_kg_m3: float | None = None
     provenance: Provenance = field(default_factory=Provenance)
     diagnostics: QuadratureDiagnostics | None = field(default=None, repr=False)
 
@@ -445,6 +518,18 @@ class Table:
         for key in _COUNT_FIELDS:
             arrays[key] = _node_counts(key, getattr(self, key), n)
         arrays["refractive_index"] = _refractive_index(self.refractive_index, n)
+        for key in MATRIX_FIELDS:
+            arrays[key] = _per_wavelength_2d(key, getattr(self, key), n, theta.size)
+        n_order = None
+        for key in EXPANSION_FIELDS:
+            arrays[key] = _per_wavelength_2d(key, getattr(self, key), n, n_order)
+            if arrays[key] is not None:
+                n_order = arrays[key].shape[1]
+        given = [getattr(self, key) is not None for key in EXPANSION_FIELDS]
+        if any(given) and not all(given):
+            raise ValueError(
+                "alpha1, alpha2, alpha3, alpha4, beta1 and beta2 must all be given or all be None"
+            )
         if arrays["g"] is None:
             raise ValueError("g must be given, one asymmetry parameter per wavelength")
         if (arrays["cext_um2"] is None) != (arrays["csca_um2"] is None):
@@ -460,7 +545,12 @@ class Table:
                 )
         if np.any(np.abs(arrays["g"]) > 1):
             raise ValueError(f"g must satisfy |g| <= 1; got {arrays['g'].tolist()}")
-        for key in ("mean_geometric_cross_section_um2", "number_density_per_m3"):
+        for key in (
+            "mean_geometric_cross_section_um2",
+            "number_density_per_m3",
+            "mean_volume_um3",
+            "particle_density_kg_m3",
+        ):
             value = getattr(self, key)
             if value is not None:
                 object.__setattr__(self, key, check_positive(key, value))
@@ -851,6 +941,49 @@ class Table:
         return self.cabs_um2 * _UM2_TO_M2 * self._need_density("beta_abs_per_m")
 
     @property
+    def lidar_ratio_sr(self) -> np.ndarray:
+        """Extinction-to-backscatter ratio 4 pi <C_ext> / <C_back>. [sr]"""
+        cext = self._need_cross_sections("lidar_ratio_sr")[0]
+        if self.cback_um2 is None:
+            raise ValueError(f"table {self.name!r} has no backscattering cross-section cback_um2")
+        return 4.0 * np.pi * cext / self.cback_um2
+
+    def _mass(self, what: str) -> float:
+        """1 / (rho <V>) in m^2 kg^-1 per um^2 of cross-section."""
+        if self.particle_density_kg_m3 is None or self.mean_volume_um3 is None:
+            raise ValueError(
+                f"table {self.name!r} has no particle density or mean volume; {what} needs "
+                "compute_optics(particle_density_kg_m3=...)"
+            )
+        return _M2_PER_KG / (self.particle_density_kg_m3 * self.mean_volume_um3)
+
+    @property
+    def mass_ext_m2_per_kg(self) -> np.ndarray:
+        """Mass extinction coefficient <C_ext> / (rho <V>). [m^2 kg^-1]"""
+        return self._need_cross_sections("mass_ext_m2_per_kg")[0] * self._mass("mass_ext_m2_per_kg")
+
+    @property
+    def mass_sca_m2_per_kg(self) -> np.ndarray:
+        """Mass scattering coefficient <C_sca> / (rho <V>). [m^2 kg^-1]"""
+        return self._need_cross_sections("mass_sca_m2_per_kg")[1] * self._mass("mass_sca_m2_per_kg")
+
+    @property
+    def mass_abs_m2_per_kg(self) -> np.ndarray:
+        """Mass absorption coefficient <C_abs> / (rho <V>). [m^2 kg^-1]"""
+        return self.cabs_um2 * self._mass("mass_abs_m2_per_kg")
+
+    @property
+    def pmom(self) -> np.ndarray:
+        """DISORT's phase-function moments alpha1_l / (2 l + 1), shape (n_wavelength, n_order). [-]"""
+        if self.alpha1 is None:
+            raise ValueError(
+                f"table {self.name!r} has no expansion coefficients; use compute_optics(expansion=True)"
+            )
+        from dustoptics.scattering.expansion import pmom_from_alpha1
+
+        return pmom_from_alpha1(self.alpha1)
+
+    @property
     def achieved_error(self) -> float | None:
         """Largest phase-function error estimate over wavelength, or None. [-]"""
         if self.error_estimate is None:
@@ -894,6 +1027,8 @@ class Table:
             *_FLOAT_FIELDS,
             *_COUNT_FIELDS,
             "refractive_index",
+            *MATRIX_FIELDS,
+            *EXPANSION_FIELDS,
         ):
             a, b = getattr(self, key), getattr(other, key)
             if (a is None) != (b is None):
@@ -904,6 +1039,8 @@ class Table:
             self.name == other.name
             and self.mean_geometric_cross_section_um2 == other.mean_geometric_cross_section_um2
             and self.number_density_per_m3 == other.number_density_per_m3
+            and self.mean_volume_um3 == other.mean_volume_um3
+            and self.particle_density_kg_m3 == other.particle_density_kg_m3
             and self.provenance.to_dict() == other.provenance.to_dict()
         )
 

@@ -7,6 +7,6 @@
 - :mod:`~dustoptics.particles.sizedist`: number size distributions n(r).
 """
 
-from dustoptics.particles import materials, mixing, sizedist
+from dustoptics.particles import coated, materials, mixing, sizedist
 
-__all__ = ["materials", "mixing", "sizedist"]
+__all__ = ["coated", "materials", "mixing", "sizedist"]

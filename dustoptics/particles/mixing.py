@@ -52,10 +52,26 @@ from dustoptics.particles.materials import (
     get_material,
 )
 
-__all__ = ["MIXING_RULES", "Mixture", "bruggeman", "mars_dust", "maxwell_garnett"]
+__all__ = [
+    "MARS_DUST_DENSITY_KG_M3",
+    "MIXING_RULES",
+    "Mixture",
+    "bruggeman",
+    "mars_dust",
+    "maxwell_garnett",
+]
 
 ComplexArray = NDArray[np.complex128]
 FloatArray = NDArray[np.float64]
+
+#: Density of Martian dust grains, 2500 kg m^-3, as used for the dust of the
+#: LMD Mars Global Climate Model: J.-B. Madeleine, F. Forget, J. W. Head,
+#: B. Levrard, F. Montmessin and E. Millour, "Revisiting the radiative impact
+#: of dust on Mars using the LMD Global Climate Model," J. Geophys. Res. 116,
+#: E11010 (2011), doi:10.1029/2011JE003855.  Pass it as
+#: ``compute_optics(..., particle_density_kg_m3=MARS_DUST_DENSITY_KG_M3)``
+#: for mass extinction coefficients. [kg m^-3]
+MARS_DUST_DENSITY_KG_M3: Final = 2500.0
 
 #: Names of the mixing rules accepted by :class:`Mixture` and :func:`mars_dust`.
 MIXING_RULES: Final = ("maxwell_garnett", "bruggeman")

@@ -7,9 +7,11 @@
 - :mod:`~dustoptics.scattering.optics`: :func:`compute_optics`, the adaptive
   polydisperse average that returns a :class:`~dustoptics.table.Table`;
 - :mod:`~dustoptics.scattering.phase`: analytic phase functions, blending
-  and renormalization.
+  and renormalization;
+- :mod:`~dustoptics.scattering.expansion`: the scattering matrix's expansion
+  in generalized spherical functions, DISORT moments, delta-M truncation.
 """
 
-from dustoptics.scattering import mie, optics, phase, quadrature
+from dustoptics.scattering import expansion, mie, optics, phase, quadrature
 
-__all__ = ["mie", "optics", "phase", "quadrature"]
+__all__ = ["expansion", "mie", "optics", "phase", "quadrature"]

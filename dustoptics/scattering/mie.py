@@ -375,6 +375,115 @@ def _bh_ratio(
     return nr * u - ni * v, nr * v + ni * u
 
 
+@njit(cache=True, nogil=True)
+def _log_derivatives_down(z: complex, n_top: int) -> np.ndarray:
+    """D_n(z) = psi_n'(z) / psi_n(z), n = 0..n_top, by the downward recurrence
+    D_{n-1} = n/z - 1/(D_n + n/z) (Bohren & Huffman 1983, Eq. 4.89, stable for
+    every complex z) from D_N = 0 at N = max(n_top, |z|) + 16, as in their
+    BHCOAT."""
+    start = int(max(n_top, abs(z))) + 16
+    d = np.empty(n_top + 1, dtype=np.complex128)
+    cur = 0.0 + 0.0j
+    for n in range(start, 0, -1):
+        if n <= n_top:
+            d[n] = cur
+        cur = n / z - 1.0 / (cur + n / z)
+    d[0] = cur
+    return d
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _coat(
+    m_core: complex, m: complex, fraction: float, nmax: np.ndarray, n_sph: int, ws: np.ndarray
+) -> None:
+    """Turn the coefficients of homogeneous spheres of the shell's index ``m``
+    (workspace ``ws`` after :func:`_mie_coefficients`) into those of coated
+    spheres: a core of index ``m_core`` and radius ``fraction`` times the
+    sphere's.
+
+    Bohren & Huffman (1983, Sec. 8.1, Eqs. 8.2-8.3) divided through by the
+    Riccati-Bessel functions of the complex arguments, so that only their
+    logarithmic derivatives and one ratio appear (as Toon & Ackerman 1981 do
+    to avoid the overflow of psi_n and chi_n of large complex argument).  The
+    field in the shell is expanded in psi_n and xi_n = psi_n - i chi_n rather
+    than psi_n and chi_n (any two independent solutions give the same
+    coefficients): in an absorbing shell psi_n(m r) grows and xi_n(m r)
+    decays with r, so the ratio R_n below is small instead of 1 - epsilon and
+    1 - T does not cancel.  With x = fraction y the core's and y the sphere's
+    size parameter, D_n = psi_n'/psi_n (downward recurrence),
+    G_n = xi_n'/xi_n (upward recurrence G_n = 1/(n/z - G_{n-1}) - n/z from
+    G_0 = i, stable: xi_n is the dominant solution in n) and
+    R_n = [psi_n(m x) / xi_n(m x)] [xi_n(m y) / psi_n(m y)] (a product of
+    the per-order ratios 1/(D_n + n/z) and 1/(G_n + n/z), from R_0 =
+    exp(2i(m y - m x)) (1 - exp(2i m x)) / (1 - exp(2i m y))),
+
+        T_a = R_n (m D_n(m_c x) - m_c D_n(m x)) / (m D_n(m_c x) - m_c G_n(m x)),
+        T_b = R_n (m D_n(m x) - m_c D_n(m_c x)) / (m G_n(m x) - m_c D_n(m_c x)),
+        D^a = (D_n(m y) - T_a G_n(m y)) / (1 - T_a), D^b likewise with T_b,
+
+    and a_n, b_n are the homogeneous sphere's expressions (Eq. 4.88) with
+    D_n(m y) replaced by D^a, D^b.  psi_n(y), chi_n(y) and D_n(m y) are read
+    from the workspace.  Efficiencies are summed again.
+    """
+    for s in range(n_sph):
+        y = ws[_X + s]
+        n_s = int(nmax[s])
+        x = fraction * y
+        z_cx = m_core * x
+        z_x = m * x
+        z_y = m * y
+        d_cx = _log_derivatives_down(z_cx, n_s)
+        d_x = _log_derivatives_down(z_x, n_s)
+        # xi_0 = -i exp(i z): H_0 = xi_0'/xi_0 = i, and
+        # R_0 = [sin(z_x) / xi_0(z_x)] [xi_0(z_y) / sin(z_y)], written with
+        # exp(2 i z), which is small where Im z is large.
+        g_x = 1j
+        g_y = 1j
+        ratio = np.exp(2j * (z_y - z_x)) * (1.0 - np.exp(2j * z_x)) / (1.0 - np.exp(2j * z_y))
+        qext = 0.0
+        qsca = 0.0
+        gq = 0.0
+        a_prev = 0.0 + 0.0j
+        b_prev = 0.0 + 0.0j
+        for n in range(1, n_s + 1):
+            g_x = 1.0 / (n / z_x - g_x) - n / z_x
+            g_y = 1.0 / (n / z_y - g_y) - n / z_y
+            o = _LANE + n * _BLK + s
+            d_y = complex(ws[o + _DNR], ws[o + _DNI])
+            ratio *= (g_x + n / z_x) / (d_x[n] + n / z_x) * (d_y + n / z_y) / (g_y + n / z_y)
+            t_a = ratio * (m * d_cx[n] - m_core * d_x[n]) / (m * d_cx[n] - m_core * g_x)
+            t_b = ratio * (m * d_x[n] - m_core * d_cx[n]) / (m * g_x - m_core * d_cx[n])
+            da = (d_y - t_a * g_y) / (1.0 - t_a)
+            db = (d_y - t_b * g_y) / (1.0 - t_b)
+            p1 = ws[o + _PSI]
+            p0 = ws[o - _BLK + _PSI]
+            c1 = ws[o + _CHI]
+            c0 = ws[o - _BLK + _CHI]
+            ta = da / m + n / y
+            tb = m * db + n / y
+            ar, ai = _bh_ratio(ta.real, ta.imag, p1, p0, c1, c0)
+            br, bi = _bh_ratio(tb.real, tb.imag, p1, p0, c1, c0)
+            a = complex(ar, ai)
+            b = complex(br, bi)
+            q = o - _BLK  # a_n, b_n live in order n - 1's block
+            ws[q + _AR] = ar
+            ws[q + _AI] = ai
+            ws[q + _BR] = br
+            ws[q + _BI] = bi
+            c = 2.0 * n + 1.0
+            qext += c * (ar + br)
+            qsca += c * (ar * ar + ai * ai + br * br + bi * bi)
+            gq += c / (n * (n + 1.0)) * (a * b.conjugate()).real + (n - 1.0) * (n + 1.0) / n * (
+                (a_prev * a.conjugate()).real + (b_prev * b.conjugate()).real
+            )
+            a_prev = a
+            b_prev = b
+        f = 2.0 / (y * y)
+        ws[_QEXT + s] = qext * f
+        ws[_QSCA + s] = qsca * f
+        ws[_GQ + s] = gq * 2.0 * f
+
+
 def _coefficients(ws: np.ndarray, n_top: int, n_sph: int) -> tuple[np.ndarray, np.ndarray]:
     """a_n, b_n (n = 1..n_top) of the spheres of workspace ``ws`` after
     :func:`_mie_coefficients`, as complex arrays of shape (n_top, n_sph)."""
@@ -431,10 +540,15 @@ def _amplitudes(
 
 
 @njit(cache=True, nogil=True)
-def _single_sphere_kernel(m: complex, x: float, mu: np.ndarray):
+def _single_sphere_kernel(
+    m: complex, x: float, mu: np.ndarray, m_core: complex, core_fraction: float
+):
     nmax = wiscombe_nmax(x)
     ws = _workspace(nmax)
-    _mie_coefficients(m, np.full(1, x), np.full(1, nmax), ws)
+    nmax_arr = np.full(1, nmax)
+    _mie_coefficients(m, np.full(1, x), nmax_arr, ws)
+    if core_fraction > 0.0:
+        _coat(m_core, m, core_fraction, nmax_arr, 1, ws)
     a = np.empty(nmax, dtype=np.complex128)
     b = np.empty(nmax, dtype=np.complex128)
     for k in range(nmax):
@@ -578,7 +692,79 @@ def single_sphere(
         allow_large=allow_large,
         change=f"x = {x:g} needs n_max = {n_max:.3g} orders: use a smaller sphere or fewer angles",
     )
-    qext, qsca, gq, s1, s2 = _single_sphere_kernel(m, x, mu_arr)
+    qext, qsca, gq, s1, s2 = _single_sphere_kernel(m, x, mu_arr, 0j, 0.0)
+    phase = (np.abs(s1) ** 2 + np.abs(s2) ** 2) / (2.0 * np.pi * x * x * qsca)
+    return SingleSphere(
+        qext=qext, qsca=qsca, qabs=qext - qsca, g=gq / qsca, mu=mu_arr, s1=s1, s2=s2, phase=phase
+    )
+
+
+def _check_index(name: str, m: complex) -> complex:
+    m = complex(m)
+    if not (np.isfinite(m.real) and np.isfinite(m.imag)):
+        raise ValueError(f"{name} must be a finite complex number; got {m!r}")
+    if m.real <= 0.0 or m.imag < 0.0:
+        raise ValueError(f"{name} must have n > 0 and k >= 0 (m = n + i k); got {m!r}")
+    return m
+
+
+def coated_sphere(
+    *, m_core: complex, m_shell: complex, x_core: float, x: float, mu: np.ndarray | float = 1.0
+) -> SingleSphere:
+    """Scatter a plane wave off a coated sphere: a core inside a concentric shell.
+
+    Parameters
+    ----------
+    m_core, m_shell : complex
+        Refractive indices of core and shell relative to the medium,
+        m = n + i k, n > 0, k >= 0. [-]
+    x_core : float
+        Size parameter of the core, 2 pi r_core / lambda, 0 <= x_core <= x
+        (0: a homogeneous sphere of the shell's index; x: of the core's). [-]
+    x : float
+        Size parameter of the whole sphere, 2 pi r / lambda, > 0. [-]
+    mu : array_like
+        Cosines of the scattering angles, in [-1, 1]. [-]
+
+    Returns
+    -------
+    SingleSphere
+        Efficiencies (relative to pi r^2 of the whole sphere), g, amplitudes
+        and phase function.
+
+    Notes
+    -----
+    Bohren & Huffman (1983, Sec. 8.1) written with logarithmic derivatives and
+    one ratio of Riccati-Bessel functions (as Toon & Ackerman 1981 do), see
+    :func:`_coat`; tested against scatrs' layered spheres for x <= 60 and
+    k <= 1 (tests/scattering/test_coated.py).
+
+    References
+    ----------
+    Bohren & Huffman (1983), chapter 8; O. B. Toon and T. P. Ackerman,
+    "Algorithms for the calculation of scattering by stratified spheres,"
+    Appl. Opt. 20, 3657-3660 (1981), doi:10.1364/AO.20.003657.
+    """
+    m_core = _check_index("m_core", m_core)
+    m_shell = _check_index("m_shell", m_shell)
+    x = check_positive("x", x)
+    x_core = float(x_core)
+    if not (np.isfinite(x_core) and 0.0 <= x_core <= x):
+        raise ValueError(
+            f"x_core must be in [0, x = {x!r}] (the core lies inside the sphere; a coating "
+            f"cannot be thicker than the particle); got {x_core!r}"
+        )
+    mu_arr = np.atleast_1d(as_float_array("mu", mu))
+    if mu_arr.ndim != 1 or np.any(np.abs(mu_arr) > 1.0):
+        raise ValueError(f"mu must be a 1-D array of cosines in [-1, 1]; got {mu!r}")
+    n_max = x + 4.05 * x ** (1.0 / 3.0) + 2.0
+    check_budget(
+        "coated_sphere",
+        16.0 * n_max * (14.0 + 2.0 * mu_arr.size),
+        allow_large=False,
+        change=f"x = {x:g} needs n_max = {n_max:.3g} orders: use a smaller sphere or fewer angles",
+    )
+    qext, qsca, gq, s1, s2 = _single_sphere_kernel(m_shell, x, mu_arr, m_core, x_core / x)
     phase = (np.abs(s1) ** 2 + np.abs(s2) ** 2) / (2.0 * np.pi * x * x * qsca)
     return SingleSphere(
         qext=qext, qsca=qsca, qabs=qext - qsca, g=gq / qsca, mu=mu_arr, s1=s1, s2=s2, phase=phase
@@ -591,8 +777,14 @@ def single_sphere(
 
 
 #: Columns appended after the angular values in each row of :func:`_accumulate`:
-#: sums of w, w x^2 Q_ext, w x^2 Q_sca, w x^2 Q_sca g, and w g.
-N_SUMS = 5
+#: sums of w, w x^2 Q_ext, w x^2 Q_sca, w x^2 Q_sca g, w g, and w x^2 Q_back.
+N_SUMS = 6
+
+#: Angular blocks of a row of :func:`_accumulate` with the scattering matrix
+#: (``n_stokes`` = 4): I = |S1|^2 + |S2|^2, Q = |S2|^2 - |S1|^2,
+#: U = 2 Re(S2 S1*), V = 2 Im(S2 S1*), each times the node's factor; in
+#: Bohren & Huffman's notation (1983, Eq. 4.77) 2 S11, 2 S12, 2 S33, 2 S34.
+N_STOKES = 4
 
 
 #: Angles per block of :func:`angular_table`'s layout.  Each block holds the
@@ -646,6 +838,9 @@ def _accumulate(
     table: np.ndarray,
     n_mu: int,
     symmetric: bool,
+    n_stokes: int,
+    m_core: complex,
+    core_fraction: float,
 ) -> np.ndarray:
     """Sum the Mie quantities of many spheres with weights, per panel.
 
@@ -659,17 +854,24 @@ def _accumulate(
     least n_max orders for every node); if ``symmetric`` (angles mu >= 0),
     the next n_mu columns receive the values at -mu, obtained from the parity
     pi_n(-mu) = (-1)^(n-1) pi_n(mu), tau_n(-mu) = (-1)^n tau_n(mu) at no extra
-    cost.  The last ``N_SUMS`` columns hold sums of w, w x^2 Q_ext,
-    w x^2 Q_sca, w x^2 Q_sca g and w g (times pi (lambda / 2 pi)^2 the second
-    and third are areas).  Returns an array of shape (n_panels, n_f + N_SUMS),
-    n_f = 2 n_mu if ``symmetric`` else n_mu.
+    cost.  With ``n_stokes`` = N_STOKES (4) the row holds four such blocks of
+    n_f columns, I, Q, U, V (see :data:`N_STOKES`), for the scattering matrix;
+    with 1, the intensity alone.  The last ``N_SUMS`` columns hold sums of
+    w, w x^2 Q_ext, w x^2 Q_sca, w x^2 Q_sca g, w g and w x^2 Q_back (times
+    pi (lambda / 2 pi)^2 the second, third and last are areas).  Returns an
+    array of shape (n_panels, n_stokes n_f + N_SUMS), n_f = 2 n_mu if
+    ``symmetric`` else n_mu.
+
+    With ``core_fraction`` > 0 the spheres are coated: a core of index
+    ``m_core`` and radius ``core_fraction`` times the sphere's inside a shell
+    of index ``m`` (:func:`_coat`); x is then the outer size parameter.
 
     The Mie coefficients are computed for LANES consecutive nodes at a time,
     up to the largest n_max among them: give the nodes sorted by x.
     """
     n_nodes = x_nodes.shape[0]
     n_f = 2 * n_mu if symmetric else n_mu
-    out = np.zeros((n_panels, n_f + N_SUMS))
+    out = np.zeros((n_panels, n_stokes * n_f + N_SUMS))
     if n_nodes == 0:
         return out
     x_top = x_nodes[0]
@@ -687,6 +889,8 @@ def _accumulate(
             x_b[s] = x_nodes[j0 + min(s, n_live - 1)]
             nmax_b[s] = wiscombe_nmax(x_b[s])
         _mie_coefficients(m, x_b, nmax_b, ws)
+        if core_fraction > 0.0:
+            _coat(m_core, m, core_fraction, nmax_b, n_live, ws)
         for s in range(n_live):
             j = j0 + s
             _add_sphere(
@@ -700,6 +904,7 @@ def _accumulate(
                 table,
                 n_mu,
                 symmetric,
+                n_stokes,
                 coef,
                 acc,
             )
@@ -718,6 +923,7 @@ def _add_sphere(
     table: np.ndarray,
     n_mu: int,
     symmetric: bool,
+    n_stokes: int,
     coef: np.ndarray,
     acc: np.ndarray,
 ) -> None:
@@ -730,11 +936,24 @@ def _add_sphere(
     qsca = ws[_QSCA + s]
     gq = ws[_GQ + s]
     x2 = x * x
-    row[n_f] += w
-    row[n_f + 1] += w * x2 * qext
-    row[n_f + 2] += w * x2 * qsca
-    row[n_f + 3] += w * x2 * gq
-    row[n_f + 4] += w * gq / qsca
+    # Backscattering: x^2 Q_back = |sum_n (2n + 1) (-1)^n (a_n - b_n)|^2
+    # (Bohren & Huffman 1983, p. 122).
+    back_r = 0.0
+    back_i = 0.0
+    sign = -1.0
+    for k in range(nmax):
+        o = _LANE + k * _BLK + s
+        c_n = sign * (2.0 * k + 3.0)
+        back_r += c_n * (ws[o + _AR] - ws[o + _BR])
+        back_i += c_n * (ws[o + _AI] - ws[o + _BI])
+        sign = -sign
+    n_a = n_stokes * n_f
+    row[n_a] += w
+    row[n_a + 1] += w * x2 * qext
+    row[n_a + 2] += w * x2 * qsca
+    row[n_a + 3] += w * x2 * gq
+    row[n_a + 4] += w * gq / qsca
+    row[n_a + 5] += w * (back_r * back_r + back_i * back_i)
     if n_mu == 0:
         return
     c = w / (2.0 * np.pi * x2 * qsca) if per_particle else w
@@ -794,6 +1013,9 @@ def _add_sphere(
                 a[5 * BLOCK + i] += bi0 * pp0 + ai1 * tt1 + bi2 * pp2 + ai3 * tt3
                 a[6 * BLOCK + i] += ar0 * tt0 + br1 * pp1 + ar2 * tt2 + br3 * pp3
                 a[7 * BLOCK + i] += ai0 * tt0 + bi1 * pp1 + ai2 * tt2 + bi3 * pp3
+    if n_stokes > 1:
+        _add_matrix(row, c, acc, n_mu, n_f, n_blocks, nb, symmetric)
+        return
     # Intensities |S1|^2 + |S2|^2 at +mu (and -mu), block by block, so that
     # this loop too runs over the angles of a block and vectorizes.
     for blk in range(n_blocks):
@@ -818,6 +1040,45 @@ def _add_sphere(
 
 
 @njit(cache=True, nogil=True)
+def _add_matrix(
+    row: np.ndarray,
+    c: float,
+    acc: np.ndarray,
+    n_mu: int,
+    n_f: int,
+    n_blocks: int,
+    nb: int,
+    symmetric: bool,
+) -> None:
+    """Add c times I, Q, U, V (see :data:`N_STOKES`) at +mu (and -mu) to the
+    four angular blocks of ``row`` from the parity-split amplitude sums of
+    :func:`_add_sphere` in ``acc``."""
+    for blk in range(n_blocks):
+        a = acc[blk * 8 * BLOCK : (blk + 1) * 8 * BLOCK]
+        i0 = blk * BLOCK
+        n_l = min(nb, n_mu - i0)
+        for half in range(2 if symmetric else 1):
+            sgn = 1.0 if half == 0 else -1.0
+            j0 = i0 + half * n_mu
+            r_i = row[j0 : j0 + n_l]
+            r_q = row[n_f + j0 : n_f + j0 + n_l]
+            r_u = row[2 * n_f + j0 : 2 * n_f + j0 + n_l]
+            r_v = row[3 * n_f + j0 : 3 * n_f + j0 + n_l]
+            for i in range(n_l):
+                s1r = a[i] + sgn * a[2 * BLOCK + i]
+                s1i = a[BLOCK + i] + sgn * a[3 * BLOCK + i]
+                s2r = a[4 * BLOCK + i] + sgn * a[6 * BLOCK + i]
+                s2i = a[5 * BLOCK + i] + sgn * a[7 * BLOCK + i]
+                p1 = s1r * s1r + s1i * s1i
+                p2 = s2r * s2r + s2i * s2i
+                r_i[i] += c * (p1 + p2)
+                r_q[i] += c * (p2 - p1)
+                # S2 S1* = (s2r s1r + s2i s1i) + i (s2i s1r - s2r s1i)
+                r_u[i] += 2.0 * c * (s2r * s1r + s2i * s1i)
+                r_v[i] += 2.0 * c * (s2i * s1r - s2r * s1i)
+
+
+@njit(cache=True, nogil=True)
 def _accumulate_tiers(
     m: complex,
     x_nodes: np.ndarray,
@@ -831,6 +1092,9 @@ def _accumulate_tiers(
     table_start: np.ndarray,
     maps: np.ndarray,
     map_start: np.ndarray,
+    n_stokes: int,
+    m_core: complex,
+    core_fraction: float,
 ) -> np.ndarray:
     """:func:`_accumulate` on tiers of symmetric Gauss grids, moved to the largest.
 
@@ -841,13 +1105,16 @@ def _accumulate_tiers(
     last are moved to the last tier's grid by the maps of
     :func:`_interpolation_maps` (R_even then R_odd, flattened, at
     ``maps[map_start[t]:]``).  Returns rows of shape
-    (n_panels, 2 tier_size[-1] + N_SUMS), as :func:`_accumulate` would on the
-    largest grid (to the rounding of the interpolation).
+    (n_panels, 2 n_stokes tier_size[-1] + N_SUMS), as :func:`_accumulate`
+    would on the largest grid (to the rounding of the interpolation; every
+    block I, Q, U, V of the scattering matrix is a polynomial in mu of degree
+    2 n_max, as the intensity is).
     """
     n_top = tier_size[tier_size.shape[0] - 1]
     # True, but not the literal: that would compile _accumulate a second time.
     symmetric = n_top > 0
-    out = np.zeros((n_panels, 2 * n_top + N_SUMS))
+    width_top = 2 * n_stokes * n_top
+    out = np.zeros((n_panels, width_top + N_SUMS))
     local = np.full(n_panels, -1, dtype=np.int64)
     panel_of = np.empty(n_panels, dtype=np.int64)
     n_nodes = x_nodes.shape[0]
@@ -880,6 +1147,9 @@ def _accumulate_tiers(
             table,
             n_t,
             symmetric,
+            n_stokes,
+            m_core,
+            core_fraction,
         )
         # Rows are copied element by element: numba's array-to-slice assignment
         # compiles a shape-mismatch message (string formatting), about 2 s.
@@ -892,13 +1162,17 @@ def _accumulate_tiers(
             size = n_t * n_top
             r_even = maps[map_start[t] : map_start[t] + size].reshape((n_t, n_top))
             r_odd = maps[map_start[t] + size : map_start[t] + 2 * size].reshape((n_t, n_top))
-            moved = _legendre_regrid(np.ascontiguousarray(rows[:, : 2 * n_t]), r_even, r_odd)
+            # Each block of 2 n_t values moves on its own: as rows of their own.
+            blocks = np.ascontiguousarray(rows[:, : 2 * n_stokes * n_t]).reshape(
+                (n_loc * n_stokes, 2 * n_t)
+            )
+            moved = _legendre_regrid(blocks, r_even, r_odd).reshape((n_loc, width_top))
             for r in range(n_loc):
                 p = panel_of[r]
-                for c in range(2 * n_top):
+                for c in range(width_top):
                     out[p, c] = moved[r, c]
                 for c in range(N_SUMS):
-                    out[p, 2 * n_top + c] = rows[r, 2 * n_t + c]
+                    out[p, width_top + c] = rows[r, 2 * n_stokes * n_t + c]
         for r in range(n_loc):
             local[panel_of[r]] = -1
         j0 = j1

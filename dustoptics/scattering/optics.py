@@ -56,12 +56,15 @@ from dustoptics._validation import (
     check_budget,
     check_choice,
     check_open_interval,
+    check_positive,
     check_wavelength_unit,
 )
+from dustoptics.particles.coated import CoatedSphere
 from dustoptics.particles.materials import RefractiveIndex, get_material
 from dustoptics.particles.sizedist import SizeDistribution
 from dustoptics.particles.sizedist import from_dict as _distribution_from_dict
 from dustoptics.scattering import mie
+from dustoptics.scattering.expansion import greek_coefficients
 from dustoptics.scattering.quadrature import (
     _UPPER_MOMENT,
     QuadratureSettings,
@@ -278,6 +281,10 @@ class _Result:
     err_cross: float
     panels_s: np.ndarray
     cross_section_panels_s: np.ndarray
+    cback: float = float("nan")
+    matrix: _Matrix | None = None
+    # Sums of w r^2, w r^3, w r^4 [um^k] over the cross-sections' radius nodes.
+    moments: tuple[float, float, float] = (float("nan"),) * 3
 
 
 @dataclass(frozen=True)
@@ -288,6 +295,10 @@ class _Run:
     panels_s: np.ndarray
     n_nodes: int
     error: float
+    # With the matrix: per block (I, Q, U, V), the summed panel differences
+    # relative to I at each Gauss node, then the normalization's (see
+    # :func:`_matrix_refinement_errors`).
+    block_errors: np.ndarray | None = None
 
 
 class _Panels(NamedTuple):
@@ -635,6 +646,9 @@ def _accumulate_by_tier(
     table_start: np.ndarray,
     maps: np.ndarray,
     map_start: np.ndarray,
+    n_stokes: int,
+    m_core: complex,
+    core_fraction: float,
 ) -> np.ndarray:
     """Rows of :func:`mie._accumulate_tiers` for nodes given panel after panel.
 
@@ -699,6 +713,122 @@ def _accumulate_by_tier(
         table_start,
         maps,
         map_start,
+        n_stokes,
+        m_core,
+        core_fraction,
+    )
+
+
+# ----------------------------------------------------------------------------
+# The scattering matrix and its expansion (compute_optics(polarization=True,
+# expansion=...)): the refinement's error per matrix element, and the
+# elements and coefficients from the refined sums.
+# ----------------------------------------------------------------------------
+
+
+@njit(cache=True, nogil=True)
+def _matrix_refinement_errors(
+    pool: np.ndarray,
+    coarse: np.ndarray,
+    left: np.ndarray,
+    right: np.ndarray,
+    n_f: int,
+    n_stokes: int,
+    norm: int,
+) -> tuple[np.ndarray, np.ndarray, float, np.ndarray]:
+    """:func:`_phase_refinement_errors` for rows of ``n_stokes`` angular
+    blocks (I, Q, U, V; see ``mie.N_STOKES``), every block's differences
+    relative to I at the same angle (the matrix elements' errors relative to
+    F11).  Returns the summed row; per panel the largest relative difference
+    in any block plus the normalization's; the largest over blocks of the
+    summed estimate; and per block the summed differences at each angle
+    (relative to I) with the normalization's summed relative change appended
+    (shape (n_stokes, n_f + 1)).  Block 0 gives the phase function's error
+    exactly as :func:`_phase_refinement_errors` does.
+    """
+    n_p = coarse.shape[0]
+    total = _halves_total(pool, left, right)
+    columns = np.zeros((n_stokes, n_f + 1))
+    panel_error = np.empty(n_p)
+    norm_sum = 0.0
+    for p in range(n_p):
+        a = pool[left[p]]
+        b = pool[right[p]]
+        z = pool[coarse[p]]
+        rel_norm = abs(a[norm] + b[norm] - z[norm]) / total[norm]
+        worst = 0.0
+        for k in range(n_stokes):
+            col = columns[k]
+            o = k * n_f
+            for i in range(n_f):
+                d = abs(a[o + i] + b[o + i] - z[o + i]) / total[i]
+                col[i] += d
+                worst = max(worst, d)
+        panel_error[p] = worst + rel_norm
+        norm_sum += rel_norm
+    error = 0.0
+    for k in range(n_stokes):
+        columns[k, n_f] = norm_sum
+        error = max(error, np.max(columns[k, :n_f]) + norm_sum)
+    return total, panel_error, error, columns
+
+
+@dataclass(frozen=True)
+class _Matrix:
+    """One wavelength's matrix elements (normalized like the phase function),
+    their error estimate relative to F11, and the expansion coefficients."""
+
+    f12: np.ndarray
+    f33: np.ndarray
+    f34: np.ndarray
+    error: float
+    greek: np.ndarray | None
+    greek_error: float
+
+
+def _finish_matrix(solver: _WavelengthSolver, phase_run: _Run, scale: float) -> _Matrix:
+    """F12, F33, F34 at the output angles and, on the Gauss grid, the
+    expansion coefficients of orders 0..2 n_max (see
+    :mod:`dustoptics.scattering.expansion`), from a refined run with the
+    four blocks I, Q, U, V; ``scale`` turns summed I into the phase function."""
+    n_f = solver.n_f
+    blocks = phase_run.block_errors
+    assert blocks is not None
+    values = [phase_run.total[k * n_f : (k + 1) * n_f] for k in range(mie.N_STOKES)]
+    if solver.gauss:
+        lmax = 2 * solver.nmax
+        at_output = [
+            mie._legendre_evaluate(
+                mie._legendre_project(solver.mu_half, solver.w_half, np.ascontiguousarray(v), lmax),
+                solver.mu_out,
+            )
+            for v in values[1:]
+        ]
+    else:
+        at_output = list(values[1:])
+    error = max(float(np.max(blocks[k, :n_f]) + blocks[k, n_f]) for k in range(1, mie.N_STOKES))
+    greek = None
+    greek_error = float("nan")
+    if solver.want_greek:
+        mu = np.concatenate([solver.mu_half, -solver.mu_half])
+        w = np.concatenate([solver.w_half, solver.w_half])
+        a1, b1, a3, b2 = (4.0 * np.pi * scale * v for v in values)
+        greek = greek_coefficients(
+            mu=mu, weight=w, a1=a1, a3=a3, b1=b1, b2=b2, lmax=2 * solver.nmax
+        )
+        # (1/2) int a1 dmu is 1 to round-off (~1e-13); make alpha1_0 exactly 1.
+        greek = greek / greek[0, 0]
+        # |d^l_mn| <= 1, so each coefficient over (2 l + 1) moves by at most
+        # (1/2) int |da| dmu: the blocks' summed differences times a1, plus
+        # the normalization's relative change.
+        greek_error = float(0.5 * np.sum(w * a1 * np.sum(blocks[:, :n_f], axis=0)) + blocks[0, n_f])
+    return _Matrix(
+        f12=at_output[0] * scale,
+        f33=at_output[1] * scale,
+        f34=at_output[2] * scale,
+        error=error,
+        greek=greek,
+        greek_error=greek_error,
     )
 
 
@@ -729,8 +859,17 @@ class _WavelengthSolver:
         distribution: SizeDistribution,
         per_particle: bool,
         settings: QuadratureSettings,
+        n_stokes: int = 1,
+        expansion: bool = False,
+        m_core: complex = 0j,
+        core_fraction: float = 0.0,
     ) -> None:
         self.m = m
+        # Coated spheres: core index and radius fraction (0: homogeneous).
+        self.m_core = m_core
+        self.core_fraction = core_fraction
+        # 4: the scattering matrix (I, Q, U, V blocks, see mie.N_STOKES); 1: the phase function.
+        self.n_stokes = n_stokes
         self.wavelength_um = wavelength_nm * 1e-3
         self.wavelength_nm = wavelength_nm
         self.mu_out = mu_out
@@ -754,18 +893,28 @@ class _WavelengthSolver:
         # Sum at Gauss angles and project on Legendre polynomials when that is
         # cheaper than summing at every output angle.  2 n_half >= 2 nmax + 2
         # nodes integrate |S|^2 P_l (degree <= 4 nmax) exactly.
-        self.legendre = n_half < mu_out.size and not distribution.is_monodisperse
-        if self.legendre:
+        # ``gauss`` asks for the Gauss grid whatever the output angles (the
+        # expansion coefficients are projected from it).
+        self.want_greek = expansion
+        self.gauss = expansion or (n_half < mu_out.size and not distribution.is_monodisperse)
+        self.legendre = self.gauss and not distribution.is_monodisperse
+        if self.gauss:
             self.n_half = n_half
             self.mu_half, self.w_half = _gauss_angles(n_half)[:2]
             self.n_f = 2 * n_half
-            self.tiers, self._tables, self._table_start, self._maps, self._map_start = (
-                _angular_tiers(n_half)
-            )
+            if self.legendre:
+                self.tiers, self._tables, self._table_start, self._maps, self._map_start = (
+                    _angular_tiers(n_half)
+                )
+            else:  # one sphere on the Gauss grid
+                self.table = _gauss_angles(n_half)[2]
         else:
             # Summed at the output angles directly (few angles, or one sphere).
             self.table = mie.angular_table(mu_out, self.nmax)
             self.n_f = mu_out.size
+        # Angular columns of a row; the sums follow.
+        self.n_a = n_stokes * self.n_f
+        self.matrix = n_stokes > 1
         # Cross-sections alone: no angles.
         self.no_angles = np.empty((0, 0))
 
@@ -778,6 +927,7 @@ class _WavelengthSolver:
         table: np.ndarray,
         n_mu: int,
         symmetric: bool,
+        n_stokes: int,
     ) -> np.ndarray:
         # The kernel computes the Mie coefficients of consecutive spheres in
         # batches that share the largest member's n_max: sorted by size, a
@@ -793,6 +943,9 @@ class _WavelengthSolver:
             table,
             n_mu,
             symmetric,
+            n_stokes,
+            self.m_core,
+            self.core_fraction,
         )
 
     def evaluate(self, lower: np.ndarray, upper: np.ndarray, *, angles: bool = True) -> np.ndarray:
@@ -806,9 +959,11 @@ class _WavelengthSolver:
         )
         x, w = nodes.size_parameter, nodes.weight
         if not angles:
-            return self._accumulate(x, w, node_panel, lower.size, self.no_angles, 0, False)
+            return self._accumulate(x, w, node_panel, lower.size, self.no_angles, 0, False, 1)
         if not self.legendre:
-            return self._accumulate(x, w, node_panel, lower.size, self.table, self.n_f, False)
+            return self._accumulate(
+                x, w, node_panel, lower.size, self.table, self.n_f, False, self.n_stokes
+            )
         return _accumulate_by_tier(
             self.m,
             x,
@@ -821,6 +976,9 @@ class _WavelengthSolver:
             self._table_start,
             self._maps,
             self._map_start,
+            self.n_stokes,
+            self.m_core,
+            self.core_fraction,
         )
 
     def halves(
@@ -837,8 +995,13 @@ class _WavelengthSolver:
         self, pool: np.ndarray, coarse: np.ndarray, left: np.ndarray, right: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray, float]:
         """Summed row, and relative phase error per panel and of the sum (see
-        :func:`_phase_refinement_errors`)."""
-        norm = self.n_f if self.per_particle else self.n_f + 2
+        :func:`_phase_refinement_errors`; for the matrix or the expansion,
+        :func:`_matrix_refinement_errors`)."""
+        norm = self.n_a if self.per_particle else self.n_a + 2
+        if self.matrix:
+            return _matrix_refinement_errors(
+                pool, coarse, left, right, self.n_f, self.n_stokes, norm
+            )[:3]
         return _phase_refinement_errors(pool, coarse, left, right, self.n_f, norm)
 
     def _cross_errors(
@@ -908,12 +1071,19 @@ class _WavelengthSolver:
             )
         order = np.argsort(lower, kind="stable")
         panels = np.column_stack([lower[order], upper[order]])
-        run = _Run(total, panels, 2 * self.settings.nodes_per_panel * lower.size, error)
+        blocks = None
+        if angles and self.matrix:
+            norm = self.n_a if self.per_particle else self.n_a + 2
+            blocks = _matrix_refinement_errors(
+                pool, coarse, left, right, self.n_f, self.n_stokes, norm
+            )[3]
+        run = _Run(total, panels, 2 * self.settings.nodes_per_panel * lower.size, error, blocks)
         return _Panels(lower, upper, pool[coarse], pool[left], pool[right]), run
 
     def solve(self, rtol: float, cross_rtol: float) -> _Result:
         if self.distribution.is_monodisperse:
             x = np.array([2.0 * np.pi * self.distribution.mean_radius_um / self.wavelength_um])
+            n_mu = self.n_half if self.gauss else self.n_f
             rows = mie._accumulate(
                 self.m,
                 x,
@@ -922,15 +1092,19 @@ class _WavelengthSolver:
                 1,
                 self.per_particle,
                 self.table,
-                self.n_f,
-                False,
+                n_mu,
+                self.gauss,
+                self.n_stokes,
+                self.m_core,
+                self.core_fraction,
             )
-            run = _Run(rows[0], np.empty((0, 2)), 1, 0.0)
-            return self.finish(run, _Run(rows[0, self.n_f :], run.panels_s, 1, 0.0))
+            blocks = np.zeros((self.n_stokes, self.n_f + 1)) if self.matrix else None
+            run = _Run(rows[0], np.empty((0, 2)), 1, 0.0, blocks)
+            return self.finish(run, _Run(rows[0, self.n_a :], run.panels_s, 1, 0.0))
         state, phase_run = self.refine(self.initial_state(), angles=True, tol=rtol)
         # The cross-sections continue from the phase function's panels (whose
         # sums they already hold), refining further without angles.
-        sums = _Panels(state.lower, state.upper, *(rows[:, self.n_f :] for rows in state[2:]))
+        sums = _Panels(state.lower, state.upper, *(rows[:, self.n_a :] for rows in state[2:]))
         _, cross_run = self.refine(sums, angles=False, tol=cross_rtol)
         return self.finish(phase_run, cross_run)
 
@@ -938,16 +1112,18 @@ class _WavelengthSolver:
         """Phase function from ``phase_run``, cross-sections and g from ``cross_run``."""
         n_f = self.n_f
         f = phase_run.total[:n_f]
-        if self.legendre:
+        if self.gauss:
             beta = mie._legendre_project(
                 self.mu_half, self.w_half, np.ascontiguousarray(f), 2 * self.nmax
             )
             f = mie._legendre_evaluate(beta, self.mu_out)
         # Normalized with the phase run's own sums, so 2 pi int P dmu = 1 holds
         # for the nodes that made P.
-        s_w, _, s_sca = phase_run.total[n_f : n_f + 3]
-        phase = f / s_w if self.per_particle else f / (2.0 * np.pi * s_sca)
-        s_w, s_ext, s_sca, s_gsca, s_g = cross_run.total
+        s_w, _, s_sca = phase_run.total[self.n_a : self.n_a + 3]
+        scale = 1.0 / s_w if self.per_particle else 1.0 / (2.0 * np.pi * s_sca)
+        phase = f * scale
+        matrix = _finish_matrix(self, phase_run, scale) if self.matrix else None
+        s_w, s_ext, s_sca, s_gsca, s_g, s_back = cross_run.total
         g = s_g / s_w if self.per_particle else s_gsca / s_sca
         area = (self.wavelength_um / (2.0 * np.pi)) ** 2 * np.pi  # x^2 -> pi r^2 [um^2]
         # n(r) is normalized analytically, so <C> = sum w_j C_j; dividing by
@@ -965,7 +1141,29 @@ class _WavelengthSolver:
             err_cross=cross_run.error,
             panels_s=phase_run.panels_s,
             cross_section_panels_s=cross_run.panels_s,
+            cback=area * s_back,
+            matrix=matrix,
+            moments=self.node_moments(cross_run.panels_s),
         )
+
+    def node_moments(self, panels_s: np.ndarray) -> tuple[float, float, float]:
+        """Sums of w r^k, k = 2, 3, 4, over the radius nodes of the final
+        panels ``panels_s`` (their halves carry the rule that was used) [um^k]."""
+        if self.distribution.is_monodisperse:
+            r = self.distribution.mean_radius_um
+            return r**2, r**3, r**4
+        lower, upper = panels_s[:, 0], panels_s[:, 1]
+        mid = 0.5 * (lower + upper)
+        nodes, _ = panel_nodes(
+            self.distribution,
+            wavelength_nm=self.wavelength_nm,
+            lower_s=np.concatenate([lower, mid]),
+            upper_s=np.concatenate([mid, upper]),
+            settings=self.settings,
+        )
+        r = nodes.size_parameter * self.wavelength_um / (2.0 * np.pi)
+        w = nodes.weight
+        return tuple(math.fsum(w * r**k) for k in (2, 3, 4))  # type: ignore[return-value]
 
 
 #: Largest estimated work of one :func:`compute_optics` call without
@@ -1129,6 +1327,9 @@ def compute_optics(
     progress: Callable[[int, int], None] | None = None,
     wavelengths_nm: Sequence[float] | np.ndarray | None = None,
     allow_large: bool = False,
+    polarization: bool = False,
+    expansion: bool | int = False,
+    particle_density_kg_m3: float | None = None,
 ) -> Table:
     """Polydisperse Mie optics of spheres, converged over the size distribution.
 
@@ -1175,6 +1376,21 @@ def compute_optics(
         estimated work exceeds :data:`WORK_BUDGET` (about ten minutes); see
         :func:`estimate_cost`.  Default False: such a call raises
         :class:`dustoptics._validation.BudgetError` before any work.
+    polarization : bool
+        Also compute the scattering matrix F12, F33, F34 (F22 = F11 = phase,
+        F44 = F33 for spheres), normalized like the phase function and with
+        Bohren & Huffman's signs (:mod:`dustoptics.scattering.expansion`); the
+        quadrature then refines until every element's error, relative to F11
+        at each angle, is below ``rtol``.
+    expansion : bool or int
+        Also compute the expansion coefficients alpha1..alpha4, beta1, beta2
+        in generalized spherical functions: ``True`` for every order the
+        population needs (2 n_max + 1 of the largest sphere; the series ends
+        there), an integer N for orders 0..N.  Refines like ``polarization``.
+    particle_density_kg_m3 : float, optional
+        Density of the particle material, for the mass extinction, scattering
+        and absorption coefficients (``table.mass_ext_m2_per_kg``, ...); for
+        Mars dust :data:`dustoptics.particles.mixing.MARS_DUST_DENSITY_KG_M3`. [kg m^-3]
 
     Returns
     -------
@@ -1275,10 +1491,26 @@ def compute_optics(
         workers=workers,
         allow_large=allow_large,
     )
-    m, label = resolve_refractive_index(refractive_index, wl)
+    if not isinstance(polarization, (bool, np.bool_)):
+        raise ValueError(f"polarization must be True or False; got {polarization!r}")
+    n_order = _check_expansion(expansion)
+    density = (
+        None
+        if particle_density_kg_m3 is None
+        else check_positive("particle_density_kg_m3", particle_density_kg_m3, unit="kg m-3")
+    )
+    if isinstance(refractive_index, CoatedSphere):
+        m, shell_label = resolve_refractive_index(refractive_index.shell, wl)
+        m_core, core_label = resolve_refractive_index(refractive_index.core, wl)
+        core_fraction = refractive_index.radius_fraction
+        label = refractive_index.describe(core_label, shell_label)
+    else:
+        m, label = resolve_refractive_index(refractive_index, wl)
+        m_core, core_fraction = np.zeros_like(m), 0.0
 
     mu_out = np.cos(np.deg2rad(theta))
     per_particle = weighting == "number"
+    n_stokes = mie.N_STOKES if (polarization or n_order is not None) else 1
 
     def one(i: int) -> _Result:
         solver = _WavelengthSolver(
@@ -1288,6 +1520,10 @@ def compute_optics(
             distribution=distribution,
             per_particle=per_particle,
             settings=settings,
+            n_stokes=n_stokes,
+            expansion=n_order is not None,
+            m_core=complex(m_core[i]),
+            core_fraction=core_fraction,
         )
         return solver.solve(rtol, cross_rtol)
 
@@ -1306,7 +1542,7 @@ def compute_optics(
         # _phase_refinement_errors from Python, so its signatures say whether
         # one has run; kernels called only from compiled code keep none.)
         # Each wavelength's result is the same either way.
-        if not _phase_refinement_errors.signatures:
+        if not (_phase_refinement_errors.signatures or _matrix_refinement_errors.signatures):
             results.append(one(0))
             report(1)
         with ThreadPoolExecutor(max_workers=n_threads) as pool:
@@ -1335,8 +1571,10 @@ def compute_optics(
     # (no absorption, an identity of the physics); with k > 0 the difference
     # is kept unless it is negative beyond round-off (1e-12 of <C_ext>), which
     # would be a wrong number and raises.
-    cabs = np.where(m.imag == 0.0, 0.0, cext - csca)
-    cext = np.where(m.imag == 0.0, csca, cext)
+    # (A coated sphere absorbs if its shell or its core does.)
+    lossless = (m.imag == 0.0) & ((m_core.imag == 0.0) | (core_fraction == 0.0))
+    cabs = np.where(lossless, 0.0, cext - csca)
+    cext = np.where(lossless, csca, cext)
     if np.any(cabs < -1e-12 * cext):
         i = int(np.argmax(cabs < -1e-12 * cext))
         raise ValueError(
@@ -1344,6 +1582,9 @@ def compute_optics(
             f"{label} with distribution {distribution!r}: the input lies outside the kernel's tested domain"
         )
     csca = np.minimum(csca, cext)
+    extra = _matrix_fields(results, polarization=bool(polarization), n_order=n_order)
+    if polarization:
+        err_phase = np.maximum(err_phase, extra["matrix_error_estimate"])
     not_converged = (err_phase > rtol) | (err_cross > cross_rtol)
     if not_converged.any():
         bad = ", ".join(f"{w:g}" for w in wl[not_converged])
@@ -1366,6 +1607,20 @@ def compute_optics(
         "cross_section_rtol": cross_rtol,
         "quadrature": settings,
     }
+    # Recorded only when used, so that other tables' provenance is unchanged.
+    if polarization:
+        inputs["polarization"] = True
+    if n_order is not None:
+        inputs["expansion"] = True if n_order < 0 else n_order
+    if density is not None:
+        inputs["particle_density_kg_m3"] = density
+    if core_fraction > 0.0 or isinstance(refractive_index, CoatedSphere):
+        inputs["core"] = {
+            "n": m_core.real,
+            "k": m_core.imag,
+            "core_radius_fraction": core_fraction,
+        }
+    moments = np.array([r.moments for r in results])
     record = {
         "method": "adaptive Gauss-Legendre panels over radius (dustoptics.scattering.quadrature), "
         "error = summed differences of each panel's rule and the rules on its halves",
@@ -1397,6 +1652,13 @@ def compute_optics(
         cross_section_n_nodes=cross_n_nodes,
         refractive_index=m,
         mean_geometric_cross_section_um2=float(distribution.mean_cross_section_um2),
+        cback_um2=np.array([r.cback for r in results]),
+        r_eff_quadrature_um=moments[:, 1] / moments[:, 0],
+        v_eff_quadrature=moments[:, 2] * moments[:, 0] / moments[:, 1] ** 2 - 1.0,
+        mean_volume_quadrature_um3=4.0 / 3.0 * np.pi * moments[:, 1],
+        mean_volume_um3=float(distribution.mean_volume_um3),
+        particle_density_kg_m3=density,
+        **extra,
         provenance=Provenance(inputs=plain(inputs), sources=sources, quadrature=plain(record)),
         diagnostics=QuadratureDiagnostics(
             settings=settings,
@@ -1463,8 +1725,19 @@ def recompute(
         )
     index = inputs["refractive_index"]
     m = np.asarray(index["n"], dtype=np.float64) + 1j * np.asarray(index["k"], dtype=np.float64)
+    particle: Any = m.tolist()
+    if "core" in inputs:
+        core = inputs["core"]
+        m_core = np.asarray(core["n"], dtype=np.float64) + 1j * np.asarray(
+            core["k"], dtype=np.float64
+        )
+        particle = CoatedSphere(
+            core=m_core.tolist(),
+            shell=m.tolist(),
+            core_radius_fraction=core["core_radius_fraction"],
+        )
     table = compute_optics(
-        m.tolist(),
+        particle,
         _distribution_from_dict(inputs["size_distribution"]),
         inputs["wavelength_nm"],
         inputs["theta_deg"],
@@ -1474,6 +1747,9 @@ def recompute(
         quadrature=QuadratureSettings(**inputs["quadrature"]),
         workers=workers,
         name=name,
+        polarization=bool(inputs.get("polarization", False)),
+        expansion=inputs.get("expansion", False),
+        particle_density_kg_m3=inputs.get("particle_density_kg_m3"),
     )
     # The same values of m; only the caller's description of them is restored.
     return table.replace(
@@ -1485,3 +1761,43 @@ def recompute(
             notes=provenance.notes,
         )
     )
+
+
+def _check_expansion(expansion: Any) -> int | None:
+    """None (no expansion), -1 (every order needed) or the highest order N."""
+    if expansion is False or expansion is None:
+        return None
+    if expansion is True:
+        return -1
+    if isinstance(expansion, (int, np.integer)) and not isinstance(expansion, bool):
+        if expansion < 0:
+            raise ValueError(f"expansion must be True, False or an order N >= 0; got {expansion!r}")
+        return int(expansion)
+    raise ValueError(
+        f"expansion must be True, False or an order N >= 0 (an integer); got {expansion!r}"
+    )
+
+
+def _matrix_fields(
+    results: Sequence[_Result], *, polarization: bool, n_order: int | None
+) -> dict[str, Any]:
+    """The optional matrix and expansion fields of a table from the
+    wavelengths' results (coefficients zero-padded to one order count)."""
+    out: dict[str, Any] = {}
+    matrices = [r.matrix for r in results]
+    if polarization:
+        assert all(mx is not None for mx in matrices)
+        for key in ("f12", "f33", "f34"):
+            out[key] = np.vstack([getattr(mx, key) for mx in matrices])
+        out["matrix_error_estimate"] = np.array([mx.error for mx in matrices])
+    if n_order is not None:
+        greek = [mx.greek for mx in matrices]
+        size = max(g.shape[1] for g in greek) if n_order < 0 else n_order + 1
+        coefficients = np.zeros((6, len(results), size))
+        for i, g in enumerate(greek):
+            k = min(size, g.shape[1])
+            coefficients[:, i, :k] = g[:, :k]
+        for j, key in enumerate(("alpha1", "alpha2", "alpha3", "alpha4", "beta1", "beta2")):
+            out[key] = coefficients[j]
+        out["expansion_error_estimate"] = np.array([mx.greek_error for mx in matrices])
+    return out

@@ -394,13 +394,19 @@ def test_interpolation_maps_reproduce_polynomials(n_in: int, n_out: int) -> None
     np.testing.assert_allclose(same[0], rows[0], rtol=0, atol=4e-16 * np.abs(rows).max())
 
 
+@pytest.mark.parametrize(
+    ("n_stokes", "m_core", "core_fraction"), [(1, 0j, 0.0), (4, 0j, 0.0), (4, 2.0 + 0.5j, 0.6)]
+)
 @pytest.mark.parametrize("per_particle", [False, True])
-def test_tiers_equal_the_full_grid(per_particle: bool) -> None:
+def test_tiers_equal_the_full_grid(
+    per_particle: bool, n_stokes: int, m_core: complex, core_fraction: float
+) -> None:
     """The fast path (small spheres summed on a smaller Gauss grid, moved to
     the full grid by polynomial interpolation, all tiers in one call) gives
     the rows of the simple path (every sphere summed on the full grid).  The
-    interpolation is exact for |S|^2 of degree 2 n_max < 2 n_tier, so they
-    agree to round-off (1e-10 of the largest value, as the maps' own test)."""
+    interpolation is exact for |S|^2 and the matrix's S_i S_j* of degree
+    2 n_max < 2 n_tier, so they agree to round-off (1e-10 of the largest
+    value, as the maps' own test), with the phase function or the matrix."""
     from dustoptics.scattering.optics import _angular_tiers, _gauss_angles
 
     m = 1.52 + 0.004j
@@ -418,11 +424,27 @@ def test_tiers_equal_the_full_grid(per_particle: bool) -> None:
     for t, hi in zip((0, 1, sizes.size - 1), (3.0, 18.0, 70.0)):
         assert mie.wiscombe_nmax(hi) + 2 <= sizes[t]
     fast = mie._accumulate_tiers(
-        m, x, w, panel, tier, 3, per_particle, sizes, tables, table_start, maps, map_start
+        m,
+        x,
+        w,
+        panel,
+        tier,
+        3,
+        per_particle,
+        sizes,
+        tables,
+        table_start,
+        maps,
+        map_start,
+        n_stokes,
+        m_core,
+        core_fraction,
     )
     full_table = _gauss_angles(n_full)[2]
-    simple = mie._accumulate(m, x, w, panel, 3, per_particle, full_table, n_full, True)
-    assert fast.shape == simple.shape == (3, 2 * n_full + mie.N_SUMS)
+    simple = mie._accumulate(
+        m, x, w, panel, 3, per_particle, full_table, n_full, True, n_stokes, m_core, core_fraction
+    )
+    assert fast.shape == simple.shape == (3, 2 * n_stokes * n_full + mie.N_SUMS)
     for p in range(3):  # each panel to its own scale (rows differ by orders of magnitude)
         np.testing.assert_allclose(fast[p], simple[p], rtol=0, atol=1e-10 * np.abs(simple[p]).max())
     assert np.all(fast[:, : 2 * n_full] > 0)

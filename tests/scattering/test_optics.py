@@ -456,9 +456,20 @@ def test_accumulate_by_tier_equals_the_full_grid(per_particle: bool):
     x = np.concatenate([panels[p] for p in shuffled])
     w = np.linspace(0.5, 1.5, x.size)
     node_panel = np.repeat(np.arange(len(shuffled)), per)
-    fast = _accumulate_by_tier(m, x, w, node_panel, per, per_particle, *tiers)
+    fast = _accumulate_by_tier(m, x, w, node_panel, per, per_particle, *tiers, 1, 0j, 0.0)
     simple = mie._accumulate(
-        m, x, w, node_panel, len(shuffled), per_particle, _gauss_angles(n_full)[2], n_full, True
+        m,
+        x,
+        w,
+        node_panel,
+        len(shuffled),
+        per_particle,
+        _gauss_angles(n_full)[2],
+        n_full,
+        True,
+        1,
+        0j,
+        0.0,
     )
     assert fast.shape == simple.shape
     for p in range(len(shuffled)):
@@ -474,7 +485,16 @@ def test_accumulate_by_tier_rejects_spheres_beyond_the_largest_tier():
     x = np.linspace(100.0, 110.0, 8)  # n_max ~ 130 > 96
     with pytest.raises(ValueError, match="largest angular tier"):
         _accumulate_by_tier(
-            1.5 + 0.01j, x, np.ones(8), np.zeros(8, dtype=np.int64), 8, False, *_angular_tiers(96)
+            1.5 + 0.01j,
+            x,
+            np.ones(8),
+            np.zeros(8, dtype=np.int64),
+            8,
+            False,
+            *_angular_tiers(96),
+            1,
+            0j,
+            0.0,
         )
 
 
