@@ -112,6 +112,28 @@ UNITS: Mapping[str, tuple[str, str]] = {
     "beta_ext_per_m": ("m-1", "volume extinction coefficient N cext"),
     "beta_sca_per_m": ("m-1", "volume scattering coefficient N csca"),
     "beta_abs_per_m": ("m-1", "volume absorption coefficient N cabs"),
+    "order": ("1", "order l of the expansion in generalized spherical functions"),
+    "f12": ("sr-1", "scattering matrix element F12, normalized like the phase function (F11)"),
+    "f33": ("sr-1", "scattering matrix element F33 (= F44 for spheres), normalized like F11"),
+    "f34": ("sr-1", "scattering matrix element F34, Bohren & Huffman's sign, normalized like F11"),
+    "matrix_error_estimate": ("1", "estimated largest error of F12, F33, F34 relative to F11"),
+    "alpha1": ("1", "expansion coefficient alpha1 (alpha1_0 = 1, alpha1_1 = 3 g)"),
+    "alpha2": ("1", "expansion coefficient alpha2 (generalized spherical functions)"),
+    "alpha3": ("1", "expansion coefficient alpha3 (generalized spherical functions)"),
+    "alpha4": ("1", "expansion coefficient alpha4 (generalized spherical functions)"),
+    "beta1": ("1", "expansion coefficient beta1 (generalized spherical functions)"),
+    "beta2": ("1", "expansion coefficient beta2 (generalized spherical functions)"),
+    "expansion_error_estimate": ("1", "bound on the error of every coefficient over (2 l + 1)"),
+    "cback_um2": ("um2", "mean backscattering cross-section per particle"),
+    "r_eff_quadrature_um": ("um", "effective radius of the radius quadrature's nodes"),
+    "v_eff_quadrature": ("1", "effective variance of the radius quadrature's nodes"),
+    "mean_volume_quadrature_um3": ("um3", "mean particle volume of the radius quadrature's nodes"),
+    "mean_volume_um3": ("um3", "4/3 pi <r^3> of the size distribution"),
+    "particle_density_kg_m3": ("kg m-3", "density of the particle material"),
+    "lidar_ratio_sr": ("sr", "extinction-to-backscatter ratio 4 pi cext / cback"),
+    "mass_ext_m2_per_kg": ("m2 kg-1", "mass extinction coefficient cext / (rho <V>)"),
+    "mass_sca_m2_per_kg": ("m2 kg-1", "mass scattering coefficient csca / (rho <V>)"),
+    "mass_abs_m2_per_kg": ("m2 kg-1", "mass absorption coefficient cabs / (rho <V>)"),
 }
 
 #: CF standard names (CF standard-name table, version 93) of the quantities
@@ -140,6 +162,10 @@ DERIVED: Mapping[str, str] = {
     "beta_ext_per_m": "number_density_per_m3 * cext_um2 * 1e-12",
     "beta_sca_per_m": "number_density_per_m3 * csca_um2 * 1e-12",
     "beta_abs_per_m": "number_density_per_m3 * cabs_um2 * 1e-12",
+    "lidar_ratio_sr": "4 pi cext_um2 / cback_um2",
+    "mass_ext_m2_per_kg": "1e6 cext_um2 / (particle_density_kg_m3 mean_volume_um3)",
+    "mass_sca_m2_per_kg": "1e6 csca_um2 / (particle_density_kg_m3 mean_volume_um3)",
+    "mass_abs_m2_per_kg": "1e6 cabs_um2 / (particle_density_kg_m3 mean_volume_um3)",
 }
 
 #: Version of the table schema (variables, dimensions, attributes) of
@@ -149,6 +175,16 @@ SCHEMA = "dustoptics-table-2"
 #: Dimension names (those of the coordinates).
 WAVELENGTH_DIM = "wavelength_nm"
 ANGLE_DIM = "theta_deg"
+#: Dimension of the expansion coefficients: the order l = 0, 1, ...
+ORDER_DIM = "order"
+
+#: Stored scalar fields of a :class:`Table` (None when absent).
+SCALAR_FIELDS = (
+    "mean_geometric_cross_section_um2",
+    "number_density_per_m3",
+    "mean_volume_um3",
+    "particle_density_kg_m3",
+)
 
 _UM2_TO_M2 = 1e-12
 
@@ -361,6 +397,14 @@ MATRIX_FIELDS = ("f12", "f33", "f34")
 #: Expansion coefficients in generalized spherical functions, shape (n_wavelength, n_order).
 EXPANSION_FIELDS = ("alpha1", "alpha2", "alpha3", "alpha4", "beta1", "beta2")
 _M2_PER_KG = 1e6  # um^2 / (kg m^-3 um^3) -> m^2 kg^-1
+#: Per-wavelength radiative-transfer quantities (dropped by :meth:`Table.replace`
+#: when the wavelengths change).
+_RT_PER_WAVELENGTH = (
+    "cback_um2",
+    "r_eff_quadrature_um",
+    "v_eff_quadrature",
+    "mean_volume_quadrature_um3",
+)
 
 
 def _per_wavelength_2d(name: str, value: Any, n: int, m: int | None) -> np.ndarray | None:
@@ -580,6 +624,10 @@ class Table:
                 names += ["qext", "qsca", "qabs"]
             if self.number_density_per_m3 is not None:
                 names += ["beta_ext_per_m", "beta_sca_per_m", "beta_abs_per_m"]
+            if self.cback_um2 is not None:
+                names += ["lidar_ratio_sr"]
+            if self.particle_density_kg_m3 is not None and self.mean_volume_um3 is not None:
+                names += ["mass_ext_m2_per_kg", "mass_sca_m2_per_kg", "mass_abs_m2_per_kg"]
         return {key: getattr(self, key) for key in names}
 
     def _per_wavelength_values(self) -> dict[str, np.ndarray]:
@@ -680,10 +728,23 @@ class Table:
         }
         for key, values in self._per_wavelength_values().items():
             data[key] = (wl, np.array(values), self.variable_attributes(key))
-        for key in ("mean_geometric_cross_section_um2", "number_density_per_m3"):
+        for key in SCALAR_FIELDS:
             value = getattr(self, key)
             if value is not None:
                 data[key] = ((), np.float64(value), self.variable_attributes(key))
+        for key in MATRIX_FIELDS:
+            value = getattr(self, key)
+            if value is not None:
+                data[key] = ((wl, angle), np.array(value), self.variable_attributes(key))
+        if self.alpha1 is not None:
+            order = np.arange(self.alpha1.shape[1], dtype=np.float64)
+            coords[ORDER_DIM] = (ORDER_DIM, order, self.variable_attributes(ORDER_DIM))
+            for key in EXPANSION_FIELDS:
+                data[key] = (
+                    (wl, ORDER_DIM),
+                    np.array(getattr(self, key)),
+                    self.variable_attributes(key),
+                )
         return xr.Dataset(data, coords=coords, attrs=self.global_attributes())
 
     @classmethod
@@ -736,8 +797,13 @@ class Table:
             *DERIVED,
         ):
             expected_dims[key] = (wl,)
-        for key in ("mean_geometric_cross_section_um2", "number_density_per_m3"):
+        for key in SCALAR_FIELDS:
             expected_dims[key] = ()
+        for key in MATRIX_FIELDS:
+            expected_dims[key] = (wl, angle)
+        expected_dims[ORDER_DIM] = (ORDER_DIM,)
+        for key in EXPANSION_FIELDS:
+            expected_dims[key] = (wl, ORDER_DIM)
         names = [str(k) for k in ds.variables]
         unknown = [k for k in names if k not in expected_dims]
         if unknown:
@@ -759,7 +825,7 @@ class Table:
                 raise ValueError(
                     f"variable {name!r} must be in {UNITS[name][0]!r}; its units are {unit!r}"
                 )
-            if name not in DERIVED:
+            if name not in DERIVED and name != ORDER_DIM:
                 values[name] = var.values
         try:
             provenance = Provenance.from_dict(json.loads(ds.attrs["provenance"]))
@@ -775,7 +841,7 @@ class Table:
             raise ValueError(
                 "refractive_index_real and refractive_index_imag must both be present or neither"
             )
-        for key in ("mean_geometric_cross_section_um2", "number_density_per_m3"):
+        for key in SCALAR_FIELDS:
             if key in values:
                 values[key] = float(values[key])
         name = ds.attrs.get("name", DEFAULT_NAME)
@@ -847,7 +913,10 @@ class Table:
 
         The in-memory :attr:`diagnostics` describe the computation that made
         the numbers, so they are dropped when the phase function or the
-        cross-sections change, unless ``changes`` gives them.
+        cross-sections change, unless ``changes`` gives them.  Likewise the
+        scattering matrix and expansion coefficients are dropped when the
+        phase function, angles or wavelengths change, and the backscatter and
+        quadrature moments when the wavelengths change.
         """
         if "diagnostics" not in changes and changes.keys() & {
             "phase",
@@ -856,6 +925,17 @@ class Table:
             "csca_um2",
         }:
             changes["diagnostics"] = None
+        # The matrix and its expansion belong to the phase function (F11) they
+        # were computed with, the radiative-transfer quantities to the
+        # wavelengths: dropped with them unless ``changes`` gives them.
+        stale: tuple[str, ...] = ()
+        if changes.keys() & {"phase", "theta_deg", "wavelength_nm"}:
+            stale += (*MATRIX_FIELDS, "matrix_error_estimate", *EXPANSION_FIELDS)
+            stale += ("expansion_error_estimate",)
+        if "wavelength_nm" in changes:
+            stale += _RT_PER_WAVELENGTH
+        for key in stale:
+            changes.setdefault(key, None)
         return replace(self, **changes)
 
     # ------------------------------------------------------------ derived

@@ -254,7 +254,7 @@ class DustOptics:
 
     def table(
         self, r_eff: float, v_eff: float, wavelengths: np.ndarray, theta: np.ndarray, **kwargs
-    ):
+    ):  # kwargs: compute_optics' keywords (rtol=..., polarization=..., expansion=...)
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always", do.ConvergenceWarning)
             t = do.compute_optics(
@@ -697,6 +697,72 @@ def measure_fits(table, repeats: int) -> dict:
 # --------------------------------------------------------------------------- report
 
 
+def measure_rt(dust: DustOptics, repeats: int, quick: bool) -> dict:
+    """Step 7: the default table with the whole scattering matrix and every
+    expansion coefficient against the phase function alone (interleaved warm
+    calls, best of each), and scatrs computing the same (Greek coefficients
+    to every order, the phase matrix at the 1,801 angles) at several rtol,
+    with each one's largest error of F11 (relative) and of F12, F33, F34
+    (relative to F11) against a tight dustoptics reference (rtol 1e-7) at
+    three wavelengths."""
+    wl, theta = wavelength_grid(N_WAVELENGTHS_DEFAULT), theta_grid(N_THETA_DEFAULT)
+    n = max(repeats, 2)
+    plain_t, full_t = [], []
+    log(f"RT optics: phase only vs matrix + expansion, {n} interleaved warm calls each ...")
+    dust.table(R_EFF_UM, V_EFF, wl[:1], theta, polarization=True, expansion=True)  # compile
+    for _ in range(n):
+        t0 = time.perf_counter()
+        dust.table(R_EFF_UM, V_EFF, wl, theta)
+        plain_t.append(time.perf_counter() - t0)
+        t0 = time.perf_counter()
+        full, _ = dust.table(R_EFF_UM, V_EFF, wl, theta, polarization=True, expansion=True)
+        full_t.append(time.perf_counter() - t0)
+    out: dict = {
+        "phase_only_times_s": plain_t,
+        "matrix_expansion_times_s": full_t,
+        "ratio": min(full_t) / min(plain_t),
+        "n_order_max": int(full.alpha1.shape[1]),
+        "max_matrix_error_estimate": float(full.matrix_error_estimate.max()),
+    }
+    try:
+        import scatrs
+    except ImportError:
+        out["scatrs"] = None
+        return out
+    sub = spread(wl, 1 if quick else 3)
+    log(f"RT optics: tight reference (rtol 1e-7) at {sub.tolist()} nm ...")
+    ref, _ = dust.table(R_EFF_UM, V_EFF, sub, theta, rtol=1e-7, polarization=True)
+    idx = np.searchsorted(wl, sub)
+
+    def errors(f11, f12, f33, f34) -> float:
+        worst = np.max(np.abs(f11 - ref.phase) / ref.phase)
+        for ours, theirs in ((f12, ref.f12), (f33, ref.f33), (f34, ref.f34)):
+            worst = max(worst, np.max(np.abs(ours - theirs) / ref.phase))
+        return float(worst)
+
+    out["dustoptics_error"] = errors(full.phase[idx], full.f12[idx], full.f33[idx], full.f34[idx])
+    m = do.mars_dust()(wl)
+    ensemble = scatrs.Ensemble(
+        scatrs.Sphere(scatrs.refractive.Table((wl * 1e-3).tolist(), list(m))),
+        scatrs.Gamma(effective_radius=R_EFF_UM, effective_variance=V_EFF),
+    )
+    mu = np.cos(np.deg2rad(theta))
+    rows = []
+    for rtol in (1e-6,) if quick else (1e-6, 1e-7, 1e-8):
+        log(f"RT optics: scatrs 48 x 1801, greek='all', rtol {rtol:g} ...")
+        t0 = time.perf_counter()
+        r = ensemble.compute(wl * 1e-3, greek="all", mu=mu, rtol=rtol)
+        elapsed = time.perf_counter() - t0
+        # scatrs normalizes F11 to average 1 over the sphere: ours times 4 pi.
+        f = [
+            np.asarray(getattr(r.phase, k))[idx] / (4 * np.pi) for k in ("f11", "f12", "f33", "f34")
+        ]
+        rows.append({"rtol": rtol, "time_s": elapsed, "error": errors(*f)})
+    out["scatrs"] = rows
+    out["scatrs_version"] = package_version("scatrs")
+    return out
+
+
 def targets(res: dict) -> list[dict]:
     """The issue's targets next to the measured values, PASS or FAIL."""
     warm = res["dustoptics_default"]["warm_s"]
@@ -906,6 +972,28 @@ def format_report(res: dict) -> str:
         "  (on Linux RUSAGE_CHILDREN includes this process's memory when each child was spawned)"
     )
 
+    rt = res["rt_optics"]
+    head("7. Radiative-transfer optics (issue 17): matrix + expansion vs phase only, and scatrs")
+    row("phase function only (best)", f"{min(rt['phase_only_times_s']):.3f} s")
+    row(
+        "F11..F34 + all expansion coefficients (best)",
+        f"{min(rt['matrix_expansion_times_s']):.3f} s  ({rt['n_order_max']} orders)",
+    )
+    row("ratio (target <= 1.5)", f"{rt['ratio']:.2f}x")
+    if rt.get("scatrs"):
+        row(
+            "dustoptics default: max error vs rtol-1e-7 reference",
+            f"{rt['dustoptics_error']:.1e} (F11 relative; F12, F33, F34 relative to F11)",
+        )
+        for e in rt["scatrs"]:
+            row(
+                f"scatrs {rt['scatrs_version']} rtol {e['rtol']:g}",
+                f"{e['time_s']:.3f} s  error {e['error']:.1e}  "
+                f"({e['time_s'] / min(rt['matrix_expansion_times_s']):.1f}x dustoptics)",
+            )
+    else:
+        row("scatrs", "not installed (pip install scatrs)")
+
     r = res["ratios"]
     head("Ratios (baseline time / dustoptics warm time)")
     row("baseline A / dustoptics", f"{r['baseline_a']:.1f}x")
@@ -952,6 +1040,7 @@ def run(quick: bool, repeats: int) -> dict:
     res["storm"] = measure_storm(dust, repeats)
     res["scaling"] = measure_scaling(dust, quick)
     res["fits"] = measure_fits(table, repeats)
+    res["rt_optics"] = measure_rt(dust, repeats, quick)
     res["memory"] = {
         "main_after_warm_mb": default["maxrss_after_warm_mb"],
         "cold_process_mb": res["cold_process"]["maxrss_mb"],

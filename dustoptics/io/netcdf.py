@@ -75,6 +75,10 @@ from dustoptics.io._atomic import FormatError, write_files
 from dustoptics.table import (
     ANGLE_DIM,
     DERIVED,
+    EXPANSION_FIELDS,
+    MATRIX_FIELDS,
+    ORDER_DIM,
+    SCALAR_FIELDS,
     SCHEMA,
     UNITS,
     WAVELENGTH_DIM,
@@ -113,7 +117,7 @@ _GZIP_LEVEL = 6
 _LIBVER = ("v110", "v110")
 #: HDF5's own attributes of dimension scales, not part of the netCDF data model.
 _HDF5_ATTRIBUTES = frozenset({"CLASS", "NAME", "DIMENSION_LIST", "REFERENCE_LIST", "_Netcdf4Dimid"})
-_SCALARS = ("mean_geometric_cross_section_um2", "number_density_per_m3")
+_SCALARS = SCALAR_FIELDS
 _INTEGERS = ("n_nodes", "cross_section_n_nodes")
 
 
@@ -204,13 +208,16 @@ def _writer(table: Table) -> Callable[[Path], None]:
             )
             phase.dims[0].attach_scale(scales[WAVELENGTH_DIM])
             phase.dims[1].attach_scale(scales[ANGLE_DIM])
+            if ORDER_DIM in ds.coords:
+                scales[ORDER_DIM] = dataset(ORDER_DIM)
+                scales[ORDER_DIM].make_scale(ORDER_DIM)
             for key in ds.data_vars:
                 key = str(key)
                 if key == "phase":
                     continue
                 obj = dataset(key)
-                if obj.ndim == 1:
-                    obj.dims[0].attach_scale(scales[WAVELENGTH_DIM])
+                for axis, dim in enumerate(ds[key].dims):
+                    obj.dims[axis].attach_scale(scales[str(dim)])
 
     return write
 
@@ -375,12 +382,17 @@ def _string_attribute(path: Path, owner: Any, key: str, where: str) -> str:
     return value
 
 
-def _expected_shapes(n_wl: int, n_theta: int) -> dict[str, tuple[int, ...]]:
+def _expected_shapes(n_wl: int, n_theta: int, n_order: int) -> dict[str, tuple[int, ...]]:
     shapes: dict[str, tuple[int, ...]] = {
         WAVELENGTH_DIM: (n_wl,),
         ANGLE_DIM: (n_theta,),
         "phase": (n_wl, n_theta),
+        ORDER_DIM: (n_order,),
     }
+    for key in MATRIX_FIELDS:
+        shapes[key] = (n_wl, n_theta)
+    for key in EXPANSION_FIELDS:
+        shapes[key] = (n_wl, n_order)
     for key in UNITS:
         if key not in shapes:
             shapes[key] = () if key in _SCALARS else (n_wl,)
@@ -444,7 +456,14 @@ def _open_checked(
             raise FormatError(
                 f"{path}: coordinate {key!r} must be 1-D; got shape {objects[key].shape}"
             )
-    shapes = _expected_shapes(objects[WAVELENGTH_DIM].shape[0], objects[ANGLE_DIM].shape[0])
+    order = objects.get(ORDER_DIM)
+    if order is not None and order.ndim != 1:
+        raise FormatError(f"{path}: coordinate {ORDER_DIM!r} must be 1-D; got shape {order.shape}")
+    shapes = _expected_shapes(
+        objects[WAVELENGTH_DIM].shape[0],
+        objects[ANGLE_DIM].shape[0],
+        0 if order is None else order.shape[0],
+    )
     for key, obj in objects.items():
         if key not in shapes:
             raise FormatError(
@@ -555,15 +574,19 @@ def read_netcdf(path: str | os.PathLike[str]) -> Table:
     except (OSError, RuntimeError, KeyError, ValueError, TypeError) as exc:
         raise FormatError(f"{path}: damaged file ({type(exc).__name__}: {exc})") from None
     coords = {
-        key: (key, variables[key][0], variables[key][1]) for key in (WAVELENGTH_DIM, ANGLE_DIM)
+        key: (key, variables[key][0], variables[key][1])
+        for key in (WAVELENGTH_DIM, ANGLE_DIM, ORDER_DIM)
+        if key in variables
     }
     data = {}
     for key, (values, var_attrs) in variables.items():
         if key in coords:
             continue
-        dims = (
+        dims: tuple[str, ...] = (
             (WAVELENGTH_DIM, ANGLE_DIM)
-            if key == "phase"
+            if key == "phase" or key in MATRIX_FIELDS
+            else (WAVELENGTH_DIM, ORDER_DIM)
+            if key in EXPANSION_FIELDS
             else (WAVELENGTH_DIM,)
             if values.ndim
             else ()

@@ -58,7 +58,25 @@ from dustoptics.io._text import (
     shift,
     wavelength_label,
 )
-from dustoptics.table import PHASE_NORMALIZATION, UNITS, Provenance, Table
+from dustoptics.table import (
+    EXPANSION_FIELDS,
+    MATRIX_FIELDS,
+    PHASE_NORMALIZATION,
+    UNITS,
+    Provenance,
+    Table,
+)
+
+#: Optional per-wavelength quantities of radiative-transfer tables, kept in the summary.
+_EXTRA_PER_WAVELENGTH = (
+    "cback_um2",
+    "matrix_error_estimate",
+    "expansion_error_estimate",
+    "r_eff_quadrature_um",
+    "v_eff_quadrature",
+    "mean_volume_quadrature_um3",
+)
+_EXTRA_SCALARS = ("mean_volume_um3", "particle_density_kg_m3")
 
 __all__ = [
     "EXTINCTION_COLUMNS",
@@ -209,6 +227,12 @@ def _summary_bytes(table: Table, hashes: dict[str, str]) -> bytes:
         if table.refractive_index is None
         else table.refractive_index.imag.tolist(),
     }
+    for key in _EXTRA_PER_WAVELENGTH:
+        if getattr(table, key) is not None:
+            per_wavelength[key] = _optional_list(getattr(table, key))
+    for key in (*MATRIX_FIELDS, *EXPANSION_FIELDS):
+        if getattr(table, key) is not None:
+            per_wavelength[key] = np.asarray(getattr(table, key), dtype=np.float64).tolist()
     if not table.has_cross_sections:
         per_wavelength["g"] = table.g.tolist()
     summary = {
@@ -221,6 +245,7 @@ def _summary_bytes(table: Table, hashes: dict[str, str]) -> bytes:
         "has_cross_sections": table.has_cross_sections,
         "mean_geometric_cross_section_um2": table.mean_geometric_cross_section_um2,
         "number_density_per_m3": table.number_density_per_m3,
+        **{key: getattr(table, key) for key in _EXTRA_SCALARS if getattr(table, key) is not None},
         "per_wavelength": per_wavelength,
         "files": files,
         "units": {key: UNITS[key][0] for key in _SUMMARY_UNITS},
@@ -577,6 +602,11 @@ def read_seed_csv(directory: str | os.PathLike[str], *, verify: bool = True) -> 
         fields = {"g": _guard(summary_path, lambda: array("g"))}
         if fields["g"] is None:
             raise FormatError(f"{summary_path}: a phase-only table needs per_wavelength.g")
+    extra: dict[str, Any] = {
+        key: array(key) for key in (*_EXTRA_PER_WAVELENGTH, *MATRIX_FIELDS, *EXPANSION_FIELDS)
+    }
+    extra.update({key: summary.get(key) for key in _EXTRA_SCALARS})
+    fields.update(extra)
     table = _guard(
         summary_path,
         lambda: Table(

@@ -1470,20 +1470,29 @@ class TabulatedDistribution(SizeDistribution):
         path : str or path-like
             The file.
         """
-        import pandas as pd
+        import csv
+        from pathlib import Path
 
-        frame = pd.read_csv(path, comment="#", skipinitialspace=True)
-        columns = [c.strip() for c in frame.columns]
-        frame.columns = columns
+        lines = [
+            ln
+            for ln in Path(path).read_text().splitlines()
+            if ln.strip() and not ln.lstrip().startswith("#")
+        ]
+        rows = list(csv.reader(lines, skipinitialspace=True))
+        columns = [c.strip() for c in rows[0]] if rows else []
         if "radius_um" not in columns or ("dn_dr" in columns) == ("dn_dlnr" in columns):
             raise ValueError(
                 f"{path}: a size table needs the columns radius_um and exactly one of dn_dr, dn_dlnr; "
                 f"got {columns}"
             )
         key = "dn_dr" if "dn_dr" in columns else "dn_dlnr"
-        return cls(
-            radius_um=frame["radius_um"].to_numpy(float), **{key: frame[key].to_numpy(float)}
-        )
+        i, j = columns.index("radius_um"), columns.index(key)
+        try:
+            radius = [float(row[i]) for row in rows[1:]]
+            values = [float(row[j]) for row in rows[1:]]
+        except (ValueError, IndexError) as exc:
+            raise ValueError(f"{path}: unreadable number in the size table ({exc})") from None
+        return cls(radius_um=np.array(radius), **{key: np.array(values)})
 
     @property
     def _density_points(self) -> NDArray[np.float64]:

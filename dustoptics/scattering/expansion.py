@@ -35,8 +35,8 @@ is every P^l_mn here (m +- n even): a Gauss rule of more than 2 n_max + 1
 nodes in mu projects them exactly, and the series ends at l = 2 n_max.
 
 Sign convention: the table's F12 and F34 are Bohren & Huffman's S12 and S34
-(exp(-i w t), m = n + i k): F12 = (|S2|^2 - |S1|^2) / 2 and
-F34 = Im(S2 S1*) up to the normalization, so F12 < 0 for Rayleigh scattering
+(exp(-i w t), m = n + i k): ``F12 = (|S2|^2 - |S1|^2) / 2`` and
+``F34 = Im(S2 S1*)`` up to the normalization, so F12 < 0 for Rayleigh scattering
 at 90 deg.  ``beta1`` and ``beta2`` expand these same F12 and F34.  Codes that
 follow Mishchenko, Travis & Lacis (2002) define the Stokes parameter V with
 the opposite sign; their b2 and beta2 are minus ours (b1 and beta1 agree).

@@ -781,8 +781,8 @@ def coated_sphere(
 N_SUMS = 6
 
 #: Angular blocks of a row of :func:`_accumulate` with the scattering matrix
-#: (``n_stokes`` = 4): I = |S1|^2 + |S2|^2, Q = |S2|^2 - |S1|^2,
-#: U = 2 Re(S2 S1*), V = 2 Im(S2 S1*), each times the node's factor; in
+#: (``n_stokes`` = 4): ``I = |S1|^2 + |S2|^2``, ``Q = |S2|^2 - |S1|^2``,
+#: ``U = 2 Re(S2 S1*)``, ``V = 2 Im(S2 S1*)``, each times the node's factor; in
 #: Bohren & Huffman's notation (1983, Eq. 4.77) 2 S11, 2 S12, 2 S33, 2 S34.
 N_STOKES = 4
 

@@ -1161,9 +1161,10 @@ class _WavelengthSolver:
             upper_s=np.concatenate([mid, upper]),
             settings=self.settings,
         )
-        r = nodes.size_parameter * self.wavelength_um / (2.0 * np.pi)
+        radius = nodes.size_parameter * self.wavelength_um / (2.0 * np.pi)
         w = nodes.weight
-        return tuple(math.fsum(w * r**k) for k in (2, 3, 4))  # type: ignore[return-value]
+        m2, m3, m4 = (math.fsum(w * radius**k) for k in (2, 3, 4))
+        return m2, m3, m4
 
 
 #: Largest estimated work of one :func:`compute_optics` call without
@@ -1784,14 +1785,17 @@ def _matrix_fields(
     """The optional matrix and expansion fields of a table from the
     wavelengths' results (coefficients zero-padded to one order count)."""
     out: dict[str, Any] = {}
-    matrices = [r.matrix for r in results]
+    if not (polarization or n_order is not None):
+        return out
+    matrices = [r.matrix for r in results if r.matrix is not None]
+    assert len(matrices) == len(results)
     if polarization:
-        assert all(mx is not None for mx in matrices)
         for key in ("f12", "f33", "f34"):
             out[key] = np.vstack([getattr(mx, key) for mx in matrices])
         out["matrix_error_estimate"] = np.array([mx.error for mx in matrices])
     if n_order is not None:
-        greek = [mx.greek for mx in matrices]
+        greek = [mx.greek for mx in matrices if mx.greek is not None]
+        assert len(greek) == len(results)
         size = max(g.shape[1] for g in greek) if n_order < 0 else n_order + 1
         coefficients = np.zeros((6, len(results), size))
         for i, g in enumerate(greek):
