@@ -145,7 +145,10 @@ def test_cf_layout_units_names_and_checksums(table, written):
             assert f[key].attrs["long_name"] == UNITS[key][1], key
             if f[key].ndim:  # every array is stored with HDF5's Fletcher-32 checksum
                 assert f[key].fletcher32, key
-        for key in DERIVED:
+        # Every derived variable the table defines (those of a table with a
+        # particle density or a backscatter cross-section are among DERIVED too).
+        assert set(table.derived()) <= set(DERIVED)
+        for key in table.derived():
             assert f[key].attrs["derived_from"] == DERIVED[key]
         assert f["theta_deg"].attrs["units"] == "degree"
         assert f["theta_deg"].attrs["standard_name"] == "scattering_angle"
