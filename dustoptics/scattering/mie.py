@@ -912,6 +912,23 @@ def _accumulate(
 
 
 @njit(cache=True, nogil=True)
+def _backscatter(ws: np.ndarray, s: int, nmax: int) -> float:
+    """x^2 Q_back = |sum_n (2n + 1) (-1)^n (a_n - b_n)|^2 of sphere ``s`` of
+    workspace ``ws`` (Bohren & Huffman 1983, p. 122): 4 pi times the
+    differential scattering cross-section at 180 deg, over (lambda / 2 pi)^2 / pi."""
+    back_r = 0.0
+    back_i = 0.0
+    sign = -1.0
+    for k in range(nmax):
+        o = _LANE + k * _BLK + s
+        c_n = sign * (2.0 * k + 3.0)
+        back_r += c_n * (ws[o + _AR] - ws[o + _BR])
+        back_i += c_n * (ws[o + _AI] - ws[o + _BI])
+        sign = -sign
+    return back_r * back_r + back_i * back_i
+
+
+@njit(cache=True, nogil=True)
 def _add_sphere(
     row: np.ndarray,
     w: float,
@@ -936,24 +953,13 @@ def _add_sphere(
     qsca = ws[_QSCA + s]
     gq = ws[_GQ + s]
     x2 = x * x
-    # Backscattering: x^2 Q_back = |sum_n (2n + 1) (-1)^n (a_n - b_n)|^2
-    # (Bohren & Huffman 1983, p. 122).
-    back_r = 0.0
-    back_i = 0.0
-    sign = -1.0
-    for k in range(nmax):
-        o = _LANE + k * _BLK + s
-        c_n = sign * (2.0 * k + 3.0)
-        back_r += c_n * (ws[o + _AR] - ws[o + _BR])
-        back_i += c_n * (ws[o + _AI] - ws[o + _BI])
-        sign = -sign
     n_a = n_stokes * n_f
     row[n_a] += w
     row[n_a + 1] += w * x2 * qext
     row[n_a + 2] += w * x2 * qsca
     row[n_a + 3] += w * x2 * gq
     row[n_a + 4] += w * gq / qsca
-    row[n_a + 5] += w * (back_r * back_r + back_i * back_i)
+    row[n_a + 5] += w * _backscatter(ws, s, nmax)
     if n_mu == 0:
         return
     c = w / (2.0 * np.pi * x2 * qsca) if per_particle else w

@@ -912,11 +912,14 @@ class _WavelengthSolver:
             # Summed at the output angles directly (few angles, or one sphere).
             self.table = mie.angular_table(mu_out, self.nmax)
             self.n_f = mu_out.size
-        # Angular columns of a row; the sums follow.
-        self.n_a = n_stokes * self.n_f
         self.matrix = n_stokes > 1
         # Cross-sections alone: no angles.
         self.no_angles = np.empty((0, 0))
+
+    @property
+    def n_a(self) -> int:
+        """Angular columns of a row (n_stokes blocks of n_f); the sums follow."""
+        return self.n_stokes * self.n_f
 
     def _accumulate(
         self,
@@ -1108,8 +1111,11 @@ class _WavelengthSolver:
         _, cross_run = self.refine(sums, angles=False, tol=cross_rtol)
         return self.finish(phase_run, cross_run)
 
-    def finish(self, phase_run: _Run, cross_run: _Run) -> _Result:
-        """Phase function from ``phase_run``, cross-sections and g from ``cross_run``."""
+    def finish(
+        self, phase_run: _Run, cross_run: _Run, distribution: SizeDistribution | None = None
+    ) -> _Result:
+        """Phase function from ``phase_run``, cross-sections and g from
+        ``cross_run`` (of ``distribution``, default the solver's)."""
         n_f = self.n_f
         f = phase_run.total[:n_f]
         if self.gauss:
@@ -1143,19 +1149,23 @@ class _WavelengthSolver:
             cross_section_panels_s=cross_run.panels_s,
             cback=area * s_back,
             matrix=matrix,
-            moments=self.node_moments(cross_run.panels_s),
+            moments=self.node_moments(
+                cross_run.panels_s, self.distribution if distribution is None else distribution
+            ),
         )
 
-    def node_moments(self, panels_s: np.ndarray) -> tuple[float, float, float]:
+    def node_moments(
+        self, panels_s: np.ndarray, distribution: SizeDistribution
+    ) -> tuple[float, float, float]:
         """Sums of w r^k, k = 2, 3, 4, over the radius nodes of the final
         panels ``panels_s`` (their halves carry the rule that was used) [um^k]."""
-        if self.distribution.is_monodisperse:
-            r = self.distribution.mean_radius_um
+        if distribution.is_monodisperse:
+            r = distribution.mean_radius_um
             return r**2, r**3, r**4
         lower, upper = panels_s[:, 0], panels_s[:, 1]
         mid = 0.5 * (lower + upper)
         nodes, _ = panel_nodes(
-            self.distribution,
+            distribution,
             wavelength_nm=self.wavelength_nm,
             lower_s=np.concatenate([lower, mid]),
             upper_s=np.concatenate([mid, upper]),

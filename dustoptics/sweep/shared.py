@@ -78,7 +78,7 @@ def _cell_intensities(
     symmetric: bool,
     out: np.ndarray,
     out_rows: np.ndarray,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Unweighted intensities and efficiencies of spheres of size parameters ``x``.
 
     Sphere j is summed on tier ``node_tier[j]`` (< 0: efficiencies only): the
@@ -90,14 +90,15 @@ def _cell_intensities(
     number the kernel adds for a sphere of weight c, and written to the
     first values of ``out[out_rows[j]]``.  Give the spheres sorted by size,
     so that each batch of Mie coefficients holds spheres of similar n_max.
-    Returns Q_ext, Q_sca and g Q_sca.
+    Returns Q_ext, Q_sca, g Q_sca and x^2 Q_back.
     """
     n_nodes = x.shape[0]
     qext = np.empty(n_nodes)
     qsca = np.empty(n_nodes)
     gq = np.empty(n_nodes)
+    back = np.empty(n_nodes)
     if n_nodes == 0:
-        return qext, qsca, gq
+        return qext, qsca, gq, back
     x_top = x[0]
     for j in range(n_nodes):
         x_top = max(x_top, x[j])
@@ -121,6 +122,7 @@ def _cell_intensities(
             qext[j] = ws[mie._QEXT + s]
             qsca[j] = ws[mie._QSCA + s]
             gq[j] = ws[mie._GQ + s]
+            back[j] = mie._backscatter(ws, s, nmax_b[s])
             t = node_tier[j]
             if t < 0:
                 continue
@@ -132,12 +134,24 @@ def _cell_intensities(
             row = scratch[: n_f + mie.N_SUMS]
             row[:] = 0.0
             mie._add_sphere(
-                row, 1.0, x_b[s], nmax_b[s], ws, s, False, table, n_t, symmetric, coef, acc[:width]
+                row,
+                1.0,
+                x_b[s],
+                nmax_b[s],
+                ws,
+                s,
+                False,
+                table,
+                n_t,
+                symmetric,
+                1,
+                coef,
+                acc[:width],
             )
             target = out[out_rows[j]]
             for k in range(n_f):
                 target[k] = row[k]
-    return qext, qsca, gq
+    return qext, qsca, gq, back
 
 
 @njit(cache=True, nogil=True)
@@ -151,6 +165,7 @@ def _cell_rows(
     qext: np.ndarray,
     qsca: np.ndarray,
     gq: np.ndarray,
+    back: np.ndarray,
     intens: np.ndarray,
     n_f_cell: np.ndarray,
 ) -> np.ndarray:
@@ -180,6 +195,7 @@ def _cell_rows(
             row[n_f + 2] += wj * x2 * qsca[j]
             row[n_f + 3] += wj * x2 * gq[j]
             row[n_f + 4] += wj * gq[j] / qsca[j]
+            row[n_f + 5] += wj * back[j]
             if angles:
                 cj = wj / (2.0 * np.pi * x2 * qsca[j]) if per_particle else wj
                 values = intens[j]
@@ -200,7 +216,7 @@ class _Store:
         self.has_angles = np.zeros(0, dtype=np.bool_)
         self.tier = np.zeros(0, dtype=np.int64)  # -1: no angles
         self.n_f = np.zeros(0, dtype=np.int64)  # angular values on the cell's tier
-        self.nodes = np.empty((4, 0))  # x, qext, qsca, gq
+        self.nodes = np.empty((5, 0))  # x, qext, qsca, gq, x^2 qback
         self.intens = np.empty((0, n_f))
         self.spheres_angles = 0
         self.spheres_sums = 0
@@ -220,7 +236,7 @@ class _Store:
         n_f = np.zeros(size, dtype=np.int64)
         n_f[: self.n] = self.n_f[: self.n]
         self.n_f = n_f
-        nodes = np.empty((4, size * self.npc))
+        nodes = np.empty((5, size * self.npc))
         nodes[:, :used] = self.nodes[:, :used]
         self.nodes = nodes
         intens = np.empty((size * self.npc, self.intens.shape[1]))
@@ -270,8 +286,12 @@ class _GroupSolver(_WavelengthSolver):
         self.mu_out = mu_out
         self.per_particle = per_particle
         self.settings = settings
+        # The phase function alone, homogeneous spheres (see _WavelengthSolver).
+        self.n_stokes, self.matrix, self.want_greek = 1, False, False
+        self.m_core, self.core_fraction = 0j, 0.0
         self.nmax = n_half - 1  # orders of the angular table
         self.legendre = n_half < mu_out.size
+        self.gauss = self.legendre
         if self.legendre:
             self.n_half = n_half
             self.mu_half, self.w_half = _gauss_angles(n_half)[:2]
@@ -474,7 +494,7 @@ def _solve_group(
         # similar n_max.
         order = np.argsort(x, kind="stable")
         node_rows = node_rows[order]
-        qext, qsca, gq = _cell_intensities(
+        qext, qsca, gq, back = _cell_intensities(
             m,
             np.ascontiguousarray(x[order]),
             np.repeat(tier, npc)[order],
@@ -488,6 +508,7 @@ def _solve_group(
         store.nodes[1, node_rows] = qext
         store.nodes[2, node_rows] = qsca
         store.nodes[3, node_rows] = gq
+        store.nodes[4, node_rows] = back
         if angles:
             store.has_angles[cells] = True
             store.spheres_angles += cells.size * npc
@@ -515,6 +536,7 @@ def _solve_group(
             store.nodes[1, :used],
             store.nodes[2, :used],
             store.nodes[3, :used],
+            store.nodes[4, :used],
             store.intens[:used],
             store.n_f[: store.n],
         )
@@ -615,7 +637,7 @@ def _solve_group(
     results = []
     for st, phase_run in zip(states, phase_runs):
         assert phase_run is not None and st.run is not None
-        results.append(group.finish(phase_run, st.run))
+        results.append(group.finish(phase_run, st.run, st.dist))
     stats = SharedStatistics(
         spheres_computed=store.spheres_sums,
         spheres_with_angles=store.spheres_angles,

@@ -119,10 +119,10 @@ def test_cell_rows_are_the_kernels_sums_to_the_bit():
     x = nodes.size_parameter
     for per_particle in (False, True):
         expected = mie._accumulate(
-            m, x, nodes.weight, node_panel, 2, per_particle, table, mu.size, False
+            m, x, nodes.weight, node_panel, 2, per_particle, table, mu.size, False, 1, 0j, 0.0
         )
         intens = np.empty((x.size, mu.size))
-        qext, qsca, gq = _cell_intensities(
+        qext, qsca, gq, back = _cell_intensities(
             m,
             x,
             np.zeros(x.size, dtype=np.int64),
@@ -143,6 +143,7 @@ def test_cell_rows_are_the_kernels_sums_to_the_bit():
             qext,
             qsca,
             gq,
+            back,
             intens,
             np.array([mu.size, mu.size]),
         )
