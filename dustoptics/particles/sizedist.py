@@ -62,12 +62,12 @@ from dustoptics._validation import (
 )
 
 __all__ = [
-    "DeirmendjianGamma",
-    "DensityDistribution",
     "MAX_SIGMA",
     "MIN_TAIL_FRACTION",
     "MIN_V_EFF",
     "RADIUS_RANGE_UM",
+    "DeirmendjianGamma",
+    "DensityDistribution",
     "Gamma",
     "LogNormal",
     "ModifiedGamma",
