@@ -652,7 +652,7 @@ def single_sphere(
     ----------
     m : complex
         Refractive index of the sphere relative to the medium, m = n + i k with
-        n > 0, k >= 0 and |m - 1| >= :data:`MIN_INDEX_CONTRAST`. [-]
+        n > 0, k >= 0 and ``|m - 1| >=`` :data:`MIN_INDEX_CONTRAST`. [-]
     x : float
         Size parameter 2 pi r / lambda (lambda in the medium),
         x >= :data:`MIN_SIZE_PARAMETER`. [-]
