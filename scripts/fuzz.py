@@ -2,7 +2,7 @@
 
 Usage::
 
-    python scripts/fuzz.py                      # the CI budget: seed 0, 8 cases per kind
+    python scripts/fuzz.py                      # the CI budget: seed 0, 5 cases per kind
     python scripts/fuzz.py --cases 200 --seed 7 # a longer search
     python scripts/fuzz.py --kinds api,files    # some kinds only
 
@@ -241,8 +241,12 @@ EDGE_NUMBERS: tuple[Any, ...] = (
 )
 
 
+def _pick(rng: random.Random, valid: tuple[str, ...], invalid: tuple[str, ...]) -> str:
+    return rng.choice(valid) if rng.random() < 0.5 else rng.choice(invalid)
+
+
 def _number(rng: random.Random, typical: float) -> Any:
-    return rng.choice(EDGE_NUMBERS) if rng.random() < 0.7 else typical * rng.uniform(0.5, 2.0)
+    return rng.choice(EDGE_NUMBERS) if rng.random() < 0.5 else typical * rng.uniform(0.5, 2.0)
 
 
 def api_cases(rng: random.Random, n: int) -> list[Case]:
@@ -274,14 +278,21 @@ def api_cases(rng: random.Random, n: int) -> list[Case]:
                 f"relative_number_densities=({_number(rng, 1.0)!r}, {_number(rng, 1.0)!r}))"
             )
         if choice != 4 and rng.random() < 0.8:
-            wl = rng.choice(
-                ("[550.0]", "[0.44, 0.55]", "[1e-3]", "[True]", "[440.0, 680.0]", "[1e9]", "[-1.0]")
+            # Each argument valid half of the time, so that some calls compute.
+            wl = _pick(
+                rng,
+                ("[550.0]", "[440.0, 680.0]"),
+                ("[0.44, 0.55]", "[1e-3]", "[True]", "[1e9]", "[-1.0]"),
             )
-            theta = rng.choice(("[0.0, 90.0, 180.0]", "[0.0, 180.0]", "None"))
-            m = rng.choice(
-                ("1.5 + 0.01j", "1.5", "1 + 1e-300j", "1e300", "'1.5'", "lambda w: None", "2 + 1j")
+            theta = _pick(
+                rng, ("[0.0, 90.0, 180.0]", "[0.0, 180.0]"), ("None", "[180.0, 0.0]", "[]")
             )
-            weighting = rng.choice(("'scattering'", "'number'", "['number']", "1"))
+            m = _pick(
+                rng,
+                ("1.5 + 0.01j", "1.5", "2 + 1j"),
+                ("1 + 1e-300j", "1e300", "'1.5'", "lambda w: None"),
+            )
+            weighting = _pick(rng, ("'scattering'", "'number'"), ("['number']", "1", "'Number'"))
             code = f"do.compute_optics({m}, {code}, {wl}, {theta}, rtol=1e-2, weighting={weighting}, workers=1)"
         cases.append(Case("api", code, _evaluator(code)))
     return cases
@@ -601,7 +612,7 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--seed", type=int, default=0, help="random seed (default 0, the CI seed)")
     parser.add_argument(
-        "--cases", type=int, default=8, help="cases per kind (default 8, the CI budget)"
+        "--cases", type=int, default=5, help="cases per kind (default 5, the CI budget)"
     )
     parser.add_argument(
         "--kinds", default=",".join(KINDS), help=f"comma-separated, from {', '.join(KINDS)}"
