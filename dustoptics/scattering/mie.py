@@ -616,7 +616,7 @@ def check_sphere_inputs(m: Any, x: Any = None) -> complex:
 
     Returns ``m`` as a complex number.  Raises TypeError for a value that is
     not a number (strings, booleans, None) and ValueError for a non-finite m,
-    n <= 0, k < 0, |m - 1| < :data:`MIN_INDEX_CONTRAST`, or ``x`` outside
+    n <= 0, k < 0, ``|m - 1|`` < :data:`MIN_INDEX_CONTRAST`, or ``x`` outside
     [:data:`MIN_SIZE_PARAMETER`, inf).
     """
     if isinstance(m, (str, bytes, bool, np.bool_)) or not isinstance(m, numbers.Number):
