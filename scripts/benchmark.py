@@ -4,6 +4,7 @@ Usage::
 
     python scripts/benchmark.py [--quick] [--json OUT.json] [--repeats N]
     python scripts/benchmark.py --sweep [--quick] [--json OUT.json]
+    python scripts/benchmark.py --sky [--json OUT.json]
 
 Everything below is measured in one run on one machine, and printed as a plain
 text table (progress goes to stderr); ``--json`` writes the same figures with
@@ -91,6 +92,19 @@ the default table: best of N.
      2 threads, each cluster started and its workers' kernels loaded before
      the clock starts; scaling 1 -> 2 processes; scheduling overhead = 1 -
      (summed task time on the workers) / (wall time x workers).
+
+9. Sky (``--sky``, which runs this section alone, a few minutes on 2 cores):
+   the Mars sky of the hybrid dust model at tau 0.5 on its default 49
+   wavelengths (``dustoptics.sky.compare.mars_sky_atmosphere``; building the
+   dust table is not timed).  Warm: one untimed run first compiles or loads
+   every kernel, then the best of 2 runs of each step is reported (compile
+   excluded).
+
+   * precomputation: ``Medium.from_atmosphere`` (optics, Legendre moments,
+     slant columns) plus ``solve_orders`` (Sun at 30 deg elevation, ground
+     albedo 0.2, tol 1e-4);
+   * image: ``sky_radiance`` over the dome with that field (121 zenith x 91
+     azimuth lines of sight) plus ``SkyRadiance.fisheye(size=512)``.
 
 Timings are wall-clock (``time.perf_counter``); dustoptics runs on all cores,
 the miepython baselines on one, as their users would run them.  Other load on
@@ -1253,6 +1267,103 @@ def format_sweep(res: dict, quick: bool, mach: dict) -> str:
     return "\n".join(lines)
 
 
+SKY_TARGET_PRECOMPUTE_S = 60.0
+SKY_TARGET_IMAGE_S = 5.0
+
+
+def measure_sky(repeats: int = 2) -> dict:
+    """Section 9: one atmosphere's precomputation, then a 512 x 512 fisheye (warm)."""
+    from dustoptics.sky import Medium, solve_orders
+    from dustoptics.sky.compare import mars_sky_atmosphere
+    from dustoptics.sky.scene import sky_radiance
+
+    log("sky: building the hybrid Mars dust table (not timed)")
+    atm = mars_sky_atmosphere("hybrid", optical_depth=0.5)
+    elevation, albedo = 30.0, 0.2
+
+    def precompute() -> tuple[object, object, float, float]:
+        t0 = time.perf_counter()
+        medium = Medium.from_atmosphere(atm)
+        t1 = time.perf_counter()
+        field = solve_orders(medium, sun_zenith_deg=90.0 - elevation, ground_albedo=albedo)
+        return medium, field, t1 - t0, time.perf_counter() - t1
+
+    def image(medium: object, field: object) -> tuple[object, float, float]:
+        t0 = time.perf_counter()
+        sky = sky_radiance(medium, sun_elevation_deg=elevation, ground_albedo=albedo, field=field)
+        t1 = time.perf_counter()
+        sky.fisheye(size=512)
+        return sky, t1 - t0, time.perf_counter() - t1
+
+    log("sky: warm-up run (compiles or loads the kernels)")
+    medium, field, _, _ = precompute()
+    image(medium, field)
+    pre, img = [], []
+    for i in range(repeats):
+        log(f"sky: timed run {i + 1}/{repeats}")
+        medium, field, t_medium, t_orders = precompute()
+        pre.append((t_medium + t_orders, t_medium, t_orders))
+        sky, t_dome, t_fisheye = image(medium, field)
+        img.append((t_dome + t_fisheye, t_dome, t_fisheye))
+    best_pre, best_img = min(pre), min(img)
+    return {
+        "atmosphere": atm.name,
+        "optical_depth": 0.5,
+        "wavelengths": len(atm.wavelength_nm),
+        "sun_elevation_deg": elevation,
+        "n_orders": int(field.n_orders),
+        "lines_of_sight": int(sky.radiance.shape[0] * sky.radiance.shape[1]),
+        "precompute_s": best_pre[0],
+        "medium_s": best_pre[1],
+        "orders_s": best_pre[2],
+        "image_s": best_img[0],
+        "dome_s": best_img[1],
+        "fisheye_s": best_img[2],
+        "repeats": repeats,
+    }
+
+
+def format_sky(res: dict, mach: dict) -> str:
+    lines = ["dustoptics sky benchmark", "=" * 24]
+
+    def row(label: str, value: str) -> None:
+        lines.append(f"  {label:<62} {value}")
+
+    row("cores (os.cpu_count)", str(mach["cpu_count"]))
+    row(
+        "load average at start (1, 5, 15 min)",
+        ", ".join(f"{x:.2f}" for x in mach["load_average"]) if mach["load_average"] else "n/a",
+    )
+    lines.append("")
+    lines.append(
+        f"9. Sky: {res['atmosphere']}, tau {res['optical_depth']:g}, {res['wavelengths']} "
+        f"wavelengths, Sun at {res['sun_elevation_deg']:g} deg "
+        f"(warm, compile excluded; best of {res['repeats']})"
+    )
+    row("precomputation: Medium.from_atmosphere + solve_orders", f"{res['precompute_s']:.2f} s")
+    row("  Medium.from_atmosphere", f"{res['medium_s']:.2f} s")
+    row(f"  solve_orders ({res['n_orders']} orders)", f"{res['orders_s']:.2f} s")
+    row("512 x 512 fisheye: sky_radiance over the dome + fisheye", f"{res['image_s']:.2f} s")
+    row(f"  sky_radiance ({res['lines_of_sight']} lines of sight)", f"{res['dome_s']:.2f} s")
+    row("  SkyRadiance.fisheye(size=512)", f"{res['fisheye_s']:.2f} s")
+    lines.append("")
+    lines.append("Targets (issue 20)")
+    for label, ok, value in (
+        (
+            f"precomputation <= {SKY_TARGET_PRECOMPUTE_S:g} s on 2 cores",
+            res["precompute_s"] <= SKY_TARGET_PRECOMPUTE_S,
+            f"{res['precompute_s']:.1f} s",
+        ),
+        (
+            f"512 x 512 fisheye after it <= {SKY_TARGET_IMAGE_S:g} s",
+            res["image_s"] <= SKY_TARGET_IMAGE_S,
+            f"{res['image_s']:.1f} s",
+        ),
+    ):
+        lines.append(f"  {'PASS' if ok else 'FAIL'}  {label:<62} {value}")
+    return "\n".join(lines)
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
         description="Benchmark dustoptics against miepython baselines (see the module docstring)."
@@ -1272,7 +1383,24 @@ def main(argv: list[str] | None = None) -> int:
         action="store_true",
         help="only the sweep rows (section 8, ~15 min on 2 cores; --quick ~2 min); needs the 'sweep' extra",
     )
+    parser.add_argument(
+        "--sky",
+        action="store_true",
+        help="only the sky rows (section 9, a few minutes on 2 cores)",
+    )
     args = parser.parse_args(argv)
+    if args.sky:
+        t0 = time.perf_counter()
+        mach = machine_info()
+        sky_res = measure_sky()
+        print(format_sky(sky_res, mach))
+        print(f"(benchmark ran {time.perf_counter() - t0:.0f} s)")
+        if args.json is not None:
+            args.json.write_text(
+                json.dumps({"machine": mach, "sky": sky_res}, indent=2, sort_keys=True) + "\n"
+            )
+            log(f"wrote {args.json}")
+        return 0
     if args.sweep:
         t0 = time.perf_counter()
         mach = machine_info()

@@ -48,7 +48,7 @@ import numpy as np
 from dustoptics.sky.medium import Medium, _scatters
 from dustoptics.sky.orders import DiffuseField, normalized_legendre
 
-__all__ = ["line_of_sight_radiance", "source_table"]
+__all__ = ["MODE_CUTOFF", "line_of_sight_radiance", "source_modes", "source_table"]
 
 #: Samples of the direction-cosine grid of the multiple-scattering source.
 N_SOURCE_MU: Final = 181
@@ -67,12 +67,65 @@ def source_table(medium: Medium, field: DiffuseField) -> np.ndarray:
     numpy.ndarray, shape (n_constituent, n_modes, n_wavelength, n_level, N_SOURCE_MU)
         Per unit scaled scattering cross-section and number density. [sr^-1]
     """
+    return _source_grid(medium, field, 2 * medium.n_streams).transpose(2, 3, 4, 0, 1)
+
+
+def _source_grid(medium: Medium, field: DiffuseField, n_modes: int) -> np.ndarray:
+    # The source of :func:`source_table` for modes m < n_modes, laid out as the
+    # kernel reads it: (level, mu, constituent, mode, wavelength).
     n_mom = 2 * medium.n_streams
     grid = np.linspace(-1.0, 1.0, N_SOURCE_MU)
-    lam = normalized_legendre(n_mom, grid)  # (m, l, u)
+    lam = normalized_legendre(n_mom, grid)[:n_modes]  # (m, l, u)
     two_l = 2.0 * np.arange(n_mom) + 1.0
     chi = 0.5 * two_l * medium.scaled_chi  # (c, x, l)
-    return np.einsum("cxl,mxkl,mlu->cmxku", chi, field.moments, lam)
+    weighted = chi[:, None, :, None, :] * field.moments[None, :n_modes]  # (c, m, x, k, l)
+    return np.einsum("cmxkl,mlu->kucmx", weighted, lam, optimize=True)
+
+
+#: Fourier modes of the multiple-scattering source whose largest contribution
+#: to the emission (over levels, directions and wavelengths) is below this
+#: fraction of the largest mode-0 contribution are dropped: 100 times below
+#: the default tolerance of the orders, so dropping them changes no radiance
+#: by more than 1e-6 of the brightest diffuse source.
+MODE_CUTOFF: Final = 1e-6
+
+
+def source_modes(medium: Medium, field: DiffuseField) -> np.ndarray:
+    """Fourier modes kept per constituent: 1 + the last mode above :data:`MODE_CUTOFF`.
+
+    The size of constituent c's source in mode m, weighted by its scaled
+    scattering coefficient ``N0 sigma'_sca``, is bounded (``|L_l^m| <= 1``)
+    by ``N0 sigma'_sca (1/2) sum_l (2 l + 1) |chi'_l M_l^m|``, the largest over
+    levels and wavelengths; modes beyond the last one whose bound is above
+    the cutoff times the largest mode-0 bound are left out of the
+    line-of-sight sums (exactly zero for Rayleigh scattering beyond m = 2 and
+    for a pure absorber).
+
+    Parameters
+    ----------
+    medium : Medium
+        The atmosphere's optics.
+    field : DiffuseField
+        The converged diffuse field.
+
+    Returns
+    -------
+    numpy.ndarray of int64, shape (n_constituent,)
+    """
+    n_mom = 2 * medium.n_streams
+    two_l = 2.0 * np.arange(n_mom) + 1.0
+    chi = np.abs(0.5 * two_l * medium.scaled_chi)  # (c, x, l)
+    weight = medium.scaled_sigma_sca_m2 * medium.number_density_per_m3[:, None]  # (c, x)
+    bound = np.einsum("cxl,mxkl->cmxk", chi, np.abs(field.moments)) * weight[:, None, :, None]
+    size = bound.max(axis=(2, 3))  # (c, m)
+    ref = size[:, 0].max()
+    out = np.zeros(size.shape[0], dtype=np.int64)
+    if ref <= 0.0:
+        return out
+    for c, row in enumerate(size):
+        above = np.nonzero(row > MODE_CUTOFF * ref)[0]
+        out[c] = above[-1] + 1 if above.size else 0
+    return out
 
 
 @numba.njit(cache=True, nogil=True)
@@ -140,6 +193,7 @@ def _radiance_kernel(
     source: np.ndarray,
     ground_albedo: np.ndarray,
     ground_diffuse: np.ndarray,
+    modes_used: np.ndarray,
     n_path: int,
 ) -> np.ndarray:
     n_rays = mu_view.shape[0]
@@ -170,6 +224,11 @@ def _radiance_kernel(
         col = np.zeros(n_c)
         dens = np.zeros(n_c)
         cosm = np.zeros(n_modes)
+        tsun = np.zeros(nwl)
+        bes = np.zeros(nwl)
+        ss = np.zeros(nwl)
+        ms = np.zeros(nwl)
+        jm = np.zeros(nwl)
         s_prev = 0.0
         a = 6.0
         norm = math.expm1(a)
@@ -210,22 +269,26 @@ def _radiance_kernel(
             fk = (level_altitude[k] - z) / (level_altitude[k] - level_altitude[k + 1])
             fk = min(max(fk, 0.0), 1.0)
             # Scattering and extinction at the point, wavelength innermost.
-            tsun = np.zeros(nwl)
-            if lit:
-                for x in range(nwl):
-                    tau_sun = 0.0
+            for x in range(nwl):
+                tau_sun = 0.0
+                if lit:
                     for c in range(n_c):
                         tau_sun += sig_ext_scaled[c, x] * col[c] * n0[c]
                     tsun[x] = math.exp(-tau_sun)
-            bes = np.zeros(nwl)
-            ss = np.zeros(nwl)
-            ms = np.zeros(nwl)
+                else:
+                    tsun[x] = 0.0
+                bes[x] = 0.0
+                ss[x] = 0.0
+                ms[x] = 0.0
             for c in range(n_c):
                 d = dens[c]
                 if d == 0.0:
                     continue
-                jm = np.zeros(nwl)
-                for m in range(n_modes):
+                for x in range(nwl):
+                    jm[x] = 0.0
+                # Only the Fourier modes this constituent's source has
+                # (Rayleigh: m <= 2; none for a pure absorber).
+                for m in range(modes_used[c]):
                     cm = cosm[m]
                     w0 = cm * (1.0 - fk) * (1.0 - fu)
                     w1 = cm * (1.0 - fk) * fu
@@ -341,7 +404,8 @@ def line_of_sight_radiance(
         axis=1,
     )  # (ray, c, x)
     density = medium.density(medium.altitude_m)
-    source = source_table(medium, field)
+    modes_used = source_modes(medium, field)
+    source = _source_grid(medium, field, max(int(modes_used.max()), 1))
     ground_diffuse = field.flux_down_diffuse[:, -1]
     out = _radiance_kernel(
         mu_view,
@@ -361,9 +425,10 @@ def line_of_sight_radiance(
         medium.slant.mu,
         medium.slant.column_m,
         field.altitude_m,
-        np.ascontiguousarray(source.transpose(3, 4, 0, 1, 2)),  # (level, mu, c, m, x)
+        np.ascontiguousarray(source),  # (level, mu, c, m, x)
         field.ground_albedo,
         ground_diffuse,
+        modes_used,
         int(n_path),
     )
     return out.reshape(vz.shape + (medium.wavelength_nm.size,))

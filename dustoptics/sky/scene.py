@@ -24,7 +24,7 @@ from dustoptics import colour
 from dustoptics._validation import check_closed_interval, check_positive
 from dustoptics.atmosphere.sets import Atmosphere
 from dustoptics.sky.medium import Medium
-from dustoptics.sky.orders import solve_orders
+from dustoptics.sky.orders import DiffuseField, solve_orders
 from dustoptics.sky.render import line_of_sight_radiance
 
 __all__ = ["ILLUMINANT", "SkyRadiance", "default_view_zenith_deg", "png_bytes", "sky_radiance"]
@@ -252,6 +252,7 @@ def sky_radiance(
     tol: float = 1e-4,
     view_zenith_deg: np.ndarray | None = None,
     azimuth_step_deg: float = 2.0,
+    field: DiffuseField | None = None,
 ) -> SkyRadiance:
     """The spectral sky over an observer near the ground.
 
@@ -273,6 +274,11 @@ def sky_radiance(
         Viewing zenith angles (default :func:`default_view_zenith_deg`). [deg]
     azimuth_step_deg : float
         Step of the viewing azimuths from 0 to 180 deg. [deg]
+    field : DiffuseField, optional
+        The diffuse field already solved for this medium and Sun
+        (:func:`~dustoptics.sky.orders.solve_orders` with ``tol``), to render
+        the dome without solving again; ``ground_albedo`` must equal the
+        field's.
 
     Returns
     -------
@@ -288,7 +294,25 @@ def sky_radiance(
         raise ValueError("view_zenith_deg must increase strictly within [0, 90] deg")
     n_az = round(180.0 / step) + 1
     azi = np.linspace(0.0, 180.0, n_az)
-    field = solve_orders(medium, sun_zenith_deg=90.0 - elev, ground_albedo=ground_albedo, tol=tol)
+    if field is None:
+        field = solve_orders(
+            medium, sun_zenith_deg=90.0 - elev, ground_albedo=ground_albedo, tol=tol
+        )
+    elif not isinstance(field, DiffuseField):
+        raise TypeError(f"field must be a DiffuseField; got {type(field).__name__}")
+    elif abs(field.mu0 - math.cos(math.radians(90.0 - elev))) > 1e-12:
+        raise ValueError(
+            f"field was solved for a Sun at {90.0 - math.degrees(math.acos(field.mu0)):g} deg "
+            f"elevation; sun_elevation_deg is {elev!r}"
+        )
+    elif field.ground_albedo.size != medium.wavelength_nm.size or not np.allclose(
+        np.broadcast_to(np.asarray(ground_albedo, dtype=float), field.ground_albedo.shape),
+        field.ground_albedo,
+    ):
+        raise ValueError(
+            f"ground_albedo {ground_albedo!r} differs from the field's "
+            f"({field.ground_albedo.tolist()!r})"
+        )
     zz, aa = np.meshgrid(zen, azi, indexing="ij")
     radiance = line_of_sight_radiance(
         medium,
