@@ -1095,6 +1095,12 @@ def _add_sky_parser(sub: Any) -> None:
             action="store_true",
             help="also a sunset sequence, Sun elevation 20 to -2 degree, at one exposure",
         )
+        q.add_argument(
+            "--space",
+            action="store_true",
+            help="also the limb seen from space, Sun in quadrature (NAME_limb.png, its own "
+            "exposure unless --exposure)",
+        )
         q.add_argument("--out", type=Path, required=True, metavar="DIR", help="output directory")
         q.add_argument("--force", action="store_true", help="replace existing files")
         q.add_argument("--quiet", action="store_true", help="no summary output")
@@ -1151,6 +1157,8 @@ class SkyJob:
         names = [f"{stem}_sky.nc", f"{stem}_fisheye.png", f"{stem}_panorama.png"]
         if self.args.sunset:
             names += [f"{stem}_sunset_{e:+05.1f}.png" for e in _SUNSET_ELEVATIONS_DEG]
+        if self.args.space:
+            names.append(f"{stem}_limb.png")
         return [out / n for n in names]
 
     def atmosphere(self) -> Any:
@@ -1190,6 +1198,11 @@ class SkyJob:
                 out[stem.with_name(f"{atm.name}_sunset_{elev:+05.1f}.png")] = png_bytes(
                     s.panorama(exposure=exposure)
                 )
+        if a.space:
+            from dustoptics.sky.space import limb_radiance
+
+            limb = limb_radiance(medium, ground_albedo=a.albedo)
+            out[stem.with_name(f"{atm.name}_limb.png")] = png_bytes(limb.image(exposure=a.exposure))
         return out
 
     def comparison_files(self) -> dict[Path, bytes]:

@@ -5,7 +5,9 @@
 - :mod:`~dustoptics.sky.orders`: multiple scattering by successive orders
   (discrete ordinates, Fourier series in azimuth, pseudo-spherical beam);
 - :mod:`~dustoptics.sky.render`: radiance along lines of sight through the
-  spherical shell (exact single scattering plus the diffuse source).
+  spherical shell (exact single scattering plus the diffuse source);
+- :mod:`~dustoptics.sky.scene`: the sky dome, colour and images;
+- :mod:`~dustoptics.sky.space`: the limb seen from space.
 """
 
 from dustoptics.sky import medium, orders, render

@@ -54,6 +54,9 @@ __all__ = ["MODE_CUTOFF", "line_of_sight_radiance", "source_modes", "source_tabl
 N_SOURCE_MU: Final = 181
 #: Samples along each line of sight.
 N_PATH: Final = 96
+#: Stretch of the samples along a line of sight from the ground: dense near
+#: the observer, where the densities are largest.
+PATH_STRETCH: Final = 6.0
 
 
 def source_table(medium: Medium, field: DiffuseField) -> np.ndarray:
@@ -176,7 +179,7 @@ def _radiance_kernel(
     mu_view: np.ndarray,
     phi_view: np.ndarray,
     r0: float,
-    mu_sun: float,
+    mu_sun_ray: np.ndarray,
     r_top: float,
     altitude: np.ndarray,
     density: np.ndarray,
@@ -195,6 +198,7 @@ def _radiance_kernel(
     ground_diffuse: np.ndarray,
     modes_used: np.ndarray,
     n_path: int,
+    stretch: float,
 ) -> np.ndarray:
     n_rays = mu_view.shape[0]
     n_c, nwl = sig_ext.shape
@@ -203,8 +207,9 @@ def _radiance_kernel(
     n_u = source.shape[1]
     r_ground = radius_grid[0]
     out = np.zeros((n_rays, nwl))
-    sin_sun = math.sqrt(max(0.0, 1.0 - mu_sun * mu_sun))
     for ray in numba.prange(n_rays):
+        mu_sun = mu_sun_ray[ray]
+        sin_sun = math.sqrt(max(0.0, 1.0 - mu_sun * mu_sun))
         mv = mu_view[ray]
         sv = math.sqrt(max(0.0, 1.0 - mv * mv))
         cos_theta = mv * mu_sun + sv * sin_sun * math.cos(phi_view[ray])
@@ -230,7 +235,7 @@ def _radiance_kernel(
         ms = np.zeros(nwl)
         jm = np.zeros(nwl)
         s_prev = 0.0
-        a = 6.0
+        a = stretch
         norm = math.expm1(a)
         for i in range(n_path + 1):
             s = s_end * math.expm1(a * i / n_path) / norm
@@ -388,10 +393,42 @@ def line_of_sight_radiance(
         )
     mu_view = np.cos(np.deg2rad(vz)).ravel()
     phi_view = np.deg2rad(va).ravel()
-    mu_sun = field.mu0
+    out = _radiance(
+        medium,
+        field,
+        mu_view=mu_view,
+        phi_view=phi_view,
+        mu_sun=np.full(mu_view.shape, field.mu0),
+        radius_m=medium.planet_radius_m + h,
+        n_path=int(n_path),
+    )
+    return out.reshape(vz.shape + (medium.wavelength_nm.size,))
+
+
+def _radiance(
+    medium: Medium,
+    field: DiffuseField,
+    *,
+    mu_view: np.ndarray,
+    phi_view: np.ndarray,
+    mu_sun: np.ndarray,
+    radius_m: float,
+    n_path: int,
+    stretch: float = PATH_STRETCH,
+) -> np.ndarray:
+    """Radiance along rays from radius ``radius_m`` (checked by the callers).
+
+    Each ray has its own view cosine, azimuth from the Sun [rad] and Sun
+    cosine at its start; the multiple-scattering source is ``field``'s.
+    Samples along each ray are at ``s_end expm1(stretch i / n) / expm1(stretch)``
+    (dense near the start; nearly uniform for a small ``stretch``).
+    Returns shape (n_rays, n_wavelength). [sr^-1]
+    """
     cos_theta = np.clip(
         mu_view * mu_sun
-        + np.sqrt(1 - mu_view**2) * math.sqrt(max(0.0, 1 - mu_sun**2)) * np.cos(phi_view),
+        + np.sqrt(np.maximum(0.0, 1 - mu_view**2))
+        * np.sqrt(np.maximum(0.0, 1 - mu_sun**2))
+        * np.cos(phi_view),
         -1.0,
         1.0,
     )
@@ -407,11 +444,11 @@ def line_of_sight_radiance(
     modes_used = source_modes(medium, field)
     source = _source_grid(medium, field, max(int(modes_used.max()), 1))
     ground_diffuse = field.flux_down_diffuse[:, -1]
-    out = _radiance_kernel(
-        mu_view,
-        phi_view,
-        medium.planet_radius_m + h,
-        mu_sun,
+    out: np.ndarray = _radiance_kernel(
+        np.ascontiguousarray(mu_view, dtype=float),
+        np.ascontiguousarray(phi_view, dtype=float),
+        float(radius_m),
+        np.ascontiguousarray(mu_sun, dtype=float),
         medium.planet_radius_m + medium.top_altitude_m,
         medium.altitude_m,
         np.ascontiguousarray(density),
@@ -430,5 +467,6 @@ def line_of_sight_radiance(
         ground_diffuse,
         modes_used,
         int(n_path),
+        float(stretch),
     )
-    return out.reshape(vz.shape + (medium.wavelength_nm.size,))
+    return out

@@ -27,7 +27,15 @@ from dustoptics.sky.medium import Medium
 from dustoptics.sky.orders import DiffuseField, solve_orders
 from dustoptics.sky.render import line_of_sight_radiance
 
-__all__ = ["ILLUMINANT", "SkyRadiance", "default_view_zenith_deg", "png_bytes", "sky_radiance"]
+__all__ = [
+    "ILLUMINANT",
+    "SkyRadiance",
+    "default_view_zenith_deg",
+    "display_rgb",
+    "png_bytes",
+    "sky_radiance",
+    "sunlit_xyz",
+]
 
 #: Spectrum of the sunlight that lights every sky (shape only; see colour).
 ILLUMINANT: Final = "astm-g173"
@@ -124,10 +132,7 @@ class SkyRadiance:
         and ybar, divided by the Sun's own ``int S ybar``. [sr^-1]
         """
         spectra = self.radiance if radiance is None else radiance
-        sun = colour.spectrum_to_xyz(
-            self.wavelength_nm, np.ones(self.wavelength_nm.size), illuminant=ILLUMINANT
-        )
-        return colour.spectrum_to_xyz(self.wavelength_nm, spectra, illuminant=ILLUMINANT) / sun[1]
+        return sunlit_xyz(self.wavelength_nm, spectra)
 
     def chromaticity(self, radiance: np.ndarray | None = None) -> np.ndarray:
         """CIE 1931 (x, y) chromaticity of radiances under sunlight. [-]"""
@@ -239,8 +244,22 @@ class SkyRadiance:
         )
 
     def _display(self, spectra: np.ndarray, exposure: float) -> np.ndarray:
-        rgb = colour.xyz_to_display(self.xyz(spectra), exposure=exposure)
-        return np.round(rgb * 255.0).astype(np.uint8)
+        return display_rgb(self.xyz(spectra), exposure)
+
+
+def sunlit_xyz(wavelength_nm: np.ndarray, spectra: np.ndarray) -> np.ndarray:
+    """CIE 1931 XYZ of radiances under sunlight, per unit solar illuminance. [sr^-1]
+
+    ``spectra`` has the wavelengths last; ``Y`` is the luminance factor.
+    """
+    sun = colour.spectrum_to_xyz(wavelength_nm, np.ones(wavelength_nm.size), illuminant=ILLUMINANT)
+    return colour.spectrum_to_xyz(wavelength_nm, spectra, illuminant=ILLUMINANT) / sun[1]
+
+
+def display_rgb(xyz: np.ndarray, exposure: float) -> np.ndarray:
+    """8-bit display sRGB of XYZ with white at ``Y * exposure = 1``."""
+    rgb = colour.xyz_to_display(xyz, exposure=exposure)
+    return np.round(rgb * 255.0).astype(np.uint8)
 
 
 def sky_radiance(

@@ -31,6 +31,17 @@ def test_sky_earth_writes_images_and_data(tmp_path: Path) -> None:
     assert cli.main([*argv, "--force"]) == 0
 
 
+def test_sky_earth_space_writes_the_limb(tmp_path: Path) -> None:
+    out = tmp_path / "sky"
+    argv = ["sky", "earth", "--sun-elevation", "30", "--size", "32", "--space"]
+    assert cli.main([*argv, "--out", str(out), "--quiet"]) == 0
+    img = mpl_image.imread(out / "earth_limb.png")
+    assert img.shape[:2] == (120, 61)
+    # Rows run from the top of the atmosphere (dark) down to the ground (bright).
+    luminance = img[..., :3].mean(axis=(1, 2))
+    assert luminance[-5:].mean() > 5 * luminance[:5].mean()
+
+
 @pytest.mark.parametrize(
     "extra",
     [["--sun-elevation", "-40"], ["--albedo", "2"]],

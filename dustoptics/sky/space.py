@@ -1,0 +1,268 @@
+"""The limb seen from space: radiance of the atmosphere against black space.
+
+A distant observer looks along parallel lines of sight past the planet.  A
+line of sight is fixed by its tangent point ``T``: the tangent altitude
+``h`` above the ground and the limb angle ``psi`` around the planet's disc
+(0 where the limb is closest to the Sun's direction).  The Sun's direction
+makes the angle ``sun_view_angle_deg`` (``beta``) with the lines of sight, so
+every line of sight has the scattering angle ``beta`` (90 deg: the Sun
+beside the observer's line of sight, a quadrature view).
+
+Each line of sight is integrated from where it enters the atmosphere to where
+it leaves it (or meets the ground) with the ground observer's machinery of
+:mod:`dustoptics.sky.render`: exact single scattering in the spherical shell
+(the Sun's path to every point), every beam attenuated with the delta-M
+scaled extinction.  The multiple-scattering source changes along the limb
+with the local Sun: the diffuse field is solved
+(:func:`~dustoptics.sky.orders.solve_orders`) at Sun zenith angles every
+``field_step_deg`` over the range of the tangent points' local Sun zenith
+angles, and each line of sight takes the source of the two fields that
+bracket its tangent point's, linearly interpolated (the radiance is linear
+in the source, so interpolating the two radiances is interpolating the
+sources).  As for the ground observer, the multiple-scattering source takes
+the column at each tangent point as laterally uniform; near the terminator,
+where the local Sun changes fastest along a line of sight, this is the
+approximation's weakest place.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any, Final
+
+import numpy as np
+
+from dustoptics._validation import check_closed_interval, check_positive
+from dustoptics.atmosphere.sets import Atmosphere
+from dustoptics.sky.medium import Medium
+from dustoptics.sky.orders import solve_orders
+from dustoptics.sky.render import _radiance
+from dustoptics.sky.scene import display_rgb, sunlit_xyz
+
+__all__ = ["LimbRadiance", "limb_radiance"]
+
+#: Largest local Sun zenith angle at a tangent point (that of solve_orders). [deg]
+MAX_SUN_ZENITH_DEG: Final = 100.0
+#: Samples along a line of sight through the limb (nearly uniform: the
+#: tangent point, where the densities are largest, is mid-way).
+N_LIMB_PATH: Final = 600
+_LIMB_STRETCH: Final = 1e-6
+
+
+@dataclass(frozen=True, eq=False)
+class LimbRadiance:
+    """Spectral radiance of the limb seen from space.
+
+    Attributes
+    ----------
+    name : str
+        The atmosphere's name.
+    wavelength_nm : numpy.ndarray, shape (n_wavelength,)
+        Wavelengths. [nm]
+    tangent_altitude_m : numpy.ndarray, shape (n_altitude,)
+        Tangent altitudes of the lines of sight. [m]
+    limb_angle_deg : numpy.ndarray, shape (n_limb,)
+        Limb angles (0: closest to the Sun's direction). [deg]
+    radiance : numpy.ndarray, shape (n_altitude, n_limb, n_wavelength)
+        Radiance per unit solar irradiance normal to the beam. [sr^-1]
+    sun_view_angle_deg : float
+        Angle between the Sun's direction and the lines of sight (the
+        scattering angle). [deg]
+    field_sun_zenith_deg : numpy.ndarray
+        Sun zenith angles at which the diffuse field was solved. [deg]
+    n_orders : int
+        Largest number of orders of scattering summed.
+    error_estimate : float
+        Largest estimated relative remainder of the series of orders. [-]
+    tol : float
+        Requested tolerance of the series. [-]
+    """
+
+    name: str
+    wavelength_nm: np.ndarray
+    tangent_altitude_m: np.ndarray
+    limb_angle_deg: np.ndarray
+    radiance: np.ndarray
+    sun_view_angle_deg: float
+    field_sun_zenith_deg: np.ndarray
+    n_orders: int
+    error_estimate: float
+    tol: float
+
+    def xyz(self) -> np.ndarray:
+        """CIE 1931 XYZ under sunlight, per unit solar illuminance. [sr^-1]"""
+        return sunlit_xyz(self.wavelength_nm, self.radiance)
+
+    def default_exposure(self) -> float:
+        """Exposure that puts the 99th percentile of the limb's luminance at white."""
+        y = self.xyz()[..., 1]
+        return float(1.0 / max(float(np.percentile(y, 99.0)), 1e-300))
+
+    def image(self, *, exposure: float | None = None) -> np.ndarray:
+        """Display sRGB image: tangent altitude upward (rows), limb angle across.
+
+        Returns
+        -------
+        numpy.ndarray, shape (n_altitude, n_limb, 3), dtype uint8
+            The top row is the highest tangent altitude.
+        """
+        e = self.default_exposure() if exposure is None else check_positive("exposure", exposure)
+        return display_rgb(self.xyz()[::-1], e)
+
+
+def limb_geometry(
+    *,
+    planet_radius_m: float,
+    top_radius_m: float,
+    tangent_altitude_m: np.ndarray,
+    limb_angle_deg: np.ndarray,
+    sun_view_angle_deg: float,
+) -> dict[str, np.ndarray]:
+    """Where each line of sight enters the atmosphere, in the local frame there.
+
+    Lines of sight run along +x; the tangent point is
+    ``r_t (0, cos psi, sin psi)``; the Sun is in the direction
+    ``(cos beta, sin beta, 0)``.  Returns, per (altitude, limb angle): the
+    view cosine ``mu_view`` and the Sun cosine ``mu_sun`` at the entry point,
+    the azimuth ``phi_view`` [rad] between them there, and the local Sun zenith
+    cosine at the tangent point ``mu_sun_tangent``.
+    """
+    h, psi = np.meshgrid(tangent_altitude_m, np.deg2rad(limb_angle_deg), indexing="ij")
+    beta = math.radians(sun_view_angle_deg)
+    r_t = planet_radius_m + h
+    half = np.sqrt(np.maximum(top_radius_m**2 - r_t**2, 0.0))
+    mu_view = -half / top_radius_m
+    s_dot_t = math.sin(beta) * np.cos(psi)  # Sun . (tangent point direction)
+    mu_sun = (r_t * s_dot_t - half * math.cos(beta)) / top_radius_m
+    sv = np.sqrt(np.maximum(0.0, 1.0 - mu_view**2))
+    ss = np.sqrt(np.maximum(0.0, 1.0 - mu_sun**2))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        cphi = np.where(sv * ss > 1e-12, (math.cos(beta) - mu_view * mu_sun) / (sv * ss), 1.0)
+    return {
+        "mu_view": mu_view,
+        "mu_sun": mu_sun,
+        "phi_view": np.arccos(np.clip(cphi, -1.0, 1.0)),
+        "mu_sun_tangent": s_dot_t,
+    }
+
+
+def limb_radiance(
+    atmosphere: Atmosphere | Medium,
+    *,
+    sun_view_angle_deg: float = 90.0,
+    tangent_altitude_m: Any = None,
+    limb_angle_deg: Any = None,
+    ground_albedo: float | np.ndarray = 0.2,
+    tol: float = 1e-4,
+    field_step_deg: float = 10.0,
+    n_path: int = N_LIMB_PATH,
+) -> LimbRadiance:
+    """The limb of an atmosphere seen from far away in space.
+
+    Parameters
+    ----------
+    atmosphere : Atmosphere or Medium
+        An atmosphere set or its medium.
+    sun_view_angle_deg : float
+        Angle between the Sun's direction and the lines of sight, 1 .. 179
+        (the scattering angle; 90: quadrature). [deg]
+    tangent_altitude_m : array_like, optional
+        Tangent altitudes, within [0, top); default 120 from the ground to the
+        top. [m]
+    limb_angle_deg : array_like, optional
+        Limb angles; default -60 .. 60 deg in 2 deg steps. [deg]
+    ground_albedo : float or array_like
+        Lambertian ground albedo. [-]
+    tol : float
+        Tolerance of the series of orders of scattering. [-]
+    field_step_deg : float
+        Step of the Sun zenith angles at which the diffuse field is solved. [deg]
+    n_path : int
+        Samples along each line of sight (nearly uniform).
+
+    Returns
+    -------
+    LimbRadiance
+    """
+    medium = atmosphere if isinstance(atmosphere, Medium) else Medium.from_atmosphere(atmosphere)
+    beta = check_closed_interval("sun_view_angle_deg", sun_view_angle_deg, 1.0, 179.0)
+    step = check_closed_interval("field_step_deg", field_step_deg, 1.0, 50.0)
+    top = medium.top_altitude_m
+    h = (
+        (np.arange(120) + 0.5) / 120 * top
+        if tangent_altitude_m is None
+        else np.asarray(tangent_altitude_m, dtype=float)
+    )
+    psi = (
+        np.arange(-60.0, 60.01, 2.0)
+        if limb_angle_deg is None
+        else np.asarray(limb_angle_deg, dtype=float)
+    )
+    if h.ndim != 1 or h.size < 1 or not np.all(np.isfinite(h)) or np.any((h < 0) | (h >= top)):
+        raise ValueError(
+            f"tangent_altitude_m must be a 1-D array within [0, {top:g}) m (inside the atmosphere)"
+        )
+    if psi.ndim != 1 or psi.size < 1 or not np.all(np.isfinite(psi)):
+        raise ValueError("limb_angle_deg must be a finite 1-D array [deg]")
+    if not (isinstance(n_path, int) and 16 <= n_path <= 100_000):
+        raise ValueError(f"n_path must be an integer in [16, 100000]; got {n_path!r}")
+    geo = limb_geometry(
+        planet_radius_m=medium.planet_radius_m,
+        top_radius_m=medium.planet_radius_m + top,
+        tangent_altitude_m=h,
+        limb_angle_deg=psi,
+        sun_view_angle_deg=beta,
+    )
+    sza_t = np.rad2deg(np.arccos(np.clip(geo["mu_sun_tangent"], -1.0, 1.0)))
+    if sza_t.max() > MAX_SUN_ZENITH_DEG:
+        raise ValueError(
+            f"limb_angle_deg reaches tangent points with the Sun {sza_t.max():.1f} deg from the "
+            f"zenith (sun_view_angle_deg {beta:g}); at most {MAX_SUN_ZENITH_DEG:g} deg is allowed"
+        )
+    lo = math.floor(sza_t.min() / step) * step
+    hi = min(math.ceil(sza_t.max() / step) * step, MAX_SUN_ZENITH_DEG)
+    nodes = np.unique(np.append(np.arange(lo, hi, step), hi))
+    k = np.clip(np.searchsorted(nodes, sza_t, side="right") - 1, 0, max(nodes.size - 2, 0))
+    if nodes.size == 1:
+        weight_hi = np.zeros_like(sza_t)
+    else:
+        weight_hi = (sza_t - nodes[k]) / (nodes[k + 1] - nodes[k])
+    nwl = medium.wavelength_nm.size
+    radiance = np.zeros(sza_t.shape + (nwl,))
+    n_orders, err = 0, 0.0
+    for j, sza in enumerate(nodes):
+        share = np.where(k == j, 1.0 - weight_hi, 0.0) + np.where(k + 1 == j, weight_hi, 0.0)
+        if nodes.size == 1:
+            share = np.ones_like(sza_t)
+        rays = share > 0
+        if not np.any(rays):
+            continue
+        field = solve_orders(
+            medium, sun_zenith_deg=float(sza), ground_albedo=ground_albedo, tol=tol
+        )
+        n_orders = max(n_orders, field.n_orders)
+        err = max(err, float(np.max(field.error_estimate)))
+        part = _radiance(
+            medium,
+            field,
+            mu_view=geo["mu_view"][rays],
+            phi_view=geo["phi_view"][rays],
+            mu_sun=geo["mu_sun"][rays],
+            radius_m=medium.planet_radius_m + top,
+            n_path=n_path,
+            stretch=_LIMB_STRETCH,
+        )
+        radiance[rays] += share[rays, None] * part
+    return LimbRadiance(
+        name=medium.name,
+        wavelength_nm=medium.wavelength_nm,
+        tangent_altitude_m=h,
+        limb_angle_deg=psi,
+        radiance=radiance,
+        sun_view_angle_deg=beta,
+        field_sun_zenith_deg=nodes,
+        n_orders=n_orders,
+        error_estimate=err,
+        tol=float(tol),
+    )
