@@ -765,7 +765,7 @@ def _add_format_options(p: argparse.ArgumentParser, *, default: str | None, requ
         default=None,
         required=required,
         metavar="FMT[,FMT...]",
-        help=f"output formats: netcdf (.nc), hdf5 (.h5, the same format), csv, cosmoscout, glsl, hlsl, wgsl, texture{help_default}",
+        help=f"output formats: netcdf (.nc), hdf5 (.h5, the same format), csv, cosmoscout, glsl, hlsl, wgsl, texture, disort, libradtran{help_default}",
     )
     p.add_argument("--force", action="store_true", help="replace existing output files")
     p.add_argument(

@@ -31,6 +31,10 @@ replace existing files unless asked to (``overwrite=True``).  Readers raise
   atmospheric scattering (2017) for a whole atmosphere
   (:func:`~dustoptics.io.bruneton.write_bruneton`) or, as the ``bruneton``
   format, one aerosol table's Mie part and phase-function snippet.
+- :mod:`~dustoptics.io.rt_text`: what radiative-transfer codes read, as plain
+  text: DISORT's phase-function moments with ssa and extinction (format
+  ``disort``) and libRadtran's ``aerosol_file explicit`` layer files (format
+  ``libradtran``); both need ``compute_optics(expansion=...)``.
 
 :data:`FORMATS` maps a format name (the command line's ``--format``) to a
 writer ``writer(table, out_dir, *, overwrite=False, **options) -> list[Path]``
@@ -85,6 +89,7 @@ from dustoptics.io import (
     netcdf,
     npy,
     phase_texture,
+    rt_text,
     seed_csv,
     shader,
     texture,
@@ -128,6 +133,7 @@ __all__ = [
     "read_seed_csv",
     "read_texture",
     "register_format",
+    "rt_text",
     "seed_csv",
     "shader",
     "shader_source",

@@ -1,0 +1,136 @@
+"""The ``disort`` and ``libradtran`` files, read back by independent readers
+written here from the formats' documentation (numpy.loadtxt for the rows; the
+libRadtran user's guide, option ``aerosol_file explicit``, for the layout:
+altitude [km] and layer file, top line first with NULL; layer rows wavelength
+[nm], extinction [km-1], single-scattering albedo, moments), and compared with
+the Table."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import dustoptics as do
+from dustoptics.cli import main
+from dustoptics.io import FORMATS, write
+
+N_M3 = 2.0e6  # number density [m-3], a typical Mars dust value (Smith 2004 order of magnitude)
+
+
+@pytest.fixture(scope="module")
+def table() -> do.Table:
+    return do.compute_optics(
+        do.mars_dust(),
+        do.ModifiedGamma(r_eff_um=1.5, v_eff=0.3),
+        [500.0, 900.0],
+        np.linspace(0.0, 180.0, 19),
+        rtol=1e-3,
+        expansion=True,
+        name="mars rt",
+    ).replace(number_density_per_m3=N_M3)
+
+
+def _header(path: Path) -> list[str]:
+    return [ln for ln in path.read_text().splitlines() if ln.startswith("#")]
+
+
+def test_registered() -> None:
+    assert "disort" in FORMATS and "libradtran" in FORMATS
+
+
+def test_disort_file(table: do.Table, tmp_path: Path) -> None:
+    (path,) = write(table, tmp_path, format="disort")
+    assert path.name == "mars_rt_disort.txt"
+    rows = np.loadtxt(path, ndmin=2)
+    np.testing.assert_array_equal(rows[:, 0], table.wavelength_nm)
+    np.testing.assert_array_equal(rows[:, 1], table.cext_um2)
+    np.testing.assert_array_equal(rows[:, 2], table.csca_um2 / table.cext_um2)
+    np.testing.assert_array_equal(rows[:, 3], table.expansion_error_estimate)
+    pmom = rows[:, 4:]
+    # DISORT's moments: chi_l = alpha1_l / (2 l + 1), computed here independently.
+    l_ = np.arange(table.alpha1.shape[1])
+    np.testing.assert_allclose(pmom, table.alpha1 / (2 * l_ + 1), rtol=1e-15, atol=0)
+    # Identities: chi_0 = 1 (normalization), chi_1 = g (asymmetry parameter).
+    np.testing.assert_array_equal(pmom[:, 0], 1.0)
+    np.testing.assert_allclose(pmom[:, 1], table.g, atol=1e-6)
+    head = "\n".join(_header(path))
+    assert table.provenance.input_hash in head
+    assert "[um2]" in head and "[nm]" in head and "pmom_l = alpha1_l / (2 l + 1)" in head
+    # Deterministic: the same table gives the same bytes.
+    (again,) = write(table, tmp_path / "again", format="disort")
+    assert again.read_bytes() == path.read_bytes()
+
+
+def test_libradtran_files(table: do.Table, tmp_path: Path) -> None:
+    paths = write(table, tmp_path, format="libradtran", bottom_km=0.0, top_km=10.0)
+    explicit, layer = paths
+    # The explicit file, parsed as uvspec does: non-comment lines "z file", top first.
+    entries = [ln.split() for ln in explicit.read_text().splitlines() if not ln.startswith("#")]
+    assert entries == [["10.0", "NULL"], ["0.0", layer.name]]
+    assert (explicit.parent / entries[1][1]).is_file()
+    rows = np.loadtxt(layer, ndmin=2)
+    np.testing.assert_array_equal(rows[:, 0], table.wavelength_nm)
+    # Extinction [km-1] = N [m-3] * cext [um2] * 1e-12 [m2 um-2] * 1e3 [m km-1].
+    np.testing.assert_allclose(rows[:, 1], N_M3 * table.cext_um2 * 1e-12 * 1e3, rtol=1e-15)
+    np.testing.assert_allclose(rows[:, 1], table.beta_ext_per_m * 1e3, rtol=1e-15)
+    np.testing.assert_array_equal(rows[:, 2], table.ssa)
+    l_ = np.arange(table.alpha1.shape[1])
+    np.testing.assert_allclose(rows[:, 3:], table.alpha1 / (2 * l_ + 1), rtol=1e-15, atol=0)
+    assert rows[0, 3] == 1.0
+    assert table.provenance.input_hash in "\n".join(_header(layer))
+
+
+def test_refusals(table: do.Table, tmp_path: Path) -> None:
+    plain = table.replace(
+        alpha1=None,
+        alpha2=None,
+        alpha3=None,
+        alpha4=None,
+        beta1=None,
+        beta2=None,
+        expansion_error_estimate=None,
+    )
+    for fmt in ("disort", "libradtran"):
+        with pytest.raises(ValueError, match=r"expansion=True"):
+            write(plain, tmp_path, format=fmt)
+    with pytest.raises(ValueError, match="number-density-per-m3"):
+        write(table.replace(number_density_per_m3=None), tmp_path, format="libradtran")
+    with pytest.raises(ValueError, match="top_km"):
+        write(table, tmp_path, format="libradtran", bottom_km=2.0, top_km=1.0)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_cli_export(table: do.Table, tmp_path: Path) -> None:
+    src = tmp_path / "t.nc"
+    table.save(src)
+    out = tmp_path / "out"
+    assert main(["export", str(src), "--out", str(out), "--format", "disort,libradtran"]) == 0
+    files = sorted(p.name for p in out.rglob("*") if p.is_file())
+    assert files == [
+        "mars_rt_aerosol_explicit.dat",
+        "mars_rt_aerosol_layer.dat",
+        "mars_rt_disort.txt",
+    ]
+    (disort,) = out.rglob("mars_rt_disort.txt")
+    np.testing.assert_array_equal(np.loadtxt(disort, ndmin=2)[:, 1], table.cext_um2)
+
+
+def test_cli_refuses_without_expansion(
+    table: do.Table, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    src = tmp_path / "plain.nc"
+    table.replace(
+        alpha1=None,
+        alpha2=None,
+        alpha3=None,
+        alpha4=None,
+        beta1=None,
+        beta2=None,
+        expansion_error_estimate=None,
+    ).save(src)
+    code = main(["export", str(src), "--out", str(tmp_path / "out"), "--format", "disort"])
+    assert code != 0
+    assert "expansion=True" in capsys.readouterr().err
+    assert not list((tmp_path / "out").rglob("*.txt"))
