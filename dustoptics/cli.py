@@ -1460,6 +1460,15 @@ def _check_build_request(args: argparse.Namespace, builder: TableBuilder) -> Non
     """What the formats need and where the files go, checked before the table is computed."""
     from dustoptics._validation import check_file_name, check_inside
 
+    rt_formats = sorted({"disort", "libradtran"} & set(args.format or DEFAULT_FORMATS))
+    if rt_formats:
+        # Configurations compute no expansion coefficients: refuse before computing.
+        raise UsageError(
+            f"--format {','.join(rt_formats)} needs the phase function's Legendre moments, which "
+            "a configuration does not compute: compute the table with "
+            "compute_optics(..., expansion=True), save it (table.save) and run "
+            f"'{PROG} export FILE --format {','.join(rt_formats)}'"
+        )
     if "cosmoscout" in (args.format or DEFAULT_FORMATS):
         # What _format_options needs, checked before the table is computed.
         from dustoptics.atmosphere.column import ExponentialProfile, sample_profile

@@ -134,3 +134,13 @@ def test_cli_refuses_without_expansion(
     assert code != 0
     assert "expansion=True" in capsys.readouterr().err
     assert not list((tmp_path / "out").rglob("*.txt"))
+
+
+def test_cli_build_refuses_before_computing(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    code = main(["build", "blue-moons", "--out", str(tmp_path), "--format", "disort", "--quiet"])
+    assert code == 2
+    err = capsys.readouterr().err
+    assert "expansion=True" in err and "export FILE --format disort" in err
+    assert list(tmp_path.iterdir()) == []
