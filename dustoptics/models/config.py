@@ -27,8 +27,8 @@ Top level (before any ``[section]``)::
 ``[material]`` (Mie and hybrid models only), ``model`` one of
 
 - ``"mars_dust"`` (:func:`dustoptics.particles.mixing.mars_dust`): ``hematite_fraction``
-  [0, 1] (default 0.03), ``host_index`` (a number n, or ``{n = 1.5, k = 0.0}``;
-  default 1.5), ``hematite`` (default ``"querry-extraordinary"``), ``rule``
+  [0, 1] (default 0.03), ``host_index`` (a number n, ``{n = 1.5, k = 0.0}``, or a
+  catalogue name such as ``"marsdust-wolff2009"``; default 1.5), ``hematite`` (default ``"querry-extraordinary"``), ``rule``
   (default ``"maxwell_garnett"``);
 - ``"catalogue"``: ``name``, a catalogue material (:func:`dustoptics.list_materials`);
 - ``"constant"``: ``n`` > 0 and ``k`` >= 0 (default 0).
@@ -469,7 +469,8 @@ class MaterialConfig:
         ``"mars_dust"``, ``"catalogue"`` or ``"constant"``.
     parameters : Mapping
         The model's parameters with defaults filled in: for ``"mars_dust"``
-        ``hematite_fraction`` [-], ``host_index`` (``{"n", "k"}``) [-],
+        ``hematite_fraction`` [-], ``host_index`` (``{"n", "k"}`` [-] or a
+        catalogue name),
         ``hematite`` (full catalogue name) and ``rule``; for ``"catalogue"``
         ``name``; for ``"constant"`` ``n`` and ``k`` [-].
     """
@@ -481,7 +482,12 @@ class MaterialConfig:
         """The refractive-index object for :func:`dustoptics.scattering.optics.compute_optics`."""
         p = self.parameters
         if self.model == "mars_dust":
-            host = complex(p["host_index"]["n"], p["host_index"]["k"])
+            host_index = p["host_index"]
+            host = (
+                host_index
+                if isinstance(host_index, str)
+                else complex(host_index["n"], host_index["k"])
+            )
             return mars_dust(
                 hematite_fraction=p["hematite_fraction"],
                 host_index=host,
@@ -757,7 +763,10 @@ def _parse_material(ctx: _Context, value: Any) -> MaterialConfig:
         ctx, "material.hematite_fraction", sec.get("hematite_fraction", 0.03), 0.0, 1.0
     )
     host = sec.get("host_index", 1.5)
-    if isinstance(host, dict):
+    host_value: Any
+    if isinstance(host, str):
+        host_value = _choice(ctx, "material.host_index", host, list_materials())
+    elif isinstance(host, dict):
         _known_keys(ctx, "material.host_index", host, ("n", "k"))
         host_n = _positive(
             ctx, "material.host_index.n", _required(ctx, "material.host_index", host, "n")
@@ -776,6 +785,8 @@ def _parse_material(ctx: _Context, value: Any) -> MaterialConfig:
                 f"must be a number n > 0 or a table {{n = ..., k = ...}}; got {host!r}",
             ) from None
         host_k = 0.0
+    if not isinstance(host, str):
+        host_value = _frozen({"n": host_n, "k": host_k})
     hematite = _choice(
         ctx,
         "material.hematite",
@@ -788,7 +799,7 @@ def _parse_material(ctx: _Context, value: Any) -> MaterialConfig:
         _frozen(
             {
                 "hematite_fraction": fraction,
-                "host_index": _frozen({"n": host_n, "k": host_k}),
+                "host_index": host_value,
                 "hematite": MARS_DUST_HEMATITE.get(hematite, hematite),
                 "rule": rule,
             }

