@@ -144,3 +144,31 @@ def test_cli_build_refuses_before_computing(
     err = capsys.readouterr().err
     assert "expansion=True" in err and "export FILE --format disort" in err
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("sza_deg", [60.0, 30.0])
+def test_cdisort_reads_the_moments(table: do.Table, tmp_path: Path, sza_deg: float) -> None:
+    """CDISORT (nanodisort) given the file's ssa and moments: the nadir radiance
+    leaving an optically thin layer is single scattering (Chandrasekhar 1950;
+    Thomas & Stamnes 1999, eq. 7.12),
+    I = F0 ssa F11(Theta) mu0 / (mu0 + mu) (1 - exp(-tau (1/mu0 + 1/mu))),
+    with F11 from the table's tabulated phase function at Theta = 180 - sza
+    (per sr, so F0/(4 pi) P = F0 F11); multiple scattering adds O(tau)."""
+    nanodisort = pytest.importorskip("nanodisort")
+    (path,) = write(table, tmp_path, format="disort")
+    row = np.loadtxt(path, ndmin=2)[0]
+    ssa, pmom = row[2], row[4:]
+    tau, mu0, mu = 1e-3, np.cos(np.radians(sza_deg)), 1.0
+    s = nanodisort.DisortState()
+    s.nstr, s.nlyr, s.nmom, s.ntau, s.numu, s.nphi = 16, 1, pmom.size - 1, 1, 1, 1
+    s.usrtau = s.usrang = s.lamber = s.quiet = True
+    s.onlyfl = False
+    s.intensity_correction = s.old_intensity_correction = True
+    s.allocate()
+    s.dtauc, s.ssalb, s.pmom = np.array([tau]), np.array([ssa]), pmom.reshape(-1, 1)
+    s.utau, s.umu, s.phi = np.array([0.0]), np.array([mu]), np.array([0.0])
+    s.fbeam, s.umu0, s.phi0, s.albedo = 1.0, mu0, 0.0, 0.0
+    s.solve()
+    (k,) = np.flatnonzero(table.theta_deg == 180.0 - sza_deg)
+    single = ssa * table.phase[0, k] * mu0 / (mu0 + mu) * (1 - np.exp(-tau * (1 / mu0 + 1 / mu)))
+    np.testing.assert_allclose(np.asarray(s.uu).ravel()[0], single, rtol=1e-2)
