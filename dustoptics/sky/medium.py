@@ -105,32 +105,71 @@ class SlantColumns:
 
         Returns an array of shape ``(n_constituent,) + radius_m.shape``.
         """
-        r = np.clip(radius_m, self.radius_m[0], self.radius_m[-1])
-        ir = np.clip(np.searchsorted(self.radius_m, r) - 1, 0, self.radius_m.size - 2)
-        fr = (r - self.radius_m[ir]) / (self.radius_m[ir + 1] - self.radius_m[ir])
-        m = np.clip(mu, -1.0, 1.0)
-        im = np.clip(np.searchsorted(self.mu, m) - 1, 0, self.mu.size - 2)
-        fm = (m - self.mu[im]) / (self.mu[im + 1] - self.mu[im])
-        c = self.column_m
-        # Bilinear weights over the finite corners only: next to the rays that
-        # meet the ground (infinite columns) a grazing ray takes the columns
-        # of its grazing neighbours.
-        num = np.zeros((c.shape[0],) + np.shape(r))
-        den = np.zeros(np.shape(r))
-        for di, dj, weight in (
-            (0, 0, (1 - fr) * (1 - fm)),
-            (1, 0, fr * (1 - fm)),
-            (0, 1, (1 - fr) * fm),
-            (1, 1, fr * fm),
-        ):
-            value = c[:, ir + di, im + dj]
-            ok = np.isfinite(value[0])
-            num += np.where(ok, value, 0.0) * weight
-            den += np.where(ok, weight, 0.0)
-        hits = (m < 0) & (r * np.sqrt(np.maximum(0.0, 1.0 - m * m)) < self.radius_m[0])
-        with np.errstate(invalid="ignore", divide="ignore"):
-            out = np.where(den > 0, num / np.where(den > 0, den, 1.0), np.inf)
-        return np.where(hits, np.inf, out)
+        r, m = np.broadcast_arrays(np.asarray(radius_m, float), np.asarray(mu, float))
+        flat = _columns_many(r.ravel(), m.ravel(), self.radius_m, self.mu, self.column_m)
+        return flat.reshape((self.column_m.shape[0],) + r.shape)
+
+
+@numba.njit(cache=True, nogil=True)
+def _columns_many(
+    r: np.ndarray, mu: np.ndarray, radius_grid: np.ndarray, mu_grid: np.ndarray, columns: np.ndarray
+) -> np.ndarray:
+    out = np.empty((columns.shape[0], r.size))
+    col = np.empty(columns.shape[0])
+    for i in range(r.size):
+        if _interp_columns(r[i], mu[i], radius_grid, mu_grid, columns, col):
+            out[:, i] = col
+        else:
+            out[:, i] = np.inf
+    return out
+
+
+@numba.njit(cache=True, nogil=True)
+def _interp_columns(
+    r: float,
+    mu: float,
+    radius_grid: np.ndarray,
+    mu_grid: np.ndarray,
+    columns: np.ndarray,
+    out: np.ndarray,
+) -> bool:
+    """Slant columns from (r, mu) to the top; False if the ray meets the ground.
+
+    Bilinear in radius and cosine over the finite corners only: next to the
+    rays that meet the ground (infinite columns) a grazing ray takes the
+    columns of its grazing neighbours.
+    """
+    r_ground = radius_grid[0]
+    if mu < 0.0 and r * math.sqrt(max(0.0, 1.0 - mu * mu)) < r_ground:
+        return False
+    nr = radius_grid.shape[0]
+    nm = mu_grid.shape[0]
+    rr = min(max(r, radius_grid[0]), radius_grid[nr - 1])
+    ir = int(np.searchsorted(radius_grid, rr)) - 1
+    ir = min(max(ir, 0), nr - 2)
+    fr = (rr - radius_grid[ir]) / (radius_grid[ir + 1] - radius_grid[ir])
+    mm = min(max(mu, -1.0), 1.0)
+    im = int(np.searchsorted(mu_grid, mm)) - 1
+    im = min(max(im, 0), nm - 2)
+    fm = (mm - mu_grid[im]) / (mu_grid[im + 1] - mu_grid[im])
+    den = 0.0
+    for c in range(columns.shape[0]):
+        out[c] = 0.0
+    for corner in range(4):
+        di = corner & 1
+        dj = corner >> 1
+        wgt = (fr if di else 1.0 - fr) * (fm if dj else 1.0 - fm)
+        v0 = columns[0, ir + di, im + dj]
+        if math.isinf(v0):
+            continue
+        den += wgt
+        for c in range(columns.shape[0]):
+            out[c] += wgt * columns[c, ir + di, im + dj]
+    if den <= 0.0:
+        return False
+    for c in range(columns.shape[0]):
+        out[c] /= den
+    return True
 
 
 @dataclass(frozen=True)

@@ -45,7 +45,7 @@ from typing import Final
 import numba
 import numpy as np
 
-from dustoptics.sky.medium import Medium, _scatters
+from dustoptics.sky.medium import Medium, _interp_columns, _scatters
 from dustoptics.sky.orders import DiffuseField, normalized_legendre
 
 __all__ = ["MODE_CUTOFF", "line_of_sight_radiance", "source_modes", "source_table"]
@@ -131,49 +131,6 @@ def source_modes(medium: Medium, field: DiffuseField) -> np.ndarray:
     return out
 
 
-@numba.njit(cache=True, nogil=True)
-def _interp_columns(
-    r: float,
-    mu: float,
-    radius_grid: np.ndarray,
-    mu_grid: np.ndarray,
-    columns: np.ndarray,
-    out: np.ndarray,
-) -> bool:
-    """Slant columns from (r, mu) to the top; False if the ray meets the ground."""
-    r_ground = radius_grid[0]
-    if mu < 0.0 and r * math.sqrt(max(0.0, 1.0 - mu * mu)) < r_ground:
-        return False
-    nr = radius_grid.shape[0]
-    nm = mu_grid.shape[0]
-    rr = min(max(r, radius_grid[0]), radius_grid[nr - 1])
-    ir = int(np.searchsorted(radius_grid, rr)) - 1
-    ir = min(max(ir, 0), nr - 2)
-    fr = (rr - radius_grid[ir]) / (radius_grid[ir + 1] - radius_grid[ir])
-    mm = min(max(mu, -1.0), 1.0)
-    im = int(np.searchsorted(mu_grid, mm)) - 1
-    im = min(max(im, 0), nm - 2)
-    fm = (mm - mu_grid[im]) / (mu_grid[im + 1] - mu_grid[im])
-    den = 0.0
-    for c in range(columns.shape[0]):
-        out[c] = 0.0
-    for corner in range(4):
-        di = corner & 1
-        dj = corner >> 1
-        wgt = (fr if di else 1.0 - fr) * (fm if dj else 1.0 - fm)
-        v0 = columns[0, ir + di, im + dj]
-        if math.isinf(v0):
-            continue
-        den += wgt
-        for c in range(columns.shape[0]):
-            out[c] += wgt * columns[c, ir + di, im + dj]
-    if den <= 0.0:
-        return False
-    for c in range(columns.shape[0]):
-        out[c] /= den
-    return True
-
-
 @numba.njit(cache=True, nogil=True, parallel=True)
 def _radiance_kernel(
     mu_view: np.ndarray,
@@ -184,7 +141,6 @@ def _radiance_kernel(
     altitude: np.ndarray,
     density: np.ndarray,
     n0: np.ndarray,
-    sig_ext: np.ndarray,
     sig_sca: np.ndarray,
     sig_ext_scaled: np.ndarray,
     sig_sca_scaled: np.ndarray,
@@ -201,7 +157,7 @@ def _radiance_kernel(
     stretch: float,
 ) -> np.ndarray:
     n_rays = mu_view.shape[0]
-    n_c, nwl = sig_ext.shape
+    n_c, nwl = sig_ext_scaled.shape
     n_modes = source.shape[3]
     n_lev = level_altitude.shape[0]
     n_u = source.shape[1]
@@ -453,7 +409,6 @@ def _radiance(
         medium.altitude_m,
         np.ascontiguousarray(density),
         medium.number_density_per_m3,
-        medium.sigma_ext_m2,
         medium.sigma_sca_m2,
         medium.scaled_sigma_ext_m2,
         medium.scaled_sigma_sca_m2,
