@@ -44,6 +44,7 @@ import hashlib
 import json
 from collections.abc import Mapping
 from dataclasses import asdict, dataclass, field, is_dataclass, replace
+from functools import cache
 from importlib.metadata import PackageNotFoundError
 from importlib.metadata import version as _dist_version
 from typing import TYPE_CHECKING, Any
@@ -222,7 +223,10 @@ def canonical_json(value: Any) -> str:
     return json.dumps(plain(value), sort_keys=True, separators=(",", ":"), allow_nan=False)
 
 
+@cache
 def _installed_version(distribution: str) -> str:
+    # Cached: reading a distribution's metadata takes about a millisecond,
+    # and a sweep records the versions for each of its points.
     try:
         return _dist_version(distribution)
     except PackageNotFoundError:

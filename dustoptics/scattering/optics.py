@@ -1172,9 +1172,35 @@ class _WavelengthSolver:
             settings=self.settings,
         )
         radius = nodes.size_parameter * self.wavelength_um / (2.0 * np.pi)
-        w = nodes.weight
-        m2, m3, m4 = (math.fsum(w * radius**k) for k in (2, 3, 4))
+        m2, m3, m4 = _moment_sums(nodes.weight, radius)
         return m2, m3, m4
+
+
+@njit(cache=True, nogil=True)
+def _moment_sums(w: np.ndarray, radius: np.ndarray) -> tuple[float, float, float]:
+    """Sums of w r^2, w r^3 and w r^4, compensated (Neumaier 1974): for these
+    positive terms within an ulp or two of the correctly rounded sum
+    (math.fsum, which took a fifth of a sweep's time on its ~10^4 nodes per
+    distribution).
+
+    Reference: A. Neumaier, Z. Angew. Math. Mech. 54, 39-51 (1974),
+    doi:10.1002/zamm.19740540106.
+    """
+    sums = np.zeros(3)
+    comp = np.zeros(3)
+    for j in range(w.shape[0]):
+        # The terms as numpy forms them (x * x, then pow).
+        r = radius[j]
+        terms = (w[j] * (r * r), w[j] * r**3.0, w[j] * r**4.0)
+        for k in range(3):
+            term = terms[k]
+            t = sums[k] + term
+            if abs(sums[k]) >= abs(term):
+                comp[k] += (sums[k] - t) + term
+            else:
+                comp[k] += (term - t) + sums[k]
+            sums[k] = t
+    return sums[0] + comp[0], sums[1] + comp[1], sums[2] + comp[2]
 
 
 #: Largest estimated work of one :func:`compute_optics` call without

@@ -30,8 +30,14 @@ distributed = pytest.importorskip(
 xr = pytest.importorskip("xarray", reason="needs the 'sweep' extra (xarray)")
 pytest.importorskip("zarr", reason="needs the 'sweep' extra (zarr)")
 
+from dustoptics.scattering.optics import _gauss_angles  # noqa: E402
 from dustoptics.sweep import sweep  # noqa: E402
-from dustoptics.sweep.shared import _cell_intensities, _cell_rows, solve_shared  # noqa: E402
+from dustoptics.sweep.shared import (  # noqa: E402
+    _GRIDS,
+    _cell_intensities,
+    _cell_rows,
+    solve_shared,
+)
 
 WAVELENGTHS = [450.0, 550.0, 650.0, 750.0]
 OVER = {"size_distribution.r_eff_um": [0.8, 1.6], "size_distribution.v_eff": [0.1, 0.3]}
@@ -132,12 +138,13 @@ def test_cell_rows_are_the_kernels_sums_to_the_bit():
             False,
             intens,
             np.arange(x.size),
+            16,
         )
         rows = _cell_rows(
             np.arange(2),
             nodes.weight,
             per_particle,
-            True,
+            mu.size,
             16,
             x,
             qext,
@@ -146,8 +153,113 @@ def test_cell_rows_are_the_kernels_sums_to_the_bit():
             back,
             intens,
             np.array([mu.size, mu.size]),
+            np.empty(0),
+            np.zeros(1, dtype=np.int64),
+            np.zeros(2, dtype=np.int64),
         )
         assert np.array_equal(rows, expected)
+
+
+def test_cell_rows_on_a_smaller_grid_are_moved_as_the_kernel_moves_them():
+    """A cell summed on a smaller Gauss grid of the ladder and moved to the
+    distribution's grid equals, to the bit, mie._accumulate's row on that
+    grid moved by mie._legendre_regrid (what a single build does), and the
+    intensities on the grid (the polynomial of degree 2 n_max that both
+    grids resolve) to 1e-12 of the row summed on the larger grid directly."""
+    dist = do.ModifiedGamma(r_eff_um=0.3, v_eff=0.2)
+    settings = QuadratureSettings()
+    lower, upper = np.array([0.0]), np.array([8.0])
+    nodes, node_panel = panel_nodes(
+        dist, wavelength_nm=550.0, lower_s=lower, upper_s=upper, settings=settings
+    )
+    x = nodes.size_parameter
+    small, large = (int(n) for n in _GRIDS[[0, 3]])  # 32 and 80 half-grid angles
+    assert mie.wiscombe_nmax(float(x.max())) + 2 <= small
+    m = 1.55 + 0.003j
+    mu_s, w_s, table_s = _gauss_angles(small)
+    mu_l, _, table_l = _gauss_angles(large)
+    r_even, r_odd = mie._interpolation_maps(mu_s, w_s, mu_l)
+    intens = np.empty((x.size, 2 * small))
+    qext, qsca, gq, back = _cell_intensities(
+        m,
+        x,
+        np.zeros(x.size, dtype=np.int64),
+        np.array([small]),
+        table_s.ravel(),
+        np.array([0, table_s.size]),
+        True,
+        intens,
+        np.arange(x.size),
+        16,
+    )
+    maps = np.concatenate([r_even.ravel(), r_odd.ravel()])
+    for per_particle in (False, True):
+        rows = _cell_rows(
+            np.arange(1),
+            nodes.weight,
+            per_particle,
+            2 * large,
+            16,
+            x,
+            qext,
+            qsca,
+            gq,
+            back,
+            intens,
+            np.array([2 * small]),
+            maps,
+            np.array([0, maps.size]),
+            np.zeros(1, dtype=np.int64),
+        )
+        on_small = mie._accumulate(
+            m, x, nodes.weight, node_panel, 1, per_particle, table_s, small, True, 1, 0j, 0.0
+        )
+        moved = mie._legendre_regrid(np.ascontiguousarray(on_small[:, : 2 * small]), r_even, r_odd)
+        assert np.array_equal(rows[:, : 2 * large], moved)
+        assert np.array_equal(rows[:, 2 * large :], on_small[:, 2 * small :])
+        direct = mie._accumulate(
+            m, x, nodes.weight, node_panel, 1, per_particle, table_l, large, True, 1, 0j, 0.0
+        )
+        assert np.allclose(rows[:, : 2 * large], direct[:, : 2 * large], rtol=1e-12, atol=0)
+
+
+def test_shared_results_do_not_depend_on_the_other_distributions():
+    """A distribution's result is the same to the bit whichever distributions
+    share its solve and in whatever order (a cell's spheres are the same
+    numbers whoever asked for them first)."""
+    dust = do.mars_dust()
+    m = complex(dust(np.array([600.0]))[0])
+    mu = np.cos(np.deg2rad(np.linspace(0.0, 180.0, 361)))
+    dists = [
+        do.ModifiedGamma(r_eff_um=0.5, v_eff=0.1),
+        do.ModifiedGamma(r_eff_um=1.5, v_eff=0.3),
+        do.ModifiedGamma(r_eff_um=1.0, v_eff=0.2),
+    ]
+
+    def solve(group):
+        return solve_shared(
+            m=m,
+            wavelength_nm=600.0,
+            mu_out=mu,
+            distributions=group,
+            per_particle=False,
+            settings=QuadratureSettings(),
+            rtol=1e-4,
+            cross_rtol=1e-6,
+        )[0]
+
+    together = solve(dists)
+    for i, dist in enumerate(dists):
+        alone = solve([dist])[0]
+        reversed_ = solve(dists[::-1])[len(dists) - 1 - i]
+        for r in (alone, reversed_):
+            assert np.array_equal(r.phase, together[i].phase)
+            assert (r.cext, r.csca, r.g, r.err_phase) == (
+                together[i].cext,
+                together[i].csca,
+                together[i].g,
+                together[i].err_phase,
+            )
 
 
 @pytest.mark.parametrize("weighting", ["scattering", "number"])
