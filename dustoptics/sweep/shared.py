@@ -205,15 +205,16 @@ def _cell_rows(
     than ``n_f`` (a smaller symmetric Gauss grid, ``+mu`` then ``-mu``) is
     summed there and moved to the distribution's grid by the maps (R_even
     then R_odd, :func:`mie._interpolation_maps`) at
-    ``maps[map_start[cell_map[c]]:]``, as :func:`mie._legendre_regrid` does:
-    one move per row, not per sphere.
+    ``maps[map_start[cell_map[c]]:]``, as :func:`mie._legendre_regrid` does
+    (:func:`_move_rows`): one move per row, not per sphere.
     """
-    out = np.zeros((cells.shape[0], n_f + mie.N_SUMS))
-    scratch = np.empty(n_f)
-    half = n_f // 2
-    even = np.empty(half)
-    odd = np.empty(half)
-    for r in range(cells.shape[0]):
+    n_rows = cells.shape[0]
+    out = np.zeros((n_rows, n_f + mie.N_SUMS))
+    # Rows summed on a smaller grid wait in ``small`` to be moved, by grid.
+    small = np.empty((n_rows, n_f))
+    n_small = 0
+    small_row = np.empty(n_rows, dtype=np.int64)
+    for r in range(n_rows):
         c = cells[r]
         row = out[r]
         for i in range(nodes_per_cell):
@@ -230,8 +231,12 @@ def _cell_rows(
         if n_f == 0:
             continue
         n_c = cell_values[c]
-        target = row if n_c == n_f else scratch
-        if n_c != n_f:
+        if n_c == n_f:
+            target = row
+        else:
+            target = small[n_small]
+            small_row[n_small] = r
+            n_small += 1
             for k in range(n_c):
                 target[k] = 0.0
         for i in range(nodes_per_cell):
@@ -242,29 +247,94 @@ def _cell_rows(
             values = intens[j]
             for k in range(n_c):
                 target[k] += cj * values[k]
-        if n_c == n_f:
-            continue
-        n_t = n_c // 2
-        start = map_start[cell_map[c]]
+    if n_small == 0:
+        return out
+    # Rows of one grid together, four at a time (_move_rows), in order of
+    # grid then row (a counting sort by grid).
+    n_maps = map_start.shape[0] - 1
+    count = np.zeros(n_maps + 1, dtype=np.int64)
+    for q in range(n_small):
+        count[cell_map[cells[small_row[q]]] + 1] += 1
+    for t in range(n_maps):
+        count[t + 1] += count[t]
+    by_grid = np.empty(n_small, dtype=np.int64)
+    for q in range(n_small):
+        t = cell_map[cells[small_row[q]]]
+        by_grid[count[t]] = q
+        count[t] += 1
+    half = n_f // 2
+    q0 = 0
+    while q0 < n_small:
+        t = cell_map[cells[small_row[by_grid[q0]]]]
+        q1 = q0
+        while (
+            q1 < n_small and q1 - q0 < _MOVE_ROWS and cell_map[cells[small_row[by_grid[q1]]]] == t
+        ):
+            q1 += 1
+        n_t = cell_values[cells[small_row[by_grid[q0]]]] // 2
+        start = map_start[t]
         size = n_t * half
-        r_even = maps[start : start + size].reshape((n_t, half))
-        r_odd = maps[start + size : start + 2 * size].reshape((n_t, half))
-        # In arrays of their own, which the compiler knows alias nothing
-        # else, so that it vectorizes the sums (2x faster than in the row).
-        even[:] = 0.0
-        odd[:] = 0.0
-        for i in range(n_t):
-            e = 0.5 * (scratch[i] + scratch[n_t + i])
-            o = 0.5 * (scratch[i] - scratch[n_t + i])
-            re = r_even[i]
-            ro = r_odd[i]
-            for k in range(half):
-                even[k] += e * re[k]
-                odd[k] += o * ro[k]
-        for k in range(half):
-            row[k] = even[k] + odd[k]
-            row[half + k] = even[k] - odd[k]
+        _move_rows(
+            small,
+            by_grid[q0:q1],
+            small_row,
+            n_t,
+            maps[start : start + size].reshape((n_t, half)),
+            maps[start + size : start + 2 * size].reshape((n_t, half)),
+            out,
+        )
+        q0 = q1
     return out
+
+
+#: Rows that :func:`_move_rows` moves together.
+_MOVE_ROWS = 4
+
+
+@njit(cache=True, nogil=True)
+def _move_rows(
+    small: np.ndarray,
+    which: np.ndarray,
+    small_row: np.ndarray,
+    n_t: int,
+    r_even: np.ndarray,
+    r_odd: np.ndarray,
+    out: np.ndarray,
+) -> None:
+    """Rows ``small[which]`` (2 n_t values, +mu then -mu, on a smaller
+    Gauss grid) moved to the grid of ``out`` (rows ``small_row[which]``) by
+    the maps R_even, R_odd of :func:`mie._interpolation_maps`, with the
+    expressions and the order of :func:`mie._legendre_regrid` (the same bits):
+    the rows share each pass over the maps, which on large grids come from
+    main memory rather than the cache (up to 2 x 400 x 600 values a grid).
+    """
+    n_b = which.shape[0]
+    half = r_even.shape[1]
+    e = np.empty((_MOVE_ROWS, n_t))
+    o = np.empty((_MOVE_ROWS, n_t))
+    even = np.zeros((_MOVE_ROWS, half))
+    odd = np.zeros((_MOVE_ROWS, half))
+    for b in range(n_b):
+        v = small[which[b]]
+        for i in range(n_t):
+            e[b, i] = 0.5 * (v[i] + v[n_t + i])
+            o[b, i] = 0.5 * (v[i] - v[n_t + i])
+    for i in range(n_t):
+        re = r_even[i]
+        ro = r_odd[i]
+        for b in range(n_b):
+            eb = e[b, i]
+            ob = o[b, i]
+            acc_e = even[b]
+            acc_o = odd[b]
+            for k in range(half):
+                acc_e[k] += eb * re[k]
+                acc_o[k] += ob * ro[k]
+    for b in range(n_b):
+        row = out[small_row[which[b]]]
+        for k in range(half):
+            row[k] = even[b, k] + odd[b, k]
+            row[half + k] = even[b, k] - odd[b, k]
 
 
 #: Angular grids (positive Gauss angles of a symmetric rule): multiples of 16
