@@ -42,7 +42,7 @@ from dustoptics.io._atomic import write_files
 from dustoptics.models.config import BuildConfig, build_table
 from dustoptics.scattering.optics import resolve_refractive_index
 from dustoptics.scattering.quadrature import QuadratureSettings
-from dustoptics.sweep.spec import SweepSpec, load_sweep, parse_point
+from dustoptics.sweep.spec import SweepSpec, load_sweep, parse_points
 from dustoptics.table import Provenance, canonical_json, software_versions
 
 __all__ = ["ChunkResult", "compute_chunk", "sweep"]
@@ -110,30 +110,6 @@ def _shareable(config: BuildConfig) -> bool:
         and config.size_distribution is not None
         and config.size_distribution.build().has_density
     )
-
-
-def _parse_points(points: Sequence[Mapping[str, Any]]) -> list[BuildConfig]:
-    """Validated configurations of points; those that differ from the first
-    only in their size distribution reuse the first's other parts (validating
-    the distribution alone is 100x faster than the whole text)."""
-    from dustoptics.models.config import _Context, _parse_size_distribution
-
-    first = parse_point(points[0])
-    rest = {k: v for k, v in points[0].items() if k != "size_distribution"}
-    configs = [first]
-    for p in points[1:]:
-        if {
-            k: v for k, v in p.items() if k != "size_distribution"
-        } == rest and "size_distribution" in p:
-            ctx = _Context("", "<sweep point>")
-            configs.append(
-                replace(
-                    first, size_distribution=_parse_size_distribution(ctx, p["size_distribution"])
-                )
-            )
-        else:
-            configs.append(parse_point(p))
-    return configs
 
 
 # glibc's mallopt parameters (malloc.h).
@@ -215,7 +191,7 @@ def _compute_arrays(
     points: Sequence[Mapping[str, Any]], wl_start: int, wl_stop: int, shared: bool
 ) -> tuple[dict[str, np.ndarray], int, int]:
     """The arrays of :func:`compute_chunk`, and the spheres computed and weighted."""
-    configs = _parse_points(points)
+    configs = parse_points(points)
     wl_all = configs[0].wavelengths_nm
     wl = wl_all[wl_start:wl_stop]
     theta = configs[0].theta_deg
@@ -723,4 +699,4 @@ def _load(
     validated configurations."""
     spec = load_sweep(config, over)
     data = [spec.point_data(i) for i in spec.indices()]
-    return spec, data, _parse_points(data)
+    return spec, data, parse_points(data)

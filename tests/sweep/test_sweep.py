@@ -22,7 +22,13 @@ from dustoptics.models.config import build_table, parse_config
 from dustoptics.models.presets import preset_text
 from dustoptics.scattering import mie
 from dustoptics.scattering.quadrature import QuadratureSettings, panel_nodes
-from dustoptics.sweep.spec import config_data, load_sweep, parse_point, toml_text
+from dustoptics.sweep.spec import (
+    config_data,
+    load_sweep,
+    parse_point,
+    parse_points,
+    toml_text,
+)
 
 distributed = pytest.importorskip(
     "distributed", reason="needs the 'sweep' extra (dask[distributed])"
@@ -333,6 +339,16 @@ def test_axis_value_outside_its_range_is_rejected_before_any_work(config_file, t
         load_sweep(config_file, {"material.host_index": [1.5]})
     with pytest.raises(TypeError, match=r"values must be numbers"):
         load_sweep(config_file, {"size_distribution.r_eff_um": ["big"]})
+
+
+def test_points_parsed_by_section_equal_whole_parses(config_file):
+    """parse_points validates a point that differs from the first only in its
+    size distribution by that section alone: the same configurations as
+    parsing each point's whole text, with a non-size axis in the sweep too."""
+    over = dict(OVER, **{"material.hematite_fraction": [0.0, 0.05]})
+    spec = load_sweep(config_file, over)
+    data = [spec.point_data(i) for i in spec.indices()]
+    assert parse_points(data) == [parse_point(d) for d in data]
 
 
 def test_sweep_table_in_toml_gives_the_axes(tmp_path):
