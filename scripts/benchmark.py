@@ -94,6 +94,10 @@ the default table: best of N.
      median run reported (one run varies by up to 15 % on this machine);
      scaling 1 -> 2 processes; scheduling overhead = 1 - (summed task time on
      the workers) / (wall time x workers).
+   * the machine's ceiling: the same chunks in one plain process (no Dask),
+     then in two plain processes side by side, each doing all of them: 2 x
+     alone / side by side is the most a second process can gain here (the
+     two share the caches and the memory bandwidth).
 
 9. Sky (``--sky``, which runs this section alone, a few minutes on 2 cores):
    the Mars sky of the hybrid dust model at tau 0.5 on its default 49
@@ -1123,6 +1127,34 @@ def _warm_workers(client) -> None:
     client.run(warm)
 
 
+def _plain_chunks(points: list[dict], n_wl: int) -> float:
+    """Seconds for the sweep's chunks one after the other in this process
+    (a plain process: no Dask), its kernels loaded first."""
+    from dustoptics.sweep import compute_chunk
+
+    compute_chunk(points[:1], 0, 1)
+    t0 = time.perf_counter()
+    for w in range(0, n_wl, 4):
+        compute_chunk(points, w, min(w + 4, n_wl))
+    return time.perf_counter() - t0
+
+
+def _machine_ceiling(points: list[dict], n_wl: int) -> dict:
+    """How much two plain processes computing the whole sweep side by side
+    slow each other down on this machine (shared caches, memory bandwidth):
+    the most any scheduler can gain from a second process here."""
+    import multiprocessing
+
+    ctx = multiprocessing.get_context("spawn")
+    with ctx.Pool(1) as pool:
+        alone = pool.apply(_plain_chunks, (points, n_wl))
+    with ctx.Pool(2) as pool:
+        pair = [
+            r.get() for r in [pool.apply_async(_plain_chunks, (points, n_wl)) for _ in range(2)]
+        ]
+    return {"alone_s": alone, "side_by_side_s": pair, "ceiling": 2.0 * alone / max(pair)}
+
+
 def _timed_sweep(case: dict, *, processes: bool, n_workers: int, threads: int) -> dict:
     import distributed
 
@@ -1213,6 +1245,8 @@ def measure_sweep(quick: bool) -> dict:
     for key, done in runs.items():
         done.sort(key=lambda r: r["wall_s"])
         res[key] = dict(done[len(done) // 2], walls_s=[r["wall_s"] for r in done])
+    log("sweep: one plain process, then two side by side (the machine's ceiling)")
+    res["machine"] = _machine_ceiling(points, int(n_wl))
     res["scaling_1_to_2_processes"] = (
         res["dask_processes_1"]["wall_s"] / res["dask_processes_2"]["wall_s"]
     )
@@ -1261,6 +1295,17 @@ def format_sweep(res: dict, quick: bool, mach: dict) -> str:
             f" (runs {', '.join(f'{w:.1f}' for w in d['walls_s'])} s)",
         )
     row("scaling 1 -> 2 processes", f"{res['scaling_1_to_2_processes']:.2f}x")
+    if "machine" in res:
+        m = res["machine"]
+        row(
+            "plain processes, no Dask: one alone / two side by side",
+            f"{m['alone_s']:.1f} s / {', '.join(f'{t:.1f}' for t in m['side_by_side_s'])} s",
+        )
+        row("  so the most a 2nd process can give on this machine", f"{m['ceiling']:.2f}x")
+        row(
+            "  Dask's scaling as a fraction of that",
+            f"{res['scaling_1_to_2_processes'] / m['ceiling']:.0%}",
+        )
     row("2 threads time / 2 processes time", f"{res['processes_over_threads']:.2f}")
     lines.append("")
     checks = [
