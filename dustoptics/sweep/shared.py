@@ -205,8 +205,8 @@ def _cell_rows(
     than ``n_f`` (a smaller symmetric Gauss grid, ``+mu`` then ``-mu``) is
     summed there and moved to the distribution's grid by the maps (R_even
     then R_odd, :func:`mie._interpolation_maps`) at
-    ``maps[map_start[cell_map[c]]:]``, as :func:`mie._legendre_regrid` does
-    (:func:`_move_rows`): one move per row, not per sphere.
+    ``maps[map_start[cell_map[c]]:]`` with :func:`mie._legendre_regrid`:
+    one move per row, not per sphere.
     """
     n_rows = cells.shape[0]
     out = np.zeros((n_rows, n_f + mie.N_SUMS))
@@ -249,8 +249,8 @@ def _cell_rows(
                 target[k] += cj * values[k]
     if n_small == 0:
         return out
-    # Rows of one grid together, four at a time (_move_rows), in order of
-    # grid then row (a counting sort by grid).
+    # Rows of one grid together (a counting sort by grid), each group moved
+    # by one call of the kernel's own function.
     n_maps = map_start.shape[0] - 1
     count = np.zeros(n_maps + 1, dtype=np.int64)
     for q in range(n_small):
@@ -267,74 +267,27 @@ def _cell_rows(
     while q0 < n_small:
         t = cell_map[cells[small_row[by_grid[q0]]]]
         q1 = q0
-        while (
-            q1 < n_small and q1 - q0 < _MOVE_ROWS and cell_map[cells[small_row[by_grid[q1]]]] == t
-        ):
+        while q1 < n_small and cell_map[cells[small_row[by_grid[q1]]]] == t:
             q1 += 1
         n_t = cell_values[cells[small_row[by_grid[q0]]]] // 2
+        block = np.empty((q1 - q0, 2 * n_t))
+        for b in range(q1 - q0):
+            v = small[by_grid[q0 + b]]
+            for k in range(2 * n_t):
+                block[b, k] = v[k]
         start = map_start[t]
         size = n_t * half
-        _move_rows(
-            small,
-            by_grid[q0:q1],
-            small_row,
-            n_t,
+        moved = mie._legendre_regrid(
+            block,
             maps[start : start + size].reshape((n_t, half)),
             maps[start + size : start + 2 * size].reshape((n_t, half)),
-            out,
         )
+        for b in range(q1 - q0):
+            row = out[small_row[by_grid[q0 + b]]]
+            for k in range(n_f):
+                row[k] = moved[b, k]
         q0 = q1
     return out
-
-
-#: Rows that :func:`_move_rows` moves together.
-_MOVE_ROWS = 4
-
-
-@njit(cache=True, nogil=True)
-def _move_rows(
-    small: np.ndarray,
-    which: np.ndarray,
-    small_row: np.ndarray,
-    n_t: int,
-    r_even: np.ndarray,
-    r_odd: np.ndarray,
-    out: np.ndarray,
-) -> None:
-    """Rows ``small[which]`` (2 n_t values, +mu then -mu, on a smaller
-    Gauss grid) moved to the grid of ``out`` (rows ``small_row[which]``) by
-    the maps R_even, R_odd of :func:`mie._interpolation_maps`, with the
-    expressions and the order of :func:`mie._legendre_regrid` (the same bits):
-    the rows share each pass over the maps, which on large grids come from
-    main memory rather than the cache (up to 2 x 400 x 600 values a grid).
-    """
-    n_b = which.shape[0]
-    half = r_even.shape[1]
-    e = np.empty((_MOVE_ROWS, n_t))
-    o = np.empty((_MOVE_ROWS, n_t))
-    even = np.zeros((_MOVE_ROWS, half))
-    odd = np.zeros((_MOVE_ROWS, half))
-    for b in range(n_b):
-        v = small[which[b]]
-        for i in range(n_t):
-            e[b, i] = 0.5 * (v[i] + v[n_t + i])
-            o[b, i] = 0.5 * (v[i] - v[n_t + i])
-    for i in range(n_t):
-        re = r_even[i]
-        ro = r_odd[i]
-        for b in range(n_b):
-            eb = e[b, i]
-            ob = o[b, i]
-            acc_e = even[b]
-            acc_o = odd[b]
-            for k in range(half):
-                acc_e[k] += eb * re[k]
-                acc_o[k] += ob * ro[k]
-    for b in range(n_b):
-        row = out[small_row[which[b]]]
-        for k in range(half):
-            row[k] = even[b, k] + odd[b, k]
-            row[half + k] = even[b, k] - odd[b, k]
 
 
 #: Angular grids (positive Gauss angles of a symmetric rule): multiples of 16
