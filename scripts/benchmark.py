@@ -93,7 +93,8 @@ the default table: best of N.
      the clock starts; each configuration 3 times, the three in turn, the
      median run reported (one run varies by up to 15 % on this machine);
      scaling 1 -> 2 processes; scheduling overhead = 1 - (summed task time on
-     the workers) / (wall time x workers).
+     the workers) / (wall time x workers); the tasks' summed time and the CPU
+     time of their threads (the difference: waiting for a core or the GIL).
    * the machine's ceiling: the same chunks in one plain process (no Dask),
      then in two plain processes side by side, each doing all of them: 2 x
      alone / side by side is the most a second process can gain here (the
@@ -1186,6 +1187,7 @@ def _timed_sweep(case: dict, *, processes: bool, n_workers: int, threads: int) -
         "wall_s": wall,
         "tasks": len(markers),
         "task_s": busy,
+        "task_cpu_s": sum(m["cpu_seconds"] for m in markers),
         "lanes": lanes,
         "overhead": 1.0 - busy / (wall * lanes),
     }
@@ -1291,7 +1293,8 @@ def format_sweep(res: dict, quick: bool, mach: dict) -> str:
         d = res[key]
         row(
             label + f" (median of {len(d['walls_s'])})",
-            f"{d['wall_s']:.1f} s, {d['tasks']} tasks, overhead {100 * d['overhead']:.1f} %"
+            f"{d['wall_s']:.1f} s, {d['tasks']} tasks, overhead {100 * d['overhead']:.1f} %,"
+            f" tasks {d['task_s']:.1f} s ({d['task_cpu_s']:.1f} s CPU)"
             f" (runs {', '.join(f'{w:.1f}' for w in d['walls_s'])} s)",
         )
     row("scaling 1 -> 2 processes", f"{res['scaling_1_to_2_processes']:.2f}x")

@@ -96,12 +96,16 @@ class ChunkResult:
         weighted (equal without sharing). [-]
     seconds : float
         Time the task took on its worker. [s]
+    cpu_seconds : float
+        CPU time of the thread that ran it: below ``seconds`` by the time it
+        waited (for a core, or for the GIL). [s]
     """
 
     arrays: Mapping[str, np.ndarray]
     spheres_computed: int
     spheres_weighted: int
     seconds: float
+    cpu_seconds: float
 
 
 def _shareable(config: BuildConfig) -> bool:
@@ -181,10 +185,12 @@ def compute_chunk(
     :func:`dustoptics.models.config.build_table` at those wavelengths, equal
     to the bit to the same wavelengths of a single build.
     """
-    start = time.perf_counter()
+    start, cpu = time.perf_counter(), time.thread_time()
     with _allocations_reused():
         arrays, computed, weighted = _compute_arrays(points, wl_start, wl_stop, shared)
-    return ChunkResult(arrays, computed, weighted, time.perf_counter() - start)
+    return ChunkResult(
+        arrays, computed, weighted, time.perf_counter() - start, time.thread_time() - cpu
+    )
 
 
 def _compute_arrays(
@@ -450,6 +456,7 @@ def _write_chunk(store: Path, layout: _Layout, chunk: tuple[int, ...], result: C
     record = {
         "chunk": list(chunk),
         "seconds": result.seconds,
+        "cpu_seconds": result.cpu_seconds,
         "spheres_computed": result.spheres_computed,
         "spheres_weighted": result.spheres_weighted,
     }

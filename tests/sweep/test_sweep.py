@@ -438,6 +438,11 @@ def test_rerun_recomputes_nothing_and_a_lost_chunk_only(reference, config_file, 
         )
     assert calls == [(12, 16), (16, 16)]
     assert store_bytes(copy) == before
+    # The recomputed chunk's marker: its work, its wall time and the CPU time
+    # of its thread, which cannot exceed the wall time.
+    marker = json.loads((copy / "sweep-done" / "0.0.2").read_text())
+    assert marker["spheres_computed"] > 0
+    assert 0.0 < marker["cpu_seconds"] <= marker["seconds"] + 0.01
 
 
 def test_worker_killed_mid_sweep_finishes_identically(reference, config_file, cluster, tmp_path):
