@@ -42,7 +42,7 @@ from dustoptics.io._atomic import write_files
 from dustoptics.models.config import BuildConfig, build_table
 from dustoptics.scattering.optics import resolve_refractive_index
 from dustoptics.scattering.quadrature import QuadratureSettings
-from dustoptics.sweep.spec import SweepSpec, load_sweep, parse_points
+from dustoptics.sweep.spec import SweepSpec, _load_points, parse_points
 from dustoptics.table import Provenance, canonical_json, software_versions
 
 __all__ = ["ChunkResult", "compute_chunk", "sweep"]
@@ -704,6 +704,4 @@ def _load(
 ) -> tuple[SweepSpec, list[dict[str, Any]], list[BuildConfig]]:
     """The sweep, its points' TOML data (in C order of the axes) and their
     validated configurations."""
-    spec = load_sweep(config, over)
-    data = [spec.point_data(i) for i in spec.indices()]
-    return spec, data, parse_points(data)
+    return _load_points(config, over)

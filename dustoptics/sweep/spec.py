@@ -420,6 +420,14 @@ def load_sweep(config: Any, over: Mapping[str, Any] | None = None) -> SweepSpec:
     TypeError
         Values that are not numbers.
     """
+    return _load_points(config, over)[0]
+
+
+def _load_points(
+    config: Any, over: Mapping[str, Any] | None
+) -> tuple[SweepSpec, list[dict[str, Any]], list[BuildConfig]]:
+    """:func:`load_sweep`, with the points' TOML data (in C order of the axes)
+    and their configurations, validated once."""
     base, table, source = _base_from(config)
     raw = _flatten_sweep_table(table)
     if over is not None:
@@ -452,13 +460,14 @@ def load_sweep(config: Any, over: Mapping[str, Any] | None = None) -> SweepSpec:
             )
         axes.append(Axis(key, _axis_values(key, values)))
     spec = SweepSpec(base=base, axes=tuple(axes), source=source)
-    _validate(spec)
-    return spec
+    data, configs = _validate(spec)
+    return spec, data, configs
 
 
-def _validate(spec: SweepSpec) -> None:
+def _validate(spec: SweepSpec) -> tuple[list[dict[str, Any]], list[BuildConfig]]:
     """Every axis value alone, then every point, then every distinct material
-    at the wavelengths: all before any work."""
+    at the wavelengths: all before any work.  Returns the points' TOML data
+    and configurations."""
     for axis in spec.axes:
         for value in axis.values:
             data = copy.deepcopy(dict(spec.base))
@@ -472,6 +481,7 @@ def _validate(spec: SweepSpec) -> None:
                 ) from None
     materials: dict[str, Any] = {}
     parse = _point_parser()
+    points, configs = [], []
     for index in spec.indices():
         data = spec.point_data(index)
         try:
@@ -481,6 +491,8 @@ def _validate(spec: SweepSpec) -> None:
             raise ValueError(
                 f"sweep point ({where}) is not a valid configuration: {exc.key}: {exc.reason}"
             ) from None
+        points.append(data)
+        configs.append(config)
         if config.material is not None:
             materials.setdefault(canonical_json(config.material.to_inputs()), (config, index))
     for config, index in materials.values():
@@ -491,3 +503,4 @@ def _validate(spec: SweepSpec) -> None:
         except ValueError as exc:
             where = ", ".join(f"{a.key} = {a.values[i]!r}" for a, i in zip(spec.axes, index))
             raise ValueError(f"sweep point ({where}): {exc}") from None
+    return points, configs
