@@ -115,6 +115,26 @@ def store_bytes(store: Path) -> dict[str, bytes]:
 # ---------------------------------------------------------------- shared nodes
 
 
+def one_grid_intensities(m, x, table, n_angles, symmetric):
+    """_cell_intensities of the spheres x (cells of 16) on one grid of
+    ``n_angles`` angles (half-grid angles if ``symmetric``) whose angular
+    table is ``table``: the intensities and (Q_ext, Q_sca, g Q_sca, x^2 Q_back)."""
+    intens = np.empty((x.size, (2 if symmetric else 1) * n_angles))
+    sums = _cell_intensities(
+        m,
+        x,
+        np.zeros(x.size, dtype=np.int64),
+        np.array([n_angles]),
+        table.ravel(),
+        np.array([0, table.size]),
+        symmetric,
+        intens,
+        np.arange(x.size),
+        16,
+    )
+    return intens, sums
+
+
 def test_cell_rows_are_the_kernels_sums_to_the_bit():
     """A cell's weighted row from unweighted sphere intensities equals
     mie._accumulate's row for the same nodes and weights, to the bit."""
@@ -133,19 +153,7 @@ def test_cell_rows_are_the_kernels_sums_to_the_bit():
         expected = mie._accumulate(
             m, x, nodes.weight, node_panel, 2, per_particle, table, mu.size, False, 1, 0j, 0.0
         )
-        intens = np.empty((x.size, mu.size))
-        qext, qsca, gq, back = _cell_intensities(
-            m,
-            x,
-            np.zeros(x.size, dtype=np.int64),
-            np.array([mu.size]),
-            table.ravel(),
-            np.array([0, table.size]),
-            False,
-            intens,
-            np.arange(x.size),
-            16,
-        )
+        intens, (qext, qsca, gq, back) = one_grid_intensities(m, x, table, mu.size, False)
         rows = _cell_rows(
             np.arange(2),
             nodes.weight,
@@ -185,19 +193,7 @@ def test_cell_rows_on_a_smaller_grid_are_moved_as_the_kernel_moves_them():
     mu_s, w_s, table_s = _gauss_angles(small)
     mu_l, _, table_l = _gauss_angles(large)
     r_even, r_odd = mie._interpolation_maps(mu_s, w_s, mu_l)
-    intens = np.empty((x.size, 2 * small))
-    qext, qsca, gq, back = _cell_intensities(
-        m,
-        x,
-        np.zeros(x.size, dtype=np.int64),
-        np.array([small]),
-        table_s.ravel(),
-        np.array([0, table_s.size]),
-        True,
-        intens,
-        np.arange(x.size),
-        16,
-    )
+    intens, (qext, qsca, gq, back) = one_grid_intensities(m, x, table_s, small, True)
     maps = np.concatenate([r_even.ravel(), r_odd.ravel()])
     for per_particle in (False, True):
         rows = _cell_rows(
