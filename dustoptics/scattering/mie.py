@@ -1233,10 +1233,26 @@ def _legendre_project(
     return beta
 
 
-@njit(cache=True, nogil=True, error_model="numpy")  # y at a node: inf, then replaced
+@njit(cache=True, nogil=True)
 def _interpolation_maps(
     mu_half: np.ndarray, w_half: np.ndarray, mu_half_out: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
+    """(R_even, R_odd) of :func:`_interpolation_maps_into`, in new arrays of
+    shape (len(mu_half), len(mu_half_out))."""
+    r_even = np.empty((mu_half.shape[0], mu_half_out.shape[0]))
+    r_odd = np.empty((mu_half.shape[0], mu_half_out.shape[0]))
+    _interpolation_maps_into(mu_half, w_half, mu_half_out, r_even, r_odd)
+    return r_even, r_odd
+
+
+@njit(cache=True, nogil=True, error_model="numpy")  # y at a node: inf, then replaced
+def _interpolation_maps_into(
+    mu_half: np.ndarray,
+    w_half: np.ndarray,
+    mu_half_out: np.ndarray,
+    r_even: np.ndarray,
+    r_odd: np.ndarray,
+) -> None:
     """Linear maps from values on a symmetric Gauss-Legendre grid to values on
     another, of the interpolating polynomial, split by parity.
 
@@ -1249,8 +1265,9 @@ def _interpolation_maps(
     weights are lambda_j = (-1)^j sqrt((1 - t_j^2) w_j) (Wang & Xiang 2012).
     With e_i = (f(mu_i) + f(-mu_i)) / 2 and o_i the odd part, the even part of
     p at mu_half_out is sum_i e_i R_even[i, :] and the odd part
-    sum_i o_i R_odd[i, :]; p(+-mu_out) = even +- odd.  Returns (R_even, R_odd),
-    each of shape (len(mu_half), len(mu_half_out)); O(n^2), not O(n^3).
+    sum_i o_i R_odd[i, :]; p(+-mu_out) = even +- odd.  Writes R_even and
+    R_odd, each of shape (len(mu_half), len(mu_half_out)), into the arrays
+    given (views of one array, when many maps are stacked); O(n^2), not O(n^3).
 
     References: N. J. Higham, IMA J. Numer. Anal. 24, 547-556 (2004),
     doi:10.1093/imanum/24.4.547; H. Wang and S. Xiang, Math. Comp. 81,
@@ -1266,8 +1283,6 @@ def _interpolation_maps(
         lam = np.sqrt((1.0 - mu_half[i] * mu_half[i]) * w_half[i])
         lam_plus[i] = lam if (n_in + i) % 2 == 0 else -lam
         lam_minus[i] = lam if (n_in - 1 - i) % 2 == 0 else -lam
-    r_even = np.empty((n_in, n_out))
-    r_odd = np.empty((n_in, n_out))
     c_plus = np.empty(n_in)
     c_minus = np.empty(n_in)
     for k in range(n_out):
@@ -1289,7 +1304,6 @@ def _interpolation_maps(
                 cm = c_minus[i] / total
             r_even[i, k] = cp + cm
             r_odd[i, k] = cp - cm
-    return r_even, r_odd
 
 
 @njit(cache=True, nogil=True)

@@ -60,6 +60,7 @@ from dustoptics.scattering.optics import (
     _phase_refinement_errors,
     _Result,
     _Run,
+    _stacked_interpolation_maps,
     _WavelengthSolver,
 )
 from dustoptics.scattering.quadrature import (
@@ -313,16 +314,7 @@ def _ladder_maps(n_half: int) -> tuple[np.ndarray, np.ndarray]:
     to the grid of ``n_half`` (R_even then R_odd, flattened, see
     :func:`mie._interpolation_maps`) and their offsets.  Cached.  Not to be
     modified."""
-    mu_half = _gauss_angles(n_half)[0]
-    maps = [
-        np.concatenate(
-            [r.ravel() for r in mie._interpolation_maps(*_gauss_angles(int(n))[:2], mu_half)]
-        )
-        for n in _GRIDS[: np.searchsorted(_GRIDS, n_half)]
-    ]
-    if not maps:
-        return np.empty(0), np.zeros(1, dtype=np.int64)
-    return np.concatenate(maps), np.cumsum([0] + [a.size for a in maps])
+    return _stacked_interpolation_maps(_GRIDS[: np.searchsorted(_GRIDS, n_half)], n_half)
 
 
 class _Store:
