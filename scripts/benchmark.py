@@ -87,14 +87,18 @@ the default table: best of N.
      wavelengths at once, against ``build_table`` of each point (workers=1);
      the Mie spheres each computes; the largest difference of the two
      phase functions relative to the sum of their error estimates.
-   * on Dask: ``dustoptics.sweep.sweep`` into a Zarr store on a LocalCluster
-     of 1 and of 2 worker processes (one thread each) and of 1 process with
-     2 threads, each cluster started and its workers' kernels loaded before
-     the clock starts; each configuration 3 times, the three in turn, the
-     median run reported (one run varies by up to 15 % on this machine);
-     scaling 1 -> 2 processes; scheduling overhead = 1 - (summed task time on
-     the workers) / (wall time x workers); the tasks' summed time and the CPU
-     time of their threads (the difference: waiting for a core or the GIL).
+   * on Dask: ``dustoptics.sweep.sweep`` into a Zarr store on the local
+     cluster a sweep starts (``dustoptics.sweep.local_cluster``, Dask's
+     event-loop tick, profiler and monitors slowed) of 1 and of 2 worker
+     processes (one thread each) and of 1 process with 2 threads, each
+     cluster started and its workers' kernels loaded before the clock
+     starts; each configuration 3 times, the three in turn, the median run
+     reported (one run varies by up to 15 % on this machine); scaling 1 -> 2
+     processes, the median over the rounds of each round's own ratio (its
+     two runs a minute apart: this machine's speed drifts by 30-50 % within
+     minutes); scheduling overhead = 1 - (summed task time on the workers) /
+     (wall time x workers); the tasks' summed time and the CPU time of their
+     threads (the difference: waiting for a core or the GIL).
    * the machine's ceiling: the same chunks in one plain process (no Dask),
      then in two plain processes side by side, each doing all of them: 2 x
      alone / side by side is the most a second process can gain here (the
@@ -1159,17 +1163,11 @@ def _machine_ceiling(points: list[dict], n_wl: int) -> dict:
 def _timed_sweep(case: dict, *, processes: bool, n_workers: int, threads: int) -> dict:
     import distributed
 
-    from dustoptics.sweep import sweep
+    from dustoptics.sweep import local_cluster, sweep
 
     with tempfile.TemporaryDirectory() as tmp:
         with (
-            distributed.LocalCluster(
-                n_workers=n_workers,
-                threads_per_worker=threads,
-                processes=processes,
-                dashboard_address=None,
-                silence_logs=50,
-            ) as cluster,
+            local_cluster(n_workers, threads=threads, processes=processes) as cluster,
             distributed.Client(cluster) as client,
         ):
             _warm_workers(client)
@@ -1244,12 +1242,21 @@ def measure_sweep(quick: bool) -> dict:
         for key, kwargs in clusters.items():
             log(f"sweep: {key}, run {i + 1} of {SWEEP_REPEATS}")
             runs[key].append(_timed_sweep(case, **kwargs))
+    # Scaling from each round's own pair of runs, 1 then 2 processes a minute
+    # apart, so that a slow or fast spell of the machine touches both: the
+    # median of those ratios (the ratio of the medians is shown beside it).
+    pairs = sorted(
+        one["wall_s"] / two["wall_s"]
+        for one, two in zip(runs["dask_processes_1"], runs["dask_processes_2"])
+    )
     for key, done in runs.items():
-        done.sort(key=lambda r: r["wall_s"])
-        res[key] = dict(done[len(done) // 2], walls_s=[r["wall_s"] for r in done])
+        ordered = sorted(done, key=lambda r: r["wall_s"])
+        res[key] = dict(ordered[len(ordered) // 2], walls_s=[r["wall_s"] for r in done])
     log("sweep: one plain process, then two side by side (the machine's ceiling)")
     res["machine"] = _machine_ceiling(points, int(n_wl))
-    res["scaling_1_to_2_processes"] = (
+    res["scaling_pairs"] = pairs
+    res["scaling_1_to_2_processes"] = pairs[len(pairs) // 2]
+    res["scaling_of_medians"] = (
         res["dask_processes_1"]["wall_s"] / res["dask_processes_2"]["wall_s"]
     )
     res["processes_over_threads"] = (
@@ -1297,7 +1304,12 @@ def format_sweep(res: dict, quick: bool, mach: dict) -> str:
             f" tasks {d['task_s']:.1f} s ({d['task_cpu_s']:.1f} s CPU)"
             f" (runs {', '.join(f'{w:.1f}' for w in d['walls_s'])} s)",
         )
-    row("scaling 1 -> 2 processes", f"{res['scaling_1_to_2_processes']:.2f}x")
+    row(
+        "scaling 1 -> 2 processes (median of each round's ratio)",
+        f"{res['scaling_1_to_2_processes']:.2f}x (rounds "
+        + ", ".join(f"{r:.2f}" for r in res["scaling_pairs"])
+        + f"; ratio of the medians {res['scaling_of_medians']:.2f}x)",
+    )
     if "machine" in res:
         m = res["machine"]
         row(

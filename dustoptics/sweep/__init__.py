@@ -10,7 +10,15 @@ the ``sweep`` extra (dask[distributed], xarray, zarr).
 """
 
 from dustoptics.sweep.lookup import write_lookup
-from dustoptics.sweep.run import compute_chunk, sweep
+from dustoptics.sweep.run import compute_chunk, local_cluster, sweep
 from dustoptics.sweep.spec import Axis, SweepSpec, load_sweep
 
-__all__ = ["Axis", "SweepSpec", "compute_chunk", "load_sweep", "sweep", "write_lookup"]
+__all__ = [
+    "Axis",
+    "SweepSpec",
+    "compute_chunk",
+    "load_sweep",
+    "local_cluster",
+    "sweep",
+    "write_lookup",
+]

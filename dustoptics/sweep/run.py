@@ -5,9 +5,11 @@ changes more than the size distribution (so that a chunk's points share one
 refractive index and their spheres, :mod:`dustoptics.sweep.shared`), up to
 ``max_points`` points along the size axes, and a block of wavelengths.  A
 chunk is one Dask task and one chunk of every array in the Zarr store.  The
-client submits the chunks that the store does not hold yet, and writes each
-one as it finishes: its arrays first, then a completion marker (a small file
-written to a temporary name and renamed).  A chunk without its marker is
+client submits the chunks that the store does not hold yet, and each is
+written as it finishes, by its worker where the worker sees the store (a
+local cluster, or workers on a shared filesystem), otherwise by the client:
+its arrays first, then a completion marker (a small file written to a
+temporary name and renamed).  A chunk without its marker is
 computed again, whatever its arrays hold, so a stopped or crashed sweep
 resumes where it stopped and no half-written chunk is ever counted; a worker
 that dies is replaced and its tasks run elsewhere (Dask's scheduler).
@@ -24,11 +26,13 @@ import ctypes
 import json
 import math
 import os
+import pickle
 import platform
 import shutil
 import sys
 import threading
 import time
+import uuid
 import warnings
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
@@ -45,7 +49,7 @@ from dustoptics.scattering.quadrature import QuadratureSettings
 from dustoptics.sweep.spec import SweepSpec, _load_points, parse_points
 from dustoptics.table import Provenance, canonical_json, software_versions
 
-__all__ = ["ChunkResult", "compute_chunk", "sweep"]
+__all__ = ["ChunkResult", "compute_chunk", "local_cluster", "sweep"]
 
 #: Variables per point and wavelength (besides ``phase``), with units and meaning.
 _PER_WAVELENGTH = {
@@ -60,8 +64,16 @@ _PER_WAVELENGTH = {
     "n_nodes": ("1", "radius nodes of the quadrature of the phase function"),
 }
 
+#: Blocks of wavelengths by default.  Chunks of the benchmark sweep take
+#: 0.5-3 s; the last to finish leaves the other workers idle, about half a
+#: chunk on average, while each chunk costs about 25 ms beside its work (its
+#: points parsed, its arrays written): 24 blocks (2 of 48 wavelengths) keep
+#: both near 2 % on 2 workers.
+_WAVELENGTH_BLOCKS = 24
+
 _MARKERS = "sweep-done"
 _IDENTITY = "sweep-identity.json"
+_RUN_TOKEN = "run-"
 
 
 def _require_extra() -> tuple[Any, Any, Any]:
@@ -314,7 +326,11 @@ def _layout(spec: SweepSpec, n_wl: int, chunk_wavelengths: int | None, max_point
             per_axis[i] = max(1, budget)
             budget = 1
     chunks = [per_axis.get(i, 1) for i in range(len(spec.axes))]
-    wl = chunk_wavelengths if chunk_wavelengths is not None else max(1, math.ceil(n_wl / 12))
+    wl = (
+        chunk_wavelengths
+        if chunk_wavelengths is not None
+        else max(1, math.ceil(n_wl / _WAVELENGTH_BLOCKS))
+    )
     return _Layout(spec, tuple(chunks), min(wl, n_wl), n_wl)
 
 
@@ -420,6 +436,19 @@ def _done(store: Path, layout: _Layout) -> set[str]:
     return {p.name for p in directory.iterdir() if p.name in names}
 
 
+def _new_run_token(store: Path) -> Path:
+    """A new file in the store's marker folder that only this run of the
+    client knows: workers that see it write their chunks themselves
+    (:func:`_run_chunk`).  Tokens left by runs that were stopped go first."""
+    directory = _markers(store)
+    directory.mkdir(exist_ok=True)
+    for old in directory.glob(_RUN_TOKEN + "*"):
+        old.unlink(missing_ok=True)
+    token = directory / f"{_RUN_TOKEN}{uuid.uuid4().hex}"
+    token.touch()
+    return token
+
+
 def _open_store(store: Path, template: Any, identity: str) -> None:
     """Create the store, or check that an existing one holds this sweep."""
     marker = store / _IDENTITY
@@ -442,28 +471,62 @@ def _open_store(store: Path, template: Any, identity: str) -> None:
     os.replace(partial, store)
 
 
-def _write_chunk(store: Path, layout: _Layout, chunk: tuple[int, ...], result: ChunkResult) -> None:
+def _write_chunk(store: Path, region: tuple[slice, ...], name: str, result: ChunkResult) -> None:
     """The chunk's arrays, then its completion marker (written last, atomically)."""
     import zarr
 
     group = zarr.open_group(str(store), mode="r+", zarr_format=2)
-    region = layout.region(chunk)
     shape = tuple(s.stop - s.start for s in region[:-1])
-    for name, values in result.arrays.items():
-        n_w = region[-1].stop - region[-1].start
-        array: Any = group[name]
+    n_w = region[-1].stop - region[-1].start
+    for key, values in result.arrays.items():
+        array: Any = group[key]
         array[region] = values.reshape(shape + (n_w,) + values.shape[2:])
     record = {
-        "chunk": list(chunk),
+        "chunk": [int(i) for i in name.split(".")],
         "seconds": result.seconds,
         "cpu_seconds": result.cpu_seconds,
         "spheres_computed": result.spheres_computed,
         "spheres_weighted": result.spheres_weighted,
     }
     write_files(
-        {_markers(store) / layout.name(chunk): json.dumps(record, sort_keys=True).encode("utf-8")},
+        {_markers(store) / name: json.dumps(record, sort_keys=True).encode("utf-8")},
         overwrite=True,
     )
+
+
+def _run_chunk(
+    points: bytes,
+    wl_start: int,
+    wl_stop: int,
+    shared: bool,
+    store: str,
+    run_token: str,
+    region: tuple[slice, ...],
+    name: str,
+) -> ChunkResult | None:
+    """The Dask task: compute a chunk and, where this worker sees the
+    client's store, write it there (None); otherwise return it to the client.
+
+    The points come pickled, one opaque argument: Dask would otherwise walk
+    every value of every point's TOML data looking for dependencies (0.75 s
+    of the client's time for the benchmark's 12 chunks of 100 points).  A
+    worker sees the store when it sees the file ``run_token`` that this run
+    of the client made in it (a worker of a local cluster always does; one
+    on another machine does on a shared filesystem), so that a store at the
+    same path on another machine is never written by mistake.  Writing on
+    the workers keeps the client's process, which shares the cores of a
+    local cluster, from receiving and writing every array.
+    """
+    result = compute_chunk(pickle.loads(points), wl_start, wl_stop, shared=shared)
+    if _sees(Path(store), run_token):
+        _write_chunk(Path(store), region, name, result)
+        return None
+    return result
+
+
+def _sees(store: Path, run_token: str) -> bool:
+    """Whether this process sees the store of the client's run ``run_token``."""
+    return (_markers(store) / run_token).is_file()
 
 
 # ---------------------------------------------------------------------- progress
@@ -519,18 +582,60 @@ class _Progress:
 # ---------------------------------------------------------------------- the sweep
 
 
-def _client(client: Any, workers: int | None, distributed: Any) -> tuple[Any, list[Any]]:
-    """A Client (and what to close afterwards) for ``client``: None (a local
-    cluster of worker processes), an address, or a Client."""
-    if client is None:
-        n = workers or os.cpu_count() or 1
-        cluster = distributed.LocalCluster(
-            n_workers=n,
-            threads_per_worker=1,
-            processes=True,
+#: Dask settings for the local clusters that sweeps start.  Dask's defaults
+#: wake every worker and the scheduler 50 times a second (the event-loop
+#: tick), sample every task's stack 100 times a second (the profiler) and
+#: read each process's memory 10 times a second; on the benchmark sweep's 2
+#: cores these took 6.4 s of CPU time in 29 s, beside the tasks, and
+#: 1.3 s with these.  The tasks themselves are minutes of compiled code
+#: whose profile Dask cannot show.  Memory is still watched, once a second.
+_LOCAL_CLUSTER_CONFIG = {
+    "distributed.admin.tick.interval": "500ms",
+    "distributed.admin.system-monitor.interval": "2s",
+    "distributed.worker.memory.monitor-interval": "1s",
+    "distributed.worker.profile.enabled": False,
+}
+
+
+def local_cluster(workers: int | None = None, *, threads: int = 1, processes: bool = True) -> Any:
+    """The Dask ``LocalCluster`` that a sweep starts when given no client.
+
+    Parameters
+    ----------
+    workers : int, optional
+        Worker processes (default: all cores).
+    threads : int
+        Threads per worker.
+    processes : bool
+        Workers in their own processes (the default, and the faster with
+        numba's kernels: the sweep benchmark) or threads of this process.
+
+    Returns
+    -------
+    distributed.LocalCluster
+        With :data:`_LOCAL_CLUSTER_CONFIG`'s settings, the dashboard on a
+        free port, and logs below errors silenced.  Close it (or use it as a
+        context manager) when done.
+    """
+    import dask
+
+    _, _, distributed = _require_extra()
+    with dask.config.set(_LOCAL_CLUSTER_CONFIG):
+        return distributed.LocalCluster(
+            n_workers=workers or os.cpu_count() or 1,
+            threads_per_worker=threads,
+            processes=processes,
             dashboard_address=":0",
             silence_logs=40,
         )
+
+
+def _client(client: Any, workers: int | None, distributed: Any) -> tuple[Any, list[Any]]:
+    """A Client (and what to close afterwards) for ``client``: None (a local
+    cluster of worker processes, :func:`local_cluster`), an address, or a
+    Client."""
+    if client is None:
+        cluster = local_cluster(workers)
         c = distributed.Client(cluster)
         return c, [c, cluster]
     if isinstance(client, str):
@@ -573,8 +678,10 @@ def sweep(
         None: nothing is written; the result is returned in memory.
     client : None, str or dask.distributed.Client, optional
         Where to compute: None starts a local cluster of ``workers`` worker
-        processes (one thread each); a ``tcp://HOST:PORT`` address connects
-        to that scheduler; or a Client.
+        processes (one thread each, :func:`local_cluster`) and closes it at
+        the end; a ``tcp://HOST:PORT`` address connects to that scheduler; or
+        a Client.  Workers that see the store's filesystem write their
+        chunks themselves; others return them to the client.
     workers : int, optional
         Worker processes of the local cluster (default: all cores).
     shared : bool
@@ -582,7 +689,7 @@ def sweep(
         distribution (:mod:`dustoptics.sweep.shared`).  False builds every
         point independently: each then equals a single build to the bit.
     chunk_wavelengths : int, optional
-        Wavelengths per chunk (default: the wavelengths in 12 blocks).
+        Wavelengths per chunk (default: the wavelengths in 24 blocks).
     max_points : int
         Most points of a chunk along the size-distribution axes.
     progress : stream or callable, optional
@@ -658,30 +765,45 @@ def sweep(
         bar = _Progress(stream, callback, total, total - sum(size(c) for c in todo))
         if todo:
             c, to_close = _client(client, workers, distributed)
+            token = _new_run_token(store)
             try:
                 flat = np.arange(spec.n_points).reshape(spec.shape)
                 futures = {}
                 for chunk in todo:
                     region = layout.region(chunk)
-                    points = [data[i] for i in flat[region[:-1]].ravel()]
+                    points = pickle.dumps([data[i] for i in flat[region[:-1]].ravel()], protocol=5)
                     future = c.submit(
-                        compute_chunk,
+                        _run_chunk,
                         points,
                         region[-1].start,
                         region[-1].stop,
-                        shared=shared,
+                        shared,
+                        str(store),
+                        token.name,
+                        region,
+                        layout.name(chunk),
                         pure=False,
                         key=f"dustoptics-sweep-{layout.name(chunk)}-{os.getpid()}-{time.time_ns()}",
                     )
                     futures[future] = chunk
                 for future in distributed.as_completed(futures):
                     chunk = futures[future]
-                    _write_chunk(store, layout, chunk, future.result())
+                    result = future.result()
+                    if result is not None:  # the worker does not see the store
+                        _write_chunk(store, layout.region(chunk), layout.name(chunk), result)
                     future.release()
                     bar.add(size(chunk))
             finally:
+                token.unlink(missing_ok=True)
                 for obj in to_close:
                     obj.close()
+            missing = sorted(set(map(layout.name, todo)) - _done(store, layout))
+            if missing:
+                raise RuntimeError(
+                    f"chunks {missing} finished but their markers are not in {str(store)!r}: "
+                    "did their workers write to another filesystem at the same path? "
+                    "Running the sweep again computes them"
+                )
         if netcdf:
             assert out is not None
             ds = xr.open_zarr(store, consolidated=True).load()

@@ -469,6 +469,84 @@ def test_rerun_recomputes_nothing_and_a_lost_chunk_only(reference, config_file, 
     assert 0.0 < marker["cpu_seconds"] <= marker["seconds"] + 0.01
 
 
+def counting_writes(monkeypatch) -> list[str]:
+    """The chunks that this process writes (``run._write_chunk``), recorded."""
+    from dustoptics.sweep import run
+
+    written: list[str] = []
+    write = run._write_chunk
+
+    def spy(store, region, name, result):
+        written.append(name)
+        write(store, region, name, result)
+
+    monkeypatch.setattr(run, "_write_chunk", spy)
+    return written
+
+
+def test_workers_that_see_the_store_write_their_chunks(
+    reference, config_file, cluster, tmp_path, monkeypatch
+):
+    """Worker processes of a local cluster see the store, so the client
+    writes nothing itself; the store equals the reference and the run's
+    token is gone."""
+    written = counting_writes(monkeypatch)
+    out = tmp_path / "w.zarr"
+    with distributed.Client(cluster) as client:
+        sweep(config_file, OVER, out=out, client=client, chunk_wavelengths=1, progress=None)
+    assert written == []
+    assert store_bytes(out) == store_bytes(reference)
+    assert sorted(p.name for p in (out / "sweep-done").iterdir()) == sorted(
+        f"0.0.{w}" for w in range(len(WAVELENGTHS))
+    )
+
+
+def test_workers_that_do_not_see_the_store_return_their_chunks(
+    reference, config_file, tmp_path, monkeypatch
+):
+    """Where workers do not see the client's store (another machine, no
+    shared filesystem), the client writes every chunk: the same bytes.  The
+    workers are threads of this process here, so that they see the patch."""
+    from dustoptics.sweep import run
+
+    written = counting_writes(monkeypatch)
+    monkeypatch.setattr(run, "_sees", lambda store, token: False)
+    out = tmp_path / "c.zarr"
+    with (
+        distributed.LocalCluster(
+            n_workers=1, threads_per_worker=2, processes=False, dashboard_address=None
+        ) as local,
+        distributed.Client(local) as client,
+    ):
+        sweep(config_file, OVER, out=out, client=client, chunk_wavelengths=1, progress=None)
+    assert sorted(written) == [f"0.0.{w}" for w in range(len(WAVELENGTHS))]
+    assert store_bytes(out) == store_bytes(reference)
+
+
+def test_chunks_written_out_of_the_clients_sight_are_an_error(config_file, tmp_path, monkeypatch):
+    """A worker that reports a chunk written that the client's store does not
+    hold (it wrote to another filesystem at the same path): the sweep fails
+    and names the chunks, rather than return a store with holes."""
+    from dustoptics.sweep import run
+
+    monkeypatch.setattr(run, "_write_chunk", lambda store, region, name, result: None)
+    with (
+        distributed.LocalCluster(
+            n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None
+        ) as local,
+        distributed.Client(local) as client,
+        pytest.raises(RuntimeError, match=r"chunks \['0\.0', '0\.1'\] finished"),
+    ):
+        sweep(
+            config_file,
+            {"size_distribution.r_eff_um": [0.8]},
+            out=tmp_path / "h.zarr",
+            client=client,
+            chunk_wavelengths=2,
+            progress=None,
+        )
+
+
 def test_worker_killed_mid_sweep_finishes_identically(reference, config_file, cluster, tmp_path):
     """A watcher kills (SIGKILL) the process of the first worker it sees busy
     with a task of the sweep; the sweep finishes and the store equals the
