@@ -77,7 +77,7 @@ Storm dust (r_eff 4 um, v_eff 0.3, 48 x 1,801, rtol 1e-4) is timed warm like
 the default table: best of N.
 
 8. Sweeps (``--sweep``, which runs this section alone: the full rows take
-   about 8 minutes on 2 cores; the issue's 100-point sweep).  The blue-moons
+   about 11 minutes on 2 cores; the issue's 100-point sweep).  The blue-moons
    preset (Mars dust, 48 x 1,801, rtol 1e-4) over r_eff = linspace(0.5, 4,
    10) um x v_eff = linspace(0.1, 0.4, 10) (``--quick``: 5 x 5 points on 12
    of the 48 wavelengths).
@@ -92,11 +92,12 @@ the default table: best of N.
      event-loop tick, profiler and monitors slowed) of 1 and of 2 worker
      processes (one thread each) and of 1 process with 2 threads, each
      cluster started and its workers' kernels loaded before the clock
-     starts; each configuration 3 times, the three in turn, the median run
-     reported (one run varies by up to 15 % on this machine); scaling 1 -> 2
-     processes, the median over the rounds of each round's own ratio (its
-     two runs a minute apart: this machine's speed drifts by 30-50 % within
-     minutes); scheduling overhead = 1 - (summed task time on the workers) /
+     starts; 5 rounds of 1 and 2 processes (in alternating order) and 3 of
+     them with the threads, the median run of each reported (one run varies
+     by up to 15 % on this machine); scaling 1 -> 2 processes, the median
+     over the rounds of each round's own ratio (its two runs a minute apart:
+     this machine's speed drifts by 30-50 % within minutes); scheduling
+     overhead = 1 - (summed task time on the workers) /
      (wall time x workers); the tasks' summed time and the CPU time of their
      threads (the difference: waiting for a core or the GIL).
    * the machine's ceiling: the same chunks in one plain process (no Dask),
@@ -1083,7 +1084,8 @@ def run(quick: bool, repeats: int) -> dict:
 SWEEP_TARGET_RATIO, SWEEP_GOAL_RATIO = 2.0, 3.0
 SWEEP_TARGET_SCALING = 1.8
 SWEEP_TARGET_OVERHEAD = 0.10
-SWEEP_REPEATS = 3
+SWEEP_ROUNDS = 5
+SWEEP_THREAD_ROUNDS = 3
 
 
 def _sweep_points(quick: bool) -> tuple[list[dict], list[str], dict]:
@@ -1230,21 +1232,27 @@ def measure_sweep(quick: bool) -> dict:
         "spheres_weighted_shared": shared.spheres_weighted,
         "phase_difference_over_estimates_max": worst,
     }
-    # Each configuration SWEEP_REPEATS times, the three in turn, so that a
-    # slow spell of the machine touches all of them; the median run of each.
+    # Rounds of the configurations in turn, so that a slow spell of the
+    # machine touches all of them; the median run of each.  The two process
+    # counts run in every round, in alternating order (1, 2, then 2, 1: a
+    # drift of the machine's speed favours neither); threads in the first
+    # SWEEP_THREAD_ROUNDS.
     clusters = {
         "dask_processes_1": {"processes": True, "n_workers": 1, "threads": 1},
         "dask_processes_2": {"processes": True, "n_workers": 2, "threads": 1},
         "dask_threads_2": {"processes": False, "n_workers": 1, "threads": 2},
     }
     runs: dict[str, list[dict]] = {key: [] for key in clusters}
-    for i in range(SWEEP_REPEATS):
-        for key, kwargs in clusters.items():
-            log(f"sweep: {key}, run {i + 1} of {SWEEP_REPEATS}")
-            runs[key].append(_timed_sweep(case, **kwargs))
-    # Scaling from each round's own pair of runs, 1 then 2 processes a minute
-    # apart, so that a slow or fast spell of the machine touches both: the
-    # median of those ratios (the ratio of the medians is shown beside it).
+    for i in range(SWEEP_ROUNDS):
+        order = ["dask_processes_1", "dask_processes_2"][:: 1 if i % 2 == 0 else -1]
+        if i < SWEEP_THREAD_ROUNDS:
+            order.append("dask_threads_2")
+        for key in order:
+            log(f"sweep: {key}, round {i + 1} of {SWEEP_ROUNDS}")
+            runs[key].append(_timed_sweep(case, **clusters[key]))
+    # Scaling from each round's own pair of runs, a minute apart, so that a
+    # slow or fast spell of the machine touches both: the median of those
+    # ratios (the ratio of the medians is shown beside it).
     pairs = sorted(
         one["wall_s"] / two["wall_s"]
         for one, two in zip(runs["dask_processes_1"], runs["dask_processes_2"])

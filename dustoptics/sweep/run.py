@@ -226,6 +226,7 @@ def _compute_arrays(
         m, _ = resolve_refractive_index(first.material.build(), wl)
         mu = np.cos(np.deg2rad(theta))
         dists = [c.size_distribution.build() for c in configs]  # type: ignore[union-attr]
+        buffers: dict[bool, np.ndarray] = {}
         for w in range(n_w):
             results, stats = solve_shared(
                 m=complex(m[w]),
@@ -236,6 +237,7 @@ def _compute_arrays(
                 settings=QuadratureSettings(),
                 rtol=first.optics.rtol,
                 cross_rtol=first.optics.cross_section_rtol,
+                buffers=buffers,
             )
             computed += stats.spheres_computed
             weighted += stats.spheres_weighted

@@ -322,7 +322,9 @@ class _Store:
     cells' grids: the ladder :data:`_GRIDS` (``symmetric``, half-grid angles
     ``+mu`` then ``-mu``), or a single grid, the output angles.  Arrays grow
     by doubling: per node x, Q_ext, Q_sca, g Q_sca, x^2 Q_back and the
-    intensities (undefined until the cell is computed with angles)."""
+    intensities (undefined until the cell is computed with angles).  The
+    intensities are rows of a flat array, ``spare`` (a previous store's) if
+    given: it grows only when too small, and keeps its pages."""
 
     def __init__(
         self,
@@ -333,6 +335,7 @@ class _Store:
         sizes: np.ndarray,
         tables: np.ndarray,
         table_start: np.ndarray,
+        spare: np.ndarray | None = None,
     ) -> None:
         self.npc = nodes_per_cell
         self.symmetric = symmetric
@@ -343,7 +346,8 @@ class _Store:
         self.tier = np.zeros(0, dtype=np.int64)  # grid of the cell's intensities
         self.n_values = np.zeros(0, dtype=np.int64)  # intensities per sphere
         self.nodes = np.empty((5, 0))  # x, qext, qsca, gq, x^2 qback
-        self.intens = np.empty((0, width))
+        self.flat = spare if spare is not None else np.empty(0)
+        self.intens = self.flat[:0].reshape(0, width)
         self.spheres_angles = 0
         self.spheres_sums = 0
 
@@ -365,9 +369,14 @@ class _Store:
         nodes = np.empty((5, size * self.npc))
         nodes[:, :used] = self.nodes[:, :used]
         self.nodes = nodes
-        intens = np.empty((size * self.npc, self.intens.shape[1]))
-        intens[:used] = self.intens[:used]
-        self.intens = intens
+        width = self.intens.shape[1]
+        needed = size * self.npc * width
+        if needed > self.flat.size:
+            flat = np.empty(needed)
+            flat[: used * width] = self.flat[: used * width]
+            self.flat = flat
+        # Rows keep their place in the flat array: growing within it moves nothing.
+        self.intens = self.flat[:needed].reshape(size * self.npc, width)
 
     def ensure(
         self,
@@ -555,6 +564,7 @@ def solve_shared(
     settings: QuadratureSettings,
     rtol: float,
     cross_rtol: float,
+    buffers: dict[bool, np.ndarray] | None = None,
 ) -> tuple[list[_Result], SharedStatistics]:
     """Converged polydisperse results of several distributions at one wavelength.
 
@@ -576,6 +586,13 @@ def solve_shared(
     rtol, cross_rtol : float
         Each distribution's tolerances for the phase function and for the
         cross-sections and g. [-]
+    buffers : dict, optional
+        The spheres' intensity arrays, kept from one call to the next (pass
+        the same dict for every wavelength): a store of the 100-point
+        benchmark sweep reserves ~100 MB, and one fresh each wavelength
+        faulted its pages in again, in the kernel's time (huge pages, which
+        numpy asks for, are zeroed 2 MiB at a time).  Results do not depend
+        on it.
 
     Returns
     -------
@@ -626,6 +643,7 @@ def solve_shared(
             sizes=sizes,
             tables=tables,
             table_start=table_start,
+            spare=None if buffers is None else buffers.pop(True, None),
         )
     if len(legendre_grids) < len(solvers):
         # Few output angles: sums at the output angles themselves.
@@ -638,6 +656,7 @@ def solve_shared(
             sizes=np.array([mu_out.size], dtype=np.int64),
             tables=table.ravel(),
             table_start=np.array([0, table.size], dtype=np.int64),
+            spare=None if buffers is None else buffers.pop(False, None),
         )
     for store in stores.values():
         # Room for the refinement to come: untouched pages of np.empty cost
@@ -660,6 +679,8 @@ def solve_shared(
         spheres_with_angles=sum(s.spheres_angles for s in stores.values()),
         spheres_weighted=weighted,
     )
+    if buffers is not None:
+        buffers.update((key, store.flat) for key, store in stores.items())
     return results, stats
 
 

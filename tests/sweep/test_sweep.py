@@ -37,7 +37,7 @@ xr = pytest.importorskip("xarray", reason="needs the 'sweep' extra (xarray)")
 pytest.importorskip("zarr", reason="needs the 'sweep' extra (zarr)")
 
 from dustoptics.scattering.optics import _gauss_angles  # noqa: E402
-from dustoptics.sweep import sweep  # noqa: E402
+from dustoptics.sweep import local_cluster, sweep  # noqa: E402
 from dustoptics.sweep.shared import (  # noqa: E402
     _GRIDS,
     _cell_intensities,
@@ -69,8 +69,9 @@ def config_file(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 @pytest.fixture(scope="module")
 def cluster():
-    """Two worker processes on localhost; the numba cache is warmed here first,
-    so that the workers load every kernel from it."""
+    """Two worker processes on localhost, as a sweep starts them
+    (:func:`dustoptics.sweep.local_cluster`); the numba cache is warmed here
+    first, so that the workers load every kernel from it."""
     dust = do.mars_dust()
     mu = np.cos(np.deg2rad(np.linspace(0.0, 180.0, 181)))
     solve_shared(
@@ -83,14 +84,7 @@ def cluster():
         rtol=1e-3,
         cross_rtol=1e-5,
     )
-    with distributed.LocalCluster(
-        n_workers=2,
-        threads_per_worker=1,
-        processes=True,
-        host="127.0.0.1",
-        dashboard_address=None,
-        silence_logs=50,
-    ) as c:
+    with local_cluster(2) as c:
         yield c
 
 
@@ -261,6 +255,42 @@ def test_shared_results_do_not_depend_on_the_other_distributions():
                 together[i].csca,
                 together[i].g,
                 together[i].err_phase,
+            )
+
+
+def test_intensity_arrays_kept_between_wavelengths_change_no_bit():
+    """Stores that reuse the previous wavelength's intensity arrays (their
+    rows still hold its spheres, on other grids) give the same bits as fresh
+    ones: the larger spheres first, then smaller ones, then larger again."""
+    dust = do.mars_dust()
+    mu = np.cos(np.deg2rad(np.linspace(0.0, 180.0, 361)))
+    dists = [do.ModifiedGamma(r_eff_um=0.5, v_eff=0.1), do.ModifiedGamma(r_eff_um=2.0, v_eff=0.3)]
+
+    def solve(wavelength_nm, kept):
+        return solve_shared(
+            m=complex(dust(np.array([wavelength_nm]))[0]),
+            wavelength_nm=wavelength_nm,
+            mu_out=mu,
+            distributions=dists,
+            per_particle=False,
+            settings=QuadratureSettings(),
+            rtol=1e-4,
+            cross_rtol=1e-6,
+            buffers=kept,
+        )[0]
+
+    buffers: dict = {}
+    for wavelength_nm in (400.0, 900.0, 500.0):
+        fresh, reused = solve(wavelength_nm, None), solve(wavelength_nm, buffers)
+        assert buffers[True].size > 0
+        for a, b in zip(fresh, reused):
+            assert np.array_equal(a.phase, b.phase)
+            assert (a.cext, a.csca, a.g, a.err_phase, a.err_cross) == (
+                b.cext,
+                b.csca,
+                b.g,
+                b.err_phase,
+                b.err_cross,
             )
 
 
@@ -484,6 +514,23 @@ def counting_writes(monkeypatch) -> list[str]:
     return written
 
 
+def test_local_cluster_workers_run_with_its_settings(cluster):
+    """The workers of the cluster a sweep starts got its Dask settings (the
+    nanny passes the configuration to the processes it starts)."""
+    import dask
+
+    from dustoptics.sweep.run import _LOCAL_CLUSTER_CONFIG
+
+    def settings() -> dict:
+        return {key: dask.config.get(key) for key in _LOCAL_CLUSTER_CONFIG}
+
+    with distributed.Client(cluster) as client:
+        seen = client.run(settings)
+    assert len(seen) == 2
+    for values in seen.values():
+        assert values == _LOCAL_CLUSTER_CONFIG
+
+
 def test_workers_that_see_the_store_write_their_chunks(
     reference, config_file, cluster, tmp_path, monkeypatch
 ):
@@ -513,9 +560,7 @@ def test_workers_that_do_not_see_the_store_return_their_chunks(
     monkeypatch.setattr(run, "_sees", lambda store, token: False)
     out = tmp_path / "c.zarr"
     with (
-        distributed.LocalCluster(
-            n_workers=1, threads_per_worker=2, processes=False, dashboard_address=None
-        ) as local,
+        local_cluster(1, threads=2, processes=False) as local,
         distributed.Client(local) as client,
     ):
         sweep(config_file, OVER, out=out, client=client, chunk_wavelengths=1, progress=None)
@@ -531,9 +576,7 @@ def test_chunks_written_out_of_the_clients_sight_are_an_error(config_file, tmp_p
 
     monkeypatch.setattr(run, "_write_chunk", lambda store, region, name, result: None)
     with (
-        distributed.LocalCluster(
-            n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None
-        ) as local,
+        local_cluster(1, processes=False) as local,
         distributed.Client(local) as client,
         pytest.raises(RuntimeError, match=r"chunks \['0\.0', '0\.1'\] finished"),
     ):
