@@ -16,6 +16,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import dustoptics as do
 from dustoptics.models.config import build_table, parse_config
@@ -512,6 +514,44 @@ def counting_writes(monkeypatch) -> list[str]:
 
     monkeypatch.setattr(run, "_write_chunk", spy)
     return written
+
+
+@settings(max_examples=50, deadline=None)
+@given(n=st.integers(min_value=0, max_value=200))
+def test_spread_order_is_a_permutation_starting_at_both_ends(n):
+    from dustoptics.sweep.run import _spread
+
+    order = _spread(n)
+    assert sorted(order) == list(range(n))
+    assert order[:2] == [0, n - 1][: min(n, 2)]
+
+
+def test_spread_order_halves_the_widest_gap_first():
+    from dustoptics.sweep.run import _spread
+
+    assert _spread(5) == [0, 4, 2, 1, 3]
+    assert _spread(9)[:5] == [0, 8, 4, 2, 6]
+
+
+def test_chunks_go_out_longest_first_as_far_as_known():
+    """Before any chunk has finished, chunks go in the spread order; after,
+    the waiting chunk whose interpolated time is longest goes next."""
+    from dustoptics.sweep.run import _Order
+
+    order = _Order([(0, w) for w in range(10)] + [(1, w) for w in range(10)])
+    first = [order.next() for _ in range(4)]
+    assert [c[-1] for c in first] == [0, 0, 9, 9]  # both blocks' ends
+    order.finished((0, 0), 1.0)
+    order.finished((0, 9), 10.0)
+    # Block 0: interpolated 1 + w; block 1 knows nothing: the mean, 5.5.
+    assert order.next() == (0, 8)
+    order.finished((1, 0), 9.0)
+    order.finished((1, 9), 0.5)
+    # Block 1 now: 9 at w = 0 falling to 0.5 at w = 9, so w = 1 is longest (8.06).
+    assert order.next() == (1, 1)
+    remaining = [order.next() for _ in range(14)]
+    assert order.next() is None and None not in remaining
+    assert len(set(remaining)) == 14
 
 
 def test_local_cluster_workers_run_with_its_settings(cluster):
