@@ -545,41 +545,66 @@ class _Order:
     Chunks that nothing is known of go in an order that spreads over the
     wavelengths (first, last, middle, then the quarters, ...); once chunks
     have finished, each waiting chunk's time is interpolated from the
-    nearest finished ones of its block along the wavelength axis (or the
-    mean of all finished chunks, for a block with none yet).
+    nearest finished ones of its block (the same values of the other axes)
+    along the wavelength axis, or is the mean of all finished chunks for a
+    block with none yet.  Each block keeps its best candidate, so a choice
+    costs a pass over the blocks, not over every waiting chunk.
     """
 
     def __init__(self, chunks: Sequence[tuple[int, ...]]):
-        self.pending = list(chunks)
-        self.seconds: dict[tuple[int, ...], dict[int, float]] = {}
         last = max((c[-1] for c in chunks), default=0)
         self.rank = {w: i for i, w in enumerate(_spread(last + 1))}
+        self.pending: dict[tuple[int, ...], list[int]] = {}  # block -> w, by rank
+        for c in chunks:
+            self.pending.setdefault(c[:-1], []).append(c[-1])
+        for ws in self.pending.values():
+            ws.sort(key=self.rank.__getitem__)
+        self.known: dict[tuple[int, ...], dict[int, float]] = {}
+        self.best: dict[tuple[int, ...], tuple[float, int, int]] = {}  # (time, -rank, w)
+        self.total = 0.0
+        self.count = 0
 
     def finished(self, chunk: tuple[int, ...], seconds: float) -> None:
-        self.seconds.setdefault(chunk[:-1], {})[chunk[-1]] = seconds
+        block = chunk[:-1]
+        self.known.setdefault(block, {})[chunk[-1]] = seconds
+        self.total += seconds
+        self.count += 1
+        self._update(block)
 
-    def _estimate(self, chunk: tuple[int, ...]) -> float:
-        known = self.seconds.get(chunk[:-1])
-        if not known:
-            every = [t for block in self.seconds.values() for t in block.values()]
-            return sum(every) / len(every)
-        w = chunk[-1]
-        below = max((k for k in known if k < w), default=None)
-        above = min((k for k in known if k > w), default=None)
-        if below is None or above is None:
-            return known[above if below is None else below]  # type: ignore[index]
-        return known[below] + (known[above] - known[below]) * (w - below) / (above - below)
+    def _update(self, block: tuple[int, ...]) -> None:
+        """The best waiting chunk of a block with finished chunks."""
+        known = self.known.get(block)
+        ws = self.pending.get(block)
+        if not known or not ws:
+            self.best.pop(block, None)
+            return
+        done = sorted(known)
+        times = [known[k] for k in done]
+        # np.interp holds the end values beyond the finished range.
+        estimates = np.interp(ws, done, times)
+        self.best[block] = max(
+            (float(t), -self.rank[w], w) for t, w in zip(estimates, ws, strict=True)
+        )
 
     def next(self) -> tuple[int, ...] | None:
         """The chunk to submit next (removed from the waiting ones), or None."""
-        if not self.pending:
+        mean = self.total / self.count if self.count else 0.0
+        choice: tuple[float, int, int] | None = None
+        block_of_choice: tuple[int, ...] = ()
+        for block, ws in self.pending.items():
+            if not ws:
+                continue
+            # A block with finished chunks: its best; without: its first by
+            # rank, at the mean time of all finished chunks.
+            candidate = self.best.get(block) or (mean, -self.rank[ws[0]], ws[0])
+            if choice is None or candidate > choice:
+                choice, block_of_choice = candidate, block
+        if choice is None:
             return None
-        if self.seconds:
-            best = max(self.pending, key=lambda c: (self._estimate(c), -self.rank[c[-1]]))
-        else:
-            best = min(self.pending, key=lambda c: self.rank[c[-1]])
-        self.pending.remove(best)
-        return best
+        w = choice[2]
+        self.pending[block_of_choice].remove(w)
+        self._update(block_of_choice)
+        return block_of_choice + (w,)
 
 
 def _spread(n: int) -> list[int]:

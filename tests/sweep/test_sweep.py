@@ -554,6 +554,48 @@ def test_chunks_go_out_longest_first_as_far_as_known():
     assert len(set(remaining)) == 14
 
 
+@settings(max_examples=40, deadline=None)
+@given(
+    n_blocks=st.integers(min_value=1, max_value=4),
+    n_w=st.integers(min_value=1, max_value=12),
+    times=st.lists(st.floats(min_value=0.01, max_value=10.0), min_size=48, max_size=48),
+    seed=st.integers(min_value=0, max_value=2**16),
+)
+def test_each_chunk_chosen_is_the_longest_estimate_by_brute_force(n_blocks, n_w, times, seed):
+    """Whatever finishes when, the chunk chosen is the one with the longest
+    time estimated from scratch (linear interpolation between a block's
+    nearest finished chunks, their value beyond them, the mean of all
+    finished for a block with none; then the spread order)."""
+    import random
+
+    from dustoptics.sweep.run import _Order, _spread
+
+    def estimate(known, c):
+        mine = {w: t for (b, w), t in known.items() if b == c[0]}
+        if not mine:
+            return sum(known.values()) / len(known) if known else 0.0
+        return float(np.interp(c[1], sorted(mine), [mine[w] for w in sorted(mine)]))
+
+    chunks = [(b, w) for b in range(n_blocks) for w in range(n_w)]
+    rank = {w: i for i, w in enumerate(_spread(n_w))}
+    order = _Order(chunks)
+    pending, known = set(chunks), {}
+    rng = random.Random(seed)
+    running = []
+    while pending or running:
+        if running and (not pending or rng.random() < 0.5):
+            done = running.pop(rng.randrange(len(running)))
+            known[done] = times[done[0] * 12 + done[1]]
+            order.finished(done, known[done])
+            continue
+        best = max((estimate(known, c), -rank[c[1]]) for c in pending)
+        chosen = order.next()
+        assert chosen in pending and (estimate(known, chosen), -rank[chosen[1]]) == best
+        pending.remove(chosen)
+        running.append(chosen)
+    assert order.next() is None
+
+
 def test_local_cluster_workers_run_with_its_settings(cluster):
     """The workers of the cluster a sweep starts got its Dask settings (the
     nanny passes the configuration to the processes it starts)."""
