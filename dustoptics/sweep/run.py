@@ -892,10 +892,14 @@ def sweep(
 
                 futures: dict[Any, tuple[int, ...]] = {}
                 running = distributed.as_completed()
-                while len(futures) < slots() and (chunk := order.next()) is not None:
-                    future = submit(chunk)
-                    futures[future] = chunk
-                    running.add(future)
+
+                def fill() -> None:
+                    while len(futures) < slots() and (chunk := order.next()) is not None:
+                        future = submit(chunk)
+                        futures[future] = chunk
+                        running.add(future)
+
+                fill()
                 for future in running:
                     chunk = futures.pop(future)
                     result, seconds = future.result()
@@ -904,10 +908,7 @@ def sweep(
                     future.release()
                     order.finished(chunk, seconds)
                     bar.add(size(chunk))
-                    while len(futures) < slots() and (chunk := order.next()) is not None:
-                        future = submit(chunk)
-                        futures[future] = chunk
-                        running.add(future)
+                    fill()
             finally:
                 token.unlink(missing_ok=True)
                 for obj in to_close:

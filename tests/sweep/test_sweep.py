@@ -221,35 +221,35 @@ def test_cell_rows_on_a_smaller_grid_are_moved_as_the_kernel_moves_them():
         assert np.allclose(rows[:, : 2 * large], direct[:, : 2 * large], rtol=1e-12, atol=0)
 
 
+def solve_mars_dust(wavelength_nm, distributions, buffers=None):
+    """solve_shared's results for Mars dust at one wavelength, 361 angles,
+    scattering weighting, rtol 1e-4 (cross-sections 1e-6)."""
+    return solve_shared(
+        m=complex(do.mars_dust()(np.array([wavelength_nm]))[0]),
+        wavelength_nm=wavelength_nm,
+        mu_out=np.cos(np.deg2rad(np.linspace(0.0, 180.0, 361))),
+        distributions=distributions,
+        per_particle=False,
+        settings=QuadratureSettings(),
+        rtol=1e-4,
+        cross_rtol=1e-6,
+        buffers=buffers,
+    )[0]
+
+
 def test_shared_results_do_not_depend_on_the_other_distributions():
     """A distribution's result is the same to the bit whichever distributions
     share its solve and in whatever order (a cell's spheres are the same
     numbers whoever asked for them first)."""
-    dust = do.mars_dust()
-    m = complex(dust(np.array([600.0]))[0])
-    mu = np.cos(np.deg2rad(np.linspace(0.0, 180.0, 361)))
     dists = [
         do.ModifiedGamma(r_eff_um=0.5, v_eff=0.1),
         do.ModifiedGamma(r_eff_um=1.5, v_eff=0.3),
         do.ModifiedGamma(r_eff_um=1.0, v_eff=0.2),
     ]
-
-    def solve(group):
-        return solve_shared(
-            m=m,
-            wavelength_nm=600.0,
-            mu_out=mu,
-            distributions=group,
-            per_particle=False,
-            settings=QuadratureSettings(),
-            rtol=1e-4,
-            cross_rtol=1e-6,
-        )[0]
-
-    together = solve(dists)
+    together = solve_mars_dust(600.0, dists)
     for i, dist in enumerate(dists):
-        alone = solve([dist])[0]
-        reversed_ = solve(dists[::-1])[len(dists) - 1 - i]
+        alone = solve_mars_dust(600.0, [dist])[0]
+        reversed_ = solve_mars_dust(600.0, dists[::-1])[len(dists) - 1 - i]
         for r in (alone, reversed_):
             assert np.array_equal(r.phase, together[i].phase)
             assert (r.cext, r.csca, r.g, r.err_phase) == (
@@ -264,26 +264,11 @@ def test_intensity_arrays_kept_between_wavelengths_change_no_bit():
     """Stores that reuse the previous wavelength's intensity arrays (their
     rows still hold its spheres, on other grids) give the same bits as fresh
     ones: the larger spheres first, then smaller ones, then larger again."""
-    dust = do.mars_dust()
-    mu = np.cos(np.deg2rad(np.linspace(0.0, 180.0, 361)))
     dists = [do.ModifiedGamma(r_eff_um=0.5, v_eff=0.1), do.ModifiedGamma(r_eff_um=2.0, v_eff=0.3)]
-
-    def solve(wavelength_nm, kept):
-        return solve_shared(
-            m=complex(dust(np.array([wavelength_nm]))[0]),
-            wavelength_nm=wavelength_nm,
-            mu_out=mu,
-            distributions=dists,
-            per_particle=False,
-            settings=QuadratureSettings(),
-            rtol=1e-4,
-            cross_rtol=1e-6,
-            buffers=kept,
-        )[0]
-
     buffers: dict = {}
     for wavelength_nm in (400.0, 900.0, 500.0):
-        fresh, reused = solve(wavelength_nm, None), solve(wavelength_nm, buffers)
+        fresh = solve_mars_dust(wavelength_nm, dists)
+        reused = solve_mars_dust(wavelength_nm, dists, buffers=buffers)
         assert buffers[True].size > 0
         for a, b in zip(fresh, reused):
             assert np.array_equal(a.phase, b.phase)
