@@ -894,7 +894,8 @@ def sweep(
                 running = distributed.as_completed()
 
                 def fill() -> None:
-                    while len(futures) < slots() and (chunk := order.next()) is not None:
+                    limit = slots()  # one call to the scheduler, not one per chunk
+                    while len(futures) < limit and (chunk := order.next()) is not None:
                         future = submit(chunk)
                         futures[future] = chunk
                         running.add(future)
