@@ -34,7 +34,7 @@ _numba_cache.configure(__version__)
 from dustoptics import atmosphere, colour, compare, io, models, particles, scattering, sky, table
 from dustoptics.atmosphere import column, gases, parametric
 from dustoptics.compare import compare_tables
-from dustoptics.io.netcdf import open_table
+from dustoptics.io.tables.netcdf import open_table
 from dustoptics.models import config, presets
 from dustoptics.models.config import build_table, load_config
 from dustoptics.models.presets import build_preset, list_presets

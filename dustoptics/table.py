@@ -908,7 +908,7 @@ class Table:
         OSError
             The place is not writable; nothing is left behind.
         """
-        from dustoptics.io.netcdf import save_table
+        from dustoptics.io.tables.netcdf import save_table
 
         return save_table(self, path, overwrite=overwrite)
 

@@ -84,14 +84,13 @@ from dustoptics.io import (
     cosmoscout,
     exr,
     glsl,
-    hdf5,
     ktx2,
-    netcdf,
     npy,
     phase_texture,
     rt_text,
     seed_csv,
     shader,
+    tables,
     texture,
 )
 from dustoptics.io.cosmoscout import (
@@ -104,10 +103,10 @@ from dustoptics.io.cosmoscout import (
 from dustoptics.io.exr import write_exr
 from dustoptics.io.glsl import glsl_snippet, write_glsl
 from dustoptics.io.ktx2 import write_ktx2
-from dustoptics.io.netcdf import open_table, read_hdf5, read_netcdf, write_hdf5, write_netcdf
 from dustoptics.io.npy import write_npy
 from dustoptics.io.seed_csv import read_seed_csv, write_seed_csv
 from dustoptics.io.shader import shader_source, write_shader
+from dustoptics.io.tables import open_table, read_hdf5, read_netcdf, write_hdf5, write_netcdf
 from dustoptics.io.texture import read_texture, write_texture
 
 __all__ = [
@@ -121,9 +120,7 @@ __all__ = [
     "exr",
     "glsl",
     "glsl_snippet",
-    "hdf5",
     "ktx2",
-    "netcdf",
     "npy",
     "open_table",
     "phase_texture",
@@ -137,6 +134,7 @@ __all__ = [
     "seed_csv",
     "shader",
     "shader_source",
+    "tables",
     "texture",
     "write",
     "write_cosmoscout_constituent",
