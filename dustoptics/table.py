@@ -42,11 +42,12 @@ from __future__ import annotations
 
 import hashlib
 import json
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import asdict, dataclass, field, is_dataclass, replace
 from functools import cache
 from importlib.metadata import PackageNotFoundError
 from importlib.metadata import version as _dist_version
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -60,7 +61,7 @@ if TYPE_CHECKING:  # the computation imports this module, not the other way roun
     import xarray as xr
 
     from dustoptics.scattering.fit import FitResult
-    from dustoptics.scattering.optics import QuadratureDiagnostics
+    from dustoptics.scattering.quadrature import QuadratureDiagnostics
 
 __all__ = [
     "AEROSOL_STANDARD_NAMES",
@@ -74,8 +75,12 @@ __all__ = [
     "Provenance",
     "Source",
     "Table",
+    "alpha1_from_pmom",
     "canonical_json",
     "plain",
+    "pmom_from_alpha1",
+    "register_table_fitter",
+    "register_table_writer",
     "software_versions",
 ]
 
@@ -423,6 +428,124 @@ def _per_wavelength_2d(name: str, value: Any, n: int, m: int | None) -> np.ndarr
     return arr
 
 
+# ---------------------------------------- what a table does through modules above it
+#
+# This module is the bottom of the package: of the package it imports only the
+# validation helpers.  Writing a file and fitting a model need modules that
+# import this one, so they register themselves here when imported (``import
+# dustoptics`` imports them all), the way xarray's backends register their
+# engines.
+
+#: A table file writer: ``writer(table, path, *, overwrite=False) -> pathlib.Path``.
+TableWriter = Callable[..., Path]
+
+#: Lower-case file suffix -> the writer :meth:`Table.save` uses for it; the
+#: first suffix registered is the default (a path without a suffix gets it).
+_WRITERS: dict[str, TableWriter] = {}
+
+#: The function behind :meth:`Table.fit` (one at most).
+_FITTERS: list[Callable[..., FitResult]] = []
+
+
+def register_table_writer(suffixes: Sequence[str], writer: TableWriter) -> None:
+    """Let :meth:`Table.save` write files with these suffixes through ``writer``.
+
+    :mod:`dustoptics.io.tables.netcdf` registers its writer for ``.nc``,
+    ``.h5``, ``.hdf5`` and ``.nc4`` when it is imported, which ``import
+    dustoptics`` does.  Registering the same writer again changes nothing.
+
+    Parameters
+    ----------
+    suffixes : sequence of str
+        File suffixes with their dot, e.g. ``(".nc", ".h5")``, matched
+        without regard to case.  The first suffix ever registered is the
+        default of a path without one.
+    writer : callable
+        ``writer(table, path, *, overwrite=False) -> pathlib.Path``: writes
+        one file at ``path`` (whose suffix is one of ``suffixes``).
+
+    Raises
+    ------
+    ValueError
+        A suffix that is not a dot followed by letters and digits, or one
+        already registered to another writer (nothing is registered).
+    """
+    if isinstance(suffixes, str):
+        raise TypeError(
+            f"suffixes must be a sequence of suffixes, not one string; got {suffixes!r}"
+        )
+    if not callable(writer):
+        raise TypeError(f"writer must be callable; got {writer!r}")
+    keys = []
+    for suffix in suffixes:
+        if not (isinstance(suffix, str) and suffix[:1] == "." and suffix[1:].isalnum()):
+            raise ValueError(
+                f"suffixes must be file suffixes like '.nc' (a dot, then letters and digits); "
+                f"got {suffix!r}"
+            )
+        key = suffix.lower()
+        if _WRITERS.get(key, writer) is not writer:
+            raise ValueError(
+                f"table file suffix {suffix!r} is already registered to "
+                f"{getattr(_WRITERS[key], '__qualname__', _WRITERS[key])!r}"
+            )
+        keys.append(key)
+    for key in keys:
+        _WRITERS[key] = writer
+
+
+def register_table_fitter(fitter: Callable[..., FitResult]) -> None:
+    """Make ``fitter`` the function behind :meth:`Table.fit`.
+
+    :mod:`dustoptics.scattering` registers
+    :func:`~dustoptics.scattering.fit.fit_table` when it is imported, which
+    ``import dustoptics`` does.  Registering the same function again changes
+    nothing.
+
+    Parameters
+    ----------
+    fitter : callable
+        ``fitter(table, *, model, colour, channels_nm, forward_cutoff_deg) -> FitResult``.
+
+    Raises
+    ------
+    ValueError
+        Another function is already registered.
+    """
+    if not callable(fitter):
+        raise TypeError(f"fitter must be callable; got {fitter!r}")
+    if _FITTERS and _FITTERS[0] is not fitter:
+        raise ValueError(
+            f"Table.fit is already served by {getattr(_FITTERS[0], '__qualname__', _FITTERS[0])!r}"
+        )
+    _FITTERS[:] = [fitter]
+
+
+# ------------------------------------------------------------ DISORT's moments
+
+
+def pmom_from_alpha1(alpha1: np.ndarray) -> np.ndarray:
+    """DISORT's phase-function moments chi_l = alpha1_l / (2 l + 1). [-]
+
+    The same numbers as ``alpha1`` (:attr:`Table.alpha1`) in the
+    normalization of DISORT's ``PMOM`` (Stamnes et al. 1988): P(mu) =
+    sum_l (2 l + 1) chi_l P_l(mu), chi_0 = 1, chi_1 = g.  Works on the last axis.
+
+    Examples
+    --------
+    >>> pmom_from_alpha1(np.array([1.0, 1.5, 2.5]))
+    array([1. , 0.5, 0.5])
+    """
+    a = np.asarray(alpha1, dtype=np.float64)
+    return a / (2.0 * np.arange(a.shape[-1]) + 1.0)
+
+
+def alpha1_from_pmom(pmom: np.ndarray) -> np.ndarray:
+    """Inverse of :func:`pmom_from_alpha1`: alpha1_l = (2 l + 1) chi_l. [-]"""
+    p = np.asarray(pmom, dtype=np.float64)
+    return p * (2.0 * np.arange(p.shape[-1]) + 1.0)
+
+
 @dataclass(frozen=True, eq=False, kw_only=True)
 class Table:
     """One constituent's optical table over wavelength and scattering angle.
@@ -474,7 +597,7 @@ class Table:
         Expansion coefficients in generalized spherical functions
         (``compute_optics(expansion=...)``), alpha1[:, 0] = 1, alpha1[:, 1] = 3 g;
         DISORT's moments are alpha1_l / (2 l + 1)
-        (:func:`dustoptics.scattering.expansion.pmom_from_alpha1`). [-]
+        (:func:`pmom_from_alpha1`). [-]
     expansion_error_estimate : numpy.ndarray or None
         Bound on the error of every coefficient divided by (2 l + 1), per
         wavelength. [-]
@@ -883,7 +1006,9 @@ class Table:
         """Write the table to one file; the format follows the suffix.
 
         ``.nc`` (the default: a path without a suffix gets it), ``.h5``,
-        ``.hdf5`` and ``.nc4`` are the same CF-1.10 netCDF-4 file (:mod:`dustoptics.io.netcdf`); read it back with
+        ``.hdf5`` and ``.nc4`` are the same CF-1.10 netCDF-4 file
+        (:mod:`dustoptics.io.tables.netcdf`, which registers its writer with
+        :func:`register_table_writer`); read it back with
         :func:`dustoptics.open_table`.  The write is atomic and byte
         reproducible (same table, same bytes).
 
@@ -907,10 +1032,25 @@ class Table:
             ``path`` exists and ``overwrite`` is False.
         OSError
             The place is not writable; nothing is left behind.
+        RuntimeError
+            No writer is registered (``dustoptics.io`` was never imported).
         """
-        from dustoptics.io.tables.netcdf import save_table
-
-        return save_table(self, path, overwrite=overwrite)
+        if not _WRITERS:
+            raise RuntimeError(
+                "Table.save: no table file writer is registered; import dustoptics.io "
+                "(import dustoptics does), which registers the netCDF-4 writer"
+            )
+        target = Path(path)
+        if not target.suffix:
+            target = target.with_name(target.name + next(iter(_WRITERS)))
+        writer = _WRITERS.get(target.suffix.lower())
+        if writer is None:
+            raise ValueError(
+                f"path {str(target)!r}: unknown table file suffix {target.suffix!r}; use one of "
+                f"{', '.join(_WRITERS)} (the first is the default). "
+                "Renderer formats (CSV, GLSL, textures) are written by dustoptics.io"
+            )
+        return writer(self, target, overwrite=overwrite)
 
     def replace(self, **changes: Any) -> Table:
         """A copy with some fields changed (validated again).
@@ -1063,8 +1203,6 @@ class Table:
             raise ValueError(
                 f"table {self.name!r} has no expansion coefficients; use compute_optics(expansion=True)"
             )
-        from dustoptics.scattering.expansion import pmom_from_alpha1
-
         return pmom_from_alpha1(self.alpha1)
 
     @property
@@ -1181,12 +1319,21 @@ class Table:
     ) -> FitResult:
         """Fit an analytic phase function per wavelength or per colour channel.
 
-        Delegates to :func:`dustoptics.scattering.fit.fit_table`, which
-        documents the models, the loss and the reported errors.
-        """
-        from dustoptics.scattering.fit import fit_table
+        Delegates to :func:`dustoptics.scattering.fit.fit_table` (registered
+        with :func:`register_table_fitter`), which documents the models, the
+        loss and the reported errors.
 
-        return fit_table(
+        Raises
+        ------
+        RuntimeError
+            No fitter is registered (``dustoptics.scattering`` was never imported).
+        """
+        if not _FITTERS:
+            raise RuntimeError(
+                "Table.fit: no fitter is registered; import dustoptics.scattering "
+                "(import dustoptics does), which registers dustoptics.scattering.fit.fit_table"
+            )
+        return _FITTERS[0](
             self,
             model=model,
             colour=colour,

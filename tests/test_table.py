@@ -285,3 +285,82 @@ def test_from_xarray_refuses_what_is_not_a_table(table: Table) -> None:
         ValueError, match=r"'phase' must have dimensions \('wavelength_nm', 'theta_deg'\)"
     ):
         Table.from_xarray(ds.assign(phase=ds.phase.transpose()))
+
+
+# ------------------------------------------------- what a table does through modules above it
+
+
+def test_the_package_registers_the_writer_and_the_fitter() -> None:
+    from dustoptics.io.tables.netcdf import SUFFIXES, save_table
+    from dustoptics.scattering.fit import fit_table
+
+    assert tuple(do.table._WRITERS) == SUFFIXES
+    assert set(do.table._WRITERS.values()) == {save_table}
+    assert list(do.table._FITTERS) == [fit_table]
+
+
+def test_save_and_fit_without_a_registration_are_clear_errors(
+    table: Table, tmp_path, monkeypatch
+) -> None:
+    monkeypatch.setattr(do.table, "_WRITERS", {})
+    monkeypatch.setattr(do.table, "_FITTERS", [])
+    with pytest.raises(RuntimeError, match="no table file writer is registered; import dustoptics"):
+        table.save(tmp_path / "t.nc")
+    with pytest.raises(RuntimeError, match="no fitter is registered; import dustoptics"):
+        table.fit(model="hg")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_save_dispatches_on_the_suffix(table: Table, tmp_path, monkeypatch) -> None:
+    calls = []
+
+    def writer(t, path, *, overwrite=False):
+        calls.append((t, path, overwrite))
+        return path
+
+    monkeypatch.setattr(do.table, "_WRITERS", {})
+    do.table.register_table_writer((".abc", ".XYZ"), writer)
+    do.table.register_table_writer([".abc"], writer)  # the same again changes nothing
+    assert table.save(tmp_path / "t") == tmp_path / "t.abc"  # the first suffix is the default
+    assert table.save(tmp_path / "u.xyz", overwrite=True) == tmp_path / "u.xyz"
+    assert calls == [(table, tmp_path / "t.abc", False), (table, tmp_path / "u.xyz", True)]
+    with pytest.raises(
+        ValueError, match=r"unknown table file suffix '\.nc'; use one of \.abc, \.xyz"
+    ):
+        table.save(tmp_path / "t.nc")
+
+
+@pytest.mark.parametrize(
+    ("suffixes", "error", "match"),
+    [
+        ((".nc",), ValueError, r"'\.nc' is already registered to 'save_table'"),
+        (("nc",), ValueError, r"suffixes must be file suffixes like '\.nc'.*got 'nc'"),
+        ((".n c",), ValueError, r"got '\.n c'"),
+        (".nc", TypeError, "not one string"),
+    ],
+)
+def test_register_table_writer_refuses(suffixes, error, match) -> None:
+    before = dict(do.table._WRITERS)
+    with pytest.raises(error, match=match):
+        do.table.register_table_writer(suffixes, lambda t, p, *, overwrite=False: p)
+    assert dict(do.table._WRITERS) == before
+
+
+def test_register_table_fitter_refuses_a_second_fitter() -> None:
+    with pytest.raises(ValueError, match="Table.fit is already served by 'fit_table'"):
+        do.table.register_table_fitter(lambda table, **kw: None)
+    with pytest.raises(TypeError, match="fitter must be callable"):
+        do.table.register_table_fitter("fit")  # type: ignore[arg-type]
+
+
+def test_pmom_is_alpha1_over_2l_plus_1() -> None:
+    t = Table(
+        wavelength_nm=[550.0],
+        theta_deg=[0.0, 180.0],
+        phase=[[0.1, 0.05]],
+        g=[0.8],
+        **{key: [[1.0, 1.5, 2.5]] for key in do.table.EXPANSION_FIELDS},
+    )
+    np.testing.assert_array_equal(t.pmom, [[1.0, 0.5, 0.5]])
+    np.testing.assert_array_equal(do.table.alpha1_from_pmom(t.pmom), t.alpha1)
+    assert do.expansion.pmom_from_alpha1 is do.table.pmom_from_alpha1

@@ -9,9 +9,15 @@
 - :mod:`~dustoptics.scattering.phase`: analytic phase functions, blending
   and renormalization;
 - :mod:`~dustoptics.scattering.expansion`: the scattering matrix's expansion
-  in generalized spherical functions, DISORT moments, delta-M truncation.
+  in generalized spherical functions, DISORT moments, delta-M truncation;
+- :mod:`~dustoptics.scattering.fit`: analytic phase functions fitted to a
+  table (:meth:`dustoptics.table.Table.fit`).
 """
 
-from dustoptics.scattering import expansion, mie, optics, phase, quadrature
+from dustoptics.scattering import expansion, fit, mie, optics, phase, quadrature
+from dustoptics.table import register_table_fitter
 
-__all__ = ["expansion", "mie", "optics", "phase", "quadrature"]
+# Table.fit is served from here: the data model imports nothing above it.
+register_table_fitter(fit.fit_table)
+
+__all__ = ["expansion", "fit", "mie", "optics", "phase", "quadrature"]

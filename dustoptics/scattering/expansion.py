@@ -43,7 +43,8 @@ the opposite sign; their b2 and beta2 are minus ours (b1 and beta1 agree).
 
 DISORT's phase-function moments are ``pmom_l = alpha1_l / (2 l + 1)``, the
 Legendre coefficients of P in the normalization (1/2) int P dmu = 1 with
-P = sum (2 l + 1) pmom_l P_l (:func:`pmom_from_alpha1`).
+P = sum (2 l + 1) pmom_l P_l (:func:`~dustoptics.table.pmom_from_alpha1`, defined with the table in
+:mod:`dustoptics.table` and importable from here).
 
 References
 ----------
@@ -66,6 +67,9 @@ from dataclasses import dataclass
 
 import numpy as np
 from numba import njit
+
+# The moments are the table's convention (Table.pmom), defined with the data model.
+from dustoptics.table import alpha1_from_pmom, pmom_from_alpha1
 
 __all__ = [
     "DeltaM",
@@ -232,23 +236,6 @@ def evaluate_matrix(coefficients: np.ndarray, theta_deg: np.ndarray) -> dict[str
         "b1": -(c[4] @ d02),
         "b2": -(c[5] @ d02),
     }
-
-
-def pmom_from_alpha1(alpha1: np.ndarray) -> np.ndarray:
-    """DISORT's phase-function moments chi_l = alpha1_l / (2 l + 1). [-]
-
-    The same numbers as ``alpha1`` in the normalization of DISORT's ``PMOM``
-    (Stamnes et al. 1988): P(mu) = sum_l (2 l + 1) chi_l P_l(mu), chi_0 = 1,
-    chi_1 = g.  Works on the last axis.
-    """
-    a = np.asarray(alpha1, dtype=np.float64)
-    return a / (2.0 * np.arange(a.shape[-1]) + 1.0)
-
-
-def alpha1_from_pmom(pmom: np.ndarray) -> np.ndarray:
-    """Inverse of :func:`pmom_from_alpha1`: alpha1_l = (2 l + 1) chi_l. [-]"""
-    p = np.asarray(pmom, dtype=np.float64)
-    return p * (2.0 * np.arange(p.shape[-1]) + 1.0)
 
 
 @dataclass(frozen=True)

@@ -43,7 +43,7 @@ import os
 import warnings
 from collections.abc import Callable, Sequence
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from functools import lru_cache
 from typing import Any, NamedTuple, cast
 
@@ -60,13 +60,14 @@ from dustoptics._validation import (
     check_wavelength_unit,
 )
 from dustoptics.particles.coated import CoatedSphere
+from dustoptics.particles.custom_sizedist import from_dict as _distribution_from_dict
 from dustoptics.particles.materials import RefractiveIndex, get_material
 from dustoptics.particles.sizedist import SizeDistribution
-from dustoptics.particles.sizedist import from_dict as _distribution_from_dict
 from dustoptics.scattering import mie
 from dustoptics.scattering.expansion import greek_coefficients
 from dustoptics.scattering.quadrature import (
     _UPPER_MOMENT,
+    QuadratureDiagnostics,
     QuadratureSettings,
     _stretch,
     _wright_omega,
@@ -118,36 +119,6 @@ def default_wavelengths_nm() -> np.ndarray:
 def default_theta_deg() -> np.ndarray:
     """1,801 scattering angles 0, 0.1, ..., 180 deg. [deg]"""
     return np.linspace(0.0, 180.0, 1801)
-
-
-@dataclass(frozen=True, eq=False)
-class QuadratureDiagnostics:
-    """Where :func:`compute_optics` put its radius nodes, per wavelength.
-
-    Kept in memory with the :class:`~dustoptics.table.Table` (its
-    ``diagnostics``) for scripts that study the quadrature
-    (``scripts/benchmark.py`` rebuilds the nodes from it); files do not store
-    it, since it follows from the table's provenance.
-
-    Attributes
-    ----------
-    settings : QuadratureSettings
-        Radius node placement.
-    distribution : SizeDistribution
-        The size distribution.
-    panels : tuple of numpy.ndarray
-        Per wavelength, the phase function's final panels (shape (n_panels, 2))
-        in the stretched variable s of :mod:`dustoptics.scattering.quadrature`; each
-        panel's two halves carry the Gauss-Legendre rule that gave the table,
-        so ``quadrature.panel_nodes`` on the halves reproduces the nodes. [-]
-    cross_section_panels : tuple of numpy.ndarray
-        The same for the cross-sections and g. [-]
-    """
-
-    settings: QuadratureSettings
-    distribution: SizeDistribution
-    panels: tuple[np.ndarray, ...] = field(repr=False)
-    cross_section_panels: tuple[np.ndarray, ...] = field(repr=False)
 
 
 def _describe(obj: Any) -> str:

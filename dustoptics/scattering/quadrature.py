@@ -40,7 +40,7 @@ sampling is never used.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import lru_cache
 
 import numpy as np
@@ -51,6 +51,7 @@ from dustoptics._validation import check_open_interval, check_positive
 from dustoptics.particles.sizedist import SizeDistribution
 
 __all__ = [
+    "QuadratureDiagnostics",
     "QuadratureSettings",
     "RadiusNodes",
     "gauss_legendre",
@@ -137,6 +138,36 @@ class RadiusNodes:
     size_parameter: np.ndarray
     weight: np.ndarray
     radius_um: np.ndarray
+
+
+@dataclass(frozen=True, eq=False)
+class QuadratureDiagnostics:
+    """Where :func:`~dustoptics.scattering.optics.compute_optics` put its radius nodes, per wavelength.
+
+    Kept in memory with the :class:`~dustoptics.table.Table` (its
+    ``diagnostics``) for scripts that study the quadrature
+    (``scripts/benchmark.py`` rebuilds the nodes from it); files do not store
+    it, since it follows from the table's provenance.
+
+    Attributes
+    ----------
+    settings : QuadratureSettings
+        Radius node placement.
+    distribution : SizeDistribution
+        The size distribution.
+    panels : tuple of numpy.ndarray
+        Per wavelength, the phase function's final panels (shape (n_panels, 2))
+        in the stretched variable s of this module; each panel's two halves
+        carry the Gauss-Legendre rule that gave the table, so
+        :func:`panel_nodes` on the halves reproduces the nodes. [-]
+    cross_section_panels : tuple of numpy.ndarray
+        The same for the cross-sections and g. [-]
+    """
+
+    settings: QuadratureSettings
+    distribution: SizeDistribution
+    panels: tuple[np.ndarray, ...] = field(repr=False)
+    cross_section_panels: tuple[np.ndarray, ...] = field(repr=False)
 
 
 @lru_cache(maxsize=64)

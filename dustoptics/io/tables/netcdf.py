@@ -84,6 +84,7 @@ from dustoptics.table import (
     WAVELENGTH_DIM,
     Table,
     canonical_json,
+    register_table_writer,
 )
 
 __all__ = [
@@ -318,6 +319,7 @@ def _directory_writer(suffix: str) -> Callable[..., list[Path]]:
 
 register_format("netcdf", _directory_writer(".nc"))
 register_format("hdf5", _directory_writer(".h5"))
+register_table_writer(SUFFIXES, save_table)  # Table.save
 
 
 # ------------------------------------------------------------------ reading
