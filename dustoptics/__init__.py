@@ -40,6 +40,11 @@ from dustoptics.models.config import build_table, load_config
 from dustoptics.models.presets import build_preset, list_presets
 from dustoptics.particles import materials, mixing, sizedist
 from dustoptics.particles.coated import CoatedSphere
+from dustoptics.particles.custom_sizedist import (
+    DensityDistribution,
+    MultiModal,
+    TabulatedDistribution,
+)
 from dustoptics.particles.materials import (
     ConstantIndex,
     GasFormulaIndex,
@@ -59,16 +64,13 @@ from dustoptics.particles.mixing import (
 )
 from dustoptics.particles.sizedist import (
     DeirmendjianGamma,
-    DensityDistribution,
     Gamma,
     LogNormal,
     ModifiedGamma,
     ModifiedLogNormal,
     Monodisperse,
-    MultiModal,
     PowerLaw,
     SizeDistribution,
-    TabulatedDistribution,
     Truncated,
 )
 from dustoptics.scattering import expansion, mie, optics, phase, quadrature

@@ -39,7 +39,8 @@ Top level (before any ``[section]``)::
 (``shape`` > 0, ``scale_um`` > 0), ``"log_normal"`` (``median_radius_um`` > 0,
 ``sigma`` > 0), ``"monodisperse"`` (``radius_um`` > 0), or ``"multimodal"``
 with one ``[[size_distribution.modes]]`` table per mode, each a model above
-plus ``relative_number_density`` > 0 (:class:`dustoptics.particles.sizedist.MultiModal`).
+plus ``relative_number_density`` > 0
+(:class:`dustoptics.particles.custom_sizedist.MultiModal`).
 
 ``[optics]``: ``wavelengths_nm`` (a list, or ``{start = 360, stop = 830, step
 = 10}``, the default), angles as ``n_theta`` evenly spaced from 0 to 180 deg
@@ -102,6 +103,7 @@ from dustoptics._validation import (
     check_file_name,
     check_wavelength_unit,
 )
+from dustoptics.particles.custom_sizedist import MultiModal
 from dustoptics.particles.materials import get_material, list_materials
 from dustoptics.particles.mixing import MARS_DUST_HEMATITE, MIXING_RULES, mars_dust
 from dustoptics.particles.sizedist import (
@@ -110,7 +112,6 @@ from dustoptics.particles.sizedist import (
     ModifiedGamma,
     ModifiedLogNormal,
     Monodisperse,
-    MultiModal,
     SizeDistribution,
 )
 from dustoptics.scattering import phase as _phase

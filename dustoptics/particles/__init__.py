@@ -4,9 +4,12 @@
   (catalogue, tables, dispersion formulas);
 - :mod:`~dustoptics.particles.mixing`: effective-medium mixing rules
   (Maxwell Garnett, Bruggeman) and the seed's Mars dust;
-- :mod:`~dustoptics.particles.sizedist`: number size distributions n(r).
+- :mod:`~dustoptics.particles.sizedist`: number size distributions n(r), the
+  analytic families of the literature;
+- :mod:`~dustoptics.particles.custom_sizedist`: size distributions the user puts
+  together (a mixture of modes, a measured table, a density function).
 """
 
-from dustoptics.particles import coated, materials, mixing, sizedist
+from dustoptics.particles import coated, custom_sizedist, materials, mixing, sizedist
 
-__all__ = ["coated", "materials", "mixing", "sizedist"]
+__all__ = ["coated", "custom_sizedist", "materials", "mixing", "sizedist"]

@@ -1,11 +1,10 @@
-"""Tests for dustoptics.particles.sizedist.
+"""Tests for dustoptics.particles.sizedist: the interface and the analytic families.
 
 The analytic moments, tail fractions and bounds are checked against
-``scipy.integrate.quad`` of the density, which shares no code with them (the
-density comes from ``scipy.stats``; the moments from ``scipy.special.poch`` or
-the log-normal closed form; the tails from incomplete gamma / normal functions).
-Quadrature runs in ``t = ln r`` (``dr = r dt``), where every integrand here is a
-smooth bump, with a tolerance of 1e-12 so that 1e-8 comparisons are meaningful.
+``scipy.integrate.quad`` of the density (``_sizedist_reference``), which shares no
+code with them (the density comes from ``scipy.stats``; the moments from
+``scipy.special.poch`` or the log-normal closed form; the tails from incomplete
+gamma / normal functions).
 """
 
 from __future__ import annotations
@@ -17,92 +16,33 @@ from collections.abc import Callable
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from _sizedist_reference import (
+    FAST,
+    MARS_COARSE,
+    MOMENT_ORDERS,
+    check_against_density,
+    check_bounds,
+    continuous,
+    gammas,
+    log_normals,
+    quad,
+    quad_moment,
+)
+from hypothesis import given
 from hypothesis import strategies as st
 from scipy import integrate
 
 from dustoptics.particles.sizedist import (
+    DeirmendjianGamma,
     Gamma,
     LogNormal,
     ModifiedGamma,
     ModifiedLogNormal,
     Monodisperse,
-    MultiModal,
+    PowerLaw,
     SizeDistribution,
+    Truncated,
 )
-
-MOMENT_ORDERS = (1, 2, 3, 4, 6)
-FAST = settings(max_examples=15, deadline=None)  # quad is the slow part
-
-# CosmoScout VR, scattering-table-generator/mie-settings/mars_realistic.json.
-MARS_FINE = ModifiedLogNormal(r_eff_um=0.04, v_eff=0.1)
-MARS_COARSE = ModifiedLogNormal(r_eff_um=1.4, v_eff=0.35)
-
-
-def cosmoscout_mars() -> MultiModal:
-    return MultiModal(modes=(MARS_FINE, MARS_COARSE), relative_number_densities=(1000.0, 1.0))
-
-
-# ------------------------------------------------------------------ reference
-
-
-def _windows_ln_r(dist: SizeDistribution, k: float) -> list[tuple[float, float, float]]:
-    """``(start, peak, end)`` in ln r outside which ``r^(k+1) n(r)`` is < e^-40 of its peak."""
-    if isinstance(dist, MultiModal):
-        return [w for mode in dist.modes for w in _windows_ln_r(mode, k)]
-    if isinstance(dist, (Gamma, ModifiedGamma)):
-        # In t = ln r the integrand is ~ exp(a t - e^t / scale), a = shape + k + 1,
-        # i.e. exp(a (d + 1 - e^d)) times its peak at distance d from the peak:
-        # exponential decay below, Gaussian of width 1/sqrt(a) near the peak for
-        # large a, double-exponential decay above.
-        a = dist.shape + k + 1.0
-        peak = math.log(dist.scale_um * a)
-        return [(peak - 40.0 / a - 12.0 / math.sqrt(a), peak, peak + 4.0)]
-    assert isinstance(dist, (LogNormal, ModifiedLogNormal))
-    # A Gaussian in t of width sigma, centred at mu + (k + 1) sigma^2.
-    peak = math.log(dist.median_radius_um) + (k + 1.0) * dist.sigma**2
-    return [(peak - 9.0 * dist.sigma, peak, peak + 9.0 * dist.sigma)]
-
-
-def quad_moment(
-    dist: SizeDistribution, k: float, lo_um: float = 0.0, hi_um: float = math.inf
-) -> float:
-    """``integral_lo^hi r^k n(r) dr`` by adaptive quadrature in ln r."""
-    windows = _windows_ln_r(dist, k)
-    t_lo = min(w[0] for w in windows) if lo_um <= 0.0 else math.log(lo_um)
-    t_hi = max(w[2] for w in windows) if math.isinf(hi_um) else math.log(hi_um)
-    if t_hi <= t_lo:
-        return 0.0
-
-    def integrand(t: float) -> float:
-        r = math.exp(t)
-        return float(r ** (k + 1.0)) * float(dist.pdf(r))
-
-    inner = sorted({p for w in windows for p in w if t_lo < p < t_hi})
-    value, _ = integrate.quad(
-        integrand, t_lo, t_hi, points=inner or None, limit=500, epsabs=0.0, epsrel=1e-12
-    )
-    return float(value)
-
-
-# ----------------------------------------------------------------- strategies
-
-modified_gammas = st.builds(
-    ModifiedGamma,
-    r_eff_um=st.floats(0.05, 20.0),
-    # v_eff <= 1/3 keeps shape >= 1 (no singularity at r = 0 for quad);
-    # the singular range is tested separately.
-    v_eff=st.floats(0.01, 0.33),
-)
-gammas = st.builds(Gamma, shape=st.floats(1.0, 100.0), scale_um=st.floats(0.005, 5.0))
-log_normals = st.builds(
-    LogNormal, median_radius_um=st.floats(0.01, 10.0), sigma=st.floats(0.05, 1.2)
-)
-modified_log_normals = st.builds(
-    ModifiedLogNormal, r_eff_um=st.floats(0.02, 20.0), v_eff=st.floats(0.01, 1.0)
-)
-continuous = st.one_of(modified_gammas, gammas, log_normals, modified_log_normals)
-
 
 # --------------------------------------------------------- density, moments
 
@@ -286,16 +226,6 @@ def test_tail_fractions_are_ordered_in_moment(dist: SizeDistribution, factor: fl
 # ------------------------------------------------------------------- bounds
 
 
-def _check_bounds(dist: SizeDistribution, eps: float, lower: float, upper: float) -> None:
-    r_lo, r_hi = dist.radius_bounds_um(tail_fraction=eps, lower_moment=lower, upper_moment=upper)
-    assert 0.0 < r_lo < r_hi
-    limit = eps * (1.0 + 1e-6)
-    for p in {lower, 0.5 * (lower + upper), upper}:
-        total = dist.moment(p)
-        assert quad_moment(dist, p, hi_um=r_lo) / total <= limit, ("below", p)
-        assert quad_moment(dist, p, lo_um=r_hi) / total <= limit, ("above", p)
-
-
 @FAST
 @given(
     dist=continuous,
@@ -305,7 +235,7 @@ def _check_bounds(dist: SizeDistribution, eps: float, lower: float, upper: float
 def test_radius_bounds_bound_the_tails(
     dist: SizeDistribution, eps: float, orders: tuple[float, float]
 ) -> None:
-    _check_bounds(dist, eps, *orders)
+    check_bounds(dist, eps, *orders)
 
 
 @pytest.mark.parametrize("eps", [1e-2, 1e-4, 1e-8])
@@ -315,83 +245,6 @@ def test_radius_bounds_are_exact_quantiles_for_one_mode(eps: float) -> None:
         assert dist.moment_tail_fraction(0, r_lo, upper=False) == pytest.approx(eps, rel=1e-9)
         assert dist.moment_tail_fraction(6, r_hi, upper=True) == pytest.approx(eps, rel=1e-9)
         assert quad_moment(dist, 0, hi_um=r_lo) == pytest.approx(eps, rel=1e-7)
-
-
-@pytest.mark.parametrize("eps", [1e-2, 1e-6])
-def test_radius_bounds_of_the_cosmoscout_mixture(eps: float) -> None:
-    mars = cosmoscout_mars()
-    _check_bounds(mars, eps, 0.0, 6.0)
-    r_lo, r_hi = mars.radius_bounds_um(tail_fraction=eps)
-    assert r_lo == MARS_FINE.radius_bounds_um(tail_fraction=eps)[0]
-    assert r_hi == MARS_COARSE.radius_bounds_um(tail_fraction=eps)[1]
-
-
-# ----------------------------------------------------------------- mixtures
-
-
-@FAST
-@given(dist=continuous)
-def test_single_mode_mixture_equals_the_mode(dist: SizeDistribution) -> None:
-    mix = MultiModal(modes=(dist,), relative_number_densities=(3.7,))
-    assert mix.number_fractions == (1.0,)
-    r = np.geomspace(0.01, 50.0, 25) * dist.r_eff_um
-    np.testing.assert_allclose(mix.pdf(r), dist.pdf(r), rtol=1e-15)
-    for k in (0, *MOMENT_ORDERS):
-        assert mix.moment(k) == pytest.approx(dist.moment(k), rel=1e-15)
-        np.testing.assert_allclose(
-            mix.moment_tail_fraction(k, r, upper=True),
-            dist.moment_tail_fraction(k, r, upper=True),
-            rtol=1e-14,
-        )
-    assert mix.r_eff_um == pytest.approx(dist.r_eff_um, rel=1e-13)
-    assert mix.v_eff == pytest.approx(dist.v_eff, rel=1e-10)
-    assert mix.radius_bounds_um(tail_fraction=1e-5) == dist.radius_bounds_um(tail_fraction=1e-5)
-
-
-def test_mixture_is_the_weighted_sum_of_its_modes() -> None:
-    modes = (
-        ModifiedGamma(r_eff_um=0.3, v_eff=0.1),
-        LogNormal(median_radius_um=2.0, sigma=0.3),
-        Gamma(shape=5.0, scale_um=0.1),
-    )
-    mix = MultiModal(modes=modes, relative_number_densities=[2.0, 1.0, 1.0])
-    w = (0.5, 0.25, 0.25)
-    assert mix.number_fractions == pytest.approx(w, rel=1e-15)
-    r = np.geomspace(0.01, 20.0, 30)
-    np.testing.assert_allclose(
-        mix.pdf(r), sum(wi * m.pdf(r) for wi, m in zip(w, modes, strict=True)), rtol=1e-14
-    )
-    for k in (0.5, *MOMENT_ORDERS):
-        expected = sum(wi * m.moment(k) for wi, m in zip(w, modes, strict=True))
-        assert mix.moment(k) == pytest.approx(expected, rel=1e-14)
-        assert mix.moment(k) == pytest.approx(quad_moment(mix, k), rel=1e-8)
-        # The tail fraction is the moment-weighted mean of the modes' fractions.
-        c = np.array([wi * m.moment(k) for wi, m in zip(w, modes, strict=True)])
-        tails = np.array([m.moment_tail_fraction(k, r, upper=False) for m in modes])
-        np.testing.assert_allclose(
-            mix.moment_tail_fraction(k, r, upper=False),
-            c @ tails / c.sum(),
-            rtol=1e-13,
-            atol=1e-300,
-        )
-
-
-def test_cosmoscout_mars_mixture() -> None:
-    mars = cosmoscout_mars()
-    assert mars.number_fractions == pytest.approx((1000 / 1001, 1 / 1001), rel=1e-15)
-    assert quad_moment(mars, 0.0) == pytest.approx(1.0, rel=1e-9)
-    for k in MOMENT_ORDERS:
-        assert mars.moment(k) == pytest.approx(quad_moment(mars, k), rel=1e-8)
-    # In number the fine mode dominates; in cross-section the coarse one does.
-    assert mars.mean_radius_um < 0.05
-    assert 0.5 < mars.r_eff_um < 1.4
-    d = mars.to_dict()
-    assert d["model"] == "multimodal" and "CosmoScout" in d["citation"]
-    assert [m["parameters"] for m in d["modes"]] == [
-        {"r_eff_um": 0.04, "v_eff": 0.1},
-        {"r_eff_um": 1.4, "v_eff": 0.35},
-    ]
-    assert d["parameters"]["relative_number_densities"] == [1000.0, 1.0]
 
 
 # ------------------------------------------------------------- monodisperse
@@ -412,13 +265,56 @@ def test_monodisperse() -> None:
     )
     assert dist.radius_bounds_um(tail_fraction=1e-3) == (0.8, 0.8)
 
-    mix = MultiModal(modes=(dist, Gamma(shape=2.0, scale_um=1.0)), relative_number_densities=(1, 3))
-    assert not mix.has_density and not mix.is_monodisperse
-    assert mix.moment(2) == pytest.approx(0.25 * 0.64 + 0.75 * 6.0, rel=1e-14)
-    with pytest.raises(TypeError, match="no probability density"):
-        mix.pdf(1.0)
-    two = MultiModal(modes=(dist, dist), relative_number_densities=(1, 2))
-    assert two.is_monodisperse
+
+# ------------------------------------------ more families from the literature
+
+
+@pytest.mark.parametrize(
+    ("alpha", "b", "gamma"), [(2.0, 15.1186, 0.5), (6.0, 1.5, 1.0), (1.0, 8.9443, 0.5)]
+)
+def test_deirmendjian_gamma(alpha: float, b: float, gamma: float) -> None:
+    """Haze L, Cloud C.1 and Haze M of Deirmendjian (1969); mode radii 0.07,
+    4 and 0.05 um (his r_c), the density's maximum."""
+    d = DeirmendjianGamma(alpha=alpha, b=b, gamma=gamma)
+    check_against_density(d, 1e-9, 400.0)
+    r_c = {2.0: 0.07, 6.0: 4.0, 1.0: 0.05}[alpha]
+    assert d.mode_radius_um == pytest.approx(r_c, rel=1e-4)
+    r = np.array([0.98, 1.0, 1.02]) * d.mode_radius_um
+    values = d.pdf(r)
+    assert values[1] > values[0] and values[1] > values[2]
+
+
+def test_power_law() -> None:
+    d = PowerLaw(exponent=4.0, r_min_um=0.05, r_max_um=10.0)
+    check_against_density(d, 0.05, 10.0)
+    assert d.pdf(0.04) == 0.0 and d.pdf(11.0) == 0.0
+    # nu = 1: ln-uniform, int r^-1 = ln(r_max / r_min) (the p = 0 branch).
+    flat = PowerLaw(exponent=1.0, r_min_um=0.1, r_max_um=10.0)
+    assert flat.moment(0.0) == pytest.approx(1.0)
+    assert flat.moment_tail_fraction(0.0, 1.0, upper=True) == pytest.approx(0.5)
+
+
+# ----------------------------------------------------------------- truncation
+
+
+def test_truncation_of_any_distribution() -> None:
+    """A truncated distribution's moments against quad of the parent's density
+    on [r_min, r_max], renormalized."""
+    parent = ModifiedGamma(r_eff_um=1.6, v_eff=0.2)
+    t = parent.truncated(r_min_um=0.1, r_max_um=3.0)
+    assert isinstance(t, Truncated)
+    check_against_density(t, 0.1, 3.0)
+    inside = quad(lambda r: float(parent.pdf(r)), 0.1, 3.0)
+    assert t.pdf(1.0) == pytest.approx(float(parent.pdf(1.0)) / inside, rel=1e-10)
+    assert t.pdf(3.5) == 0.0
+    # Truncated log-normal (the IPRT and libRadtran way), open above.
+    ln = LogNormal(median_radius_um=0.2, sigma=0.6).truncated(r_min_um=0.05)
+    check_against_density(ln, 0.05, 200.0)
+    # A truncated distribution truncated again.
+    twice = t.truncated(r_min_um=0.5, r_max_um=2.0)
+    assert twice.moment(3.0) == pytest.approx(
+        parent.truncated(r_min_um=0.5, r_max_um=2.0).moment(3.0), rel=1e-10
+    )
 
 
 # -------------------------------------------------------------- provenance
@@ -440,7 +336,7 @@ def test_to_dict_and_immutability() -> None:
     with pytest.raises(TypeError):
         ModifiedGamma(1.6, 0.2)  # type: ignore[call-arg]  # keyword-only
     assert dist == ModifiedGamma(r_eff_um=1.6, v_eff=0.2)
-    assert len({dist, ModifiedGamma(r_eff_um=1.6, v_eff=0.2), cosmoscout_mars()}) == 2
+    assert len({dist, ModifiedGamma(r_eff_um=1.6, v_eff=0.2), MARS_COARSE}) == 2
     assert "r_eff_um=1.6" in repr(dist)
 
 
@@ -478,28 +374,19 @@ BAD_CONSTRUCTIONS: list[tuple[Callable[[], object], str]] = [
     ),
     (lambda: Monodisperse(radius_um=0.0), r"radius_um must be > 0 um; got 0\.0"),
     (
-        lambda: MultiModal(modes=(), relative_number_densities=()),
-        r"modes must contain at least one",
+        lambda: ModifiedGamma(r_eff_um=1.0, v_eff=0.1).truncated(r_min_um=50.0, r_max_um=60.0),
+        "remove the whole",
     ),
     (
-        lambda: MultiModal(modes=(MARS_FINE, MARS_COARSE), relative_number_densities=(1.0, -1.0)),
-        r"relative_number_densities must all be > 0; got \[1\.0, -1\.0\]",
+        lambda: ModifiedGamma(r_eff_um=1.0, v_eff=0.1).truncated(r_min_um=2.0, r_max_um=1.0),
+        "r_min_um < r_max_um",
     ),
+    (lambda: Monodisperse(radius_um=1.0).truncated(r_min_um=2.0), "remove the whole"),
+    (lambda: DeirmendjianGamma(alpha=-1.5, b=1.0, gamma=1.0), r"alpha must be > -1"),
+    (lambda: DeirmendjianGamma(alpha=1.0, b=-1.0, gamma=1.0), "b"),
     (
-        lambda: MultiModal(modes=(MARS_FINE, MARS_COARSE), relative_number_densities=(1.0, 0.0)),
-        r"relative_number_densities must all be > 0",
-    ),
-    (
-        lambda: MultiModal(modes=(MARS_FINE,), relative_number_densities=(math.nan,)),
-        r"relative_number_densities must be finite",
-    ),
-    (
-        lambda: MultiModal(modes=(MARS_FINE,), relative_number_densities=(math.inf,)),
-        r"relative_number_densities must be finite",
-    ),
-    (
-        lambda: MultiModal(modes=(MARS_FINE, MARS_COARSE), relative_number_densities=(1.0,)),
-        r"relative_number_densities must have one entry per mode \(2 modes\); got 1",
+        lambda: PowerLaw(exponent=3.0, r_min_um=1.0, r_max_um=0.5),
+        "r_max_um must be finite and > r_min_um",
     ),
 ]
 
@@ -508,13 +395,6 @@ BAD_CONSTRUCTIONS: list[tuple[Callable[[], object], str]] = [
 def test_bad_parameters_raise(build: Callable[[], object], message: str) -> None:
     with pytest.raises(ValueError, match=message):
         build()
-
-
-def test_bad_modes_raise_type_error() -> None:
-    with pytest.raises(TypeError, match=r"modes\[1\] must be a SizeDistribution"):
-        MultiModal(modes=(MARS_FINE, 1.0), relative_number_densities=(1.0, 1.0))  # type: ignore[arg-type]
-    with pytest.raises(TypeError, match="modes must be a sequence"):
-        MultiModal(modes=MARS_FINE, relative_number_densities=(1.0,))  # type: ignore[arg-type]
 
 
 def test_bad_method_arguments_raise() -> None:
