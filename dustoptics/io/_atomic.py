@@ -38,8 +38,9 @@ atmosphere's CSV set and its settings) into one such transaction: inside it,
 :func:`write_files` only collects; the set is written when the block ends
 without an error, and nothing is written otherwise.
 
-Readers raise :class:`FormatError` (a :class:`ValueError`) naming the file
-and what is wrong with it.
+Writers name their files after the table (:func:`safe_stem`).  Readers raise
+:class:`FormatError` (a :class:`ValueError`) naming the file and what is wrong
+with it.
 """
 
 from __future__ import annotations
@@ -67,6 +68,7 @@ __all__ = [
     "clean_leftovers",
     "file_set",
     "is_leftover",
+    "safe_stem",
     "write_files",
 ]
 
@@ -95,6 +97,18 @@ class FormatError(ValueError):
 
     The message names the file and what is wrong with it.
     """
+
+
+def safe_stem(name: str) -> str:
+    """A file-name stem from a table name: characters other than [A-Za-z0-9._-] become '_'.
+
+    Leading dots are dropped (no hidden files); nothing left gives ``"table"``.
+
+    >>> safe_stem("mars dust/1"), safe_stem("..x"), safe_stem("")
+    ('mars_dust_1', 'x', 'table')
+    """
+    stem = re.sub(r"[^A-Za-z0-9._-]", "_", name).lstrip(".")
+    return stem or "table"
 
 
 def check_targets(paths: list[Path] | tuple[Path, ...], *, overwrite: bool) -> None:

@@ -1,0 +1,588 @@
+"""CosmoScout VR's per-constituent CSV set (``csp-atmospheres``, Bruneton model).
+
+CosmoScout VR's Bruneton atmosphere loads each constituent of an atmosphere
+(molecules, aerosols, ozone, ...) from CSV files named after it (layout and
+reader rules in the project brief, section 7):
+
+``<name>_phase.csv``
+    Header ``lambda,0.0,1.0,...,180.0``; one row per wavelength: lambda [m],
+    then the phase function [sr^-1] at ``n_theta`` evenly spaced angles from
+    0 to 180 deg (default 181), normalized to 1 over the sphere.
+``<name>_scattering.csv``
+    Header ``lambda,beta_sca``; lambda [m] and the scattering coefficient
+    [m^-1] at the peak number density.
+``<name>_absorption.csv``
+    Header ``lambda,beta_abs``; the absorption coefficient [m^-1].
+``<name>_density.csv``
+    A header line, then one relative density [-] per line at evenly spaced
+    altitudes from the ground to the top of the atmosphere; the largest is
+    exactly 1, so beta times this profile is the coefficient at each altitude.
+
+CosmoScout's reader skips the first line of each file, splits lines on commas,
+reads lambda as a 32-bit float times 1e9 (nm), and demands exactly the same
+wavelengths in every file of a set.  :func:`write_cosmoscout_set` therefore
+writes every wavelength with the same text in every file (the table's
+wavelength [nm] shifted exactly to metres in decimal), and
+:func:`check_cosmoscout_set` applies these rules to a written directory.
+
+A constituent that does not scatter (``csca`` zero at every wavelength, e.g.
+ozone, which only absorbs) gets no phase and no scattering file: CosmoScout
+configures such a constituent (its ozone) with only absorption and density
+files, and a phase function of a non-scattering medium is undefined.
+"""
+
+from __future__ import annotations
+
+import decimal
+import os
+import re
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from dustoptics._validation import as_float_array
+from dustoptics.io import register_format
+from dustoptics.io._atomic import FormatError, write_files
+from dustoptics.io._text import floats, number, parse, read_rows
+from dustoptics.table import Table
+
+__all__ = [
+    "COSMOSCOUT_KINDS",
+    "CosmoScoutConstituent",
+    "check_cosmoscout_set",
+    "cosmoscout_wavelength_text",
+    "read_cosmoscout_constituent",
+    "write_cosmoscout_constituent",
+    "write_cosmoscout_files",
+    "write_cosmoscout_set",
+]
+
+#: File kinds of a constituent, in the order they are written.
+COSMOSCOUT_KINDS = ("phase", "scattering", "absorption", "density")
+
+_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]*")
+_FILE = re.compile(r"(?P<name>.+)_(?P<kind>phase|scattering|absorption|density)\.csv")
+_DENSITY_HEADER = "density"
+
+
+@dataclass(frozen=True)
+class CosmoScoutConstituent:
+    """One constituent read back from a CosmoScout VR CSV set.
+
+    Attributes
+    ----------
+    name : str
+        Constituent name (the file-name prefix).
+    wavelength_m : numpy.ndarray, shape (n_wavelength,)
+        Wavelengths as written (parsed as float64). [m]
+    theta_deg : numpy.ndarray or None, shape (n_theta,)
+        Angles of the phase-function columns, or None for a constituent
+        without a phase file (non-scattering). [deg]
+    phase : numpy.ndarray or None, shape (n_wavelength, n_theta)
+        Phase function, normalized to 1 over the sphere. [sr^-1]
+    beta_sca_per_m : numpy.ndarray or None, shape (n_wavelength,)
+        Scattering coefficient at the peak density, or None (no scattering
+        file). [m^-1]
+    beta_abs_per_m : numpy.ndarray, shape (n_wavelength,)
+        Absorption coefficient at the peak density. [m^-1]
+    density : numpy.ndarray, shape (n_altitude,)
+        Relative density at evenly spaced altitudes, maximum 1. [-]
+    """
+
+    name: str
+    wavelength_m: np.ndarray
+    theta_deg: np.ndarray | None
+    phase: np.ndarray | None
+    beta_sca_per_m: np.ndarray | None
+    beta_abs_per_m: np.ndarray
+    density: np.ndarray
+
+
+# ------------------------------------------------------------------ writing
+
+
+def cosmoscout_wavelength_text(wavelength_nm: float) -> str:
+    """The text of a wavelength [nm] in metres, as written in every file.
+
+    The shortest round-trip decimal of the wavelength in nm, shifted by 9
+    decimal places (exact), so the same wavelength is always the same text.
+
+    >>> cosmoscout_wavelength_text(440.0), cosmoscout_wavelength_text(552.5)
+    ('4.4e-7', '5.525e-7')
+    """
+    value = decimal.Decimal(repr(float(wavelength_nm))).scaleb(-9).normalize()
+    return format(value, "e")
+
+
+def _check_name(name: Any) -> str:
+    if not isinstance(name, str) or not _NAME.fullmatch(name):
+        raise ValueError(
+            f"name must be a non-empty file-name prefix of letters, digits, '.', '_' and '-' "
+            f"(starting with a letter or digit); got {name!r}"
+        )
+    return name
+
+
+def _check_n_theta(n_theta: Any) -> int:
+    if isinstance(n_theta, bool) or not isinstance(n_theta, (int, np.integer)) or n_theta < 2:
+        raise ValueError(
+            f"n_theta must be an integer >= 2 (angles from 0 to 180 deg); got {n_theta!r}"
+        )
+    return int(n_theta)
+
+
+def _check_density(name: str, density: Any) -> np.ndarray:
+    what = f"density of constituent {name!r}"
+    try:
+        arr = as_float_array(what, density, ndim=1)
+    except ValueError as exc:
+        raise ValueError(f"{exc} (a 1-D profile of finite relative densities)") from None
+    if arr.size < 2:
+        raise ValueError(f"{what} needs at least 2 altitudes (ground and top); got {arr.size}")
+    if np.any(arr < 0):
+        raise ValueError(f"{what} must be >= 0; got minimum {float(arr.min())!r}")
+    if float(arr.max()) != 1.0:
+        raise ValueError(
+            f"{what} must have maximum exactly 1 (relative to the peak density at which beta is "
+            f"given); got maximum {float(arr.max())!r} (divide the profile by its maximum)"
+        )
+    return arr
+
+
+def _lines(rows: list[str]) -> bytes:
+    return ("\n".join(rows) + "\n").encode("ascii")
+
+
+def _constituent_files(
+    table: Table, directory: Path, *, name: str, density: Any, n_theta: int
+) -> dict[Path, bytes]:
+    if not isinstance(table, Table):
+        raise TypeError(
+            f"constituent {name!r}: table must be a dustoptics.table.Table; got {type(table).__name__}"
+        )
+    if not table.has_cross_sections:
+        raise ValueError(
+            f"constituent {name!r}: table {table.name!r} holds a phase function only; CosmoScout "
+            "needs scattering and absorption coefficients (a table with cross-sections)"
+        )
+    if table.number_density_per_m3 is None:
+        raise ValueError(
+            f"constituent {name!r}: table {table.name!r} has no number_density_per_m3; give the "
+            "peak number density [m^-3] (Table.replace(number_density_per_m3=...)) so that "
+            "beta = N C can be written in m^-1"
+        )
+    profile = _check_density(name, density)
+    lam = [cosmoscout_wavelength_text(w) for w in floats("wavelength_nm", table.wavelength_nm)]
+    files: dict[Path, bytes] = {}
+    assert table.csca_um2 is not None  # checked by _check_density's caller
+    scatters = bool(np.any(table.csca_um2 > 0))
+    if scatters:
+        theta = np.linspace(0.0, 180.0, n_theta)
+        phase = table.phase_at(theta)
+        header = "lambda," + ",".join(number(t) for t in floats("theta_deg", theta))
+        rows = [header]
+        rows += [
+            lw + "," + ",".join(number(v) for v in row) for lw, row in zip(lam, phase.tolist())
+        ]
+        files[directory / f"{name}_phase.csv"] = _lines(rows)
+        beta_sca = floats("beta_sca_per_m", table.beta_sca_per_m)
+        files[directory / f"{name}_scattering.csv"] = _lines(
+            ["lambda,beta_sca"] + [f"{lw},{number(b)}" for lw, b in zip(lam, beta_sca)]
+        )
+    beta_abs = floats("beta_abs_per_m", table.beta_abs_per_m)
+    files[directory / f"{name}_absorption.csv"] = _lines(
+        ["lambda,beta_abs"] + [f"{lw},{number(b)}" for lw, b in zip(lam, beta_abs)]
+    )
+    files[directory / f"{name}_density.csv"] = _lines(
+        [_DENSITY_HEADER] + [number(d) for d in profile.tolist()]
+    )
+    return files
+
+
+def write_cosmoscout_constituent(
+    table: Table,
+    directory: str | os.PathLike[str],
+    *,
+    name: str,
+    density: Any,
+    n_theta: int = 181,
+    overwrite: bool = False,
+) -> list[Path]:
+    """Write one constituent's CosmoScout VR CSV files.
+
+    Parameters
+    ----------
+    table : Table
+        The constituent's table, with cross-sections and
+        ``number_density_per_m3`` (the peak number density [m^-3] at which
+        the coefficients beta = N C are written).
+    directory : path-like
+        Output directory; created if missing.
+    name : str
+        Constituent name, the prefix of the file names (letters, digits,
+        ``.``, ``_``, ``-``).
+    density : array_like, shape (n_altitude,)
+        Relative density at evenly spaced altitudes from the ground to the
+        top of the atmosphere: finite, >= 0, maximum exactly 1. [-]
+    n_theta : int, optional
+        Number of evenly spaced phase-function angles from 0 to 180 deg.
+        Default 181 (1 deg steps, CosmoScout's default).
+    overwrite : bool, optional
+        Replace existing files.  Default False.
+
+    Returns
+    -------
+    list of pathlib.Path
+        ``<name>_phase.csv``, ``<name>_scattering.csv`` (both only if the
+        constituent scatters), ``<name>_absorption.csv``,
+        ``<name>_density.csv``.
+
+    Raises
+    ------
+    ValueError
+        Bad ``name``, ``n_theta`` or ``density``; a table without
+        cross-sections or without a number density.
+    FileExistsError
+        A file exists and ``overwrite`` is False (nothing is written).
+
+    Notes
+    -----
+    The phase function is resampled from the table's angle grid with
+    :meth:`~dustoptics.table.Table.phase_at` (linear in angle, as a renderer
+    interpolates it).  When the ``n_theta`` angles are a subset of the
+    table's grid (e.g. 181 angles from a table on 1,801 angles), the written
+    values are the table's own values, exactly.  Otherwise they are linear
+    interpolates, and the resampled function's normalization can differ from
+    1 by the interpolation error; it is not renormalized.
+    """
+    files = _constituent_files(
+        table,
+        Path(directory),
+        name=_check_name(name),
+        density=density,
+        n_theta=_check_n_theta(n_theta),
+    )
+    return write_files(files, overwrite=overwrite)
+
+
+def write_cosmoscout_set(
+    directory: str | os.PathLike[str],
+    constituents: Mapping[str, tuple[Table, Any]],
+    *,
+    n_theta: int = 181,
+    overwrite: bool = False,
+) -> list[Path]:
+    """Write the CSV files of several constituents of one atmosphere, atomically.
+
+    Parameters
+    ----------
+    directory : path-like
+        Output directory; created if missing.
+    constituents : mapping of str to (Table, array_like)
+        Constituent name -> (its table, its relative density profile), as for
+        :func:`write_cosmoscout_constituent`.  All tables must have identical
+        wavelengths (CosmoScout demands the same wavelengths in every file).
+    n_theta : int, optional
+        Number of phase-function angles from 0 to 180 deg.  Default 181.
+    overwrite : bool, optional
+        Replace existing files.  Default False.
+
+    Returns
+    -------
+    list of pathlib.Path
+        Every file written, constituent by constituent.
+
+    Raises
+    ------
+    ValueError
+        No constituents, wavelengths that differ between tables, or a bad
+        constituent (see :func:`write_cosmoscout_constituent`).
+    FileExistsError
+        A file exists and ``overwrite`` is False (nothing is written).
+
+    Notes
+    -----
+    All files are prepared, then staged, then renamed into place: a failure
+    leaves none of them behind.
+    """
+    if not isinstance(constituents, Mapping) or not constituents:
+        raise ValueError("constituents must be a non-empty mapping name -> (Table, density)")
+    n = _check_n_theta(n_theta)
+    root = Path(directory)
+    files: dict[Path, bytes] = {}
+    reference: tuple[str, np.ndarray] | None = None
+    for name, entry in constituents.items():
+        _check_name(name)
+        try:
+            table, density = entry
+        except (TypeError, ValueError):
+            raise ValueError(
+                f"constituent {name!r} must be a (Table, density) pair; got {entry!r}"
+            ) from None
+        if isinstance(table, Table):
+            if reference is None:
+                reference = (name, table.wavelength_nm)
+            elif not np.array_equal(table.wavelength_nm, reference[1]):
+                raise ValueError(
+                    f"constituent {name!r} has wavelengths {table.wavelength_nm.tolist()} nm; "
+                    f"constituent {reference[0]!r} has {reference[1].tolist()} nm: all tables of a "
+                    "CosmoScout set must have identical wavelengths"
+                )
+        files.update(_constituent_files(table, root, name=name, density=density, n_theta=n))
+    return write_files(files, overwrite=overwrite)
+
+
+def write_cosmoscout_files(
+    table: Table,
+    out_dir: str | os.PathLike[str],
+    *,
+    overwrite: bool = False,
+    density: Any = None,
+    name: str | None = None,
+    n_theta: int = 181,
+) -> list[Path]:
+    """The ``"cosmoscout"`` entry of :data:`dustoptics.io.FORMATS`: one constituent.
+
+    As :func:`write_cosmoscout_constituent`, with ``name`` defaulting to the
+    table's name; ``density`` (the relative profile [-]) is required.
+    """
+    if density is None:
+        raise ValueError(
+            "the cosmoscout format needs density=, the constituent's relative density at evenly "
+            "spaced altitudes (maximum 1)"
+        )
+    return write_cosmoscout_constituent(
+        table, out_dir, name=table.name if name is None else name, density=density,
+        n_theta=n_theta, overwrite=overwrite,
+    )  # fmt: skip
+
+
+register_format("cosmoscout", write_cosmoscout_files)
+
+
+# ------------------------------------------------------------------ reading
+
+
+def _read_numbers(
+    path: Path, header: list[str] | None, width: int | None
+) -> tuple[list[str], np.ndarray]:
+    """Header cells and the numeric rows of one file (skipping the header line)."""
+    rows = read_rows(path)
+    head = [cell.strip() for cell in rows[0]]
+    if header is not None and head != header:
+        raise FormatError(f"{path}: header must be {','.join(header)!r}; got {','.join(head)!r}")
+    if len(rows) < 2:
+        raise FormatError(f"{path}: no data rows after the header")
+    ncol = width if width is not None else len(head)
+    out = np.empty((len(rows) - 1, ncol))
+    for i, row in enumerate(rows[1:]):
+        if len(row) != ncol:
+            raise FormatError(f"{path}: line {i + 2} has {len(row)} cells; expected {ncol}")
+        for j, cell in enumerate(row):
+            label = head[j] if j < len(head) else str(j + 1)
+            out[i, j] = parse(path, i + 2, f"{j + 1} ({label})", cell)
+    return head, out
+
+
+def _wavelengths(path: Path, values: np.ndarray) -> np.ndarray:
+    if np.any(values <= 0):
+        raise FormatError(f"{path}: lambda [m] must be > 0; got {values.tolist()}")
+    if values.size > 1 and not np.all(np.diff(values) > 0):
+        raise FormatError(f"{path}: lambda [m] must be strictly increasing; got {values.tolist()}")
+    return values
+
+
+def _nonnegative(path: Path, what: str, values: np.ndarray) -> np.ndarray:
+    if np.any(values < 0):
+        raise FormatError(f"{path}: {what} must be >= 0; got minimum {float(values.min())!r}")
+    return values
+
+
+def read_cosmoscout_constituent(
+    directory: str | os.PathLike[str], name: str
+) -> CosmoScoutConstituent:
+    """Read one constituent's files written by :func:`write_cosmoscout_constituent`.
+
+    Parameters
+    ----------
+    directory : path-like
+        Directory of the set.
+    name : str
+        Constituent name (file-name prefix).
+
+    Returns
+    -------
+    CosmoScoutConstituent
+        ``phase``, ``theta_deg`` and ``beta_sca_per_m`` are None when the
+        constituent has no phase and scattering files (it does not scatter).
+
+    Raises
+    ------
+    FileNotFoundError
+        The absorption or density file is missing, or only one of the phase
+        and scattering files exists.
+    FormatError
+        A malformed file (header, ragged or non-numeric rows, negative
+        values, a density whose maximum is not 1) or wavelengths that differ
+        between the files; the message names the file.
+    """
+    root = Path(directory)
+    _check_name(name)
+    paths = {kind: root / f"{name}_{kind}.csv" for kind in COSMOSCOUT_KINDS}
+    for kind in ("absorption", "density"):
+        if not paths[kind].is_file():
+            raise FileNotFoundError(f"{paths[kind]}: no such file")
+    if paths["phase"].is_file() != paths["scattering"].is_file():
+        present, absent = (
+            ("phase", "scattering") if paths["phase"].is_file() else ("scattering", "phase")
+        )
+        raise FileNotFoundError(f"{paths[absent]}: no such file (but {paths[present].name} exists)")
+
+    _, absorption = _read_numbers(paths["absorption"], ["lambda", "beta_abs"], None)
+    wavelength = _wavelengths(paths["absorption"], absorption[:, 0])
+    beta_abs = _nonnegative(paths["absorption"], "beta_abs [m^-1]", absorption[:, 1])
+    _, density_rows = _read_numbers(paths["density"], None, 1)
+    density = _nonnegative(paths["density"], "the relative density", density_rows[:, 0])
+    if density.max() != 1.0:
+        raise FormatError(
+            f"{paths['density']}: the relative density must have maximum 1; got {density.max()!r}"
+        )
+
+    def same_wavelengths(path: Path, values: np.ndarray) -> None:
+        if not np.array_equal(values, wavelength):
+            raise FormatError(
+                f"{path}: lambda column {values.tolist()} differs from {paths['absorption'].name}'s "
+                f"{wavelength.tolist()}"
+            )
+
+    theta = phase = beta_sca = None
+    if paths["phase"].is_file():
+        head, data = _read_numbers(paths["phase"], None, None)
+        if len(head) < 3 or head[0] != "lambda":
+            raise FormatError(
+                f"{paths['phase']}: header must be 'lambda' then at least 2 angles [deg]; got {','.join(head)!r}"
+            )
+        theta = np.array(
+            [parse(paths["phase"], 1, f"{j} (header)", c) for j, c in enumerate(head[1:], 2)]
+        )
+        expected = np.linspace(0.0, 180.0, theta.size)
+        if not np.allclose(theta, expected, rtol=0, atol=1e-9):
+            raise FormatError(
+                f"{paths['phase']}: header angles must be {theta.size} evenly spaced values from 0 to "
+                f"180 deg; got {theta.tolist()}"
+            )
+        same_wavelengths(paths["phase"], data[:, 0])
+        phase = _nonnegative(paths["phase"], "the phase function [sr^-1]", data[:, 1:])
+        _, scattering = _read_numbers(paths["scattering"], ["lambda", "beta_sca"], None)
+        same_wavelengths(paths["scattering"], scattering[:, 0])
+        beta_sca = _nonnegative(paths["scattering"], "beta_sca [m^-1]", scattering[:, 1])
+    return CosmoScoutConstituent(
+        name=name,
+        wavelength_m=wavelength,
+        theta_deg=theta,
+        phase=phase,
+        beta_sca_per_m=beta_sca,
+        beta_abs_per_m=beta_abs,
+        density=density,
+    )
+
+
+def _reader_wavelengths_nm(path: Path) -> list[float]:
+    """CosmoScout's reading of a file's first column: skip a line, float32(lambda) * 1e9."""
+    out = []
+    from dustoptics.io._text import read_checked
+
+    try:
+        text = read_checked(path).decode("ascii")
+    except UnicodeDecodeError as exc:
+        raise FormatError(
+            f"{path}: not an ASCII CSV file ({exc.reason} at byte {exc.start})"
+        ) from None
+    for i, line in enumerate(text.splitlines()[1:], start=2):
+        cell = line.split(",")[0]
+        try:
+            lam32 = np.float32(cell)
+        except ValueError:
+            raise FormatError(f"{path}: line {i}: lambda {cell!r} is not a number") from None
+        out.append(float(lam32) * 1e9)
+    return out
+
+
+def check_cosmoscout_set(directory: str | os.PathLike[str]) -> list[str]:
+    """Apply CosmoScout VR's reader rules to every constituent in a directory.
+
+    The rules (project brief, section 7): the first line of every file is a
+    header and is skipped; lines are split on commas; every data line of a
+    phase file has 1 + n_theta cells (lambda, then one value per header
+    angle, angles evenly spaced from 0 to 180 deg), of a scattering or
+    absorption file 2 cells, of a density file 1 cell; lambda, read as a
+    32-bit float times 1e9, gives exactly the same wavelengths in every file
+    of the set (all constituents); each constituent has an absorption and a
+    density file, and a phase and a scattering file together or neither.
+    Each constituent is also read with :func:`read_cosmoscout_constituent`
+    (finite, nonnegative values, density maximum 1).
+
+    Parameters
+    ----------
+    directory : path-like
+        Directory holding the set.
+
+    Returns
+    -------
+    list of str
+        The constituent names, sorted.
+
+    Raises
+    ------
+    FormatError
+        On the first violation; the message names the file and the rule.
+    FileNotFoundError
+        The directory does not exist.
+    """
+    root = Path(directory)
+    if not root.is_dir():
+        raise FileNotFoundError(f"{root}: no such directory")
+    kinds: dict[str, set[str]] = {}
+    for path in sorted(root.iterdir()):
+        match = _FILE.fullmatch(path.name)
+        if match and path.is_file():
+            kinds.setdefault(match["name"], set()).add(match["kind"])
+    if not kinds:
+        raise FormatError(
+            f"{root}: no CosmoScout files (<name>_phase.csv, _scattering.csv, ...) found"
+        )
+    reference: tuple[Path, list[float]] | None = None
+    for name, present in sorted(kinds.items()):
+        for kind in ("absorption", "density"):
+            if kind not in present:
+                raise FormatError(
+                    f"{root / f'{name}_{kind}.csv'}: missing (every constituent needs one)"
+                )
+        if ("phase" in present) != ("scattering" in present):
+            raise FormatError(
+                f"{root}: constituent {name!r} has only one of {name}_phase.csv and "
+                f"{name}_scattering.csv; a scattering constituent needs both"
+            )
+        try:
+            constituent = read_cosmoscout_constituent(root, name)
+        except FileNotFoundError as exc:  # pragma: no cover - checked above
+            raise FormatError(str(exc)) from None
+        n = constituent.wavelength_m.size
+        for kind in sorted(present - {"density"}):
+            path = root / f"{name}_{kind}.csv"
+            lam_nm = _reader_wavelengths_nm(path)
+            if len(lam_nm) != n:
+                raise FormatError(
+                    f"{path}: {len(lam_nm)} wavelength rows; {name}_absorption.csv has {n}"
+                )
+            if reference is None:
+                reference = (path, lam_nm)
+            elif lam_nm != reference[1]:
+                raise FormatError(
+                    f"{path}: wavelengths read as float32(lambda) * 1e9 = {lam_nm} nm differ from "
+                    f"{reference[0].name}'s {reference[1]} nm (CosmoScout demands the same in every file)"
+                )
+    return sorted(kinds)

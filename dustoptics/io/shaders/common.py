@@ -1,0 +1,1388 @@
+"""The phase function as shader source: one generator, one emitter per language.
+
+Every language gets the same content, made once here: three channels of the
+table (:func:`shader_channels`: three wavelengths, or colour bands), sampled
+uniformly over 0..180 deg and rounded to float32, per-channel constants (g,
+cross-sections, beta coefficients), and the seed shader's lookup
+``MiePhaseFunction(nu)``: it takes the cosine of the scattering angle ``nu``
+and returns the three channels, interpolated linearly in angle between
+samples.  The languages (:data:`LANGUAGES`):
+
+``"glsl"``
+    GLSL 1.30 and later, GLSL ES 3.00 and later: ``const vec3`` array and
+    ``vec3 MiePhaseFunction(float nu)``.  Include-ready (no ``#version``
+    line; the header states the minimum versions, each tested with
+    glslangValidator in a full shader).
+``"glsl100"``
+    GLSL ES 1.00 (WebGL 1).  That language has no array initializers and
+    its Appendix A only guarantees array indexing by constant or loop index
+    in fragment shaders, so a constant array cannot be indexed by a computed
+    angle.  The samples are returned instead by a function,
+    ``<prefix>_PHASE_SAMPLE(i)``, a balanced binary tree of comparisons on
+    ``i`` whose leaves return the literals (ceil(log2 N) comparisons per
+    call, no array, no loop, no texture).  Every declaration is ``highp``:
+    the lookup needs float32 (fragment shaders must have
+    ``GL_FRAGMENT_PRECISION_HIGH``; vertex shaders always do).
+``"hlsl"``
+    HLSL (Shader Model 4 and later; DirectX 10-12, Unity, Unreal):
+    ``static const float3`` array and ``float3 MiePhaseFunction(float nu)``.
+    Direct3D keeps such an array in an immediate constant buffer of at most
+    4096 entries, so resolutions finer than 180/4095 deg are refused.
+``"wgsl"``
+    WGSL (WebGPU): ``const`` ``array<vec3<f32>, N>`` and
+    ``fn MiePhaseFunction(nu: f32) -> vec3<f32>``.
+
+Every identifier a snippet declares at module scope begins with ``prefix``
+(default ``"MIE"``: ``MIE_PHASE_N``, ``MIE_PHASE``, ``MIE_G``, ...) except the
+lookup, named by ``function_name`` (default the seed's ``MiePhaseFunction``),
+so two snippets with different prefixes and function names share a shader.
+
+Numbers: each value is rounded to float32 and written as the shortest decimal
+that reads back as that float32 (HLSL and WGSL with the ``f`` suffix, so the
+compiler rounds the decimal to float32 once, not through a double).  The
+lookup computes ``acos`` with the polynomial of Abramowitz & Stegun 4.4.46
+(error 2.5e-7 rad in float32), the same in every driver, unless
+``acos="builtin"`` (the language's own ``acos``, whose precision the shading
+languages leave to the implementation).
+
+Everything is deterministic: the same table and options give the same bytes.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import re
+from dataclasses import dataclass
+from pathlib import Path
+from types import SimpleNamespace
+from typing import Any
+
+import numpy as np
+
+from dustoptics._validation import MAX_GRID_POINTS, check_choice, check_positive
+from dustoptics.colour import (
+    CHANNEL_MODES,
+    DEFAULT_CHANNELS_NM,
+    ChannelWeights,
+    channel_phase,
+    channel_weights,
+)
+from dustoptics.io import register_format
+from dustoptics.io._atomic import safe_stem, write_files
+from dustoptics.scattering.tabulated_phase import sphere_integral
+from dustoptics.table import PHASE_NORMALIZATION
+
+__all__ = [
+    "ACOS_AS4446",
+    "ACOS_METHODS",
+    "COLOUR_MODES",
+    "DEFAULT_CHANNELS_NM",
+    "DEFAULT_RESOLUTION_DEG",
+    "LANGUAGES",
+    "ShaderChannels",
+    "check_shader_options",
+    "choose_channels",
+    "float_literal",
+    "shader_channels",
+    "shader_source",
+    "write_hlsl",
+    "write_shader",
+    "write_wgsl",
+]
+
+#: Colour modes of ``colour=`` (the three-wavelength mode is ``channels_nm``).
+COLOUR_MODES = tuple(m for m in CHANNEL_MODES if m != "wavelengths")
+
+#: The seed shader's angular step (721 samples over 0..180 deg). [deg]
+DEFAULT_RESOLUTION_DEG = 0.25
+
+#: How the lookup computes acos: its own polynomial (default) or the language's builtin.
+ACOS_METHODS = ("polynomial", "builtin")
+
+#: Shader languages :func:`shader_source` writes.
+LANGUAGES = ("glsl", "glsl100", "hlsl", "wgsl")
+
+#: File-name extension of each language.
+EXTENSIONS = {"glsl": ".glsl", "glsl100": ".glsl", "hlsl": ".hlsl", "wgsl": ".wgsl"}
+
+#: What each language's header says about the versions that compile it.
+REQUIREMENTS = {
+    "glsl": (
+        "GLSL 1.30 or later (#version 130), or GLSL ES 3.00 or later (#version 300 es); "
+        "include-ready (no #version line)"
+    ),
+    "glsl100": (
+        "GLSL ES 1.00 (#version 100, WebGL 1) and later; highp float in the calling stage "
+        "(fragment shaders: GL_FRAGMENT_PRECISION_HIGH); no arrays, loops or textures "
+        "(ES 1.00 Appendix A)"
+    ),
+    "hlsl": "HLSL Shader Model 4.0 or later (static const arrays, int arithmetic)",
+    "wgsl": "WGSL (WebGPU); const array indexed at run time",
+}
+
+#: Largest number of samples per language: Direct3D's immediate constant buffer
+#: holds 4096 entries; the others have no fixed limit.
+MAX_SAMPLES = {"hlsl": 4096}
+
+#: Coefficients a0..a7 of acos(x) = sqrt(1 - x) (a0 + a1 x + ... + a7 x^7), 0 <= x <= 1,
+#: absolute error <= 2e-8 rad: M. Abramowitz and I. A. Stegun, Handbook of Mathematical
+#: Functions (1964), formula 4.4.46 (after C. Hastings, 1955).
+ACOS_AS4446 = (
+    1.5707963050,
+    -0.2145988016,
+    0.0889789874,
+    -0.0501743046,
+    0.0308918810,
+    -0.0170881256,
+    0.0066700901,
+    -0.0012624911,
+)
+
+_UM2_TO_M2 = 1e-12
+
+_IDENTIFIER = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
+
+# Keywords and reserved words an identifier of ours could collide with.
+# GLSL 4.60 section 3.6 (with ES 1.00's and 3.x's); names with "__" or starting
+# "gl_" are reserved too.
+_GLSL_KEYWORDS = frozenset(
+    [
+        "attribute",
+        "const",
+        "uniform",
+        "varying",
+        "buffer",
+        "shared",
+        "coherent",
+        "volatile",
+        "restrict",
+        "readonly",
+        "writeonly",
+        "atomic_uint",
+        "layout",
+        "centroid",
+        "flat",
+        "smooth",
+        "noperspective",
+        "patch",
+        "sample",
+        "invariant",
+        "precise",
+        "break",
+        "continue",
+        "do",
+        "for",
+        "while",
+        "switch",
+        "case",
+        "default",
+        "if",
+        "else",
+        "subroutine",
+        "in",
+        "out",
+        "inout",
+        "int",
+        "void",
+        "bool",
+        "true",
+        "false",
+        "float",
+        "double",
+        "discard",
+        "return",
+        "vec2",
+        "vec3",
+        "vec4",
+        "ivec2",
+        "ivec3",
+        "ivec4",
+        "bvec2",
+        "bvec3",
+        "bvec4",
+        "uint",
+        "uvec2",
+        "uvec3",
+        "uvec4",
+        "dvec2",
+        "dvec3",
+        "dvec4",
+        "mat2",
+        "mat3",
+        "mat4",
+        "mat2x2",
+        "mat2x3",
+        "mat2x4",
+        "mat3x2",
+        "mat3x3",
+        "mat3x4",
+        "mat4x2",
+        "mat4x3",
+        "mat4x4",
+        "dmat2",
+        "dmat3",
+        "dmat4",
+        "lowp",
+        "mediump",
+        "highp",
+        "precision",
+        "sampler1D",
+        "sampler2D",
+        "sampler3D",
+        "samplerCube",
+        "struct",
+        "common",
+        "partition",
+        "active",
+        "asm",
+        "class",
+        "union",
+        "enum",
+        "typedef",
+        "template",
+        "this",
+        "resource",
+        "goto",
+        "inline",
+        "noinline",
+        "public",
+        "static",
+        "extern",
+        "external",
+        "interface",
+        "long",
+        "short",
+        "half",
+        "fixed",
+        "unsigned",
+        "superp",
+        "input",
+        "output",
+        "hvec2",
+        "hvec3",
+        "hvec4",
+        "fvec2",
+        "fvec3",
+        "fvec4",
+        "filter",
+        "sizeof",
+        "cast",
+        "namespace",
+        "using",
+        "sampler3DRect",
+        "texture",
+        "main",
+    ]
+)
+# HLSL keywords (Microsoft's "Keywords" and "Reserved Words" pages, shader model 5.1).
+_HLSL_KEYWORDS = frozenset(
+    [
+        "AppendStructuredBuffer",
+        "asm",
+        "asm_fragment",
+        "BlendState",
+        "bool",
+        "break",
+        "Buffer",
+        "ByteAddressBuffer",
+        "case",
+        "cbuffer",
+        "centroid",
+        "class",
+        "column_major",
+        "compile",
+        "compile_fragment",
+        "CompileShader",
+        "const",
+        "continue",
+        "ComputeShader",
+        "ConsumeStructuredBuffer",
+        "default",
+        "DepthStencilState",
+        "DepthStencilView",
+        "discard",
+        "do",
+        "double",
+        "DomainShader",
+        "dword",
+        "else",
+        "export",
+        "extern",
+        "false",
+        "float",
+        "for",
+        "fxgroup",
+        "GeometryShader",
+        "groupshared",
+        "half",
+        "Hullshader",
+        "if",
+        "in",
+        "inline",
+        "inout",
+        "InputPatch",
+        "int",
+        "interface",
+        "line",
+        "lineadj",
+        "linear",
+        "LineStream",
+        "matrix",
+        "min16float",
+        "min10float",
+        "min16int",
+        "min12int",
+        "min16uint",
+        "namespace",
+        "nointerpolation",
+        "noperspective",
+        "NULL",
+        "out",
+        "OutputPatch",
+        "packoffset",
+        "pass",
+        "pixelfragment",
+        "PixelShader",
+        "point",
+        "PointStream",
+        "precise",
+        "RasterizerState",
+        "RenderTargetView",
+        "return",
+        "register",
+        "row_major",
+        "RWBuffer",
+        "RWByteAddressBuffer",
+        "RWStructuredBuffer",
+        "RWTexture1D",
+        "RWTexture1DArray",
+        "RWTexture2D",
+        "RWTexture2DArray",
+        "RWTexture3D",
+        "sample",
+        "sampler",
+        "SamplerState",
+        "SamplerComparisonState",
+        "shared",
+        "snorm",
+        "stateblock",
+        "stateblock_state",
+        "static",
+        "string",
+        "struct",
+        "switch",
+        "StructuredBuffer",
+        "tbuffer",
+        "technique",
+        "technique10",
+        "technique11",
+        "texture",
+        "Texture1D",
+        "Texture1DArray",
+        "Texture2D",
+        "Texture2DArray",
+        "Texture2DMS",
+        "Texture2DMSArray",
+        "Texture3D",
+        "TextureCube",
+        "TextureCubeArray",
+        "true",
+        "typedef",
+        "triangle",
+        "triangleadj",
+        "TriangleStream",
+        "uint",
+        "uniform",
+        "unorm",
+        "unsigned",
+        "vector",
+        "vertexfragment",
+        "VertexShader",
+        "void",
+        "volatile",
+        "while",
+        "auto",
+        "case",
+        "catch",
+        "char",
+        "class",
+        "const_cast",
+        "default",
+        "delete",
+        "dynamic_cast",
+        "enum",
+        "explicit",
+        "friend",
+        "goto",
+        "long",
+        "mutable",
+        "new",
+        "operator",
+        "private",
+        "protected",
+        "public",
+        "reinterpret_cast",
+        "short",
+        "signed",
+        "sizeof",
+        "static_cast",
+        "template",
+        "this",
+        "throw",
+        "try",
+        "typename",
+        "union",
+        "unsigned",
+        "using",
+        "virtual",
+        "float2",
+        "float3",
+        "float4",
+        "int2",
+        "int3",
+        "int4",
+        "main",
+    ]
+)
+# WGSL keywords and reserved words (W3C WGSL sections 15.2-15.3, 2024); names
+# starting "__" are reserved too.
+_WGSL_KEYWORDS = frozenset(
+    [
+        "alias",
+        "break",
+        "case",
+        "const",
+        "const_assert",
+        "continue",
+        "continuing",
+        "default",
+        "diagnostic",
+        "discard",
+        "else",
+        "enable",
+        "false",
+        "fn",
+        "for",
+        "if",
+        "let",
+        "loop",
+        "override",
+        "requires",
+        "return",
+        "struct",
+        "switch",
+        "true",
+        "var",
+        "while",
+        "NULL",
+        "Self",
+        "abstract",
+        "active",
+        "alignas",
+        "alignof",
+        "as",
+        "asm",
+        "asm_fragment",
+        "async",
+        "attribute",
+        "auto",
+        "await",
+        "become",
+        "binding_array",
+        "cast",
+        "catch",
+        "class",
+        "co_await",
+        "co_return",
+        "co_yield",
+        "coherent",
+        "column_major",
+        "common",
+        "compile",
+        "compile_fragment",
+        "concept",
+        "const_cast",
+        "consteval",
+        "constexpr",
+        "constinit",
+        "crate",
+        "debugger",
+        "decltype",
+        "delete",
+        "demote",
+        "demote_to_helper",
+        "do",
+        "dynamic_cast",
+        "enum",
+        "explicit",
+        "export",
+        "extends",
+        "extern",
+        "external",
+        "fallthrough",
+        "filter",
+        "final",
+        "finally",
+        "friend",
+        "from",
+        "fxgroup",
+        "get",
+        "goto",
+        "groupshared",
+        "highp",
+        "impl",
+        "implements",
+        "import",
+        "inline",
+        "instanceof",
+        "interface",
+        "layout",
+        "lowp",
+        "macro",
+        "macro_rules",
+        "match",
+        "mediump",
+        "meta",
+        "mod",
+        "module",
+        "move",
+        "mut",
+        "mutable",
+        "namespace",
+        "new",
+        "nil",
+        "noexcept",
+        "noinline",
+        "nointerpolation",
+        "noperspective",
+        "null",
+        "nullptr",
+        "of",
+        "operator",
+        "package",
+        "packoffset",
+        "partition",
+        "pass",
+        "patch",
+        "pixelfragment",
+        "precise",
+        "precision",
+        "premerge",
+        "priv",
+        "protected",
+        "pub",
+        "public",
+        "readonly",
+        "ref",
+        "regardless",
+        "register",
+        "reinterpret_cast",
+        "require",
+        "resource",
+        "restrict",
+        "self",
+        "set",
+        "shared",
+        "sizeof",
+        "smooth",
+        "snorm",
+        "static",
+        "static_assert",
+        "static_cast",
+        "std",
+        "subroutine",
+        "super",
+        "target",
+        "template",
+        "this",
+        "thread_local",
+        "throw",
+        "trait",
+        "try",
+        "type",
+        "typedef",
+        "typeid",
+        "typename",
+        "typeof",
+        "union",
+        "unless",
+        "unorm",
+        "unsafe",
+        "unsized",
+        "use",
+        "using",
+        "varying",
+        "virtual",
+        "volatile",
+        "wgsl",
+        "where",
+        "with",
+        "writeonly",
+        "yield",
+        "bool",
+        "f16",
+        "f32",
+        "i32",
+        "u32",
+        "vec2",
+        "vec3",
+        "vec4",
+        "array",
+        "atomic",
+        "ptr",
+        "sampler",
+        "texture_2d",
+        "main",
+    ]
+)
+_KEYWORDS = {
+    "glsl": _GLSL_KEYWORDS,
+    "glsl100": _GLSL_KEYWORDS,
+    "hlsl": _HLSL_KEYWORDS,
+    "wgsl": _WGSL_KEYWORDS,
+}
+_LANGUAGE_NAMES = {"glsl": "GLSL", "glsl100": "GLSL ES 1.00", "hlsl": "HLSL", "wgsl": "WGSL"}
+
+# Suffixes of the constants every snippet declares (after "<prefix>_").
+_CONSTANT_KEYS = (
+    "PHASE_N",
+    "PHASE",
+    "PHASE_SAMPLE",
+    "PHASE_INDEX_PER_RAD",
+    "PI",
+    "WAVELENGTH_NM",
+    "G",
+    "CEXT_M2",
+    "CSCA_M2",
+    "CABS_M2",
+    "SSA",
+    "NUMBER_DENSITY_PER_M3",
+    "BETA_EXT_PER_M",
+    "BETA_SCA_PER_M",
+    "BETA_ABS_PER_M",
+)
+
+
+# ---------------------------------------------------------------------- channels
+
+
+@dataclass(frozen=True)
+class ShaderChannels:
+    """The three channels a shader snippet holds, before formatting.
+
+    Attributes
+    ----------
+    mode : str
+        One of :data:`dustoptics.colour.CHANNEL_MODES`.
+    wavelength_nm : numpy.ndarray, shape (3,)
+        The channel wavelengths, or each band's weighted mean wavelength. [nm]
+    descriptions : tuple of str
+        How each channel was made from the table (grid member, interpolated
+        between two wavelengths with their weights, or band weighting).
+    weights : numpy.ndarray, shape (3, n_wavelength)
+        Weights over the table's wavelengths, rows summing to 1 (nonnegative
+        except for linear sRGB): every channel cross-section is ``weights @``
+        the table's rows; the phase function and g are weighted by scattering
+        as well (:func:`dustoptics.colour.channel_phase`). [-]
+    theta_deg : numpy.ndarray, shape (n_angles,)
+        The uniform angle grid of the array, 0 to 180. [deg]
+    phase : numpy.ndarray of float32, shape (n_angles, 3)
+        The constant array as the shader holds it. [sr^-1]
+    sphere_integral : numpy.ndarray, shape (3,)
+        2 pi int P dmu of each channel of ``phase`` read by linear
+        interpolation in angle (what the shader computes); 1 up to resampling
+        and float32 rounding. [-]
+    g : numpy.ndarray, shape (3,)
+        Asymmetry parameter of each channel (channel weights applied to the
+        table's g). [-]
+    cext_m2, csca_m2 : numpy.ndarray or None, shape (3,)
+        Mean cross-sections per particle, or None for a phase-only table. [m^2]
+    number_density_per_m3 : float or None
+        Number density of the table's beta coefficients. [m^-3]
+    """
+
+    mode: str
+    wavelength_nm: np.ndarray
+    descriptions: tuple[str, ...]
+    weights: np.ndarray
+    theta_deg: np.ndarray
+    phase: np.ndarray
+    sphere_integral: np.ndarray
+    g: np.ndarray
+    cext_m2: np.ndarray | None
+    csca_m2: np.ndarray | None
+    number_density_per_m3: float | None
+
+
+def _fmt_nm(x: float) -> str:
+    return f"{x:g}"
+
+
+def choose_channels(
+    table: Any,
+    *,
+    channels_nm: Any = None,
+    colour: str | None = None,
+    min_band_coverage: float = 0.99,
+) -> ChannelWeights:
+    """The three channels (R, G, B roles) of a table, as weights over its wavelengths.
+
+    Parameters
+    ----------
+    table : dustoptics.table.Table
+        The table.
+    channels_nm : sequence of 3 floats, optional
+        Channel wavelengths in (R, G, B) order within the table's range;
+        default (680, 550, 440), the seed's, unless ``colour`` is given. [nm]
+    colour : {"cie1931-xyz", "linear-srgb-astmg173"}, optional
+        Colour channels instead (:func:`dustoptics.colour.channel_weights`).
+        Not together with ``channels_nm``.
+    min_band_coverage : float
+        With ``colour``: smallest fraction of each weighting function's
+        integral over 360-830 nm the table's range must hold. [-]
+
+    Returns
+    -------
+    dustoptics.colour.ChannelWeights
+    """
+    if colour is not None and channels_nm is not None:
+        raise ValueError(
+            f"give either channels_nm (wavelengths) or colour (bands), not both; got "
+            f"channels_nm={channels_nm!r} and colour={colour!r}"
+        )
+    wavelength = np.asarray(table.wavelength_nm, dtype=np.float64)
+    if colour is not None:
+        check_choice("colour", colour, COLOUR_MODES)
+        return channel_weights(wavelength, mode=colour, min_coverage=min_band_coverage)
+    return channel_weights(
+        wavelength,
+        mode="wavelengths",
+        channels_nm=DEFAULT_CHANNELS_NM if channels_nm is None else channels_nm,
+    )
+
+
+def _channel_line(ch: ShaderChannels) -> str:
+    """One line saying what the three channels are (for a file's header)."""
+    if ch.mode == "wavelengths":
+        return (
+            "channels (.x, .y, .z): "
+            + ", ".join(f"{_fmt_nm(w)} nm" for w in ch.wavelength_nm)
+            + " (wavelengths)"
+        )
+    return f"channels (.x, .y, .z): {ch.mode} (dustoptics.colour.channel_weights)"
+
+
+def _grid_count(resolution_deg: Any) -> int:
+    step = check_positive("resolution_deg", resolution_deg, unit="deg")
+    intervals = 180.0 / step
+    if intervals + 1 > MAX_GRID_POINTS:
+        raise ValueError(
+            f"resolution_deg must give at most {MAX_GRID_POINTS} samples over 0-180 deg; got "
+            f"{resolution_deg!r} ({intervals + 1:.3g} samples)"
+        )
+    n = round(intervals)
+    if n < 1 or abs(intervals - n) > 1e-9 * n:
+        raise ValueError(
+            f"resolution_deg must divide 180 deg into a whole number of steps "
+            f"(e.g. 0.1, 0.25, 0.5, 1); got {resolution_deg!r} ({intervals:g} steps)"
+        )
+    return n + 1
+
+
+def check_shader_options(
+    wavelength_nm: Any,
+    *,
+    channels_nm: Any = None,
+    colour: str | None = None,
+    resolution_deg: float = DEFAULT_RESOLUTION_DEG,
+    min_band_coverage: float = 0.99,
+) -> None:
+    """Check a snippet's options against a table's wavelengths, before the table exists.
+
+    The command line calls it with a configuration's wavelength grid before
+    computing the table, so that options :func:`shader_channels` would refuse
+    (channels outside the grid, a colour mode whose bands the grid does not
+    cover, a resolution that does not divide 180 deg or gives more than
+    :data:`dustoptics._validation.MAX_GRID_POINTS` samples) fail before any work.
+
+    Raises
+    ------
+    ValueError
+        What :func:`shader_channels` would raise for these options.
+    """
+    _grid_count(resolution_deg)
+    grid = SimpleNamespace(wavelength_nm=np.asarray(wavelength_nm, dtype=np.float64))
+    choose_channels(
+        grid, channels_nm=channels_nm, colour=colour, min_band_coverage=min_band_coverage
+    )
+
+
+def shader_channels(
+    table: Any,
+    *,
+    channels_nm: Any = None,
+    colour: str | None = None,
+    resolution_deg: float = DEFAULT_RESOLUTION_DEG,
+    min_band_coverage: float = 0.99,
+) -> ShaderChannels:
+    """The channel data of :func:`shader_source`, as arrays.
+
+    Parameters
+    ----------
+    table : dustoptics.table.Table
+        The table.
+    channels_nm, colour, min_band_coverage
+        As in :func:`choose_channels`.
+    resolution_deg : float
+        Angular step of the array; must divide 180. Default 0.25. [deg]
+
+    Returns
+    -------
+    ShaderChannels
+    """
+    n_angles = _grid_count(resolution_deg)
+    chosen = choose_channels(
+        table, channels_nm=channels_nm, colour=colour, min_band_coverage=min_band_coverage
+    )
+    weights = np.array(chosen.weights)
+    theta = np.linspace(0.0, 180.0, n_angles)
+    # Scattering-weighted channels when the table has cross-sections, so that
+    # csca_c * P_c is the channel of csca * P (see dustoptics.colour.channel_phase).
+    phase64 = channel_phase(
+        chosen, np.asarray(table.phase_at(theta), dtype=np.float64), csca_um2=table.csca_um2
+    )
+    phase32 = np.ascontiguousarray(phase64.T.astype(np.float32))
+    integral = np.asarray(sphere_integral(phase32.T.astype(np.float64), theta_deg=theta))
+    g = channel_phase(
+        chosen, np.asarray(table.g, dtype=np.float64)[:, None], csca_um2=table.csca_um2
+    )[:, 0]
+    cext = csca = None
+    if table.cext_um2 is not None:
+        cext = weights @ np.asarray(table.cext_um2, dtype=np.float64) * _UM2_TO_M2
+        csca = weights @ np.asarray(table.csca_um2, dtype=np.float64) * _UM2_TO_M2
+    for array in (weights, theta, phase32, integral, g, cext, csca):
+        if array is not None:
+            array.setflags(write=False)
+    return ShaderChannels(
+        mode=chosen.mode,
+        wavelength_nm=chosen.centroid_nm,
+        descriptions=chosen.descriptions,
+        weights=weights,
+        theta_deg=theta,
+        phase=phase32,
+        sphere_integral=integral,
+        g=g,
+        cext_m2=cext,
+        csca_m2=csca,
+        number_density_per_m3=table.number_density_per_m3 if cext is not None else None,
+    )
+
+
+# ---------------------------------------------------------------------- formatting
+
+
+def float_literal(value: Any, *, suffix: str = "") -> str:
+    """Shader literal of ``value`` rounded to float32, reading back to that float32 exactly.
+
+    The shortest decimal that identifies the float32 (numpy's Dragon4 with
+    ``unique=True``), always in exponent form with a decimal point, so every
+    shading language reads a float (never an int); ``suffix="f"`` for HLSL
+    and WGSL, where it makes the literal a float32 (not a double or an
+    abstract float rounded twice).
+
+    >>> float_literal(1.0), float_literal(0.1, suffix="f"), float_literal(-2.5e-13)
+    ('1.0e+00', '1.0e-01f', '-2.5e-13')
+    """
+    with np.errstate(over="ignore"):
+        x = np.float32(value)
+    if not np.isfinite(x):
+        raise ValueError(
+            f"value must be finite as float32 to be written to a shader; got {value!r}"
+        )
+    return np.format_float_scientific(x, unique=True, trim="0", exp_digits=2) + suffix
+
+
+def _check_identifier(name: str, value: Any, language: str) -> str:
+    if (
+        not isinstance(value, str)
+        or not _IDENTIFIER.match(value)
+        or "__" in value
+        or value.startswith("gl_")
+        or value in _KEYWORDS[language]
+    ):
+        label = _LANGUAGE_NAMES[language]
+        raise ValueError(
+            f"{name} must be a valid {label} identifier (letters, digits and '_', not starting with "
+            f"a digit or 'gl_', no '__', not a {label} keyword); got {value!r}"
+        )
+    return value
+
+
+def _text(value: Any) -> str:
+    """One-line ASCII rendering of free text for a comment (quoted, escaped)."""
+    return json.dumps(str(value), ensure_ascii=True)
+
+
+@dataclass(frozen=True)
+class _Syntax:
+    """How one language spells the few constructs the snippets use."""
+
+    language: str
+    vec3: str  # vector type and constructor
+    suffix: str  # float literal suffix
+
+    def lit(self, value: Any) -> str:
+        return float_literal(value, suffix=self.suffix)
+
+    def vec(self, values: Any) -> str:
+        return f"{self.vec3}(" + ", ".join(self.lit(v) for v in values) + ")"
+
+    def const(self, kind: str, name: str, value: str, comment: str) -> str:
+        """One module-scope constant (kind: "float", "int" or "vec3") with its comment, if any."""
+        tail = f"  // {comment}" if comment else ""
+        if self.language == "wgsl":
+            wgsl_type = {"float": "f32", "int": "i32", "vec3": self.vec3}[kind]
+            return f"const {name}: {wgsl_type} = {value};{tail}"
+        if self.language == "hlsl":
+            hlsl_type = {"float": "float", "int": "int", "vec3": self.vec3}[kind]
+            return f"static const {hlsl_type} {name} = {value};{tail}"
+        glsl_type = {"float": "float", "int": "int", "vec3": "vec3"}[kind]
+        if self.language == "glsl100" and kind != "int":
+            glsl_type = "highp " + glsl_type
+        return f"const {glsl_type} {name} = {value};{tail}"
+
+
+_SYNTAX = {
+    "glsl": _Syntax("glsl", "vec3", ""),
+    "glsl100": _Syntax("glsl100", "vec3", ""),
+    "hlsl": _Syntax("hlsl", "float3", "f"),
+    "wgsl": _Syntax("wgsl", "vec3<f32>", "f"),
+}
+
+
+def _acos_lines(sx: _Syntax, acos: str, names: dict[str, str], indent: str = "    ") -> list[str]:
+    """Statements that set ``theta = acos(c)`` [rad] from ``c``, in the language's syntax."""
+    lang = sx.language
+    decl_var = {"glsl": "float ", "glsl100": "highp float ", "hlsl": "float ", "wgsl": "var "}[lang]
+    decl_let = {"glsl": "float ", "glsl100": "highp float ", "hlsl": "float ", "wgsl": "let "}[lang]
+    if acos == "builtin":
+        return [f"{indent}{decl_let}theta = acos(c);  // [rad]"]
+    lines = [
+        f"{indent}// theta = acos(c) [rad]: Abramowitz & Stegun 4.4.46 (|error| <= 2e-8 rad in exact",
+        f"{indent}// arithmetic), for a result independent of the driver's acos precision.",
+        f"{indent}{decl_let}a = abs(c);",
+        f"{indent}{decl_var}p = {sx.lit(ACOS_AS4446[-1])};",
+    ]
+    lines += [f"{indent}p = p * a + {sx.lit(coef)};" for coef in ACOS_AS4446[-2::-1]]
+    lines.append(f"{indent}{decl_var}theta = sqrt({sx.lit(1.0)} - a) * p;")
+    flip = f"theta = {names['PI']} - theta;"
+    if lang == "wgsl":
+        lines.append(f"{indent}if (c < {sx.lit(0.0)}) {{ {flip} }}")
+    else:
+        lines.append(f"{indent}if (c < {sx.lit(0.0)}) {flip}")
+    return lines
+
+
+def _sample_tree(sx: _Syntax, phase: np.ndarray, lo: int, hi: int, depth: int) -> list[str]:
+    """GLSL ES 1.00 leaves: return the sample whose index equals i, by bisection on i."""
+    indent = "    " * depth
+    if lo == hi:
+        return [f"{indent}return {sx.vec(phase[lo])};"]
+    mid = (lo + hi) // 2
+    return (
+        [f"{indent}if (i < {float(mid) + 0.5:.1f}) {{"]
+        + _sample_tree(sx, phase, lo, mid, depth + 1)
+        + [f"{indent}}}"]
+        + _sample_tree(sx, phase, mid + 1, hi, depth)
+    )
+
+
+def _lookup_lines(
+    sx: _Syntax, ch: ShaderChannels, names: dict[str, str], function_name: str, acos: str
+) -> list[str]:
+    """The lookup function ``function_name(nu)`` and, for GLSL ES 1.00, its sample function."""
+    lang = sx.language
+    one, zero = sx.lit(1.0), sx.lit(0.0)
+    n_name, p_name, k_name = names["PHASE_N"], names["PHASE"], names["PHASE_INDEX_PER_RAD"]
+    safety = [
+        "    // Numerical safety only: a cosine computed by rounding (e.g. a dot product of",
+        "    // unit vectors) can exceed 1 in magnitude, where acos is undefined.",
+    ]
+    doc = "// Phase function [sr^-1] at nu = cos(scattering angle) [-], nu = 1 forward."
+    if lang == "wgsl":
+        return [
+            doc,
+            f"fn {function_name}(nu: f32) -> vec3<f32> {{",
+            *safety,
+            f"    let c = clamp(nu, -{one}, {one});",
+            *_acos_lines(sx, acos, names),
+            f"    let x = clamp(theta * {k_name}, {zero}, f32({n_name} - 1));",
+            f"    let i = min(i32(x), {n_name} - 2);",
+            "    let f = x - f32(i);",
+            f"    return {p_name}[i] * ({one} - f) + {p_name}[i + 1] * f;",
+            "}",
+        ]
+    if lang == "glsl100":
+        sample = names["PHASE_SAMPLE"]
+        n = ch.phase.shape[0]
+        return [
+            f"// Sample i (0 <= i <= {n - 1}, a whole number) of the phase function [sr^-1]:",
+            f"// bisection on i, {math.ceil(math.log2(n))} comparisons (GLSL ES 1.00 has no constant arrays).",
+            f"highp vec3 {sample}(highp float i)",
+            "{",
+            *_sample_tree(sx, ch.phase, 0, n - 1, 1),
+            "}",
+            "",
+            doc,
+            f"highp vec3 {function_name}(highp float nu)",
+            "{",
+            *safety,
+            "    highp float c = clamp(nu, -1.0, 1.0);",
+            *_acos_lines(sx, acos, names),
+            f"    highp float x = clamp(theta * {k_name}, 0.0, float({n_name} - 1));",
+            f"    highp float i = min(floor(x), float({n_name} - 2));",
+            "    highp float f = x - i;",
+            f"    return {sample}(i) * (1.0 - f) + {sample}(i + 1.0) * f;",
+            "}",
+        ]
+    vec3 = sx.vec3
+    return [
+        doc,
+        f"{vec3} {function_name}(float nu)",
+        "{",
+        *safety,
+        f"    float c = clamp(nu, -{one}, {one});",
+        *_acos_lines(sx, acos, names),
+        f"    float x = clamp(theta * {k_name}, {zero}, float({n_name} - 1));",
+        f"    int i = min(int(x), {n_name} - 2);",
+        "    float f = x - float(i);",
+        f"    return {p_name}[i] * ({one} - f) + {p_name}[i + 1] * f;",
+        "}",
+    ]
+
+
+def _array_lines(sx: _Syntax, ch: ShaderChannels, names: dict[str, str]) -> list[str]:
+    """The constant array of samples (none in GLSL ES 1.00, whose samples are a function)."""
+    n = ch.phase.shape[0]
+    if sx.language == "glsl100":
+        return []
+    header = f"// Phase function [sr^-1] at theta_j = 180 j / {n - 1} deg, j = 0..{n - 1}."
+    rows = [f"    {sx.vec(row)}" for row in ch.phase]
+    body = [row + "," for row in rows[:-1]] + [rows[-1]]
+    if sx.language == "wgsl":
+        kind = f"array<vec3<f32>, {n}>"
+        return ["", header, f"const {names['PHASE']}: {kind} = {kind}(", *body, ");"]
+    if sx.language == "hlsl":
+        return ["", header, f"static const float3 {names['PHASE']}[{n}] = {{", *body, "};"]
+    return ["", header, f"const vec3 {names['PHASE']}[{names['PHASE_N']}] = vec3[](", *body, ");"]
+
+
+def shader_source(
+    table: Any,
+    *,
+    language: str = "glsl",
+    channels_nm: Any = None,
+    colour: str | None = None,
+    resolution_deg: float = DEFAULT_RESOLUTION_DEG,
+    prefix: str = "MIE",
+    function_name: str = "MiePhaseFunction",
+    min_band_coverage: float = 0.99,
+    acos: str = "polynomial",
+) -> str:
+    """Shader source: the phase function as constants and its lookup function.
+
+    Parameters
+    ----------
+    table : dustoptics.table.Table
+        The table.
+    language : {"glsl", "glsl100", "hlsl", "wgsl"}
+        Shading language (see the module docstring): GLSL 1.30+/ES 3.00+,
+        GLSL ES 1.00 (WebGL 1), HLSL, WGSL.
+    channels_nm : sequence of 3 floats, optional
+        Channel wavelengths in vector order (.x, .y, .z), each on the table's
+        grid or between two grid wavelengths (linear interpolation in
+        wavelength); default (680, 550, 440), the seed's R, G, B. [nm]
+    colour : {"cie1931-xyz", "linear-srgb-astmg173"}, optional
+        Colour channels instead (:func:`choose_channels`).
+    resolution_deg : float
+        Angular step of the samples; must divide 180.  Default 0.25 (721
+        samples, the seed's). [deg]
+    prefix : str
+        Prefix of every module-scope identifier except the lookup
+        (``<prefix>_PHASE_N``, ``<prefix>_PHASE``, ``<prefix>_G``, ...), so two
+        snippets can share a shader.  Default ``"MIE"``.
+    function_name : str
+        Name of the lookup; default ``"MiePhaseFunction"`` (the seed's).
+    min_band_coverage : float
+        With ``colour``: smallest accepted fraction of each colour-matching
+        function's 360-830 nm integral within the table's range. [-]
+    acos : {"polynomial", "builtin"}
+        How the lookup computes the angle from ``nu``: ``"polynomial"``
+        (default), Abramowitz & Stegun 4.4.46 evaluated in float32 (error
+        2.5e-7 rad, measured against float64 over [-1, 1]), the same on every
+        driver; or ``"builtin"``, the language's ``acos``, whose precision the
+        specifications leave to the implementation (Mesa llvmpipe's GLSL acos:
+        errors up to 1.6e-4 rad, 0.04 of a 0.25 deg step, measured).
+
+    Returns
+    -------
+    str
+        Source (ASCII, ``\\n`` line ends), include-ready (no ``#version``
+        line): a comment header, then
+
+        - ``<prefix>_PHASE_N`` (int): number of samples N;
+        - ``<prefix>_PHASE``: N three-component vectors, the phase function
+          [sr^-1] at ``theta_j = 180 j / (N - 1)`` deg, channel per component
+          (GLSL ES 1.00: the function ``<prefix>_PHASE_SAMPLE(float i)``);
+        - ``<prefix>_PHASE_INDEX_PER_RAD`` (float): (N - 1) / pi [rad^-1];
+          ``<prefix>_PI`` (float): pi in float32;
+        - ``<prefix>_WAVELENGTH_NM``: channel wavelengths (band mean
+          wavelengths in colour mode) [nm]; ``<prefix>_G``: asymmetry
+          parameter [-];
+        - with cross-sections: ``<prefix>_CEXT_M2``, ``<prefix>_CSCA_M2``,
+          ``<prefix>_CABS_M2`` [m^2] and ``<prefix>_SSA`` [-];
+        - with a number density as well: ``<prefix>_NUMBER_DENSITY_PER_M3``
+          (float) [m^-3] and ``<prefix>_BETA_EXT_PER_M``,
+          ``<prefix>_BETA_SCA_PER_M``, ``<prefix>_BETA_ABS_PER_M`` [m^-1];
+        - the lookup ``function_name(nu)``: the phase function [sr^-1] at
+          ``nu = cos(theta)``, three components.
+
+    Raises
+    ------
+    ValueError
+        An unknown language, a channel wavelength outside the table's range,
+        both ``channels_nm`` and ``colour``, a resolution that does not divide
+        180 deg (or, for HLSL, gives more than 4096 samples), an invalid
+        identifier, or too little band coverage; the message names the
+        parameter, the value and what is allowed.
+
+    Notes
+    -----
+    The lookup computes ``x = acos(clamp(nu, -1, 1)) * (N - 1) / pi``
+    (``acos`` per the ``acos`` option), ``i = min(floor(x), N - 2)``,
+    ``f = x - i`` and returns ``P[i] (1 - f) + P[i + 1] f``.  The clamp of
+    ``nu`` (and of ``x`` to [0, N - 1]) is numerical safety only: a cosine
+    computed as a dot product of unit vectors can exceed 1 in magnitude by
+    rounding, where ``acos`` is undefined.  Since ``x`` is linear in
+    ``theta``, the shader interpolates linearly in angle, as
+    :meth:`~dustoptics.table.Table.phase_at` does; the seed divides by pi
+    after multiplying, this multiplies by the float32 of (N - 1)/pi (a
+    difference of float32 rounding).
+
+    Examples
+    --------
+    >>> src = shader_source(table, language="wgsl")                      # doctest: +SKIP
+    >>> two = shader_source(table, language="hlsl", prefix="DUST",
+    ...                     function_name="DustPhase")                    # doctest: +SKIP
+    """
+    from dustoptics import __version__
+
+    check_choice("language", language, LANGUAGES)
+    check_choice("acos", acos, ACOS_METHODS)
+    prefix = _check_identifier("prefix", prefix, language)
+    function_name = _check_identifier("function_name", function_name, language)
+    names = {
+        key: _check_identifier("prefix", f"{prefix}_{key}", language) for key in _CONSTANT_KEYS
+    }
+    if function_name in names.values():
+        raise ValueError(
+            f"function_name must differ from the constants' names; got {function_name!r}"
+        )
+    n_samples = _grid_count(resolution_deg)
+    limit = MAX_SAMPLES.get(language)
+    if limit is not None and n_samples > limit:
+        raise ValueError(
+            f"resolution_deg = {resolution_deg!r} gives {n_samples} samples, more than {language}'s "
+            f"{limit} (Direct3D's immediate constant buffer); choose resolution_deg >= "
+            f"{180.0 / (limit - 1):.6g}"
+        )
+    ch = shader_channels(
+        table,
+        channels_nm=channels_nm,
+        colour=colour,
+        resolution_deg=resolution_deg,
+        min_band_coverage=min_band_coverage,
+    )
+    sx = _SYNTAX[language]
+    n = ch.theta_deg.size
+    step = 180.0 / (n - 1)
+    source_angles = np.asarray(table.theta_deg)
+    same_grid = source_angles.size == n and np.array_equal(source_angles, ch.theta_deg)
+    resampling = (
+        f"the table's own {n} angles (no resampling)"
+        if same_grid
+        else f"the table's {source_angles.size} angles read by linear interpolation in angle "
+        "(Table.phase_at)"
+    )
+    title = f"phase function of table {_text(table.name)} for {_LANGUAGE_NAMES[language]}"
+    lines = [
+        f"// dustoptics {__version__}: {title}.",
+        f"// requires: {REQUIREMENTS[language]}",
+        f"// input_hash (SHA-256 of the table's inputs): {table.provenance.input_hash}",
+        f"// {_channel_line(ch)}",
+    ]
+    lines += [f"//   .{axis}: {desc}" for axis, desc in zip("xyz", ch.descriptions)]
+    sources = ", ".join(_text(s.name) for s in table.provenance.sources) or "none recorded"
+    lines += [
+        f"// sources: {sources}",
+        "// units: phase function [sr^-1]; nu = cos(scattering angle) [-], nu = 1 forward;",
+        "//   wavelengths [nm]; cross-sections [m^2]; beta coefficients [m^-1]",
+        f"// normalization: {PHASE_NORMALIZATION}",
+        f"// resolution: {step:g} deg, {n} samples theta_j = 180 j / {n - 1} deg, j = 0..{n - 1}",
+        f"// resampling: {resampling}, then rounded to float32",
+        "//   (each literal is the shortest decimal that reads back as that float32)",
+        "// sphere integral 2 pi int P dmu of each channel as interpolated below: "
+        + ", ".join(f"{v:.7f}" for v in ch.sphere_integral),
+        f"// lookup: x = ({n - 1}) acos(nu) / pi, linear interpolation between samples",
+        "//   floor(x) and floor(x) + 1 (linear in angle, as Table.phase_at); acos: "
+        + (
+            "the language's builtin"
+            if acos == "builtin"
+            else "Abramowitz & Stegun 4.4.46 polynomial"
+        ),
+        "",
+        sx.const("int", names["PHASE_N"], str(n), ""),  # N, the number of samples
+        sx.const(
+            "float",
+            names["PHASE_INDEX_PER_RAD"],
+            sx.lit((n - 1) / math.pi),
+            "(N - 1) / pi [rad^-1]",
+        ),
+        sx.const("float", names["PI"], sx.lit(math.pi), "pi in float32"),
+        sx.const(
+            "vec3",
+            names["WAVELENGTH_NM"],
+            sx.vec(ch.wavelength_nm),
+            "[nm]" if ch.mode == "wavelengths" else "weighted mean wavelengths [nm]",
+        ),
+        sx.const("vec3", names["G"], sx.vec(ch.g), "asymmetry parameter [-]"),
+    ]
+    if ch.cext_m2 is not None and ch.csca_m2 is not None:
+        cabs = ch.cext_m2 - ch.csca_m2
+        lines += [
+            sx.const(
+                "vec3",
+                names["CEXT_M2"],
+                sx.vec(ch.cext_m2),
+                "mean extinction cross-section per particle [m^2]",
+            ),
+            sx.const(
+                "vec3",
+                names["CSCA_M2"],
+                sx.vec(ch.csca_m2),
+                "mean scattering cross-section per particle [m^2]",
+            ),
+            sx.const(
+                "vec3",
+                names["CABS_M2"],
+                sx.vec(cabs),
+                "mean absorption cross-section per particle [m^2]",
+            ),
+            sx.const(
+                "vec3",
+                names["SSA"],
+                sx.vec(ch.csca_m2 / ch.cext_m2),
+                "single-scattering albedo csca / cext [-]",
+            ),
+        ]
+        if ch.number_density_per_m3 is not None:
+            density = ch.number_density_per_m3
+            lines += [
+                sx.const(
+                    "float",
+                    names["NUMBER_DENSITY_PER_M3"],
+                    sx.lit(density),
+                    "number density of the beta coefficients [m^-3]",
+                ),
+                sx.const(
+                    "vec3",
+                    names["BETA_EXT_PER_M"],
+                    sx.vec(density * ch.cext_m2),
+                    "extinction coefficient [m^-1]",
+                ),
+                sx.const(
+                    "vec3",
+                    names["BETA_SCA_PER_M"],
+                    sx.vec(density * ch.csca_m2),
+                    "scattering coefficient [m^-1]",
+                ),
+                sx.const(
+                    "vec3",
+                    names["BETA_ABS_PER_M"],
+                    sx.vec(density * cabs),
+                    "absorption coefficient [m^-1]",
+                ),
+            ]
+    lines += _array_lines(sx, ch, names)
+    lines += [""] + _lookup_lines(sx, ch, names, function_name, acos)
+    return "\n".join(lines) + "\n"
+
+
+def write_shader(
+    table: Any,
+    out_dir_or_path: str | os.PathLike[str],
+    *,
+    language: str = "glsl",
+    overwrite: bool = False,
+    **options: Any,
+) -> list[Path]:
+    """Write :func:`shader_source` to a file, atomically.
+
+    Parameters
+    ----------
+    table : dustoptics.table.Table
+        The table.
+    out_dir_or_path : path-like
+        A path ending in the language's extension (``.glsl``, ``.hlsl``,
+        ``.wgsl``) is the file to write; anything else is a directory
+        (created if missing) that receives ``<table name>_phase<ext>``
+        (GLSL ES 1.00: ``<table name>_phase_es100.glsl``), with characters
+        other than letters, digits, ``.``, ``_`` and ``-`` replaced by ``_``.
+    language : {"glsl", "glsl100", "hlsl", "wgsl"}
+        Shading language.
+    overwrite : bool
+        Replace an existing file.  Default False.
+    **options
+        As :func:`shader_source` (``channels_nm``, ``colour``,
+        ``resolution_deg``, ``prefix``, ``function_name``,
+        ``min_band_coverage``, ``acos``).
+
+    Returns
+    -------
+    list of pathlib.Path
+        The written file.
+
+    Raises
+    ------
+    FileExistsError
+        The file exists and ``overwrite`` is False (nothing is written).
+    ValueError
+        As :func:`shader_source`.
+    """
+    check_choice("language", language, LANGUAGES)
+    source = shader_source(table, language=language, **options)
+    ext = EXTENSIONS[language]
+    out = Path(out_dir_or_path)
+    tail = "_phase_es100" if language == "glsl100" else "_phase"
+    target = out if out.suffix == ext else out / f"{safe_stem(table.name)}{tail}{ext}"
+    return write_files({target: source.encode("ascii")}, overwrite=overwrite)
+
+
+def write_hlsl(
+    table: Any, out_dir_or_path: str | os.PathLike[str], *, overwrite: bool = False, **options: Any
+) -> list[Path]:
+    """Write the HLSL snippet (:func:`write_shader` with ``language="hlsl"``)."""
+    return write_shader(table, out_dir_or_path, language="hlsl", overwrite=overwrite, **options)
+
+
+def write_wgsl(
+    table: Any, out_dir_or_path: str | os.PathLike[str], *, overwrite: bool = False, **options: Any
+) -> list[Path]:
+    """Write the WGSL snippet (:func:`write_shader` with ``language="wgsl"``)."""
+    return write_shader(table, out_dir_or_path, language="wgsl", overwrite=overwrite, **options)
+
+
+register_format("hlsl", write_hlsl)
+register_format("wgsl", write_wgsl)

@@ -1,0 +1,135 @@
+"""The phase-function texture as an OpenEXR image (film and game pipelines).
+
+Written with the OpenEXR library's own Python binding (``OpenEXR`` on PyPI,
+the ``textures`` extra): scanline image, ZIP compression (lossless), pixel
+type FLOAT (float32) or HALF (float16), channels ``R`` (wavelength layout) or
+``R``, ``G``, ``B`` (RGB layout).  The sampling rule, axes, units, accuracy and
+provenance are the header's string attribute ``dustoptics`` (canonical JSON).
+Same table and options, same bytes.
+
+Reference: Academy Software Foundation, "OpenEXR File Layout",
+https://openexr.com/en/latest/OpenEXRFileLayout.html.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import Any
+
+from dustoptics.io import register_format
+from dustoptics.io._atomic import safe_stem, write_files
+from dustoptics.io.textures.phase_texture import (
+    DEFAULT_MAX_DIMENSION,
+    PhaseTexture,
+    check_dimensions,
+    metadata_json,
+    phase_texture,
+)
+from dustoptics.io.textures.raw import DEFAULT_N_ANGLES
+
+__all__ = ["write_exr"]
+
+# The data window is stored as int32 coordinates.
+_CONTAINER_LIMIT = 2**31 - 1
+
+
+def _openexr() -> Any:
+    try:
+        import OpenEXR
+    except ImportError:
+        raise ImportError(
+            "the exr format needs the OpenEXR package: pip install 'dustoptics[textures]'"
+        ) from None
+    return OpenEXR
+
+
+def _writer(texture: PhaseTexture) -> Any:
+    """A callback that writes the EXR file of ``texture`` at a given path."""
+    openexr = _openexr()
+    check_dimensions(
+        texture.width,
+        texture.height,
+        max_dimension=_CONTAINER_LIMIT,
+        container="OpenEXR",
+        container_limit=_CONTAINER_LIMIT,
+    )
+    header = {
+        "compression": openexr.ZIP_COMPRESSION,
+        "type": openexr.scanlineimage,
+        "dustoptics": metadata_json(texture),
+    }
+    channels = {
+        name: texture.pixels[:, :, k].copy() for k, name in enumerate(texture.channel_names)
+    }
+
+    def write(path: Path) -> None:
+        with openexr.File(header, channels) as image:
+            image.write(str(path))
+
+    return write
+
+
+def write_exr(
+    table: Any,
+    out_dir_or_path: str | os.PathLike[str],
+    *,
+    overwrite: bool = False,
+    layout: str = "rgb",
+    sampling: str = "theta",
+    n_angles: int = DEFAULT_N_ANGLES,
+    precision: str = "float32",
+    channels_nm: Any = None,
+    colour: str | None = None,
+    min_band_coverage: float = 0.99,
+    max_dimension: int = DEFAULT_MAX_DIMENSION,
+) -> list[Path]:
+    """Write the phase function as an OpenEXR image, atomically.
+
+    Parameters
+    ----------
+    table : dustoptics.table.Table
+        The table.
+    out_dir_or_path : path-like
+        A path ending in ``.exr`` is the file to write; anything else is a
+        directory (created if missing) that receives
+        ``<table name>_phase_<layout>_<sampling>_<precision>.exr``.
+    overwrite : bool
+        Replace an existing file.  Default False.
+    layout, sampling, n_angles, precision, channels_nm, colour, min_band_coverage, max_dimension
+        As :func:`dustoptics.io.textures.phase_texture.phase_texture`.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The written file.
+
+    Raises
+    ------
+    ImportError
+        OpenEXR is not installed (the message names the ``textures`` extra).
+    ValueError
+        As :func:`~dustoptics.io.textures.phase_texture.phase_texture` (before
+        anything is written).
+    FileExistsError
+        The file exists and ``overwrite`` is False.
+    """
+    texture = phase_texture(
+        table,
+        layout=layout,
+        sampling=sampling,
+        n_angles=n_angles,
+        precision=precision,
+        channels_nm=channels_nm,
+        colour=colour,
+        min_band_coverage=min_band_coverage,
+        max_dimension=max_dimension,
+    )
+    write = _writer(texture)
+    out = Path(out_dir_or_path)
+    name = f"{safe_stem(table.name)}_phase_{layout}_{sampling}_{precision}.exr"
+    target = out if out.suffix == ".exr" else out / name
+    return write_files({target: write}, overwrite=overwrite)
+
+
+register_format("exr", write_exr)

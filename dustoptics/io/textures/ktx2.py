@@ -1,0 +1,227 @@
+"""The phase-function texture as a KTX 2.0 file (Khronos; Vulkan, WebGPU, three.js).
+
+One uncompressed 2-D image, one mip level, no supercompression, in
+``VK_FORMAT_R32G32B32A32_SFLOAT`` / ``VK_FORMAT_R16G16B16A16_SFLOAT`` (RGB
+layout, A = 1) or ``VK_FORMAT_R32_SFLOAT`` / ``VK_FORMAT_R16_SFLOAT``
+(wavelength layout), linear transfer, BT.709 primaries.  The sampling rule,
+axes, units, accuracy and provenance are the key/value entry ``dustoptics``
+(canonical JSON, NUL-terminated UTF-8), beside ``KTXwriter``.
+
+Why the container is written here: ``pyktx`` (PyPI) binds libktx, which must
+be built from KTX-Software's sources (PyPI has no wheel and Debian 12 no
+package).  An uncompressed one-level 2-D KTX2 file is a fixed header, a level
+index, a Data Format Descriptor and key/value data (KTX 2.0 specification,
+sections 3-4; Khronos Data Format specification 1.3, section 5), written
+below field by field with the DFD that KTX-Software's ``vk2dfd`` makes for
+these formats.  The tests read the files with an independent parser,
+``ktx-parse`` (npm; the reader of three.js's KTX2Loader and glTF-Transform),
+check that it serializes them back to the same bytes, and upload its pixels
+to OpenGL.
+
+References
+----------
+Khronos Group, "KTX File Format Specification, version 2.0" (2021),
+https://registry.khronos.org/KTX/specs/2.0/ktxspec.v2.html; Khronos Group,
+"Khronos Data Format Specification 1.3" (2020).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import struct
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from dustoptics.io import register_format
+from dustoptics.io._atomic import safe_stem, write_files
+from dustoptics.io.textures.phase_texture import (
+    DEFAULT_MAX_DIMENSION,
+    PhaseTexture,
+    check_dimensions,
+    metadata_json,
+    phase_texture,
+)
+from dustoptics.io.textures.raw import DEFAULT_N_ANGLES
+
+__all__ = ["KTX2_IDENTIFIER", "VK_FORMATS", "ktx2_bytes", "write_ktx2"]
+
+#: The 12-byte file identifier: «KTX 20»\r\n\x1A\n.
+KTX2_IDENTIFIER = bytes([0xAB, 0x4B, 0x54, 0x58, 0x20, 0x32, 0x30, 0xBB, 0x0D, 0x0A, 0x1A, 0x0A])
+
+#: vkFormat of (channels, precision): Vulkan's VkFormat enumerants.
+VK_FORMATS = {
+    (4, "float32"): 109,  # VK_FORMAT_R32G32B32A32_SFLOAT
+    (4, "float16"): 97,  # VK_FORMAT_R16G16B16A16_SFLOAT
+    (1, "float32"): 100,  # VK_FORMAT_R32_SFLOAT
+    (1, "float16"): 76,  # VK_FORMAT_R16_SFLOAT
+}
+
+# pixelWidth and pixelHeight are uint32.
+_CONTAINER_LIMIT = 2**32 - 1
+
+# Data Format Descriptor fields (Khronos Data Format 1.3, khr_df.h).
+_KHR_DF_VERSIONNUMBER_1_3 = 2
+_KHR_DF_MODEL_RGBSDA = 1
+_KHR_DF_PRIMARIES_BT709 = 1
+_KHR_DF_TRANSFER_LINEAR = 1
+_KHR_DF_SAMPLE_DATATYPE_FLOAT = 0x80
+_KHR_DF_SAMPLE_DATATYPE_SIGNED = 0x40
+_CHANNEL_IDS = (0, 1, 2, 15)  # R, G, B, A
+_FLOAT_ONE = struct.unpack("<I", struct.pack("<f", 1.0))[0]
+_FLOAT_MINUS_ONE = struct.unpack("<I", struct.pack("<f", -1.0))[0]
+
+
+def _dfd(n_channels: int, bytes_per_channel: int) -> bytes:
+    """The basic Data Format Descriptor of an unpacked little-endian SFLOAT format."""
+    block_size = 24 + 16 * n_channels
+    words = [
+        0,  # vendorId KHRONOS (0), descriptorType BASICFORMAT (0)
+        _KHR_DF_VERSIONNUMBER_1_3 | (block_size << 16),
+        _KHR_DF_MODEL_RGBSDA | (_KHR_DF_PRIMARIES_BT709 << 8) | (_KHR_DF_TRANSFER_LINEAR << 16),
+        0,  # texelBlockDimension0..3 = 1x1x1x1, stored as n - 1
+        n_channels * bytes_per_channel,  # bytesPlane0; planes 1-3 zero
+        0,  # bytesPlane4..7
+    ]
+    for k in range(n_channels):
+        channel_type = (
+            _CHANNEL_IDS[k] | _KHR_DF_SAMPLE_DATATYPE_FLOAT | _KHR_DF_SAMPLE_DATATYPE_SIGNED
+        )
+        bits = 8 * bytes_per_channel
+        words += [
+            (k * bits) | ((bits - 1) << 16) | (channel_type << 24),
+            0,  # sample position
+            _FLOAT_MINUS_ONE,  # sampleLower: -1.0f for SFLOAT (as KTX-Software's vk2dfd)
+            _FLOAT_ONE,  # sampleUpper: 1.0f
+        ]
+    body = struct.pack(f"<{len(words)}I", *words)
+    return struct.pack("<I", 4 + len(body)) + body
+
+
+def _key_value(entries: dict[str, bytes]) -> bytes:
+    """Key/value data: entries sorted by key, each padded to 4 bytes."""
+    out = bytearray()
+    for key in sorted(entries, key=lambda k: k.encode("utf-8")):
+        kv = key.encode("utf-8") + b"\0" + entries[key]
+        out += struct.pack("<I", len(kv)) + kv
+        out += b"\0" * (-len(kv) % 4)
+    return bytes(out)
+
+
+def ktx2_bytes(texture: PhaseTexture) -> bytes:
+    """The KTX2 file of ``texture`` (see the module docstring)."""
+    from dustoptics import __version__
+
+    check_dimensions(
+        texture.width,
+        texture.height,
+        max_dimension=_CONTAINER_LIMIT,
+        container="KTX2",
+        container_limit=_CONTAINER_LIMIT,
+    )
+    pixels = texture.pixels
+    if pixels.shape[2] == 3:  # no filterable RGB float format in Vulkan/WebGPU: RGBA with A = 1
+        alpha = np.ones(pixels.shape[:2] + (1,), dtype=pixels.dtype)
+        pixels = np.concatenate([pixels, alpha], axis=2)
+    n_channels = pixels.shape[2]
+    type_size = pixels.dtype.itemsize
+    level = np.ascontiguousarray(pixels).tobytes(order="C")
+    dfd = _dfd(n_channels, type_size)
+    kvd = _key_value(
+        {
+            "KTXwriter": f"dustoptics {__version__}".encode() + b"\0",
+            "dustoptics": metadata_json(texture).encode("utf-8") + b"\0",
+        }
+    )
+    header_size = 12 + 9 * 4 + 4 * 4 + 2 * 8
+    level_index_size = 24
+    dfd_offset = header_size + level_index_size
+    kvd_offset = dfd_offset + len(dfd)
+    texel = n_channels * type_size
+    alignment = math.lcm(texel, 4)
+    data_start = kvd_offset + len(kvd)
+    data_offset = data_start + (-data_start % alignment)
+    out = bytearray(KTX2_IDENTIFIER)
+    out += struct.pack(
+        "<9I",
+        VK_FORMATS[(n_channels, texture.precision)],
+        type_size,
+        texture.width,
+        texture.height,
+        0,  # pixelDepth: 2-D
+        0,  # layerCount: not an array
+        1,  # faceCount
+        1,  # levelCount
+        0,  # supercompressionScheme: none
+    )
+    out += struct.pack("<4I2Q", dfd_offset, len(dfd), kvd_offset, len(kvd), 0, 0)
+    out += struct.pack("<3Q", data_offset, len(level), len(level))
+    out += dfd + kvd
+    out += b"\0" * (data_offset - len(out))
+    out += level
+    return bytes(out)
+
+
+def write_ktx2(
+    table: Any,
+    out_dir_or_path: str | os.PathLike[str],
+    *,
+    overwrite: bool = False,
+    layout: str = "rgb",
+    sampling: str = "theta",
+    n_angles: int = DEFAULT_N_ANGLES,
+    precision: str = "float32",
+    channels_nm: Any = None,
+    colour: str | None = None,
+    min_band_coverage: float = 0.99,
+    max_dimension: int = DEFAULT_MAX_DIMENSION,
+) -> list[Path]:
+    """Write the phase function as a KTX2 texture, atomically.
+
+    Parameters
+    ----------
+    table : dustoptics.table.Table
+        The table.
+    out_dir_or_path : path-like
+        A path ending in ``.ktx2`` is the file to write; anything else is a
+        directory (created if missing) that receives
+        ``<table name>_phase_<layout>_<sampling>_<precision>.ktx2``.
+    overwrite : bool
+        Replace an existing file.  Default False.
+    layout, sampling, n_angles, precision, channels_nm, colour, min_band_coverage, max_dimension
+        As :func:`dustoptics.io.textures.phase_texture.phase_texture`.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The written file.
+
+    Raises
+    ------
+    ValueError
+        As :func:`~dustoptics.io.textures.phase_texture.phase_texture` (before
+        anything is written).
+    FileExistsError
+        The file exists and ``overwrite`` is False.
+    """
+    texture = phase_texture(
+        table,
+        layout=layout,
+        sampling=sampling,
+        n_angles=n_angles,
+        precision=precision,
+        channels_nm=channels_nm,
+        colour=colour,
+        min_band_coverage=min_band_coverage,
+        max_dimension=max_dimension,
+    )
+    data = ktx2_bytes(texture)
+    out = Path(out_dir_or_path)
+    name = f"{safe_stem(table.name)}_phase_{layout}_{sampling}_{precision}.ktx2"
+    target = out if out.suffix == ".ktx2" else out / name
+    return write_files({target: data}, overwrite=overwrite)
+
+
+register_format("ktx2", write_ktx2)

@@ -1,0 +1,98 @@
+"""The phase-function texture as a NumPy ``.npy`` array with a JSON sidecar.
+
+``<stem>.npy``: NumPy's format 1.0, little-endian float32 (``<f4``) or float16
+(``<f2``), C order, shape (height, width, channels) (row, angle column,
+channel).  The ``.npy`` header holds only dtype, order and shape, so the
+sampling rule, axes, units, accuracy and provenance go into ``<stem>.json``
+beside it (the texture metadata of :mod:`~dustoptics.io.textures.phase_texture`, plus
+the array file's name and SHA-256).  Both files are written together, or
+neither.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import io
+import json
+import os
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from dustoptics.io import register_format
+from dustoptics.io._atomic import safe_stem, write_files
+from dustoptics.io.textures.phase_texture import DEFAULT_MAX_DIMENSION, phase_texture
+from dustoptics.io.textures.raw import DEFAULT_N_ANGLES
+
+__all__ = ["write_npy"]
+
+
+def write_npy(
+    table: Any,
+    out_dir: str | os.PathLike[str],
+    *,
+    overwrite: bool = False,
+    layout: str = "rgb",
+    sampling: str = "theta",
+    n_angles: int = DEFAULT_N_ANGLES,
+    precision: str = "float32",
+    channels_nm: Any = None,
+    colour: str | None = None,
+    min_band_coverage: float = 0.99,
+    max_dimension: int = DEFAULT_MAX_DIMENSION,
+) -> list[Path]:
+    """Write the phase-function texture as ``.npy`` and its ``.json`` sidecar, atomically.
+
+    Parameters
+    ----------
+    table : dustoptics.table.Table
+        The table.
+    out_dir : path-like
+        Directory (created if missing) that receives
+        ``<table name>_phase_<layout>_<sampling>_<precision>.npy`` and ``.json``.
+    overwrite : bool
+        Replace existing files.  Default False.
+    layout, sampling, n_angles, precision, channels_nm, colour, min_band_coverage, max_dimension
+        As :func:`dustoptics.io.textures.phase_texture.phase_texture`.
+
+    Returns
+    -------
+    list of pathlib.Path
+        ``[<stem>.npy, <stem>.json]``.
+    """
+    texture = phase_texture(
+        table,
+        layout=layout,
+        sampling=sampling,
+        n_angles=n_angles,
+        precision=precision,
+        channels_nm=channels_nm,
+        colour=colour,
+        min_band_coverage=min_band_coverage,
+        max_dimension=max_dimension,
+    )
+    buffer = io.BytesIO()
+    np.save(buffer, texture.pixels, allow_pickle=False)
+    array_bytes = buffer.getvalue()
+    stem = safe_stem(f"{table.name}_phase_{layout}_{sampling}_{precision}")
+    root = Path(out_dir)
+    npy_path, json_path = root / f"{stem}.npy", root / f"{stem}.json"
+    sidecar = dict(texture.metadata)
+    sidecar.update(
+        {
+            "file": npy_path.name,
+            "sha256": hashlib.sha256(array_bytes).hexdigest(),
+            "dtype": texture.pixels.dtype.str,
+            "shape": list(texture.pixels.shape),
+            "order": "C: (row, angle column, channel), channel fastest",
+            "channel_names": list(texture.channel_names),
+        }
+    )
+    text = json.dumps(sidecar, indent=2, sort_keys=True, allow_nan=False, ensure_ascii=True) + "\n"
+    return write_files(
+        {npy_path: array_bytes, json_path: text.encode("ascii")}, overwrite=overwrite
+    )
+
+
+register_format("npy", write_npy)

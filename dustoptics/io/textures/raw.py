@@ -1,0 +1,439 @@
+"""Raw float32 2-D phase-function texture with a JSON sidecar.
+
+For engines that upload the phase function as a texture rather than compile
+it into a shader: :func:`write_texture` writes two files,
+
+``<stem>.raw``
+    The phase function [sr^-1] as little-endian IEEE-754 float32, no header,
+    C order of an array of shape ``(n_wavelength, n_angles)``: one row per
+    wavelength (in the table's increasing order), the angle index fastest.
+    Uploaded as it is, it is a GL texture of width ``n_angles`` and height
+    ``n_wavelength`` (``GL_R32F``, format ``GL_RED``, type ``GL_FLOAT``,
+    unpack alignment 4).  Texel ``(j, i)`` is angle sample ``j`` at
+    wavelength ``i``; with texel centres at ``(j + 0.5) / n_angles``.
+``<stem>.json``
+    The sidecar: shape, dtype ``"<f4"``, byte order, memory order, the axes
+    with their coordinate values and units, the sampling, the normalization,
+    the table's name, input hash and provenance, and the SHA-256 of the raw
+    file, which :func:`read_texture` checks.
+
+Two samplings of the angle axis:
+
+``"theta"``
+    Uniform in scattering angle: ``theta_j = 180 j / (n_angles - 1)`` deg,
+    ``j = 0 .. n_angles - 1``, both ends included (0 = forward).  Values are
+    ``table.phase_at(theta_j)``, the table read by linear interpolation in
+    angle (at the table's own angles, its stored values).
+``"cos"``
+    Uniform in ``mu = cos(theta)`` from ``mu_0 = 1`` (forward) to
+    ``mu_{N-1} = -1`` (backward), both ends included: ``mu_j = 1 - 2 j /
+    (n_angles - 1)`` as computed by :func:`numpy.linspace`, for engines that
+    index by ``nu = cos(theta)``.  Values are
+    ``table.phase_at(degrees(arccos(mu_j)))``.
+
+Both files go through the package's one atomic-write mechanism
+(:func:`dustoptics.io._atomic.write_files`): an existing output is not
+replaced unless ``overwrite=True``, and a failed call leaves nothing partial.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import os
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from dustoptics._validation import MAX_GRID_POINTS, check_choice
+from dustoptics.io import register_format
+from dustoptics.io._atomic import FormatError, safe_stem, write_files
+from dustoptics.io._text import load_json, read_checked
+from dustoptics.scattering.tabulated_phase import sphere_integral
+from dustoptics.table import PHASE_NORMALIZATION
+
+__all__ = [
+    "DEFAULT_N_ANGLES",
+    "SAMPLINGS",
+    "TEXTURE_FORMAT",
+    "TextureData",
+    "read_texture",
+    "texture_values",
+    "write_texture",
+]
+
+#: Format name and version written in every sidecar and required by the reader.
+TEXTURE_FORMAT = "dustoptics-phase-texture/1"
+
+#: Angle samplings :func:`write_texture` knows.
+SAMPLINGS = ("theta", "cos")
+
+#: Default number of angle samples: the seed shader's 0.25 deg over 0..180 deg.
+DEFAULT_N_ANGLES = 721
+
+
+@dataclass(frozen=True)
+class TextureData:
+    """A texture read back by :func:`read_texture`.
+
+    Attributes
+    ----------
+    phase : numpy.ndarray of float32, shape (n_wavelength, n_angles)
+        The texture, read-only. [sr^-1]
+    wavelength_nm : numpy.ndarray, shape (n_wavelength,)
+        Row coordinates. [nm]
+    theta_deg : numpy.ndarray, shape (n_angles,)
+        Column coordinates as angles (for ``"cos"``: ``degrees(arccos(mu))``). [deg]
+    mu : numpy.ndarray or None, shape (n_angles,)
+        Column coordinates as cosines for the ``"cos"`` sampling, else None. [-]
+    sampling : str
+        ``"theta"`` or ``"cos"``.
+    metadata : dict
+        The whole sidecar.
+    """
+
+    phase: np.ndarray
+    wavelength_nm: np.ndarray
+    theta_deg: np.ndarray
+    mu: np.ndarray | None
+    sampling: str
+    metadata: dict[str, Any]
+
+
+def _check_n_angles(n_angles: Any) -> int:
+    if isinstance(n_angles, bool) or not isinstance(n_angles, (int, np.integer)) or n_angles < 2:
+        raise ValueError(
+            f"n_angles must be an integer >= 2 (both ends are sampled); got {n_angles!r}"
+        )
+    if n_angles > MAX_GRID_POINTS:
+        raise ValueError(
+            f"n_angles must be <= {MAX_GRID_POINTS} (samples of one texture row); got {n_angles!r}"
+        )
+    return int(n_angles)
+
+
+def _sampling_grid(sampling: str, n_angles: int) -> tuple[np.ndarray, np.ndarray | None]:
+    """Angles [deg] of the samples, and their cosines for the ``"cos"`` sampling."""
+    if sampling == "theta":
+        return np.linspace(0.0, 180.0, n_angles), None
+    mu = np.linspace(1.0, -1.0, n_angles)
+    # degrees(arccos(-1)) is exactly 180 in IEEE arithmetic; the clip only guards
+    # a libm that rounds it up, which phase_at would reject.
+    theta = np.minimum(np.degrees(np.arccos(mu)), 180.0)
+    return theta, mu
+
+
+def texture_values(
+    table: Any, *, sampling: str = "theta", n_angles: int = DEFAULT_N_ANGLES
+) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+    """The texture :func:`write_texture` writes, in memory.
+
+    Parameters
+    ----------
+    table : dustoptics.table.Table
+        The table.
+    sampling : {"theta", "cos"}
+        Uniform in angle or in its cosine (see the module docstring).
+    n_angles : int
+        Number of angle samples, both ends included (>= 2).
+
+    Returns
+    -------
+    phase : numpy.ndarray of float32, shape (n_wavelength, n_angles)
+        The phase function at the samples, rounded to float32. [sr^-1]
+    theta_deg : numpy.ndarray, shape (n_angles,)
+        The sample angles. [deg]
+    mu : numpy.ndarray or None
+        The sample cosines (``"cos"`` sampling), else None. [-]
+    """
+    check_choice("sampling", sampling, SAMPLINGS)
+    n_angles = _check_n_angles(n_angles)
+    theta, mu = _sampling_grid(sampling, n_angles)
+    values = np.asarray(table.phase_at(theta), dtype=np.float64)
+    with np.errstate(over="raise"):
+        phase = values.astype("<f4")
+    return phase, theta, mu
+
+
+def _normalization_check(
+    phase32: np.ndarray, theta: np.ndarray, mu: np.ndarray | None
+) -> list[float]:
+    """2 pi int P dmu of each row, read the way the sampling is meant to be interpolated."""
+    p = phase32.astype(np.float64)
+    if mu is None:  # linear in theta between samples: integrated exactly
+        return np.atleast_1d(sphere_integral(p, theta_deg=theta)).tolist()
+    # linear in mu between samples: the trapezoid rule is exact (mu decreasing)
+    return (
+        2.0 * math.pi * np.sum(0.5 * (p[:, 1:] + p[:, :-1]) * (mu[:-1] - mu[1:]), axis=1)
+    ).tolist()
+
+
+def _sidecar(
+    table: Any,
+    *,
+    raw_name: str,
+    raw_bytes: bytes,
+    phase32: np.ndarray,
+    theta: np.ndarray,
+    mu: np.ndarray | None,
+    sampling: str,
+) -> bytes:
+    from dustoptics import __version__
+
+    n_wl, n_angles = phase32.shape
+    if sampling == "theta":
+        angle_axis: dict[str, Any] = {
+            "name": "theta_deg",
+            "unit": "deg",
+            "meaning": "scattering angle, 0 = forward",
+            "values": theta.tolist(),
+        }
+        description = (
+            f"uniform in theta_deg from 0 (forward, column 0) to 180 (backward, column "
+            f"{n_angles - 1}), both included: theta_j = 180 j / {n_angles - 1}"
+        )
+        interpolation = "linear in theta between columns reproduces the table's own interpolation"
+    else:
+        angle_axis = {
+            "name": "mu",
+            "unit": "1",
+            "meaning": "cosine of the scattering angle nu = cos(theta), 1 = forward",
+            "values": mu.tolist() if mu is not None else [],
+            "theta_deg": theta.tolist(),
+        }
+        description = (
+            f"uniform in mu = cos(theta) from 1 (forward, column 0) to -1 (backward, column "
+            f"{n_angles - 1}), both included: mu_j = 1 - 2 j / {n_angles - 1}; value_j = "
+            "table.phase_at(degrees(arccos(mu_j)))"
+        )
+        interpolation = (
+            "linear in mu between columns (GL linear filtering), which differs from the "
+            "table's linear-in-theta interpolation between samples"
+        )
+    provenance = table.provenance.to_dict()
+    document = {
+        "format": TEXTURE_FORMAT,
+        "file": raw_name,
+        "sha256": hashlib.sha256(raw_bytes).hexdigest(),
+        "size_bytes": len(raw_bytes),
+        "dtype": "<f4",
+        "byte_order": "little-endian",
+        "shape": [n_wl, n_angles],
+        "order": (
+            "C (row-major): row i = wavelength index, column j = angle index (fastest); "
+            "byte offset of (i, j) = 4 (i n_angles + j)"
+        ),
+        "gl": {
+            "width": n_angles,
+            "height": n_wl,
+            "internal_format": "GL_R32F",
+            "format": "GL_RED",
+            "type": "GL_FLOAT",
+            "texel_centre": "u = (j + 0.5) / width, v = (i + 0.5) / height",
+        },
+        "axes": [
+            {
+                "name": "wavelength_nm",
+                "unit": "nm",
+                "meaning": "vacuum wavelength, increasing",
+                "values": np.asarray(table.wavelength_nm, dtype=np.float64).tolist(),
+            },
+            angle_axis,
+        ],
+        "sampling": sampling,
+        "sampling_description": description,
+        "interpolation": interpolation,
+        "quantity": "phase function",
+        "unit": "sr^-1",
+        "normalization": PHASE_NORMALIZATION,
+        "sphere_integral_of_samples": _normalization_check(phase32, theta, mu),
+        "source_angles": int(np.asarray(table.theta_deg).size),
+        "table": table.name,
+        "input_hash": table.provenance.input_hash,
+        "provenance": provenance,
+        "written_by": f"dustoptics {__version__}",
+    }
+    text = json.dumps(document, indent=2, sort_keys=True, allow_nan=False, ensure_ascii=True)
+    return (text + "\n").encode("ascii")
+
+
+def write_texture(
+    table: Any,
+    out_dir: str | os.PathLike[str],
+    *,
+    sampling: str = "theta",
+    n_angles: int = DEFAULT_N_ANGLES,
+    overwrite: bool = False,
+    stem: str | None = None,
+) -> list[Path]:
+    """Write the phase function as a raw float32 texture and its JSON sidecar.
+
+    Parameters
+    ----------
+    table : dustoptics.table.Table
+        The table; every wavelength becomes one row of the texture.
+    out_dir : path-like
+        Output directory; created with its parents if missing.
+    sampling : {"theta", "cos"}
+        ``"theta"``: uniform in angle from 0 to 180 deg; ``"cos"``: uniform
+        in ``mu = cos(theta)`` from 1 to -1.  Both ends are samples.
+    n_angles : int
+        Number of angle samples (texture width), >= 2.  Default 721: the seed
+        shader's 0.25 deg step in ``"theta"``.  In ``"cos"`` sampling the first
+        interval spans theta = arccos(1 - 2 / (n_angles - 1)) (4.3 deg for
+        721): dust's forward peak needs many more samples, and the sidecar's
+        ``sphere_integral_of_samples`` shows how much of the normalization the
+        sampling keeps.
+    overwrite : bool
+        Replace existing files.  Default False: if either file exists, nothing
+        is written.
+    stem : str, optional
+        File-name stem; default ``"<table name>_phase_<sampling>"`` with
+        characters other than letters, digits, ``.``, ``_`` and ``-`` replaced
+        by ``_``.
+
+    Returns
+    -------
+    list of pathlib.Path
+        ``[<stem>.raw, <stem>.json]``.
+
+    Raises
+    ------
+    ValueError
+        Unknown ``sampling`` or invalid ``n_angles`` or ``stem``.
+    FileExistsError
+        An output exists and ``overwrite`` is False.
+
+    Examples
+    --------
+    >>> paths = write_texture(table, "out", sampling="cos", n_angles=2048)  # doctest: +SKIP
+    >>> [p.name for p in paths]                                              # doctest: +SKIP
+    ['mars-dust_phase_cos.raw', 'mars-dust_phase_cos.json']
+    """
+    phase32, theta, mu = texture_values(table, sampling=sampling, n_angles=n_angles)
+    if stem is None:
+        stem = safe_stem(f"{table.name}_phase_{sampling}")
+    elif not isinstance(stem, str) or safe_stem(stem) != stem:
+        raise ValueError(
+            f"stem must be a non-empty file-name stem of letters, digits, '.', '_' and '-' "
+            f"not starting with '.'; got {stem!r}"
+        )
+    root = Path(out_dir)
+    raw_path = root / f"{stem}.raw"
+    json_path = root / f"{stem}.json"
+    raw_bytes = np.ascontiguousarray(phase32, dtype="<f4").tobytes(order="C")
+    sidecar = _sidecar(
+        table,
+        raw_name=raw_path.name,
+        raw_bytes=raw_bytes,
+        phase32=phase32,
+        theta=theta,
+        mu=mu,
+        sampling=sampling,
+    )
+    return write_files({raw_path: raw_bytes, json_path: sidecar}, overwrite=overwrite)
+
+
+def read_texture(sidecar_path: str | os.PathLike[str]) -> TextureData:
+    """Read a texture written by :func:`write_texture`, checking size and checksum.
+
+    Parameters
+    ----------
+    sidecar_path : path-like
+        The ``.json`` sidecar; the raw file is the one it names, in the same
+        directory.
+
+    Returns
+    -------
+    TextureData
+        The float32 array (read-only) with its coordinates and the sidecar.
+
+    Raises
+    ------
+    FormatError
+        The sidecar is not JSON or not a texture sidecar of this format, the
+        raw file is missing, shorter or longer than the sidecar's shape needs
+        (e.g. a truncated download), or its SHA-256 differs from the
+        sidecar's.
+    """
+    path = Path(sidecar_path)
+    try:
+        meta = load_json(path)
+    except FormatError as exc:
+        detail = str(exc).removeprefix(f"{path}: ")
+        raise FormatError(f"{path}: cannot read the texture sidecar as JSON: {detail}") from None
+    if not isinstance(meta, dict) or meta.get("format") != TEXTURE_FORMAT:
+        found = meta.get("format") if isinstance(meta, dict) else type(meta).__name__
+        raise FormatError(f"{path}: not a {TEXTURE_FORMAT!r} sidecar (format {found!r})")
+    try:
+        shape = tuple(int(n) for n in meta["shape"])
+        dtype = meta["dtype"]
+        raw_name = meta["file"]
+        digest = meta["sha256"]
+        sampling = meta["sampling"]
+        wl_axis, angle_axis = meta["axes"]
+    except (KeyError, TypeError, ValueError) as exc:
+        raise FormatError(
+            f"{path}: texture sidecar is missing or has a malformed entry: {exc}"
+        ) from None
+    if dtype != "<f4" or len(shape) != 2 or sampling not in SAMPLINGS:
+        raise FormatError(
+            f"{path}: unsupported texture (dtype {dtype!r}, shape {shape}, sampling {sampling!r}); "
+            f"this reader reads dtype '<f4', 2-D, sampling one of {SAMPLINGS}"
+        )
+    if Path(raw_name).name != raw_name:
+        raise FormatError(f"{path}: raw file name {raw_name!r} must not contain a directory")
+    raw_path = path.parent / raw_name
+    expected = 4 * shape[0] * shape[1]
+    if min(shape) < 1:
+        raise FormatError(f"{path}: texture shape {list(shape)} must be positive")
+    try:
+        size = raw_path.stat().st_size
+    except OSError as exc:
+        raise FormatError(f"{path}: cannot read the raw texture {raw_path}: {exc}") from None
+    # Sizes compared before reading: a sidecar's shape cannot make the reader
+    # allocate more than the file holds.
+    if size != expected:
+        what = "truncated" if size < expected else "longer than expected"
+        raise FormatError(
+            f"{raw_path}: raw texture is {what}: {size} bytes, but shape {list(shape)} of "
+            f"float32 needs {expected} bytes"
+        )
+    data = read_checked(raw_path, limit=expected)
+    actual = hashlib.sha256(data).hexdigest()
+    if actual != digest:
+        raise FormatError(
+            f"{raw_path}: SHA-256 {actual} differs from the sidecar's {digest}: the file was "
+            "altered or damaged"
+        )
+    phase = np.frombuffer(data, dtype="<f4").reshape(shape).copy()
+    phase.setflags(write=False)
+    wavelength = np.asarray(wl_axis["values"], dtype=np.float64)
+    if sampling == "theta":
+        theta = np.asarray(angle_axis["values"], dtype=np.float64)
+        mu = None
+    else:
+        mu = np.asarray(angle_axis["values"], dtype=np.float64)
+        theta = np.asarray(angle_axis["theta_deg"], dtype=np.float64)
+        mu.setflags(write=False)
+    if wavelength.shape != (shape[0],) or theta.shape != (shape[1],):
+        raise FormatError(
+            f"{path}: axis lengths ({wavelength.size} wavelengths, {theta.size} angles) do not "
+            f"match the shape {list(shape)}"
+        )
+    wavelength.setflags(write=False)
+    theta.setflags(write=False)
+    return TextureData(
+        phase=phase,
+        wavelength_nm=wavelength,
+        theta_deg=theta,
+        mu=mu,
+        sampling=sampling,
+        metadata=meta,
+    )
+
+
+register_format("texture", write_texture)
