@@ -36,7 +36,8 @@ from dustoptics.atmosphere import column, gases, parametric
 from dustoptics.compare import compare_tables
 from dustoptics.io.tables.netcdf import open_table
 from dustoptics.models import config, presets
-from dustoptics.models.config import build_table, load_config
+from dustoptics.models.compute import build_table
+from dustoptics.models.files import load_config
 from dustoptics.models.presets import build_preset, list_presets
 from dustoptics.particles import materials, mixing, sizedist
 from dustoptics.particles.coated import CoatedSphere

@@ -1208,7 +1208,7 @@ def _timed_sweep(case: dict, *, processes: bool, n_workers: int, threads: int) -
 
 def measure_sweep(quick: bool) -> dict:
     """Section 8: shared vs independent builds, and the sweep on Dask."""
-    from dustoptics.models.config import build_table
+    from dustoptics.models.compute import build_table
     from dustoptics.sweep import compute_chunk
     from dustoptics.sweep.spec import parse_point
 

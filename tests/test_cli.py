@@ -18,7 +18,7 @@ import dustoptics as do
 from dustoptics import cli
 from dustoptics.atmosphere.sets import COSMOSCOUT_WAVELENGTHS_NM
 from dustoptics.io import read_hdf5, read_seed_csv, read_texture
-from dustoptics.io.cosmoscout import check_cosmoscout_set, read_cosmoscout_constituent
+from dustoptics.io.csv.cosmoscout import check_cosmoscout_set, read_cosmoscout_constituent
 from dustoptics.models import presets
 
 SMALL = """\
@@ -70,8 +70,8 @@ def test_build_writes_every_format_and_they_agree(config, tmp_path, capsys):
     assert h5.number_density_per_m3 == 1e8
     # The table is what the library computes from the same configuration, the number
     # density given on the command line included (an input: it is in the input hash).
-    ref = do.config.build_table(
-        dataclasses.replace(do.config.load_config(config), number_density_per_m3=1e8)
+    ref = do.build_table(
+        dataclasses.replace(do.load_config(config), number_density_per_m3=1e8)
     )
     np.testing.assert_array_equal(h5.phase, ref.phase)
     assert h5.provenance.input_hash == ref.provenance.input_hash
@@ -391,11 +391,11 @@ def test_build_mars_and_earth_write_whole_cosmoscout_sets(config, tmp_path):
     # The dust's column reproduces the optical depth at 550 nm: tau = N0 <C_ext> L
     # (exponential profile, 11.1 km, cut at the 120 km top), with <C_ext> computed here.
     dust = read_cosmoscout_constituent(tmp_path / "mars", "mars_aerosols")
-    cfg = do.config.load_config(config)
+    cfg = do.load_config(config)
     from dataclasses import replace
 
     at550 = replace(cfg, optics=replace(cfg.optics, wavelengths_nm=(550.0,), n_theta=2))
-    cext_m2 = do.config.build_table(at550).cext_um2[0] * 1e-12
+    cext_m2 = do.build_table(at550).cext_um2[0] * 1e-12
     h, top = 11100.0, 120e3
     n0 = float(dust.beta_sca_per_m[0] / (read_hdf5_free_csca(cfg, 0)))
     length = h * (1 - np.exp(-top / h))
@@ -425,7 +425,7 @@ def read_hdf5_free_csca(cfg, i):
     grid = replace(
         cfg, optics=replace(cfg.optics, wavelengths_nm=COSMOSCOUT_WAVELENGTHS_NM, n_theta=1801)
     )
-    return do.config.build_table(grid).csca_um2[i] * 1e-12
+    return do.build_table(grid).csca_um2[i] * 1e-12
 
 
 # ------------------------------------------------------------------ provenance of CLI inputs

@@ -9,7 +9,7 @@ import pytest
 
 from dustoptics.compare import TableComparison, compare_tables
 from dustoptics.models import presets
-from dustoptics.models.config import build_table
+from dustoptics.models.compute import build_table
 from dustoptics.table import Table
 
 

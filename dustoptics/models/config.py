@@ -1,14 +1,18 @@
-"""Build configurations: the TOML schema of a dust model, and building its table.
+"""Build configurations: the TOML schema of a dust model, parsed and validated.
 
 A configuration file says everything a table is made from: the material, the
 size distribution, the grids and tolerances, the phase-function model, and the
 sources and choices behind them.  The package's presets
 (:mod:`dustoptics.models.presets`) are such files; a user copies one
-(``dustoptics.models.presets.preset_text(name)``), edits it and builds it.  Files are
-read with the standard library's :mod:`tomllib` and validated key by key:
+(``dustoptics.models.presets.preset_text(name)``), edits it, reads it with
+:func:`dustoptics.models.files.load_config` and builds it with
+:func:`dustoptics.models.compute.build_table`.  :func:`parse_config` reads the
+text with the standard library's :mod:`tomllib` and validates it key by key:
 unknown keys, wrong types and out-of-range values raise :class:`ConfigError`,
 which names the key (``size_distribution.modes[1].r_eff_um``), the line of the
-file and what is allowed.  Nothing is clamped or ignored.
+file and what is allowed.  Nothing is clamped or ignored.  The result, a
+:class:`BuildConfig`, is plain data: this module computes nothing and knows no
+preset.
 
 Schema
 ------
@@ -63,43 +67,24 @@ hybrid models also ``weighting`` (``"scattering"``, the default, or
   (``cornette_shanks1992`` with ``g``, ``henyey_greenstein`` with ``g``,
   ``dhg_costa2021`` with ``g1``, ``g2``, ``alpha``, ...), the same at every
   wavelength.  Analytic-only tables carry no cross-sections.
-
-Tables
-------
-:func:`build_table` returns a :class:`dustoptics.table.Table`.  Its
-``Provenance.inputs`` is :meth:`BuildConfig.to_inputs`: every computational
-parameter with the defaults filled in (not the name, description, sources and
-choices, which label the table; they go into ``Provenance.sources`` and
-``Provenance.notes``), so equivalent files (e.g. ``n_theta = 1801`` and
-``theta_step_deg = 0.1``) give the same input hash.
-
-Asymmetry parameter ``g``: for ``"mie"`` it is the quadrature's
-``2 pi int P mu dmu`` of the Mie phase function.  For ``"hybrid"`` and analytic
-models it is computed from the returned table, read as a renderer reads it
-(linear in theta between samples), with the exact piecewise-linear quadrature
-of :func:`dustoptics.scattering.phase.sphere_integral`; the provenance notes give its
-largest difference from the analytic formula.
 """
 
 from __future__ import annotations
 
 import itertools
 import math
-import os
 import re
 import tomllib
-import warnings
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass, field
-from pathlib import Path
 from types import MappingProxyType
 from typing import Any, Final
 
 import numpy as np
 
+from dustoptics._deprecated import moved_attribute
 from dustoptics._validation import (
     MAX_GRID_POINTS,
-    check_budget,
     check_file_name,
     check_wavelength_unit,
 )
@@ -115,12 +100,8 @@ from dustoptics.particles.sizedist import (
     SizeDistribution,
 )
 from dustoptics.scattering import phase as _phase
-from dustoptics.scattering.optics import (
-    WEIGHTINGS,
-    ConvergenceWarning,
-    compute_optics,
-)
-from dustoptics.table import Provenance, Source, Table
+from dustoptics.scattering.optics import WEIGHTINGS
+from dustoptics.table import Source
 
 __all__ = [
     "SCHEMA",
@@ -130,13 +111,28 @@ __all__ = [
     "ModeConfig",
     "OpticsConfig",
     "PhaseConfig",
-    "PresetCopyWarning",
     "SizeDistributionConfig",
-    "build_table",
-    "load_config",
     "parse_config",
-    "preset_copy_problems",
 ]
+
+#: Names that moved out of this module (building a table, reading a user's file and
+#: checking it against the presets); the old path warns (:func:`__getattr__`) until it is
+#: removed in 0.3.
+_MOVED: Final = MappingProxyType(
+    {
+        "build_table": "dustoptics.models.compute",
+        "load_config": "dustoptics.models.files",
+        "preset_copy_problems": "dustoptics.models.files",
+        "PresetCopyWarning": "dustoptics.models.files",
+    }
+)
+
+
+def __getattr__(name: str) -> Any:
+    """The names that moved to :mod:`dustoptics.models.compute` and
+    :mod:`dustoptics.models.files` (deprecated)."""
+    return moved_attribute(__name__, name, _MOVED)
+
 
 #: Schema identifier recorded in every table's inputs.
 SCHEMA: Final = "dustoptics-config-1"
@@ -696,7 +692,8 @@ class BuildConfig:
     def to_inputs(self) -> dict[str, Any]:
         """Every computational parameter, defaults filled in, JSON-ready.
 
-        This is what :func:`build_table` stores as ``Provenance.inputs`` (and
+        This is what :func:`dustoptics.models.compute.build_table` stores as
+        ``Provenance.inputs`` (and
         hashes).  The name, description, sources and choices label the table
         and are not part of it.
         """
@@ -1073,283 +1070,3 @@ def parse_config(text: str, *, source: str = "<string>") -> BuildConfig:
         number_density_per_m3=density,
         source=source,
     )
-
-
-class PresetCopyWarning(UserWarning):
-    """A configuration file labels its table with a preset's name, sources or choices
-    although its parameters differ from that preset's."""
-
-
-#: The sections of a configuration that determine its numbers (see BuildConfig.to_inputs).
-_COMPUTATIONAL_KEYS: Final = (
-    "material",
-    "size_distribution",
-    "optics",
-    "phase",
-    "number_density_per_m3",
-)
-
-
-def preset_copy_problems(config: BuildConfig) -> list[str]:
-    """How ``config`` still carries the labels of a preset whose parameters it changed.
-
-    ``dustoptics presets --show NAME > my.toml`` gives a copy to edit.  Once
-    its parameters are edited, the preset's ``name``, ``sources`` and
-    ``choices`` describe another model: kept, they would label the table with
-    citations and choices that are not its own.  A configuration counts as a
-    copy of a preset when it has the preset's name, or both its sources and its
-    choices (presets may share publications).  Empty when ``config`` is a
-    preset itself, an unchanged copy of one, or has labels of its own.
-
-    Examples
-    --------
-    >>> from dataclasses import replace
-    >>> from dustoptics.models import presets
-    >>> preset = presets.load_preset("blue-moons")
-    >>> preset_copy_problems(preset)
-    []
-    >>> edited = replace(preset, number_density_per_m3=1e8)
-    >>> print(preset_copy_problems(edited)[0])  # doctest: +ELLIPSIS
-    carries the name, sources and choices of preset 'blue-moons' but its number_density_per_m3 differ...
-    """
-    from dustoptics.models import presets
-
-    inputs = config.to_inputs()
-    problems = []
-    for name in presets.list_presets():
-        preset = presets.load_preset(name)
-        labels = [
-            label
-            for label, same in (
-                ("name", config.name == preset.name),
-                ("sources", bool(preset.sources) and config.sources == preset.sources),
-                ("choices", bool(preset.choices) and config.choices == preset.choices),
-            )
-            if same
-        ]
-        # Presets may share their publications (hybrid, hybrid-seed): a copy is one that
-        # kept the preset's name, or both its sources and its choices.
-        if "name" not in labels and len(labels) < 2:
-            continue
-        theirs = preset.to_inputs()
-        changed = [key for key in _COMPUTATIONAL_KEYS if inputs.get(key) != theirs.get(key)]
-        if not changed:
-            continue
-        carried = labels[0] if len(labels) == 1 else ", ".join(labels[:-1]) + " and " + labels[-1]
-        problems.append(
-            f"carries the {carried} of preset {name!r} but its {', '.join(changed)} differ "
-            "from the preset's: the table would be labelled with a model it is not. Give "
-            "the configuration its own name, and sources and choices that describe it"
-        )
-    return problems
-
-
-def load_config(path: str | os.PathLike[str]) -> BuildConfig:
-    """Read and validate a TOML build configuration file (UTF-8).
-
-    A file that still carries the name, sources or choices of a preset whose
-    parameters it changed (an edited copy of ``dustoptics presets --show``)
-    gives a :class:`PresetCopyWarning` (:func:`preset_copy_problems`).
-
-    Raises
-    ------
-    ConfigError
-        As :func:`parse_config`, with the path in the message.
-    OSError
-        If the file cannot be read.
-    """
-    p = Path(path)
-    config = parse_config(p.read_text(encoding="utf-8"), source=str(p))
-    for problem in preset_copy_problems(config):
-        warnings.warn(f"configuration {str(p)!r} {problem}", PresetCopyWarning, stacklevel=2)
-    return config
-
-
-# ------------------------------------------------------------------- building
-
-
-def _analytic_table(
-    config: BuildConfig,
-    name: str,
-    params: Mapping[str, Any],
-    wavelengths: np.ndarray,
-    theta: np.ndarray,
-) -> tuple[np.ndarray, np.ndarray, Source]:
-    """(renormalized table, analytic mean cosine per wavelength, its source)."""
-    n = wavelengths.size
-    if name == _COSTA_SPECTRUM:
-        spectrum = _phase.costa2021_mars_dhg(wavelengths, outside=params["outside"])
-        raw = _phase.tabulate(
-            _phase.dhg_costa2021,
-            theta_deg=theta,
-            g1=spectrum.g1[:, None],
-            g2=spectrum.g2[:, None],
-            alpha=spectrum.alpha[:, None],
-        )
-        exact = spectrum.asymmetry()
-        source = Source(name=_COSTA_SPECTRUM, role="phase function", citation=spectrum.citation)
-    else:
-        model = _phase.get_analytic_model(name)
-        row = _phase.tabulate(model.phase, theta_deg=theta, **params)
-        raw = np.broadcast_to(np.atleast_1d(row), (n, theta.size)).copy()
-        exact = np.full(n, float(model.asymmetry(**params)))
-        source = Source(name=name, role="phase function", citation=model.citation)
-    return _phase.renormalize(raw, theta_deg=theta), exact, source
-
-
-def _compute_mie(
-    config: BuildConfig,
-    workers: int | None,
-    progress: Callable[[int, int], None] | None,
-    allow_large: bool = False,
-) -> Table:
-    assert config.material is not None and config.size_distribution is not None
-    assert config.optics.rtol is not None and config.optics.weighting is not None
-    return compute_optics(
-        config.material.build(),
-        config.size_distribution.build(),
-        config.wavelengths_nm,
-        config.theta_deg,
-        config.optics.rtol,
-        config.optics.weighting,
-        cross_section_rtol=config.optics.cross_section_rtol,
-        workers=workers,
-        name=config.name,
-        progress=progress,
-        allow_large=allow_large,
-    )
-
-
-def _add_sources(sources: list[Source], *extra: Source) -> None:
-    cited = {s.citation for s in sources}
-    for s in extra:
-        if s.citation not in cited:
-            sources.append(s)
-            cited.add(s.citation)
-
-
-def build_table(
-    config: BuildConfig,
-    *,
-    workers: int | None = None,
-    progress: Callable[[int, int], None] | None = None,
-    allow_large: bool = False,
-) -> Table:
-    """Compute the table a configuration describes.
-
-    Parameters
-    ----------
-    config : BuildConfig
-        A validated configuration (:func:`parse_config`, :func:`load_config`,
-        :func:`dustoptics.models.presets.load_preset`).
-    workers : int, optional
-        Threads over wavelengths for the Mie computation (default: all cores);
-        the result is the same to the bit for any count.
-    progress : callable, optional
-        Called as ``progress(done, total)`` with the number of wavelengths
-        done, first with ``done = 0`` and last with ``done = total``, e.g. to
-        print a progress line.  It does not change the result.
-    allow_large : bool, optional
-        Go ahead beyond the memory and work budget
-        (:func:`dustoptics.scattering.optics.compute_optics`); default False.
-
-    Returns
-    -------
-    Table
-        ``Provenance.inputs`` is ``config.to_inputs()``; the sources are the
-        configuration's plus those of the material, size distribution and
-        analytic phase function; the notes are the configuration's choices,
-        how g was obtained, and the messages of the package's warnings about
-        the result (:class:`~dustoptics.scattering.optics.ConvergenceWarning`,
-        :class:`~dustoptics.scattering.phase.ExtrapolationWarning`); every warning raised
-        while building is re-issued to the caller.
-
-    Raises
-    ------
-    ValueError
-        Inputs the engine rejects (e.g. a wavelength outside a material's data).
-    """
-    if not isinstance(config, BuildConfig):
-        raise TypeError(
-            f"config must be a BuildConfig (see parse_config); got {type(config).__name__}"
-        )
-    wl = config.wavelengths_nm
-    theta = config.theta_deg
-    inputs = config.to_inputs()
-    sources = list(config.sources)
-    notes = list(config.choices)
-    ph = config.phase
-    # The table's own arrays (a Mie computation's estimate, grids and largest
-    # sphere, is compute_optics's, before any of its work).
-    check_budget(
-        "build_table",
-        8.0 * 8.0 * wl.size * theta.size,
-        allow_large=allow_large,
-        change=f"the table holds {wl.size} wavelengths x {theta.size} angles: use fewer",
-    )
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        if ph.uses_mie:
-            table = _compute_mie(config, workers, progress, allow_large)
-            _add_sources(sources, *table.provenance.sources)
-            if ph.model == "hybrid":
-                assert ph.analytic is not None and ph.weight is not None
-                p_analytic, _, analytic_source = _analytic_table(
-                    config, ph.analytic, ph.parameters, wl, theta
-                )
-                _add_sources(sources, analytic_source)
-                p_mie = _phase.renormalize(table.phase, theta_deg=theta)
-                blended = _phase.hybrid(p_mie, p_analytic, theta_deg=theta, weight=ph.weight)
-                notes.append(
-                    f"phase: hybrid renormalize((1 - w) P_mie + w P_{ph.analytic}) with w = {ph.weight:g}, "
-                    "both tables first renormalized under linear interpolation in theta; g is the "
-                    "mean cosine of the blended table (exact for linear interpolation in theta); "
-                    "cross-sections and error estimates are the Mie computation's"
-                )
-                table = table.replace(phase=blended, g=_phase.mean_cosine(blended, theta_deg=theta))
-            table = table.replace(number_density_per_m3=config.number_density_per_m3)
-        else:
-            assert ph.analytic is not None
-            if progress is not None:
-                progress(0, wl.size)
-            p_analytic, exact, analytic_source = _analytic_table(
-                config, ph.analytic, ph.parameters, wl, theta
-            )
-            _add_sources(sources, analytic_source)
-            g = np.asarray(_phase.mean_cosine(p_analytic, theta_deg=theta), dtype=np.float64)
-            notes.append(
-                f"phase: {ph.analytic} sampled at the table's angles and renormalized under linear "
-                "interpolation in theta; no cross-sections (phase function only); g is the mean "
-                "cosine of that table (exact for linear interpolation in theta), at most "
-                f"{float(np.max(np.abs(g - exact))):.2e} from the analytic formula"
-            )
-            table = Table(
-                name=config.name,
-                wavelength_nm=wl,
-                theta_deg=theta,
-                phase=p_analytic,
-                g=g,
-                provenance=Provenance(inputs=inputs, sources=tuple(sources)),
-            )
-            if progress is not None:
-                progress(wl.size, wl.size)
-    # The package's own warnings about the result go into the notes; all are re-issued.
-    messages = [
-        f"warning ({w.category.__name__}): {w.message}"
-        for w in caught
-        if issubclass(w.category, (ConvergenceWarning, _phase.ExtrapolationWarning))
-    ]
-    notes.extend(dict.fromkeys(messages))  # once each, in order
-    provenance = table.provenance
-    table = table.replace(
-        provenance=Provenance(
-            inputs=inputs,
-            sources=tuple(sources),
-            software=provenance.software,
-            quadrature=provenance.quadrature,
-            notes=tuple(notes),
-        )
-    )
-    for w in caught:
-        warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
-    return table

@@ -4,7 +4,7 @@ Each preset is a TOML file in ``dustoptics/models/data/presets/`` that follows t
 schema of :mod:`dustoptics.models.config`, with comments saying what it is, its
 sources with full citations and every choice its sources left open.  Copy one
 (:func:`preset_text`), edit it, and build it with
-:func:`dustoptics.models.config.load_config` and :func:`dustoptics.models.config.build_table`.
+:func:`dustoptics.models.files.load_config` and :func:`dustoptics.models.compute.build_table`.
 
 ========================  ======================================================
 ``blue-moons``            Blue Moon's dust (Meyran 2022 after Ehlers et al. 2014),
@@ -35,7 +35,8 @@ from __future__ import annotations
 from importlib import resources
 from typing import Any, Final
 
-from dustoptics.models.config import BuildConfig, build_table, parse_config
+from dustoptics.models.compute import build_table
+from dustoptics.models.config import BuildConfig, parse_config
 from dustoptics.table import Table
 
 __all__ = ["DEFAULT_PRESET", "build_preset", "list_presets", "load_preset", "preset_text"]
@@ -113,7 +114,7 @@ def build_preset(name: str = DEFAULT_PRESET, **kwargs: Any) -> Table:
     name : str, optional
         A name of :func:`list_presets`; default :data:`DEFAULT_PRESET`.
     **kwargs
-        ``workers`` and ``progress`` of :func:`dustoptics.models.config.build_table`.
+        ``workers`` and ``progress`` of :func:`dustoptics.models.compute.build_table`.
 
     Returns
     -------

@@ -70,11 +70,11 @@ def _grid(extra_nm: tuple[float, ...]) -> tuple[float, ...]:
 
 
 def _preset_table(name: str, wavelength_nm: tuple[float, ...]) -> Table:
-    from dustoptics.models import config, presets
+    from dustoptics.models import compute, presets
 
     cfg = presets.load_preset(name)
     cfg = replace(cfg, optics=replace(cfg.optics, wavelengths_nm=wavelength_nm))
-    return config.build_table(cfg)
+    return compute.build_table(cfg)
 
 
 def mars_sky_atmosphere(

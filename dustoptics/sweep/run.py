@@ -43,7 +43,8 @@ from typing import Any, TextIO
 import numpy as np
 
 from dustoptics.io._atomic import write_files
-from dustoptics.models.config import BuildConfig, build_table
+from dustoptics.models.compute import build_table
+from dustoptics.models.config import BuildConfig
 from dustoptics.scattering.optics import resolve_refractive_index
 from dustoptics.scattering.quadrature import QuadratureSettings
 from dustoptics.sweep.spec import SweepSpec, _load_points, parse_points
@@ -194,7 +195,7 @@ def compute_chunk(
     With ``shared`` (and a polydisperse Mie model), the points, which differ
     only in their size distribution, share their spheres
     (:func:`dustoptics.sweep.shared.solve_shared`); otherwise each point is
-    :func:`dustoptics.models.config.build_table` at those wavelengths, equal
+    :func:`dustoptics.models.compute.build_table` at those wavelengths, equal
     to the bit to the same wavelengths of a single build.
     """
     start, cpu = time.perf_counter(), time.thread_time()

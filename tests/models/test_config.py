@@ -1,4 +1,4 @@
-"""Build configurations: schema, errors with key and line, building."""
+"""Build configurations: the schema, and errors that name the key and line."""
 
 from __future__ import annotations
 
@@ -6,37 +6,10 @@ import dataclasses
 
 import numpy as np
 import pytest
+from _model_configs import SMALL, edit
 
 from dustoptics.models import presets
-from dustoptics.models.config import (
-    BuildConfig,
-    ConfigError,
-    build_table,
-    load_config,
-    parse_config,
-)
-from dustoptics.scattering import phase
-
-#: A fast Mie configuration (small particles, few angles) for build tests.
-SMALL = """\
-name = "small"
-description = "test dust"
-
-[material]
-model = "constant"
-n = 1.5
-k = 0.01
-
-[size_distribution]
-model = "modified_gamma"
-r_eff_um = 0.2
-v_eff = 0.1
-
-[optics]
-rtol = 1e-3
-wavelengths_nm = { start = 400, stop = 490, step = 10 }
-n_theta = 19
-"""
+from dustoptics.models.config import BuildConfig, ConfigError, parse_config
 
 
 def _line_of(text: str, fragment: str) -> int:
@@ -55,21 +28,6 @@ def _short(value: object) -> str | None:
     return "" if isinstance(value, str) and "\n" in value else None
 
 
-def _edit(text: str, old: str, new: str) -> str:
-    """Replace ``old`` by ``new`` on the lines that start with ``old`` (key lines,
-    not comments or strings), or else on the non-comment lines that contain it."""
-    lines = text.splitlines(keepends=True)
-    hits = [i for i, ln in enumerate(lines) if ln.startswith(old)]
-    if not hits:
-        hits = [
-            i for i, ln in enumerate(lines) if old in ln and not ln.lstrip().startswith(("#", '"'))
-        ]
-    assert hits, old
-    for i in hits:
-        lines[i] = lines[i].replace(old, new, 1)
-    return "".join(lines)
-
-
 # ------------------------------------------------------------------ errors
 
 COSMO = presets.preset_text("cosmoscout-mars")
@@ -83,128 +41,128 @@ BLUE = presets.preset_text("blue-moons")
     [
         # unknown key, inside the second array-of-tables element; allowed keys listed
         (
-            _edit(COSMO, "v_eff = 0.35", "v_eff = 0.35\nr_eff = 3"),
+            edit(COSMO, "v_eff = 0.35", "v_eff = 0.35\nr_eff = 3"),
             "size_distribution.modes[1].r_eff",
             "r_eff = 3",
             "unknown key .*allowed keys: model, r_eff_um, v_eff, relative_number_density",
         ),
         # out of range
         (
-            _edit(BLUE, "v_eff = 0.2 ", "v_eff = 0.7 "),
+            edit(BLUE, "v_eff = 0.2 ", "v_eff = 0.7 "),
             "size_distribution.v_eff",
             "v_eff = 0.7",
             r"must be in the open interval \(0, 0.5\); got 0.7",
         ),
         (
-            _edit(COSMO, "v_eff = 0.35", "v_eff = -0.35"),
+            edit(COSMO, "v_eff = 0.35", "v_eff = -0.35"),
             "size_distribution.modes[1].v_eff",
             "v_eff = -0.35",
             "must be > 0; got -0.35",
         ),
         (
-            _edit(COLLIENNE, "g = 0.8", "g = 1.0"),
+            edit(COLLIENNE, "g = 0.8", "g = 1.0"),
             "phase.g",
             "g = 1.0",
             r"must be in the open interval \(-1.0, 1.0\); got 1.0",
         ),
-        (_edit(COLLIENNE, "g = 0.8", "g = -1.5"), "phase.g", "g = -1.5", "open interval"),
+        (edit(COLLIENNE, "g = 0.8", "g = -1.5"), "phase.g", "g = -1.5", "open interval"),
         (
-            _edit(HYBRID, "weight = 0.5", "weight = 1.5"),
+            edit(HYBRID, "weight = 0.5", "weight = 1.5"),
             "phase.weight",
             "weight = 1.5",
             r"must be in the closed interval \[0, 1\]; got 1.5",
         ),
         (
-            _edit(HYBRID, "weight = 0.5", "weight = -0.1"),
+            edit(HYBRID, "weight = 0.5", "weight = -0.1"),
             "phase.weight",
             "weight = -0.1",
             "closed interval",
         ),
         (
-            _edit(BLUE, "hematite_fraction = 0.03", "hematite_fraction = 1.03"),
+            edit(BLUE, "hematite_fraction = 0.03", "hematite_fraction = 1.03"),
             "material.hematite_fraction",
             "hematite_fraction = 1.03",
             r"closed interval \[0, 1\]",
         ),
-        (_edit(BLUE, "rtol = 1e-4", "rtol = 0.5"), "optics.rtol", "rtol = 0.5", "open interval"),
+        (edit(BLUE, "rtol = 1e-4", "rtol = 0.5"), "optics.rtol", "rtol = 0.5", "open interval"),
         (
-            _edit(BLUE, "n_theta = 1801", "n_theta = 1"),
+            edit(BLUE, "n_theta = 1801", "n_theta = 1"),
             "optics.n_theta",
             "n_theta = 1",
             "integer >= 2",
         ),
         # wrong type
         (
-            _edit(BLUE, "rtol = 1e-4", 'rtol = "small"'),
+            edit(BLUE, "rtol = 1e-4", 'rtol = "small"'),
             "optics.rtol",
             'rtol = "small"',
             "must be a number; got 'small' \\(string\\)",
         ),
         (
-            _edit(BLUE, "n_theta = 1801", "n_theta = 1801.0"),
+            edit(BLUE, "n_theta = 1801", "n_theta = 1801.0"),
             "optics.n_theta",
             "n_theta = 1801.0",
             "must be an integer",
         ),
         (
-            _edit(BLUE, "r_eff_um = 1.6", "r_eff_um = true"),
+            edit(BLUE, "r_eff_um = 1.6", "r_eff_um = true"),
             "size_distribution.r_eff_um",
             "r_eff_um = true",
             "must be a number; got True \\(boolean\\)",
         ),
         # bad choice: lists the valid ones
         (
-            _edit(BLUE, 'weighting = "scattering"', 'weighting = "area"'),
+            edit(BLUE, 'weighting = "scattering"', 'weighting = "area"'),
             "optics.weighting",
             'weighting = "area"',
             "must be one of 'scattering', 'number'; got 'area'",
         ),
         (
-            _edit(BLUE, 'model = "mie"', 'model = "miie"'),
+            edit(BLUE, 'model = "mie"', 'model = "miie"'),
             "phase.model",
             'model = "miie"',
             "must be one of 'mie', 'hybrid', 'costa2021_mars_dhg', ",
         ),
         (
-            _edit(HYBRID, 'outside = "clamp"', 'outside = "extrapolate"'),
+            edit(HYBRID, 'outside = "clamp"', 'outside = "extrapolate"'),
             "phase.outside",
             'outside = "extrapolate"',
             "must be one of 'quadratic', 'clamp', 'error'",
         ),
         # grid checks
         (
-            _edit(BLUE, "step = 10 }", "step = 7 }"),
+            edit(BLUE, "step = 10 }", "step = 7 }"),
             "optics.wavelengths_nm.step",
             "step = 7",
             "whole steps",
         ),
         (
-            _edit(BLUE, "{ start = 360, stop = 830, step = 10 }", "[550, 450]"),
+            edit(BLUE, "{ start = 360, stop = 830, step = 10 }", "[550, 450]"),
             "optics.wavelengths_nm",
             "wavelengths_nm = [550, 450]",
             "strictly increasing",
         ),
         (
-            _edit(BLUE, "n_theta = 1801", "n_theta = 1801\ntheta_step_deg = 0.1"),
+            edit(BLUE, "n_theta = 1801", "n_theta = 1801\ntheta_step_deg = 0.1"),
             "optics.theta_step_deg",
             "theta_step_deg = 0.1",
             "not both",
         ),
         (
-            _edit(BLUE, "n_theta = 1801", "theta_step_deg = 0.7"),
+            edit(BLUE, "n_theta = 1801", "theta_step_deg = 0.7"),
             "optics.theta_step_deg",
             "theta_step_deg = 0.7",
             "divide 180",
         ),
         # options an analytic model does not use are errors, not ignored
         (
-            _edit(COLLIENNE, "[optics]", '[optics]\nweighting = "number"'),
+            edit(COLLIENNE, "[optics]", '[optics]\nweighting = "number"'),
             "optics.weighting",
             'weighting = "number"',
             "not used by phase.model = 'cornette_shanks1992'",
         ),
         (
-            _edit(
+            edit(
                 COLLIENNE, 'name = "collienne"', 'name = "collienne"\nnumber_density_per_m3 = 1e8'
             ),
             "number_density_per_m3",
@@ -228,14 +186,14 @@ def test_errors_name_key_and_line(text: str, key: str, fragment: str, reason: st
     ("text", "key", "header"),
     [
         # missing keys point at the table header they belong in
-        (_edit(COSMO, "r_eff_um = 1.4", ""), "size_distribution.modes[1].r_eff_um", None),
+        (edit(COSMO, "r_eff_um = 1.4", ""), "size_distribution.modes[1].r_eff_um", None),
         (
-            _edit(BLUE, 'model = "modified_gamma"', ""),
+            edit(BLUE, 'model = "modified_gamma"', ""),
             "size_distribution.model",
             "[size_distribution]",
         ),
-        (_edit(COLLIENNE, "g = 0.8", ""), "phase.g", "[phase]"),
-        (_edit(BLUE, "[material]", "[materials]"), "materials", "[materials]"),
+        (edit(COLLIENNE, "g = 0.8", ""), "phase.g", "[phase]"),
+        (edit(BLUE, "[material]", "[materials]"), "materials", "[materials]"),
     ],
     ids=_short,
 )
@@ -269,7 +227,7 @@ def test_unknown_top_level_key_lists_allowed() -> None:
 
 
 def test_malformed_toml_line_from_tomllib() -> None:
-    text = _edit(BLUE, "n_theta = 1801", "n_theta = ")
+    text = edit(BLUE, "n_theta = 1801", "n_theta = ")
     with pytest.raises(ConfigError, match="invalid TOML") as info:
         parse_config(text, source="my.toml")
     assert info.value.key is None
@@ -279,15 +237,6 @@ def test_malformed_toml_line_from_tomllib() -> None:
 
 def test_config_error_is_value_error() -> None:
     assert issubclass(ConfigError, ValueError)
-
-
-def test_load_config_names_the_file(tmp_path) -> None:
-    path = tmp_path / "my.toml"
-    path.write_text(_edit(COLLIENNE, "g = 0.8", "g = 1.2"), encoding="utf-8")
-    with pytest.raises(ConfigError, match=rf"^{path}:\d+: phase.g: "):
-        load_config(path)
-    path.write_text(COLLIENNE, encoding="utf-8")
-    assert load_config(path).to_inputs() == presets.load_preset("collienne").to_inputs()
 
 
 def test_line_scanner_ignores_brackets_and_keys_in_strings() -> None:
@@ -337,22 +286,22 @@ def test_equivalent_spellings_give_the_same_inputs() -> None:
     reference = presets.load_preset("blue-moons").to_inputs()
     wl = ", ".join(f"{w:g}" for w in range(360, 831, 10))
     variants = [
-        _edit(BLUE, "n_theta = 1801", "theta_step_deg = 0.1"),
-        _edit(BLUE, "{ start = 360, stop = 830, step = 10 }", f"[{wl}]"),
-        _edit(BLUE, "host_index = { n = 1.5, k = 0.0 }", "host_index = 1.5"),
-        _edit(
+        edit(BLUE, "n_theta = 1801", "theta_step_deg = 0.1"),
+        edit(BLUE, "{ start = 360, stop = 830, step = 10 }", f"[{wl}]"),
+        edit(BLUE, "host_index = { n = 1.5, k = 0.0 }", "host_index = 1.5"),
+        edit(
             BLUE,
             'hematite = "querry-extraordinary"',
             'hematite = "hematite-querry1985-extraordinary"',
         ),
-        _edit(BLUE, 'description = "', 'description = "edited: '),
+        edit(BLUE, 'description = "', 'description = "edited: '),
     ]
     for text in variants:
         assert parse_config(text).to_inputs() == reference
 
 
 def test_hybrid_defaults_weight_and_analytic() -> None:
-    text = _edit(HYBRID, "weight = 0.5", "").replace('analytic = "costa2021_mars_dhg"', "")
+    text = edit(HYBRID, "weight = 0.5", "").replace('analytic = "costa2021_mars_dhg"', "")
     text = text.replace('outside = "clamp"', "")
     ph = parse_config(text).phase
     assert (ph.weight, ph.analytic, dict(ph.parameters)) == (
@@ -396,122 +345,3 @@ def test_config_is_frozen() -> None:
         config.name = "x"  # type: ignore[misc]
     with pytest.raises(TypeError):
         config.material.parameters["hematite_fraction"] = 0.5  # type: ignore[index]
-
-
-# ------------------------------------------------------------- building
-
-
-def test_mean_cosine_of_sampled_henyey_greenstein() -> None:
-    """HG(g) sampled at 0.1 deg and renormalized: mean cosine g to the sampling error."""
-    theta = np.linspace(0, 180, 1801)
-    for g in (-0.3, 0.0, 0.5, 0.8):
-        p = phase.renormalize(
-            phase.tabulate(phase.henyey_greenstein, theta_deg=theta, g=g), theta_deg=theta
-        )
-        assert phase.mean_cosine(p, theta_deg=theta) == pytest.approx(g, abs=1e-5)
-
-
-def test_progress_does_not_change_the_result() -> None:
-    config = parse_config(SMALL)
-    calls: list[tuple[int, int]] = []
-    with_progress = build_table(
-        config, workers=1, progress=lambda done, total: calls.append((done, total))
-    )
-    plain = build_table(config, workers=2)
-    assert calls[0] == (0, 10) and calls[-1] == (10, 10)
-    assert [d for d, _ in calls] == sorted(d for d, _ in calls) and len(calls) >= 3
-    for key in ("phase", "g", "cext_um2", "csca_um2", "error_estimate"):
-        assert getattr(with_progress, key).tobytes() == getattr(plain, key).tobytes()
-    assert with_progress.provenance.to_dict() == plain.provenance.to_dict()
-
-
-def test_number_density_and_sources() -> None:
-    table = build_table(
-        parse_config(
-            SMALL.replace(
-                'description = "test dust"',
-                'description = "test dust"\nnumber_density_per_m3 = 2e8',
-            )
-        )
-    )
-    assert table.number_density_per_m3 == 2e8
-    np.testing.assert_allclose(table.beta_ext_per_m, 2e8 * table.cext_um2 * 1e-12, rtol=1e-15)
-    roles = [s.role for s in table.provenance.sources]
-    assert roles == ["refractive index", "size distribution"]
-
-
-def test_analytic_model_table() -> None:
-    text = (
-        'name = "hg"\ndescription = "HG"\n[optics]\nwavelengths_nm = [500, 600]\nn_theta = 721\n'
-        '[phase]\nmodel = "henyey_greenstein"\ng = 0.6\n'
-    )
-    table = build_table(parse_config(text))
-    assert table.cext_um2 is None and table.phase.shape == (2, 721)
-    np.testing.assert_allclose(
-        phase.sphere_integral(table.phase, theta_deg=table.theta_deg), 1.0, rtol=1e-13
-    )
-    np.testing.assert_allclose(table.g, 0.6, atol=1e-4)
-    assert any("from the analytic formula" in n for n in table.provenance.notes)
-    assert table.provenance.sources[0].name == "henyey_greenstein"
-
-
-def test_build_rejects_non_config() -> None:
-    with pytest.raises(TypeError, match="config must be a BuildConfig"):
-        build_table({"name": "x"})  # type: ignore[arg-type]
-
-
-def test_preset_copy_problems_flag_edited_copies_only():
-    """An edited copy keeping a preset's name, or both its sources and choices, is flagged;
-    the presets themselves (hybrid and hybrid-seed share sources) and relabelled copies not."""
-    from dataclasses import replace
-
-    from dustoptics.models.config import preset_copy_problems
-
-    for name in presets.list_presets():
-        assert preset_copy_problems(presets.load_preset(name)) == []
-    preset = presets.load_preset("blue-moons")
-    edited = replace(preset, number_density_per_m3=1e8)
-    assert preset_copy_problems(replace(edited, name="mine")) == [
-        "carries the sources and choices of preset 'blue-moons' but its number_density_per_m3 "
-        "differ from the preset's: the table would be labelled with a model it is not. Give the "
-        "configuration its own name, and sources and choices that describe it"
-    ]
-    assert preset_copy_problems(replace(edited, name="mine", choices=("my own",))) == []
-    assert preset_copy_problems(replace(preset, name="mine")) == []  # unchanged numbers
-
-
-def test_wolff2009_as_the_dust_and_as_the_host() -> None:
-    """The Wolff et al. 2009 dust index in a configuration: alone (catalogue) and as the
-    mars_dust host by name; the existing spellings of host_index still parse."""
-    from dustoptics.particles.materials import get_material
-
-    alone = parse_config(
-        SMALL.replace(
-            'model = "constant"\nn = 1.5\nk = 0.01',
-            'model = "catalogue"\nname = "marsdust-wolff2009"',
-        )
-    )
-    assert alone.material is not None
-    assert alone.material.build() is get_material("marsdust-wolff2009")
-    table = build_table(alone)
-    # k > 0 at every row: the dust absorbs, so 0 < ssa < 1 (Bohren & Huffman 1983)
-    assert table.wavelength_nm[0] == 400.0 and np.all((table.ssa > 0.0) & (table.ssa < 1.0))
-    hosted = parse_config(
-        SMALL.replace(
-            'model = "constant"\nn = 1.5\nk = 0.01',
-            'model = "mars_dust"\nhematite_fraction = 0.0\nhost_index = "marsdust-wolff2009"',
-        )
-    )
-    assert hosted.material is not None
-    assert hosted.to_inputs()["material"]["host_index"] == "marsdust-wolff2009"
-    wavelength_nm = np.array([440.0, 550.0])
-    np.testing.assert_array_equal(
-        hosted.material.build()(wavelength_nm), get_material("marsdust-wolff2009")(wavelength_nm)
-    )
-    with pytest.raises(ConfigError, match="material.host_index"):
-        parse_config(
-            SMALL.replace(
-                'model = "constant"\nn = 1.5\nk = 0.01',
-                'model = "mars_dust"\nhost_index = "basalt"',
-            )
-        )

@@ -11,7 +11,8 @@ import pytest
 from _shared import shared_path
 
 from dustoptics.models import presets
-from dustoptics.models.config import BuildConfig, build_table, parse_config
+from dustoptics.models.compute import build_table
+from dustoptics.models.config import BuildConfig, parse_config
 from dustoptics.scattering import phase
 from dustoptics.scattering.phase import ExtrapolationWarning
 from dustoptics.table import Table, canonical_json

@@ -20,7 +20,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import dustoptics as do
-from dustoptics.models.config import build_table, parse_config
+from dustoptics.models.compute import build_table
+from dustoptics.models.config import parse_config
 from dustoptics.models.presets import preset_text
 from dustoptics.scattering import mie
 from dustoptics.scattering.quadrature import QuadratureSettings, panel_nodes
