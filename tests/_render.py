@@ -23,7 +23,7 @@ from typing import Any, NoReturn
 import numpy as np
 import pytest
 
-from dustoptics.io.shader import ACOS_AS4446
+from dustoptics.io.shaders.common import ACOS_AS4446
 
 EPS32 = float(np.finfo(np.float32).eps)  # 2^-23: float32 spacing at 1
 

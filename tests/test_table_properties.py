@@ -14,7 +14,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from dustoptics.io import open_table
-from dustoptics.io.netcdf import SUFFIXES
+from dustoptics.io.tables.netcdf import SUFFIXES
 from dustoptics.scattering.phase import renormalize
 from dustoptics.table import Provenance, Source, Table
 

@@ -6,7 +6,7 @@ refractivity) and its constituents, each a :class:`Constituent`: a
 density where the constituent's relative density is 1, and a
 :class:`~dustoptics.atmosphere.column.DensityProfile`.  :func:`write_atmosphere` writes
 it as CosmoScout VR's CSV set (through
-:func:`dustoptics.io.cosmoscout.write_cosmoscout_set`) plus the settings JSON
+:func:`dustoptics.io.csv.cosmoscout.write_cosmoscout_set`) plus the settings JSON
 snippet that points CosmoScout's Bruneton preprocessor at the files.
 
 Builders (the presets of the seeds)
@@ -262,7 +262,7 @@ class Atmosphere:
         return f"{self.name}_{role}"
 
     def cosmoscout_constituents(self) -> dict[str, tuple[Table, np.ndarray]]:
-        """Mapping for :func:`~dustoptics.io.cosmoscout.write_cosmoscout_set`.
+        """Mapping for :func:`~dustoptics.io.csv.cosmoscout.write_cosmoscout_set`.
 
         Each profile is sampled at :attr:`n_altitudes` evenly spaced altitudes
         from the ground to the top and rescaled to a largest sample of 1; the
@@ -366,7 +366,7 @@ def write_atmosphere(
         is written).
     """
     from dustoptics.io._atomic import check_targets, file_set, write_files
-    from dustoptics.io.cosmoscout import write_cosmoscout_set
+    from dustoptics.io.csv.cosmoscout import write_cosmoscout_set
 
     root = Path(directory)
     settings_path = root / f"{atmosphere.name}_settings.json"

@@ -48,7 +48,7 @@ from typing import Any
 import numpy as np
 
 from dustoptics.io._atomic import write_files
-from dustoptics.io.glsl import glsl_float
+from dustoptics.io.shaders.glsl import glsl_float
 from dustoptics.table import PHASE_NORMALIZATION
 
 __all__ = ["LOOKUP_FORMAT", "lookup_glsl", "write_lookup"]

@@ -18,7 +18,7 @@ from dustoptics.atmosphere.column import (
     ExponentialProfile,
     optical_depth,
 )
-from dustoptics.io.cosmoscout import check_cosmoscout_set, read_cosmoscout_constituent
+from dustoptics.io.csv.cosmoscout import check_cosmoscout_set, read_cosmoscout_constituent
 from dustoptics.table import Table
 
 WL15 = np.linspace(360.0, 830.0, 15)  # CosmoScout's default wavelength set

@@ -321,7 +321,7 @@ def test_full_disk_leaves_the_old_set(tmp_path, monkeypatch):
 
 
 def test_a_phase_csv_of_blank_lines_is_a_format_error(tmp_path):
-    from dustoptics.io.seed_csv import read_phase_csv
+    from dustoptics.io.csv.seed import read_phase_csv
 
     path = tmp_path / "MiePhaseFunctionSpectrum.csv"
     path.write_text("\n\n\n")

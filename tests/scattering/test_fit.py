@@ -12,7 +12,7 @@ import pytest
 
 from dustoptics.cli import main
 from dustoptics.io import read_hdf5
-from dustoptics.io.fit import fit_constants, fit_json, write_fit
+from dustoptics.io.engines.fit import fit_constants, fit_json, write_fit
 from dustoptics.scattering import phase as ph
 from dustoptics.scattering.fit import FIT_MODELS, fit_phase
 

@@ -24,14 +24,14 @@ import pytest
 from _render import EPS32, gl_context, missing
 
 from dustoptics.io import FORMATS, write
-from dustoptics.io.exr import write_exr
-from dustoptics.io.ktx2 import KTX2_IDENTIFIER, VK_FORMATS, write_ktx2
-from dustoptics.io.npy import write_npy
-from dustoptics.io.phase_texture import PHASE_TEXTURE_FORMAT, phase_texture
+from dustoptics.io.textures.exr import write_exr
+from dustoptics.io.textures.ktx2 import KTX2_IDENTIFIER, VK_FORMATS, write_ktx2
+from dustoptics.io.textures.npy import write_npy
+from dustoptics.io.textures.phase_texture import PHASE_TEXTURE_FORMAT, phase_texture
 from dustoptics.scattering.phase import henyey_greenstein
 from dustoptics.table import Provenance, Table
 
-READER_DIR = Path(__file__).parent / "ktx2_reader"
+READER_DIR = Path(__file__).parents[1] / "ktx2_reader"
 EPS16 = 2.0**-10  # float16 spacing at 1
 
 
@@ -398,7 +398,7 @@ def test_exr_without_openexr_names_the_extra(tmp_path, monkeypatch) -> None:
 
 
 def test_container_limits_are_checked() -> None:
-    from dustoptics.io.phase_texture import check_dimensions
+    from dustoptics.io.textures.phase_texture import check_dimensions
 
     # KTX2 stores the width as uint32, OpenEXR its data window as int32.
     with pytest.raises(ValueError, match="exceeds the KTX2 container's limit of 4294967295 texels"):

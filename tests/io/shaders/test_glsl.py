@@ -23,7 +23,7 @@ import numpy as np
 import pytest
 
 import dustoptics as do
-from dustoptics.io.glsl import (
+from dustoptics.io.shaders.glsl import (
     ACOS_AS4446,
     glsl_channels,
     glsl_float,

@@ -23,7 +23,7 @@ from dustoptics.atmosphere.column import (
 )
 from dustoptics.cli import main
 from dustoptics.colour import solar_irradiance_astm_g173
-from dustoptics.io.bruneton import (
+from dustoptics.io.engines.bruneton import (
     ASTRONOMICAL_UNIT_M,
     bruneton_cpp,
     bruneton_density_layers,
@@ -31,9 +31,9 @@ from dustoptics.io.bruneton import (
     bruneton_phase_glsl,
     write_bruneton,
 )
-from dustoptics.io.hdf5 import read_hdf5
+from dustoptics.io.tables.netcdf import read_hdf5
 
-TABLES = Path(__file__).resolve().parents[2] / "tables"
+TABLES = Path(__file__).resolve().parents[3] / "tables"
 GXX = shutil.which("g++")
 GLSLANG = shutil.which("glslangValidator")
 # A checkout of github.com/ebruneton/precomputed_atmospheric_scattering, if the

@@ -27,7 +27,7 @@ from _render import (
 )
 
 from dustoptics.io import FORMATS, write
-from dustoptics.io.shader import (
+from dustoptics.io.shaders.common import (
     LANGUAGES,
     REQUIREMENTS,
     shader_channels,

@@ -1,4 +1,4 @@
-"""Tests for dustoptics.io.cosmoscout: CosmoScout VR's per-constituent CSV set.
+"""Tests for dustoptics.io.csv.cosmoscout: CosmoScout VR's per-constituent CSV set.
 
 Hand-made tables with numbers chosen to be checked by hand: a Rayleigh phase
 function 3/(16 pi) (1 + mu^2) (brief section 4) on 361 angles (0.5 deg), cross-sections
@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from dustoptics.io import FORMATS, FormatError
-from dustoptics.io.cosmoscout import (
+from dustoptics.io.csv.cosmoscout import (
     check_cosmoscout_set,
     cosmoscout_wavelength_text,
     read_cosmoscout_constituent,

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from dustoptics.io import FormatError
-from dustoptics.io.texture import (
+from dustoptics.io.textures.raw import (
     TEXTURE_FORMAT,
     read_texture,
     texture_values,

@@ -1,4 +1,4 @@
-"""Tests for dustoptics.io.seed_csv: the seed framework's CSV layout on a Table.
+"""Tests for dustoptics.io.csv.seed: the seed framework's CSV layout on a Table.
 
 One small table (2 wavelengths, 19 angles, rtol 1e-3) is computed once per
 module; layout tests that need other wavelength grids reuse its numbers on a
@@ -17,7 +17,7 @@ from _shared import shared_path
 
 import dustoptics as do
 from dustoptics.io import FORMATS, FormatError
-from dustoptics.io.seed_csv import (
+from dustoptics.io.csv.seed import (
     EXTINCTION_FILENAME,
     PHASE_FILENAME,
     SEED_CSV_FILES,

@@ -1,4 +1,4 @@
-"""Tests for dustoptics.io.netcdf: CF-1.10 netCDF-4 table files, proven against real readers.
+"""Tests for dustoptics.io.tables.netcdf: CF-1.10 netCDF-4 table files, proven against real readers.
 
 One small computed table (3 wavelengths, 181 angles, rtol 1e-3; well under a
 second) carries real numbers; a hand-made phase-only table (Rayleigh,
@@ -21,11 +21,11 @@ import pytest
 
 import dustoptics as do
 from dustoptics.io import FORMATS, FormatError, open_table, write_netcdf
-from dustoptics.io.netcdf import DIGEST_ATTRIBUTE, MAX_VALUES, SUFFIXES, dataset_digest
+from dustoptics.io.tables.netcdf import DIGEST_ATTRIBUTE, MAX_VALUES, SUFFIXES, dataset_digest
 from dustoptics.scattering.phase import renormalize
 from dustoptics.table import DERIVED, SCHEMA, UNITS, Table
 
-TABLES = Path(__file__).resolve().parents[2] / "tables"
+TABLES = Path(__file__).resolve().parents[3] / "tables"
 PRESET_FILES = sorted(TABLES.glob("*/*.nc"))
 
 
@@ -463,7 +463,7 @@ def test_huge_declared_size_is_refused_before_allocation(written):
 
 def test_reader_checks_the_declared_size_before_reading(tmp_path, monkeypatch):
     """A consistent file whose axes exceed the limit is refused from its metadata alone."""
-    monkeypatch.setattr("dustoptics.io.netcdf.MAX_VALUES", 100)
+    monkeypatch.setattr("dustoptics.io.tables.netcdf.MAX_VALUES", 100)
     table = Table(
         wavelength_nm=[500.0],
         theta_deg=np.linspace(0.0, 180.0, 181),
