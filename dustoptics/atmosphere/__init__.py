@@ -6,10 +6,13 @@
 - :mod:`~dustoptics.atmosphere.parametric`: Angstrom turbidity and anomalous
   diffraction (Costa et al. 2021);
 - :mod:`~dustoptics.atmosphere.sets`: an :class:`Atmosphere` of constituents
-  (molecules, aerosols, ozone) and its builders for Mars and Earth.
+  (molecules, aerosols, ozone) and its builders for Mars and Earth;
+- :mod:`~dustoptics.atmosphere.build`: the sets by name, their dust computed
+  from a preset, and their provenance record (``dustoptics build mars``).
 """
 
-from dustoptics.atmosphere import column, gases, parametric, sets
+from dustoptics.atmosphere import build, column, gases, parametric, sets
+from dustoptics.atmosphere.build import ATMOSPHERES, build_atmosphere
 from dustoptics.atmosphere.sets import (
     Atmosphere,
     Constituent,
@@ -19,8 +22,11 @@ from dustoptics.atmosphere.sets import (
 )
 
 __all__ = [
+    "ATMOSPHERES",
     "Atmosphere",
     "Constituent",
+    "build",
+    "build_atmosphere",
     "column",
     "earth_atmosphere",
     "gases",

@@ -33,6 +33,9 @@ Formats, grouped by what they are for (each subpackage lists its modules):
 - :mod:`~dustoptics.io.engines`: parameters of engines' own models: Bruneton's
   precomputed atmospheric scattering (2017; as the ``bruneton`` format, one aerosol
   table's Mie part) and fitted analytic phase functions as JSON and constants.
+- :mod:`~dustoptics.io.outputs` (a table in several formats into ``OUT/NAME/``,
+  beside what is there; :func:`read_table` of any table file) and
+  :mod:`~dustoptics.io.describe` (what any file dustoptics writes holds).
 
 :data:`FORMATS` maps a format name (the command line's ``--format``) to a
 writer ``writer(table, out_dir, *, overwrite=False, **options) -> list[Path]``
@@ -79,7 +82,9 @@ def write(
 
 from dustoptics.io import (
     csv,
+    describe,
     engines,
+    outputs,
     rt,
     shaders,
     tables,
@@ -93,6 +98,16 @@ from dustoptics.io.csv import (
     write_cosmoscout_constituent,
     write_cosmoscout_set,
     write_seed_csv,
+)
+from dustoptics.io.describe import describe_path, describe_table
+from dustoptics.io.outputs import (
+    Placement,
+    place_outputs,
+    place_table,
+    read_table,
+    with_inputs,
+    write_atmosphere_set,
+    write_formats,
 )
 from dustoptics.io.shaders import glsl_snippet, shader_source, write_glsl, write_shader
 from dustoptics.io.tables import open_table, read_hdf5, read_netcdf, write_hdf5, write_netcdf
@@ -108,16 +123,24 @@ __all__ = [
     "FORMATS",
     "CosmoScoutConstituent",
     "FormatError",
+    "Placement",
     "Writer",
     "check_cosmoscout_set",
     "csv",
+    "describe",
+    "describe_path",
+    "describe_table",
     "engines",
     "glsl_snippet",
     "open_table",
+    "outputs",
+    "place_outputs",
+    "place_table",
     "read_cosmoscout_constituent",
     "read_hdf5",
     "read_netcdf",
     "read_seed_csv",
+    "read_table",
     "read_texture",
     "register_format",
     "rt",
@@ -125,10 +148,13 @@ __all__ = [
     "shaders",
     "tables",
     "textures",
+    "with_inputs",
     "write",
+    "write_atmosphere_set",
     "write_cosmoscout_constituent",
     "write_cosmoscout_set",
     "write_exr",
+    "write_formats",
     "write_glsl",
     "write_hdf5",
     "write_ktx2",

@@ -7,9 +7,21 @@
 - :mod:`~dustoptics.models.presets`: the seeds' named models, shipped as
   TOML files in ``dustoptics/models/data/presets/``;
 - :mod:`~dustoptics.models.files`: configuration files users write
-  (:func:`~dustoptics.models.files.load_config`), checked against the presets.
+  (:func:`~dustoptics.models.files.load_config`), checked against the presets;
+- :mod:`~dustoptics.models.build`: a configuration's table computed with
+  progress (:class:`TableBuilder`) and the options of its output formats.
 """
 
-from dustoptics.models import compute, config, files, presets
+from dustoptics.models import build, compute, config, files, presets
+from dustoptics.models.build import FormatOptions, TableBuilder, prepare_export
 
-__all__ = ["compute", "config", "files", "presets"]
+__all__ = [
+    "FormatOptions",
+    "TableBuilder",
+    "build",
+    "compute",
+    "config",
+    "files",
+    "prepare_export",
+    "presets",
+]

@@ -7,10 +7,12 @@
 - :mod:`~dustoptics.sky.render`: radiance along lines of sight through the
   spherical shell (exact single scattering plus the diffuse source);
 - :mod:`~dustoptics.sky.scene`: the sky dome, colour and images;
-- :mod:`~dustoptics.sky.space`: the limb seen from space.
+- :mod:`~dustoptics.sky.space`: the limb seen from space;
+- :mod:`~dustoptics.sky.job`: a sky as files (what ``dustoptics sky`` writes).
 """
 
-from dustoptics.sky import medium, orders, render
+from dustoptics.sky import job, medium, orders, render
+from dustoptics.sky.job import SkyJob
 from dustoptics.sky.medium import Medium
 from dustoptics.sky.orders import DiffuseField, solve_orders
 from dustoptics.sky.render import line_of_sight_radiance
@@ -18,6 +20,8 @@ from dustoptics.sky.render import line_of_sight_radiance
 __all__ = [
     "DiffuseField",
     "Medium",
+    "SkyJob",
+    "job",
     "line_of_sight_radiance",
     "medium",
     "orders",

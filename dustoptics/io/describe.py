@@ -1,0 +1,321 @@
+"""What a file dustoptics writes holds and how it was made, as text (``dustoptics info``).
+
+- :func:`describe_table`: a table's grids, ranges, provenance and inputs;
+- :func:`describe_path`: any file or folder dustoptics writes, each format
+  read by its own describer (``_describe_*``, one per format).
+
+The text is safe to print: every line is passed through
+:func:`dustoptics.io._text.printable`, so control characters and escape
+sequences read from a file are shown escaped, never sent to the terminal.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+if TYPE_CHECKING:
+    from dustoptics.table import Table
+
+__all__ = ["describe_path", "describe_table"]
+
+#: A CosmoScout VR constituent's files: ``<name>_phase.csv``, ...
+_COSMOSCOUT_FILE = re.compile(r"(?P<name>.+)_(phase|scattering|absorption|density)\.csv")
+
+#: The ``format`` of a texture's JSON sidecar starts with this.
+_TEXTURE_FORMAT = "dustoptics-phase-texture/"
+
+#: The file of an atmosphere set's settings, beside CosmoScout VR's CSV files.
+_SETTINGS_SUFFIX = "_settings.json"
+
+
+def _printable_lines(text: str) -> str:
+    from dustoptics.io._text import printable
+
+    return "\n".join(printable(line) for line in text.split("\n"))
+
+
+def describe_table(table: Table) -> str:
+    """What a table holds and how it was made, as text.
+
+    Parameters
+    ----------
+    table : Table
+
+    Returns
+    -------
+    str
+        Lines ``key: value`` (name, grids, ranges of g, the cross-sections
+        and the single-scattering albedo, number density, error estimates,
+        input hash, software, sources, notes), then the provenance inputs as
+        indented JSON.  Control characters from the table's text are escaped.
+    """
+    prov = table.provenance
+    wl, theta = table.wavelength_nm, table.theta_deg
+    lines = [
+        f"name:            {table.name}",
+        f"wavelengths:     {wl.size}, {wl[0]:g} .. {wl[-1]:g} nm",
+        f"angles:          {theta.size}, {theta[0]:g} .. {theta[-1]:g} deg",
+        "phase function:  [sr^-1], 2 pi int P dmu = 1",
+        f"g:               {table.g.min():.6g} .. {table.g.max():.6g}",
+    ]
+    cext = table.cext_um2
+    if cext is not None:  # table.has_cross_sections
+        lines += [
+            f"cext_um2:        {cext.min():.6g} .. {cext.max():.6g}",
+            f"ssa:             {table.ssa.min():.6g} .. {table.ssa.max():.6g}",
+        ]
+    else:
+        lines.append("cross-sections:  none (phase function only)")
+    if table.number_density_per_m3 is not None:
+        lines.append(f"number density:  {table.number_density_per_m3:.6g} m^-3")
+    if table.error_estimate is not None:
+        lines.append(f"error estimate:  phase <= {table.error_estimate.max():.2e} (relative)")
+    if table.cross_section_error_estimate is not None:
+        lines.append(
+            f"                 cross-sections, g <= {table.cross_section_error_estimate.max():.2e}"
+        )
+    lines.append(f"input hash:      {prov.input_hash}")
+    lines.append(
+        "software:        " + ", ".join(f"{k} {v}" for k, v in sorted(prov.software.items()))
+    )
+    if prov.sources:
+        lines.append("sources:")
+        lines += [f"  - {s.name} ({s.role}): {s.citation}" for s in prov.sources]
+    if prov.notes:
+        lines.append("notes:")
+        lines += [f"  - {n}" for n in prov.notes]
+    lines.append("inputs:")
+    lines += [
+        "  " + line
+        for line in json.dumps(prov.to_dict()["inputs"], indent=2, sort_keys=True).splitlines()
+    ]
+    # Names, citations and notes come from the file: escape what a terminal would obey.
+    return _printable_lines("\n".join(lines))
+
+
+def describe_path(path: str | os.PathLike[str]) -> str:
+    """What any file or folder dustoptics writes holds, as text.
+
+    Parameters
+    ----------
+    path : path-like
+        A file: HDF5 or netCDF (``.h5``, ``.hdf5``, ``.nc``), the seed CSVs or
+        their ``table_summary.json``, a GLSL snippet, a texture (its JSON
+        sidecar or ``.raw`` file), a CosmoScout VR constituent file, an
+        atmosphere set's ``<name>_settings.json`` or ``<name>_provenance.json``.
+        A folder: every output found in it (``build``'s ``DIR/NAME/``, a set
+        from ``build mars``), one section each.
+
+    Returns
+    -------
+    str
+        The description; control characters read from the files are escaped.
+
+    Raises
+    ------
+    FileNotFoundError
+        No such file or folder.
+    dustoptics.io.FormatError
+        A damaged file, or nothing dustoptics writes.
+    """
+    p = Path(path)
+    if not p.exists():
+        raise FileNotFoundError(f"no such file or directory: {str(p)!r}")
+    return _printable_lines(_describe_directory(p) if p.is_dir() else _describe_file(p))
+
+
+def _describe_file(p: Path) -> str:
+    """One file, by its name: the describer of its format."""
+    from dustoptics.atmosphere.build import SET_PROVENANCE_SUFFIX
+    from dustoptics.io import FormatError
+    from dustoptics.io.csv.seed import EXTINCTION_FILENAME, PHASE_FILENAME, SUMMARY_FILENAME
+    from dustoptics.io.outputs import TABLE_SUFFIXES, read_table
+
+    name, suffix = p.name, p.suffix.lower()
+    if suffix in TABLE_SUFFIXES or name in (SUMMARY_FILENAME, PHASE_FILENAME, EXTINCTION_FILENAME):
+        return describe_table(read_table(p if suffix != ".csv" else p.parent))
+    for ending in (SET_PROVENANCE_SUFFIX, _SETTINGS_SUFFIX):
+        if name.endswith(ending):
+            return _describe_set(p.parent, name[: -len(ending)])
+    if suffix == ".glsl":
+        return _describe_glsl(p)
+    if suffix in (".json", ".raw"):
+        sidecar = p.with_suffix(".json")
+        if sidecar.is_file() and _is_texture_sidecar(sidecar):
+            return _describe_texture(sidecar)
+    match = _COSMOSCOUT_FILE.fullmatch(name)
+    if match:
+        return _describe_constituent(p.parent, match["name"])
+    raise FormatError(
+        f"{str(p)!r}: not a file dustoptics writes (HDF5 .h5/.hdf5/.nc, seed CSV, GLSL "
+        "snippet, texture sidecar or .raw, CosmoScout VR CSV, set settings or provenance)"
+    )
+
+
+def _is_texture_sidecar(path: Path) -> bool:
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return False
+    return isinstance(data, dict) and str(data.get("format", "")).startswith(_TEXTURE_FORMAT)
+
+
+def _describe_directory(root: Path) -> str:
+    """Every output found in ``root``, one section each."""
+    from dustoptics.atmosphere.build import SET_PROVENANCE_SUFFIX
+    from dustoptics.io import FormatError
+    from dustoptics.io.csv.seed import SUMMARY_FILENAME
+    from dustoptics.io.outputs import TABLE_SUFFIXES, read_table
+
+    sections: list[tuple[str, str]] = []
+    files = sorted(q for q in root.iterdir() if q.is_file())
+    set_names = [
+        q.name[: -len(suffix)]
+        for q in files
+        for suffix in (SET_PROVENANCE_SUFFIX, _SETTINGS_SUFFIX)
+        if q.name.endswith(suffix)
+    ]
+    in_sets: set[str] = set()
+    for name in dict.fromkeys(set_names):
+        sections.append((f"{name} (atmosphere set)", _describe_set(root, name)))
+        in_sets.add(name)
+    constituents = sorted({m["name"] for q in files if (m := _COSMOSCOUT_FILE.fullmatch(q.name))})
+    for name in constituents:
+        if not any(name.startswith(f"{s}_") for s in in_sets):
+            sections.append((f"{name} (CosmoScout VR)", _describe_constituent(root, name)))
+    for q in files:
+        if q.suffix.lower() in TABLE_SUFFIXES:
+            sections.append((q.name, describe_table(read_table(q))))
+    if (root / SUMMARY_FILENAME).is_file():
+        sections.append((f"{SUMMARY_FILENAME} (seed CSV)", describe_table(read_table(root))))
+    for q in files:
+        if q.suffix.lower() == ".glsl":
+            sections.append((q.name, _describe_glsl(q)))
+        elif q.suffix.lower() == ".json" and _is_texture_sidecar(q):
+            sections.append((q.name, _describe_texture(q)))
+    if not sections:
+        raise FormatError(f"{str(root)!r}: holds no file dustoptics writes")
+    if len(sections) == 1:
+        return sections[0][1]
+    return "\n\n".join(f"== {title} ==\n{text}" for title, text in sections)
+
+
+def _range(values: Any, unit: str) -> str:
+    values = np.asarray(values, dtype=float)
+    return f"{values.min():.6g} .. {values.max():.6g} {unit}".rstrip()
+
+
+def _describe_constituent(root: Path, name: str) -> str:
+    """A CosmoScout VR constituent: its four CSV files in ``root``."""
+    from dustoptics.io import read_cosmoscout_constituent
+
+    c = read_cosmoscout_constituent(root, name)
+    wl_nm = c.wavelength_m * 1e9
+    lines = [
+        f"constituent:     {c.name} (CosmoScout VR CSV set in {root})",
+        f"wavelengths:     {wl_nm.size}, {_range(wl_nm, 'nm')}",
+    ]
+    if c.phase is not None and c.theta_deg is not None:
+        lines.append(f"phase function:  {c.theta_deg.size} angles, {_range(c.phase, 'sr^-1')}")
+    else:
+        lines.append("phase function:  none (does not scatter)")
+    if c.beta_sca_per_m is not None:
+        lines.append(f"beta_sca:        {_range(c.beta_sca_per_m, 'm^-1')} (at density 1)")
+    lines.append(f"beta_abs:        {_range(c.beta_abs_per_m, 'm^-1')} (at density 1)")
+    lines.append(f"density:         {c.density.size} altitudes, {_range(c.density, '')}")
+    return "\n".join(lines)
+
+
+def _describe_set(root: Path, name: str) -> str:
+    """An atmosphere set: its settings, provenance record and constituents."""
+    from dustoptics.atmosphere.build import SET_PROVENANCE_SUFFIX
+    from dustoptics.io import check_cosmoscout_set
+
+    lines = [f"atmosphere set:  {name} (CosmoScout VR, in {root})"]
+    settings = root / f"{name}{_SETTINGS_SUFFIX}"
+    if settings.is_file():
+        data = json.loads(settings.read_text(encoding="utf-8"))
+        lines.append(
+            f"radii:           planet {data['minAltitude']:.6g} m, atmosphere top "
+            f"{data['maxAltitude']:.6g} m; sun distance {data['sunDistance']:.6g} m"
+        )
+    record_path = root / f"{name}{SET_PROVENANCE_SUFFIX}"
+    record = None
+    if record_path.is_file():
+        record = json.loads(record_path.read_text(encoding="utf-8"))
+        lines.append(f"input hash:      {record['input_hash']}")
+    members = [c for c in check_cosmoscout_set(root) if c.startswith(f"{name}_")]
+    for member in members:
+        lines.append("")
+        lines.append(_describe_constituent(root, member))
+        role = member[len(name) + 1 :]
+        if record is not None and role in record["constituents"]:
+            entry = record["constituents"][role]
+            lines.append(
+                f"table:           {entry['table']}, input hash {entry['provenance']['input_hash']}"
+            )
+            if entry["number_density_per_m3"] is not None:
+                lines.append(f"number density:  {entry['number_density_per_m3']:.6g} m^-3")
+    if record is not None:
+        lines.append("")
+        lines.append("inputs:")
+        lines += [
+            "  " + line
+            for line in json.dumps(record["inputs"], indent=2, sort_keys=True).splitlines()
+        ]
+    return "\n".join(lines)
+
+
+def _describe_glsl(path: Path) -> str:
+    """The snippet's header: what the shader must assume, the table's input hash."""
+    from dustoptics.io import FormatError
+
+    text = path.read_text(encoding="utf-8")
+    header = []
+    for line in text.splitlines():
+        if not line.startswith("//"):
+            break
+        header.append(line[2:].strip())
+    if not header or not header[0].startswith("dustoptics"):
+        raise FormatError(f"{str(path)!r}: not a GLSL snippet written by dustoptics")
+    lines = [f"GLSL snippet:    {path.name}"]
+    lines += [f"  {h}" for h in header]
+    lines.append("constants:")
+    for line in text.splitlines():
+        if line.startswith("const "):
+            declaration = line.split(" = vec")[0] if "[" in line.split("=")[0] else line
+            lines.append(f"  {declaration}")
+    return "\n".join(lines)
+
+
+def _describe_texture(sidecar: Path) -> str:
+    """A texture, from its JSON sidecar (the raw file it names is read and checked too)."""
+    from dustoptics.io import read_texture
+
+    t = read_texture(sidecar)
+    meta = t.metadata
+    lines = [
+        f"texture:         {meta['file']} ({meta['dtype']}, {meta['byte_order']}), sidecar "
+        f"{sidecar.name}",
+        f"table:           {meta['table']}",
+        f"shape:           {t.phase.shape[0]} wavelengths x {t.phase.shape[1]} angles",
+        f"wavelengths:     {_range(t.wavelength_nm, 'nm')}",
+        f"sampling:        {meta['sampling_description']}",
+        f"values:          {_range(t.phase, meta['unit'])}, {meta['normalization']}",
+        "sphere integral of the samples: "
+        + ", ".join(f"{v:.6g}" for v in meta["sphere_integral_of_samples"]),
+        f"input hash:      {meta['input_hash']}",
+        f"written by:      {meta['written_by']}",
+        "inputs:",
+    ]
+    lines += [
+        "  " + line
+        for line in json.dumps(meta["provenance"]["inputs"], indent=2, sort_keys=True).splitlines()
+    ]
+    return "\n".join(lines)

@@ -1,0 +1,373 @@
+"""A table's files in a directory: read one back, write a set, place it beside what is there.
+
+What ``dustoptics build`` and ``dustoptics export`` do with files, for Python
+users too:
+
+- :func:`read_table`: a table from any table file dustoptics writes (HDF5 or
+  netCDF, a seed-CSV directory or its ``table_summary.json``);
+- :func:`write_formats`: one table in several formats (:data:`dustoptics.io.FORMATS`),
+  written as one set (:func:`dustoptics.io._atomic.file_set`), each format's
+  options recorded in its files' provenance;
+- :func:`place_outputs`: files rendered elsewhere, moved into a directory
+  beside the files already there: the same ones are left untouched, different
+  ones are replaced only with ``force``;
+- :func:`place_table`: both, into ``OUT/NAME/`` (``NAME`` the table's name);
+- :func:`with_inputs`: a table whose provenance records inputs given outside
+  its configuration (a number density, an optical depth);
+- :func:`write_atmosphere_set`: an atmosphere set's files (CosmoScout VR's,
+  optionally Bruneton's) and its provenance record, as ``dustoptics build
+  mars`` writes them.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from dustoptics.atmosphere.sets import Atmosphere
+    from dustoptics.models.build import FormatOptions
+    from dustoptics.table import Table
+
+__all__ = [
+    "TABLE_SUFFIXES",
+    "Placement",
+    "place_outputs",
+    "place_table",
+    "read_table",
+    "with_inputs",
+    "write_atmosphere_set",
+    "write_formats",
+]
+
+#: Suffixes of the files that hold a whole table (netCDF-4/HDF5).
+TABLE_SUFFIXES = (".h5", ".hdf5", ".nc")
+
+
+def read_table(path: str | os.PathLike[str]) -> Table:
+    """Read a table from any table file dustoptics writes.
+
+    Parameters
+    ----------
+    path : path-like
+        An HDF5 or netCDF file (``.h5``, ``.hdf5``, ``.nc``), a seed-CSV
+        directory or its ``table_summary.json``.
+
+    Returns
+    -------
+    Table
+
+    Raises
+    ------
+    FileNotFoundError
+        No such file.
+    dustoptics.io.FormatError
+        A damaged or unrecognized file.
+    """
+    from dustoptics.io import FormatError, read_hdf5, read_seed_csv
+    from dustoptics.io.csv.seed import SUMMARY_FILENAME
+
+    p = Path(path)
+    if not p.exists():
+        raise FileNotFoundError(f"no such file or directory: {str(p)!r}")
+    if p.is_dir() or p.name == SUMMARY_FILENAME:
+        return read_seed_csv(p if p.is_dir() else p.parent)
+    if p.suffix.lower() in TABLE_SUFFIXES:
+        return read_hdf5(p)
+    raise FormatError(
+        f"{str(p)!r}: not a table file; give an HDF5 file (.h5, .hdf5, .nc), a seed-CSV "
+        f"directory or its {SUMMARY_FILENAME}"
+    )
+
+
+def with_inputs(table: Table, *, note: str | None = None, **inputs: Any) -> Table:
+    """The table with inputs added to its provenance, hence with a new input hash.
+
+    For inputs given outside the table's configuration (on the command line:
+    a number density, a format's options), so that the files written record
+    them.
+
+    Parameters
+    ----------
+    table : Table
+    note : str, optional
+        A line added to the provenance's notes.
+    **inputs
+        JSON-serializable values added to (or replacing) ``provenance.inputs``.
+
+    Returns
+    -------
+    Table
+    """
+    prov = table.provenance
+    notes = prov.notes if note is None else (*prov.notes, note)
+    return table.replace(provenance=replace(prov, inputs={**prov.inputs, **inputs}, notes=notes))
+
+
+def write_formats(
+    table: Table,
+    out_dir: str | os.PathLike[str],
+    formats: Sequence[str],
+    *,
+    overwrite: bool = False,
+    options: FormatOptions | None = None,
+    root: str | os.PathLike[str] | None = None,
+) -> list[Path]:
+    """Write a table into a directory in several formats, as one set.
+
+    The options that change a format's numbers
+    (:meth:`~dustoptics.models.build.FormatOptions.recorded`) are added to
+    the provenance inputs of the table that format's writer gets, under
+    ``"export"``: the files record them, and their input hash changes with
+    them.  The set is written whole or not at all
+    (:func:`dustoptics.io._atomic.file_set`).
+
+    Parameters
+    ----------
+    table : Table
+    out_dir : path-like
+        Directory the files go into.
+    formats : sequence of str
+        Names of :data:`dustoptics.io.FORMATS`.
+    overwrite : bool, optional
+        Replace existing files.  Default False.
+    options : FormatOptions, optional
+        The formats' options; default none (each writer's defaults).
+    root : path-like, optional
+        Directory every file must stay inside; default ``out_dir``.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The files written.
+
+    Raises
+    ------
+    ValueError
+        An unknown format, or options a format rejects.
+    FileExistsError
+        A file exists and ``overwrite`` is False (nothing is written).
+    """
+    from dustoptics.io import write
+    from dustoptics.io._atomic import file_set
+    from dustoptics.models.build import FormatOptions
+
+    if options is None:
+        options = FormatOptions()
+    out = Path(out_dir)
+    written: list[Path] = []
+    # One set: every format is prepared, then all are moved into place together.
+    with file_set(root if root is not None else out, overwrite=overwrite):
+        for name in formats:
+            recorded = options.recorded(name)
+            table_for_format = (
+                with_inputs(table, export={"format": name, **recorded}) if recorded else table
+            )
+            written.extend(
+                write(
+                    table_for_format,
+                    out,
+                    format=name,
+                    overwrite=overwrite,
+                    **options.for_format(name),
+                )
+            )
+    return written
+
+
+@dataclass(frozen=True)
+class Placement:
+    """What :func:`place_outputs` did: files written, and files left as they were.
+
+    Attributes
+    ----------
+    written : tuple of pathlib.Path
+        Files written (new, or replaced with ``force``).
+    unchanged : tuple of pathlib.Path
+        Files that already held the same bytes or content, left untouched.
+    """
+
+    written: tuple[Path, ...]
+    unchanged: tuple[Path, ...]
+
+
+def place_outputs(
+    render: Callable[[Path], Sequence[Path]],
+    out_dir: str | os.PathLike[str],
+    *,
+    force: bool,
+    same: Callable[[Path, Path], bool] | None = None,
+) -> Placement:
+    """Write the files a function renders into a directory, beside the files there.
+
+    ``render`` writes into an empty temporary directory; each of its files is
+    then compared with the file of the same name in ``out_dir``:
+
+    - none there: the file is written;
+    - the same bytes, or the same content by ``same`` (``dustoptics build``:
+      an HDF5 file that holds the same table, same inputs and grids, numbers
+      equal to 1e-9 relative, only the recorded software versions differ):
+      the existing file is left untouched ("up to date");
+    - anything else: replaced with ``force``, otherwise :class:`FileExistsError`
+      naming every such file, before anything is written.
+
+    The new files appear together or not at all (:mod:`dustoptics.io._atomic`).
+    Other files in ``out_dir`` are left alone.
+
+    Parameters
+    ----------
+    render : callable
+        ``render(directory) -> paths``: writes the files into ``directory``
+        (subdirectories allowed) and returns their paths.
+    out_dir : path-like
+        Where the files go.
+    force : bool
+        Replace existing files that differ.
+    same : callable, optional
+        ``same(existing, new) -> bool``: whether an existing file and the new
+        one of the same name hold the same content although their bytes
+        differ; default: only the same bytes are the same.
+
+    Returns
+    -------
+    Placement
+
+    Raises
+    ------
+    FileExistsError
+        Files exist and differ, and ``force`` is False (nothing is written).
+    """
+    from dustoptics.io._atomic import write_files
+
+    out = Path(out_dir)
+    with tempfile.TemporaryDirectory(prefix="dustoptics-") as tmp:
+        staging = Path(tmp).resolve()
+        contents: dict[Path, bytes] = {}
+        unchanged: list[Path] = []
+        conflicts: list[Path] = []
+        for path in render(staging):
+            target = out / Path(path).resolve().relative_to(staging)
+            data = Path(path).read_bytes()
+            if target.is_file():
+                if target.read_bytes() == data or (same is not None and same(target, Path(path))):
+                    unchanged.append(target)
+                    continue
+                conflicts.append(target)
+            contents[target] = data
+        if conflicts and not force:
+            raise FileExistsError(
+                "these files exist and differ from the new ones; use --force to replace them: "
+                + ", ".join(repr(str(c)) for c in conflicts)
+            )
+        written = write_files(contents, overwrite=force) if contents else []
+    return Placement(written=tuple(written), unchanged=tuple(unchanged))
+
+
+def place_table(
+    table: Table,
+    out: str | os.PathLike[str],
+    formats: Sequence[str],
+    *,
+    options: FormatOptions | None = None,
+    force: bool = False,
+    same: Callable[[Path, Path], bool] | None = None,
+) -> Placement:
+    """Write a table in several formats into ``out/NAME/``, as ``dustoptics build`` does.
+
+    :func:`write_formats` renders the files, :func:`place_outputs` places
+    them: files that already hold the same bytes (or the same content, by
+    ``same``) are left untouched.
+
+    Parameters
+    ----------
+    table : Table
+        Its name (a plain file name) names the directory.
+    out : path-like
+        The output directory; the files go into ``out/<table.name>/``.
+    formats : sequence of str
+        Names of :data:`dustoptics.io.FORMATS`.
+    options : FormatOptions, optional
+        The formats' options (:func:`dustoptics.models.build.prepare_export`).
+    force : bool, optional
+        Replace existing files that differ.  Default False.
+    same : callable, optional
+        See :func:`place_outputs`.
+
+    Returns
+    -------
+    Placement
+
+    Raises
+    ------
+    ValueError
+        The table's name is not a plain file name, or leads outside ``out``
+        (a symbolic link); an unknown format or an option a format rejects.
+    FileExistsError
+        Files exist and differ, and ``force`` is False (nothing is written).
+    """
+    from dustoptics._validation import check_file_name, check_inside
+
+    # The name may come from a file: it must not choose where files go.
+    out_dir = Path(out) / check_file_name("name", table.name)
+    check_inside(out, out_dir)
+    return place_outputs(
+        lambda directory: write_formats(
+            table, directory, formats, overwrite=False, options=options
+        ),
+        out_dir,
+        force=force,
+        same=same,
+    )
+
+
+def write_atmosphere_set(
+    atmosphere: Atmosphere,
+    directory: str | os.PathLike[str],
+    *,
+    inputs: Mapping[str, Any],
+    bruneton: bool = False,
+    overwrite: bool = False,
+) -> list[Path]:
+    """Write a set's files into a directory: CosmoScout VR's, Bruneton's, its provenance.
+
+    Parameters
+    ----------
+    atmosphere : Atmosphere
+    directory : path-like
+        Output directory (created if missing).
+    inputs : mapping
+        What made the set (:func:`~dustoptics.atmosphere.build.set_inputs`),
+        recorded in ``<name>_provenance.json``
+        (:func:`~dustoptics.atmosphere.build.set_provenance`).
+    bruneton : bool, optional
+        Also Bruneton's model parameters
+        (:func:`dustoptics.io.engines.bruneton.write_bruneton`).  Default False.
+    overwrite : bool, optional
+        Replace existing files.  Default False.
+
+    Returns
+    -------
+    list of pathlib.Path
+        CosmoScout VR's CSV files and settings, Bruneton's files, the record.
+
+    Raises
+    ------
+    FileExistsError
+        A file exists and ``overwrite`` is False.
+    """
+    from dustoptics.atmosphere.build import SET_PROVENANCE_SUFFIX, set_provenance
+    from dustoptics.atmosphere.sets import write_atmosphere
+    from dustoptics.io._atomic import write_files
+
+    record = set_provenance(atmosphere, inputs)
+    written = write_atmosphere(atmosphere, directory, overwrite=overwrite)
+    if bruneton:
+        from dustoptics.io.engines.bruneton import write_bruneton
+
+        written += write_bruneton(atmosphere, directory, overwrite=overwrite)
+    path = Path(directory) / f"{atmosphere.name}{SET_PROVENANCE_SUFFIX}"
+    return written + write_files({path: record.encode("utf-8")}, overwrite=overwrite)

@@ -1,0 +1,235 @@
+"""The sky an atmosphere makes, as files: what ``dustoptics sky`` writes.
+
+A :class:`SkyJob` names its files before any work (:meth:`SkyJob.targets`),
+computes them in memory (:meth:`SkyJob.files`) and writes them as one set
+(:meth:`SkyJob.write`, :func:`dustoptics.io._atomic.write_files`):
+
+- ``"mars"`` and ``"earth"``: the sky over an observer near the ground
+  (:func:`~dustoptics.sky.scene.sky_radiance`) as a netCDF file
+  ``NAME_sky.nc``, a fisheye and a panorama (PNG); optionally a sunset
+  sequence at one exposure and the limb seen from space;
+- ``"compare"``: the seed thesis's comparisons of the Mars dust models
+  (:func:`~dustoptics.sky.compare.compare_mars_models`) as
+  ``mars-comparison.nc`` and one figure per quantity.
+"""
+
+from __future__ import annotations
+
+import io
+import os
+from dataclasses import KW_ONLY, dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Final
+
+from dustoptics._validation import check_choice
+
+if TYPE_CHECKING:
+    from dustoptics.atmosphere.sets import Atmosphere
+
+__all__ = ["SKY_JOBS", "SUNSET_ELEVATIONS_DEG", "SkyJob"]
+
+#: What a :class:`SkyJob` renders.
+SKY_JOBS: Final = ("mars", "earth", "compare")
+
+#: Sun elevations of the sunset sequence (``sunset=True``). [degree]
+SUNSET_ELEVATIONS_DEG: Final = (20.0, 10.0, 5.0, 2.0, 0.0, -2.0)
+
+#: Sun elevation unless given: low over Mars (its blue sunset light), high over Earth. [degree]
+_DEFAULT_SUN_ELEVATION_DEG: Final = {"mars": 10.0, "earth": 45.0, "compare": 10.0}
+
+
+@dataclass(frozen=True)
+class SkyJob:
+    """A sky (or the Mars dust models' comparison) to render into files.
+
+    Parameters
+    ----------
+    kind : str
+        ``"mars"``, ``"earth"`` or ``"compare"`` (:data:`SKY_JOBS`).
+    out_dir : path-like
+        Directory the files go into.
+    dust : str, optional
+        mars: the dust preset (:func:`dustoptics.sky.compare.mars_sky_atmosphere`).
+        Default ``"hybrid"``.
+    optical_depth : float, optional
+        mars, compare: vertical dust optical depth at 550 nm.  Default 0.5. [-]
+    sun_elevation_deg : float, optional
+        Sun elevation, -10 .. 90 for mars and earth.  Default 10 (mars,
+        compare) or 45 (earth). [degree]
+    albedo : float, optional
+        mars, earth: Lambertian ground albedo, 0 .. 1.  Default 0.2. [-]
+    size_px : int, optional
+        mars, earth: fisheye size.  Default 512. [pixels]
+    exposure : float, optional
+        mars, earth: display white at Y * exposure = 1; default the 99th
+        percentile of the sky (and the limb's own).
+    sunset : bool, optional
+        mars, earth: also panoramas at :data:`SUNSET_ELEVATIONS_DEG`, at the
+        sky's exposure.
+    space : bool, optional
+        mars, earth: also the limb seen from space, Sun in quadrature.
+    models : tuple of str, optional
+        compare: the presets compared (default
+        :data:`~dustoptics.sky.compare.MARS_MODELS`).
+
+    Raises
+    ------
+    ValueError
+        An unknown kind, or a Sun elevation or albedo out of range.
+    """
+
+    kind: str
+    _: KW_ONLY
+    out_dir: Path
+    dust: str = "hybrid"
+    optical_depth: float = 0.5
+    sun_elevation_deg: float | None = None
+    albedo: float = 0.2
+    size_px: int = 512
+    exposure: float | None = None
+    sunset: bool = False
+    space: bool = False
+    models: tuple[str, ...] | None = None
+
+    def __post_init__(self) -> None:
+        check_choice("kind", self.kind, SKY_JOBS)
+        object.__setattr__(self, "out_dir", Path(os.fspath(self.out_dir)))
+        elevation = self.sun_elevation_deg
+        if elevation is None:
+            elevation = _DEFAULT_SUN_ELEVATION_DEG[self.kind]
+            object.__setattr__(self, "sun_elevation_deg", elevation)
+        if self.kind != "compare":
+            if not (-10.0 <= elevation <= 90.0):
+                raise ValueError(
+                    f"sun_elevation_deg must be within [-10, 90] degree; got {elevation!r}"
+                )
+            if not (0.0 <= self.albedo <= 1.0):
+                raise ValueError(f"albedo must be within [0, 1]; got {self.albedo!r}")
+
+    @property
+    def _sun_elevation(self) -> float:
+        assert self.sun_elevation_deg is not None  # set in __post_init__
+        return self.sun_elevation_deg
+
+    @property
+    def name(self) -> str:
+        """File-name stem: the atmosphere's name, or ``mars-comparison``."""
+        if self.kind == "compare":
+            return "mars-comparison"
+        return f"mars-{self.dust}" if self.kind == "mars" else "earth"
+
+    def targets(self) -> list[Path]:
+        """Every file the job writes, known before any work.
+
+        Returns
+        -------
+        list of pathlib.Path
+        """
+        out, stem = self.out_dir, self.name
+        if self.kind == "compare":
+            kinds = ["radiance", "luminance", "chromaticity", "transmittance"]
+            return [out / f"{stem}.nc"] + [out / f"{stem}_{k}.png" for k in kinds]
+        names = [f"{stem}_sky.nc", f"{stem}_fisheye.png", f"{stem}_panorama.png"]
+        if self.sunset:
+            names += [f"{stem}_sunset_{e:+05.1f}.png" for e in SUNSET_ELEVATIONS_DEG]
+        if self.space:
+            names.append(f"{stem}_limb.png")
+        return [out / n for n in names]
+
+    def atmosphere(self) -> Atmosphere:
+        """The atmosphere of a "mars" or "earth" job, computed.
+
+        Returns
+        -------
+        Atmosphere
+        """
+        from dustoptics.atmosphere import sets
+        from dustoptics.sky.compare import mars_sky_atmosphere
+
+        if self.kind == "mars":
+            return mars_sky_atmosphere(self.dust, optical_depth=self.optical_depth)
+        return sets.earth_atmosphere()
+
+    def files(self) -> dict[Path, bytes]:
+        """Compute every file's bytes (the keys are :meth:`targets`).
+
+        Returns
+        -------
+        dict of pathlib.Path to bytes
+        """
+        if self.kind == "compare":
+            return self._comparison_files()
+        return self._sky_files()
+
+    def write(self, *, overwrite: bool = False) -> list[Path]:
+        """Compute the files and write them as one set.
+
+        Parameters
+        ----------
+        overwrite : bool, optional
+            Replace existing files.  Default False.
+
+        Returns
+        -------
+        list of pathlib.Path
+            The files written.
+
+        Raises
+        ------
+        FileExistsError
+            A target exists and ``overwrite`` is False, found before any work.
+        """
+        from dustoptics.io._atomic import check_targets, write_files
+
+        targets = self.targets()
+        check_targets(targets, overwrite=overwrite)  # before any work
+        files = self.files()
+        if sorted(files) != sorted(targets):
+            raise RuntimeError(f"{self.kind} sky: computed {sorted(files)}, announced {targets}")
+        return write_files(files, overwrite=overwrite)
+
+    def _sky_files(self) -> dict[Path, bytes]:
+        from dustoptics.sky import Medium
+        from dustoptics.sky.scene import png_bytes, sky_radiance
+
+        atm = self.atmosphere()
+        medium = Medium.from_atmosphere(atm)
+        sky = sky_radiance(medium, sun_elevation_deg=self._sun_elevation, ground_albedo=self.albedo)
+        exposure = self.exposure if self.exposure is not None else sky.default_exposure()
+        stem = self.out_dir / atm.name
+        out = {
+            stem.with_name(f"{atm.name}_sky.nc"): bytes(sky.to_xarray().to_netcdf(engine="scipy")),
+            stem.with_name(f"{atm.name}_fisheye.png"): png_bytes(
+                sky.fisheye(size=self.size_px, exposure=exposure)
+            ),
+            stem.with_name(f"{atm.name}_panorama.png"): png_bytes(sky.panorama(exposure=exposure)),
+        }
+        if self.sunset:
+            for elev in SUNSET_ELEVATIONS_DEG:
+                s = sky_radiance(medium, sun_elevation_deg=elev, ground_albedo=self.albedo)
+                out[stem.with_name(f"{atm.name}_sunset_{elev:+05.1f}.png")] = png_bytes(
+                    s.panorama(exposure=exposure)
+                )
+        if self.space:
+            from dustoptics.sky.space import limb_radiance
+
+            limb = limb_radiance(medium, ground_albedo=self.albedo)
+            out[stem.with_name(f"{atm.name}_limb.png")] = png_bytes(
+                limb.image(exposure=self.exposure)
+            )
+        return out
+
+    def _comparison_files(self) -> dict[Path, bytes]:
+        from dustoptics.sky.compare import MARS_MODELS, compare_mars_models, plot_comparison
+
+        ds = compare_mars_models(
+            models=self.models or MARS_MODELS,
+            optical_depth=self.optical_depth,
+            sun_elevation_deg=self._sun_elevation,
+        )
+        out = {self.out_dir / "mars-comparison.nc": bytes(ds.to_netcdf(engine="scipy"))}
+        for name, fig in plot_comparison(ds).items():
+            buf = io.BytesIO()
+            fig.savefig(buf, format="png", dpi=110, metadata={"Software": None})
+            out[self.out_dir / f"mars-comparison_{name}.png"] = buf.getvalue()
+        return out
