@@ -40,6 +40,7 @@ from dustoptics.models.compute import build_table
 from dustoptics.models.files import load_config
 from dustoptics.models.presets import build_preset, list_presets
 from dustoptics.particles import materials, mixing, sizedist
+from dustoptics.particles.catalogue import get_material, list_materials
 from dustoptics.particles.coated import CoatedSphere
 from dustoptics.particles.custom_sizedist import (
     DensityDistribution,
@@ -52,8 +53,6 @@ from dustoptics.particles.materials import (
     OrientationAverage,
     RefractiveIndex,
     TabulatedIndex,
-    get_material,
-    list_materials,
     read_index_csv,
 )
 from dustoptics.particles.mixing import (

@@ -88,8 +88,8 @@ from dustoptics._validation import (
     check_file_name,
     check_wavelength_unit,
 )
+from dustoptics.particles.catalogue import get_material, list_materials
 from dustoptics.particles.custom_sizedist import MultiModal
-from dustoptics.particles.materials import get_material, list_materials
 from dustoptics.particles.mixing import MARS_DUST_HEMATITE, MIXING_RULES, mars_dust
 from dustoptics.particles.sizedist import (
     Gamma,

@@ -1,7 +1,9 @@
 """Particles: what the dust is made of and how large it is.
 
 - :mod:`~dustoptics.particles.materials`: refractive indices m = n + i k
-  (catalogue, tables, dispersion formulas);
+  (constants, tables, dispersion formulas, orientation averages; CSV tables);
+- :mod:`~dustoptics.particles.catalogue`: the materials known by name, each
+  with its source;
 - :mod:`~dustoptics.particles.mixing`: effective-medium mixing rules
   (Maxwell Garnett, Bruggeman) and the seed's Mars dust;
 - :mod:`~dustoptics.particles.sizedist`: number size distributions n(r), the
@@ -10,6 +12,6 @@
   together (a mixture of modes, a measured table, a density function).
 """
 
-from dustoptics.particles import coated, custom_sizedist, materials, mixing, sizedist
+from dustoptics.particles import catalogue, coated, custom_sizedist, materials, mixing, sizedist
 
-__all__ = ["coated", "custom_sizedist", "materials", "mixing", "sizedist"]
+__all__ = ["catalogue", "coated", "custom_sizedist", "materials", "mixing", "sizedist"]

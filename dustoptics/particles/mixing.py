@@ -44,14 +44,12 @@ from dustoptics._validation import (
     check_choice,
     check_closed_interval,
 )
+from dustoptics.particles.catalogue import as_refractive_index, get_material, list_materials
 from dustoptics.particles.materials import (
     ConstantIndex,
     RefractiveIndex,
     _index_from_epsilon,
     _intersect_ranges,
-    as_refractive_index,
-    get_material,
-    list_materials,
 )
 
 __all__ = [

@@ -73,7 +73,7 @@ def test_build_rejects_non_config() -> None:
 def test_wolff2009_as_the_dust_and_as_the_host() -> None:
     """The Wolff et al. 2009 dust index in a configuration: alone (catalogue) and as the
     mars_dust host by name; the existing spellings of host_index still parse."""
-    from dustoptics.particles.materials import get_material
+    from dustoptics.particles.catalogue import get_material
 
     alone = parse_config(
         SMALL.replace(

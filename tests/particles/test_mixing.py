@@ -14,7 +14,8 @@ from _shared import shared_path
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
-from dustoptics.particles.materials import ConstantIndex, TabulatedIndex, get_material
+from dustoptics.particles.catalogue import get_material
+from dustoptics.particles.materials import ConstantIndex, TabulatedIndex
 from dustoptics.particles.mixing import (
     MIXING_RULES,
     Mixture,
