@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from dustoptics import cli
+from dustoptics.cli import main
 
 xr = pytest.importorskip("xarray")
 mpl_image = pytest.importorskip("matplotlib.image")
@@ -16,7 +16,7 @@ mpl_image = pytest.importorskip("matplotlib.image")
 def test_sky_earth_writes_images_and_data(tmp_path: Path) -> None:
     out = tmp_path / "sky"
     argv = ["sky", "earth", "--sun-elevation", "30", "--size", "64", "--out", str(out), "--quiet"]
-    assert cli.main(argv) == 0
+    assert main(argv) == 0
     names = sorted(p.name for p in out.iterdir())
     assert names == ["earth_fisheye.png", "earth_panorama.png", "earth_sky.nc"]
     img = mpl_image.imread(out / "earth_fisheye.png")
@@ -27,14 +27,14 @@ def test_sky_earth_writes_images_and_data(tmp_path: Path) -> None:
     # Zenith of a clear Earth sky: bluer than the sunlight's white.
     assert float(ds.chromaticity_x[0, 0]) < 0.30
     # Existing files are not replaced without --force (exit 1), before any work.
-    assert cli.main(argv) == 1
-    assert cli.main([*argv, "--force"]) == 0
+    assert main(argv) == 1
+    assert main([*argv, "--force"]) == 0
 
 
 def test_sky_earth_space_writes_the_limb(tmp_path: Path) -> None:
     out = tmp_path / "sky"
     argv = ["sky", "earth", "--sun-elevation", "30", "--size", "32", "--space"]
-    assert cli.main([*argv, "--out", str(out), "--quiet"]) == 0
+    assert main([*argv, "--out", str(out), "--quiet"]) == 0
     img = mpl_image.imread(out / "earth_limb.png")
     assert img.shape[:2] == (120, 61)
     # Rows run from the top of the atmosphere (dark) down to the ground (bright).
@@ -49,6 +49,6 @@ def test_sky_earth_space_writes_the_limb(tmp_path: Path) -> None:
 def test_sky_usage_errors(
     tmp_path: Path, extra: list[str], capsys: pytest.CaptureFixture[str]
 ) -> None:
-    assert cli.main(["sky", "earth", "--out", str(tmp_path / "x"), *extra]) == 2
+    assert main(["sky", "earth", "--out", str(tmp_path / "x"), *extra]) == 2
     assert "error" in capsys.readouterr().err
     assert not (tmp_path / "x").exists()

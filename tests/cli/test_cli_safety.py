@@ -10,8 +10,9 @@ import os
 
 import pytest
 
-from dustoptics import cli
+from dustoptics.cli import main
 from dustoptics.io import _atomic
+from dustoptics.models.build import TableBuilder
 
 SMALL = """\
 name = "{name}"
@@ -56,7 +57,7 @@ def _error_line(capsys) -> str:
 def test_a_name_that_is_not_a_plain_file_name_is_refused(tmp_path, capsys, name):
     config = _config(tmp_path, name=name.replace("\x1b", "\\u001b"))
     out = tmp_path / "out" / "sub"
-    assert cli.main(["build", str(config), "--out", str(out), "--format", "csv", "--quiet"]) == 2
+    assert main(["build", str(config), "--out", str(out), "--format", "csv", "--quiet"]) == 2
     assert "name" in _error_line(capsys)
     assert not (tmp_path / "out").exists() and not (tmp_path / "escaped").exists()
 
@@ -66,7 +67,7 @@ def test_an_output_directory_symlinked_out_of_out_is_refused(tmp_path, capsys):
     out.mkdir()
     elsewhere.mkdir()
     (out / "small").symlink_to(elsewhere)
-    assert cli.main(["build", str(_config(tmp_path)), "--out", str(out), "--quiet", "--force"]) == 1
+    assert main(["build", str(_config(tmp_path)), "--out", str(out), "--quiet", "--force"]) == 1
     assert "outside the output directory" in _error_line(capsys)
     assert list(elsewhere.iterdir()) == []
 
@@ -75,7 +76,7 @@ def test_cosmoscout_needs_are_checked_before_computing(tmp_path, capsys, monkeyp
     def no_work(self):
         raise AssertionError("computed before the formats' needs were checked")
 
-    monkeypatch.setattr(cli.TableBuilder, "build", no_work)
+    monkeypatch.setattr(TableBuilder, "build", no_work)
     argv = [
         "build",
         str(_config(tmp_path)),
@@ -84,15 +85,13 @@ def test_cosmoscout_needs_are_checked_before_computing(tmp_path, capsys, monkeyp
         "--format",
         "hdf5,cosmoscout",
     ]
-    assert cli.main([*argv, "--quiet"]) == 2
+    assert main([*argv, "--quiet"]) == 2
     assert "number density" in _error_line(capsys)
 
 
 def test_a_failing_format_leaves_the_old_set(tmp_path, capsys, monkeypatch):
     config, out = _config(tmp_path), tmp_path / "out"
-    assert (
-        cli.main(["build", str(config), "--out", str(out), "--quiet", "--format", "hdf5,csv"]) == 0
-    )
+    assert main(["build", str(config), "--out", str(out), "--quiet", "--format", "hdf5,csv"]) == 0
     before = {p.name: p.read_bytes() for p in (out / "small").iterdir()}
     # The same set again, with a different table, and a third format that fails.
     config2 = _config(tmp_path, **{"r_eff_um = 0.5": "r_eff_um = 0.6"})
@@ -112,16 +111,14 @@ def test_a_failing_format_leaves_the_old_set(tmp_path, capsys, monkeypatch):
         "--format",
         "hdf5,csv,glsl",
     ]
-    assert cli.main(argv) == 1
+    assert main(argv) == 1
     _error_line(capsys)
     assert {p.name: p.read_bytes() for p in (out / "small").iterdir()} == before
 
 
 def test_full_disk_leaves_the_old_set_with_a_one_line_error(tmp_path, capsys, monkeypatch):
     config, out = _config(tmp_path), tmp_path / "out"
-    assert (
-        cli.main(["build", str(config), "--out", str(out), "--quiet", "--format", "hdf5,csv"]) == 0
-    )
+    assert main(["build", str(config), "--out", str(out), "--quiet", "--format", "hdf5,csv"]) == 0
     before = {p.name: p.read_bytes() for p in (out / "small").iterdir()}
     real = _atomic._stage_file
 
@@ -135,7 +132,7 @@ def test_full_disk_leaves_the_old_set_with_a_one_line_error(tmp_path, capsys, mo
     monkeypatch.setattr(_atomic, "_stage_file", full)
     config2 = _config(tmp_path, **{"r_eff_um = 0.5": "r_eff_um = 0.6"})
     assert (
-        cli.main(
+        main(
             ["build", str(config2), "--out", str(out), "--quiet", "--force", "--format", "hdf5,csv"]
         )
         == 1
@@ -152,16 +149,14 @@ def test_leftovers_of_a_killed_run_do_not_block_a_rerun(tmp_path, capsys):
     )  # an older version's temporary
     (out / ".dustoptics-stage-abcd1234").mkdir()  # a staging directory whose lock is free
     (out / ".dustoptics-stage-abcd1234" / "small.h5").write_bytes(b"half")
-    assert (
-        cli.main(["build", str(_config(tmp_path)), "--out", str(tmp_path / "out"), "--quiet"]) == 0
-    )
+    assert main(["build", str(_config(tmp_path)), "--out", str(tmp_path / "out"), "--quiet"]) == 0
     names = sorted(p.name for p in out.iterdir())
     assert "small.h5" in names and not any(_atomic.is_leftover(n) for n in names)
 
 
 def test_a_request_beyond_the_budget_names_the_flag(tmp_path, capsys):
     config = _config(tmp_path, **{"r_eff_um = 0.5": "r_eff_um = 1000.0"})
-    assert cli.main(["build", str(config), "--out", str(tmp_path / "out"), "--quiet"]) == 1
+    assert main(["build", str(config), "--out", str(tmp_path / "out"), "--quiet"]) == 1
     line = _error_line(capsys)
     assert "--allow-large" in line and "r_eff_um" in line
 
@@ -182,7 +177,7 @@ def test_a_request_beyond_the_budget_names_the_flag(tmp_path, capsys):
 )
 def test_bad_configurations_are_one_line_errors(tmp_path, capsys, key, value, message):
     config = _config(tmp_path, **{key: value})
-    assert cli.main(["build", str(config), "--out", str(tmp_path / "out"), "--quiet"]) in (1, 2)
+    assert main(["build", str(config), "--out", str(tmp_path / "out"), "--quiet"]) in (1, 2)
     assert message in _error_line(capsys)
     assert not (tmp_path / "out").exists()
 
@@ -191,7 +186,7 @@ def test_a_fifo_as_ozone_csv_is_refused_without_blocking(tmp_path, capsys):
     fifo = tmp_path / "ozone.csv"
     os.mkfifo(fifo)
     argv = ["build", "earth", "--out", str(tmp_path / "out"), "--ozone-csv", str(fifo), "--quiet"]
-    assert cli.main(argv) == 1
+    assert main(argv) == 1
     assert "not a regular file" in _error_line(capsys)
 
 
@@ -207,7 +202,7 @@ def test_info_escapes_what_the_file_says(tmp_path, capsys):
     )
     path = tmp_path / "evil.h5"
     do.io.write_hdf5(table, path)
-    assert cli.main(["info", str(path)]) == 0
+    assert main(["info", str(path)]) == 0
     out = capsys.readouterr().out
     assert "\x1b" not in out and "\x07" not in out and "\\x1b]0;pwned" in out
 
@@ -247,7 +242,7 @@ def test_export_options_beyond_their_limits_are_one_line_errors(tmp_path, capsys
         "--quiet",
         *options,
     ]
-    assert cli.main(argv) in (1, 2)
+    assert main(argv) in (1, 2)
     assert message in _error_line(capsys)
     assert not (tmp_path / "out").exists()
 
@@ -264,8 +259,8 @@ def test_glsl_options_are_checked_before_computing(tmp_path, capsys, monkeypatch
     def no_work(self):
         raise AssertionError("computed before the formats' needs were checked")
 
-    monkeypatch.setattr(cli.TableBuilder, "build", no_work)
+    monkeypatch.setattr(TableBuilder, "build", no_work)
     argv = ["build", str(_config(tmp_path)), "--out", str(tmp_path / "out"), "--quiet", *options]
-    assert cli.main(argv) in (1, 2)
+    assert main(argv) in (1, 2)
     _error_line(capsys)
     assert not (tmp_path / "out").exists()

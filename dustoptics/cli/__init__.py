@@ -1,0 +1,130 @@
+"""The ``dustoptics`` command line: thin, the library does the work.
+
+Usage::
+
+    dustoptics build [NAME_OR_CONFIG] [--out DIR] [--format FMT[,FMT...]] [--force] [--quiet]
+    dustoptics build mars|earth [--out DIR] [--dust PRESET] [--optical-depth TAU] [--force]
+    dustoptics export FILE --out DIR --format FMT[,FMT...] [--force]
+    dustoptics info FILE_OR_FOLDER
+    dustoptics plot FILE --kind {phase,polar,map,spectra} [--wavelengths-nm LIST] --out FIG.png|.svg
+    dustoptics presets [--show NAME]
+    dustoptics materials
+    dustoptics fit NAME_OR_FILE [--model MODEL] [--colour C] [--out DIR]
+    dustoptics sweep CONFIG --out STORE [--scheduler ADDRESS] [--workers N] [--quiet]
+    dustoptics sky mars|earth|compare --out DIR [--force]
+    dustoptics --version
+
+``build`` computes a preset (``dustoptics presets``) or a TOML configuration
+file (:mod:`dustoptics.models.config`; copy a preset with ``presets --show NAME``)
+and writes it into ``DIR/NAME/`` in each format of :data:`dustoptics.io.FORMATS`
+(``hdf5``, ``csv``, ``cosmoscout``, ``glsl``, ``hlsl``, ``wgsl``, ``texture``,
+``ktx2``, ``exr``, ``npy``, ...); ``build mars`` and
+``build earth`` write CosmoScout VR's whole atmosphere set (molecules,
+aerosols, ozone, densities and the settings JSON).  ``export`` turns
+an HDF5 table into other formats in ``DIR``; ``info`` says what a table file
+holds and how it was made; ``plot`` draws it (needs the ``plot`` extra).
+``sweep`` computes a configuration over the axes of its ``[sweep]`` table
+into a resumable Zarr store (or a ``.nc`` file) on Dask (needs the ``sweep``
+extra; :func:`dustoptics.sweep.sweep`).
+
+Exit status: 0 on success, 1 on failure (an output exists without ``--force``,
+a damaged input file, an input the physics rejects), 2 on a usage error
+(unknown preset, format or option value).  Errors are printed as
+``dustoptics: error: <message>`` on stderr, without a traceback.  A closed
+output pipe (``dustoptics info f.h5 | head``) is not an error.
+
+Each command is a module of this package that parses its options, calls the
+library and reports (:mod:`~dustoptics.cli.parser` holds the options they
+share, :mod:`~dustoptics.cli.errors` the exit status).  The work is the
+library's, for Python users too: :class:`dustoptics.models.build.TableBuilder`
+and :func:`dustoptics.models.build.prepare_export` (build),
+:func:`dustoptics.io.outputs.place_table` (build, export),
+:func:`dustoptics.atmosphere.build.build_atmosphere` (build mars|earth),
+:func:`dustoptics.io.describe.describe_path` (info),
+:class:`dustoptics.sky.job.SkyJob` (sky), :func:`dustoptics.scattering.fit.fit_table`
+(fit), :func:`dustoptics.sweep.sweep` (sweep).
+"""
+
+from __future__ import annotations
+
+import argparse
+import warnings
+from typing import Any
+
+from dustoptics.cli import errors
+
+__all__ = ["main"]
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the command line; returns the exit status (0 ok, 1 failure, 2 usage).
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        Arguments without the program name (default ``sys.argv[1:]``).
+
+    Returns
+    -------
+    int
+        The exit status (:mod:`dustoptics.cli.errors`).
+    """
+    from dustoptics.cli.parser import build_parser
+
+    def command() -> int:
+        try:
+            args = build_parser().parse_args(argv)
+        except SystemExit as exc:  # argparse: --help/--version (0) or usage (2)
+            return int(exc.code or 0)
+        status: int = args.run(args)
+        return status
+
+    return errors.exit_status(command)
+
+
+def _parser() -> argparse.ArgumentParser:
+    """The argument parser (for the documentation's command reference)."""
+    from dustoptics.cli.parser import build_parser
+
+    return build_parser()
+
+
+#: Names that lived here before the command line became a package, and the module each
+#: moved to: importing them from here warns, for one release.
+_MOVED = {
+    "ATMOSPHERES": "dustoptics.atmosphere.build",
+    "SET_PROVENANCE_SUFFIX": "dustoptics.atmosphere.build",
+    "build_atmosphere": "dustoptics.atmosphere.build",
+    "set_inputs": "dustoptics.atmosphere.build",
+    "set_provenance": "dustoptics.atmosphere.build",
+    "COMPILE_ESTIMATE_S": "dustoptics.models.build",
+    "FormatOptions": "dustoptics.models.build",
+    "TableBuilder": "dustoptics.models.build",
+    "Placement": "dustoptics.io.outputs",
+    "place_outputs": "dustoptics.io.outputs",
+    "read_table": "dustoptics.io.outputs",
+    "with_inputs": "dustoptics.io.outputs",
+    "write_formats": "dustoptics.io.outputs",
+    "describe_path": "dustoptics.io.describe",
+    "SkyJob": "dustoptics.sky.job",
+    "DEFAULT_FORMATS": "dustoptics.cli.build",
+    "PROG": "dustoptics.cli.errors",
+    "UsageError": "dustoptics.cli.errors",
+}
+
+
+def __getattr__(name: str) -> Any:
+    """The moved names, with a DeprecationWarning naming their new place."""
+    from dustoptics._deprecated import REMOVED_IN, moved_attribute
+
+    if name == "describe":  # renamed as it moved
+        warnings.warn(
+            f"{__name__}.describe moved to dustoptics.io.describe.describe_table; the old path "
+            f"is removed in {REMOVED_IN}",
+            DeprecationWarning,
+            stacklevel=2,
+        )
+        from dustoptics.io.describe import describe_table
+
+        return describe_table
+    return moved_attribute(__name__, name, _MOVED)

@@ -1,0 +1,7 @@
+"""``python -m dustoptics.cli``: the command line, as the ``dustoptics`` script runs it."""
+
+import sys
+
+from dustoptics.cli import main
+
+sys.exit(main())

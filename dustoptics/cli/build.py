@@ -1,0 +1,263 @@
+"""``dustoptics build``: a preset's or configuration's table, or a whole atmosphere set.
+
+``build NAME_OR_CONFIG`` computes the table (:class:`~dustoptics.models.build.TableBuilder`)
+and writes it into ``DIR/NAME/`` in each format asked for (:mod:`dustoptics.cli.export`);
+``build mars|earth|earth-kobe2026`` computes the set
+(:func:`~dustoptics.atmosphere.build.build_atmosphere`) and writes CosmoScout VR's files
+(:func:`~dustoptics.atmosphere.build.write_atmosphere_set`).  What the formats need and
+where the files go is checked before anything is computed.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import warnings
+from collections.abc import Sequence
+from dataclasses import replace
+from pathlib import Path
+from typing import Any, TextIO
+
+from dustoptics.atmosphere.build import ATMOSPHERES, DEFAULT_DUST
+from dustoptics.cli.errors import PROG, UsageError
+from dustoptics.cli.export import NEEDS_DENSITY, same_table, write_table
+from dustoptics.cli.parser import _add_format_options, _float_list, _positive_float
+from dustoptics.cli.report import report_placement
+from dustoptics.models.build import TableBuilder, is_config_path
+
+__all__ = ["DEFAULT_FORMATS", "add_parser", "run", "table_builder"]
+
+#: Formats written by ``build`` when ``--format`` is not given.
+DEFAULT_FORMATS = ("hdf5", "csv")
+
+#: Options of ``build`` that only a table's formats use, and those only a set uses.
+_TABLE_OPTIONS = (
+    "channels_nm",
+    "colour",
+    "resolution_deg",
+    "sampling",
+    "n_angles",
+    "number_density_per_m3",
+    "prefix",
+    "glsl_version",
+    "layout",
+    "precision",
+)
+_SET_OPTIONS = ("dust", "ozone_csv", "wavelengths_nm")
+
+
+def add_parser(sub: Any) -> None:
+    """Add the ``build`` subcommand to the subparsers ``sub``."""
+    from dustoptics.models.presets import DEFAULT_PRESET
+
+    p = sub.add_parser("build", help="compute a preset or configuration file and write its tables")
+    p.set_defaults(run=run)
+    p.add_argument(
+        "name",
+        nargs="?",
+        default=DEFAULT_PRESET,
+        metavar="NAME_OR_CONFIG",
+        help=f"preset name (see 'presets'), TOML configuration file, or an atmosphere set "
+        f"({', '.join(ATMOSPHERES)}) (default {DEFAULT_PRESET})",
+    )
+    p.add_argument(
+        "--out",
+        type=Path,
+        default=Path("tables"),
+        metavar="DIR",
+        help="output directory; files go to DIR/NAME/ (default ./tables); files that "
+        "already hold the same table are left untouched",
+    )
+    p.add_argument("--quiet", action="store_true", help="no progress or summary output")
+    _add_format_options(p, default=",".join(DEFAULT_FORMATS), required=False)
+    g = p.add_argument_group(
+        "atmosphere sets ('build mars', 'build earth': CosmoScout VR's full set)"
+    )
+    g.add_argument(
+        "--dust",
+        default=None,
+        metavar="PRESET_OR_CONFIG",
+        help="Mars dust model (default blue-moons)",
+    )
+    g.add_argument(
+        "--optical-depth",
+        type=_positive_float,
+        metavar="TAU",
+        help="vertical optical depth: of the Mars dust (default 0.5; clear seasons 0.3-1), or, "
+        "for one preset with --format cosmoscout, sets its number density (recorded in the provenance)",
+    )
+    g.add_argument(
+        "--reference-wavelength-nm",
+        type=_positive_float,
+        default=550.0,
+        metavar="NM",
+        help="wavelength of that optical depth [nm] (default 550)",
+    )
+    g.add_argument(
+        "--wavelengths-nm",
+        type=_float_list,
+        metavar="L1,L2,...",
+        help="wavelengths of the mars and earth sets [nm] (default CosmoScout VR's 15, 360-830)",
+    )
+    g.add_argument(
+        "--ozone-csv",
+        type=Path,
+        metavar="FILE",
+        help="Earth: ozone cross-sections (see dustoptics.atmosphere.gases.read_ozone_csv) in Bruneton's layer",
+    )
+
+
+def table_builder(
+    name: str, *, progress: TextIO | None = None, allow_large: bool = False
+) -> TableBuilder:
+    """:meth:`TableBuilder.from_name`, an unknown preset name a usage error."""
+    if is_config_path(name):
+        return TableBuilder.from_name(name, progress=progress, allow_large=allow_large)
+    try:
+        return TableBuilder.from_name(name, progress=progress, allow_large=allow_large)
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
+
+
+def _refuse_unused_options(args: argparse.Namespace) -> None:
+    """An option given where it changes nothing is a usage error, never silently ignored."""
+
+    def given(names: Sequence[str]) -> list[str]:
+        return ["--" + n.replace("_", "-") for n in names if getattr(args, n, None) is not None]
+
+    if args.name in ATMOSPHERES:
+        unused = given(_TABLE_OPTIONS)
+        unused += given(("dust", "optical_depth") if args.name == "earth" else ("ozone_csv",))
+        where = f"'build {args.name}' (an atmosphere set)"
+    else:
+        unused = given(_SET_OPTIONS)
+        if args.optical_depth is not None and "cosmoscout" not in (args.format or ()):
+            unused.append("--optical-depth")
+        where = f"'build {args.name}' with --format {','.join(args.format or DEFAULT_FORMATS)}"
+    if unused:
+        raise UsageError(f"{', '.join(unused)} changes nothing in {where}; remove it")
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run ``build``; returns the exit status."""
+    from dustoptics.io.outputs import with_inputs
+    from dustoptics.models.files import PresetCopyWarning
+
+    _refuse_unused_options(args)
+    if args.name in ATMOSPHERES:
+        return _run_set(args)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        builder = table_builder(
+            args.name,
+            progress=None if args.quiet else sys.stderr,
+            allow_large=args.allow_large,
+        )
+        if args.number_density_per_m3 is not None:
+            # An input of the table: recorded in its provenance like the configuration's own.
+            builder.config = replace(
+                builder.config, number_density_per_m3=args.number_density_per_m3
+            )
+        _check_build_request(args, builder)
+        table = builder.build()
+    for w in caught:
+        print(f"{PROG}: warning: {w.message}", file=sys.stderr)
+        if issubclass(w.category, PresetCopyWarning):
+            table = with_inputs(table, note=f"warning: {w.message}")
+    return write_table(args, table, args.format or DEFAULT_FORMATS)
+
+
+def _check_build_request(args: argparse.Namespace, builder: TableBuilder) -> None:
+    """What the formats need and where the files go, checked before the table is computed."""
+    from dustoptics._validation import check_file_name, check_inside
+
+    formats = args.format or DEFAULT_FORMATS
+    rt_formats = sorted({"disort", "libradtran"} & set(formats))
+    if rt_formats:
+        # Configurations compute no expansion coefficients: refuse before computing.
+        raise UsageError(
+            f"--format {','.join(rt_formats)} needs the phase function's Legendre moments, which "
+            "a configuration does not compute: compute the table with "
+            "compute_optics(..., expansion=True), save it (table.save) and run "
+            f"'{PROG} export FILE --format {','.join(rt_formats)}'"
+        )
+    if "cosmoscout" in formats:
+        # What write_table needs, checked before the table is computed.
+        from dustoptics.atmosphere.column import ExponentialProfile, sample_profile
+
+        if (
+            getattr(args, "optical_depth", None) is None
+            and args.number_density_per_m3 is None
+            and builder.config.number_density_per_m3 is None
+        ):
+            raise UsageError(NEEDS_DENSITY)
+        sample_profile(
+            ExponentialProfile(scale_height_m=args.scale_height_m),
+            top_altitude_m=args.top_altitude_m,
+            n_altitudes=args.n_altitudes,
+        )
+    if {"glsl", "hlsl", "wgsl"} & set(formats):
+        from dustoptics.io.shaders.common import DEFAULT_RESOLUTION_DEG, check_shader_options
+
+        check_shader_options(
+            builder.config.wavelengths_nm,
+            channels_nm=args.channels_nm,
+            colour=args.colour,
+            resolution_deg=args.resolution_deg or DEFAULT_RESOLUTION_DEG,
+        )
+    # Where the files go is checked before any work, too.
+    check_inside(args.out, args.out / check_file_name("name", builder.name))
+
+
+def _run_set(args: argparse.Namespace) -> int:
+    """``build mars|earth|earth-kobe2026``: the set's files in ``DIR/NAME/``."""
+    from dustoptics.atmosphere.build import build_atmosphere, set_inputs
+    from dustoptics.io.outputs import place_outputs, write_atmosphere_set
+
+    if args.format is not None and not set(args.format) <= {"cosmoscout", "bruneton"}:
+        raise UsageError(
+            f"'build {args.name}' writes CosmoScout VR's atmosphere set (format cosmoscout), and "
+            f"with --format bruneton also Bruneton's model parameters; --format "
+            f"{','.join(args.format)} is not available for a set. Build a table "
+            "('dustoptics build PRESET --format ...') to get the other formats"
+        )
+    if args.name == "earth-kobe2026" and args.wavelengths_nm is not None:
+        raise UsageError("earth-kobe2026 has Kobe's three wavelengths only; drop --wavelengths-nm")
+    progress = None if args.quiet else sys.stderr
+    dust = DEFAULT_DUST if args.dust is None else args.dust
+    optical_depth = 0.5 if args.optical_depth is None else args.optical_depth
+    dust_config = None
+    if args.name == "mars":
+        dust_config = table_builder(dust, progress=progress).config
+        if not dust_config.phase.uses_mie:
+            raise UsageError(
+                f"dust {dust!r} has no cross-sections (a phase-function-only model); "
+                "choose a Mie preset"
+            )
+    atm = build_atmosphere(
+        args.name,
+        dust=dust if dust_config is None else dust_config,
+        optical_depth=optical_depth,
+        reference_wavelength_nm=args.reference_wavelength_nm,
+        ozone_csv=args.ozone_csv,
+        wavelength_nm=args.wavelengths_nm,
+        progress=progress,
+    )
+    inputs = set_inputs(
+        args.name,
+        dust=dust,
+        optical_depth=optical_depth,
+        reference_wavelength_nm=args.reference_wavelength_nm,
+        ozone_csv=args.ozone_csv,
+        wavelength_nm=args.wavelengths_nm,
+    )
+    bruneton = args.format is not None and "bruneton" in args.format
+    out_dir = args.out / args.name
+    placed = place_outputs(
+        lambda directory: write_atmosphere_set(atm, directory, inputs=inputs, bruneton=bruneton),
+        out_dir,
+        force=args.force,
+        same=same_table,
+    )
+    report_placement(args, f"{args.name} (CosmoScout VR set)", out_dir, placed)
+    return 0

@@ -1,0 +1,50 @@
+"""``dustoptics presets`` and ``dustoptics materials``: what the package ships."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from typing import Any
+
+from dustoptics.cli.errors import UsageError
+
+__all__ = ["add_parser", "run_materials", "run_presets"]
+
+
+def add_parser(sub: Any) -> None:
+    """Add the ``presets`` and ``materials`` subcommands to the subparsers ``sub``."""
+    p = sub.add_parser("presets", help="list the presets, or print one's configuration file")
+    p.set_defaults(run=run_presets)
+    p.add_argument("--show", metavar="NAME", help="print the TOML of preset NAME (copy it to edit)")
+
+    p = sub.add_parser("materials", help="list the refractive-index catalogue")
+    p.set_defaults(run=run_materials)
+
+
+def run_presets(args: argparse.Namespace) -> int:
+    """Run ``presets``: one line per preset, or ``--show NAME``'s TOML."""
+    from dustoptics.models import presets
+
+    if args.show is not None:
+        try:
+            text = presets.preset_text(args.show)
+        except ValueError as exc:
+            raise UsageError(str(exc)) from None
+        sys.stdout.write(text)
+        return 0
+    for name in presets.list_presets():
+        description = (presets.load_preset(name).description.splitlines() or [""])[0]
+        marker = " (default)" if name == presets.DEFAULT_PRESET else ""
+        print(f"{name:18s} {description}{marker}")
+    return 0
+
+
+def run_materials(args: argparse.Namespace) -> int:
+    """Run ``materials``: one line per material, its wavelength range and source."""
+    from dustoptics.particles.catalogue import get_material, list_materials
+
+    for name in list_materials():
+        material = get_material(name)
+        lo, hi = material.wavelength_range_nm
+        print(f"{name:36s} {lo:8.1f} - {hi:8.1f} nm  {material.citation}")
+    return 0

@@ -1,0 +1,78 @@
+"""Exit status and error messages of the command line.
+
+Exit status: 0 on success, 1 on failure (an output exists without
+``--force``, a damaged input file, an input the physics rejects), 2 on a
+usage error (unknown preset, format or option value: :class:`UsageError`, a
+configuration file that does not follow the schema, argparse's own).  Errors
+are printed as ``dustoptics: error: <message>`` on stderr, on one line and
+without a traceback.  A closed output pipe (``dustoptics info f.h5 | head``)
+is not an error.  Ctrl-C is not caught: Python's own KeyboardInterrupt, and
+the files being written are left as they were (:mod:`dustoptics.io._atomic`).
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+from collections.abc import Callable
+
+__all__ = ["EXIT_FAILURE", "EXIT_OK", "EXIT_USAGE", "PROG", "UsageError", "exit_status"]
+
+#: The program's name, the first word of every message.
+PROG = "dustoptics"
+
+#: Exit status of a command that did what it was asked.
+EXIT_OK = 0
+#: Exit status of a command that failed (its input, the physics, the file system).
+EXIT_FAILURE = 1
+#: Exit status of a command given wrongly (argparse's own status for usage errors).
+EXIT_USAGE = 2
+
+
+class UsageError(ValueError):
+    """A command-line usage error (exit status 2)."""
+
+
+def _silence_stdout() -> None:
+    """After a broken pipe, send further output to devnull so exit is quiet."""
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, sys.stdout.fileno())
+
+
+def _one_line(exc: BaseException) -> str:
+    """An error message on one line (h5py's span several), control characters escaped."""
+    from dustoptics.io._text import printable
+
+    return printable(" ".join(str(exc).split()))
+
+
+def exit_status(command: Callable[[], int]) -> int:
+    """Run ``command`` and return its exit status, an error's printed on stderr.
+
+    Parameters
+    ----------
+    command : callable
+        ``command() -> int``: parses the arguments and runs the command.
+
+    Returns
+    -------
+    int
+        ``command``'s status; 0 on a broken pipe; 2 on a :class:`UsageError`
+        or a configuration error; 1 on any other error a user can cause
+        (:class:`OSError`, :class:`ValueError`, :class:`TypeError`,
+        :class:`ImportError` of an optional dependency).
+    """
+    from dustoptics.models.config import ConfigError
+
+    try:
+        return command()
+    except BrokenPipeError:
+        _silence_stdout()
+        return EXIT_OK
+    except (UsageError, ConfigError) as exc:
+        print(f"{PROG}: error: {_one_line(exc)}", file=sys.stderr)
+        return EXIT_USAGE
+    except (OSError, ValueError, TypeError, ImportError) as exc:
+        # FormatError is a ValueError; FileExistsError/PermissionError are OSErrors.
+        print(f"{PROG}: error: {_one_line(exc)}", file=sys.stderr)
+        return EXIT_FAILURE

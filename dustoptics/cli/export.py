@@ -1,0 +1,111 @@
+"""``dustoptics export``: a table file in other formats; and how ``build`` writes a table.
+
+The table's files go into ``--out DIR`` / the table's name
+(:func:`~dustoptics.io.outputs.place_table`), with the format options given
+(:func:`~dustoptics.models.build.prepare_export`); files that already hold the
+same table are left untouched.
+"""
+
+from __future__ import annotations
+
+import argparse
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+from dustoptics.cli.errors import UsageError
+from dustoptics.cli.parser import _add_format_options
+from dustoptics.cli.report import report_placement
+
+__all__ = ["NEEDS_DENSITY", "add_parser", "run", "same_table", "write_table"]
+
+#: The usage error of the cosmoscout format without a number density.
+NEEDS_DENSITY = (
+    "the cosmoscout format needs a number density for beta [m^-1]: give "
+    "--optical-depth (with --reference-wavelength-nm), --number-density-per-m3 or "
+    "number_density_per_m3 in the configuration"
+)
+
+
+def same_table(existing: Path, new: Path) -> bool:
+    """Both files are HDF5 files that hold the same table
+    (:func:`dustoptics.compare.table_differences`): the existing one is up to date."""
+    from dustoptics.compare import table_differences
+    from dustoptics.io import FormatError, read_hdf5
+    from dustoptics.io.outputs import TABLE_SUFFIXES
+
+    if existing.suffix.lower() not in TABLE_SUFFIXES:
+        return False
+    try:
+        return not table_differences(read_hdf5(existing), read_hdf5(new))
+    except (FormatError, OSError):
+        return False
+
+
+def add_parser(sub: Any) -> None:
+    """Add the ``export`` subcommand to the subparsers ``sub``."""
+    p = sub.add_parser("export", help="convert a table file into other formats")
+    p.set_defaults(run=run)
+    p.add_argument(
+        "file", type=Path, metavar="FILE", help="HDF5 file, seed-CSV directory or its summary"
+    )
+    p.add_argument(
+        "--out",
+        type=Path,
+        required=True,
+        metavar="DIR",
+        help="output directory; files go to DIR/NAME/, NAME the table's name (as for build)",
+    )
+    p.add_argument("--quiet", action="store_true", help="no summary output")
+    _add_format_options(p, default=None, required=True)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run ``export``; returns the exit status."""
+    from dustoptics.io.outputs import read_table, with_inputs
+
+    table = read_table(args.file)
+    if args.number_density_per_m3 is not None:
+        table = with_inputs(
+            table.replace(number_density_per_m3=args.number_density_per_m3),
+            number_density_per_m3=args.number_density_per_m3,
+        )
+    return write_table(args, table, args.format)
+
+
+def write_table(args: argparse.Namespace, table: Any, formats: Sequence[str]) -> int:
+    """``build`` and ``export``: the table's files go into ``--out DIR`` / the table's name."""
+    from dustoptics.io.outputs import place_table
+    from dustoptics.models.build import FormatOptions, prepare_export
+
+    optical_depth = getattr(args, "optical_depth", None)
+    if "cosmoscout" in formats:
+        if optical_depth is not None and args.number_density_per_m3 is not None:
+            raise UsageError("give --optical-depth or --number-density-per-m3, not both")
+        if optical_depth is None and table.number_density_per_m3 is None:
+            raise UsageError(NEEDS_DENSITY)
+    table, options = prepare_export(
+        table,
+        formats,
+        options=FormatOptions(
+            channels_nm=args.channels_nm,
+            colour=args.colour,
+            resolution_deg=args.resolution_deg,
+            sampling=args.sampling,
+            n_angles=args.n_angles,
+            prefix=args.prefix,
+            glsl_version=args.glsl_version,
+            layout=args.layout,
+            precision=args.precision,
+        ),
+        optical_depth=optical_depth,
+        reference_wavelength_nm=getattr(args, "reference_wavelength_nm", 550.0),
+        scale_height_m=args.scale_height_m,
+        top_altitude_m=args.top_altitude_m,
+        n_altitudes=args.n_altitudes,
+    )
+    placed = place_table(
+        table, args.out, formats, options=options, force=args.force, same=same_table
+    )
+    report_placement(args, table.name, args.out / table.name, placed)
+    return 0

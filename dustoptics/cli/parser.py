@@ -1,0 +1,210 @@
+"""The argument parser of the command line, and the option types its commands share.
+
+:func:`build_parser` makes the parser: the program's options, then one
+subcommand per command module (each module's ``add_parser``, which sets the
+function that runs it as the ``run`` default).  The documentation's command
+reference is generated from this parser (``docs/_ext/argparse_reference.py``).
+"""
+
+from __future__ import annotations
+
+import argparse
+from typing import NoReturn
+
+import numpy as np
+
+from dustoptics.cli.errors import PROG
+
+__all__ = ["build_parser"]
+
+#: Command modules of :mod:`dustoptics.cli`, in the order of the help's command list.
+_COMMAND_MODULES = ("build", "export", "info", "plot", "catalogue", "fit", "sweep", "sky")
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse with usage errors on one line: ``dustoptics: error: <message>``."""
+
+    def error(self, message: str) -> NoReturn:
+        from dustoptics.io._text import printable
+
+        self.exit(2, f"{PROG}: error: {printable(message)} (see '{self.prog} --help')\n")
+
+
+def _formats(text: str) -> tuple[str, ...]:
+    from dustoptics.io import FORMATS
+
+    names = tuple(part.strip() for part in text.split(",") if part.strip())
+    unknown = [n for n in names if n not in FORMATS]
+    if not names or unknown:
+        raise argparse.ArgumentTypeError(
+            f"unknown format {', '.join(map(repr, unknown)) or repr(text)}; "
+            f"choose from {', '.join(sorted(FORMATS))} (comma-separated)"
+        )
+    return tuple(dict.fromkeys(names))
+
+
+def _float_list(text: str) -> tuple[float, ...]:
+    try:
+        values = tuple(float(v) for v in text.replace(" ", ",").split(",") if v)
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"expected comma-separated numbers; got {text!r}"
+        ) from None
+    if not values or not all(np.isfinite(values)):
+        raise argparse.ArgumentTypeError(f"expected comma-separated finite numbers; got {text!r}")
+    return values
+
+
+def _positive_float(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number; got {text!r}") from None
+    if not (np.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"must be a finite number > 0; got {text!r}")
+    return value
+
+
+def _positive_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer; got {text!r}") from None
+    if value < 2:
+        raise argparse.ArgumentTypeError(f"must be an integer >= 2; got {text!r}")
+    return value
+
+
+def _add_format_options(p: argparse.ArgumentParser, *, default: str | None, required: bool) -> None:
+    help_default = f" (default {default})" if default else ""
+    p.add_argument(
+        "--format",
+        type=_formats,
+        default=None,
+        required=required,
+        metavar="FMT[,FMT...]",
+        help=f"output formats: netcdf (.nc), hdf5 (.h5, the same format), csv, cosmoscout, glsl, hlsl, wgsl, texture, disort, libradtran{help_default}",
+    )
+    p.add_argument("--force", action="store_true", help="replace existing output files")
+    p.add_argument(
+        "--allow-large",
+        action="store_true",
+        help="go ahead beyond the memory (2 GiB) and work (about ten minutes) budget",
+    )
+    g = p.add_argument_group("glsl, hlsl, wgsl")
+    g.add_argument(
+        "--channels-nm",
+        type=_float_list,
+        metavar="R,G,B",
+        help="wavelengths of the three channels [nm] (default 680,550,440)",
+    )
+    g.add_argument(
+        "--colour",
+        choices=["cie1931-xyz", "linear-srgb-astmg173"],
+        help="colour channels instead of three wavelengths: CIE 1931 XYZ bands, or linear sRGB of the "
+        "table lit by the ASTM G173 sun (a renderer with a white sun reproduces the spectral colour)",
+    )
+    g.add_argument(
+        "--resolution-deg",
+        type=_positive_float,
+        metavar="DEG",
+        help="angular step of the constant array [deg] (default 0.25)",
+    )
+    g.add_argument(
+        "--prefix",
+        metavar="NAME",
+        help="prefix of every identifier: NAME_PHASE, ..., NAME_MiePhaseFunction (default MIE, "
+        "with the seed's MiePhaseFunction)",
+    )
+    g.add_argument(
+        "--glsl-version",
+        choices=["130", "100"],
+        help="glsl: 130 = GLSL 1.30+ and ES 3.00+ (default); 100 = GLSL ES 1.00 (WebGL 1)",
+    )
+    g = p.add_argument_group("texture, ktx2, exr, npy (channels: --channels-nm, --colour)")
+    g.add_argument(
+        "--sampling",
+        choices=["theta", "cos"],
+        help="uniform in angle or in cos(angle) (default theta)",
+    )
+    g.add_argument(
+        "--n-angles",
+        type=_positive_int,
+        metavar="N",
+        help="samples along the angle axis (default 721)",
+    )
+    g.add_argument(
+        "--layout",
+        choices=["rgb", "wavelength"],
+        help="ktx2, exr, npy: angle x RGB (default) or angle x wavelength",
+    )
+    g.add_argument(
+        "--precision",
+        choices=["float32", "float16"],
+        help="ktx2, exr, npy: sample type (default float32)",
+    )
+    g = p.add_argument_group("cosmoscout (beta in m^-1 needs a number density)")
+    g.add_argument(
+        "--number-density-per-m3",
+        type=_positive_float,
+        metavar="N0",
+        help="number density at the surface [m^-3] (overrides the configuration's; recorded "
+        "in the table's provenance)",
+    )
+    g.add_argument(
+        "--scale-height-m",
+        type=_positive_float,
+        default=10_000.0,
+        metavar="H",
+        help="exponential density profile's scale height [m] (default 10000, the seeds' Mars dust)",
+    )
+    g.add_argument(
+        "--top-altitude-m",
+        type=_positive_float,
+        default=120_000.0,
+        metavar="Z",
+        help="atmosphere top above the surface [m] (default 120000, Mars 3510 - 3390 km)",
+    )
+    g.add_argument(
+        "--n-altitudes",
+        type=_positive_int,
+        default=1024,
+        metavar="N",
+        help="density samples (default 1024)",
+    )
+
+
+def _worker_count(text: str) -> int:
+    """``--workers``: an integer >= 1."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer; got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be an integer >= 1; got {text!r}")
+    return value
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The command line's argument parser.
+
+    Returns
+    -------
+    argparse.ArgumentParser
+        Parsed arguments carry ``command`` (the subcommand's name) and ``run``,
+        the function that runs it: ``args.run(args) -> exit status``.
+    """
+    import importlib
+
+    from dustoptics import __version__
+
+    parser = _Parser(
+        prog=PROG,
+        description="Exact, reproducible optics of atmospheric dust and lookup tables for renderers.",
+    )
+    parser.add_argument("--version", action="version", version=f"{PROG} {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    sub.required = True
+    for name in _COMMAND_MODULES:
+        importlib.import_module(f"dustoptics.cli.{name}").add_parser(sub)
+    return parser

@@ -1,0 +1,139 @@
+"""``dustoptics sky``: the sky an atmosphere makes, as images and data (:class:`~dustoptics.sky.job.SkyJob`)."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+from typing import Any
+
+from dustoptics.cli.errors import UsageError
+from dustoptics.cli.parser import _positive_float, _positive_int
+from dustoptics.cli.report import say
+
+__all__ = ["add_parser", "run"]
+
+
+def add_parser(sub: Any) -> None:
+    """Add the ``sky`` subcommand (``mars``, ``earth``, ``compare``) to the subparsers ``sub``."""
+    p = sub.add_parser(
+        "sky", help="render the sky an atmosphere makes: images, data and the thesis's comparisons"
+    )
+    p.set_defaults(run=run)
+    skies = p.add_subparsers(dest="sky_command", metavar="{mars,earth,compare}", required=True)
+    for planet in ("mars", "earth"):
+        q = skies.add_parser(
+            planet, help=f"spectral sky of {planet} over an observer near the ground"
+        )
+        if planet == "mars":
+            q.add_argument(
+                "--dust",
+                default="hybrid",
+                metavar="PRESET",
+                help="dust model (a preset: collienne, costa, blue-moons, hybrid, ...; default hybrid)",
+            )
+            q.add_argument(
+                "--optical-depth",
+                type=_positive_float,
+                default=0.5,
+                metavar="TAU",
+                help="vertical dust optical depth at 550 nm (default 0.5)",
+            )
+        q.add_argument(
+            "--sun-elevation",
+            type=float,
+            default=10.0 if planet == "mars" else 45.0,
+            metavar="DEG",
+            help="Sun elevation [degree], -10 .. 90",
+        )
+        q.add_argument(
+            "--albedo",
+            type=float,
+            default=0.2,
+            metavar="A",
+            help="Lambertian ground albedo (default 0.2)",
+        )
+        q.add_argument(
+            "--size", type=_positive_int, default=512, metavar="PX", help="fisheye size [pixels]"
+        )
+        q.add_argument(
+            "--exposure",
+            type=_positive_float,
+            metavar="E",
+            help="display white at Y * E = 1 (default: the 99th percentile of the sky is white)",
+        )
+        q.add_argument(
+            "--sunset",
+            action="store_true",
+            help="also a sunset sequence, Sun elevation 20 to -2 degree, at one exposure",
+        )
+        q.add_argument(
+            "--space",
+            action="store_true",
+            help="also the limb seen from space, Sun in quadrature (NAME_limb.png, its own "
+            "exposure unless --exposure)",
+        )
+        q.add_argument("--out", type=Path, required=True, metavar="DIR", help="output directory")
+        q.add_argument("--force", action="store_true", help="replace existing files")
+        q.add_argument("--quiet", action="store_true", help="no summary output")
+    q = skies.add_parser("compare", help="the seed thesis's comparisons of the Mars dust models")
+    q.add_argument(
+        "--models",
+        type=lambda t: tuple(x.strip() for x in t.split(",") if x.strip()),
+        default=None,
+        metavar="LIST",
+        help="presets (default collienne,costa,blue-moons,hybrid)",
+    )
+    q.add_argument(
+        "--optical-depth",
+        type=_positive_float,
+        default=0.5,
+        metavar="TAU",
+        help="vertical dust optical depth at 550 nm (default 0.5)",
+    )
+    q.add_argument(
+        "--sun-elevation",
+        type=float,
+        default=10.0,
+        metavar="DEG",
+        help="Sun elevation of the radiance and luminance comparisons [degree]",
+    )
+    q.add_argument("--out", type=Path, required=True, metavar="DIR", help="output directory")
+    q.add_argument("--force", action="store_true", help="replace existing files")
+    q.add_argument("--quiet", action="store_true", help="no summary output")
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run ``sky``: the job's files, known and checked before any work; returns the exit status."""
+    from dustoptics.sky.job import SkyJob
+
+    if args.sky_command == "compare":
+        job = SkyJob(
+            "compare",
+            out_dir=args.out,
+            models=args.models,
+            optical_depth=args.optical_depth,
+            sun_elevation_deg=args.sun_elevation,
+        )
+    else:
+        if not (-10.0 <= args.sun_elevation <= 90.0):
+            raise UsageError(
+                f"--sun-elevation must be within [-10, 90] degree; got {args.sun_elevation!r}"
+            )
+        if not (0.0 <= args.albedo <= 1.0):
+            raise UsageError(f"--albedo must be within [0, 1]; got {args.albedo!r}")
+        job = SkyJob(
+            args.sky_command,
+            out_dir=args.out,
+            sun_elevation_deg=args.sun_elevation,
+            albedo=args.albedo,
+            size_px=args.size,
+            exposure=args.exposure,
+            sunset=args.sunset,
+            space=args.space,
+            # Options of 'sky mars' only.
+            dust=getattr(args, "dust", "hybrid"),
+            optical_depth=getattr(args, "optical_depth", 0.5),
+        )
+    for path in job.write(overwrite=args.force):
+        say(args, f"wrote {path}")
+    return 0

@@ -1,0 +1,49 @@
+"""``dustoptics export``: a table file into other formats, placed as ``build`` places them."""
+
+from __future__ import annotations
+
+import pytest
+from _cli import config_fixture, run_build  # noqa: F401 (fixture config)
+
+from dustoptics.cli import main
+from dustoptics.io import read_hdf5, read_seed_csv
+
+
+def test_export_places_files_as_build_does(config, tmp_path, capsys):
+    """export FILE --out DIR writes into DIR/NAME/, like build."""
+    assert run_build(config, tmp_path / "built", "--format", "hdf5,csv") == 0
+    h5 = tmp_path / "built" / "small-dust" / "small-dust.h5"
+    out = tmp_path / "exported"
+    assert main(["export", str(h5), "--out", str(out), "--format", "csv", "--quiet"]) == 0
+    assert read_seed_csv(out / "small-dust").equals(read_hdf5(h5))
+    # The same files as build's, byte for byte; exporting again is up to date.
+    for name in ("MiePhaseFunctionSpectrum.csv", "MieExtinctionSpectrum.csv", "table_summary.json"):
+        assert (out / "small-dust" / name).read_bytes() == (h5.parent / name).read_bytes()
+    assert main(["export", str(h5), "--out", str(out), "--format", "csv"]) == 0
+    assert "3 files up to date" in capsys.readouterr().out
+    # Any table file is an input: export from the seed-CSV folder.
+    out2 = tmp_path / "from-csv"
+    assert main(["export", str(h5.parent), "--out", str(out2), "--format", "hdf5"]) == 0
+    assert read_hdf5(out2 / "small-dust" / "small-dust.h5").equals(read_hdf5(h5))
+
+
+@pytest.mark.parametrize("damage", ["truncate", "garbage", "missing"])
+def test_damaged_or_missing_input_is_a_clean_failure(config, tmp_path, capsys, damage):
+    assert run_build(config, tmp_path, "--format", "hdf5") == 0
+    h5 = tmp_path / "small-dust" / "small-dust.h5"
+    if damage == "truncate":
+        h5.write_bytes(h5.read_bytes()[:2000])
+    elif damage == "garbage":
+        h5.write_bytes(b"not an hdf5 file at all")
+    else:
+        h5.unlink()
+    capsys.readouterr()
+    for argv in (
+        ["info", str(h5)],
+        ["export", str(h5), "--out", str(tmp_path / "x"), "--format", "csv"],
+    ):
+        assert main(argv) == 1
+        err = capsys.readouterr().err
+        assert err.startswith("dustoptics: error: ") and "small-dust.h5" in err
+        assert "Traceback" not in err
+    assert not (tmp_path / "x").exists()

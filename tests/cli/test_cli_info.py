@@ -1,0 +1,81 @@
+"""``dustoptics info``: what every file and folder dustoptics writes holds."""
+
+from __future__ import annotations
+
+import json
+
+from _cli import config_fixture, run_build  # noqa: F401 (fixture config)
+
+from dustoptics.cli import main
+from dustoptics.io import read_hdf5
+
+
+def test_info_describes_provenance(config, tmp_path, capsys):
+    assert run_build(config, tmp_path, "--format", "hdf5,csv") == 0
+    capsys.readouterr()
+    table = read_hdf5(tmp_path / "small-dust" / "small-dust.h5")
+    for target in ("small-dust/small-dust.h5", "small-dust", "small-dust/table_summary.json"):
+        assert main(["info", str(tmp_path / target)]) == 0
+        out = capsys.readouterr().out
+        assert "name:            small-dust" in out
+        assert table.provenance.input_hash in out
+        assert "wavelengths:     3, 440 .. 680 nm" in out
+        assert "modified_gamma" in out
+
+
+def test_info_reads_every_format_and_a_build_folder(config, tmp_path, capsys):
+    args = ["--format", "hdf5,csv,glsl,texture,cosmoscout", "--number-density-per-m3", "1e8"]
+    assert run_build(config, tmp_path, *args) == 0
+    folder = tmp_path / "small-dust"
+    table = read_hdf5(folder / "small-dust.h5")
+    digest = table.provenance.input_hash
+    capsys.readouterr()
+    expected = {
+        "small-dust_phase.glsl": ["GLSL snippet:    small-dust_phase.glsl", digest, "MIE_PHASE"],
+        "small-dust_phase_theta.json": ["shape:           3 wavelengths x 721 angles", digest],
+        "small-dust_phase_theta.raw": ["texture:         small-dust_phase_theta.raw", digest],
+        "small-dust_phase.csv": ["constituent:     small-dust", "phase function:  181 angles"],
+        "small-dust_density.csv": ["density:         1024 altitudes"],
+        "MiePhaseFunctionSpectrum.csv": ["name:            small-dust", digest],
+    }
+    for name, needles in expected.items():
+        assert main(["info", str(folder / name)]) == 0, name
+        out = capsys.readouterr().out
+        for needle in needles:
+            assert needle in out, (name, needle)
+    # The folder: one section per output found.
+    assert main(["info", str(folder)]) == 0
+    out = capsys.readouterr().out
+    for title in (
+        "== small-dust (CosmoScout VR) ==",
+        "== small-dust.h5 ==",
+        "== table_summary.json (seed CSV) ==",
+        "== small-dust_phase.glsl ==",
+        "== small-dust_phase_theta.json ==",
+    ):
+        assert title in out
+    # beta_sca = N0 <C_sca>: the CosmoScout numbers info prints are the table's.
+    c_sca_m2 = table.csca_um2 * 1e-12
+    assert f"beta_sca:        {1e8 * c_sca_m2.min():.6g} .. {1e8 * c_sca_m2.max():.6g} m^-1" in out
+
+
+def test_info_reads_an_atmosphere_set(config, tmp_path, capsys):
+    argv = ["build", "mars", "--out", str(tmp_path), "--quiet", "--dust", str(config)]
+    assert main(argv) == 0
+    record = json.loads((tmp_path / "mars" / "mars_provenance.json").read_text())
+    for target in ("mars", "mars/mars_settings.json", "mars/mars_provenance.json"):
+        assert main(["info", str(tmp_path / target)]) == 0
+        out = capsys.readouterr().out
+        assert "atmosphere set:  mars" in out
+        assert f"input hash:      {record['input_hash']}" in out
+        assert "constituent:     mars_aerosols" in out and "constituent:     mars_molecules" in out
+        assert '"optical_depth": 0.5' in out
+
+
+def test_info_refuses_what_dustoptics_does_not_write(tmp_path, capsys):
+    other = tmp_path / "notes.txt"
+    other.write_text("hello\n")
+    assert main(["info", str(other)]) == 1
+    assert "not a file dustoptics writes" in capsys.readouterr().err
+    assert main(["info", str(tmp_path)]) == 1
+    assert "holds no file dustoptics writes" in capsys.readouterr().err
