@@ -1,0 +1,64 @@
+"""dustoptics.sky.job: a sky as files, named before any work and written as one set."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from dustoptics.sky.job import SUNSET_ELEVATIONS_DEG, SkyJob
+
+
+def test_targets_are_known_before_any_work(tmp_path: Path) -> None:
+    job = SkyJob("mars", out_dir=tmp_path, dust="costa", sunset=True, space=True)
+    assert job.name == "mars-costa" and job.sun_elevation_deg == 10.0
+    names = [p.name for p in job.targets()]
+    assert names[:3] == ["mars-costa_sky.nc", "mars-costa_fisheye.png", "mars-costa_panorama.png"]
+    assert names[3:-1] == [f"mars-costa_sunset_{e:+05.1f}.png" for e in SUNSET_ELEVATIONS_DEG]
+    assert names[-1] == "mars-costa_limb.png"
+    assert {p.parent for p in job.targets()} == {tmp_path}
+    compare = SkyJob("compare", out_dir=str(tmp_path))
+    assert compare.out_dir == tmp_path and compare.name == "mars-comparison"
+    assert [p.name for p in compare.targets()] == [
+        "mars-comparison.nc",
+        "mars-comparison_radiance.png",
+        "mars-comparison_luminance.png",
+        "mars-comparison_chromaticity.png",
+        "mars-comparison_transmittance.png",
+    ]
+    assert SkyJob("earth", out_dir=tmp_path).sun_elevation_deg == 45.0
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"kind": "venus"}, "kind must be one of 'mars', 'earth', 'compare'; got 'venus'"),
+        ({"kind": "earth", "sun_elevation_deg": -40.0}, r"sun_elevation_deg must be within"),
+        ({"kind": "mars", "albedo": 2.0}, r"albedo must be within \[0, 1\]; got 2.0"),
+    ],
+)
+def test_bad_parameters_are_refused(tmp_path: Path, kwargs: dict, message: str) -> None:
+    with pytest.raises(ValueError, match=message):
+        SkyJob(out_dir=tmp_path, **kwargs)
+
+
+def test_write_refuses_existing_files_before_any_work(tmp_path: Path, monkeypatch) -> None:
+    job = SkyJob("earth", out_dir=tmp_path, size_px=16)
+    job.targets()[1].write_bytes(b"old")
+
+    def no_work(self):
+        raise AssertionError("computed before the targets were checked")
+
+    monkeypatch.setattr(SkyJob, "files", no_work)
+    with pytest.raises(FileExistsError, match="earth_fisheye.png"):
+        job.write()
+
+
+def test_write_gives_the_files_it_announced(tmp_path: Path) -> None:
+    pytest.importorskip("xarray")
+    job = SkyJob("earth", out_dir=tmp_path, sun_elevation_deg=30.0, size_px=16)
+    written = job.write()
+    assert written == job.targets()
+    assert all(p.stat().st_size > 0 for p in written)
+    with pytest.raises(FileExistsError):
+        job.write()
