@@ -67,6 +67,7 @@ __all__ = [
     "check_targets",
     "clean_leftovers",
     "file_set",
+    "held_lock",
     "is_leftover",
     "safe_stem",
     "write_files",
@@ -166,9 +167,9 @@ def is_leftover(name: str) -> bool:
     return name.startswith(STAGE_PREFIX) or bool(_LEGACY_TMP.match(name))
 
 
-def _try_lock(fd: int) -> bool:
+def _try_lock(fd: int, *, shared: bool = False) -> bool:
     try:
-        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        fcntl.flock(fd, (fcntl.LOCK_SH if shared else fcntl.LOCK_EX) | fcntl.LOCK_NB)
     except OSError as exc:
         if exc.errno in (errno.EWOULDBLOCK, errno.EAGAIN, errno.EACCES):
             return False
@@ -267,6 +268,23 @@ def _locked(directory: Path) -> Iterator[None]:
     try:
         fcntl.flock(fd, fcntl.LOCK_EX)
         yield
+    finally:
+        os.close(fd)  # releases the lock
+
+
+@contextlib.contextmanager
+def held_lock(directory: str | os.PathLike[str], *, shared: bool = False) -> Iterator[int | None]:
+    """Hold a flock on ``directory`` for the block if no other holder conflicts; never waits.
+
+    Yields the directory's open descriptor while the lock is held (the lock follows the
+    directory through a rename), or None when another open of it holds a conflicting lock
+    (an exclusive one; any one unless ``shared``).  The lock ends with the block.  The
+    sweep stores (:mod:`dustoptics.sweep.store`) are held this way by the run that writes
+    them.
+    """
+    fd = os.open(directory, os.O_RDONLY)
+    try:
+        yield fd if _try_lock(fd, shared=shared) else None
     finally:
         os.close(fd)  # releases the lock
 
