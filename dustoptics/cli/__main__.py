@@ -4,4 +4,5 @@ import sys
 
 from dustoptics.cli import main
 
-sys.exit(main())
+if __name__ == "__main__":  # not when imported (by the documentation's module scan)
+    sys.exit(main())
