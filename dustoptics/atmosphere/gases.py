@@ -113,7 +113,8 @@ from dustoptics._validation import (
     check_choice,
     check_positive,
 )
-from dustoptics.particles.materials import GasFormulaIndex, get_material
+from dustoptics.particles.catalogue import get_material
+from dustoptics.particles.materials import GasFormulaIndex
 from dustoptics.scattering import phase as _phase
 from dustoptics.table import Provenance, Source, Table
 

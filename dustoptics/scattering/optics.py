@@ -59,9 +59,10 @@ from dustoptics._validation import (
     check_positive,
     check_wavelength_unit,
 )
+from dustoptics.particles.catalogue import get_material
 from dustoptics.particles.coated import CoatedSphere
 from dustoptics.particles.custom_sizedist import from_dict as _distribution_from_dict
-from dustoptics.particles.materials import RefractiveIndex, get_material
+from dustoptics.particles.materials import RefractiveIndex
 from dustoptics.particles.sizedist import SizeDistribution
 from dustoptics.scattering import mie
 from dustoptics.scattering.expansion import greek_coefficients
@@ -151,7 +152,7 @@ def resolve_refractive_index(
     """Evaluate a refractive-index specification at the wavelengths.
 
     Accepts a complex constant, a sequence with one value per wavelength, a
-    catalogue name (see :func:`dustoptics.particles.materials.list_materials`), a material
+    catalogue name (see :func:`dustoptics.particles.catalogue.list_materials`), a material
     or mixture object, or any callable ``wavelength_nm -> complex``.  Returns
     the complex array m = n + i k and a description.  Raises ValueError for
     k < 0, n <= 0, non-finite values, or a wavelength outside the data.
@@ -1714,7 +1715,7 @@ def recompute(
     provenance : Provenance
         ``table.provenance`` of a table from :func:`compute_optics` (not of a
         configuration's table, whose inputs are the configuration; rebuild
-        those with :func:`dustoptics.models.config.build_table`).
+        those with :func:`dustoptics.models.compute.build_table`).
     workers : int, optional
         Threads over wavelengths (does not change the result).
     name : str, optional
