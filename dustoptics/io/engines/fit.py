@@ -27,8 +27,8 @@ from pathlib import Path
 import numpy as np
 
 from dustoptics._validation import check_choice
-from dustoptics.io._atomic import write_files
-from dustoptics.io.shaders.glsl import glsl_float
+from dustoptics.io._atomic import safe_stem, write_files
+from dustoptics.io.shaders.common import shader_syntax
 from dustoptics.scattering.fit import FitResult
 
 __all__ = ["FIT_LANGUAGES", "fit_constants", "fit_json", "write_fit"]
@@ -37,45 +37,11 @@ __all__ = ["FIT_LANGUAGES", "fit_constants", "fit_json", "write_fit"]
 FIT_LANGUAGES = ("glsl", "hlsl", "wgsl")
 
 _IDENTIFIER = re.compile(r"^[A-Za-z][A-Za-z0-9_]*$")
-_EXTENSIONS = {"glsl": "glsl", "hlsl": "hlsl", "wgsl": "wgsl"}
 
 
 def fit_json(result: FitResult) -> str:
     """The fit as indented JSON text (model, loss, per-row parameters and errors)."""
     return json.dumps(result.to_dict(), indent=2, allow_nan=False) + "\n"
-
-
-def _literal(value: float, language: str) -> str:
-    text = glsl_float(value)
-    return text if language == "glsl" else text + "f"
-
-
-def _vector(values: np.ndarray, language: str) -> tuple[str, str]:
-    items = ", ".join(_literal(v, language) for v in values)
-    kind = {"glsl": "vec3", "hlsl": "float3", "wgsl": "vec3<f32>"}[language]
-    return kind, f"{kind}({items})"
-
-
-def _array(values: np.ndarray, language: str) -> tuple[str, str]:
-    n = values.size
-    items = ", ".join(_literal(v, language) for v in values)
-    if language == "glsl":
-        return f"float[{n}]", f"float[{n}]({items})"
-    if language == "hlsl":
-        return f"float[{n}]", "{" + items + "}"
-    return f"array<f32, {n}>", f"array<f32, {n}>({items})"
-
-
-def _declaration(language: str, kind: str, name: str, value: str) -> str:
-    if language == "glsl":
-        if kind.startswith("float["):
-            return f"const float {name}[{kind[6:-1]}] = {value};"
-        return f"const {kind} {name} = {value};"
-    if language == "hlsl":
-        if kind.startswith("float["):
-            return f"static const float {name}[{kind[6:-1]}] = {value};"
-        return f"static const {kind} {name} = {value};"
-    return f"const {name}: {kind} = {value};"
 
 
 def fit_constants(result: FitResult, *, language: str, prefix: str = "DUST") -> str:
@@ -142,13 +108,15 @@ def fit_constants(result: FitResult, *, language: str, prefix: str = "DUST") -> 
         ("FIT_MAX_REL_ERROR", np.asarray(result.max_relative_error)),
         ("FIT_G_ERROR", np.asarray(result.g_error)),
     ]
+    sx = shader_syntax(language)
     for name, values in columns:
         if not np.all(np.isfinite(values)):
             continue  # e.g. rows fitted without a wavelength
-        kind, value = (_vector if channels else _array)(
-            np.asarray(values, dtype=np.float64), language
-        )
-        lines.append(_declaration(language, kind, f"{prefix}_{name}", value))
+        full_name, values = f"{prefix}_{name}", np.asarray(values, dtype=np.float64)
+        if channels:
+            lines.append(sx.const("vec3", full_name, sx.vec(values), ""))
+        else:
+            lines.append(sx.float_array(full_name, values))
     return "\n".join(lines) + "\n"
 
 
@@ -180,10 +148,10 @@ def write_fit(
         The files written.
     """
     base = Path(out_dir)
-    safe = re.sub(r"[^A-Za-z0-9._-]", "_", stem).lstrip(".") or "table"
-    name = f"{safe}_{result.model}"
+    name = f"{safe_stem(stem)}_{result.model}"
     files: dict[Path, bytes] = {base / f"{name}.json": fit_json(result).encode("utf-8")}
     for language in FIT_LANGUAGES:
         source = fit_constants(result, language=language, prefix=prefix)
-        files[base / f"{name}.{_EXTENSIONS[language]}"] = source.encode("ascii", "replace")
+        path = base / f"{name}{shader_syntax(language).extension}"
+        files[path] = source.encode("ascii", "replace")
     return write_files(files, overwrite=overwrite)

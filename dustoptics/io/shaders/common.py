@@ -1,36 +1,18 @@
-"""The phase function as shader source: one generator, one emitter per language.
+"""What every shading language's phase-function source holds, made once.
 
-Every language gets the same content, made once here: three channels of the
-table (:func:`shader_channels`: three wavelengths, or colour bands), sampled
-uniformly over 0..180 deg and rounded to float32, per-channel constants (g,
-cross-sections, beta coefficients), and the seed shader's lookup
-``MiePhaseFunction(nu)``: it takes the cosine of the scattering angle ``nu``
-and returns the three channels, interpolated linearly in angle between
-samples.  The languages (:data:`LANGUAGES`):
+:func:`shader_source` writes the same content in every language of
+:data:`LANGUAGES`; each language module says how it is spelled
+(:class:`ShaderSyntax`): :mod:`~dustoptics.io.shaders.glsl` (GLSL 1.30+ and
+GLSL ES 1.00), :mod:`~dustoptics.io.shaders.hlsl`,
+:mod:`~dustoptics.io.shaders.wgsl`.  The content:
 
-``"glsl"``
-    GLSL 1.30 and later, GLSL ES 3.00 and later: ``const vec3`` array and
-    ``vec3 MiePhaseFunction(float nu)``.  Include-ready (no ``#version``
-    line; the header states the minimum versions, each tested with
-    glslangValidator in a full shader).
-``"glsl100"``
-    GLSL ES 1.00 (WebGL 1).  That language has no array initializers and
-    its Appendix A only guarantees array indexing by constant or loop index
-    in fragment shaders, so a constant array cannot be indexed by a computed
-    angle.  The samples are returned instead by a function,
-    ``<prefix>_PHASE_SAMPLE(i)``, a balanced binary tree of comparisons on
-    ``i`` whose leaves return the literals (ceil(log2 N) comparisons per
-    call, no array, no loop, no texture).  Every declaration is ``highp``:
-    the lookup needs float32 (fragment shaders must have
-    ``GL_FRAGMENT_PRECISION_HIGH``; vertex shaders always do).
-``"hlsl"``
-    HLSL (Shader Model 4 and later; DirectX 10-12, Unity, Unreal):
-    ``static const float3`` array and ``float3 MiePhaseFunction(float nu)``.
-    Direct3D keeps such an array in an immediate constant buffer of at most
-    4096 entries, so resolutions finer than 180/4095 deg are refused.
-``"wgsl"``
-    WGSL (WebGPU): ``const`` ``array<vec3<f32>, N>`` and
-    ``fn MiePhaseFunction(nu: f32) -> vec3<f32>``.
+- three channels of the table (:func:`shader_channels`: three wavelengths, or
+  colour bands; :func:`choose_channels`), sampled uniformly over 0..180 deg and
+  rounded to float32;
+- per-channel constants (g, cross-sections, beta coefficients);
+- the seed shader's lookup ``MiePhaseFunction(nu)``: it takes the cosine of the
+  scattering angle ``nu`` and returns the three channels, interpolated linearly
+  in angle between samples (:meth:`ShaderSyntax.lookup_lines`).
 
 Every identifier a snippet declares at module scope begins with ``prefix``
 (default ``"MIE"``: ``MIE_PHASE_N``, ``MIE_PHASE``, ``MIE_G``, ...) except the
@@ -38,10 +20,10 @@ lookup, named by ``function_name`` (default the seed's ``MiePhaseFunction``),
 so two snippets with different prefixes and function names share a shader.
 
 Numbers: each value is rounded to float32 and written as the shortest decimal
-that reads back as that float32 (HLSL and WGSL with the ``f`` suffix, so the
-compiler rounds the decimal to float32 once, not through a double).  The
-lookup computes ``acos`` with the polynomial of Abramowitz & Stegun 4.4.46
-(error 2.5e-7 rad in float32), the same in every driver, unless
+that reads back as that float32 (:func:`float_literal`; HLSL and WGSL with the
+``f`` suffix, so the compiler rounds the decimal to float32 once, not through a
+double).  The lookup computes ``acos`` with the polynomial of Abramowitz &
+Stegun 4.4.46 (error 2.5e-7 rad in float32), the same in every driver, unless
 ``acos="builtin"`` (the language's own ``acos``, whose precision the shading
 languages leave to the implementation).
 
@@ -54,10 +36,12 @@ import json
 import math
 import os
 import re
+from abc import ABC, abstractmethod
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from types import SimpleNamespace
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -69,7 +53,6 @@ from dustoptics.colour import (
     channel_phase,
     channel_weights,
 )
-from dustoptics.io import register_format
 from dustoptics.io._atomic import safe_stem, write_files
 from dustoptics.scattering.tabulated_phase import sphere_integral
 from dustoptics.table import PHASE_NORMALIZATION
@@ -82,14 +65,15 @@ __all__ = [
     "DEFAULT_RESOLUTION_DEG",
     "LANGUAGES",
     "ShaderChannels",
+    "ShaderSyntax",
     "check_shader_options",
     "choose_channels",
     "float_literal",
+    "register_syntax",
     "shader_channels",
     "shader_source",
-    "write_hlsl",
+    "shader_syntax",
     "write_shader",
-    "write_wgsl",
 ]
 
 #: Colour modes of ``colour=`` (the three-wavelength mode is ``channels_nm``).
@@ -101,30 +85,9 @@ DEFAULT_RESOLUTION_DEG = 0.25
 #: How the lookup computes acos: its own polynomial (default) or the language's builtin.
 ACOS_METHODS = ("polynomial", "builtin")
 
-#: Shader languages :func:`shader_source` writes.
+#: Shader languages :func:`shader_source` writes, each spelled by its module's
+#: :class:`ShaderSyntax` (registered with :func:`register_syntax`).
 LANGUAGES = ("glsl", "glsl100", "hlsl", "wgsl")
-
-#: File-name extension of each language.
-EXTENSIONS = {"glsl": ".glsl", "glsl100": ".glsl", "hlsl": ".hlsl", "wgsl": ".wgsl"}
-
-#: What each language's header says about the versions that compile it.
-REQUIREMENTS = {
-    "glsl": (
-        "GLSL 1.30 or later (#version 130), or GLSL ES 3.00 or later (#version 300 es); "
-        "include-ready (no #version line)"
-    ),
-    "glsl100": (
-        "GLSL ES 1.00 (#version 100, WebGL 1) and later; highp float in the calling stage "
-        "(fragment shaders: GL_FRAGMENT_PRECISION_HIGH); no arrays, loops or textures "
-        "(ES 1.00 Appendix A)"
-    ),
-    "hlsl": "HLSL Shader Model 4.0 or later (static const arrays, int arithmetic)",
-    "wgsl": "WGSL (WebGPU); const array indexed at run time",
-}
-
-#: Largest number of samples per language: Direct3D's immediate constant buffer
-#: holds 4096 entries; the others have no fixed limit.
-MAX_SAMPLES = {"hlsl": 4096}
 
 #: Coefficients a0..a7 of acos(x) = sqrt(1 - x) (a0 + a1 x + ... + a7 x^7), 0 <= x <= 1,
 #: absolute error <= 2e-8 rad: M. Abramowitz and I. A. Stegun, Handbook of Mathematical
@@ -143,507 +106,6 @@ ACOS_AS4446 = (
 _UM2_TO_M2 = 1e-12
 
 _IDENTIFIER = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
-
-# Keywords and reserved words an identifier of ours could collide with.
-# GLSL 4.60 section 3.6 (with ES 1.00's and 3.x's); names with "__" or starting
-# "gl_" are reserved too.
-_GLSL_KEYWORDS = frozenset(
-    [
-        "attribute",
-        "const",
-        "uniform",
-        "varying",
-        "buffer",
-        "shared",
-        "coherent",
-        "volatile",
-        "restrict",
-        "readonly",
-        "writeonly",
-        "atomic_uint",
-        "layout",
-        "centroid",
-        "flat",
-        "smooth",
-        "noperspective",
-        "patch",
-        "sample",
-        "invariant",
-        "precise",
-        "break",
-        "continue",
-        "do",
-        "for",
-        "while",
-        "switch",
-        "case",
-        "default",
-        "if",
-        "else",
-        "subroutine",
-        "in",
-        "out",
-        "inout",
-        "int",
-        "void",
-        "bool",
-        "true",
-        "false",
-        "float",
-        "double",
-        "discard",
-        "return",
-        "vec2",
-        "vec3",
-        "vec4",
-        "ivec2",
-        "ivec3",
-        "ivec4",
-        "bvec2",
-        "bvec3",
-        "bvec4",
-        "uint",
-        "uvec2",
-        "uvec3",
-        "uvec4",
-        "dvec2",
-        "dvec3",
-        "dvec4",
-        "mat2",
-        "mat3",
-        "mat4",
-        "mat2x2",
-        "mat2x3",
-        "mat2x4",
-        "mat3x2",
-        "mat3x3",
-        "mat3x4",
-        "mat4x2",
-        "mat4x3",
-        "mat4x4",
-        "dmat2",
-        "dmat3",
-        "dmat4",
-        "lowp",
-        "mediump",
-        "highp",
-        "precision",
-        "sampler1D",
-        "sampler2D",
-        "sampler3D",
-        "samplerCube",
-        "struct",
-        "common",
-        "partition",
-        "active",
-        "asm",
-        "class",
-        "union",
-        "enum",
-        "typedef",
-        "template",
-        "this",
-        "resource",
-        "goto",
-        "inline",
-        "noinline",
-        "public",
-        "static",
-        "extern",
-        "external",
-        "interface",
-        "long",
-        "short",
-        "half",
-        "fixed",
-        "unsigned",
-        "superp",
-        "input",
-        "output",
-        "hvec2",
-        "hvec3",
-        "hvec4",
-        "fvec2",
-        "fvec3",
-        "fvec4",
-        "filter",
-        "sizeof",
-        "cast",
-        "namespace",
-        "using",
-        "sampler3DRect",
-        "texture",
-        "main",
-    ]
-)
-# HLSL keywords (Microsoft's "Keywords" and "Reserved Words" pages, shader model 5.1).
-_HLSL_KEYWORDS = frozenset(
-    [
-        "AppendStructuredBuffer",
-        "asm",
-        "asm_fragment",
-        "BlendState",
-        "bool",
-        "break",
-        "Buffer",
-        "ByteAddressBuffer",
-        "case",
-        "cbuffer",
-        "centroid",
-        "class",
-        "column_major",
-        "compile",
-        "compile_fragment",
-        "CompileShader",
-        "const",
-        "continue",
-        "ComputeShader",
-        "ConsumeStructuredBuffer",
-        "default",
-        "DepthStencilState",
-        "DepthStencilView",
-        "discard",
-        "do",
-        "double",
-        "DomainShader",
-        "dword",
-        "else",
-        "export",
-        "extern",
-        "false",
-        "float",
-        "for",
-        "fxgroup",
-        "GeometryShader",
-        "groupshared",
-        "half",
-        "Hullshader",
-        "if",
-        "in",
-        "inline",
-        "inout",
-        "InputPatch",
-        "int",
-        "interface",
-        "line",
-        "lineadj",
-        "linear",
-        "LineStream",
-        "matrix",
-        "min16float",
-        "min10float",
-        "min16int",
-        "min12int",
-        "min16uint",
-        "namespace",
-        "nointerpolation",
-        "noperspective",
-        "NULL",
-        "out",
-        "OutputPatch",
-        "packoffset",
-        "pass",
-        "pixelfragment",
-        "PixelShader",
-        "point",
-        "PointStream",
-        "precise",
-        "RasterizerState",
-        "RenderTargetView",
-        "return",
-        "register",
-        "row_major",
-        "RWBuffer",
-        "RWByteAddressBuffer",
-        "RWStructuredBuffer",
-        "RWTexture1D",
-        "RWTexture1DArray",
-        "RWTexture2D",
-        "RWTexture2DArray",
-        "RWTexture3D",
-        "sample",
-        "sampler",
-        "SamplerState",
-        "SamplerComparisonState",
-        "shared",
-        "snorm",
-        "stateblock",
-        "stateblock_state",
-        "static",
-        "string",
-        "struct",
-        "switch",
-        "StructuredBuffer",
-        "tbuffer",
-        "technique",
-        "technique10",
-        "technique11",
-        "texture",
-        "Texture1D",
-        "Texture1DArray",
-        "Texture2D",
-        "Texture2DArray",
-        "Texture2DMS",
-        "Texture2DMSArray",
-        "Texture3D",
-        "TextureCube",
-        "TextureCubeArray",
-        "true",
-        "typedef",
-        "triangle",
-        "triangleadj",
-        "TriangleStream",
-        "uint",
-        "uniform",
-        "unorm",
-        "unsigned",
-        "vector",
-        "vertexfragment",
-        "VertexShader",
-        "void",
-        "volatile",
-        "while",
-        "auto",
-        "case",
-        "catch",
-        "char",
-        "class",
-        "const_cast",
-        "default",
-        "delete",
-        "dynamic_cast",
-        "enum",
-        "explicit",
-        "friend",
-        "goto",
-        "long",
-        "mutable",
-        "new",
-        "operator",
-        "private",
-        "protected",
-        "public",
-        "reinterpret_cast",
-        "short",
-        "signed",
-        "sizeof",
-        "static_cast",
-        "template",
-        "this",
-        "throw",
-        "try",
-        "typename",
-        "union",
-        "unsigned",
-        "using",
-        "virtual",
-        "float2",
-        "float3",
-        "float4",
-        "int2",
-        "int3",
-        "int4",
-        "main",
-    ]
-)
-# WGSL keywords and reserved words (W3C WGSL sections 15.2-15.3, 2024); names
-# starting "__" are reserved too.
-_WGSL_KEYWORDS = frozenset(
-    [
-        "alias",
-        "break",
-        "case",
-        "const",
-        "const_assert",
-        "continue",
-        "continuing",
-        "default",
-        "diagnostic",
-        "discard",
-        "else",
-        "enable",
-        "false",
-        "fn",
-        "for",
-        "if",
-        "let",
-        "loop",
-        "override",
-        "requires",
-        "return",
-        "struct",
-        "switch",
-        "true",
-        "var",
-        "while",
-        "NULL",
-        "Self",
-        "abstract",
-        "active",
-        "alignas",
-        "alignof",
-        "as",
-        "asm",
-        "asm_fragment",
-        "async",
-        "attribute",
-        "auto",
-        "await",
-        "become",
-        "binding_array",
-        "cast",
-        "catch",
-        "class",
-        "co_await",
-        "co_return",
-        "co_yield",
-        "coherent",
-        "column_major",
-        "common",
-        "compile",
-        "compile_fragment",
-        "concept",
-        "const_cast",
-        "consteval",
-        "constexpr",
-        "constinit",
-        "crate",
-        "debugger",
-        "decltype",
-        "delete",
-        "demote",
-        "demote_to_helper",
-        "do",
-        "dynamic_cast",
-        "enum",
-        "explicit",
-        "export",
-        "extends",
-        "extern",
-        "external",
-        "fallthrough",
-        "filter",
-        "final",
-        "finally",
-        "friend",
-        "from",
-        "fxgroup",
-        "get",
-        "goto",
-        "groupshared",
-        "highp",
-        "impl",
-        "implements",
-        "import",
-        "inline",
-        "instanceof",
-        "interface",
-        "layout",
-        "lowp",
-        "macro",
-        "macro_rules",
-        "match",
-        "mediump",
-        "meta",
-        "mod",
-        "module",
-        "move",
-        "mut",
-        "mutable",
-        "namespace",
-        "new",
-        "nil",
-        "noexcept",
-        "noinline",
-        "nointerpolation",
-        "noperspective",
-        "null",
-        "nullptr",
-        "of",
-        "operator",
-        "package",
-        "packoffset",
-        "partition",
-        "pass",
-        "patch",
-        "pixelfragment",
-        "precise",
-        "precision",
-        "premerge",
-        "priv",
-        "protected",
-        "pub",
-        "public",
-        "readonly",
-        "ref",
-        "regardless",
-        "register",
-        "reinterpret_cast",
-        "require",
-        "resource",
-        "restrict",
-        "self",
-        "set",
-        "shared",
-        "sizeof",
-        "smooth",
-        "snorm",
-        "static",
-        "static_assert",
-        "static_cast",
-        "std",
-        "subroutine",
-        "super",
-        "target",
-        "template",
-        "this",
-        "thread_local",
-        "throw",
-        "trait",
-        "try",
-        "type",
-        "typedef",
-        "typeid",
-        "typename",
-        "typeof",
-        "union",
-        "unless",
-        "unorm",
-        "unsafe",
-        "unsized",
-        "use",
-        "using",
-        "varying",
-        "virtual",
-        "volatile",
-        "wgsl",
-        "where",
-        "with",
-        "writeonly",
-        "yield",
-        "bool",
-        "f16",
-        "f32",
-        "i32",
-        "u32",
-        "vec2",
-        "vec3",
-        "vec4",
-        "array",
-        "atomic",
-        "ptr",
-        "sampler",
-        "texture_2d",
-        "main",
-    ]
-)
-_KEYWORDS = {
-    "glsl": _GLSL_KEYWORDS,
-    "glsl100": _GLSL_KEYWORDS,
-    "hlsl": _HLSL_KEYWORDS,
-    "wgsl": _WGSL_KEYWORDS,
-}
-_LANGUAGE_NAMES = {"glsl": "GLSL", "glsl100": "GLSL ES 1.00", "hlsl": "HLSL", "wgsl": "WGSL"}
 
 # Suffixes of the constants every snippet declares (after "<prefix>_").
 _CONSTANT_KEYS = (
@@ -904,179 +366,212 @@ def float_literal(value: Any, *, suffix: str = "") -> str:
     return np.format_float_scientific(x, unique=True, trim="0", exp_digits=2) + suffix
 
 
-def _check_identifier(name: str, value: Any, language: str) -> str:
-    if (
-        not isinstance(value, str)
-        or not _IDENTIFIER.match(value)
-        or "__" in value
-        or value.startswith("gl_")
-        or value in _KEYWORDS[language]
-    ):
-        label = _LANGUAGE_NAMES[language]
-        raise ValueError(
-            f"{name} must be a valid {label} identifier (letters, digits and '_', not starting with "
-            f"a digit or 'gl_', no '__', not a {label} keyword); got {value!r}"
-        )
-    return value
-
-
 def _text(value: Any) -> str:
     """One-line ASCII rendering of free text for a comment (quoted, escaped)."""
     return json.dumps(str(value), ensure_ascii=True)
 
 
-@dataclass(frozen=True)
-class _Syntax:
-    """How one language spells the few constructs the snippets use."""
+# ---------------------------------------------------------------------- syntax
 
-    language: str
-    vec3: str  # vector type and constructor
-    suffix: str  # float literal suffix
+#: The comment above every lookup function.
+LOOKUP_COMMENT = "// Phase function [sr^-1] at nu = cos(scattering angle) [-], nu = 1 forward."
+
+#: The comment on the clamp of ``nu`` in every lookup function.
+SAFETY_COMMENT = (
+    "    // Numerical safety only: a cosine computed by rounding (e.g. a dot product of",
+    "    // unit vectors) can exceed 1 in magnitude, where acos is undefined.",
+)
+
+
+class ShaderSyntax(ABC):
+    """How one shading language spells what every snippet holds.
+
+    Each language module defines a subclass, registers one instance
+    (:func:`register_syntax`) and writes its files with :func:`write_shader`.
+    The defaults are the C family's spelling (GLSL, HLSL); a language that
+    spells a construct otherwise overrides its method.
+
+    Attributes
+    ----------
+    language : str
+        Its name in :data:`LANGUAGES`.
+    label : str
+        Its name in headers and messages.
+    extension : str
+        File-name extension.
+    file_tail : str
+        What follows the table's name in a file name (``"_phase"``).
+    requirements : str
+        The versions that compile the source (the header's ``// requires:`` line).
+    keywords : frozenset of str
+        Keywords and reserved words no identifier of ours may be.
+    max_samples : int or None
+        Most samples the language holds in one constant array; None: no limit.
+    max_samples_reason : str
+        What sets ``max_samples``.
+    float_type, int_type, vec3 : str
+        Names of the scalar types (casts) and of the three-component vector
+        (type and constructor).
+    precision : str
+        Qualifier before every float declaration (``"highp "`` in GLSL ES 1.00).
+    float_suffix : str
+        Suffix of float literals (``"f"``: a float32, not a double or an
+        abstract float).
+    """
+
+    language: ClassVar[str]
+    label: ClassVar[str]
+    extension: ClassVar[str]
+    file_tail: ClassVar[str] = "_phase"
+    requirements: ClassVar[str]
+    keywords: ClassVar[frozenset[str]]
+    max_samples: ClassVar[int | None] = None
+    max_samples_reason: ClassVar[str] = ""
+    float_type: ClassVar[str] = "float"
+    int_type: ClassVar[str] = "int"
+    vec3: ClassVar[str]
+    precision: ClassVar[str] = ""
+    float_suffix: ClassVar[str] = ""
+
+    # ---------------------------------------------------------- numbers and names
 
     def lit(self, value: Any) -> str:
-        return float_literal(value, suffix=self.suffix)
+        """A float literal (:func:`float_literal` with the language's suffix)."""
+        return float_literal(value, suffix=self.float_suffix)
 
     def vec(self, values: Any) -> str:
+        """A three-component vector of float literals."""
         return f"{self.vec3}(" + ", ".join(self.lit(v) for v in values) + ")"
+
+    def type_name(self, kind: str) -> str:
+        """The declared type of ``kind`` (``"float"``, ``"int"`` or ``"vec3"``)."""
+        if kind == "int":
+            return self.int_type
+        return self.precision + {"float": self.float_type, "vec3": self.vec3}[kind]
+
+    def cast(self, kind: str, expression: str) -> str:
+        """``expression`` converted to ``kind`` (``"float"`` or ``"int"``)."""
+        scalar = self.float_type if kind == "float" else self.int_type
+        return f"{scalar}({expression})"
+
+    def check_identifier(self, name: str, value: Any) -> str:
+        """``value`` if it is an identifier of ours in this language, else a ValueError."""
+        if (
+            not isinstance(value, str)
+            or not _IDENTIFIER.match(value)
+            or "__" in value
+            or value.startswith("gl_")
+            or value in self.keywords
+        ):
+            raise ValueError(
+                f"{name} must be a valid {self.label} identifier (letters, digits and '_', not "
+                f"starting with a digit or 'gl_', no '__', not a {self.label} keyword); got "
+                f"{value!r}"
+            )
+        return value
+
+    # ---------------------------------------------------------- declarations
+
+    @abstractmethod
+    def const_declaration(self, type_name: str, name: str, value: str) -> str:
+        """A module-scope constant of type ``type_name`` (:meth:`type_name`)."""
 
     def const(self, kind: str, name: str, value: str, comment: str) -> str:
         """One module-scope constant (kind: "float", "int" or "vec3") with its comment, if any."""
         tail = f"  // {comment}" if comment else ""
-        if self.language == "wgsl":
-            wgsl_type = {"float": "f32", "int": "i32", "vec3": self.vec3}[kind]
-            return f"const {name}: {wgsl_type} = {value};{tail}"
-        if self.language == "hlsl":
-            hlsl_type = {"float": "float", "int": "int", "vec3": self.vec3}[kind]
-            return f"static const {hlsl_type} {name} = {value};{tail}"
-        glsl_type = {"float": "float", "int": "int", "vec3": "vec3"}[kind]
-        if self.language == "glsl100" and kind != "int":
-            glsl_type = "highp " + glsl_type
-        return f"const {glsl_type} {name} = {value};{tail}"
+        return self.const_declaration(self.type_name(kind), name, value) + tail
 
+    @abstractmethod
+    def array_declaration(self, name: str, n_samples: int, count_name: str) -> tuple[str, str]:
+        """The lines that open and close the constant array of ``n_samples`` vectors."""
 
-_SYNTAX = {
-    "glsl": _Syntax("glsl", "vec3", ""),
-    "glsl100": _Syntax("glsl100", "vec3", ""),
-    "hlsl": _Syntax("hlsl", "float3", "f"),
-    "wgsl": _Syntax("wgsl", "vec3<f32>", "f"),
-}
+    def array_lines(self, ch: ShaderChannels, names: Mapping[str, str]) -> list[str]:
+        """The constant array of samples ``names["PHASE"]``, one vector per line."""
+        n = ch.phase.shape[0]
+        header = f"// Phase function [sr^-1] at theta_j = 180 j / {n - 1} deg, j = 0..{n - 1}."
+        rows = [f"    {self.vec(row)}" for row in ch.phase]
+        body = [row + "," for row in rows[:-1]] + [rows[-1]]
+        opening, closing = self.array_declaration(names["PHASE"], n, names["PHASE_N"])
+        return ["", header, opening, *body, closing]
 
+    @abstractmethod
+    def float_array(self, name: str, values: Any) -> str:
+        """A module-scope constant array of floats (the fitted parameters per wavelength)."""
 
-def _acos_lines(sx: _Syntax, acos: str, names: dict[str, str], indent: str = "    ") -> list[str]:
-    """Statements that set ``theta = acos(c)`` [rad] from ``c``, in the language's syntax."""
-    lang = sx.language
-    decl_var = {"glsl": "float ", "glsl100": "highp float ", "hlsl": "float ", "wgsl": "var "}[lang]
-    decl_let = {"glsl": "float ", "glsl100": "highp float ", "hlsl": "float ", "wgsl": "let "}[lang]
-    if acos == "builtin":
-        return [f"{indent}{decl_let}theta = acos(c);  // [rad]"]
-    lines = [
-        f"{indent}// theta = acos(c) [rad]: Abramowitz & Stegun 4.4.46 (|error| <= 2e-8 rad in exact",
-        f"{indent}// arithmetic), for a result independent of the driver's acos precision.",
-        f"{indent}{decl_let}a = abs(c);",
-        f"{indent}{decl_var}p = {sx.lit(ACOS_AS4446[-1])};",
-    ]
-    lines += [f"{indent}p = p * a + {sx.lit(coef)};" for coef in ACOS_AS4446[-2::-1]]
-    lines.append(f"{indent}{decl_var}theta = sqrt({sx.lit(1.0)} - a) * p;")
-    flip = f"theta = {names['PI']} - theta;"
-    if lang == "wgsl":
-        lines.append(f"{indent}if (c < {sx.lit(0.0)}) {{ {flip} }}")
-    else:
-        lines.append(f"{indent}if (c < {sx.lit(0.0)}) {flip}")
-    return lines
+    # ---------------------------------------------------------- statements
 
+    def local(self, kind: str, name: str, value: str, *, mutable: bool = False) -> str:
+        """A local variable (``mutable`` when it is assigned again)."""
+        return f"{self.type_name(kind)} {name} = {value};"
 
-def _sample_tree(sx: _Syntax, phase: np.ndarray, lo: int, hi: int, depth: int) -> list[str]:
-    """GLSL ES 1.00 leaves: return the sample whose index equals i, by bisection on i."""
-    indent = "    " * depth
-    if lo == hi:
-        return [f"{indent}return {sx.vec(phase[lo])};"]
-    mid = (lo + hi) // 2
-    return (
-        [f"{indent}if (i < {float(mid) + 0.5:.1f}) {{"]
-        + _sample_tree(sx, phase, lo, mid, depth + 1)
-        + [f"{indent}}}"]
-        + _sample_tree(sx, phase, mid + 1, hi, depth)
-    )
+    def if_then(self, condition: str, statement: str) -> str:
+        """``statement`` when ``condition`` holds."""
+        return f"if ({condition}) {statement}"
 
+    def function_open(self, function_name: str) -> list[str]:
+        """The lookup's signature, ``nu`` in, three channels out, and its opening brace."""
+        return [f"{self.type_name('vec3')} {function_name}({self.type_name('float')} nu)", "{"]
 
-def _lookup_lines(
-    sx: _Syntax, ch: ShaderChannels, names: dict[str, str], function_name: str, acos: str
-) -> list[str]:
-    """The lookup function ``function_name(nu)`` and, for GLSL ES 1.00, its sample function."""
-    lang = sx.language
-    one, zero = sx.lit(1.0), sx.lit(0.0)
-    n_name, p_name, k_name = names["PHASE_N"], names["PHASE"], names["PHASE_INDEX_PER_RAD"]
-    safety = [
-        "    // Numerical safety only: a cosine computed by rounding (e.g. a dot product of",
-        "    // unit vectors) can exceed 1 in magnitude, where acos is undefined.",
-    ]
-    doc = "// Phase function [sr^-1] at nu = cos(scattering angle) [-], nu = 1 forward."
-    if lang == "wgsl":
+    def acos_lines(self, acos: str, names: Mapping[str, str], indent: str = "    ") -> list[str]:
+        """Statements that set ``theta = acos(c)`` [rad] from ``c``."""
+        if acos == "builtin":
+            return [f"{indent}{self.local('float', 'theta', 'acos(c)')}  // [rad]"]
+        lines = [
+            f"{indent}// theta = acos(c) [rad]: Abramowitz & Stegun 4.4.46 (|error| <= 2e-8 rad "
+            "in exact",
+            f"{indent}// arithmetic), for a result independent of the driver's acos precision.",
+            f"{indent}{self.local('float', 'a', 'abs(c)')}",
+            f"{indent}{self.local('float', 'p', self.lit(ACOS_AS4446[-1]), mutable=True)}",
+        ]
+        lines += [f"{indent}p = p * a + {self.lit(coef)};" for coef in ACOS_AS4446[-2::-1]]
+        theta = f"sqrt({self.lit(1.0)} - a) * p"
+        lines.append(f"{indent}{self.local('float', 'theta', theta, mutable=True)}")
+        flip = f"theta = {names['PI']} - theta;"
+        lines.append(f"{indent}{self.if_then(f'c < {self.lit(0.0)}', flip)}")
+        return lines
+
+    def lookup_lines(
+        self, ch: ShaderChannels, names: Mapping[str, str], function_name: str, acos: str
+    ) -> list[str]:
+        """The lookup function ``function_name(nu)`` (see :func:`shader_source`, Notes)."""
+        one, zero = self.lit(1.0), self.lit(0.0)
+        n_name, p_name, k_name = names["PHASE_N"], names["PHASE"], names["PHASE_INDEX_PER_RAD"]
+        c = f"clamp(nu, -{one}, {one})"
+        x = f"clamp(theta * {k_name}, {zero}, {self.cast('float', n_name + ' - 1')})"
+        i = f"min({self.cast('int', 'x')}, {n_name} - 2)"
+        f = f"x - {self.cast('float', 'i')}"
         return [
-            doc,
-            f"fn {function_name}(nu: f32) -> vec3<f32> {{",
-            *safety,
-            f"    let c = clamp(nu, -{one}, {one});",
-            *_acos_lines(sx, acos, names),
-            f"    let x = clamp(theta * {k_name}, {zero}, f32({n_name} - 1));",
-            f"    let i = min(i32(x), {n_name} - 2);",
-            "    let f = x - f32(i);",
+            LOOKUP_COMMENT,
+            *self.function_open(function_name),
+            *SAFETY_COMMENT,
+            f"    {self.local('float', 'c', c)}",
+            *self.acos_lines(acos, names),
+            f"    {self.local('float', 'x', x)}",
+            f"    {self.local('int', 'i', i)}",
+            f"    {self.local('float', 'f', f)}",
             f"    return {p_name}[i] * ({one} - f) + {p_name}[i + 1] * f;",
             "}",
         ]
-    if lang == "glsl100":
-        sample = names["PHASE_SAMPLE"]
-        n = ch.phase.shape[0]
-        return [
-            f"// Sample i (0 <= i <= {n - 1}, a whole number) of the phase function [sr^-1]:",
-            f"// bisection on i, {math.ceil(math.log2(n))} comparisons (GLSL ES 1.00 has no constant arrays).",
-            f"highp vec3 {sample}(highp float i)",
-            "{",
-            *_sample_tree(sx, ch.phase, 0, n - 1, 1),
-            "}",
-            "",
-            doc,
-            f"highp vec3 {function_name}(highp float nu)",
-            "{",
-            *safety,
-            "    highp float c = clamp(nu, -1.0, 1.0);",
-            *_acos_lines(sx, acos, names),
-            f"    highp float x = clamp(theta * {k_name}, 0.0, float({n_name} - 1));",
-            f"    highp float i = min(floor(x), float({n_name} - 2));",
-            "    highp float f = x - i;",
-            f"    return {sample}(i) * (1.0 - f) + {sample}(i + 1.0) * f;",
-            "}",
-        ]
-    vec3 = sx.vec3
-    return [
-        doc,
-        f"{vec3} {function_name}(float nu)",
-        "{",
-        *safety,
-        f"    float c = clamp(nu, -{one}, {one});",
-        *_acos_lines(sx, acos, names),
-        f"    float x = clamp(theta * {k_name}, {zero}, float({n_name} - 1));",
-        f"    int i = min(int(x), {n_name} - 2);",
-        "    float f = x - float(i);",
-        f"    return {p_name}[i] * ({one} - f) + {p_name}[i + 1] * f;",
-        "}",
-    ]
 
 
-def _array_lines(sx: _Syntax, ch: ShaderChannels, names: dict[str, str]) -> list[str]:
-    """The constant array of samples (none in GLSL ES 1.00, whose samples are a function)."""
-    n = ch.phase.shape[0]
-    if sx.language == "glsl100":
-        return []
-    header = f"// Phase function [sr^-1] at theta_j = 180 j / {n - 1} deg, j = 0..{n - 1}."
-    rows = [f"    {sx.vec(row)}" for row in ch.phase]
-    body = [row + "," for row in rows[:-1]] + [rows[-1]]
-    if sx.language == "wgsl":
-        kind = f"array<vec3<f32>, {n}>"
-        return ["", header, f"const {names['PHASE']}: {kind} = {kind}(", *body, ");"]
-    if sx.language == "hlsl":
-        return ["", header, f"static const float3 {names['PHASE']}[{n}] = {{", *body, "};"]
-    return ["", header, f"const vec3 {names['PHASE']}[{names['PHASE_N']}] = vec3[](", *body, ");"]
+_SYNTAXES: dict[str, ShaderSyntax] = {}
+
+
+def register_syntax(syntax: ShaderSyntax) -> None:
+    """Make ``syntax`` the spelling of its language (each language module registers one)."""
+    check_choice("language", syntax.language, LANGUAGES)
+    if syntax.language in _SYNTAXES and type(_SYNTAXES[syntax.language]) is not type(syntax):
+        raise ValueError(f"language {syntax.language!r} already has a syntax")
+    _SYNTAXES[syntax.language] = syntax
+
+
+def shader_syntax(language: str) -> ShaderSyntax:
+    """The :class:`ShaderSyntax` of ``language`` (one of :data:`LANGUAGES`)."""
+    check_choice("language", language, LANGUAGES)
+    return _SYNTAXES[language]
+
+
+# ---------------------------------------------------------------------- source
 
 
 def shader_source(
@@ -1098,8 +593,9 @@ def shader_source(
     table : dustoptics.table.Table
         The table.
     language : {"glsl", "glsl100", "hlsl", "wgsl"}
-        Shading language (see the module docstring): GLSL 1.30+/ES 3.00+,
-        GLSL ES 1.00 (WebGL 1), HLSL, WGSL.
+        Shading language: GLSL 1.30+/ES 3.00+, GLSL ES 1.00 (WebGL 1)
+        (:mod:`~dustoptics.io.shaders.glsl`), HLSL
+        (:mod:`~dustoptics.io.shaders.hlsl`), WGSL (:mod:`~dustoptics.io.shaders.wgsl`).
     channels_nm : sequence of 3 floats, optional
         Channel wavelengths in vector order (.x, .y, .z), each on the table's
         grid or between two grid wavelengths (linear interpolation in
@@ -1179,23 +675,21 @@ def shader_source(
     """
     from dustoptics import __version__
 
-    check_choice("language", language, LANGUAGES)
+    sx = shader_syntax(language)
     check_choice("acos", acos, ACOS_METHODS)
-    prefix = _check_identifier("prefix", prefix, language)
-    function_name = _check_identifier("function_name", function_name, language)
-    names = {
-        key: _check_identifier("prefix", f"{prefix}_{key}", language) for key in _CONSTANT_KEYS
-    }
+    prefix = sx.check_identifier("prefix", prefix)
+    function_name = sx.check_identifier("function_name", function_name)
+    names = {key: sx.check_identifier("prefix", f"{prefix}_{key}") for key in _CONSTANT_KEYS}
     if function_name in names.values():
         raise ValueError(
             f"function_name must differ from the constants' names; got {function_name!r}"
         )
     n_samples = _grid_count(resolution_deg)
-    limit = MAX_SAMPLES.get(language)
+    limit = sx.max_samples
     if limit is not None and n_samples > limit:
         raise ValueError(
             f"resolution_deg = {resolution_deg!r} gives {n_samples} samples, more than {language}'s "
-            f"{limit} (Direct3D's immediate constant buffer); choose resolution_deg >= "
+            f"{limit} ({sx.max_samples_reason}); choose resolution_deg >= "
             f"{180.0 / (limit - 1):.6g}"
         )
     ch = shader_channels(
@@ -1205,7 +699,6 @@ def shader_source(
         resolution_deg=resolution_deg,
         min_band_coverage=min_band_coverage,
     )
-    sx = _SYNTAX[language]
     n = ch.theta_deg.size
     step = 180.0 / (n - 1)
     source_angles = np.asarray(table.theta_deg)
@@ -1216,10 +709,10 @@ def shader_source(
         else f"the table's {source_angles.size} angles read by linear interpolation in angle "
         "(Table.phase_at)"
     )
-    title = f"phase function of table {_text(table.name)} for {_LANGUAGE_NAMES[language]}"
+    title = f"phase function of table {_text(table.name)} for {sx.label}"
     lines = [
         f"// dustoptics {__version__}: {title}.",
-        f"// requires: {REQUIREMENTS[language]}",
+        f"// requires: {sx.requirements}",
         f"// input_hash (SHA-256 of the table's inputs): {table.provenance.input_hash}",
         f"// {_channel_line(ch)}",
     ]
@@ -1315,8 +808,8 @@ def shader_source(
                     "absorption coefficient [m^-1]",
                 ),
             ]
-    lines += _array_lines(sx, ch, names)
-    lines += [""] + _lookup_lines(sx, ch, names, function_name, acos)
+    lines += sx.array_lines(ch, names)
+    lines += [""] + sx.lookup_lines(ch, names, function_name, acos)
     return "\n".join(lines) + "\n"
 
 
@@ -1361,28 +854,9 @@ def write_shader(
     ValueError
         As :func:`shader_source`.
     """
-    check_choice("language", language, LANGUAGES)
+    sx = shader_syntax(language)
     source = shader_source(table, language=language, **options)
-    ext = EXTENSIONS[language]
+    ext = sx.extension
     out = Path(out_dir_or_path)
-    tail = "_phase_es100" if language == "glsl100" else "_phase"
-    target = out if out.suffix == ext else out / f"{safe_stem(table.name)}{tail}{ext}"
+    target = out if out.suffix == ext else out / f"{safe_stem(table.name)}{sx.file_tail}{ext}"
     return write_files({target: source.encode("ascii")}, overwrite=overwrite)
-
-
-def write_hlsl(
-    table: Any, out_dir_or_path: str | os.PathLike[str], *, overwrite: bool = False, **options: Any
-) -> list[Path]:
-    """Write the HLSL snippet (:func:`write_shader` with ``language="hlsl"``)."""
-    return write_shader(table, out_dir_or_path, language="hlsl", overwrite=overwrite, **options)
-
-
-def write_wgsl(
-    table: Any, out_dir_or_path: str | os.PathLike[str], *, overwrite: bool = False, **options: Any
-) -> list[Path]:
-    """Write the WGSL snippet (:func:`write_shader` with ``language="wgsl"``)."""
-    return write_shader(table, out_dir_or_path, language="wgsl", overwrite=overwrite, **options)
-
-
-register_format("hlsl", write_hlsl)
-register_format("wgsl", write_wgsl)

@@ -1,4 +1,4 @@
-"""GLSL snippet: content, determinism, errors, and proof in real GLSL tools.
+"""GLSL snippet (GLSL 1.30+ and ES 1.00): content, determinism, errors, and proof in real tools.
 
 The proof has two parts (issue 5, item 4):
 
@@ -21,10 +21,14 @@ import subprocess
 
 import numpy as np
 import pytest
+from _render import assert_matches_float32, assert_matches_table, gl_context, glslang, test_nu
+from _shader_tables import OTHER_TABLE, RUN_RESOLUTION_DEG, TABLE, exact
 
 import dustoptics as do
+from dustoptics.io.shaders.common import shader_channels, shader_source
 from dustoptics.io.shaders.glsl import (
     ACOS_AS4446,
+    GLSLSyntax,
     glsl_channels,
     glsl_float,
     glsl_snippet,
@@ -475,3 +479,130 @@ def test_builtin_acos_shader_matches_numpy_given_driver_acos(gl, mie_table: Tabl
     assert np.all(np.abs(got[:, :3] - ref) <= tol)
     acos_error = np.max(np.abs(got[:, 3] - np.arccos(np.clip(nu.astype(np.float64), -1, 1))))
     print(f"driver acos error: {acos_error:.2e} rad")
+
+
+# ---------------------------------------------------------------- versions (glslangValidator, llvmpipe)
+
+GLSL_FRAGMENT = {
+    "130": ("#version 130\n", "out vec4 colour;\nin float nu;\n"),
+    "150": ("#version 150\n", "out vec4 colour;\nin float nu;\n"),
+    "330 core": ("#version 330 core\n", "out vec4 colour;\nin float nu;\n"),
+    "450": (
+        "#version 450\n",
+        "layout(location = 0) out vec4 colour;\nlayout(location = 0) in float nu;\n",
+    ),
+    "300 es": ("#version 300 es\nprecision highp float;\n", "out vec4 colour;\nin float nu;\n"),
+    "310 es": ("#version 310 es\nprecision highp float;\n", "out vec4 colour;\nin float nu;\n"),
+}
+
+
+@pytest.mark.parametrize("version", list(GLSL_FRAGMENT))
+def test_glsl_compiles_in_each_stated_version(version: str) -> None:
+    src = shader_source(TABLE, language="glsl")
+    assert f"// requires: {GLSLSyntax.requirements}" in src and not src.startswith("#")
+    head, io = GLSL_FRAGMENT[version]
+    glslang(head + src + io + "void main() { colour = vec4(MiePhaseFunction(nu), 1.0); }\n", "frag")
+
+
+def test_glsl_minimum_version_is_tight() -> None:
+    # GLSL 1.20 has no min(int, int): the stated minimum, 1.30, is the least that compiles.
+    src = (
+        "#version 120\n"
+        + shader_source(TABLE, language="glsl")
+        + ("varying float nu;\nvoid main() { gl_FragColor = vec4(MiePhaseFunction(nu), 1.0); }\n")
+    )
+    with pytest.raises(AssertionError, match="min"):
+        glslang(src, "frag")
+
+
+ES100_FRAGMENT = """
+varying highp float v_nu;
+void main() { gl_FragColor = vec4(MiePhaseFunction(v_nu), 1.0); }
+"""
+
+ES100_VERTEX = """
+attribute highp float in_nu;
+attribute highp float in_x;
+varying highp float v_nu;
+void main() { v_nu = in_nu; gl_Position = vec4(in_x, 0.0, 0.0, 1.0); gl_PointSize = 1.0; }
+"""
+
+
+def test_glsl_es100_compiles_within_appendix_a_limits() -> None:
+    src = shader_source(TABLE, language="glsl100")
+    code = "\n".join(line.split("//")[0] for line in src.splitlines())
+    assert "[" not in code  # no array anywhere
+    assert "for" not in code and "while" not in code and "sampler" not in code
+    # Include-ready in both stages, with and without a default precision.
+    glslang("#version 100\n" + src + ES100_FRAGMENT, "frag", es100_limits=True)
+    glslang(
+        "#version 100\nprecision mediump float;\n" + src + ES100_FRAGMENT, "frag", es100_limits=True
+    )
+    glslang(
+        "#version 100\n"
+        + src
+        + "void main() { gl_Position = vec4(MiePhaseFunction(0.5), 1.0); }\n",
+        "vert",
+        es100_limits=True,
+    )
+
+
+def test_glsl_es100_runs_in_llvmpipe() -> None:
+    """ES 1.00 in Mesa's OpenGL (which accepts #version 100 shaders): one point per nu,
+    the fragment shader writes the lookup into a float32 render target."""
+    import moderngl
+
+    ctx = gl_context(require=430)
+    try:
+        src = shader_source(TABLE, language="glsl100")
+        program = ctx.program(
+            vertex_shader="#version 100\n" + ES100_VERTEX,
+            fragment_shader="#version 100\n" + src + ES100_FRAGMENT,
+        )
+        nu = test_nu(721)
+        n = nu.size
+        x = ((np.arange(n) + 0.5) / n * 2.0 - 1.0).astype(np.float32)
+        vbo = ctx.buffer(np.stack([nu, x], axis=1).astype(np.float32).tobytes())
+        vao = ctx.vertex_array(program, [(vbo, "f f", "in_nu", "in_x")])
+        target = ctx.texture((n, 1), 4, dtype="f4")
+        fbo = ctx.framebuffer([target])
+        fbo.use()
+        ctx.viewport = (0, 0, n, 1)
+        vao.render(mode=moderngl.POINTS)
+        got = np.frombuffer(fbo.read(components=4, dtype="f4"), dtype=np.float32).reshape(n, 4)[
+            :, :3
+        ]
+    finally:
+        ctx.release()
+    table32 = shader_channels(TABLE).phase
+    ulps = assert_matches_float32(got, table32, nu)
+    rel = assert_matches_table(got, exact(TABLE, nu), table32, nu)
+    print(
+        f"GLSL ES 1.00 on llvmpipe: {ulps:.1f} ulps from numpy float32, {rel:.2e} relative from the table"
+    )
+
+
+@pytest.mark.parametrize("language", ["glsl", "glsl100"])
+def test_prefix_lets_two_snippets_with_cross_sections_share_a_shader(language: str) -> None:
+    a = shader_source(TABLE, language=language, resolution_deg=RUN_RESOLUTION_DEG)
+    b = shader_source(
+        OTHER_TABLE,
+        language=language,
+        prefix="DUST",
+        function_name="DustPhase",
+        resolution_deg=RUN_RESOLUTION_DEG,
+    )
+    assert "MIE_" not in b and "MiePhaseFunction" not in b
+    if language == "glsl":
+        glslang(
+            "#version 330 core\n" + a + b + "in float nu;\nout vec4 colour;\n"
+            "void main() { colour = vec4(MiePhaseFunction(nu) + DustPhase(nu), 1.0); }\n",
+            "frag",
+        )
+    else:
+        glslang(
+            "#version 100\n" + a + b + "varying highp float nu;\n"
+            "void main() { gl_FragColor = vec4(MiePhaseFunction(nu) + DustPhase(nu), 1.0); }\n",
+            "frag",
+            es100_limits=True,
+        )
