@@ -2,21 +2,20 @@
 
 - :mod:`~dustoptics.io.rt.disort`: DISORT's phase-function moments with
   extinction and single-scattering albedo (format ``disort``).
-- libRadtran's ``aerosol_file explicit`` layer files (format ``libradtran``).
+- :mod:`~dustoptics.io.rt.libradtran`: libRadtran's ``aerosol_file explicit``
+  list and layer file (format ``libradtran``), with the same moments.
 
 Both need ``compute_optics(expansion=...)``.
 """
 
 from __future__ import annotations
 
-from dustoptics.io.rt import disort
-from dustoptics.io.rt.disort import (
-    DISORT_SUFFIX,
+from dustoptics.io.rt import disort, libradtran
+from dustoptics.io.rt.disort import DISORT_SUFFIX, disort_text, write_disort
+from dustoptics.io.rt.libradtran import (
     LIBRADTRAN_EXPLICIT_SUFFIX,
     LIBRADTRAN_LAYER_SUFFIX,
-    disort_text,
     libradtran_texts,
-    write_disort,
     write_libradtran,
 )
 
@@ -26,6 +25,7 @@ __all__ = [
     "LIBRADTRAN_LAYER_SUFFIX",
     "disort",
     "disort_text",
+    "libradtran",
     "libradtran_texts",
     "write_disort",
     "write_libradtran",

@@ -1,9 +1,6 @@
-"""The ``disort`` and ``libradtran`` files, read back by independent readers
-written here from the formats' documentation (numpy.loadtxt for the rows; the
-libRadtran user's guide, option ``aerosol_file explicit``, for the layout:
-altitude [km] and layer file, top line first with NULL; layer rows wavelength
-[nm], extinction [km-1], single-scattering albedo, moments), and compared with
-the Table."""
+"""The ``disort`` file, read back by an independent reader (numpy.loadtxt for the rows,
+DISORT's moment definition for the values) and by CDISORT itself, and compared with the
+Table."""
 
 from __future__ import annotations
 
@@ -11,25 +8,16 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from _rt_table import rt_table
 
 import dustoptics as do
 from dustoptics.cli import main
 from dustoptics.io import FORMATS, write
 
-N_M3 = 2.0e6  # number density [m-3], a typical Mars dust value (Smith 2004 order of magnitude)
-
 
 @pytest.fixture(scope="module")
 def table() -> do.Table:
-    return do.compute_optics(
-        do.mars_dust(),
-        do.ModifiedGamma(r_eff_um=1.5, v_eff=0.3),
-        [500.0, 900.0],
-        np.linspace(0.0, 180.0, 19),
-        rtol=1e-3,
-        expansion=True,
-        name="mars rt",
-    ).replace(number_density_per_m3=N_M3)
+    return rt_table()
 
 
 def _header(path: Path) -> list[str]:
@@ -37,7 +25,7 @@ def _header(path: Path) -> list[str]:
 
 
 def test_registered() -> None:
-    assert "disort" in FORMATS and "libradtran" in FORMATS
+    assert "disort" in FORMATS
 
 
 def test_disort_file(table: do.Table, tmp_path: Path) -> None:
@@ -63,25 +51,6 @@ def test_disort_file(table: do.Table, tmp_path: Path) -> None:
     assert again.read_bytes() == path.read_bytes()
 
 
-def test_libradtran_files(table: do.Table, tmp_path: Path) -> None:
-    paths = write(table, tmp_path, format="libradtran", bottom_km=0.0, top_km=10.0)
-    explicit, layer = paths
-    # The explicit file, parsed as uvspec does: non-comment lines "z file", top first.
-    entries = [ln.split() for ln in explicit.read_text().splitlines() if not ln.startswith("#")]
-    assert entries == [["10.0", "NULL"], ["0.0", layer.name]]
-    assert (explicit.parent / entries[1][1]).is_file()
-    rows = np.loadtxt(layer, ndmin=2)
-    np.testing.assert_array_equal(rows[:, 0], table.wavelength_nm)
-    # Extinction [km-1] = N [m-3] * cext [um2] * 1e-12 [m2 um-2] * 1e3 [m km-1].
-    np.testing.assert_allclose(rows[:, 1], N_M3 * table.cext_um2 * 1e-12 * 1e3, rtol=1e-15)
-    np.testing.assert_allclose(rows[:, 1], table.beta_ext_per_m * 1e3, rtol=1e-15)
-    np.testing.assert_array_equal(rows[:, 2], table.ssa)
-    l_ = np.arange(table.alpha1.shape[1])
-    np.testing.assert_allclose(rows[:, 3:], table.alpha1 / (2 * l_ + 1), rtol=1e-15, atol=0)
-    assert rows[0, 3] == 1.0
-    assert table.provenance.input_hash in "\n".join(_header(layer))
-
-
 def test_refusals(table: do.Table, tmp_path: Path) -> None:
     plain = table.replace(
         alpha1=None,
@@ -92,13 +61,10 @@ def test_refusals(table: do.Table, tmp_path: Path) -> None:
         beta2=None,
         expansion_error_estimate=None,
     )
-    for fmt in ("disort", "libradtran"):
-        with pytest.raises(ValueError, match=r"expansion=True"):
-            write(plain, tmp_path, format=fmt)
-    with pytest.raises(ValueError, match="number-density-per-m3"):
-        write(table.replace(number_density_per_m3=None), tmp_path, format="libradtran")
-    with pytest.raises(ValueError, match="top_km"):
-        write(table, tmp_path, format="libradtran", bottom_km=2.0, top_km=1.0)
+    with pytest.raises(ValueError, match=r"expansion=True"):
+        write(plain, tmp_path, format="disort")
+    with pytest.raises(ValueError, match="cross-sections"):
+        write(table.replace(cext_um2=None, csca_um2=None), tmp_path, format="disort")
     assert list(tmp_path.iterdir()) == []
 
 
