@@ -6,6 +6,8 @@
   (Gauss-Legendre panels in a stretched size-parameter variable);
 - :mod:`~dustoptics.scattering.optics`: :func:`compute_optics`, the adaptive
   polydisperse average that returns a :class:`~dustoptics.table.Table`;
+- :mod:`~dustoptics.scattering.refinement`: the adaptive refinement of the
+  radius quadrature at one wavelength, behind :func:`compute_optics`;
 - :mod:`~dustoptics.scattering.phase`: analytic phase functions, blending
   and renormalization;
 - :mod:`~dustoptics.scattering.expansion`: the scattering matrix's expansion

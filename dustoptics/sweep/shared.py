@@ -14,7 +14,7 @@ each carrying the same n-point Gauss-Legendre rule as a panel of
 from the cells of the coarsest level that cuts its truncated radius range
 (the same tail bounds as a single build) into at least ``min_panels`` cells,
 and refines exactly as a single build does (:meth:`_WavelengthSolver.refine
-<dustoptics.scattering.optics._WavelengthSolver.refine>`: coarse rule against
+<dustoptics.scattering.refinement._WavelengthSolver.refine>`: coarse rule against
 the rules on the halves, most error per unit of work split first, the phase
 function to ``rtol``, then the cross-sections and g to ``cross_section_rtol``
 from the phase function's panels), with its own error estimates and its own
@@ -50,7 +50,7 @@ from numba import njit
 
 from dustoptics.particles.sizedist import SizeDistribution
 from dustoptics.scattering import mie
-from dustoptics.scattering.optics import (
+from dustoptics.scattering.refinement import (
     _KEEP_FRACTION,
     _apply_splits,
     _choose_splits,

@@ -407,7 +407,7 @@ def test_tiers_equal_the_full_grid(
     interpolation is exact for |S|^2 and the matrix's S_i S_j* of degree
     2 n_max < 2 n_tier, so they agree to round-off (1e-10 of the largest
     value, as the maps' own test), with the phase function or the matrix."""
-    from dustoptics.scattering.optics import _angular_tiers, _gauss_angles
+    from dustoptics.scattering.refinement import _angular_tiers, _gauss_angles
 
     m = 1.52 + 0.004j
     n_full = 96

@@ -58,3 +58,12 @@ def test_size_parameter_at_keeps_the_shape():
     x = size_parameter_at(s, settings=settings_)
     assert x.shape == (3, 4)
     np.testing.assert_array_equal(x, 2.0 * wrightomega(s))
+
+
+@given(x=st.floats(1e-6, 1e4), x_c=st.floats(0.1, 10.0))
+@settings(max_examples=50, deadline=None)
+def test_size_parameter_at_inverts_the_stretch(x: float, x_c: float) -> None:
+    """size_parameter_at(s) returns the x with s = x / x_c + ln(x / x_c)."""
+    s = x / x_c + np.log(x / x_c)
+    got = float(size_parameter_at(s, settings=QuadratureSettings(transition_size_parameter=x_c)))
+    assert got == pytest.approx(x, rel=1e-12)

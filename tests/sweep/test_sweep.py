@@ -39,7 +39,7 @@ distributed = pytest.importorskip(
 xr = pytest.importorskip("xarray", reason="needs the 'sweep' extra (xarray)")
 pytest.importorskip("zarr", reason="needs the 'sweep' extra (zarr)")
 
-from dustoptics.scattering.optics import _gauss_angles  # noqa: E402
+from dustoptics.scattering.refinement import _gauss_angles  # noqa: E402
 from dustoptics.sweep import local_cluster, sweep  # noqa: E402
 from dustoptics.sweep.shared import (  # noqa: E402
     _GRIDS,
