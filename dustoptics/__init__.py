@@ -5,7 +5,8 @@ m = n + i k; a size distribution gives n(r); :mod:`dustoptics.scattering.quadrat
 deterministic radius nodes; :mod:`dustoptics.scattering.mie` computes the spheres; and
 :func:`dustoptics.scattering.optics.compute_optics` averages them into a converged table
 over wavelength and scattering angle.  :mod:`dustoptics.scattering.phase` holds the
-analytic phase functions and blending, :mod:`dustoptics.models.config` and
+analytic phase functions, :mod:`dustoptics.scattering.tabulated_phase` the blending of
+tabulated ones, :mod:`dustoptics.models.config` and
 :mod:`dustoptics.models.presets` the named models, :mod:`dustoptics.table` the data
 model with provenance, :mod:`dustoptics.io` the renderers' formats,
 :mod:`dustoptics.atmosphere.gases`, :mod:`dustoptics.atmosphere.column`,
@@ -80,11 +81,9 @@ from dustoptics.scattering.phase import (
     costa2021_mars_dhg,
     double_henyey_greenstein,
     henyey_greenstein,
-    hybrid,
-    renormalize,
-    sphere_integral,
 )
 from dustoptics.scattering.quadrature import QuadratureSettings
+from dustoptics.scattering.tabulated_phase import hybrid, renormalize, sphere_integral
 from dustoptics.table import Provenance, Source, Table
 
 __all__ = [

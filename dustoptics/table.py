@@ -7,6 +7,12 @@ population, a gas): its phase function over wavelength and scattering angle,
 its mean cross-sections per particle, and, when the user gives a number
 density, its volume coefficients.
 
+One concept, the table, in one module: its fields with their units and
+checks, the quantities derived from them, its provenance, and its
+conversions to xarray and pandas; the package's other modules import it and
+it imports none of them (writers and the fitter register themselves here,
+:func:`register_table_writer`, :func:`register_table_fitter`).
+
 Stored quantities (and their units)
 -----------------------------------
 ``wavelength_nm`` [nm], ``theta_deg`` [deg] (0 = forward scattering),
@@ -1270,7 +1276,7 @@ class Table:
         """Phase function at other angles by linear interpolation in angle.
 
         This is the interpolation a renderer applies to the table (and that
-        :func:`dustoptics.scattering.phase.sphere_integral` integrates exactly); at angles
+        :func:`dustoptics.scattering.tabulated_phase.sphere_integral` integrates exactly); at angles
         of the table's own grid it returns the stored values unchanged.
 
         Parameters

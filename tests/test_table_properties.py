@@ -15,7 +15,7 @@ from hypothesis import strategies as st
 
 from dustoptics.io import open_table
 from dustoptics.io.tables.netcdf import SUFFIXES
-from dustoptics.scattering.phase import renormalize
+from dustoptics.scattering.tabulated_phase import renormalize
 from dustoptics.table import Provenance, Source, Table
 
 _positive = st.floats(1e-3, 1e3, allow_nan=False, allow_infinity=False)

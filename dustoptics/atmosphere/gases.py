@@ -116,6 +116,7 @@ from dustoptics._validation import (
 from dustoptics.particles.catalogue import get_material
 from dustoptics.particles.materials import GasFormulaIndex
 from dustoptics.scattering import phase as _phase
+from dustoptics.scattering import tabulated_phase as _tabulated
 from dustoptics.table import Provenance, Source, Table
 
 __all__ = [
@@ -546,8 +547,8 @@ class RayleighModel:
         theta = _theta_grid(theta_deg)
         n = self._density(number_density_per_m3)
         sigma_um2 = self.cross_section_m2(wl, number_density_per_m3=n) * _M2_TO_UM2
-        p = _phase.tabulate(self.phase_function, theta_deg=theta)
-        p = _phase.renormalize(np.broadcast_to(p, (wl.size, theta.size)), theta_deg=theta)
+        p = _tabulated.tabulate(self.phase_function, theta_deg=theta)
+        p = _tabulated.renormalize(np.broadcast_to(p, (wl.size, theta.size)), theta_deg=theta)
         inputs = {
             "kind": "rayleigh-gas",
             "model": self.name,
@@ -827,8 +828,10 @@ def collienne2013_table(
     wl = as_increasing_grid("wavelength_nm", wavelength_nm, unit="nm")
     beta = collienne2013_beta_per_m(wl)
     theta = _theta_grid(theta_deg)
-    p = _phase.renormalize(
-        np.broadcast_to(_phase.tabulate(_phase.rayleigh, theta_deg=theta), (wl.size, theta.size)),
+    p = _tabulated.renormalize(
+        np.broadcast_to(
+            _tabulated.tabulate(_phase.rayleigh, theta_deg=theta), (wl.size, theta.size)
+        ),
         theta_deg=theta,
     )
     c = _phase.COLLIENNE2013_MARS

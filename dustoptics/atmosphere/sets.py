@@ -74,6 +74,7 @@ from dustoptics.atmosphere.column import (
     sample_profile,
 )
 from dustoptics.scattering import phase as _phase
+from dustoptics.scattering import tabulated_phase as _tabulated
 from dustoptics.table import Provenance, Source, Table
 
 __all__ = [
@@ -585,9 +586,10 @@ def mars_atmosphere(
 
 def _kobe_aerosols(wl: np.ndarray, *, g: float) -> Table:
     theta = np.linspace(0.0, 180.0, 1801)
-    p = _phase.renormalize(
+    p = _tabulated.renormalize(
         np.broadcast_to(
-            _phase.tabulate(_phase.cornette_shanks1992, theta_deg=theta, g=g), (wl.size, theta.size)
+            _tabulated.tabulate(_phase.cornette_shanks1992, theta_deg=theta, g=g),
+            (wl.size, theta.size),
         ),
         theta_deg=theta,
     )

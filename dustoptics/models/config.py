@@ -57,7 +57,7 @@ hybrid models also ``weighting`` (``"scattering"``, the default, or
 
 - ``"mie"`` (the default): the polydisperse Mie phase function;
 - ``"hybrid"``: Meyran 2022's blend ``renormalize((1 - w) P_mie + w P_analytic)``
-  (:func:`dustoptics.scattering.phase.hybrid`) with ``weight`` w in [0, 1] (default 0.5)
+  (:func:`dustoptics.scattering.tabulated_phase.hybrid`) with ``weight`` w in [0, 1] (default 0.5)
   and ``analytic``, an analytic model below (default ``"costa2021_mars_dhg"``)
   with its parameters;
 - an analytic model alone: ``"costa2021_mars_dhg"`` (Costa et al.'s Mars DHG

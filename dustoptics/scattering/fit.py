@@ -37,7 +37,7 @@ The residual at angle ``theta_j`` is the relative error
 loss is its mean square over solid angle,
 ``L = sum_j w_j r_j^2 / sum_j w_j``, with ``w_j`` the solid angle each sample
 stands for when the table is read linearly in angle (the weights of
-:func:`dustoptics.scattering.phase.sphere_integral`).  The model is compared as
+:func:`dustoptics.scattering.tabulated_phase.sphere_integral`).  The model is compared as
 it would be tabulated: sampled at the table's angles and scaled to the
 table's own sphere integral under the same weights (1 for a renormalized
 table), so a table made from one of the models, renormalized or sampled
@@ -74,7 +74,8 @@ from typing import Any
 import numpy as np
 
 from dustoptics._validation import as_float_array, check_choice, check_closed_interval
-from dustoptics.scattering.phase import _draine, _draine_mean, _hg, _linear_theta_weights
+from dustoptics.scattering.phase import _draine, _draine_mean, _hg
+from dustoptics.scattering.tabulated_phase import _linear_theta_weights
 
 __all__ = [
     "FIT_MODELS",
@@ -421,7 +422,7 @@ class FitResult:
         Mean cosine of the analytic model with these parameters. [-]
     g_error : numpy.ndarray, shape (n_rows,)
         Mean cosine of the model as tabulated minus the table's, both read
-        linearly in angle (:func:`~dustoptics.scattering.phase.mean_cosine`). [-]
+        linearly in angle (:func:`~dustoptics.scattering.tabulated_phase.mean_cosine`). [-]
     loss : str
         The loss, in words.
     forward_cutoff_deg : float

@@ -6,6 +6,12 @@ kernels take plain arrays (complex refractive index ``m``, size parameters
 compiled with numba (``cache=True``, no ``fastmath``: fast-math reassociation
 breaks identities such as ``Re(a_n) = |a_n|^2`` for a lossless sphere).
 
+One concept, the compiled Mie kernel, in one module: the coefficients of
+single spheres (homogeneous or coated), the polydisperse sums that fuse them
+with the angular sums in one compiled loop over radii, and the Legendre
+projections between Gauss grids that those sums use; the coefficient and sum
+kernels share one flat workspace layout (below).
+
 Conventions (Bohren & Huffman 1983, chapter 4): time dependence exp(-i w t), so
 an absorbing sphere has m = n + i k with k >= 0; scattering amplitudes S1, S2 in
 van de Hulst's dimensionless normalization; mu = cos(theta), theta = 0 forward.

@@ -1,4 +1,10 @@
-"""Analytic phase functions, the seed models' parameter sets, and blending of tables.
+"""Analytic phase functions and the seed models' parameter sets.
+
+One concept, the analytic phase function, in one module: each model with
+its closed-form asymmetry parameter, the registry that names them, and the
+published parameter sets (Costa et al. 2021, Collienne et al. 2013) that are
+evaluated with them.  Most of its length is the models' docstrings and
+citations.
 
 Conventions
 -----------
@@ -50,12 +56,13 @@ Datasets
 
 Tables
 ------
-A renderer reads a phase table linearly interpolated in ``theta`` between its
-samples.  :func:`sphere_integral` integrates exactly that piecewise-linear
-function, :func:`renormalize` makes it integrate to one, and :func:`hybrid`
-(Meyran 2022's blend of a Mie table with an analytic one) and :func:`flatten`
-(CosmoScout VR's isotropic "phase flattening") are built on them.
-:func:`tabulate` samples an analytic function on a table grid.
+Phase functions sampled on a grid of angles, and what is done to them
+(:func:`~dustoptics.scattering.tabulated_phase.sphere_integral`,
+:func:`~dustoptics.scattering.tabulated_phase.renormalize`, Meyran's
+:func:`~dustoptics.scattering.tabulated_phase.hybrid`, ...), are in
+:mod:`dustoptics.scattering.tabulated_phase`.  Their old names here
+(``phase.hybrid`` and so on) still work until release 0.3, with a
+:class:`DeprecationWarning`.
 
 References
 ----------
@@ -94,15 +101,20 @@ from types import MappingProxyType
 from typing import Any, ClassVar, Final
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from dustoptics._deprecated import REMOVED_IN
 from dustoptics._validation import (
     _show,
     as_float_array,
-    as_increasing_grid,
     check_choice,
-    check_closed_interval,
-    check_open_interval,
+)
+from dustoptics.scattering._parameters import (
+    FloatArray,
+    FloatOrArray,
+    float_or_array,
+    in_interval,
+    mixing_weight,
 )
 
 __all__ = [
@@ -131,28 +143,20 @@ __all__ = [
     "double_henyey_greenstein_asymmetry",
     "draine2003",
     "draine2003_asymmetry",
-    "flatten",
     "get_analytic_model",
     "henyey_greenstein",
     "henyey_greenstein_asymmetry",
     "hg_draine_jendersie_deon2023",
     "hg_draine_jendersie_deon2023_asymmetry",
-    "hybrid",
     "jendersie_deon2023_parameters",
-    "mean_cosine",
     "rayleigh",
     "rayleigh_asymmetry",
     "rayleigh_depolarized",
     "rayleigh_depolarized_asymmetry",
     "rayleigh_penndorf1957",
     "rayleigh_penndorf1957_asymmetry",
-    "renormalize",
-    "sphere_integral",
-    "tabulate",
 ]
 
-FloatArray = NDArray[np.float64]
-FloatOrArray = float | FloatArray
 
 _FOUR_PI: Final = 4.0 * math.pi
 
@@ -217,47 +221,14 @@ COSMOSCOUT_VR: Final = (
 # ----------------------------------------------------------------- validation
 
 
-def _out(values: FloatArray) -> FloatOrArray:
-    """A Python float for 0-d results, the array otherwise."""
-    return float(values) if values.ndim == 0 else values
-
-
-def _interval_text(low: float, high: float, closed: bool) -> str:
-    return f"closed interval [{low}, {high}]" if closed else f"open interval ({low}, {high})"
-
-
-def _param(name: str, value: Any, low: float, high: float, *, closed: bool) -> float | FloatArray:
-    """A finite parameter (scalar or array) inside an interval, else ValueError.
-
-    Scalars go through the shared helpers so that the message is the project's
-    one format; arrays get the same message plus the offending values.
-    """
-    if np.ndim(value) == 0:
-        check = check_closed_interval if closed else check_open_interval
-        return check(name, value, low, high)
-    arr = as_float_array(name, value)
-    inside = (low <= arr) & (arr <= high) if closed else (low < arr) & (arr < high)
-    if not np.all(inside):
-        raise ValueError(
-            f"{name} must be in the {_interval_text(low, high, closed)}; got "
-            f"{_show(value)} (out of range: {_show(arr[~inside])})"
-        )
-    return arr
-
-
 def _g(name: str, value: Any) -> float | FloatArray:
     """An asymmetry-type parameter with ``|g| < 1``."""
-    return _param(name, value, -1.0, 1.0, closed=False)
-
-
-def _weight(name: str, value: Any) -> float | FloatArray:
-    """A mixing weight in [0, 1]."""
-    return _param(name, value, 0.0, 1.0, closed=True)
+    return in_interval(name, value, -1.0, 1.0, closed=False)
 
 
 def _draine_alpha(value: Any) -> float | FloatArray:
     """Draine's alpha >= -1 (so that ``1 + alpha mu^2 >= 0``), finite."""
-    return _param("alpha", value, -1.0, math.inf, closed=True)
+    return in_interval("alpha", value, -1.0, math.inf, closed=True)
 
 
 def _mu(mu: ArrayLike) -> FloatArray:
@@ -331,7 +302,7 @@ def rayleigh(mu: ArrayLike) -> FloatOrArray:
     .. [1] S. Chandrasekhar, Radiative Transfer. Oxford: Clarendon Press, 1950.
     """
     m = _mu(mu)
-    return _out(3.0 / (16.0 * math.pi) * (1.0 + m * m))
+    return float_or_array(3.0 / (16.0 * math.pi) * (1.0 + m * m))
 
 
 def rayleigh_asymmetry() -> float:
@@ -340,7 +311,7 @@ def rayleigh_asymmetry() -> float:
 
 
 def _depolarization(value: Any) -> float | FloatArray:
-    return _param("depolarization", value, 0.0, 6.0 / 7.0, closed=True)
+    return in_interval("depolarization", value, 0.0, 6.0 / 7.0, closed=True)
 
 
 def rayleigh_depolarized(mu: ArrayLike, *, depolarization: ArrayLike) -> FloatOrArray:
@@ -392,13 +363,13 @@ def rayleigh_depolarized(mu: ArrayLike, *, depolarization: ArrayLike) -> FloatOr
     gamma = delta / (2.0 - delta)
     m, gamma = _broadcast(mu=m, depolarization=gamma)
     p = 3.0 / (16.0 * math.pi * (1.0 + 2.0 * gamma)) * ((1.0 + 3.0 * gamma) + (1.0 - gamma) * m * m)
-    return _out(p)
+    return float_or_array(p)
 
 
 def rayleigh_depolarized_asymmetry(*, depolarization: ArrayLike) -> FloatOrArray:
     """Mean cosine of :func:`rayleigh_depolarized`: 0 for every ``depolarization``. [-]"""
     delta = np.asarray(_depolarization(depolarization))
-    return _out(np.zeros_like(delta))
+    return float_or_array(np.zeros_like(delta))
 
 
 #: ``2 pi int P dmu`` of :func:`rayleigh_penndorf1957` as printed:
@@ -430,7 +401,7 @@ def rayleigh_penndorf1957(mu: ArrayLike) -> FloatOrArray:
     (``0.76291``, ``0.93237``).  This function is returned as printed, not
     renormalized, so that it reproduces Costa et al.'s renderer; use
     :func:`rayleigh_depolarized` for a normalized function, or
-    :func:`renormalize` on a table.
+    :func:`~dustoptics.scattering.tabulated_phase.renormalize` on a table.
 
     References
     ----------
@@ -443,7 +414,7 @@ def rayleigh_penndorf1957(mu: ArrayLike) -> FloatOrArray:
        pp. 785-795, 2021, doi:10.1109/TVCG.2020.3030333, eq. (10).
     """
     m = _mu(mu)
-    return _out(0.7629 * (1.0 + 0.932 * m * m) / _FOUR_PI)
+    return float_or_array(0.7629 * (1.0 + 0.932 * m * m) / _FOUR_PI)
 
 
 def rayleigh_penndorf1957_asymmetry() -> float:
@@ -479,12 +450,12 @@ def henyey_greenstein(mu: ArrayLike, *, g: ArrayLike) -> FloatOrArray:
     m = _mu(mu)
     gg = _g("g", g)
     m, gg = _broadcast(mu=m, g=gg)
-    return _out(_hg(m, gg))
+    return float_or_array(_hg(m, gg))
 
 
 def henyey_greenstein_asymmetry(*, g: ArrayLike) -> FloatOrArray:
     """Mean cosine of :func:`henyey_greenstein`: ``<mu> = g``. [-]"""
-    return _out(np.array(_g("g", g), dtype=np.float64))
+    return float_or_array(np.array(_g("g", g), dtype=np.float64))
 
 
 # ------------------------------------------------------ double Henyey-Greenstein
@@ -527,15 +498,15 @@ def dhg_costa2021(mu: ArrayLike, *, g1: ArrayLike, g2: ArrayLike, alpha: ArrayLi
        pp. 785-795, 2021, doi:10.1109/TVCG.2020.3030333, eq. (16).
     """
     m = _mu(mu)
-    a = _weight("alpha", alpha)
+    a = mixing_weight("alpha", alpha)
     m, g1a, g2a, a = _broadcast(mu=m, g1=_g("g1", g1), g2=_g("g2", g2), alpha=a)
-    return _out(a * _hg(m, g1a) + (1.0 - a) * _hg(m, g2a))
+    return float_or_array(a * _hg(m, g1a) + (1.0 - a) * _hg(m, g2a))
 
 
 def dhg_costa2021_asymmetry(*, g1: ArrayLike, g2: ArrayLike, alpha: ArrayLike) -> FloatOrArray:
     """Mean cosine of :func:`dhg_costa2021`: ``alpha g1 + (1 - alpha) g2``. [-]"""
-    g1a, g2a, a = _broadcast(g1=_g("g1", g1), g2=_g("g2", g2), alpha=_weight("alpha", alpha))
-    return _out(a * g1a + (1.0 - a) * g2a)
+    g1a, g2a, a = _broadcast(g1=_g("g1", g1), g2=_g("g2", g2), alpha=mixing_weight("alpha", alpha))
+    return float_or_array(a * g1a + (1.0 - a) * g2a)
 
 
 def dhg_kobe2026(mu: ArrayLike, *, g1: ArrayLike, g2: ArrayLike, f: ArrayLike) -> FloatOrArray:
@@ -572,15 +543,15 @@ def dhg_kobe2026(mu: ArrayLike, *, g1: ArrayLike, g2: ArrayLike, f: ArrayLike) -
        atmosphere," M.Sc. thesis, Hochschule Hannover, 2022, eq. (2.30).
     """
     m = _mu(mu)
-    w = _weight("f", f)
+    w = mixing_weight("f", f)
     m, g1a, g2a, w = _broadcast(mu=m, g1=_g("g1", g1), g2=_g("g2", g2), f=w)
-    return _out((1.0 - w) * _hg(m, g1a) + w * _hg(m, g2a))
+    return float_or_array((1.0 - w) * _hg(m, g1a) + w * _hg(m, g2a))
 
 
 def dhg_kobe2026_asymmetry(*, g1: ArrayLike, g2: ArrayLike, f: ArrayLike) -> FloatOrArray:
     """Mean cosine of :func:`dhg_kobe2026`: ``(1 - f) g1 + f g2``. [-]"""
-    g1a, g2a, w = _broadcast(g1=_g("g1", g1), g2=_g("g2", g2), f=_weight("f", f))
-    return _out((1.0 - w) * g1a + w * g2a)
+    g1a, g2a, w = _broadcast(g1=_g("g1", g1), g2=_g("g2", g2), f=mixing_weight("f", f))
+    return float_or_array((1.0 - w) * g1a + w * g2a)
 
 
 def _dhg_weight(convention: str, alpha: Any, f: Any) -> tuple[str, Any]:
@@ -700,7 +671,7 @@ def cornette_shanks1992(mu: ArrayLike, *, g: ArrayLike) -> FloatOrArray:
     """
     m = _mu(mu)
     m, gg = _broadcast(mu=m, g=_g("g", g))
-    return _out(1.5 / (2.0 + gg * gg) * (1.0 + m * m) * _hg(m, gg))
+    return float_or_array(1.5 / (2.0 + gg * gg) * (1.0 + m * m) * _hg(m, gg))
 
 
 def cornette_shanks1992_asymmetry(*, g: ArrayLike) -> FloatOrArray:
@@ -723,7 +694,7 @@ def cornette_shanks1992_asymmetry(*, g: ArrayLike) -> FloatOrArray:
         Mean cosine of the scattering angle. [-]
     """
     gg = np.asarray(_g("g", g), dtype=np.float64)
-    return _out(3.0 * gg * (4.0 + gg * gg) / (5.0 * (2.0 + gg * gg)))
+    return float_or_array(3.0 * gg * (4.0 + gg * gg) / (5.0 * (2.0 + gg * gg)))
 
 
 # ---------------------------------------------------------------------- Draine
@@ -761,7 +732,7 @@ def draine2003(mu: ArrayLike, *, g: ArrayLike, alpha: ArrayLike) -> FloatOrArray
     """
     m = _mu(mu)
     m, gg, a = _broadcast(mu=m, g=_g("g", g), alpha=_draine_alpha(alpha))
-    return _out(_draine(m, gg, a))
+    return float_or_array(_draine(m, gg, a))
 
 
 def draine2003_asymmetry(*, g: ArrayLike, alpha: ArrayLike) -> FloatOrArray:
@@ -775,7 +746,7 @@ def draine2003_asymmetry(*, g: ArrayLike, alpha: ArrayLike) -> FloatOrArray:
     from ``<mu>_HG = g`` and ``<mu^3>_HG = (3 g + 2 g^3) / 5``. [-]
     """
     gg, a = _broadcast(g=_g("g", g), alpha=_draine_alpha(alpha))
-    return _out(_draine_mean(gg, a))
+    return float_or_array(_draine_mean(gg, a))
 
 
 def hg_draine_jendersie_deon2023(
@@ -824,9 +795,9 @@ def hg_draine_jendersie_deon2023(
         g_hg=_g("g_hg", g_hg),
         g_d=_g("g_d", g_d),
         alpha=_draine_alpha(alpha),
-        w_d=_weight("w_d", w_d),
+        w_d=mixing_weight("w_d", w_d),
     )
-    return _out((1.0 - w) * _hg(m, gh) + w * _draine(m, gd, a))
+    return float_or_array((1.0 - w) * _hg(m, gh) + w * _draine(m, gd, a))
 
 
 def hg_draine_jendersie_deon2023_asymmetry(
@@ -841,9 +812,9 @@ def hg_draine_jendersie_deon2023_asymmetry(
         g_hg=_g("g_hg", g_hg),
         g_d=_g("g_d", g_d),
         alpha=_draine_alpha(alpha),
-        w_d=_weight("w_d", w_d),
+        w_d=mixing_weight("w_d", w_d),
     )
-    return _out((1.0 - w) * gh + w * _draine_mean(gd, a))
+    return float_or_array((1.0 - w) * gh + w * _draine_mean(gd, a))
 
 
 @dataclass(frozen=True, eq=False)
@@ -931,7 +902,9 @@ def jendersie_deon2023_parameters(*, diameter_um: ArrayLike) -> HGDraineParamete
        doi:10.1145/3587421.3595409, eqs. (7)-(10).
     """
     low, high = JENDERSIE_DEON2023_DIAMETER_RANGE_UM
-    d = np.asarray(_param("diameter_um", diameter_um, low, high, closed=True), dtype=np.float64)
+    d = np.asarray(
+        in_interval("diameter_um", diameter_um, low, high, closed=True), dtype=np.float64
+    )
     g_hg = np.exp(-0.0990567 / (d - 1.67154))
     g_d = np.exp(-2.20679 / (d + 3.91029) - 0.428934)
     alpha = np.exp(3.62489 - 8.29288 / (d + 5.52825))
@@ -1099,7 +1072,7 @@ class DHGSpectrum:
                     f"{name} must have the shape of wavelength_nm {wl.shape}; got {arr.shape}"
                 )
             if name == "alpha":
-                _weight(name, arr)
+                mixing_weight(name, arr)
             else:
                 _g(name, arr)
             object.__setattr__(self, name, arr)
@@ -1301,295 +1274,29 @@ class Collienne2013:
 COLLIENNE2013_MARS: Final = Collienne2013()
 
 
-# --------------------------------------------------------------------- tables
+# ------------------------------------------------------------- moved names
+
+#: Tabulated-phase functions that lived here until 0.2; the old names warn until 0.3.
+_MOVED_TO_TABULATED_PHASE: Final = (
+    "flatten",
+    "hybrid",
+    "mean_cosine",
+    "renormalize",
+    "sphere_integral",
+    "tabulate",
+)
 
 
-def _table_grid(theta_deg: ArrayLike) -> FloatArray:
-    """A table angle grid: strictly increasing, from exactly 0 to exactly 180 deg."""
-    theta = as_increasing_grid("theta_deg", theta_deg, low=0.0, high=180.0, unit="deg")
-    if theta.size < 2 or theta[0] != 0.0 or theta[-1] != 180.0:
-        raise ValueError(
-            f"theta_deg [deg] must start at exactly 0 and end at exactly 180 (the table "
-            f"must cover the sphere); got {theta.size} values from {theta[0]!r} to {theta[-1]!r}"
+def __getattr__(name: str) -> Any:
+    """``phase.hybrid`` and the other moved names, with a DeprecationWarning."""
+    if name in _MOVED_TO_TABULATED_PHASE:
+        from dustoptics.scattering import tabulated_phase
+
+        warnings.warn(
+            f"{__name__}.{name} moved to {tabulated_phase.__name__}.{name}; "
+            f"the old path is removed in {REMOVED_IN}",
+            DeprecationWarning,
+            stacklevel=2,
         )
-    return theta
-
-
-def _table(name: str, phase: ArrayLike, theta: FloatArray) -> FloatArray:
-    """A phase table: finite, nonnegative, last axis on the angle grid."""
-    p = as_float_array(name, phase)
-    if p.ndim == 0 or p.shape[-1] != theta.size:
-        raise ValueError(
-            f"{name} has shape {p.shape} but theta_deg has shape {theta.shape}: the last "
-            f"axis of {name} must run over theta_deg"
-        )
-    if np.any(p < 0.0):
-        raise ValueError(f"{name} must be >= 0 [sr^-1]; got minimum {float(p.min())!r}")
-    return p
-
-
-def _h_minus_sin(h: FloatArray) -> FloatArray:
-    """``h - sin(h)`` without cancellation for small ``h``.
-
-    Below 0.5 rad the Taylor series ``h^3/3! - h^5/5! + ... + h^19/19!`` (nested),
-    whose truncation is below ``h^21/21! < 1e-26``; above it, the direct
-    difference loses at most ``6 eps / h^2 < 6e-15`` relative.
-    """
-    h2 = h * h
-    series = np.ones_like(h)
-    for n in range(9, 1, -1):  # factors (2n)(2n+1): 342, 272, ..., 20
-        series = 1.0 - h2 / ((2 * n) * (2 * n + 1)) * series
-    series = h * h2 / 6.0 * series
-    return np.where(h < 0.5, series, h - np.sin(h))
-
-
-def _linear_theta_weights(theta_deg: FloatArray) -> FloatArray:
-    """Weights ``w`` with ``sum_i w_i P_i = int_0^pi P(theta) sin(theta) dtheta``.
-
-    Exact for ``P`` linear in ``theta`` on each interval (see :func:`sphere_integral`).
-    """
-    t = np.deg2rad(theta_deg)
-    t0, t1 = t[:-1], t[1:]
-    h = t1 - t0
-    one_minus_cos = 2.0 * np.sin(0.5 * h) ** 2
-    h_minus_sin = _h_minus_sin(h)
-    left = (np.sin(t0) * one_minus_cos + np.cos(t0) * h_minus_sin) / h
-    right = (np.sin(t1) * one_minus_cos - np.cos(t1) * h_minus_sin) / h
-    w = np.zeros_like(t)
-    w[:-1] += left
-    w[1:] += right
-    return w
-
-
-def sphere_integral(phase: ArrayLike, *, theta_deg: ArrayLike) -> FloatOrArray:
-    """Sphere integral of a phase table read by linear interpolation in angle.
-
-    Computes ``2 pi int_0^pi P(theta) sin(theta) dtheta = 2 pi int_{-1}^{1} P dmu``
-    exactly for the function a renderer reads from the table: linear in
-    ``theta`` between samples.  On ``[t0, t1]`` with ``h = t1 - t0`` and
-    ``P = P0 + (P1 - P0)(t - t0)/h``,
-
-    .. math::
-
-        \\int_{t_0}^{t_1} P \\sin t\\, dt = P_0 w_0 + P_1 w_1, \\quad
-        w_0 = \\frac{\\sin t_0 (1 - \\cos h) + \\cos t_0 (h - \\sin h)}{h}, \\quad
-        w_1 = \\frac{\\sin t_1 (1 - \\cos h) - \\cos t_1 (h - \\sin h)}{h}
-
-    (from ``int (t - t0) sin t dt = sin t - (t - t0) cos t``; ``w0 + w1 =
-    cos t0 - cos t1``).  ``1 - cos h`` is evaluated as ``2 sin^2(h/2)`` and
-    ``h - sin h`` by its series for small ``h``, so the weights keep full
-    relative precision on fine grids.
-
-    Parameters
-    ----------
-    phase : array_like
-        Phase table, shape ``(..., n_theta)``, nonnegative. [sr^-1]
-    theta_deg : array_like
-        Scattering angles, shape ``(n_theta,)``, strictly increasing from
-        exactly 0 to exactly 180. [deg]
-
-    Returns
-    -------
-    float or numpy.ndarray
-        ``2 pi int P dmu`` per row, shape ``phase.shape[:-1]``. [-]
-    """
-    theta = _table_grid(theta_deg)
-    p = _table("phase", phase, theta)
-    return _out(2.0 * math.pi * (p @ _linear_theta_weights(theta)))
-
-
-def mean_cosine(phase: ArrayLike, *, theta_deg: ArrayLike) -> FloatOrArray:
-    """Mean cosine (asymmetry parameter) of a phase table read linearly in angle.
-
-    Computes ``g = 2 pi int_{-1}^{1} P mu dmu`` exactly for ``P`` linear in
-    ``theta`` between samples:
-    ``int P sin(t) cos(t) dt = (1/4) int_0^{2 pi} P(u/2) sin(u) du`` with
-    ``u = 2 t``, and ``P`` is linear in ``u`` on each interval, so the weights
-    of :func:`sphere_integral` on the doubled grid integrate it exactly (their
-    derivation holds on any interval, not only within [0, pi]).
-
-    Parameters
-    ----------
-    phase : array_like
-        Phase table, shape ``(..., n_theta)``, normalized to 1. [sr^-1]
-    theta_deg : array_like
-        Scattering angles, strictly increasing from exactly 0 to exactly 180. [deg]
-
-    Returns
-    -------
-    float or numpy.ndarray
-        g per row, shape ``phase.shape[:-1]``. [-]
-
-    Examples
-    --------
-    >>> theta = np.linspace(0.0, 180.0, 1801)
-    >>> p = henyey_greenstein(np.cos(np.deg2rad(theta)), g=0.5)
-    >>> abs(mean_cosine(p, theta_deg=theta) - 0.5) < 1e-5
-    True
-    """
-    theta = _table_grid(theta_deg)
-    p = _table("phase", phase, theta)
-    return _out(0.5 * math.pi * (p @ _linear_theta_weights(2.0 * theta)))
-
-
-def renormalize(phase: ArrayLike, *, theta_deg: ArrayLike) -> FloatArray:
-    """Scale each row of a phase table so that :func:`sphere_integral` gives 1.
-
-    Parameters
-    ----------
-    phase : array_like
-        Phase table, shape ``(..., n_theta)``, nonnegative with a positive
-        integral in every row. [sr^-1]
-    theta_deg : array_like
-        Scattering angles, strictly increasing from exactly 0 to exactly 180. [deg]
-
-    Returns
-    -------
-    numpy.ndarray
-        A new table (the input is not modified), normalized to 1 to rounding
-        (< 1e-12) under linear interpolation in ``theta``. [sr^-1]
-    """
-    theta = _table_grid(theta_deg)
-    p = _table("phase", phase, theta)
-    total = 2.0 * math.pi * (p @ _linear_theta_weights(theta))
-    if np.any(total <= 0.0):
-        raise ValueError(
-            "phase must have a positive sphere integral in every row; some rows are all zero"
-        )
-    return p / total[..., None]
-
-
-def hybrid(
-    p_mie: ArrayLike,
-    p_analytic: ArrayLike,
-    *,
-    theta_deg: ArrayLike,
-    weight: ArrayLike = 0.5,
-) -> FloatArray:
-    """Meyran's hybrid phase function: a blend of two tables, renormalized.
-
-    .. math:: P_h = \\mathrm{renormalize}\\left[(1 - w) P_{mie} + w P_{analytic}\\right]
-
-    with the renormalization of :func:`renormalize` applied to each
-    wavelength row.
-
-    Parameters
-    ----------
-    p_mie : array_like
-        Mie phase table, shape ``(..., n_theta)``, nonnegative. [sr^-1]
-    p_analytic : array_like
-        Analytic phase table (e.g. Costa et al.'s DHG tabulated with
-        :func:`tabulate`), the same shape. [sr^-1]
-    theta_deg : array_like
-        Scattering angles, strictly increasing from exactly 0 to exactly 180. [deg]
-    weight : array_like, optional
-        Weight ``w`` of the analytic table, in [0, 1]: a scalar, or an array over
-        angle of shape ``(n_theta,)``, or anything else that broadcasts to the
-        tables' shape.  Meyran 2022 calls the blend a simple linear
-        interpolation without stating ``w``; 0.5 is the default. [-]
-
-    Returns
-    -------
-    numpy.ndarray
-        The hybrid table, normalized per row. [sr^-1]
-
-    Notes
-    -----
-    The inputs are blended as given; each should already be normalized, or the
-    effective weight differs from ``w``.
-
-    References
-    ----------
-    .. [1] T. Meyran, "Physically based real-time rendering of the Martian
-       atmosphere," M.Sc. thesis, Hochschule Hannover, 2022, section 4.
-    """
-    theta = _table_grid(theta_deg)
-    pm = _table("p_mie", p_mie, theta)
-    pa = _table("p_analytic", p_analytic, theta)
-    if pm.shape != pa.shape:
-        raise ValueError(
-            f"p_mie has shape {pm.shape} but p_analytic has shape {pa.shape}; they must match"
-        )
-    w = _broadcast_weight("weight", weight, pm.shape)
-    return renormalize((1.0 - w) * pm + w * pa, theta_deg=theta)
-
-
-def _broadcast_weight(name: str, value: Any, shape: tuple[int, ...]) -> FloatArray:
-    w = np.asarray(_weight(name, value), dtype=np.float64)
-    try:
-        if np.broadcast_shapes(w.shape, shape) != shape:
-            raise ValueError
-    except ValueError:
-        raise ValueError(
-            f"{name} has shape {w.shape}, which does not broadcast to the table's shape {shape} "
-            f"(use a scalar or an array over theta_deg of shape ({shape[-1]},))"
-        ) from None
-    return w
-
-
-def flatten(phase: ArrayLike, *, theta_deg: ArrayLike, amount: ArrayLike) -> FloatArray:
-    """CosmoScout VR's isotropic "phase flattening", renormalized.
-
-    .. math:: P' = \\mathrm{renormalize}\\left[(1 - a) P + \\frac{a}{4 \\pi}\\right]
-
-    Parameters
-    ----------
-    phase : array_like
-        Phase table, shape ``(..., n_theta)``, nonnegative. [sr^-1]
-    theta_deg : array_like
-        Scattering angles, strictly increasing from exactly 0 to exactly 180. [deg]
-    amount : array_like
-        Flattening ``a`` in [0, 1]: 0 leaves the table (renormalized), 1 makes it
-        isotropic.  A scalar or anything that broadcasts to the table's shape. [-]
-
-    Returns
-    -------
-    numpy.ndarray
-        The flattened table, normalized per row. [sr^-1]
-
-    Notes
-    -----
-    The constant ``1/(4 pi)`` integrates to exactly 1 under the same
-    quadrature, so for an already normalized table the renormalization only
-    removes rounding.
-
-    References
-    ----------
-    .. [1] German Aerospace Center (DLR), CosmoScout VR, plugin
-       csp-atmospheres, https://github.com/cosmoscout/cosmoscout-vr.
-    """
-    theta = _table_grid(theta_deg)
-    p = _table("phase", phase, theta)
-    a = _broadcast_weight("amount", amount, p.shape)
-    return renormalize((1.0 - a) * p + a / _FOUR_PI, theta_deg=theta)
-
-
-def tabulate(
-    function: Callable[..., FloatOrArray], *, theta_deg: ArrayLike, **params: Any
-) -> FloatArray:
-    """Sample an analytic phase function on a grid of scattering angles.
-
-    Parameters
-    ----------
-    function : callable
-        A phase function of this module (or any ``f(mu, **params)``).
-    theta_deg : array_like
-        Scattering angles, strictly increasing in [0, 180]. [deg]
-    **params
-        The function's parameters; give per-wavelength values a trailing axis
-        (shape ``(n_wl, 1)``) to get a ``(n_wl, n_theta)`` table.
-
-    Returns
-    -------
-    numpy.ndarray
-        ``function(cos(theta), **params)``. [sr^-1]
-
-    Notes
-    -----
-    Sampled values are not renormalized: under linear interpolation in angle a
-    sampled analytic function integrates to 1 only up to the interpolation
-    error.  Pass the result through :func:`renormalize` to export it.
-    """
-    theta = as_increasing_grid("theta_deg", theta_deg, low=0.0, high=180.0, unit="deg")
-    mu = np.clip(np.cos(np.deg2rad(theta)), -1.0, 1.0)
-    return np.asarray(function(mu, **params), dtype=np.float64)
+        return getattr(tabulated_phase, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -22,7 +22,7 @@ from dustoptics.atmosphere.gases import (
     rayleigh_cross_section_m2,
     read_ozone_csv,
 )
-from dustoptics.scattering import phase
+from dustoptics.scattering import tabulated_phase
 
 SPECTRA = ("reference-data", "spectra")
 
@@ -196,7 +196,7 @@ def test_rayleigh_table():
     np.testing.assert_allclose(t.beta_sca_per_m, gas.beta_sca_per_m(wl), rtol=1e-12)
     np.testing.assert_array_equal(t.beta_abs_per_m, 0.0)
     np.testing.assert_allclose(
-        phase.sphere_integral(t.phase, theta_deg=t.theta_deg), 1.0, rtol=1e-12
+        tabulated_phase.sphere_integral(t.phase, theta_deg=t.theta_deg), 1.0, rtol=1e-12
     )
     # Penndorf's shape: P(0)/P(90) = 1 + 0.932.
     assert t.phase[0, 0] / t.phase[0, 90] == pytest.approx(1.932, rel=1e-12)

@@ -13,7 +13,7 @@ from _shared import shared_path
 from dustoptics.models import presets
 from dustoptics.models.compute import build_table
 from dustoptics.models.config import BuildConfig, parse_config
-from dustoptics.scattering import phase
+from dustoptics.scattering import phase, tabulated_phase
 from dustoptics.scattering.phase import ExtrapolationWarning
 from dustoptics.table import Table, canonical_json
 
@@ -164,14 +164,14 @@ def _costa_table(wavelength_nm: np.ndarray, theta_deg: np.ndarray, outside: str)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ExtrapolationWarning)
         spec = phase.costa2021_mars_dhg(wavelength_nm, outside=outside)
-    raw = phase.tabulate(
+    raw = tabulated_phase.tabulate(
         phase.dhg_costa2021,
         theta_deg=theta_deg,
         g1=spec.g1[:, None],
         g2=spec.g2[:, None],
         alpha=spec.alpha[:, None],
     )
-    return phase.renormalize(raw, theta_deg=theta_deg)
+    return tabulated_phase.renormalize(raw, theta_deg=theta_deg)
 
 
 @pytest.mark.parametrize(
@@ -184,15 +184,17 @@ def test_hybrid_is_the_renormalized_half_blend(built, name: str, mie: str, outsi
     hyb, caught = built[name]
     base, _ = built[mie]
     theta = base.theta_deg
-    expected = phase.renormalize(
-        0.5 * phase.renormalize(base.phase, theta_deg=theta)
+    expected = tabulated_phase.renormalize(
+        0.5 * tabulated_phase.renormalize(base.phase, theta_deg=theta)
         + 0.5 * _costa_table(base.wavelength_nm, theta, outside),
         theta_deg=theta,
     )
     np.testing.assert_allclose(hyb.phase, expected, rtol=1e-13, atol=0)
     np.testing.assert_array_equal(hyb.cext_um2, base.cext_um2)
     np.testing.assert_array_equal(hyb.csca_um2, base.csca_um2)
-    np.testing.assert_allclose(phase.sphere_integral(hyb.phase, theta_deg=theta), 1.0, rtol=1e-12)
+    np.testing.assert_allclose(
+        tabulated_phase.sphere_integral(hyb.phase, theta_deg=theta), 1.0, rtol=1e-12
+    )
     extrapolated = [w for w in caught if issubclass(w.category, ExtrapolationWarning)]
     if outside == "quadratic":  # the seed's g1 < 0 above 689.76 nm: warned and recorded
         assert extrapolated
@@ -205,8 +207,8 @@ def test_hybrid_uses_the_costa_preset_table(built) -> None:
     """Both use outside='clamp' on the same grid, so hybrid's analytic part is costa's table."""
     hyb, costa, mie = built["hybrid"][0], built["costa"][0], built["blue-moons"][0]
     theta = hyb.theta_deg
-    expected = phase.hybrid(
-        phase.renormalize(mie.phase, theta_deg=theta), costa.phase, theta_deg=theta
+    expected = tabulated_phase.hybrid(
+        tabulated_phase.renormalize(mie.phase, theta_deg=theta), costa.phase, theta_deg=theta
     )
     np.testing.assert_array_equal(hyb.phase, expected)
 

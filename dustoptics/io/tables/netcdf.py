@@ -330,7 +330,7 @@ def check_normalization(table: Table) -> None:
 
     For a table whose angles span 0 to 180 degree (3 or more), I = 2 pi int P
     dmu of the phase function read by linear interpolation in angle (exactly,
-    :func:`dustoptics.scattering.phase.sphere_integral`) must satisfy
+    :func:`dustoptics.scattering.tabulated_phase.sphere_integral`) must satisfy
     ``|I - 1| <= 2 |I - I_2| + 1e-6``, where I_2 is the same integral on every
     other angle (endpoints kept): the interpolation error of I is about a
     third of ``|I - I_2|`` once the grid resolves the function (second-order
@@ -343,7 +343,7 @@ def check_normalization(table: Table) -> None:
     ValueError
         The first wavelength that fails, with I and the tolerance.
     """
-    from dustoptics.scattering.phase import sphere_integral
+    from dustoptics.scattering.tabulated_phase import sphere_integral
 
     theta = table.theta_deg
     if not table.spans_sphere or theta.size < 3:

@@ -22,7 +22,7 @@ import pytest
 import dustoptics as do
 from dustoptics.io import FORMATS, FormatError, open_table, write_netcdf
 from dustoptics.io.tables.netcdf import DIGEST_ATTRIBUTE, MAX_VALUES, SUFFIXES, dataset_digest
-from dustoptics.scattering.phase import renormalize
+from dustoptics.scattering.tabulated_phase import renormalize
 from dustoptics.table import DERIVED, SCHEMA, UNITS, Table
 
 TABLES = Path(__file__).resolve().parents[3] / "tables"
