@@ -17,12 +17,12 @@ PACKAGE = Path(__file__).resolve().parents[1] / "dustoptics"
 #: Within a layer, the cycle check alone applies.
 LAYERS: tuple[tuple[str, ...], ...] = (
     ("dustoptics._validation", "dustoptics._numba_cache", "dustoptics._deprecated"),
-    ("dustoptics.table", "dustoptics.colour"),
+    ("dustoptics.table", "dustoptics.colour", "dustoptics.compare"),
     ("dustoptics.particles",),
     ("dustoptics.scattering",),
     ("dustoptics.models", "dustoptics.atmosphere"),
     ("dustoptics.io",),
-    ("dustoptics.compare", "dustoptics.plot", "dustoptics.sweep", "dustoptics.sky"),
+    ("dustoptics.plot", "dustoptics.sweep", "dustoptics.sky"),
     ("dustoptics.cli",),
 )
 
