@@ -4,7 +4,9 @@
 over axes of its inputs (:mod:`dustoptics.sweep.spec`), sharing the Mie work
 of points that differ only in their size distribution
 (:mod:`dustoptics.sweep.shared`), on a Dask cluster, stored chunk by chunk in
-a resumable Zarr store (:mod:`dustoptics.sweep.run`); :mod:`dustoptics.sweep.lookup`
+a resumable Zarr store (:mod:`dustoptics.sweep.run`) that one run writes at a
+time and whose chunks carry their digests (:mod:`dustoptics.sweep.store`,
+:func:`verify_store`); :mod:`dustoptics.sweep.lookup`
 turns a sweep over effective radius into a 3-D texture for renderers.  Needs
 the ``sweep`` extra (dask[distributed], xarray, zarr).
 """
@@ -12,6 +14,7 @@ the ``sweep`` extra (dask[distributed], xarray, zarr).
 from dustoptics.sweep.lookup import write_lookup
 from dustoptics.sweep.run import compute_chunk, local_cluster, sweep
 from dustoptics.sweep.spec import Axis, SweepSpec, load_sweep
+from dustoptics.sweep.store import verify_store
 
 __all__ = [
     "Axis",
@@ -20,5 +23,6 @@ __all__ = [
     "load_sweep",
     "local_cluster",
     "sweep",
+    "verify_store",
     "write_lookup",
 ]

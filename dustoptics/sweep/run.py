@@ -8,11 +8,19 @@ chunk is one Dask task and one chunk of every array in the Zarr store.  The
 client submits the chunks that the store does not hold yet, and each is
 written as it finishes, by its worker where the worker sees the store (a
 local cluster, or workers on a shared filesystem), otherwise by the client:
-its arrays first, then a completion marker (a small file written to a
-temporary name and renamed).  A chunk without its marker is
-computed again, whatever its arrays hold, so a stopped or crashed sweep
-resumes where it stopped and no half-written chunk is ever counted; a worker
-that dies is replaced and its tasks run elsewhere (Dask's scheduler).
+its arrays first, then a completion marker with their digests (a small
+file written to a temporary name and renamed; :mod:`dustoptics.sweep.store`).
+A chunk without a marker that its files match is computed again, so a
+stopped or crashed sweep resumes where it stopped, no half-written or damaged
+chunk is ever counted, and one run at a time writes a store; a worker that
+dies is replaced and its tasks run elsewhere (Dask's scheduler).
+
+Before any work the whole sweep is estimated (each point as a single build
+estimates it, a chunk's memory, the result and the store) and refused beyond
+the budgets unless ``allow_large``.  A chunk that fails on its worker (a full
+disk) comes back to the client as a value and is raised there, without the
+worker's traceback; a Ctrl-C closes the cluster that the sweep started, whose
+workers ignore it, and raises KeyboardInterrupt.
 
 Values depend only on the sweep and its chunks along the size axes, never on
 the number of workers, the scheduler, the order in which chunks finish or
@@ -22,6 +30,7 @@ sweep gives the same bytes.
 
 from __future__ import annotations
 
+import contextlib
 import ctypes
 import json
 import math
@@ -29,6 +38,7 @@ import os
 import pickle
 import platform
 import shutil
+import signal
 import sys
 import threading
 import time
@@ -42,12 +52,22 @@ from typing import Any, TextIO
 
 import numpy as np
 
+from dustoptics._validation import BudgetError, check_budget
 from dustoptics.io._atomic import write_files
 from dustoptics.models.compute import build_table
 from dustoptics.models.config import BuildConfig
+from dustoptics.scattering import optics
 from dustoptics.scattering.optics import resolve_refractive_index
 from dustoptics.scattering.quadrature import QuadratureSettings
 from dustoptics.sweep.spec import SweepSpec, _load_points, parse_points
+from dustoptics.sweep.store import (
+    MARKERS,
+    StoreLayout,
+    done_chunks,
+    held_store,
+    read_layout,
+    write_marker,
+)
 from dustoptics.table import Provenance, canonical_json, software_versions
 
 __all__ = ["ChunkResult", "compute_chunk", "local_cluster", "sweep"]
@@ -72,8 +92,6 @@ _PER_WAVELENGTH = {
 #: both near 2 % on 2 workers.
 _WAVELENGTH_BLOCKS = 24
 
-_MARKERS = "sweep-done"
-_IDENTITY = "sweep-identity.json"
 _RUN_TOKEN = "run-"
 
 
@@ -188,7 +206,12 @@ def _allocations_reused() -> Iterator[None]:
 
 
 def compute_chunk(
-    points: Sequence[Mapping[str, Any]], wl_start: int, wl_stop: int, *, shared: bool = True
+    points: Sequence[Mapping[str, Any]],
+    wl_start: int,
+    wl_stop: int,
+    *,
+    shared: bool = True,
+    allow_large: bool = False,
 ) -> ChunkResult:
     """Compute one chunk: points (TOML data) at wavelengths ``[wl_start, wl_stop)``.
 
@@ -196,18 +219,23 @@ def compute_chunk(
     only in their size distribution, share their spheres
     (:func:`dustoptics.sweep.shared.solve_shared`); otherwise each point is
     :func:`dustoptics.models.compute.build_table` at those wavelengths, equal
-    to the bit to the same wavelengths of a single build.
+    to the bit to the same wavelengths of a single build, which refuses a
+    point beyond its budget unless ``allow_large``.
     """
     start, cpu = time.perf_counter(), time.thread_time()
     with _allocations_reused():
-        arrays, computed, weighted = _compute_arrays(points, wl_start, wl_stop, shared)
+        arrays, computed, weighted = _compute_arrays(points, wl_start, wl_stop, shared, allow_large)
     return ChunkResult(
         arrays, computed, weighted, time.perf_counter() - start, time.thread_time() - cpu
     )
 
 
 def _compute_arrays(
-    points: Sequence[Mapping[str, Any]], wl_start: int, wl_stop: int, shared: bool
+    points: Sequence[Mapping[str, Any]],
+    wl_start: int,
+    wl_stop: int,
+    shared: bool,
+    allow_large: bool = False,
 ) -> tuple[dict[str, np.ndarray], int, int]:
     """The arrays of :func:`compute_chunk`, and the spheres computed and weighted."""
     configs = parse_points(points)
@@ -261,7 +289,7 @@ def _compute_arrays(
             )
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
-                table = build_table(part, workers=1)
+                table = build_table(part, workers=1, allow_large=allow_large)
             arrays["phase"][p] = table.phase
             arrays["g"][p] = table.g
             for name in ("cext_um2", "csca_um2", "error_estimate", "cross_section_error_estimate"):
@@ -309,6 +337,10 @@ class _Layout:
 
     def name(self, chunk: Sequence[int]) -> str:
         return ".".join(str(i) for i in chunk)
+
+    def size(self, chunk: Sequence[int]) -> int:
+        """Point-wavelengths of the chunk."""
+        return int(np.prod([s.stop - s.start for s in self.region(chunk)]))
 
 
 def _layout(spec: SweepSpec, n_wl: int, chunk_wavelengths: int | None, max_points: int) -> _Layout:
@@ -427,23 +459,17 @@ def _template(spec: SweepSpec, configs: list[BuildConfig], layout: _Layout, meth
     return xr.Dataset(data, coords=coords, attrs=attrs)
 
 
-def _markers(store: Path) -> Path:
-    return store / _MARKERS
-
-
-def _done(store: Path, layout: _Layout) -> set[str]:
-    directory = _markers(store)
-    if not directory.is_dir():
-        return set()
-    names = {layout.name(c) for c in layout.chunks()}
-    return {p.name for p in directory.iterdir() if p.name in names}
+def _store_layout(layout: _Layout) -> StoreLayout:
+    """Which files the chunks of ``layout`` write (``phase`` keeps its angles whole)."""
+    return StoreLayout(layout.grid, {"phase": 1, **dict.fromkeys(_PER_WAVELENGTH, 0)})
 
 
 def _new_run_token(store: Path) -> Path:
     """A new file in the store's marker folder that only this run of the
     client knows: workers that see it write their chunks themselves
-    (:func:`_run_chunk`).  Tokens left by runs that were stopped go first."""
-    directory = _markers(store)
+    (:func:`_run_chunk`).  Tokens left by runs that ended go first (this run
+    holds the store: no other run is writing it)."""
+    directory = store / MARKERS
     directory.mkdir(exist_ok=True)
     for old in directory.glob(_RUN_TOKEN + "*"):
         old.unlink(missing_ok=True)
@@ -452,30 +478,9 @@ def _new_run_token(store: Path) -> Path:
     return token
 
 
-def _open_store(store: Path, template: Any, identity: str) -> None:
-    """Create the store, or check that an existing one holds this sweep."""
-    marker = store / _IDENTITY
-    if store.exists():
-        if not marker.is_file():
-            raise ValueError(
-                f"{str(store)!r} exists and is not a dustoptics sweep store; remove it or choose another path"
-            )
-        if marker.read_text(encoding="utf-8") != identity:
-            raise ValueError(
-                f"{str(store)!r} holds a different sweep (other configuration, axes or chunks); "
-                "remove it or choose another path"
-            )
-        return
-    partial = store.with_name(store.name + ".creating")
-    if partial.exists():
-        shutil.rmtree(partial)
-    template.to_zarr(partial, compute=False, mode="w", zarr_format=2, consolidated=True)
-    write_files({partial / _IDENTITY: identity.encode("utf-8")})
-    os.replace(partial, store)
-
-
 def _write_chunk(store: Path, region: tuple[slice, ...], name: str, result: ChunkResult) -> None:
-    """The chunk's arrays, then its completion marker (written last, atomically)."""
+    """The chunk's arrays, then its completion marker with their digests (written
+    last, atomically)."""
     import zarr
 
     group = zarr.open_group(str(store), mode="r+", zarr_format=2)
@@ -485,16 +490,20 @@ def _write_chunk(store: Path, region: tuple[slice, ...], name: str, result: Chun
         array: Any = group[key]
         array[region] = values.reshape(shape + (n_w,) + values.shape[2:])
     record = {
-        "chunk": [int(i) for i in name.split(".")],
         "seconds": result.seconds,
         "cpu_seconds": result.cpu_seconds,
         "spheres_computed": result.spheres_computed,
         "spheres_weighted": result.spheres_weighted,
     }
-    write_files(
-        {_markers(store) / name: json.dumps(record, sort_keys=True).encode("utf-8")},
-        overwrite=True,
-    )
+    write_marker(store, read_layout(store), name, record)
+
+
+@dataclass(frozen=True)
+class _Failed:
+    """A chunk's task that raised: the exception, returned as a value (so that
+    Dask does not log the worker's traceback) and raised by the client."""
+
+    error: BaseException
 
 
 def _run_chunk(
@@ -506,10 +515,12 @@ def _run_chunk(
     run_token: str,
     region: tuple[slice, ...],
     name: str,
-) -> tuple[ChunkResult | None, float]:
+    allow_large: bool = False,
+) -> tuple[ChunkResult | _Failed | None, float]:
     """The Dask task: compute a chunk and, where this worker sees the
     client's store, write it there (None); otherwise return it to the client.
-    With the seconds it took (for :class:`_Order`).
+    With the seconds it took (for :class:`_Order`).  An error (a full disk, a
+    request beyond the budget) comes back as :class:`_Failed`.
 
     The points come pickled, one opaque argument: Dask would otherwise walk
     every value of every point's TOML data looking for dependencies (0.75 s
@@ -521,16 +532,26 @@ def _run_chunk(
     the workers keeps the client's process, which shares the cores of a
     local cluster, from receiving and writing every array.
     """
-    result = compute_chunk(pickle.loads(points), wl_start, wl_stop, shared=shared)
-    if _sees(Path(store), run_token):
-        _write_chunk(Path(store), region, name, result)
-        return None, result.seconds
-    return result, result.seconds
+    start = time.perf_counter()
+    try:
+        result = compute_chunk(
+            pickle.loads(points), wl_start, wl_stop, shared=shared, allow_large=allow_large
+        )
+        if _sees(Path(store), run_token):
+            _write_chunk(Path(store), region, name, result)
+            return None, result.seconds
+        return result, result.seconds
+    except Exception as exc:
+        try:
+            pickle.dumps(exc)
+        except Exception:
+            exc = RuntimeError(f"{type(exc).__name__}: {exc}")
+        return _Failed(exc), time.perf_counter() - start
 
 
 def _sees(store: Path, run_token: str) -> bool:
     """Whether this process sees the store of the client's run ``run_token``."""
-    return (_markers(store) / run_token).is_file()
+    return (store / MARKERS / run_token).is_file()
 
 
 class _Order:
@@ -694,6 +715,23 @@ _LOCAL_CLUSTER_CONFIG = {
 }
 
 
+@contextmanager
+def _sigint_blocked() -> Iterator[None]:
+    """SIGINT blocked in this thread for the block, and so in the threads and
+    processes started meanwhile (they inherit the mask, across ``exec`` too);
+    a Ctrl-C meanwhile waits and is delivered when the block ends."""
+    if threading.current_thread() is not threading.main_thread() or not hasattr(
+        signal, "pthread_sigmask"
+    ):
+        yield
+        return
+    old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, old)
+
+
 def local_cluster(workers: int | None = None, *, threads: int = 1, processes: bool = True) -> Any:
     """The Dask ``LocalCluster`` that a sweep starts when given no client.
 
@@ -711,38 +749,139 @@ def local_cluster(workers: int | None = None, *, threads: int = 1, processes: bo
     -------
     distributed.LocalCluster
         With :data:`_LOCAL_CLUSTER_CONFIG`'s settings, the dashboard on a
-        free port, and logs below errors silenced.  Close it (or use it as a
-        context manager) when done.
+        free port, and logs below errors silenced.  Its worker processes
+        ignore SIGINT (:mod:`dustoptics.sweep._worker`): a Ctrl-C stops the
+        process that started it, which closes the cluster (a sweep does),
+        rather than printing every worker's traceback.  Close it (or use it
+        as a context manager) when done.
     """
     import dask
 
     _, _, distributed = _require_extra()
-    with dask.config.set(_LOCAL_CLUSTER_CONFIG):
+    with dask.config.set(_LOCAL_CLUSTER_CONFIG), _sigint_blocked():
         return distributed.LocalCluster(
             n_workers=workers or os.cpu_count() or 1,
             threads_per_worker=threads,
             processes=processes,
             dashboard_address=":0",
             silence_logs=40,
+            preload=["dustoptics.sweep._worker"],
         )
 
 
-def _client(client: Any, workers: int | None, distributed: Any) -> tuple[Any, list[Any]]:
-    """A Client (and what to close afterwards) for ``client``: None (a local
-    cluster of worker processes, :func:`local_cluster`), an address, or a
-    Client."""
+def _client(client: Any, workers: int | None, distributed: Any, to_close: list[Any]) -> Any:
+    """A Client for ``client``: None (a local cluster of worker processes,
+    :func:`local_cluster`), an address, or a Client.  What the sweep must
+    close afterwards is appended to ``to_close`` as soon as it exists."""
     if client is None:
-        cluster = local_cluster(workers)
-        c = distributed.Client(cluster)
-        return c, [c, cluster]
+        with _sigint_blocked():  # a Ctrl-C comes after the cluster is in to_close
+            cluster = local_cluster(workers)
+            to_close.append(cluster)
+            c = distributed.Client(cluster)
+            to_close.insert(0, c)
+        return c
     if isinstance(client, str):
         c = distributed.Client(client)
-        return c, [c]
+        to_close.append(c)
+        return c
     if isinstance(client, distributed.Client):
-        return client, []
+        return client
     raise TypeError(
         f"client must be None, a scheduler address 'tcp://HOST:PORT' or a dask.distributed.Client; got {client!r}"
     )
+
+
+def _close(objects: Sequence[Any]) -> None:
+    """Close the client, then the cluster, each whatever the other did."""
+    for obj in objects:
+        with contextlib.suppress(Exception):
+            obj.close()
+
+
+def _check_cost(
+    spec: SweepSpec,
+    costs: Sequence[Any],
+    layout: _Layout,
+    template: Any,
+    *,
+    store: Path,
+    in_memory: bool,
+    allow_large: bool,
+) -> None:
+    """Refuse a sweep beyond the budgets before any work: its work (each point
+    as :func:`~dustoptics.scattering.optics.estimate_cost` estimates a single
+    build of it, an upper estimate for points that share their spheres), a
+    chunk's memory, the result in memory, and the store on its disk.
+
+    Raises
+    ------
+    dustoptics._validation.BudgetError
+        Beyond a budget, and ``allow_large`` is False; the message says what
+        drives the estimate and what to change.
+    """
+    if allow_large:
+        return
+    n_theta = template.sizes["theta_deg"]
+    mie = [(i, c) for i, c in enumerate(costs) if c is not None]
+    work = float(sum(c.work for _, c in mie))
+    budget = optics.WORK_BUDGET
+    if work > budget:
+        i, costliest = max(mie, key=lambda ic: ic[1].work)
+        raise BudgetError(
+            f"the sweep would need about {work:.3g} sphere-order-angle terms over its "
+            f"{spec.n_points} points of {layout.n_wl} wavelengths x {n_theta} angles (the "
+            f"costliest, {_where(spec, i)}, {costliest.work:.3g}), beyond the budget of "
+            f"{budget:g} (about ten minutes on this machine): use fewer points, wavelengths or "
+            "angles, or smaller particles, or pass allow_large=True (--allow-large on the "
+            "command line) to go ahead"
+        )
+    per_chunk = int(np.prod(layout.axis_chunks)) * layout.wl_chunk
+    arrays = 2.0 * 8.0 * per_chunk * (n_theta + len(_PER_WAVELENGTH))
+    solver = max((c.memory_bytes for _, c in mie), default=0.0)
+    check_budget(
+        "a chunk of the sweep",
+        solver + arrays,
+        allow_large=False,
+        change=(
+            f"a chunk holds up to {per_chunk} point-wavelengths x {n_theta} angles beside the "
+            "solver of its largest point: use a smaller max_points or chunk_wavelengths, fewer "
+            "angles, or smaller particles"
+        ),
+    )
+    size = float(template.nbytes)
+    if in_memory:
+        check_budget(
+            "the sweep's result",
+            size,
+            allow_large=False,
+            change=(
+                f"it holds {spec.n_points} points x {layout.n_wl} wavelengths x {n_theta} angles "
+                "in memory: use fewer, or write a Zarr store (out='NAME.zarr'), read lazily"
+            ),
+        )
+    held = sum(p.stat().st_size for p in store.rglob("*") if p.is_file()) if store.is_dir() else 0
+    need = size - held
+    directory = store
+    while not directory.exists() and directory.parent != directory:
+        directory = directory.parent
+    try:
+        free = shutil.disk_usage(directory).free
+    except OSError:
+        return
+    if need > free:
+        raise BudgetError(
+            f"the sweep's store {str(store)!r} needs about {need / 1024**3:.3g} GiB more "
+            f"(uncompressed), and its filesystem has {free / 1024**3:.3g} GiB free: free some "
+            "space, choose another path, or use fewer points, wavelengths or angles, or pass "
+            "allow_large=True (--allow-large on the command line) to go ahead (compression "
+            "may make it fit)"
+        )
+
+
+def _where(spec: SweepSpec, flat: int) -> str:
+    """``axis = value, ...`` of the point at flat (C order) index ``flat``."""
+    index = np.unravel_index(flat, spec.shape)
+    return ", ".join(f"{a.key} = {a.values[int(i)]!r}" for a, i in zip(spec.axes, index))
 
 
 def sweep(
@@ -756,6 +895,7 @@ def sweep(
     chunk_wavelengths: int | None = None,
     max_points: int = 400,
     progress: TextIO | Callable[[int, int], None] | None = sys.stderr,
+    allow_large: bool = False,
 ) -> Any:
     """Compute a configuration over axes of its inputs: one labelled dataset.
 
@@ -772,7 +912,9 @@ def sweep(
         Store: a Zarr directory, written chunk by chunk and resumed when it
         exists, or a ``.nc`` file (netCDF-4, written at the end from a Zarr
         working store ``OUT.zarr-partial`` that makes it resumable too).
-        None: nothing is written; the result is returned in memory.
+        None: nothing is written; the result is returned in memory.  One run
+        at a time writes a store (:mod:`dustoptics.sweep.store`); every chunk
+        carries its digest, checked on resume.
     client : None, str or dask.distributed.Client, optional
         Where to compute: None starts a local cluster of ``workers`` worker
         processes (one thread each, :func:`local_cluster`) and closes it at
@@ -793,6 +935,14 @@ def sweep(
         Progress bar (points x wavelengths done, elapsed time, remaining time)
         on a stream (default stderr), a callable ``progress(done, total)``, or
         None.
+    allow_large : bool
+        Go ahead beyond the budgets (default False): before any work, the
+        sweep is refused if its points, as a single build estimates each
+        (:func:`~dustoptics.scattering.optics.check_cost`), need more than
+        :data:`~dustoptics.scattering.optics.WORK_BUDGET` together, if a
+        point or a chunk needs more memory than a single call may, if the
+        result held in memory (``out`` None or ``.nc``) would, or if the
+        store would not fit on its disk.
 
     Returns
     -------
@@ -803,13 +953,23 @@ def sweep(
         ``n_nodes``, per point ``mean_geometric_cross_section_um2`` [um^2]
         and ``provenance`` (its inputs and their hash), attributes with the
         sweep, software versions, sources and the accuracy statement.  For a
-        Zarr ``out``, the dataset opened from the store.
+        Zarr ``out``, the dataset opened from the store, every chunk checked.
 
     Raises
     ------
     ValueError
         An invalid axis or value (before any work: the message names the
-        axis, the value and its range), or a store holding another sweep.
+        axis, the value and its range), a request beyond the budget
+        (:class:`~dustoptics._validation.BudgetError`), a store holding
+        another sweep or damaged where a chunk cannot be recomputed
+        (:class:`~dustoptics.io.FormatError`), or a store that another run is
+        writing (:class:`~dustoptics.sweep.store.StoreBusyError`).
+    OSError
+        Writing the store failed (e.g. a full disk); what was written stays,
+        and a new run resumes it.
+    KeyboardInterrupt
+        After the cluster that the sweep started has been closed; the
+        finished chunks stay in the store.
     ImportError
         Without the ``sweep`` extra.
     """
@@ -826,7 +986,9 @@ def sweep(
         not isinstance(workers, int) or isinstance(workers, bool) or workers < 1
     ):
         raise ValueError(f"workers must be a positive integer; got {workers!r}")
-    spec, data, configs = _load(config, over)
+    if not isinstance(allow_large, bool):
+        raise TypeError(f"allow_large must be True or False; got {allow_large!r}")
+    spec, data, configs, costs = _load(config, over, allow_large)
     layout = _layout(spec, configs[0].wavelengths_nm.size, chunk_wavelengths, max_points)
     method = "shared" if shared and all(_shareable(c) for c in configs) else "independent"
     template = _template(spec, configs, layout, method)
@@ -848,100 +1010,146 @@ def sweep(
     else:
         store = Path(str(out) + ".zarr-partial") if netcdf else Path(out)
     try:
-        _open_store(store, template, identity)
-        done = _done(store, layout)
-        todo = [c for c in layout.chunks() if layout.name(c) not in done]
-        n_wl_theta = layout.n_wl
-        total = spec.n_points * n_wl_theta
+        _check_cost(
+            spec,
+            costs,
+            layout,
+            template,
+            store=store,
+            in_memory=out is None or netcdf,
+            allow_large=allow_large,
+        )
 
-        def size(chunk: tuple[int, ...]) -> int:
-            return int(np.prod([s.stop - s.start for s in layout.region(chunk)]))
+        def create(folder: Path) -> None:
+            # "w-" writes into the (empty, locked) folder; "w" would replace it.
+            template.to_zarr(folder, compute=False, mode="w-", zarr_format=2, consolidated=True)
 
-        stream: Any = progress if progress is not None and hasattr(progress, "write") else None
-        callback: Any = progress if callable(progress) and stream is None else None
-        bar = _Progress(stream, callback, total, total - sum(size(c) for c in todo))
-        if todo:
-            token = _new_run_token(store)
-            to_close: list[Any] = []
-            try:
-                c, to_close = _client(client, workers, distributed)
-                flat = np.arange(spec.n_points).reshape(spec.shape)
-                where = str(store.resolve())  # workers may run in another directory
-                order = _Order(todo)
-
-                def submit(chunk: tuple[int, ...]) -> Any:
-                    region = layout.region(chunk)
-                    points = pickle.dumps([data[i] for i in flat[region[:-1]].ravel()], protocol=5)
-                    return c.submit(
-                        _run_chunk,
-                        points,
-                        region[-1].start,
-                        region[-1].stop,
-                        shared,
-                        where,
-                        token.name,
-                        region,
-                        layout.name(chunk),
-                        pure=False,
-                        key=f"dustoptics-sweep-{layout.name(chunk)}-{os.getpid()}-{time.time_ns()}",
-                    )
-
-                def slots() -> int:
-                    # One chunk running and one waiting per worker thread: the
-                    # rest wait here, so that each goes out in _Order's order.
-                    return max(2, 2 * sum(c.nthreads().values()))
-
-                futures: dict[Any, tuple[int, ...]] = {}
-                running = distributed.as_completed()
-
-                def fill() -> None:
-                    limit = slots()  # one call to the scheduler, not one per chunk
-                    while len(futures) < limit and (chunk := order.next()) is not None:
-                        future = submit(chunk)
-                        futures[future] = chunk
-                        running.add(future)
-
-                fill()
-                for future in running:
-                    chunk = futures.pop(future)
-                    result, seconds = future.result()
-                    if result is not None:  # the worker does not see the store
-                        _write_chunk(store, layout.region(chunk), layout.name(chunk), result)
-                    future.release()
-                    order.finished(chunk, seconds)
-                    bar.add(size(chunk))
-                    fill()
-            finally:
-                token.unlink(missing_ok=True)
-                for obj in to_close:
-                    obj.close()
-            missing = sorted(set(map(layout.name, todo)) - _done(store, layout))
-            if missing:
-                raise RuntimeError(
-                    f"chunks {missing} finished but their markers are not in {str(store)!r}: "
-                    "did their workers write to another filesystem at the same path? "
-                    "Running the sweep again computes them"
+        with held_store(
+            store, identity=identity, layout=_store_layout(layout), create=create
+        ) as new:
+            if new:
+                done: set[str] = set()
+            else:
+                done = done_chunks(store, read_layout(store), repair=True)
+            todo = [c for c in layout.chunks() if layout.name(c) not in done]
+            stream: Any = progress if progress is not None and hasattr(progress, "write") else None
+            callback: Any = progress if callable(progress) and stream is None else None
+            total = spec.n_points * layout.n_wl
+            bar = _Progress(stream, callback, total, total - sum(layout.size(c) for c in todo))
+            if todo:
+                _compute(
+                    data,
+                    layout,
+                    todo,
+                    store,
+                    bar,
+                    client=client,
+                    workers=workers,
+                    shared=shared,
+                    allow_large=allow_large,
+                    distributed=distributed,
                 )
-        if netcdf:
-            assert out is not None
-            ds = xr.open_zarr(store, consolidated=True).load()
-            target = Path(out)
-            partial = target.with_name(target.name + ".partial")
-            ds.to_netcdf(partial, engine="h5netcdf")
-            os.replace(partial, target)
-            shutil.rmtree(store)
-            return xr.open_dataset(target, engine="h5netcdf")
-        if temporary is not None:
-            return xr.open_zarr(store, consolidated=True).load()
-        return xr.open_zarr(store, consolidated=True)
+            if netcdf:
+                assert out is not None
+                ds = xr.open_zarr(store, consolidated=True).load()
+                write_files(
+                    {Path(out): lambda path: ds.to_netcdf(path, engine="h5netcdf")},
+                    overwrite=True,
+                )
+                shutil.rmtree(store)  # still held: no other run is using it
+                return xr.open_dataset(out, engine="h5netcdf")
+            if temporary is not None:
+                return xr.open_zarr(store, consolidated=True).load()
+            return xr.open_zarr(store, consolidated=True)
     finally:
         if temporary is not None:
             shutil.rmtree(temporary, ignore_errors=True)
 
 
+def _compute(
+    data: Sequence[Mapping[str, Any]],
+    layout: _Layout,
+    todo: Sequence[tuple[int, ...]],
+    store: Path,
+    bar: _Progress,
+    *,
+    client: Any,
+    workers: int | None,
+    shared: bool,
+    allow_large: bool,
+    distributed: Any,
+) -> None:
+    """Compute the chunks ``todo`` on Dask into the store (which this run holds)."""
+    token = _new_run_token(store)
+    to_close: list[Any] = []
+    try:
+        c = _client(client, workers, distributed, to_close)
+        flat = np.arange(layout.spec.n_points).reshape(layout.spec.shape)
+        where = str(store.resolve())  # workers may run in another directory
+        order = _Order(todo)
+
+        def submit(chunk: tuple[int, ...]) -> Any:
+            region = layout.region(chunk)
+            points = pickle.dumps([data[int(i)] for i in flat[region[:-1]].ravel()], protocol=5)
+            return c.submit(
+                _run_chunk,
+                points,
+                region[-1].start,
+                region[-1].stop,
+                shared,
+                where,
+                token.name,
+                region,
+                layout.name(chunk),
+                allow_large,
+                pure=False,
+                key=f"dustoptics-sweep-{layout.name(chunk)}-{os.getpid()}-{time.time_ns()}",
+            )
+
+        def slots() -> int:
+            # One chunk running and one waiting per worker thread: the
+            # rest wait here, so that each goes out in _Order's order.
+            return max(2, 2 * sum(c.nthreads().values()))
+
+        futures: dict[Any, tuple[int, ...]] = {}
+        running = distributed.as_completed()
+
+        def fill() -> None:
+            limit = slots()  # one call to the scheduler, not one per chunk
+            while len(futures) < limit and (chunk := order.next()) is not None:
+                future = submit(chunk)
+                futures[future] = chunk
+                running.add(future)
+
+        fill()
+        for future in running:
+            chunk = futures.pop(future)
+            result, seconds = future.result()
+            if isinstance(result, _Failed):
+                raise result.error
+            if result is not None:  # the worker does not see the store
+                _write_chunk(store, layout.region(chunk), layout.name(chunk), result)
+            future.release()
+            order.finished(chunk, seconds)
+            bar.add(layout.size(chunk))
+            fill()
+    finally:
+        token.unlink(missing_ok=True)
+        _close(to_close)
+    names = [layout.name(chunk) for chunk in todo]
+    missing = sorted(set(names) - done_chunks(store, read_layout(store), names, repair=False))
+    if missing:
+        raise RuntimeError(
+            f"chunks {missing} finished but their markers are not in {str(store)!r}: "
+            "did their workers write to another filesystem at the same path? "
+            "Running the sweep again computes them"
+        )
+
+
 def _load(
-    config: Any, over: Mapping[str, Any] | None
-) -> tuple[SweepSpec, list[dict[str, Any]], list[BuildConfig]]:
-    """The sweep, its points' TOML data (in C order of the axes) and their
-    validated configurations."""
-    return _load_points(config, over)
+    config: Any, over: Mapping[str, Any] | None, allow_large: bool = False
+) -> tuple[SweepSpec, list[dict[str, Any]], list[BuildConfig], list[Any]]:
+    """The sweep, its points' TOML data (in C order of the axes), their
+    validated configurations and their costs (None for a point without Mie
+    work), each point refused as a single build would refuse it."""
+    return _load_points(config, over, allow_large=allow_large)

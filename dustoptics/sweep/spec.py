@@ -19,12 +19,22 @@ spaced ranges (both ends included)::
     "size_distribution.r_eff_um" = [0.5, 1.0, 2.0, 4.0]
     "size_distribution.v_eff" = { start = 0.1, stop = 0.4, num = 4 }
 
+An axis name has one canonical form, which names the dimension of the
+result: whitespace around its parts is dropped (``" size_distribution.r_eff_um\n"``)
+and indices are plain integers (``modes[01]`` is ``modes[1]``); two axes that
+name one input (two spellings, or a quoted and a bare key of a ``[sweep]``
+table) are refused, naming both.
+
 The points are the Cartesian product of the axes, the first axis slowest.
-Every point's configuration is the base configuration with the axis values
-set, validated by :func:`dustoptics.models.config.parse_config`, and its
-material evaluated at the wavelengths, all before any work: an axis value
-outside its model's range raises a ValueError naming the axis, the value and
-the range.
+Before any point is made, the number of points (from the axes' lengths) is
+held against the memory they take in this process
+(:data:`CLIENT_BYTES_PER_POINT` each); then every point's configuration is the
+base configuration with the axis values set, validated by
+:func:`dustoptics.models.config.parse_config`, its cost estimated as a single
+build's (:func:`dustoptics.scattering.optics.check_cost`, which refuses a
+point a single build would refuse), and its material evaluated at the
+wavelengths, all before any work: an axis value outside its model's range
+raises a ValueError naming the axis, the value and the range.
 """
 
 from __future__ import annotations
@@ -43,6 +53,8 @@ from typing import Any
 
 import numpy as np
 
+from dustoptics import _validation
+from dustoptics._validation import BudgetError, check_budget
 from dustoptics.models.config import (
     BuildConfig,
     ConfigError,
@@ -52,13 +64,20 @@ from dustoptics.models.config import (
     parse_config,
 )
 from dustoptics.models.presets import list_presets, preset_text
+from dustoptics.scattering.optics import RequestCost, check_cost
+from dustoptics.scattering.quadrature import QuadratureSettings
 from dustoptics.table import canonical_json, plain
 
-__all__ = ["Axis", "SweepSpec", "config_data", "load_sweep", "toml_text"]
+__all__ = ["Axis", "SweepSpec", "canonical_key", "config_data", "load_sweep", "toml_text"]
 
 #: Prefix of the keys that change only the size distribution: points that
 #: differ only in these share their Mie work (:mod:`dustoptics.sweep.shared`).
 SIZE_PREFIX = "size_distribution."
+
+#: Memory a point takes in the process that starts a sweep: its TOML data and
+#: configuration (about 3 KiB), its labels and provenance in the result's
+#: template (about 26 KiB, measured for blue-moons). [bytes]
+CLIENT_BYTES_PER_POINT = 32 * 1024
 
 
 @dataclass(frozen=True)
@@ -76,6 +95,9 @@ class Axis:
 
     key: str
     values: tuple[float, ...]
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "key", canonical_key(self.key))
 
     @property
     def size_only(self) -> bool:
@@ -165,13 +187,32 @@ def _strip_sweep_table(text: str) -> str:
     return "\n".join(out) + ("\n" if text.endswith("\n") else "")
 
 
-_PART = re.compile(r"^([A-Za-z0-9_-]+)(?:\[(\d+)\])?$")
+_PART = re.compile(r"([A-Za-z0-9_-]+)\s*(?:\[\s*([0-9]+)\s*\])?")
+
+
+def canonical_key(key: str) -> str:
+    """The canonical form of a sweep axis's dotted key.
+
+    Whitespace around each part goes, and an index is a plain integer; this is the
+    name of the axis's dimension in the result.
+
+    >>> canonical_key(" size_distribution.modes[01] . r_eff_um\\n")
+    'size_distribution.modes[1].r_eff_um'
+
+    Raises
+    ------
+    ValueError
+        Not a dotted key of the configuration.
+    """
+    if not isinstance(key, str):
+        raise TypeError(f"sweep axis names must be strings; got {key!r} ({type(key).__name__})")
+    return ".".join(name if index is None else f"{name}[{index}]" for name, index in _path(key))
 
 
 def _path(key: str) -> list[tuple[str, int | None]]:
     parts = []
     for part in key.split("."):
-        match = _PART.match(part)
+        match = _PART.fullmatch(part.strip())
         if not match:
             raise ValueError(
                 f"sweep axis {key!r} is not a dotted key of the configuration "
@@ -225,30 +266,50 @@ def _set(data: dict[str, Any], key: str, value: float) -> None:
 # ------------------------------------------------------------------ axes
 
 
-def _axis_values(key: str, raw: Any) -> tuple[float, ...]:
-    """Axis values from a list or a {start, stop, num} range (both ends included)."""
+def _axis_size(key: str, raw: Any) -> int:
+    """How many values an axis takes, from a list or a {start, stop, num} range,
+    without making them (``num`` may be anything a TOML file holds)."""
     if isinstance(raw, Mapping):
         extra = set(raw) - {"start", "stop", "num"}
         if extra or not {"start", "stop", "num"} <= set(raw):
             raise ValueError(
-                f"sweep axis {key!r}: a range is {{start = ..., stop = ..., num = ...}}; got {dict(raw)!r}"
+                f"sweep axis {key!r}: a range is {{start = ..., stop = ..., num = ...}}; "
+                f"got keys {sorted(map(str, raw))!r}"
             )
         num = raw["num"]
-        if isinstance(num, bool) or not isinstance(num, int) or num < 1:
+        if isinstance(num, (bool, np.bool_)) or not isinstance(num, (int, np.integer)) or num < 1:
             raise ValueError(f"sweep axis {key!r}: num must be an integer >= 1; got {num!r}")
-        start, stop = (_number(key, raw[k]) for k in ("start", "stop"))
-        grid = np.linspace(start, stop, num) if num > 1 else np.array([start])
-        return tuple(float(v) for v in grid)
+        for k in ("start", "stop"):
+            _number(key, raw[k])
+        return int(num)
     if isinstance(raw, (str, bytes)) or not isinstance(raw, Sequence | np.ndarray):
         raise TypeError(
             f"sweep axis {key!r}: values must be a list of numbers or a range "
-            f"{{start, stop, num}}; got {raw!r}"
+            f"{{start, stop, num}}; got {type(raw).__name__}"
         )
-    values = tuple(_number(key, v) for v in raw)
-    if not values:
+    if len(raw) == 0:
         raise ValueError(f"sweep axis {key!r}: needs at least one value")
+    return len(raw)
+
+
+def _axis_values(key: str, raw: Any) -> tuple[float, ...]:
+    """Axis values from a list or a {start, stop, num} range (both ends included)."""
+    _axis_size(key, raw)
+    if isinstance(raw, Mapping):
+        num = int(raw["num"])
+        start, stop = (_number(key, raw[k]) for k in ("start", "stop"))
+        grid = np.linspace(start, stop, num) if num > 1 else np.array([start])
+        values = tuple(float(v) for v in grid)
+        if len(set(values)) != len(values):
+            raise ValueError(
+                f"sweep axis {key!r}: values must be distinct; the range {start!r} .. {stop!r} "
+                f"in {num} steps repeats values"
+            )
+        return values
+    values = tuple(_number(key, v) for v in raw)
     if len(set(values)) != len(values):
-        raise ValueError(f"sweep axis {key!r}: values must be distinct; got {list(values)!r}")
+        shown = list(values) if len(values) <= 20 else f"{list(values[:20])!r}..."
+        raise ValueError(f"sweep axis {key!r}: values must be distinct; got {shown}")
     return values
 
 
@@ -259,22 +320,41 @@ def _number(key: str, value: Any) -> float:
         raise TypeError(
             f"sweep axis {key!r}: values must be numbers; got {value!r} ({type(value).__name__})"
         )
-    out = float(value)
+    try:
+        out = float(value)
+    except OverflowError:
+        out = math.inf
     if not math.isfinite(out):
         raise ValueError(f"sweep axis {key!r}: values must be finite; got {value!r}")
     return out
 
 
-def _flatten_sweep_table(table: Mapping[str, Any], prefix: str = "") -> dict[str, Any]:
-    """``[sweep]`` entries as dotted keys: quoted (``"a.b" = [...]``) or nested
-    (``a.b = [...]``, which TOML reads as tables)."""
-    out: dict[str, Any] = {}
+def _toml_spelling(parts: Sequence[str]) -> str:
+    """How a ``[sweep]`` key was written: bare parts joined by dots, others quoted."""
+    return ".".join(_toml_key(p) for p in parts)
+
+
+def _flatten_sweep_table(
+    table: Mapping[str, Any], prefix: tuple[str, ...] = ()
+) -> dict[str, tuple[str, Any]]:
+    """``[sweep]`` entries by canonical key -> (their spelling, their values):
+    quoted (``"a.b" = [...]``) or nested (``a.b = [...]``, which TOML reads as
+    tables).  Two entries for one input are refused, naming both."""
+    out: dict[str, tuple[str, Any]] = {}
     for k, v in table.items():
-        key = f"{prefix}.{k}" if prefix else str(k)
+        parts = prefix + (str(k),)
         if isinstance(v, Mapping) and not {"start", "stop", "num"} & set(v):
-            out.update(_flatten_sweep_table(v, key))
+            entries = _flatten_sweep_table(v, parts)
         else:
-            out[key] = v
+            spelling = _toml_spelling(parts)
+            entries = {canonical_key(".".join(parts)): (spelling, v)}
+        for key, (spelling, values) in entries.items():
+            if key in out:
+                raise ValueError(
+                    f"[sweep] names the input {key!r} twice, as {out[key][0]} and as "
+                    f"{spelling}; keep one of them"
+                )
+            out[key] = (spelling, values)
     return out
 
 
@@ -394,7 +474,9 @@ def _base_from(config: Any) -> tuple[dict[str, Any], dict[str, Any], str]:
     )
 
 
-def load_sweep(config: Any, over: Mapping[str, Any] | None = None) -> SweepSpec:
+def load_sweep(
+    config: Any, over: Mapping[str, Any] | None = None, *, allow_large: bool = False
+) -> SweepSpec:
     """A validated sweep from a configuration and axes.
 
     Parameters
@@ -404,8 +486,11 @@ def load_sweep(config: Any, over: Mapping[str, Any] | None = None) -> SweepSpec:
         text, or a configuration object.
     over : Mapping, optional
         Axes: dotted key -> list of values or ``{"start", "stop", "num"}``;
-        they replace axes of the same key in the file's ``[sweep]`` table and
-        follow its axes.
+        they replace axes of the same input in the file's ``[sweep]`` table
+        and follow its axes.
+    allow_large : bool
+        Accept more points than :data:`CLIENT_BYTES_PER_POINT` lets into the
+        memory budget, and points beyond a single build's budget.
 
     Returns
     -------
@@ -414,33 +499,46 @@ def load_sweep(config: Any, over: Mapping[str, Any] | None = None) -> SweepSpec:
     Raises
     ------
     ValueError
-        A key that is not a numeric input, or a value outside its model's
-        range (the message names the axis, the value and the range), or a
-        point whose material has no data at a wavelength.
+        A key that is not a numeric input, two keys (or two spellings of one)
+        for the same input, or a value outside its model's range (the message
+        names the axis, the value and the range), a point whose material has
+        no data at a wavelength, or a request beyond the budget
+        (:class:`~dustoptics._validation.BudgetError`).
     TypeError
         Values that are not numbers.
     """
-    return _load_points(config, over)[0]
+    return _load_points(config, over, allow_large=allow_large)[0]
 
 
 def _load_points(
-    config: Any, over: Mapping[str, Any] | None
-) -> tuple[SweepSpec, list[dict[str, Any]], list[BuildConfig]]:
-    """:func:`load_sweep`, with the points' TOML data (in C order of the axes)
-    and their configurations, validated once."""
+    config: Any, over: Mapping[str, Any] | None, *, allow_large: bool = False
+) -> tuple[SweepSpec, list[dict[str, Any]], list[BuildConfig], list[RequestCost | None]]:
+    """:func:`load_sweep`, with the points' TOML data (in C order of the axes),
+    their configurations, validated once, and their costs (None for a point
+    without Mie work)."""
+    if not isinstance(allow_large, bool):
+        raise TypeError(f"allow_large must be True or False; got {allow_large!r}")
     base, table, source = _base_from(config)
-    raw = _flatten_sweep_table(table)
+    raw = {key: values for key, (_, values) in _flatten_sweep_table(table).items()}
     if over is not None:
         if not isinstance(over, Mapping):
             raise TypeError(
                 f"over must be a mapping of dotted keys to values; got {type(over).__name__}"
             )
-        raw.update({str(k): v for k, v in over.items()})
+        given: dict[str, Any] = {}
+        for k, values in over.items():
+            key = canonical_key(k)
+            if key in given:
+                raise ValueError(
+                    f"over names the input {key!r} twice, as {given[key]!r} and as {k!r}; "
+                    "keep one of them"
+                )
+            given[key] = k
+            raw[key] = values
     if not raw:
         raise ValueError("a sweep needs at least one axis: give over={...} or a [sweep] table")
-    axes = []
+    sizes = []
     for key, values in raw.items():
-        _path(key)
         current = _get(base, key)
         if isinstance(current, Mapping):
             numbers = [
@@ -458,16 +556,56 @@ def _load_points(
             raise ValueError(
                 f"sweep axis {key!r} is not a numeric input of the configuration (its value is {current!r})"
             )
-        axes.append(Axis(key, _axis_values(key, values)))
-    spec = SweepSpec(base=base, axes=tuple(axes), source=source)
-    data, configs = _validate(spec)
-    return spec, data, configs
+        sizes.append(_axis_size(key, values))
+    _check_points(list(raw), sizes, allow_large=allow_large)
+    axes = tuple(Axis(key, _axis_values(key, values)) for key, values in raw.items())
+    spec = SweepSpec(base=base, axes=axes, source=source)
+    data, configs, costs = _validate(spec, allow_large=allow_large)
+    return spec, data, configs, costs
 
 
-def _validate(spec: SweepSpec) -> tuple[list[dict[str, Any]], list[BuildConfig]]:
-    """Every axis value alone, then every point, then every distinct material
-    at the wavelengths: all before any work.  Returns the points' TOML data
-    and configurations."""
+def _physical_memory_bytes() -> float:
+    """This machine's memory, or infinity where it cannot be read. [bytes]"""
+    try:
+        return float(os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES"))
+    except (AttributeError, OSError, ValueError):
+        return math.inf
+
+
+def _check_points(keys: Sequence[str], sizes: Sequence[int], *, allow_large: bool) -> None:
+    """Refuse a number of points (from the axes' lengths, before any is made)
+    whose descriptions alone exceed the memory budget (unless ``allow_large``)
+    or this machine's memory (always)."""
+    n = math.prod(sizes)
+    needed = float(n) * CLIENT_BYTES_PER_POINT
+    shape = " x ".join(f"{size} ({key})" for key, size in zip(keys, sizes))
+    physical = _physical_memory_bytes()
+    if needed > physical:
+        raise BudgetError(
+            f"a sweep of {n:.4g} points ({shape}) would need about {needed / 1024**3:.3g} GiB "
+            f"in this process for the points alone, more than this machine's "
+            f"{physical / 1024**3:.3g} GiB: use fewer values per axis, or split the sweep"
+        )
+    check_budget(
+        f"a sweep of {n:.4g} points",
+        needed,
+        allow_large=allow_large,
+        change=(
+            f"its points ({shape}) are each described, validated and labelled in this process, "
+            f"about {CLIENT_BYTES_PER_POINT / 1024:g} KiB each, "
+            f"{_validation.MEMORY_BUDGET_BYTES // CLIENT_BYTES_PER_POINT} points at most: use "
+            "fewer values per axis, or split the sweep"
+        ),
+    )
+
+
+def _validate(
+    spec: SweepSpec, *, allow_large: bool = False
+) -> tuple[list[dict[str, Any]], list[BuildConfig], list[RequestCost | None]]:
+    """Every axis value alone, then every point (its configuration and its
+    cost, refused where a single build would refuse it), then every distinct
+    material at the wavelengths: all before any work.  Returns the points'
+    TOML data, configurations and costs."""
     for axis in spec.axes:
         for value in axis.values:
             data = copy.deepcopy(dict(spec.base))
@@ -481,18 +619,20 @@ def _validate(spec: SweepSpec) -> tuple[list[dict[str, Any]], list[BuildConfig]]
                 ) from None
     materials: dict[str, Any] = {}
     parse = _point_parser()
-    points, configs = [], []
+    settings = QuadratureSettings()
+    points, configs, costs = [], [], []
     for index in spec.indices():
         data = spec.point_data(index)
         try:
             config = parse(data)
         except ConfigError as exc:
-            where = ", ".join(f"{a.key} = {a.values[i]!r}" for a, i in zip(spec.axes, index))
             raise ValueError(
-                f"sweep point ({where}) is not a valid configuration: {exc.key}: {exc.reason}"
+                f"sweep point ({_where(spec, index)}) is not a valid configuration: "
+                f"{exc.key}: {exc.reason}"
             ) from None
         points.append(data)
         configs.append(config)
+        costs.append(_point_cost(spec, index, config, settings, allow_large))
         if config.material is not None:
             materials.setdefault(canonical_json(config.material.to_inputs()), (config, index))
     for config, index in materials.values():
@@ -501,6 +641,37 @@ def _validate(spec: SweepSpec) -> tuple[list[dict[str, Any]], list[BuildConfig]]
             if callable(m):
                 m(config.wavelengths_nm)
         except ValueError as exc:
-            where = ", ".join(f"{a.key} = {a.values[i]!r}" for a, i in zip(spec.axes, index))
-            raise ValueError(f"sweep point ({where}): {exc}") from None
-    return points, configs
+            raise ValueError(f"sweep point ({_where(spec, index)}): {exc}") from None
+    return points, configs, costs
+
+
+def _where(spec: SweepSpec, index: Sequence[int]) -> str:
+    return ", ".join(f"{a.key} = {a.values[i]!r}" for a, i in zip(spec.axes, index))
+
+
+def _point_cost(
+    spec: SweepSpec,
+    index: Sequence[int],
+    config: BuildConfig,
+    settings: QuadratureSettings,
+    allow_large: bool,
+) -> RequestCost | None:
+    """A point's Mie cost as a single build estimates it (one thread: a chunk
+    is one task), refused where a single build would refuse it."""
+    if not config.phase.uses_mie or config.size_distribution is None:
+        return None
+    weighting = config.optics.weighting or "scattering"
+    try:
+        return check_cost(
+            config.size_distribution.build(),
+            config.wavelengths_nm,
+            int(config.theta_deg.size),
+            settings=settings,
+            weighting=weighting,
+            workers=1,
+            allow_large=allow_large,
+        )
+    except BudgetError as exc:
+        raise BudgetError(f"sweep point ({_where(spec, index)}): {exc}") from None
+    except ValueError as exc:
+        raise ValueError(f"sweep point ({_where(spec, index)}): {exc}") from None

@@ -16,13 +16,13 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from _sweeps import WAVELENGTHS, small_toml, store_bytes
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import dustoptics as do
 from dustoptics.models.compute import build_table
 from dustoptics.models.config import parse_config
-from dustoptics.models.presets import preset_text
 from dustoptics.scattering import mie
 from dustoptics.scattering.quadrature import QuadratureSettings, panel_nodes
 from dustoptics.sweep.spec import (
@@ -48,19 +48,7 @@ from dustoptics.sweep.shared import (  # noqa: E402
     solve_shared,
 )
 
-WAVELENGTHS = [450.0, 550.0, 650.0, 750.0]
 OVER = {"size_distribution.r_eff_um": [0.8, 1.6], "size_distribution.v_eff": [0.1, 0.3]}
-
-
-def small_toml(extra: str = "") -> str:
-    """The blue-moons preset on 4 wavelengths and 181 angles."""
-    text = preset_text("blue-moons")
-    text = text.replace(
-        "wavelengths_nm = { start = 360, stop = 830, step = 10 }",
-        f"wavelengths_nm = {WAVELENGTHS!r}",
-    ).replace("n_theta = 1801", "n_theta = 181")
-    assert f"{WAVELENGTHS!r}" in text and "n_theta = 181" in text
-    return text + extra
 
 
 @pytest.fixture(scope="module")
@@ -98,15 +86,6 @@ def reference(cluster, config_file: Path, tmp_path_factory: pytest.TempPathFacto
     with distributed.Client(cluster) as client:
         sweep(config_file, OVER, out=out, client=client, chunk_wavelengths=1, progress=None)
     return out
-
-
-def store_bytes(store: Path) -> dict[str, bytes]:
-    """Every file of a store except the completion markers (which hold timings)."""
-    return {
-        str(p.relative_to(store)): p.read_bytes()
-        for p in sorted(store.rglob("*"))
-        if p.is_file() and "sweep-done" not in p.parts
-    }
 
 
 # ---------------------------------------------------------------- shared nodes
