@@ -727,3 +727,91 @@ def test_netcdf_output_and_cli(cluster, config_file, tmp_path):
     assert main(["sweep", str(bad), "--out", str(tmp_path / "x.zarr"), "--quiet"]) == 1
     assert not (tmp_path / "x.zarr").exists()
     assert main(["sweep", str(path), "--out", str(tmp_path / "y.zarr"), "--workers", "0"]) == 2
+
+
+# ---------------------------------------------------------------- failures and interrupts
+
+
+def test_a_full_disk_on_a_worker_is_one_error_without_worker_tracebacks(
+    config_file, tmp_path, monkeypatch, capfd, caplog
+):
+    """A chunk that fails on its worker (here: no space left while writing it) is
+    raised by the sweep as the worker's OSError; Dask logs no "Compute Failed" with the
+    worker's traceback (7 lines on stderr before the one-line error)."""
+    import errno
+
+    from dustoptics.sweep import run
+
+    def full(store, region, name, result):
+        raise OSError(errno.ENOSPC, "No space left on device", str(store))
+
+    monkeypatch.setattr(run, "_write_chunk", full)
+    with (
+        local_cluster(1, threads=2, processes=False) as local,
+        distributed.Client(local) as client,
+        pytest.raises(OSError, match=r"No space left on device") as info,
+    ):
+        sweep(config_file, OVER, out=tmp_path / "full.zarr", client=client, progress=None)
+    assert info.value.errno == errno.ENOSPC
+    err = capfd.readouterr().err
+    logged = [r.getMessage() for r in caplog.records if r.levelno >= 40]
+    assert "Compute Failed" not in err and "Traceback" not in err, err
+    assert not [m for m in logged if "Compute Failed" in m], logged
+
+
+_INTERRUPTED = """
+import os, signal, sys
+from pathlib import Path
+from dustoptics.sweep import sweep
+
+if __name__ == "__main__":
+    config, out, interrupt = sys.argv[1], sys.argv[2], sys.argv[3] == "interrupt"
+    sent = []
+
+    def progress(done, total):
+        if interrupt and done and not sent:  # a Ctrl-C after the first chunk
+            sent.append(done)
+            os.killpg(os.getpgrp(), signal.SIGINT)
+
+    try:
+        sweep(config, {"size_distribution.r_eff_um": [0.8, 1.6]}, out=out, workers=1,
+              chunk_wavelengths=1, progress=progress)
+    except KeyboardInterrupt:
+        print("interrupted", file=sys.stderr)
+        sys.exit(130)
+    print("finished", file=sys.stderr)
+"""
+
+
+def test_ctrl_c_closes_the_cluster_quietly_and_a_resume_finishes_quietly(config_file, tmp_path):
+    """A Ctrl-C (SIGINT to the whole process group, as a terminal sends it) during a
+    sweep on a local cluster of worker processes: the sweep raises KeyboardInterrupt
+    after closing the cluster, and no worker prints a traceback (each printed one).
+    The finished chunks stay; a resume computes the rest and prints nothing either
+    (no "Cannot close a running event loop")."""
+    import subprocess
+    import sys
+
+    from dustoptics.sweep import verify_store
+    from dustoptics.sweep.store import done_chunks, read_layout
+
+    script = tmp_path / "interrupted.py"
+    script.write_text(_INTERRUPTED, encoding="utf-8")
+    out = tmp_path / "interrupted.zarr"
+
+    def run(mode: str) -> subprocess.CompletedProcess:
+        return subprocess.run(
+            [sys.executable, str(script), str(config_file), str(out), mode],
+            capture_output=True,
+            text=True,
+            timeout=300,
+            start_new_session=True,  # its own process group: the SIGINT stays there
+        )
+
+    first = run("interrupt")
+    assert (first.returncode, first.stderr.strip()) == (130, "interrupted"), first.stderr
+    done = done_chunks(out, read_layout(out), repair=False)
+    assert 1 <= len(done) < len(WAVELENGTHS)
+    again = run("resume")
+    assert (again.returncode, again.stderr.strip()) == (0, "finished"), again.stderr
+    assert verify_store(out) == len(WAVELENGTHS)
