@@ -91,7 +91,6 @@ from dustoptics.io import (
     textures,
 )
 from dustoptics.io.csv import (
-    CosmoScoutConstituent,
     check_cosmoscout_set,
     read_cosmoscout_constituent,
     read_seed_csv,
@@ -99,6 +98,7 @@ from dustoptics.io.csv import (
     write_cosmoscout_set,
     write_seed_csv,
 )
+from dustoptics.io.csv.cosmoscout import CosmoScoutConstituent
 from dustoptics.io.describe import describe_path, describe_table
 from dustoptics.io.outputs import (
     Placement,

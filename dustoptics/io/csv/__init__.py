@@ -14,7 +14,6 @@ from __future__ import annotations
 
 from dustoptics.io.csv import cosmoscout, seed
 from dustoptics.io.csv.cosmoscout import (
-    CosmoScoutConstituent,
     check_cosmoscout_set,
     read_cosmoscout_constituent,
     write_cosmoscout_constituent,
@@ -23,7 +22,6 @@ from dustoptics.io.csv.cosmoscout import (
 from dustoptics.io.csv.seed import read_seed_csv, write_seed_csv
 
 __all__ = [
-    "CosmoScoutConstituent",
     "check_cosmoscout_set",
     "cosmoscout",
     "read_cosmoscout_constituent",
