@@ -16,7 +16,12 @@ PACKAGE = Path(__file__).resolve().parents[1] / "dustoptics"
 #: The pipeline, bottom to top: a module may import its own layer and those below it only.
 #: Within a layer, the cycle check alone applies.
 LAYERS: tuple[tuple[str, ...], ...] = (
-    ("dustoptics._validation", "dustoptics._numba_cache", "dustoptics._deprecated"),
+    (
+        "dustoptics._validation",
+        "dustoptics._numba_cache",
+        "dustoptics._deprecated",
+        "dustoptics._files",
+    ),
     ("dustoptics.table", "dustoptics.colour", "dustoptics.compare"),
     ("dustoptics.particles",),
     ("dustoptics.scattering",),

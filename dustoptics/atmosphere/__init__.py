@@ -11,6 +11,9 @@
   from a preset, and their provenance record (``dustoptics build mars``).
 """
 
+from typing import Any
+
+from dustoptics._deprecated import moved_attribute
 from dustoptics.atmosphere import build, column, gases, parametric, sets
 from dustoptics.atmosphere.build import ATMOSPHERES, build_atmosphere
 from dustoptics.atmosphere.sets import (
@@ -18,7 +21,6 @@ from dustoptics.atmosphere.sets import (
     Constituent,
     earth_atmosphere,
     mars_atmosphere,
-    write_atmosphere,
 )
 
 __all__ = [
@@ -33,5 +35,11 @@ __all__ = [
     "mars_atmosphere",
     "parametric",
     "sets",
-    "write_atmosphere",
 ]
+
+#: Names that moved to :mod:`dustoptics.io.csv.cosmoscout` (the CosmoScout format lives in io).
+_MOVED = {"write_atmosphere": "dustoptics.io.csv.cosmoscout"}
+
+
+def __getattr__(name: str) -> Any:
+    return moved_attribute(__name__, name, _MOVED)

@@ -106,6 +106,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy import constants
 
+from dustoptics._files import FormatError, read_checked
 from dustoptics._validation import (
     _show,
     as_float_array,
@@ -1039,9 +1040,6 @@ def read_ozone_csv(path: str | os.PathLike[str], *, name: str | None = None) -> 
     wl: list[float] = []
     sigma: list[float] = []
     scale = 1.0
-    from dustoptics.io._atomic import FormatError
-    from dustoptics.io._text import read_checked
-
     try:
         content = read_checked(p).decode("utf-8")
     except UnicodeDecodeError as exc:

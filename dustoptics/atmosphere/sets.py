@@ -4,10 +4,10 @@ An :class:`Atmosphere` is a planet (radius, atmosphere top, Sun distance,
 refractivity) and its constituents, each a :class:`Constituent`: a
 :class:`~dustoptics.table.Table` whose ``number_density_per_m3`` is the number
 density where the constituent's relative density is 1, and a
-:class:`~dustoptics.atmosphere.column.DensityProfile`.  :func:`write_atmosphere` writes
-it as CosmoScout VR's CSV set (through
-:func:`dustoptics.io.csv.cosmoscout.write_cosmoscout_set`) plus the settings JSON
-snippet that points CosmoScout's Bruneton preprocessor at the files.
+:class:`~dustoptics.atmosphere.column.DensityProfile`.
+:func:`dustoptics.io.csv.cosmoscout.write_atmosphere` writes it as CosmoScout
+VR's CSV set plus the settings JSON that points CosmoScout's Bruneton
+preprocessor at the files.
 
 Builders (the presets of the seeds)
 -----------------------------------
@@ -52,16 +52,14 @@ References
 
 from __future__ import annotations
 
-import json
 import math
-import os
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any, Final
 
 import numpy as np
 from numpy.typing import ArrayLike
 
+from dustoptics._deprecated import moved_attribute
 from dustoptics._validation import as_increasing_grid, check_choice, check_positive
 from dustoptics.atmosphere import gases
 from dustoptics.atmosphere.column import (
@@ -89,9 +87,7 @@ __all__ = [
     "earth_atmosphere",
     "earth_atmosphere_kobe2026",
     "mars_atmosphere",
-    "settings_json",
     "with_optical_depth",
-    "write_atmosphere",
 ]
 
 #: Roles CosmoScout VR's Bruneton model has: two scattering media and one absorbing.
@@ -282,104 +278,6 @@ class Atmosphere:
                 table = table.replace(number_density_per_m3=table.number_density_per_m3 * s.peak)
             out[self.file_prefix(c.role)] = (table, np.array(s.relative_density))
         return out
-
-
-# ---------------------------------------------------------------- settings
-
-
-def settings_json(atmosphere: Atmosphere, *, path_prefix: str = "") -> str:
-    """CosmoScout VR's Bruneton-preprocessor settings for the atmosphere.
-
-    Parameters
-    ----------
-    atmosphere : Atmosphere
-        The atmosphere.
-    path_prefix : str, optional
-        Prepended to every file name (e.g. the directory of the set as seen
-        from where the preprocessor runs, ending in ``/``).  Default: bare
-        file names, relative to the directory of the set.
-
-    Returns
-    -------
-    str
-        JSON text (2-space indent, fixed key order, trailing newline):
-        ``sunDistance`` [m], ``minAltitude`` and ``maxAltitude`` (the planet
-        and atmosphere radii [m], as CosmoScout names them), ``molecules``,
-        ``aerosols`` (``phase``, ``betaSca``, ``betaAbs``, ``density`` files),
-        ``ozone`` (``betaAbs``, ``density``) when present, and ``ior``
-        (``n - 1``).  The preprocessor's sampling settings are left to its
-        defaults.
-    """
-    if not isinstance(atmosphere, Atmosphere):
-        raise TypeError(f"atmosphere must be an Atmosphere; got {type(atmosphere).__name__}")
-    data: dict[str, Any] = {
-        "sunDistance": atmosphere.sun_distance_m,
-        "minAltitude": atmosphere.planet_radius_m,
-        "maxAltitude": atmosphere.atmosphere_radius_m,
-    }
-    for c in atmosphere.constituents:
-        p = path_prefix + atmosphere.file_prefix(c.role)
-        if c.role == "ozone":
-            data["ozone"] = {"betaAbs": f"{p}_absorption.csv", "density": f"{p}_density.csv"}
-        else:
-            data[c.role] = {
-                "phase": f"{p}_phase.csv",
-                "betaSca": f"{p}_scattering.csv",
-                "betaAbs": f"{p}_absorption.csv",
-                "density": f"{p}_density.csv",
-            }
-    data["ior"] = atmosphere.refractivity
-    return json.dumps(data, indent=2, allow_nan=False) + "\n"
-
-
-def write_atmosphere(
-    atmosphere: Atmosphere,
-    directory: str | os.PathLike[str],
-    *,
-    n_theta: int = 181,
-    overwrite: bool = False,
-    path_prefix: str = "",
-) -> list[Path]:
-    """Write CosmoScout VR's CSV set and ``<name>_settings.json``.
-
-    Parameters
-    ----------
-    atmosphere : Atmosphere
-        The atmosphere.
-    directory : path-like
-        Output directory (created if missing).
-    n_theta : int, default 181
-        Phase-function angles from 0 to 180 deg.
-    overwrite : bool, default False
-        Replace existing files.
-    path_prefix : str, optional
-        See :func:`settings_json`.
-
-    Returns
-    -------
-    list of pathlib.Path
-        The CSV files, then the settings file.
-
-    Raises
-    ------
-    FileExistsError
-        A target exists and ``overwrite`` is False (checked before anything
-        is written).
-    """
-    from dustoptics.io._atomic import check_targets, file_set, write_files
-    from dustoptics.io.csv.cosmoscout import write_cosmoscout_set
-
-    root = Path(directory)
-    settings_path = root / f"{atmosphere.name}_settings.json"
-    check_targets([settings_path], overwrite=overwrite)
-    text = settings_json(atmosphere, path_prefix=path_prefix)
-    # One set: the CSV files and the settings appear together or not at all.
-    with file_set(root, overwrite=overwrite):
-        written = write_cosmoscout_set(
-            root, atmosphere.cosmoscout_constituents(), n_theta=n_theta, overwrite=overwrite
-        )
-        written += write_files({settings_path: text.encode("utf-8")}, overwrite=overwrite)
-    return written
 
 
 # ---------------------------------------------------------------- builders
@@ -775,3 +673,14 @@ def earth_atmosphere_kobe2026(*, name: str = "earth-kobe2026") -> Atmosphere:
         ),
         name=name,
     )
+
+
+#: Names that moved to :mod:`dustoptics.io.csv.cosmoscout` (the CosmoScout format lives in io).
+_MOVED = {
+    "settings_json": "dustoptics.io.csv.cosmoscout",
+    "write_atmosphere": "dustoptics.io.csv.cosmoscout",
+}
+
+
+def __getattr__(name: str) -> Any:
+    return moved_attribute(__name__, name, _MOVED)

@@ -58,6 +58,7 @@ from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from dustoptics._files import FormatError
 from dustoptics._validation import check_inside
 
 __all__ = [
@@ -91,13 +92,6 @@ FILE_MODE = 0o644
 #: What :func:`write_files` writes to one target: its bytes, or a callback
 #: that writes the file at the (temporary) path it is given.
 Content = bytes | Callable[[Path], None]
-
-
-class FormatError(ValueError):
-    """A file given to a reader is malformed, truncated or not of the expected format.
-
-    The message names the file and what is wrong with it.
-    """
 
 
 def safe_stem(name: str) -> str:

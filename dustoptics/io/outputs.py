@@ -360,8 +360,8 @@ def write_atmosphere_set(
         A file exists and ``overwrite`` is False.
     """
     from dustoptics.atmosphere.build import SET_PROVENANCE_SUFFIX, set_provenance
-    from dustoptics.atmosphere.sets import write_atmosphere
     from dustoptics.io._atomic import write_files
+    from dustoptics.io.csv.cosmoscout import write_atmosphere
 
     record = set_provenance(atmosphere, inputs)
     written = write_atmosphere(atmosphere, directory, overwrite=overwrite)

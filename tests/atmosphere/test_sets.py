@@ -18,7 +18,11 @@ from dustoptics.atmosphere.column import (
     ExponentialProfile,
     optical_depth,
 )
-from dustoptics.io.csv.cosmoscout import check_cosmoscout_set, read_cosmoscout_constituent
+from dustoptics.io.csv.cosmoscout import (
+    check_cosmoscout_set,
+    read_cosmoscout_constituent,
+    write_atmosphere,
+)
 from dustoptics.table import Table
 
 WL15 = np.linspace(360.0, 830.0, 15)  # CosmoScout's default wavelength set
@@ -37,7 +41,7 @@ def test_mars_set_passes_reader_rules(dust_table, tmp_path):
     mars = atm.mars_atmosphere(
         dust_table=dust_table, optical_depth=0.5, reference_wavelength_nm=550.0
     )
-    files = atm.write_atmosphere(mars, tmp_path)
+    files = write_atmosphere(mars, tmp_path)
     assert check_cosmoscout_set(tmp_path) == ["mars_aerosols", "mars_molecules"]
     settings = json.loads((tmp_path / "mars_settings.json").read_text())
     # BRIEF section 6: Mars radius 3390 km, atmosphere top 3510 km.
@@ -67,7 +71,7 @@ def test_mars_dust_reproduces_optical_depth(dust_table, tmp_path):
     )
     assert tau == pytest.approx(0.7, rel=1e-13)
     # The written coefficients are N0 <C> at the ground (density 1 at altitude 0).
-    atm.write_atmosphere(mars, tmp_path)
+    write_atmosphere(mars, tmp_path)
     read = read_cosmoscout_constituent(tmp_path, "mars_aerosols")
     np.testing.assert_allclose(read.beta_sca_per_m, dust.table.beta_sca_per_m, rtol=1e-12)
     assert read.density[0] == 1.0
@@ -79,13 +83,13 @@ def test_mars_dust_reproduces_optical_depth(dust_table, tmp_path):
 def test_write_is_deterministic_and_refuses_overwrite(dust_table, tmp_path):
     mars = atm.mars_atmosphere(dust_table=dust_table)
     a, b = tmp_path / "a", tmp_path / "b"
-    fa = atm.write_atmosphere(mars, a)
-    fb = atm.write_atmosphere(mars, b)
+    fa = write_atmosphere(mars, a)
+    fb = write_atmosphere(mars, b)
     for x, y in zip(fa, fb, strict=True):
         assert x.read_bytes() == y.read_bytes()
     with pytest.raises(FileExistsError):
-        atm.write_atmosphere(mars, a)
-    atm.write_atmosphere(mars, a, overwrite=True)
+        write_atmosphere(mars, a)
+    write_atmosphere(mars, a, overwrite=True)
 
 
 def test_mars_collienne_molecules(tmp_path):
@@ -101,13 +105,13 @@ def test_mars_collienne_molecules(tmp_path):
         [5.75e-6, 13.57e-6, 19.918e-6],
         rtol=1e-15,
     )
-    atm.write_atmosphere(mars, tmp_path)
+    write_atmosphere(mars, tmp_path)
     check_cosmoscout_set(tmp_path)
 
 
 def test_kobe_earth_with_ozone(tmp_path):
     earth = atm.earth_atmosphere_kobe2026(name="earth")
-    atm.write_atmosphere(earth, tmp_path)
+    write_atmosphere(earth, tmp_path)
     assert check_cosmoscout_set(tmp_path) == ["earth_aerosols", "earth_molecules", "earth_ozone"]
     settings = json.loads((tmp_path / "earth_settings.json").read_text())
     assert set(settings["ozone"]) == {"betaAbs", "density"}
@@ -137,7 +141,7 @@ def test_earth_with_tabulated_ozone_and_bruneton_layer(tmp_path):
         ozone_profile=BRUNETON2017_OZONE,
         ozone_number_density_per_m3=BRUNETON2017_OZONE_PEAK_NUMBER_DENSITY_PER_M3,
     )
-    atm.write_atmosphere(earth, tmp_path)
+    write_atmosphere(earth, tmp_path)
     check_cosmoscout_set(tmp_path)
     ozone = read_cosmoscout_constituent(tmp_path, "earth_ozone")
     # The 1024-sample grid misses the 25 km peak: samples rescaled to 1 and beta by the same factor,
@@ -156,7 +160,7 @@ def test_default_earth_is_cosmoscouts_15_wavelengths_with_standard_air_and_ozone
     """CosmoScout VR's 15 wavelengths, Penndorf standard air, shipped ozone in Bruneton's layer."""
     earth = atm.earth_atmosphere()
     np.testing.assert_allclose(earth.wavelength_nm, np.linspace(360.0, 830.0, 15), rtol=1e-15)
-    atm.write_atmosphere(earth, tmp_path)
+    write_atmosphere(earth, tmp_path)
     assert check_cosmoscout_set(tmp_path) == ["earth_aerosols", "earth_molecules", "earth_ozone"]
     # Molecules against Penndorf 1957 Table III (0 degC, 1013.25 hPa; shared copy),
     # interpolated log-log between its 10 nm rows, 360-800 nm (its 810-830 nm rows are

@@ -34,6 +34,7 @@ files, and a phase function of a non-scattering medium is undefined.
 from __future__ import annotations
 
 import decimal
+import json
 import os
 import re
 from collections.abc import Mapping
@@ -44,8 +45,9 @@ from typing import Any
 import numpy as np
 
 from dustoptics._validation import as_float_array
+from dustoptics.atmosphere.sets import Atmosphere
 from dustoptics.io import register_format
-from dustoptics.io._atomic import FormatError, write_files
+from dustoptics.io._atomic import FormatError, check_targets, file_set, write_files
 from dustoptics.io._text import floats, number, parse, read_rows
 from dustoptics.table import Table
 
@@ -55,6 +57,8 @@ __all__ = [
     "check_cosmoscout_set",
     "cosmoscout_wavelength_text",
     "read_cosmoscout_constituent",
+    "settings_json",
+    "write_atmosphere",
     "write_cosmoscout_constituent",
     "write_cosmoscout_files",
     "write_cosmoscout_set",
@@ -586,3 +590,98 @@ def check_cosmoscout_set(directory: str | os.PathLike[str]) -> list[str]:
                     f"{reference[0].name}'s {reference[1]} nm (CosmoScout demands the same in every file)"
                 )
     return sorted(kinds)
+
+
+# ---------------------------------------------------------------- whole atmospheres
+
+
+def settings_json(atmosphere: Atmosphere, *, path_prefix: str = "") -> str:
+    """CosmoScout VR's Bruneton-preprocessor settings for the atmosphere.
+
+    Parameters
+    ----------
+    atmosphere : Atmosphere
+        The atmosphere.
+    path_prefix : str, optional
+        Prepended to every file name (e.g. the directory of the set as seen
+        from where the preprocessor runs, ending in ``/``).  Default: bare
+        file names, relative to the directory of the set.
+
+    Returns
+    -------
+    str
+        JSON text (2-space indent, fixed key order, trailing newline):
+        ``sunDistance`` [m], ``minAltitude`` and ``maxAltitude`` (the planet
+        and atmosphere radii [m], as CosmoScout names them), ``molecules``,
+        ``aerosols`` (``phase``, ``betaSca``, ``betaAbs``, ``density`` files),
+        ``ozone`` (``betaAbs``, ``density``) when present, and ``ior``
+        (``n - 1``).  The preprocessor's sampling settings are left to its
+        defaults.
+    """
+    if not isinstance(atmosphere, Atmosphere):
+        raise TypeError(f"atmosphere must be an Atmosphere; got {type(atmosphere).__name__}")
+    data: dict[str, Any] = {
+        "sunDistance": atmosphere.sun_distance_m,
+        "minAltitude": atmosphere.planet_radius_m,
+        "maxAltitude": atmosphere.atmosphere_radius_m,
+    }
+    for c in atmosphere.constituents:
+        p = path_prefix + atmosphere.file_prefix(c.role)
+        if c.role == "ozone":
+            data["ozone"] = {"betaAbs": f"{p}_absorption.csv", "density": f"{p}_density.csv"}
+        else:
+            data[c.role] = {
+                "phase": f"{p}_phase.csv",
+                "betaSca": f"{p}_scattering.csv",
+                "betaAbs": f"{p}_absorption.csv",
+                "density": f"{p}_density.csv",
+            }
+    data["ior"] = atmosphere.refractivity
+    return json.dumps(data, indent=2, allow_nan=False) + "\n"
+
+
+def write_atmosphere(
+    atmosphere: Atmosphere,
+    directory: str | os.PathLike[str],
+    *,
+    n_theta: int = 181,
+    overwrite: bool = False,
+    path_prefix: str = "",
+) -> list[Path]:
+    """Write CosmoScout VR's CSV set and ``<name>_settings.json``.
+
+    Parameters
+    ----------
+    atmosphere : Atmosphere
+        The atmosphere.
+    directory : path-like
+        Output directory (created if missing).
+    n_theta : int, default 181
+        Phase-function angles from 0 to 180 deg.
+    overwrite : bool, default False
+        Replace existing files.
+    path_prefix : str, optional
+        See :func:`settings_json`.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The CSV files, then the settings file.
+
+    Raises
+    ------
+    FileExistsError
+        A target exists and ``overwrite`` is False (checked before anything
+        is written).
+    """
+    root = Path(directory)
+    settings_path = root / f"{atmosphere.name}_settings.json"
+    check_targets([settings_path], overwrite=overwrite)
+    text = settings_json(atmosphere, path_prefix=path_prefix)
+    # One set: the CSV files and the settings appear together or not at all.
+    with file_set(root, overwrite=overwrite):
+        written = write_cosmoscout_set(
+            root, atmosphere.cosmoscout_constituents(), n_theta=n_theta, overwrite=overwrite
+        )
+        written += write_files({settings_path: text.encode("utf-8")}, overwrite=overwrite)
+    return written
