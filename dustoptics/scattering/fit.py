@@ -62,6 +62,17 @@ rule matching the moments 1-3: ``<P_l>`` of HG(g) is ``g^l``) and from a few
 fixed points; the best result of all starts is kept.  No random starts.  A
 model that cannot represent a table returns its best parameters and their
 (large) errors, never NaN.
+
+Continuity in wavelength: fitted alone, neighbouring rows of a two-lobe model
+can land in different minima (the Blue Moon's double HG swaps its lobes between
+610 and 620 nm), and a renderer that interpolates the parameters between
+wavelengths would then draw neither.  Rows with distinct wavelengths are
+therefore fitted as one path: outward from an anchor row, each row starts from
+its neighbour's solution (anchors: the first, the last and the best-fitted row;
+the path of least total loss is kept).  Lobes are ordered by one fixed rule per
+model.  Where the path is worse than a row's best fit alone, the result says by
+how much (:attr:`FitResult.continuity_cost`); ``continuous=False`` gives the
+rows' own best fits.
 """
 
 from __future__ import annotations
@@ -427,6 +438,14 @@ class FitResult:
         The loss, in words.
     forward_cutoff_deg : float
         Angles below this were left out of the loss. [deg]
+    continuous : bool
+        True when the rows were fitted as one path along wavelength, each row
+        started from its neighbour's solution (see :func:`fit_phase`), so that a
+        renderer can interpolate the parameters between rows.
+    independent_rms_relative_error : numpy.ndarray, shape (n_rows,)
+        ``rms_relative_error`` of each row's best fit on its own, whatever its
+        neighbours; where it is below ``rms_relative_error``, the continuous path
+        costs accuracy (:attr:`continuity_cost`). [-]
     """
 
     model: str
@@ -443,11 +462,38 @@ class FitResult:
     g_error: FloatArray
     loss: str
     forward_cutoff_deg: float
+    continuous: bool
+    independent_rms_relative_error: FloatArray
 
     def parameter(self, name: str) -> FloatArray:
         """One parameter over the rows, by name."""
         check_choice("name", name, self.parameter_names)
         return self.parameters[:, self.parameter_names.index(name)]
+
+    @property
+    def continuity_cost(self) -> FloatArray:
+        """How much worse each row fits on the continuous path than on its own. [-]
+
+        ``rms_relative_error - independent_rms_relative_error``: 0 where the
+        continuous solution is also the best one found for that row alone.
+        """
+        return np.maximum(self.rms_relative_error - self.independent_rms_relative_error, 0.0)
+
+    def largest_jump(self) -> dict[str, float]:
+        """Largest change of each parameter between rows adjacent in wavelength.
+
+        Returns
+        -------
+        dict
+            Parameter name -> ``max |p[i + 1] - p[i]|`` over the rows sorted by
+            wavelength (NaN wavelengths last). [parameter's unit]
+        """
+        order = np.argsort(self.wavelength_nm, kind="stable")
+        steps = np.abs(np.diff(self.parameters[order], axis=0))
+        return {
+            name: float(steps[:, k].max()) if steps.size else 0.0
+            for k, name in enumerate(self.parameter_names)
+        }
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready mapping: model, parameters and errors per row."""
@@ -465,6 +511,7 @@ class FitResult:
                     "max_relative_error": float(self.max_relative_error[i]),
                     "median_relative_error": float(self.median_relative_error[i]),
                     "rms_relative_error": float(self.rms_relative_error[i]),
+                    "independent_rms_relative_error": float(self.independent_rms_relative_error[i]),
                     "g_model": float(self.g_model[i]),
                     "g_error": float(self.g_error[i]),
                 }
@@ -477,6 +524,7 @@ class FitResult:
             "theta = 0 forward",
             "loss": self.loss,
             "forward_cutoff_deg": self.forward_cutoff_deg,
+            "continuous": self.continuous,
             "rows": rows,
         }
 
@@ -612,6 +660,44 @@ def _moments(theta_deg: FloatArray, phase: FloatArray) -> FloatArray:
     return (phase * w) @ legendre.T
 
 
+def _continuous_path(
+    spec: _Model,
+    mu: FloatArray,
+    w: FloatArray,
+    sqrt_w: FloatArray,
+    table: FloatArray,
+    order: np.ndarray,
+    best_u: FloatArray,
+) -> tuple[FloatArray, FloatArray]:
+    """One solution per row that changes continuously along ``order`` (rows by wavelength).
+
+    Each row is started from its neighbour's solution, outward from an anchor row
+    that keeps its own best fit; the anchors tried are the first and last rows and
+    the row fitted best on its own, and the path with the least total loss is kept.
+    Returns the variables and the loss of each row.
+    """
+    n = order.size
+    _, own = _levenberg_marquardt(spec, mu, w, sqrt_w, table, best_u, 0)
+    anchors = sorted({0, n - 1, int(np.argmin(own[order]))})
+    best: tuple[FloatArray, FloatArray] | None = None
+    for a in anchors:
+        u = best_u.copy()
+        cost = own.copy()
+        for path in (range(a + 1, n), range(a - 1, -1, -1)):
+            prev = order[a]
+            for pos in path:
+                i = order[pos]
+                ui, ci = _levenberg_marquardt(
+                    spec, mu, w, sqrt_w, table[i : i + 1], u[prev : prev + 1], _POLISH_ITERATIONS
+                )
+                u[i], cost[i] = ui[0], ci[0]
+                prev = i
+        if best is None or cost.sum() < best[1].sum():
+            best = (u, cost)
+    assert best is not None
+    return best
+
+
 def fit_phase(
     theta_deg: Any,
     phase: Any,
@@ -620,6 +706,7 @@ def fit_phase(
     forward_cutoff_deg: float = 0.0,
     labels: Sequence[str] | None = None,
     wavelength_nm: Any = None,
+    continuous: bool = True,
 ) -> FitResult:
     """Fit an analytic phase function to each row of a phase table.
 
@@ -637,6 +724,14 @@ def fit_phase(
         Names of the rows (default ``"row 0"``, ...).
     wavelength_nm : array_like, shape (n,), optional
         Wavelength of each row, recorded in the result (NaN if not given). [nm]
+    continuous : bool
+        With distinct wavelengths for two rows or more (default True): fit the
+        rows as one path along wavelength, each started from its neighbour's
+        solution, so that the parameters change continuously and a renderer can
+        interpolate them (two-lobe models otherwise may swap lobes between
+        neighbouring wavelengths).  The result reports what continuity costs
+        each row (:attr:`FitResult.continuity_cost`).  False: each row's best
+        fit on its own.
 
     Returns
     -------
@@ -727,6 +822,19 @@ def fit_phase(
         best_u, best_cost = _levenberg_marquardt(
             spec, mu, w, sqrt_w, table, best_u, _POLISH_ITERATIONS
         )
+        independent_cost = best_cost
+        along = continuous and n > 1 and bool(np.all(np.isfinite(lam)))
+        along = along and np.unique(lam).size == n
+        if along:
+            # The path is followed on the screening angles, then polished on all of them
+            # at once (from a neighbour's solution a row stays in its basin).
+            order = np.argsort(lam, kind="stable")
+            path_u, _ = _continuous_path(
+                spec, mu[sub], w_sub, sqrt_w_sub, table[:, sub], order, best_u
+            )
+            best_u, best_cost = _levenberg_marquardt(
+                spec, mu, w, sqrt_w, table, path_u, _POLISH_ITERATIONS
+            )
     params = spec.canonical(_to_p(spec, best_u))
     model_tab = _tabulated(spec, mu, w, params, table)
     rel = np.abs(model_tab / table - 1.0)
@@ -756,6 +864,8 @@ def fit_phase(
         g_error=g_model_tab - g_table,
         loss=loss,
         forward_cutoff_deg=cutoff,
+        continuous=along,
+        independent_rms_relative_error=np.sqrt(np.minimum(independent_cost, best_cost)),
     )
 
 
