@@ -61,7 +61,7 @@ CASE_ADDRESS_SPACE = 1536 * 1024**2
 #: Seconds before a case counts as a hang.
 CASE_TIMEOUT_S = 60.0
 
-KINDS = ("api", "config", "cli", "files")
+KINDS = ("api", "config", "cli", "files", "sweeps", "stores")
 
 
 @dataclass(frozen=True)
@@ -98,6 +98,7 @@ def _child(case: Case, workdir: Path, write_fd: int) -> None:  # pragma: no cove
     limit = _address_space_now() + CASE_ADDRESS_SPACE
     resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
     os.chdir(workdir)
+    _fresh_dask_threads()
     from dustoptics.io import FormatError
 
     try:
@@ -114,6 +115,18 @@ def _child(case: Case, workdir: Path, write_fd: int) -> None:  # pragma: no cove
     with os.fdopen(write_fd, "w") as pipe:
         pipe.write(json.dumps(message))
     os._exit(0)
+
+
+def _fresh_dask_threads() -> None:  # pragma: no cover - runs forked
+    """Give a forked case its own Dask offload thread (the parent's does not survive a
+    fork, and a sweep in a process forked after another waits for it forever)."""
+    utils = sys.modules.get("distributed.utils")
+    if utils is not None and hasattr(utils, "_offload_executor"):
+        from concurrent.futures import ThreadPoolExecutor
+
+        utils._offload_executor = ThreadPoolExecutor(
+            max_workers=1, thread_name_prefix="Dask-Offload"
+        )
 
 
 def run_case(case: Case, *, timeout_s: float = CASE_TIMEOUT_S) -> Outcome:
@@ -579,12 +592,319 @@ def files_cases(rng: random.Random, n: int) -> list[Case]:
     return cases
 
 
-GENERATORS = {"api": api_cases, "config": config_cases, "cli": cli_cases, "files": files_cases}
+# ------------------------------------------------------------------ sweeps and their stores
+
+#: Sweep axes over :data:`SMALL_CONFIG`: how each is spelled (canonical, with
+#: whitespace or a newline, with a leading zero in an index) and what it takes.
+SWEEP_SPELLINGS: tuple[str, ...] = (
+    "size_distribution.r_eff_um",
+    "size_distribution.r_eff_um\n",
+    " size_distribution . r_eff_um ",
+    "size_distribution.v_eff",
+    "size_distribution.v_eff\t",
+    "material.n",
+    "material.k",
+    "optics.rtol",
+)
+SWEEP_VALUES: tuple[Any, ...] = (
+    [0.4, 0.6],
+    [0.5],
+    {"start": 0.3, "stop": 0.6, "num": 2},
+    {"start": 0.3, "stop": 0.6, "num": 10**9},
+    {"start": 0.3, "stop": 0.6, "num": 10**30},
+    {"start": 0.3, "stop": 0.6, "num": 0},
+    {"start": 0.3, "stop": 0.6, "num": 2.5},
+    {"start": 0.3, "stop": 0.6, "num": True},
+    {"start": 0.3, "stop": 0.6},
+    [2000.0],
+    [0.5, 0.5],
+    [10**400],
+    [],
+    "0.5",
+    [True],
+    [float("nan")],
+)
+
+#: ``[sweep]`` tables for :data:`SMALL_CONFIG` (TOML), and whether each is refused.
+SWEEP_TABLES: tuple[tuple[str, bool], ...] = (
+    ('"size_distribution.r_eff_um" = [0.4, 0.6]\nsize_distribution.r_eff_um = [0.5, 0.7]\n', True),
+    ('"size_distribution.modes[01].r_eff_um" = [0.4]\n', True),
+    ("size_distribution.r_eff_um = { start = 0.3, stop = 0.6, num = 1000000000 }\n", True),
+    ('size_distribution.r_eff_um = [2000.0]\n"size_distribution.v_eff" = [0.1]\n', True),
+    ("material = [1.5]\n", True),
+    ("x = " + "[" * 3000 + "]" * 3000 + "\n", True),
+    ("size_distribution = { r_eff_um = [0.4, 0.5], v_eff = [0.1, 0.2] }\n", False),
+    ('"size_distribution.r_eff_um" = [0.4, 0.6]\n', False),
+)
 
 
-def warm_up() -> None:
+def _canonical_axes_checked(spec: Any) -> str:
+    """A spec that loaded: its axes are canonical and each names one input."""
+    from dustoptics.sweep.spec import canonical_key
+
+    keys = [a.key for a in spec.axes]
+    assert len(set(keys)) == len(keys), f"two axes name one input: {keys}"
+    assert all(canonical_key(k) == k for k in keys), f"axis names not canonical: {keys}"
+    return f"{len(keys)} axes, {spec.n_points} points"
+
+
+def _threads_client() -> Any:
+    """A cluster of threads in this (forked) process and its client, to close."""
+    from distributed import Client
+
+    from dustoptics.sweep import local_cluster
+
+    cluster = local_cluster(1, threads=2, processes=False)
+    return cluster, Client(cluster)
+
+
+def _timed_refusal(call: Callable[[], Any], limit_s: float = 5.0) -> Any:
+    """``call()``, which must return or refuse within ``limit_s`` (before any work)."""
+    start = time.perf_counter()
+    try:
+        return call()
+    finally:
+        seconds = time.perf_counter() - start
+        assert seconds < limit_s, f"took {seconds:.1f} s to validate"
+
+
+def sweeps_cases(rng: random.Random, n: int) -> list[Case]:
+    """Sweep specifications (issue 29 items 3, 4): axes spelled several ways, sizes up
+    to 10**30 points, values a single build refuses, ``[sweep]`` tables with a quoted
+    and a bare key for one input; by the API (``load_sweep``, a tiny ``sweep`` when it
+    loads) and the command line.  An accepted sweep must have canonical, distinct axes,
+    and every refusal must come before any work, within seconds."""
+    cases = []
+    for _ in range(n):
+        route = rng.choice(("api", "api", "table", "cli"))
+        if route == "api":
+            over = {
+                rng.choice(SWEEP_SPELLINGS): rng.choice(SWEEP_VALUES)
+                for _ in range(rng.choice((1, 2, 2, 3)))
+            }
+            compute = rng.random() < 0.3
+
+            def run(workdir: Path, over: dict = over, compute: bool = compute) -> str:
+                from dustoptics.sweep import load_sweep, sweep
+
+                spec = _timed_refusal(lambda: load_sweep(SMALL_CONFIG, over))
+                result = _canonical_axes_checked(spec)
+                if compute and spec.n_points <= 4:
+                    cluster, client = _threads_client()
+                    with cluster, client:
+                        ds = sweep(SMALL_CONFIG, over, out="s.zarr", client=client, progress=None)
+                        assert list(ds.phase.dims[:-2]) == [a.key for a in spec.axes]
+                        _check_result(ds.load())
+                    result += ", computed"
+                return result
+
+            cases.append(Case("sweeps", f"load_sweep(SMALL_CONFIG, {over!r})", run))
+        else:
+            table, refused = rng.choice(SWEEP_TABLES)
+            text = SMALL_CONFIG + "\n[sweep]\n" + table
+            if route == "table" or not refused:  # the command line only where it refuses
+
+                def run(workdir: Path, text: str = text) -> str:
+                    from dustoptics.sweep import load_sweep
+
+                    return _canonical_axes_checked(_timed_refusal(lambda: load_sweep(text)))
+
+                cases.append(Case("sweeps", f"load_sweep of [sweep]:\n{table[:200]}", run))
+            else:
+
+                def run(workdir: Path, text: str = text) -> str:
+                    (workdir / "fuzz.toml").write_text(text, encoding="utf-8")
+                    argv = ["sweep", "fuzz.toml", "--out", "out/s.zarr"]
+                    return _timed_refusal(lambda: run_cli(workdir, argv))
+
+                cases.append(Case("sweeps", f"dustoptics sweep of [sweep]:\n{table[:200]}", run))
+    return cases
+
+
+#: What happens to a finished store before a run resumes it (issue 29 items 1, 2, 7).
+STORE_EVENTS = (
+    "flip a byte",
+    "delete a file",
+    "truncate a file",
+    "garbage in a marker",
+    "a marker replaced by a folder",
+    "garbage in .zmetadata",
+    "another run holds the store",
+    "two runs start at once",
+    "a full disk while writing a chunk",
+)
+
+
+def stores_cases(rng: random.Random, n: int) -> list[Case]:
+    """A tiny store (2 points x 3 wavelengths), then damage or a concurrent run, then
+    ``verify_store`` and a resume: each must give the undamaged values or a one-line
+    error (FormatError, StoreBusyError), never a traceback or a wrong value."""
+    cases = []
+    for _ in range(n):
+        event = rng.choice(STORE_EVENTS)
+        seed = rng.randrange(2**32)
+
+        def run(workdir: Path, event: str = event, seed: int = seed) -> str:
+            return _store_case(workdir, event, random.Random(seed))
+
+        cases.append(Case("stores", f"{event} (seed {seed})", run))
+    return cases
+
+
+def _store_case(workdir: Path, event: str, local: random.Random) -> str:
+    import errno
+    import threading
+
+    import numpy as np
+    import xarray as xr
+
+    from dustoptics.io._atomic import held_lock
+    from dustoptics.sweep import run as sweep_run
+    from dustoptics.sweep import sweep, verify_store
+    from dustoptics.sweep.store import StoreBusyError
+
+    over = {"size_distribution.r_eff_um": [0.4, 0.6]}
+    cluster, client = _threads_client()
+    with cluster, client:
+
+        def go(out: Path, axes: dict = over) -> Any:
+            return sweep(
+                SMALL_CONFIG, axes, out=out, client=client, chunk_wavelengths=1, progress=None
+            )
+
+        reference = go(workdir / "reference.zarr").load()
+        store = workdir / "s.zarr"
+        shutil.copytree(workdir / "reference.zarr", store)
+        files = sorted(p for p in store.rglob("*") if p.is_file())
+        path = local.choice(files)
+        outcome = event
+        if event == "flip a byte" and path.stat().st_size:
+            data = bytearray(path.read_bytes())
+            data[local.randrange(len(data))] ^= 1 << local.randrange(8)
+            path.write_bytes(bytes(data))
+            outcome += f" in {path.relative_to(store)}"
+        elif event == "delete a file":
+            path.unlink()
+            outcome += f" {path.relative_to(store)}"
+        elif event == "truncate a file":
+            path.write_bytes(path.read_bytes()[: local.randrange(path.stat().st_size + 1)])
+            outcome += f" {path.relative_to(store)}"
+        elif event == "garbage in a marker":
+            marker = local.choice(sorted((store / "sweep-done").iterdir()))
+            marker.write_bytes(
+                local.choice((b"", b"\xff\xfe", b"[" * 100_000, b'{"chunk": [0, 0]}'))
+            )
+        elif event == "a marker replaced by a folder":
+            marker = local.choice(sorted((store / "sweep-done").iterdir()))
+            marker.unlink()
+            marker.mkdir()
+        elif event == "garbage in .zmetadata":
+            (store / ".zmetadata").write_bytes(b"{not json")
+        elif event == "another run holds the store":
+            before = {p: p.read_bytes() for p in files}
+            with held_lock(store) as fd:
+                assert fd is not None
+                try:
+                    go(store)
+                except StoreBusyError:
+                    pass
+                else:
+                    raise AssertionError("a held store was not refused")
+            assert {p: p.read_bytes() for p in files} == before, "the refused run changed it"
+            return outcome + ": refused, the store untouched"
+        elif event == "two runs start at once":
+            fresh = workdir / "two.zarr"
+            other = {"size_distribution.r_eff_um": [0.45, 0.65]}
+            errors: list[BaseException] = []
+
+            def second() -> None:
+                try:
+                    go(fresh, other)
+                except (StoreBusyError, ValueError) as exc:
+                    errors.append(exc)
+
+            thread = threading.Thread(target=second)
+            thread.start()
+            try:
+                go(fresh)
+            except (StoreBusyError, ValueError) as exc:
+                errors.append(exc)
+            thread.join()
+            assert len(errors) <= 1, f"both runs failed: {errors}"
+            verify_store(fresh)
+            return outcome + f": {len(errors)} refused, the store whole"
+        elif event == "a full disk while writing a chunk":
+            fresh = workdir / "full.zarr"
+            write = sweep_run._write_chunk
+            calls: list[str] = []
+
+            def full(store: Path, region: Any, name: str, result: Any) -> None:
+                calls.append(name)
+                if len(calls) > local.randrange(3):
+                    raise OSError(errno.ENOSPC, "No space left on device", str(store))
+                write(store, region, name, result)
+
+            sweep_run._write_chunk = full
+            try:
+                go(fresh)
+            except OSError as exc:
+                assert exc.errno == errno.ENOSPC and "\n" not in str(exc), repr(exc)
+            finally:
+                sweep_run._write_chunk = write
+            store = fresh
+            outcome += f" after {len(calls) - 1} chunks"
+        try:
+            verify_store(store)
+            outcome += ": verified"
+        except ValueError as exc:
+            assert "\n" not in str(exc) and str(store) in str(exc), str(exc)
+            outcome += ": verify refused"
+        ds = go(store).load()  # a FormatError here (damage at creation) is a clean refusal
+        verify_store(store)
+        for name in ("phase", "cext_um2", "g"):
+            assert np.array_equal(ds[name].values, reference[name].values), f"{name} differs"
+        assert isinstance(ds, xr.Dataset)
+        return outcome + ", resumed to the undamaged values"
+
+
+def _warm_up_sweeps() -> None:
+    """Load the shared solver's kernels and Dask once, before the cases fork."""
+    try:
+        from dustoptics.sweep.shared import solve_shared
+    except ImportError:
+        return
+    import numpy as np
+
+    import dustoptics as do
+    from dustoptics.scattering.quadrature import QuadratureSettings
+
+    solve_shared(
+        m=1.5 + 0.001j,
+        wavelength_nm=550.0,
+        mu_out=np.cos(np.deg2rad(np.linspace(0.0, 180.0, 19))),
+        distributions=[do.ModifiedGamma(r_eff_um=0.5, v_eff=0.1)],
+        per_particle=False,
+        settings=QuadratureSettings(),
+        rtol=1e-2,
+        cross_rtol=1e-4,
+    )
+
+
+GENERATORS = {
+    "api": api_cases,
+    "config": config_cases,
+    "cli": cli_cases,
+    "files": files_cases,
+    "sweeps": sweeps_cases,
+    "stores": stores_cases,
+}
+
+
+def warm_up(kinds: tuple[str, ...] = KINDS) -> None:
     """Compile (or load) the kernels once, so that forked cases inherit them."""
     _small_table()
+    if {"sweeps", "stores"} & set(kinds):
+        _warm_up_sweeps()
 
 
 def fuzz(
@@ -596,7 +916,7 @@ def fuzz(
     report: Callable[[Outcome], None] | None = None,
 ) -> list[Outcome]:
     """Run ``cases_per_kind`` cases of each kind from ``seed``; return every outcome."""
-    warm_up()
+    warm_up(kinds)
     rng = random.Random(seed)
     outcomes = []
     for kind in kinds:

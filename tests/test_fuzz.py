@@ -1,8 +1,8 @@
 """The fuzz harness (scripts/fuzz.py) at its CI budget, and checks that it can fail.
 
 CI runs seed 0 with 5 cases of each kind (API calls, TOML configurations,
-command lines, damaged files), each forked with an address-space limit and a
-timeout.  ``pytest --hypothesis-profile=explore`` runs 60 cases of each kind
+command lines, damaged files, sweep specifications, sweep stores damaged or
+contended), each forked with an address-space limit and a timeout.  ``pytest --hypothesis-profile=explore`` runs 60 cases of each kind
 from a seed taken from the clock (printed, to reproduce a failure with
 ``python scripts/fuzz.py --seed SEED --cases 60``).
 """
@@ -39,7 +39,7 @@ def test_no_input_the_harness_generates_fails():
         if o.status == "failure"
     ]
     assert not failures, f"seed {seed}:\n" + "\n".join(failures)
-    assert len(outcomes) == 4 * cases
+    assert len(outcomes) == len(fuzz.KINDS) * cases
     # The generators reach both results and clean errors (they are not all refused).
     assert {"ok", "clean"} <= {o.status for o in outcomes}
 
@@ -104,3 +104,18 @@ def test_the_harness_sees_a_silently_wrong_number():
 
     with pytest.raises(AssertionError, match="negative"):
         fuzz._check_result(Wrong())
+
+
+def test_the_sweep_families_reach_every_kind_of_input():
+    """The store family draws every event (damage, contention, a full disk) and the
+    sweep family every route (API, [sweep] table, command line) within a few draws,
+    so that a search of a few dozen cases reaches each of issue 29's sweep defects."""
+    import random
+
+    events, routes = set(), set()
+    for seed in range(4):
+        rng = random.Random(seed)
+        events |= {c.description.split(" (seed")[0] for c in fuzz.stores_cases(rng, 10)}
+        routes |= {c.description.split(" ")[0] for c in fuzz.sweeps_cases(rng, 10)}
+    assert events == set(fuzz.STORE_EVENTS)
+    assert routes == {"load_sweep(SMALL_CONFIG,", "load_sweep", "dustoptics"}

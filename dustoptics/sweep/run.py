@@ -1082,6 +1082,7 @@ def _compute(
     """Compute the chunks ``todo`` on Dask into the store (which this run holds)."""
     token = _new_run_token(store)
     to_close: list[Any] = []
+    futures: dict[Any, tuple[int, ...]] = {}
     try:
         c = _client(client, workers, distributed, to_close)
         flat = np.arange(layout.spec.n_points).reshape(layout.spec.shape)
@@ -1111,7 +1112,6 @@ def _compute(
             # rest wait here, so that each goes out in _Order's order.
             return max(2, 2 * sum(c.nthreads().values()))
 
-        futures: dict[Any, tuple[int, ...]] = {}
         running = distributed.as_completed()
 
         def fill() -> None:
@@ -1135,6 +1135,9 @@ def _compute(
             fill()
     finally:
         token.unlink(missing_ok=True)
+        if futures and not to_close:  # a cluster that outlives the sweep: stop its work
+            with contextlib.suppress(Exception):
+                c.cancel(list(futures))
         _close(to_close)
     names = [layout.name(chunk) for chunk in todo]
     missing = sorted(set(names) - done_chunks(store, read_layout(store), names, repair=False))

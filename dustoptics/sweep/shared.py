@@ -50,6 +50,12 @@ from numba import njit
 
 from dustoptics.particles.sizedist import SizeDistribution
 from dustoptics.scattering import mie
+from dustoptics.scattering.quadrature import (
+    QuadratureSettings,
+    initial_panels,
+    panel_nodes,
+    size_parameter_at,
+)
 from dustoptics.scattering.refinement import (
     _KEEP_FRACTION,
     _apply_splits,
@@ -62,12 +68,6 @@ from dustoptics.scattering.refinement import (
     _Run,
     _stacked_interpolation_maps,
     _WavelengthSolver,
-)
-from dustoptics.scattering.quadrature import (
-    QuadratureSettings,
-    initial_panels,
-    panel_nodes,
-    size_parameter_at,
 )
 
 __all__ = ["SharedStatistics", "solve_shared"]

@@ -462,6 +462,10 @@ def _base_from(config: Any) -> tuple[dict[str, Any], dict[str, Any], str]:
             data = tomllib.loads(text)
         except tomllib.TOMLDecodeError as exc:
             raise ConfigError(f"invalid TOML: {exc}", key=None, line=None, source=source) from None
+        except RecursionError:
+            raise ConfigError(
+                "invalid TOML: nested too deeply to read", key=None, line=None, source=source
+            ) from None
         table = data.pop("sweep", {})
         if not isinstance(table, Mapping):
             raise ConfigError("must be a table [sweep]", key="sweep", line=None, source=source)
