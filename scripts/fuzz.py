@@ -1,10 +1,16 @@
-"""Fuzz dustoptics: API calls, TOML configurations, command lines and damaged files.
+"""Fuzz dustoptics: API calls, TOML configurations, command lines, damaged files, sweeps.
 
 Usage::
 
     python scripts/fuzz.py                      # the CI budget: seed 0, 5 cases per kind
     python scripts/fuzz.py --cases 200 --seed 7 # a longer search
     python scripts/fuzz.py --kinds api,files    # some kinds only
+    python scripts/fuzz.py --kinds sweeps,stores --cases 25 --seed 1   # the sweep families
+
+Kinds: ``api``, ``config``, ``cli``, ``files``, ``sweeps`` (sweep specifications: axes
+spelled several ways, huge and refused sizes, by the API and the command line) and
+``stores`` (a tiny sweep store damaged, held by another run, written by two runs at once or
+on a full disk, then checked and resumed).
 
 Every case runs in a forked process with an address-space limit
 (``resource.setrlimit(RLIMIT_AS)``) and a timeout, and with the package's
