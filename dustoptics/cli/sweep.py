@@ -43,6 +43,11 @@ def add_parser(sub: Any) -> None:
         metavar="N",
         help="worker processes of the local cluster (default: all cores)",
     )
+    p.add_argument(
+        "--allow-large",
+        action="store_true",
+        help="go ahead beyond the budgets (points, work, memory, the store's disk)",
+    )
     p.add_argument("--quiet", action="store_true", help="no progress or summary output")
 
 
@@ -56,6 +61,7 @@ def run(args: argparse.Namespace) -> int:
         client=args.scheduler,
         workers=args.workers,
         progress=None if args.quiet else sys.stderr,
+        allow_large=args.allow_large,
     )
     say(args, f"sweep: {dict(ds.sizes)} in {args.out}")
     return 0
