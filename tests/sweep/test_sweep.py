@@ -815,3 +815,29 @@ def test_ctrl_c_closes_the_cluster_quietly_and_a_resume_finishes_quietly(config_
     again = run("resume")
     assert (again.returncode, again.stderr.strip()) == (0, "finished"), again.stderr
     assert verify_store(out) == len(WAVELENGTHS)
+
+
+def test_cli_refuses_a_point_beyond_the_budget_and_allow_large_reaches_the_library(
+    tmp_path, monkeypatch, capsys
+):
+    """``dustoptics sweep`` with r_eff 2000 um: one line naming the point and
+    ``--allow-large``, before any cluster starts; ``--allow-large`` is passed on."""
+    import dustoptics.sweep
+    from dustoptics.cli import main
+
+    path = tmp_path / "big.toml"
+    path.write_text(small_toml('\n[sweep]\n"size_distribution.r_eff_um" = [1.0, 2000.0]\n'))
+    out = tmp_path / "big.zarr"
+    assert main(["sweep", str(path), "--out", str(out), "--quiet"]) == 1
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "r_eff_um = 2000.0" in err and "--allow-large" in err
+    assert not out.exists()
+    seen: dict = {}
+
+    def recorded(config, **kwargs):
+        seen.update(kwargs)
+        return xr.Dataset()
+
+    monkeypatch.setattr(dustoptics.sweep, "sweep", recorded)
+    assert main(["sweep", str(path), "--out", str(out), "--allow-large", "--quiet"]) == 0
+    assert seen["allow_large"] is True
