@@ -22,6 +22,8 @@ command line.
 from importlib.metadata import PackageNotFoundError
 from importlib.metadata import version as _version
 
+from dustoptics.cli import _interrupt  # noqa: F401  (Ctrl-C while the command imports: one line)
+
 try:
     __version__ = _version("dustoptics")
 except PackageNotFoundError:  # running from a source tree that was never installed

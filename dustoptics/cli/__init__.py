@@ -69,6 +69,7 @@ def main(argv: list[str] | None = None) -> int:
     int
         The exit status (:mod:`dustoptics.cli.errors`).
     """
+    from dustoptics.cli import _interrupt
     from dustoptics.cli.parser import build_parser
 
     def command() -> int:
@@ -79,7 +80,8 @@ def main(argv: list[str] | None = None) -> int:
         status: int = args.run(args)
         return status
 
-    return errors.exit_status(command)
+    with _interrupt.handling():  # Ctrl-C: one line and 130, wherever it lands
+        return errors.exit_status(command)
 
 
 def _parser() -> argparse.ArgumentParser:

@@ -6,17 +6,29 @@ usage error (unknown preset, format or option value: :class:`UsageError`, a
 configuration file that does not follow the schema, argparse's own).  Errors
 are printed as ``dustoptics: error: <message>`` on stderr, on one line and
 without a traceback.  A closed output pipe (``dustoptics info f.h5 | head``)
-is not an error.  Ctrl-C is not caught: Python's own KeyboardInterrupt, and
-the files being written are left as they were (:mod:`dustoptics.io._atomic`).
+is not an error.  An interrupt (Ctrl-C, SIGINT) anywhere in a command, the
+first compilation of the kernels included, prints one line,
+``dustoptics: interrupted``, and exits 130 (128 + SIGINT, as shells do); the
+files being written are left as they were (:mod:`dustoptics.io._atomic`
+writes them whole or not at all).
 """
 
 from __future__ import annotations
 
+import contextlib
 import os
 import sys
 from collections.abc import Callable
 
-__all__ = ["EXIT_FAILURE", "EXIT_OK", "EXIT_USAGE", "PROG", "UsageError", "exit_status"]
+__all__ = [
+    "EXIT_FAILURE",
+    "EXIT_INTERRUPTED",
+    "EXIT_OK",
+    "EXIT_USAGE",
+    "PROG",
+    "UsageError",
+    "exit_status",
+]
 
 #: The program's name, the first word of every message.
 PROG = "dustoptics"
@@ -27,6 +39,8 @@ EXIT_OK = 0
 EXIT_FAILURE = 1
 #: Exit status of a command given wrongly (argparse's own status for usage errors).
 EXIT_USAGE = 2
+#: Exit status of a command interrupted by Ctrl-C (128 + SIGINT, as a shell reports it).
+EXIT_INTERRUPTED = 130
 
 
 class UsageError(ValueError):
@@ -60,7 +74,8 @@ def exit_status(command: Callable[[], int]) -> int:
         ``command``'s status; 0 on a broken pipe; 2 on a :class:`UsageError`
         or a configuration error; 1 on any other error a user can cause
         (:class:`OSError`, :class:`ValueError`, :class:`TypeError`,
-        :class:`ImportError` of an optional dependency).
+        :class:`ImportError` of an optional dependency); 130 on an interrupt
+        (:class:`KeyboardInterrupt`).
     """
     from dustoptics.models.config import ConfigError
 
@@ -76,3 +91,17 @@ def exit_status(command: Callable[[], int]) -> int:
         # FormatError is a ValueError; FileExistsError/PermissionError are OSErrors.
         print(f"{PROG}: error: {_one_line(exc)}", file=sys.stderr)
         return EXIT_FAILURE
+    except KeyboardInterrupt:
+        _interrupted()
+        return EXIT_INTERRUPTED
+
+
+def _interrupted() -> None:
+    """The one line an interrupt prints (after a progress line left open on a terminal)."""
+    try:
+        tty = sys.stderr.isatty()
+    except (AttributeError, ValueError):
+        tty = False
+    newline = "\n" if tty else ""
+    with contextlib.suppress(OSError, ValueError):  # stderr closed: the status says it
+        print(f"{newline}{PROG}: interrupted", file=sys.stderr, flush=True)
