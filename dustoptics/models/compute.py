@@ -90,6 +90,7 @@ def _compute_mie(
         name=config.name,
         progress=progress,
         allow_large=allow_large,
+        expansion=False if config.optics.expansion is None else config.optics.expansion,
     )
 
 

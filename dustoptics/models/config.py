@@ -51,7 +51,12 @@ plus ``relative_number_density`` > 0
 inclusive (default 1801) or ``theta_step_deg`` (must divide 180); for Mie and
 hybrid models also ``weighting`` (``"scattering"``, the default, or
 ``"number"``), ``rtol`` (default 1e-4) and ``cross_section_rtol`` (default
-``rtol / 100``), as in :func:`dustoptics.scattering.optics.compute_optics`.
+``rtol / 100``), as in :func:`dustoptics.scattering.optics.compute_optics`;
+for ``phase.model = "mie"`` also ``expansion``: ``true`` for the expansion
+coefficients in generalized spherical functions of every order the spheres
+need, or an integer N for orders 0..N (default ``false``, none), which the
+DISORT and libRadtran formats need (``dustoptics build CONFIG --format
+disort,libradtran``).
 
 ``[phase]``: ``model`` one of
 
@@ -581,6 +586,9 @@ class OpticsConfig:
         ``"scattering"`` or ``"number"``; None for analytic-only models.
     rtol, cross_section_rtol : float or None
         Quadrature tolerances [-]; None for analytic-only models.
+    expansion : bool, int or None
+        ``True`` (every order needed) or the highest order N of the expansion
+        coefficients (``compute_optics(expansion=...)``); None for none.
     """
 
     wavelengths_nm: tuple[float, ...]
@@ -588,6 +596,7 @@ class OpticsConfig:
     weighting: str | None = None
     rtol: float | None = None
     cross_section_rtol: float | None = None
+    expansion: bool | int | None = None
 
     @property
     def theta_deg(self) -> np.ndarray:
@@ -600,6 +609,8 @@ class OpticsConfig:
             out.update(
                 weighting=self.weighting, rtol=self.rtol, cross_section_rtol=self.cross_section_rtol
             )
+        if self.expansion is not None:  # recorded only when asked: other tables' inputs unchanged
+            out["expansion"] = self.expansion
         return out
 
 
@@ -913,11 +924,12 @@ def _parse_wavelengths(ctx: _Context, value: Any) -> tuple[float, ...]:
 def _parse_optics(ctx: _Context, value: Any, *, mie: bool, model: str) -> OpticsConfig:
     sec = _table(ctx, "optics", value)
     allowed = ("wavelengths_nm", "n_theta", "theta_step_deg")
-    mie_keys = ("weighting", "rtol", "cross_section_rtol")
+    mie_keys = ("weighting", "rtol", "cross_section_rtol", "expansion")
     if not mie:
         for key in mie_keys:
             if key in sec:
                 raise _not_used(ctx, f"optics.{key}", model)
+    expansion = _expansion(ctx, sec.get("expansion", False), model)
     _known_keys(ctx, "optics", sec, allowed + mie_keys)
     wavelengths = _parse_wavelengths(ctx, sec.get("wavelengths_nm", dict(_DEFAULT_WAVELENGTHS)))
     if "n_theta" in sec and "theta_step_deg" in sec:
@@ -952,7 +964,39 @@ def _parse_optics(ctx: _Context, value: Any, *, mie: bool, model: str) -> Optics
     cross = _open(
         ctx, "optics.cross_section_rtol", sec.get("cross_section_rtol", rtol / 100.0), 0.0, 0.1
     )
-    return OpticsConfig(wavelengths, n_theta, weighting, rtol, cross)
+    return OpticsConfig(wavelengths, n_theta, weighting, rtol, cross, expansion)
+
+
+#: Highest order ``optics.expansion`` accepts (``true`` gives every order the spheres need).
+MAX_EXPANSION_ORDER: Final = 10_000
+
+
+def _expansion(ctx: _Context, value: Any, model: str) -> bool | int | None:
+    """``optics.expansion``: None (false), True, or an order N in [0, MAX_EXPANSION_ORDER]."""
+    key = "optics.expansion"
+    if value is False:
+        return None
+    if model != "mie":
+        raise ctx.error(
+            key,
+            f"is available for phase.model = 'mie' only; got phase.model = {model!r} (the "
+            "coefficients expand the Mie phase function, not a blend with an analytic one)",
+        )
+    if value is True:
+        return True
+    if isinstance(value, bool) or not isinstance(value, int):
+        raise ctx.error(
+            key,
+            f"must be true, false or an order N >= 0 (an integer); got {value!r} "
+            f"({_type_name(value)})",
+        )
+    if not 0 <= value <= MAX_EXPANSION_ORDER:
+        raise ctx.error(
+            key,
+            f"must be an order in [0, {MAX_EXPANSION_ORDER}] (true: every order the spheres "
+            f"need); got {value!r}",
+        )
+    return value
 
 
 def _analytic_names() -> tuple[str, ...]:
