@@ -12,26 +12,38 @@ memory, or a callback that writes a file by name, for h5py), then calls
    (``ROOT/.dustoptics-stage-XXXXXXXX/``, the files at their paths relative to
    the root), each flushed and :func:`os.fsync`-ed, while holding an
    exclusive :func:`fcntl.flock` on that directory (it marks the staging as
-   alive); then write its manifest (``.complete``: the relative paths, renamed
-   into place last);
+   alive);
 3. take an exclusive :func:`fcntl.flock` on the root directory itself (no
-   lock file is left behind), clean what interrupted runs left (below), check
-   the targets again, move every staged file into place with
+   lock file is left behind), settle what interrupted runs left (below),
+   decide what to write (check the targets again; :func:`place_outputs
+   <dustoptics.io.outputs.place_outputs>` compares them with the files there
+   now), then publish: write the staging directory's journal (``.complete``:
+   the relative paths), move every staged file into place with
    :func:`os.replace` (keeping a hard link to each file it replaces), fsync
-   the directories and remove the staging directory.  If a move fails, the
-   files already moved are put back (the old ones from their links, new
-   targets removed), so the old set is left whole.
+   the directories, remove the journal and the staging directory.  If a move
+   fails, the files already moved are put back (the old ones from their
+   links, new targets removed), so the old set is left whole.
 
 Concurrent writers of the same root therefore replace the set one after the
-other, never interleaved.  A failure before step 3 (an error, a full disk,
-KeyboardInterrupt) removes the staging directory and leaves the old set; a
-kill (``kill -9``, power loss) during step 2 leaves a staging directory
-without manifest, and during step 3 one with its manifest.  The next write
-into that root (holding the root's lock) recognizes both by their names and
-by their free locks: it deletes an incomplete staging directory, finishes
-moving a complete one (roll forward: the set becomes the new one, whole), and
-deletes ``.NAME.XXXXXXXX.tmp`` files that earlier versions staged beside
-their targets.  Leftovers never make a rerun refuse (see :func:`is_leftover`).
+other, never interleaved.  A failure before the journal (an error, a full
+disk, KeyboardInterrupt) removes the staging directory and leaves the old
+set.  A kill (``kill -9``, power loss) before the journal leaves a staging
+directory without one, which the next write into that root deletes: nothing
+of that run appears.  A kill while publishing leaves a staging directory with
+its journal and some files not yet moved: the set in the root is then part
+old, part new, and
+
+- a reader that checks (:func:`whole_set`, which ``dustoptics info`` uses)
+  refuses it, naming the files and the staging directory;
+- the next write into that root (holding the root's lock, before it looks
+  at anything there) completes the interrupted run alone (roll forward: the
+  journal's files not yet moved are moved, and the set becomes that run's,
+  whole), then writes its own.  A staging directory whose run never began to
+  publish is never rolled forward.
+
+It also deletes ``.NAME.XXXXXXXX.tmp`` files that earlier versions staged
+beside their targets.  Leftovers never make a rerun refuse (see
+:func:`is_leftover`).
 
 :func:`file_set` groups several writers (several formats of one table, an
 atmosphere's CSV set and its settings) into one such transaction: inside it,
@@ -69,8 +81,10 @@ __all__ = [
     "clean_leftovers",
     "file_set",
     "held_lock",
+    "interrupted_sets",
     "is_leftover",
     "safe_stem",
+    "whole_set",
     "write_files",
 ]
 
@@ -171,35 +185,43 @@ def _try_lock(fd: int, *, shared: bool = False) -> bool:
     return True
 
 
-def _roll_forward(root: Path, stage: Path) -> None:
-    """Finish moving a complete staging directory's files into place."""
+def _journal(stage: Path) -> list[str] | None:
+    """The relative paths a staging directory's journal lists, or None without a journal."""
     try:
         names = json.loads((stage / MANIFEST).read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        return
+    except (OSError, ValueError, RecursionError):
+        return None
     if not isinstance(names, list):
-        return
+        return None
+    return [name for name in names if isinstance(name, str)]
+
+
+def _roll_forward(root: Path, stage: Path) -> None:
+    """Complete an interrupted run: move its journal's files not yet moved into place."""
+    names = _journal(stage) or []
     for name in names:
-        if not isinstance(name, str):
-            continue
         source = stage / name
         target = root / name
         try:
             check_inside(root, target)
         except ValueError:
             continue
-        if source.is_file():
+        if source.is_file() and not source.is_symlink():
             target.parent.mkdir(parents=True, exist_ok=True)
             os.replace(source, target)
+    for directory in dict.fromkeys([root, *((root / n).parent for n in names)]):
+        _fsync_directory(directory)
 
 
 def clean_leftovers(root: str | os.PathLike[str], directories: tuple[Path, ...] = ()) -> list[Path]:
     """Clean what interrupted writes left in ``root`` (call it holding ``root``'s lock).
 
-    Staging directories whose lock is free: complete ones (with a manifest)
-    are rolled forward, their files moved into place; incomplete ones are
-    deleted.  ``.NAME.XXXXXXXX.tmp`` files in ``root`` and in ``directories``
-    are deleted.  Returns what was cleaned.
+    Staging directories whose lock is free: one with a journal (its run was
+    killed while publishing) is rolled forward, the files it had not yet
+    moved moved into place, so that the set becomes that run's, whole; one
+    without (its run never began to publish) is deleted.
+    ``.NAME.XXXXXXXX.tmp`` files in ``root`` and in ``directories`` are
+    deleted.  Returns what was cleaned.
     """
     base = Path(root)
     cleaned: list[Path] = []
@@ -225,6 +247,100 @@ def clean_leftovers(root: str | os.PathLike[str], directories: tuple[Path, ...] 
                 entry.unlink(missing_ok=True)
                 cleaned.append(entry)
     return cleaned
+
+
+#: Directories :func:`whole_set` checks: the one given (or a file's) and its parents up to
+#: this many in all (a set's files lie at most two folders below its root).
+_ROOT_LEVELS = 3
+
+#: Seconds :func:`whole_set` waits for a writer that is publishing a set.
+WAIT_FOR_WRITER_S = 30.0
+
+
+def interrupted_sets(path: str | os.PathLike[str]) -> list[tuple[Path, list[Path]]]:
+    """The interrupted sets ``path`` belongs to: (staging directory, files not yet moved).
+
+    A set is interrupted when a run was killed while publishing it (see the
+    module docstring): its staging directory holds a journal and files not
+    yet moved.  Only sets with a file at ``path`` (a file) or inside it (a
+    directory) count; ``path``'s directory and its parents up to
+    :data:`_ROOT_LEVELS` in all are searched.  Call it holding those
+    directories' locks (:func:`whole_set` does), or a writer may be
+    publishing meanwhile.
+    """
+    target = Path(os.path.abspath(path))
+    start = target if target.is_dir() else target.parent
+    found = []
+    for root in [start, *start.parents][:_ROOT_LEVELS]:
+        try:
+            entries = sorted(e for e in root.iterdir() if e.name.startswith(STAGE_PREFIX))
+        except OSError:
+            continue
+        for stage in entries:
+            names = _journal(stage) if stage.is_dir() and not stage.is_symlink() else None
+            if not names:
+                continue
+            ours = [n for n in names if (root / n) == target or target in (root / n).parents]
+            left = [root / n for n in names if (stage / n).is_file()]
+            if ours and left:
+                found.append((stage, left))
+    return found
+
+
+def _lock_or_unsupported(fd: int) -> bool:
+    """Take a shared lock without waiting; True also where the file system has no flock."""
+    try:
+        return _try_lock(fd, shared=True)
+    except OSError:
+        return True
+
+
+@contextlib.contextmanager
+def whole_set(
+    path: str | os.PathLike[str], *, timeout_s: float = WAIT_FOR_WRITER_S
+) -> Iterator[None]:
+    """Read the set ``path`` belongs to inside the block, or refuse it if a run left it incomplete.
+
+    Holds a shared :func:`fcntl.flock` on ``path``'s directory and its parents
+    (up to :data:`_ROOT_LEVELS` in all), so no writer publishes into them
+    during the block; waits up to ``timeout_s`` for one that is publishing.
+
+    Raises
+    ------
+    FormatError
+        A run was killed while publishing the set (:func:`interrupted_sets`):
+        the message names the files not yet moved and the staging directory;
+        or a writer held a directory longer than ``timeout_s``.
+    """
+    import time
+
+    target = Path(os.path.abspath(path))
+    start = target if target.is_dir() else target.parent
+    with contextlib.ExitStack() as stack:
+        for root in [start, *start.parents][:_ROOT_LEVELS]:
+            try:
+                fd = os.open(root, os.O_RDONLY)
+            except OSError:
+                continue
+            stack.callback(os.close, fd)
+            deadline = time.monotonic() + timeout_s
+            while not _lock_or_unsupported(fd):
+                if time.monotonic() > deadline:
+                    raise FormatError(
+                        f"{target}: another process has been writing into {root} for "
+                        f"{timeout_s:g} s; try again when it has finished"
+                    )
+                time.sleep(0.05)
+        for stage, left in interrupted_sets(target):
+            shown = ", ".join(p.name for p in left[:4]) + (
+                f" and {len(left) - 4} more" if len(left) > 4 else ""
+            )
+            raise FormatError(
+                f"{target}: an interrupted write left this set incomplete in {stage.parent} "
+                f"({shown} not yet in place; their new versions wait in {stage.name}); "
+                "write the set again: the next write into that folder completes or replaces it"
+            )
+        yield
 
 
 def _stage_file(path: Path, content: Content) -> None:
@@ -283,7 +399,29 @@ def held_lock(directory: str | os.PathLike[str], *, shared: bool = False) -> Ite
         os.close(fd)  # releases the lock
 
 
-def _commit(contents: Mapping[Path, Content], *, overwrite: bool, root: Path | None) -> list[Path]:
+#: Called with the name of each step of a write (tests stop or slow a writer there).
+_STEP_HOOK: Callable[[str], None] | None = None
+
+
+def _step(name: str) -> None:
+    if _STEP_HOOK is not None:
+        _STEP_HOOK(name)
+
+
+def _commit(
+    contents: Mapping[Path, Content],
+    *,
+    overwrite: bool,
+    root: Path | None,
+    select: Callable[[list[Path]], list[Path]] | None = None,
+) -> list[Path]:
+    """Write ``contents`` as one set (the module docstring's steps); the targets written.
+
+    ``select(targets)``, called under the root's lock after leftovers are
+    settled, returns the targets to write (the others are dropped); it may
+    raise to write nothing.  Without it, existing targets are refused unless
+    ``overwrite`` before anything is staged.
+    """
     targets = [Path(os.path.abspath(p)) for p in contents]
     if len(set(targets)) != len(targets):
         raise ValueError(f"write_files: duplicate targets in {[str(t) for t in contents]}")
@@ -298,7 +436,8 @@ def _commit(contents: Mapping[Path, Content], *, overwrite: bool, root: Path | N
         check_inside(base, target)
         if target.name.startswith(STAGE_PREFIX) or target.name == MANIFEST:
             raise ValueError(f"write_files: {str(target)!r} uses a name reserved for staging")
-    check_targets(targets, overwrite=overwrite)
+    if select is None:
+        check_targets(targets, overwrite=overwrite)
     created_dirs: list[Path] = []
     for directory in dict.fromkeys([base, *(t.parent for t in targets)]):
         missing = _missing_directories(directory)
@@ -307,27 +446,34 @@ def _commit(contents: Mapping[Path, Content], *, overwrite: bool, root: Path | N
     # Resolve again now that the directories exist (a symlink among them).
     for target in targets:
         check_inside(base, target)
-    relative = [t.relative_to(base) for t in targets]
+    relative = dict(zip(targets, (t.relative_to(base) for t in targets)))
     stage = Path(tempfile.mkdtemp(prefix=STAGE_PREFIX, dir=base))
     stage_fd = os.open(stage, os.O_RDONLY)
     done = False
+    written: list[Path] = []
     try:
         fcntl.flock(stage_fd, fcntl.LOCK_EX)
-        for rel, content in zip(relative, contents.values()):
-            path = stage / rel
+        for target, content in zip(targets, contents.values()):
+            path = stage / relative[target]
             path.parent.mkdir(parents=True, exist_ok=True)
             _stage_file(path, content)
-        manifest = json.dumps([str(r) for r in relative]).encode("utf-8")
-        _stage_file(stage / (MANIFEST + ".part"), manifest)
-        os.replace(stage / (MANIFEST + ".part"), stage / MANIFEST)
+            _step(f"staged {relative[target]}")
         _fsync_directory(stage)
         with _locked(base):
+            _step("locked")
             clean_leftovers(base, tuple(dict.fromkeys(t.parent for t in targets)))
-            # Another run may have written meanwhile; check again under the lock.
-            check_targets(targets, overwrite=overwrite)
+            # Decide under the lock, on what is there now.
+            chosen = targets if select is None else select(list(targets))
+            check_targets(chosen, overwrite=overwrite)
+            # The journal: from here on the set is being published.
+            journal = json.dumps([str(relative[t]) for t in chosen]).encode("utf-8")
+            _stage_file(stage / (MANIFEST + ".part"), journal)
+            os.replace(stage / (MANIFEST + ".part"), stage / MANIFEST)
+            _fsync_directory(stage)
+            _step("journal")
             placed: list[tuple[Path, Path | None]] = []
             try:
-                for i, (rel, target) in enumerate(zip(relative, targets)):
+                for i, target in enumerate(chosen):
                     backup = None
                     if target.exists() or target.is_symlink():
                         # A hard link to the old file, so that a failure can put it back.
@@ -337,7 +483,8 @@ def _commit(contents: Mapping[Path, Content], *, overwrite: bool, root: Path | N
                             os.link(target, backup, follow_symlinks=False)
                         except OSError:
                             backup = None
-                    os.replace(stage / rel, target)
+                    _step(f"move {relative[target]}")
+                    os.replace(stage / relative[target], target)
                     placed.append((target, backup))
             except BaseException:
                 for target, backup in reversed(placed):
@@ -347,13 +494,20 @@ def _commit(contents: Mapping[Path, Content], *, overwrite: bool, root: Path | N
                         else:
                             target.unlink()
                 raise
-            for directory in dict.fromkeys(t.parent for t in targets):
+            for directory in dict.fromkeys(t.parent for t in chosen):
                 _fsync_directory(directory)
+            _step("moved")
             done = True
+            written = chosen
+            (stage / MANIFEST).unlink()
+            _fsync_directory(stage)
+            _step("published")
             shutil.rmtree(stage, ignore_errors=True)
             _fsync_directory(base)
     except BaseException:
         if not done:
+            with contextlib.suppress(OSError):
+                (stage / MANIFEST).unlink()
             shutil.rmtree(stage, ignore_errors=True)
             for directory in sorted(created_dirs, key=lambda p: len(p.parts), reverse=True):
                 with contextlib.suppress(OSError):
@@ -361,7 +515,8 @@ def _commit(contents: Mapping[Path, Content], *, overwrite: bool, root: Path | N
         raise
     finally:
         os.close(stage_fd)
-    return [Path(p) for p in contents]
+    chosen_set = set(written)
+    return [Path(p) for p, t in zip(contents, targets) if t in chosen_set]
 
 
 @dataclass

@@ -122,12 +122,17 @@ def describe_path(path: str | os.PathLike[str]) -> str:
     FileNotFoundError
         No such file or folder.
     dustoptics.io.FormatError
-        A damaged file, or nothing dustoptics writes.
+        A damaged file, nothing dustoptics writes, or a set that a killed
+        write left incomplete (:func:`dustoptics.io._atomic.whole_set`).
     """
+    from dustoptics.io._atomic import whole_set
+
     p = Path(path)
     if not p.exists():
         raise FileNotFoundError(f"no such file or directory: {str(p)!r}")
-    return _printable_lines(_describe_directory(p) if p.is_dir() else _describe_file(p))
+    with whole_set(p):  # a set a killed write left incomplete is refused, not described
+        text = _describe_directory(p) if p.is_dir() else _describe_file(p)
+    return _printable_lines(text)
 
 
 def _describe_file(p: Path) -> str:

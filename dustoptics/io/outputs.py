@@ -216,7 +216,9 @@ def place_outputs(
       naming every such file, before anything is written.
 
     The new files appear together or not at all (:mod:`dustoptics.io._atomic`).
-    Other files in ``out_dir`` are left alone.
+    The comparison is made holding ``out_dir``'s lock, after a write that was
+    interrupted there has been completed, so it sees the files as they are
+    when the new ones are moved in.  Other files in ``out_dir`` are left alone.
 
     Parameters
     ----------
@@ -241,29 +243,41 @@ def place_outputs(
     FileExistsError
         Files exist and differ, and ``force`` is False (nothing is written).
     """
-    from dustoptics.io._atomic import write_files
+    from dustoptics.io._atomic import _commit
 
     out = Path(out_dir)
-    with tempfile.TemporaryDirectory(prefix="dustoptics-") as tmp:
-        staging = Path(tmp).resolve()
-        contents: dict[Path, bytes] = {}
-        unchanged: list[Path] = []
+    unchanged: list[Path] = []
+
+    def select(targets: list[Path]) -> list[Path]:
+        # Under out's lock, after an interrupted write there was completed: compare with
+        # what is there now, not with what was there before the lock.
+        keep: list[Path] = []
         conflicts: list[Path] = []
-        for path in render(staging):
-            target = out / Path(path).resolve().relative_to(staging)
-            data = Path(path).read_bytes()
+        given = {Path(os.path.abspath(t)): t for t in rendered}
+        for target in targets:
             if target.is_file():
-                if target.read_bytes() == data or (same is not None and same(target, Path(path))):
-                    unchanged.append(target)
+                new = rendered[given[target]]
+                if target.read_bytes() == new.read_bytes() or (
+                    same is not None and same(target, new)
+                ):
+                    unchanged.append(given[target])
                     continue
-                conflicts.append(target)
-            contents[target] = data
+                conflicts.append(given[target])
+            keep.append(target)
         if conflicts and not force:
             raise FileExistsError(
                 "these files exist and differ from the new ones; use --force to replace them: "
                 + ", ".join(repr(str(c)) for c in conflicts)
             )
-        written = write_files(contents, overwrite=force) if contents else []
+        return keep
+
+    with tempfile.TemporaryDirectory(prefix="dustoptics-") as tmp:
+        staging = Path(tmp).resolve()
+        rendered: dict[Path, Path] = {}
+        for path in render(staging):
+            rendered[out / Path(path).resolve().relative_to(staging)] = Path(path)
+        contents: dict[Path, bytes] = {t: p.read_bytes() for t, p in rendered.items()}
+        written = _commit(contents, overwrite=force, root=out, select=select)
     return Placement(written=tuple(written), unchanged=tuple(unchanged))
 
 

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import os
+import shutil
+import signal
 import stat
 from pathlib import Path
 
@@ -382,3 +384,164 @@ def test_printable_escapes_what_a_terminal_would_obey():
     shown = _text.printable(text)
     assert shown == "name\\x1b]0;title\\x07\\x1b[2J\\x9b31m\\u202eevil\\x0d\\x0a"
     assert shown.isprintable()
+
+
+# ------------------------------------------------------------------ kill -9 at every step (issue 29)
+
+_NAMES = [f"f{i}" for i in range(7)]
+
+
+def _steps(tmp_path: Path, monkeypatch, contents: dict, overwrite: bool = True) -> list[str]:
+    """The steps a write of ``contents`` goes through (recorded on a scratch copy)."""
+    from dustoptics.io import _atomic
+
+    scratch = tmp_path / "scratch"
+    shutil.copytree(next(iter(contents)).parent, scratch, dirs_exist_ok=True)
+    seen: list[str] = []
+    monkeypatch.setattr(_atomic, "_STEP_HOOK", seen.append)
+    write_files({scratch / p.name: c for p, c in contents.items()}, overwrite=overwrite)
+    monkeypatch.setattr(_atomic, "_STEP_HOOK", None)
+    shutil.rmtree(scratch)
+    return seen
+
+
+def _killed_at(step: int, write) -> None:
+    """Run ``write()`` in a forked child that is killed (SIGKILL) at its ``step``-th step."""
+    pid = os.fork()
+    if pid == 0:  # pragma: no cover - the child
+        from dustoptics.io import _atomic
+
+        count = iter(range(10**6))
+
+        def hook(name: str) -> None:
+            if next(count) == step:
+                os.kill(os.getpid(), signal.SIGKILL)
+
+        _atomic._STEP_HOOK = hook
+        try:
+            write()
+        finally:
+            os._exit(0)
+    _, status = os.waitpid(pid, 0)
+    assert os.WIFSIGNALED(status) and os.WTERMSIG(status) == signal.SIGKILL, status
+
+
+def _set_state(out: Path, sets: dict[str, dict[str, bytes]]) -> str:
+    """Which of ``sets`` the folder holds whole ("" for none of the names; AssertionError if mixed)."""
+    present = {n: (out / n).read_bytes() for n in _NAMES if (out / n).exists()}
+    if not present:
+        return ""
+    for label, files in sets.items():
+        if present == files:
+            return label
+    raise AssertionError(f"a mixed or partial set: {sorted(present)} of {sets}")
+
+
+@pytest.mark.parametrize("existing", [True, False], ids=["replace a set", "a new set"])
+def test_a_set_killed_at_any_step_reads_whole_or_is_refused(tmp_path, monkeypatch, existing):
+    from dustoptics.io._atomic import whole_set
+
+    old = {n: f"old {n}\n".encode() for n in _NAMES}
+    new = {n: f"new {n}\n".encode() for n in _NAMES}
+    template = tmp_path / "template"
+    template.mkdir()
+    if existing:
+        for n, data in old.items():
+            (template / n).write_bytes(data)
+    steps = _steps(tmp_path, monkeypatch, {template / n: d for n, d in new.items()})
+    assert steps[0] == "staged f0" and "journal" in steps and steps[-1] == "published"
+    publishing = steps.index("journal")
+    for k, step in enumerate(steps):
+        out = tmp_path / f"killed-at-{k}"
+        shutil.copytree(template, out)
+        _killed_at(
+            k, lambda out=out: write_files({out / n: d for n, d in new.items()}, overwrite=True)
+        )
+        sets = {"old": old, "new": new} if existing else {"new": new}
+        try:
+            with whole_set(out):
+                state = _set_state(out, sets)
+            refused = False
+        except FormatError as exc:
+            assert "interrupted write" in str(exc) and step.startswith(("journal", "move")), step
+            refused = True
+        # Killed while moving, the set is mixed: a reader must have refused it.
+        assert refused or state in ("old", "new", ""), step
+        # A later, unrelated write into the folder settles it: the killed run's set whole if it
+        # had begun to publish, else untouched; never rolled forward before its journal.
+        write_files({out / "unrelated": b"another run\n"})
+        with whole_set(out):
+            state = _set_state(out, sets)
+        expected = "new" if k >= publishing else ("old" if existing else "")
+        assert state == expected, (step, state)
+        assert sorted(p.name for p in out.iterdir()) == sorted(
+            ([*_NAMES] if state else []) + ["unrelated"]
+        ), step
+
+
+def test_a_later_placement_completes_the_killed_run_first_never_mixing_three(tmp_path, monkeypatch):
+    """Run A killed while moving; run B (other contents, some equal to the oldest set's) then
+    places its files with force: the folder holds B's set, whole, never A's files among B's."""
+    from dustoptics.io import _atomic
+    from dustoptics.io.outputs import place_outputs
+
+    def render(files: dict[str, bytes]):
+        def write(directory: Path) -> list[Path]:
+            for n, data in files.items():
+                (directory / n).write_bytes(data)
+            return [directory / n for n in files]
+
+        return write
+
+    run0 = {n: f"0 {n}\n".encode() for n in _NAMES}
+    run_a = {n: f"A {n}\n".encode() for n in _NAMES}
+    run_b = {n: (run0[n] if i % 2 else f"B {n}\n".encode()) for i, n in enumerate(_NAMES)}
+    out = tmp_path / "out"
+    place_outputs(render(run0), out, force=False)
+    seen: list[str] = []
+    monkeypatch.setattr(_atomic, "_STEP_HOOK", seen.append)
+    place_outputs(render(run_a), tmp_path / "scratch", force=True)
+    monkeypatch.setattr(_atomic, "_STEP_HOOK", None)
+    for k in [i for i, s in enumerate(seen) if s.startswith("move ")][1:]:
+        shutil.rmtree(out)
+        place_outputs(render(run0), out, force=False)
+        _killed_at(k, lambda: place_outputs(render(run_a), out, force=True))
+        with pytest.raises(FileExistsError, match="differ"):
+            place_outputs(render(run_b), out, force=False)
+        placed = place_outputs(render(run_b), out, force=True)
+        assert {n: (out / n).read_bytes() for n in _NAMES} == run_b, seen[k]
+        assert sorted(p.name for p in out.iterdir()) == _NAMES
+        assert len(placed.written) == len(_NAMES)  # A's files, completed first, all differ
+
+
+def test_info_refuses_a_set_killed_while_moving(tmp_path):
+    import dustoptics as do
+    from dustoptics.io.describe import describe_path
+    from dustoptics.io.outputs import write_formats
+
+    def table(name: str, r: float) -> do.Table:
+        return do.compute_optics(
+            1.5, do.Monodisperse(radius_um=r), [550.0, 680.0], [0.0, 90.0, 180.0], name=name
+        )
+
+    out = tmp_path / "out"
+    write_formats(table("t", 0.5), out, ["hdf5", "csv"])
+    assert "name:            t" in describe_path(out)
+    new = table("t", 0.7)
+    from dustoptics.io import _atomic
+
+    seen: list[str] = []
+    _atomic._STEP_HOOK = seen.append
+    try:
+        write_formats(new, tmp_path / "scratch", ["hdf5", "csv"])
+    finally:
+        _atomic._STEP_HOOK = None
+    second_move = [i for i, s in enumerate(seen) if s.startswith("move ")][1]
+    _killed_at(second_move, lambda: write_formats(new, out, ["hdf5", "csv"], overwrite=True))
+    with pytest.raises(FormatError, match=r"interrupted write left this set incomplete in .*out"):
+        describe_path(out)
+    with pytest.raises(FormatError, match="interrupted write"):
+        describe_path(out / "t.h5")
+    write_files({out / "notes.txt": b"later\n"})  # the next write completes it
+    assert do.open_table(out / "t.h5").equals(new)
+    assert "name:            t" in describe_path(out / "t.h5")
