@@ -49,8 +49,12 @@ Readers verify what the writer guarantees
     or an older layout; groups, soft or external links, external raw storage
     and virtual datasets (a crafted file cannot make the reader read other
     files); variables of unknown name, wrong type, shape or units; more than
-    :data:`MAX_VALUES` values in a variable (checked from the metadata, before
-    anything is allocated); a digest that does not match; values the
+    :data:`MAX_VALUES` values in a variable, filters other than deflate,
+    shuffle and Fletcher-32, or more data than the bytes stored can hold
+    (missing chunks, or more than deflate's limit of about 1032:1; all
+    checked from the metadata, before anything is allocated or decompressed,
+    so the memory a file can ask for is bounded by its size); a digest that
+    does not match; values the
     :class:`~dustoptics.table.Table` refuses (non-finite, negative, ...);
     derived variables that disagree with the stored ones; and a phase
     function whose sphere integral is not 1 within what its angle grid
@@ -118,6 +122,8 @@ _GZIP_LEVEL = 6
 _LIBVER = ("v110", "v110")
 #: HDF5's own attributes of dimension scales, not part of the netCDF data model.
 _HDF5_ATTRIBUTES = frozenset({"CLASS", "NAME", "DIMENSION_LIST", "REFERENCE_LIST", "_Netcdf4Dimid"})
+#: Most bytes deflate can expand one stored byte to (its format's limit is about 1032:1).
+_MAX_DEFLATE_RATIO = 1100
 _SCALARS = SCALAR_FIELDS
 _INTEGERS = ("n_nodes", "cross_section_n_nodes")
 
@@ -401,6 +407,45 @@ def _expected_shapes(n_wl: int, n_theta: int, n_order: int) -> dict[str, tuple[i
     return shapes
 
 
+def _check_storage(path: Path, objects: Mapping[str, Any]) -> None:
+    """Refuse, before a value is read, data that cannot come from the bytes stored.
+
+    Each variable's filters must be HDF5's deflate, shuffle and Fletcher-32
+    (what :func:`write_netcdf` uses); a variable without deflate must have all
+    its bytes stored (no chunk left to the fill value), one with deflate at
+    most :data:`_MAX_DEFLATE_RATIO` times its stored bytes (deflate's own
+    limit); so the data a file declares is bounded by its size.
+    """
+    h5z = _h5py().h5z
+    allowed = {h5z.FILTER_DEFLATE, h5z.FILTER_SHUFFLE, h5z.FILTER_FLETCHER32}
+    declared_total = 0
+    for key, obj in objects.items():
+        plist = obj.id.get_create_plist()
+        codes = [plist.get_filter(i)[0] for i in range(plist.get_nfilters())]
+        unknown = [c for c in codes if c not in allowed]
+        if unknown:
+            raise FormatError(
+                f"{path}: variable {key!r} uses HDF5 filter {unknown[0]}; table files use only "
+                "deflate, shuffle and Fletcher-32"
+            )
+        declared = int(obj.size) * int(obj.dtype.itemsize)
+        stored = int(obj.id.get_storage_size())
+        limit = _MAX_DEFLATE_RATIO * stored if h5z.FILTER_DEFLATE in codes else stored
+        if declared > limit:
+            raise FormatError(
+                f"{path}: variable {key!r} declares {declared} bytes of data but stores "
+                f"{stored}, which cannot hold them (chunks missing, or a crafted file); refused "
+                "before reading"
+            )
+        declared_total += declared
+    size = path.stat().st_size
+    if declared_total > _MAX_DEFLATE_RATIO * size:
+        raise FormatError(
+            f"{path}: declares {declared_total} bytes of data in a file of {size} bytes; refused "
+            "before reading"
+        )
+
+
 def _open_checked(
     path: Path, f: Any
 ) -> tuple[dict[str, tuple[np.ndarray, dict[str, Any]]], dict[str, str]]:
@@ -483,6 +528,7 @@ def _open_checked(
         if obj.dtype.kind != kind or obj.dtype.itemsize != 8:
             wanted = "64-bit integers" if kind == "i" else "64-bit floats"
             raise FormatError(f"{path}: variable {key!r} must hold {wanted}; got {obj.dtype}")
+    _check_storage(path, objects)
     variables = {}
     for key, obj in objects.items():
         var_attrs = {

@@ -531,3 +531,53 @@ def test_crafted_content_is_named(written, change, message):
     _edit(written, change)
     with pytest.raises(FormatError, match=rf"t\.nc: .*{message}"):
         open_table(written)
+
+
+def test_data_the_stored_bytes_cannot_hold_is_refused_before_reading(written, monkeypatch):
+    """A small file whose variables declare hundreds of MiB of chunks never written (read
+    back as the fill value) or beyond deflate's ratio: refused from the metadata (issue 29)."""
+    n = 1 << 23
+
+    def crafted(f):
+        for key in ("theta_deg", "phase"):
+            del f[key]
+        f.create_dataset(
+            "theta_deg", shape=(n,), dtype="<f8", chunks=(1 << 16,), compression="gzip"
+        )
+        f.create_dataset(
+            "phase", shape=(3, n), dtype="<f8", chunks=(1, 1 << 16), compression="gzip"
+        )
+        f["theta_deg"].attrs["units"] = "degree"
+        f["phase"].attrs["units"] = "sr-1"
+
+    _edit(written, crafted, resign=False)
+    assert written.stat().st_size < 1 << 20  # a small file that declares 256 MiB
+    read = []
+    monkeypatch.setattr(h5py.Dataset, "__getitem__", lambda self, key: read.append(self.name))
+    with pytest.raises(
+        FormatError, match=r"'theta_deg' declares 67108864 bytes of data but stores 0, which cannot"
+    ):
+        open_table(written)
+    assert read == []
+
+
+def test_other_filters_are_refused(written):
+    def lzf(f):
+        values = f["g"][()]
+        del f["g"]
+        f.create_dataset("g", data=values, chunks=(3,), compression="lzf")
+
+    _edit(written, lzf)
+    with pytest.raises(FormatError, match="'g' uses HDF5 filter 32000; table files use only"):
+        open_table(written)
+
+
+def test_a_constant_phase_function_compresses_within_the_bound(tmp_path):
+    theta = np.linspace(0.0, 180.0, 20001)
+    table = Table(
+        wavelength_nm=[440.0, 550.0, 680.0],
+        theta_deg=theta,
+        phase=np.full((3, theta.size), 1 / (4 * np.pi)),
+        g=[0.0, 0.0, 0.0],
+    )
+    assert open_table(table.save(tmp_path / "iso.nc")).equals(table)
