@@ -18,12 +18,13 @@ Digests
     ``sweep-created.json`` lists every file written when the store was created (Zarr
     metadata, coordinates, per-point variables, the sweep's identity) with its SHA-256,
     and the chunk grid.  Each chunk's completion marker (``sweep-done/NAME``, written
-    after its arrays, atomically) records the SHA-256 of the chunk's file in every array,
-    or null where Zarr wrote none (a chunk that is all fill value).  A chunk is done
-    only if its marker is a file of JSON naming it and every file matches; a resume
-    computes any other chunk again (its marker and files removed first), and
-    :func:`verify_store` reports it.  A file written at creation that no longer matches
-    cannot be recomputed chunk by chunk: the store is refused, naming the file.
+    after its arrays to a temporary file that is renamed) records the SHA-256 of the
+    chunk's file in every array, or null where Zarr wrote none (a chunk that is all fill
+    value).  A chunk is done only if its marker is a file of JSON naming it and every
+    file matches; a resume computes any other chunk again (its marker and files removed
+    first), and :func:`verify_store` reports it.  A file written at creation that no
+    longer matches cannot be recomputed chunk by chunk: the store is refused, naming the
+    file.
 """
 
 from __future__ import annotations
@@ -40,7 +41,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from dustoptics.io._atomic import FormatError, held_lock, write_files
+from dustoptics.io._atomic import FILE_MODE, FormatError, held_lock
 
 __all__ = ["StoreBusyError", "verify_store"]
 
@@ -60,6 +61,9 @@ STORE_FORMAT = "dustoptics-sweep-store/1"
 _LARGEST_RECORD = 64 * 1024**2
 
 _NOT_COMPUTED = "is not computed (no marker)"
+
+#: Suffix of a marker being written (``.NAME.XXXXXXXX.tmp``).
+_TEMPORARY = ".tmp"
 
 
 class StoreBusyError(ValueError):
@@ -337,7 +341,8 @@ def _acquire(
                 if not _same_directory(staging, fd):
                     raise RuntimeError(f"creating {str(store)!r} replaced its locked folder")
                 _write_plain(staging / IDENTITY, identity.encode("utf-8"))
-                full = StoreLayout(layout.grid, layout.arrays, _separator(staging, "phase"))
+                separator = _separator(staging, min(layout.arrays))
+                full = StoreLayout(layout.grid, layout.arrays, separator)
                 record = _created_record(staging, full)
                 _write_plain(staging / CREATED, json.dumps(record, sort_keys=True).encode())
                 try:
@@ -416,6 +421,10 @@ def done_chunks(
             done.add(name)
         elif repair:
             discard_chunk(store, layout, name)
+    if repair and (store / MARKERS).is_dir():
+        for entry in (store / MARKERS).iterdir():  # markers of stopped runs, half written
+            if entry.name.startswith(".") and entry.name.endswith(_TEMPORARY):
+                _remove(entry)
     return done
 
 
@@ -425,10 +434,30 @@ def write_marker(store: Path, layout: StoreLayout, name: str, record: Mapping[st
     full = dict(record)
     full["chunk"] = [int(i) for i in name.split(".")]
     full["sha256"] = {rel: _digest(store / rel) for rel in layout.chunk_files(name)}
-    write_files(
-        {store / MARKERS / name: json.dumps(full, sort_keys=True).encode("utf-8")},
-        overwrite=True,
-    )
+    _replace_atomically(store / MARKERS / name, json.dumps(full, sort_keys=True).encode("utf-8"))
+
+
+def _replace_atomically(path: Path, data: bytes) -> None:
+    """Write ``data`` to ``path`` through a new temporary file beside it, fsync-ed and
+    renamed over it.  (Markers are single files written by many workers at once into
+    one folder: each needs no staging folder of its own, nor the folder's lock.)"""
+    temporary = path.with_name(f".{path.name}.{uuid.uuid4().hex[:8]}{_TEMPORARY}")
+    try:
+        with open(temporary, "xb") as handle:
+            handle.write(data)
+            handle.flush()
+            os.fsync(handle.fileno())
+        os.chmod(temporary, FILE_MODE)
+        os.replace(temporary, path)
+    except BaseException:
+        temporary.unlink(missing_ok=True)
+        raise
+    with contextlib.suppress(OSError):
+        fd = os.open(path.parent, os.O_RDONLY)
+        try:
+            os.fsync(fd)
+        finally:
+            os.close(fd)
 
 
 # ---------------------------------------------------------------------- checking a store

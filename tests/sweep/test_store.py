@@ -279,3 +279,28 @@ def test_markers_record_the_digest_of_every_array_of_their_chunk(reference):
         )
     )
     assert all(len(d) == 64 for d in marker["sha256"].values())
+
+
+def test_markers_written_at_once_by_many_workers_all_arrive(tmp_path):
+    """Workers write markers into one folder at the same moment; each arrives whole.
+    (Through the set writer, one writer's cleanup could take another's fresh staging
+    folder before it was locked, and that chunk's task failed.)"""
+    from concurrent.futures import ThreadPoolExecutor
+
+    from dustoptics.sweep.store import MARKERS, StoreLayout, chunk_problem, write_marker
+
+    layout = StoreLayout((1, 64), {"phase": 1, "g": 0})
+    names = list(layout.names())
+    for name in names:
+        for rel in layout.chunk_files(name):
+            (tmp_path / rel).parent.mkdir(exist_ok=True)
+            (tmp_path / rel).write_bytes(name.encode())
+    (tmp_path / MARKERS).mkdir()
+
+    def write(name: str) -> None:
+        write_marker(tmp_path, layout, name, {"seconds": 1.0})
+
+    with ThreadPoolExecutor(8) as pool:
+        list(pool.map(write, names * 3))
+    assert [n for n in names if chunk_problem(tmp_path, layout, n) is not None] == []
+    assert sorted(p.name for p in (tmp_path / MARKERS).iterdir()) == sorted(names)
