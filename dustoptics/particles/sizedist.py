@@ -56,6 +56,7 @@ References
 from __future__ import annotations
 
 import math
+import warnings
 from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
 from types import MappingProxyType
@@ -74,6 +75,7 @@ from dustoptics._validation import (
 
 __all__ = [
     "MAX_SIGMA",
+    "MIN_R_EFF_UM",
     "MIN_TAIL_FRACTION",
     "MIN_V_EFF",
     "RADIUS_RANGE_UM",
@@ -155,12 +157,36 @@ MAX_SIGMA = 3.0
 MIN_TAIL_FRACTION = 1e-15
 
 
+#: Smallest effective radius of a population: 1e-3 um (1 nm, the size of a molecule).  A
+#: smaller one was almost surely given in metres (``r_eff_um=1.6e-6`` meant 1.6 um) and is
+#: refused, as wavelengths plainly not in nanometres are
+#: (:func:`dustoptics._validation.check_wavelength_unit`); a :class:`Monodisperse`
+#: sphere that small only warns (the Rayleigh limit is tested down to 1e-6 um). [um]
+MIN_R_EFF_UM = 1e-3
+
+
 def _check_radius(name: str, value: Any) -> float:
     out = check_positive(name, value, unit="um")
     low, high = RADIUS_RANGE_UM
     if not low <= out <= high:
-        raise ValueError(f"{name} must be in [{low:g}, {high:g}] um; got {value!r}")
+        hint = " (was it in metres?)" if out < low else ""
+        raise ValueError(f"{name} must be in [{low:g}, {high:g}] um; got {value!r}{hint}")
     return out
+
+
+def _metres_message(name: str, value: float) -> str:
+    return (
+        f"{name} must be in micrometres; got {value!r}, below {MIN_R_EFF_UM:g} um (1 nm, the "
+        f"size of a molecule): was it in metres? ({value:g} m = {value * 1e6:g} um)"
+    )
+
+
+def _check_r_eff(name: str, value: Any) -> float:
+    """An effective radius: a radius (:func:`_check_radius`), plainly not in metres."""
+    out = check_positive(name, value, unit="um")
+    if out < MIN_R_EFF_UM:
+        raise ValueError(_metres_message(name, out))
+    return _check_radius(name, out)
 
 
 def _check_v_eff(value: Any, high: float) -> float:
@@ -589,7 +615,7 @@ class ModifiedGamma(_GammaFamily):
     v_eff: float = field()
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "r_eff_um", _check_radius("r_eff_um", self.r_eff_um))
+        object.__setattr__(self, "r_eff_um", _check_r_eff("r_eff_um", self.r_eff_um))
         object.__setattr__(self, "v_eff", _check_v_eff(self.v_eff, 0.5))
 
     @property
@@ -650,7 +676,7 @@ class Gamma(_GammaFamily):
             )
         object.__setattr__(self, "shape", shape)
         object.__setattr__(self, "scale_um", _check_radius("scale_um", self.scale_um))
-        _check_radius("r_eff_um (scale_um (shape + 2))", self.r_eff_um)
+        _check_r_eff("r_eff_um (scale_um (shape + 2))", self.r_eff_um)
 
     def _shape_scale(self) -> tuple[float, float]:
         return self.shape, self.scale_um
@@ -772,7 +798,7 @@ class LogNormal(_LogNormalFamily):
                 f"{math.expm1(MAX_SIGMA**2):.3g}); got {self.sigma!r}"
             )
         object.__setattr__(self, "sigma", sigma)
-        _check_radius("r_eff_um (median exp(5 sigma^2 / 2))", self.r_eff_um)
+        _check_r_eff("r_eff_um (median exp(5 sigma^2 / 2))", self.r_eff_um)
 
     @property
     def geometric_std(self) -> float:
@@ -838,7 +864,7 @@ class ModifiedLogNormal(_LogNormalFamily):
     v_eff: float = field()
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "r_eff_um", _check_radius("r_eff_um", self.r_eff_um))
+        object.__setattr__(self, "r_eff_um", _check_r_eff("r_eff_um", self.r_eff_um))
         object.__setattr__(
             self, "v_eff", _check_v_eff(self.v_eff, math.expm1(MAX_SIGMA**2) * (1 + 1e-12))
         )
@@ -891,6 +917,14 @@ class Monodisperse(SizeDistribution):
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "radius_um", _check_radius("radius_um", self.radius_um))
+        if self.radius_um < MIN_R_EFF_UM:
+            warnings.warn(
+                f"radius_um = {self.radius_um!r} um is below {MIN_R_EFF_UM:g} um (1 nm, the size "
+                f"of a molecule): was it in metres? ({self.radius_um:g} m = "
+                f"{self.radius_um * 1e6:g} um); taken as micrometres",
+                UserWarning,
+                stacklevel=3,
+            )
 
     @property
     def has_density(self) -> bool:
