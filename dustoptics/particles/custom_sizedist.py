@@ -116,6 +116,12 @@ class MultiModal(SizeDistribution):
                 f"modes must be a sequence of SizeDistribution; got the single {self.modes!r} "
                 "(wrap it in a tuple)"
             )
+        if isinstance(self.modes, (str, bytes, Mapping)) or not isinstance(
+            self.modes, (Sequence, np.ndarray)
+        ):
+            raise TypeError(
+                f"modes must be a sequence of SizeDistribution (a tuple or list); got {self.modes!r}"
+            )
         modes = tuple(self.modes)
         if not modes:
             raise ValueError("modes must contain at least one SizeDistribution; got none")
@@ -305,16 +311,33 @@ class TabulatedDistribution(SizeDistribution):
         ----------
         path : str or path-like
             The file.
+
+        Raises
+        ------
+        FileNotFoundError
+            No such file.
+        dustoptics.io.FormatError
+            Not a regular file (a FIFO, a device), larger than
+            :data:`dustoptics._files.MAX_TEXT_BYTES`, not UTF-8 text, or not a
+            CSV file (a cell beyond the csv module's field limit).
+        ValueError
+            Missing columns, or a value that is not a number.
         """
         import csv
         from pathlib import Path
 
-        lines = [
-            ln
-            for ln in Path(path).read_text().splitlines()
-            if ln.strip() and not ln.lstrip().startswith("#")
-        ]
-        rows = list(csv.reader(lines, skipinitialspace=True))
+        from dustoptics._files import FormatError, read_checked
+
+        p = Path(path)
+        try:
+            text = read_checked(p).decode("utf-8")
+        except UnicodeDecodeError as exc:
+            raise FormatError(f"{p}: not UTF-8 text ({exc.reason} at byte {exc.start})") from None
+        lines = [ln for ln in text.splitlines() if ln.strip() and not ln.lstrip().startswith("#")]
+        try:
+            rows = list(csv.reader(lines, skipinitialspace=True))
+        except csv.Error as exc:
+            raise FormatError(f"{p}: not a valid CSV file ({exc})") from None
         columns = [c.strip() for c in rows[0]] if rows else []
         if "radius_um" not in columns or ("dn_dr" in columns) == ("dn_dlnr" in columns):
             raise ValueError(

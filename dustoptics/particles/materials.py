@@ -767,7 +767,10 @@ def read_index_csv(path: str | os.PathLike[str]) -> TabulatedIndex:
     ValueError
         With the file name and line number, if a required metadata line is
         missing, the unit is not ``nm`` or ``um``, the header row is wrong, or
-        a data row is malformed, not finite, out of order, has n <= 0 or k < 0.
+        a data row is malformed, not finite, out of order, has n <= 0 or k < 0;
+        :class:`dustoptics.io.FormatError` (a ValueError) if it is not a
+        regular file (a FIFO, a device), larger than
+        :data:`dustoptics._files.MAX_TEXT_BYTES` or not UTF-8 text.
     FileNotFoundError
         If the file does not exist.
 
@@ -775,8 +778,13 @@ def read_index_csv(path: str | os.PathLike[str]) -> TabulatedIndex:
     --------
     write_index_csv : the inverse.
     """
+    from dustoptics._files import FormatError, read_checked
+
     path = Path(path)
-    lines = path.read_text(encoding="utf-8").splitlines()
+    try:
+        lines = read_checked(path).decode("utf-8").splitlines()
+    except UnicodeDecodeError as exc:
+        raise FormatError(f"{path}: not UTF-8 text ({exc.reason} at byte {exc.start})") from None
     meta: dict[str, tuple[str, int]] = {}
     wavelength: list[float] = []
     n: list[float] = []

@@ -1227,7 +1227,8 @@ class Truncated(SizeDistribution):
     parent : SizeDistribution
         The distribution to truncate (with a density).
     r_min_um, r_max_um : float
-        0 <= r_min_um < r_max_um <= inf. [um]
+        0 <= r_min_um < r_max_um <= inf (None: inf; provenance records inf as
+        None, since JSON has no infinity). [um]
     """
 
     model: ClassVar[str] = "truncated"
@@ -1309,6 +1310,7 @@ class Truncated(SizeDistribution):
     def _parameters(self) -> dict[str, Any]:
         return {
             "r_min_um": self.r_min_um,
-            "r_max_um": self.r_max_um,
+            # JSON has no infinity: no upper bound is recorded as null (read back as inf).
+            "r_max_um": self.r_max_um if math.isfinite(self.r_max_um) else None,
             "parent": self.parent.to_dict(),
         }

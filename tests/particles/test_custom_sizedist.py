@@ -11,6 +11,7 @@ import importlib
 import math
 import warnings
 from collections.abc import Callable
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -350,3 +351,44 @@ def test_bad_modes_raise_type_error() -> None:
         MultiModal(modes=(MARS_FINE, 1.0), relative_number_densities=(1.0, 1.0))  # type: ignore[arg-type]
     with pytest.raises(TypeError, match="modes must be a sequence"):
         MultiModal(modes=MARS_FINE, relative_number_densities=(1.0,))  # type: ignore[arg-type]
+
+
+# ----------------------------------------------------------- refused inputs (issue 29)
+
+
+@pytest.mark.parametrize("special", ["fifo", "/dev/zero", "directory"])
+def test_from_csv_refuses_what_is_not_a_regular_file_before_reading(tmp_path, special) -> None:
+    import os
+
+    from dustoptics.io import FormatError
+
+    path = tmp_path / "sizes.csv"
+    if special == "fifo":
+        os.mkfifo(path)  # a reader that opened it would block forever
+    elif special == "directory":
+        path.mkdir()
+    else:
+        path = Path(special)
+    with pytest.raises(FormatError, match="not a regular file|is a directory"):
+        TabulatedDistribution.from_csv(path)
+
+
+def test_from_csv_refuses_a_cell_beyond_the_csv_limit_and_a_huge_file(tmp_path, monkeypatch):
+    from dustoptics import _files
+    from dustoptics.io import FormatError
+
+    path = tmp_path / "sizes.csv"
+    path.write_text("radius_um,dn_dr\n1," + "9" * (200 * 1024) + "\n")
+    with pytest.raises(FormatError, match="not a valid CSV file.*field larger than field limit"):
+        TabulatedDistribution.from_csv(path)
+    path.write_text("radius_um,dn_dr\n1,1\n2,1\n")
+    monkeypatch.setattr(_files, "MAX_TEXT_BYTES", 10)
+    monkeypatch.setattr(_files.read_checked, "__kwdefaults__", {"limit": 10})
+    with pytest.raises(FormatError, match="larger than the 10-byte limit"):
+        TabulatedDistribution.from_csv(path)
+
+
+@pytest.mark.parametrize("modes", [None, 3, "mode", {"a": 1}])
+def test_multimodal_names_modes_that_are_not_a_sequence(modes) -> None:
+    with pytest.raises(TypeError, match="modes must be a sequence of SizeDistribution"):
+        MultiModal(modes=modes, relative_number_densities=(1.0,))

@@ -459,3 +459,18 @@ def test_read_index_csv_keeps_identical_duplicate_once(tmp_path: Path) -> None:
         )
     )
     np.testing.assert_array_equal(table.wavelength_nm, [400.0, 500.0])
+
+
+@pytest.mark.parametrize("special", ["fifo", "/dev/zero"])
+def test_read_index_csv_refuses_what_is_not_a_regular_file(tmp_path: Path, special: str) -> None:
+    import os
+
+    from dustoptics.io import FormatError
+
+    path = tmp_path / "index.csv"
+    if special == "fifo":
+        os.mkfifo(path)  # opened for reading, it would block forever
+    else:
+        path = Path(special)
+    with pytest.raises(FormatError, match="not a regular file"):
+        read_index_csv(path)

@@ -317,6 +317,23 @@ def test_truncation_of_any_distribution() -> None:
     )
 
 
+def test_truncation_open_above_is_recorded_and_computed() -> None:
+    """r_max_um = inf (the default) is recorded as null, JSON having no infinity, and read
+    back as inf; a table is computed from it (issue 29: it failed after the work)."""
+    import json
+
+    import dustoptics as do
+    from dustoptics.particles.custom_sizedist import from_dict
+
+    t = ModifiedGamma(r_eff_um=1.0, v_eff=0.2).truncated(r_min_um=0.5)
+    record = t.to_dict()
+    assert record["parameters"]["r_max_um"] is None
+    json.dumps(record, allow_nan=False)
+    assert from_dict(record) == t and from_dict(record).r_max_um == math.inf
+    table = do.compute_optics(1.5, t, [550.0], [0.0, 180.0], rtol=1e-2)
+    assert table.provenance.inputs["size_distribution"]["parameters"]["r_max_um"] is None
+
+
 # -------------------------------------------------------------- provenance
 
 
