@@ -4,6 +4,11 @@
 - :func:`describe_path`: any file or folder dustoptics writes, each format
   read by its own describer (``_describe_*``, one per format).
 
+Both say everything by default; ``full=False`` gives a summary of a dozen
+lines per table (what it holds, what it was made from, its accuracy and input
+hash), leaving out the software versions, the citations, the notes and the
+inputs as JSON (``dustoptics info`` shows the summary, ``info --full`` all).
+
 The text is safe to print: every line is passed through
 :func:`dustoptics.io._text.printable`, so control characters and escape
 sequences read from a file are shown escaped, never sent to the terminal.
@@ -33,6 +38,10 @@ _TEXTURE_FORMAT = "dustoptics-phase-texture/"
 #: The file of an atmosphere set's settings, beside CosmoScout VR's CSV files.
 _SETTINGS_SUFFIX = "_settings.json"
 
+#: The last line of a summary (``full=False``): what the full description adds, and how.
+_MORE = "more:            "
+_FULL = "(full=True; dustoptics info --full)"
+
 
 def _printable_lines(text: str) -> str:
     from dustoptics.io._text import printable
@@ -40,12 +49,17 @@ def _printable_lines(text: str) -> str:
     return "\n".join(printable(line) for line in text.split("\n"))
 
 
-def describe_table(table: Table) -> str:
+def describe_table(table: Table, *, full: bool = True) -> str:
     """What a table holds and how it was made, as text.
 
     Parameters
     ----------
     table : Table
+    full : bool, optional
+        Everything (default), or a summary: the lines up to the error
+        estimates, what the table was made from (material, sizes, phase
+        model) on one line each, the sources' names, the input hash and
+        what ``full=True`` adds.
 
     Returns
     -------
@@ -54,6 +68,27 @@ def describe_table(table: Table) -> str:
         and the single-scattering albedo, number density, error estimates,
         input hash, software, sources, notes), then the provenance inputs as
         indented JSON.  Control characters from the table's text are escaped.
+
+    Examples
+    --------
+    >>> import dustoptics as do
+    >>> t = do.compute_optics(1.5, do.Monodisperse(radius_um=0.5), [550.0], [0.0, 180.0])
+    >>> print(describe_table(t, full=False))  # doctest: +ELLIPSIS
+    name:            table
+    wavelengths:     1, 550 .. 550 nm
+    angles:          2, 0 .. 180 deg
+    phase function:  [sr^-1], 2 pi int P dmu = 1
+    g:               ...
+    cext_um2:        ...
+    ssa:             1 .. 1
+    error estimate:  phase <= ... (relative)
+                     cross-sections, g <= ...
+    material:        constant m = (1.5+0j)
+    sizes:           monodisperse(radius_um=0.5)
+    phase model:     mie, scattering-weighted
+    sources:         constant m = (1.5+0j), monodisperse
+    input hash:      ...
+    more:            software, 2 citations and every input (full=True; dustoptics info --full)
     """
     prov = table.provenance
     wl, theta = table.wavelength_nm, table.theta_deg
@@ -80,6 +115,17 @@ def describe_table(table: Table) -> str:
         lines.append(
             f"                 cross-sections, g <= {table.cross_section_error_estimate.max():.2e}"
         )
+    if not full:
+        lines += _made_from(prov.to_dict()["inputs"])
+        if prov.sources:
+            names = [s.name if len(s.name) <= 30 else s.name[:27] + "..." for s in prov.sources]
+            rest = f" and {len(names) - 4} more" if len(names) > 4 else ""
+            lines.append(f"sources:         {', '.join(names[:4])}{rest}")
+        lines.append(f"input hash:      {prov.input_hash}")
+        more = ["software", f"{len(prov.sources)} citations"] if prov.sources else ["software"]
+        more += [f"{len(prov.notes)} notes"] if prov.notes else []
+        lines.append(f"{_MORE}{', '.join(more)} and every input {_FULL}")
+        return _printable_lines("\n".join(lines))
     lines.append(f"input hash:      {prov.input_hash}")
     lines.append(
         "software:        " + ", ".join(f"{k} {v}" for k, v in sorted(prov.software.items()))
@@ -99,7 +145,46 @@ def describe_table(table: Table) -> str:
     return _printable_lines("\n".join(lines))
 
 
-def describe_path(path: str | os.PathLike[str]) -> str:
+def _compact(value: Any) -> str:
+    """A value of the inputs on one line: ``model(key=value, ...)``, long lists counted."""
+    if isinstance(value, dict):
+        params = value.get("parameters")
+        if not isinstance(params, dict):
+            params = {k: v for k, v in value.items() if k not in ("model", "citation", "derived")}
+        inner = ", ".join(f"{k}={_compact(v)}" for k, v in params.items())
+        if "model" not in value:
+            return "{" + inner + "}"
+        return f"{value['model']}({inner})" if inner else str(value["model"])
+    if isinstance(value, list):
+        if len(value) > 4 and not any(isinstance(v, (dict, list)) for v in value):
+            return f"[{len(value)} values]"
+        return "[" + ", ".join(_compact(v) for v in value) + "]"
+    if isinstance(value, float):
+        return f"{value:g}"
+    return str(value)
+
+
+def _made_from(inputs: dict[str, Any]) -> list[str]:
+    """What a table was made from, one line each, for a summary."""
+    lines = []
+    material, index = inputs.get("material"), inputs.get("refractive_index")
+    if isinstance(material, dict):
+        lines.append(f"material:        {_compact(material)}")
+    elif isinstance(index, dict) and "description" in index:
+        lines.append(f"material:        {index['description']}")
+    sizes = inputs.get("size_distribution")
+    if isinstance(sizes, dict) and "model" in sizes:
+        lines.append(f"sizes:           {_compact(sizes)}")
+    phase, optics = inputs.get("phase"), inputs.get("optics")
+    weighting = optics.get("weighting") if isinstance(optics, dict) else inputs.get("weighting")
+    # compute_optics records no phase model: its tables are Mie's.
+    model = [_compact(phase) if isinstance(phase, dict) else "mie"]
+    model += [f"{weighting}-weighted"] if isinstance(weighting, str) else []
+    lines.append(f"phase model:     {', '.join(model)}")
+    return lines
+
+
+def describe_path(path: str | os.PathLike[str], *, full: bool = True) -> str:
     """What any file or folder dustoptics writes holds, as text.
 
     Parameters
@@ -111,6 +196,9 @@ def describe_path(path: str | os.PathLike[str]) -> str:
         atmosphere set's ``<name>_settings.json`` or ``<name>_provenance.json``.
         A folder: every output found in it (``build``'s ``DIR/NAME/``, a set
         from ``build mars``), one section each.
+    full : bool, optional
+        Everything (default), or a summary (:func:`describe_table`); the
+        summary of a set or a texture leaves out their inputs as JSON.
 
     Returns
     -------
@@ -131,11 +219,11 @@ def describe_path(path: str | os.PathLike[str]) -> str:
     if not p.exists():
         raise FileNotFoundError(f"no such file or directory: {str(p)!r}")
     with whole_set(p):  # a set a killed write left incomplete is refused, not described
-        text = _describe_directory(p) if p.is_dir() else _describe_file(p)
+        text = _describe_directory(p, full) if p.is_dir() else _describe_file(p, full)
     return _printable_lines(text)
 
 
-def _describe_file(p: Path) -> str:
+def _describe_file(p: Path, full: bool = True) -> str:
     """One file, by its name: the describer of its format."""
     from dustoptics.atmosphere.build import SET_PROVENANCE_SUFFIX
     from dustoptics.io import FormatError
@@ -144,16 +232,16 @@ def _describe_file(p: Path) -> str:
 
     name, suffix = p.name, p.suffix.lower()
     if suffix in TABLE_SUFFIXES or name in (SUMMARY_FILENAME, PHASE_FILENAME, EXTINCTION_FILENAME):
-        return describe_table(read_table(p if suffix != ".csv" else p.parent))
+        return describe_table(read_table(p if suffix != ".csv" else p.parent), full=full)
     for ending in (SET_PROVENANCE_SUFFIX, _SETTINGS_SUFFIX):
         if name.endswith(ending):
-            return _describe_set(p.parent, name[: -len(ending)])
+            return _describe_set(p.parent, name[: -len(ending)], full)
     if suffix == ".glsl":
         return _describe_glsl(p)
     if suffix in (".json", ".raw"):
         sidecar = p.with_suffix(".json")
         if sidecar.is_file() and _is_texture_sidecar(sidecar):
-            return _describe_texture(sidecar)
+            return _describe_texture(sidecar, full)
     match = _COSMOSCOUT_FILE.fullmatch(name)
     if match:
         return _describe_constituent(p.parent, match["name"])
@@ -171,7 +259,7 @@ def _is_texture_sidecar(path: Path) -> bool:
     return isinstance(data, dict) and str(data.get("format", "")).startswith(_TEXTURE_FORMAT)
 
 
-def _describe_directory(root: Path) -> str:
+def _describe_directory(root: Path, full: bool = True) -> str:
     """Every output found in ``root``, one section each."""
     from dustoptics.atmosphere.build import SET_PROVENANCE_SUFFIX
     from dustoptics.io import FormatError
@@ -188,7 +276,7 @@ def _describe_directory(root: Path) -> str:
     ]
     in_sets: set[str] = set()
     for name in dict.fromkeys(set_names):
-        sections.append((f"{name} (atmosphere set)", _describe_set(root, name)))
+        sections.append((f"{name} (atmosphere set)", _describe_set(root, name, full)))
         in_sets.add(name)
     constituents = sorted({m["name"] for q in files if (m := _COSMOSCOUT_FILE.fullmatch(q.name))})
     for name in constituents:
@@ -196,14 +284,15 @@ def _describe_directory(root: Path) -> str:
             sections.append((f"{name} (CosmoScout VR)", _describe_constituent(root, name)))
     for q in files:
         if q.suffix.lower() in TABLE_SUFFIXES:
-            sections.append((q.name, describe_table(read_table(q))))
+            sections.append((q.name, describe_table(read_table(q), full=full)))
     if (root / SUMMARY_FILENAME).is_file():
-        sections.append((f"{SUMMARY_FILENAME} (seed CSV)", describe_table(read_table(root))))
+        table = read_table(root)
+        sections.append((f"{SUMMARY_FILENAME} (seed CSV)", describe_table(table, full=full)))
     for q in files:
         if q.suffix.lower() == ".glsl":
             sections.append((q.name, _describe_glsl(q)))
         elif q.suffix.lower() == ".json" and _is_texture_sidecar(q):
-            sections.append((q.name, _describe_texture(q)))
+            sections.append((q.name, _describe_texture(q, full)))
     if not sections:
         raise FormatError(f"{str(root)!r}: holds no file dustoptics writes")
     if len(sections) == 1:
@@ -237,7 +326,7 @@ def _describe_constituent(root: Path, name: str) -> str:
     return "\n".join(lines)
 
 
-def _describe_set(root: Path, name: str) -> str:
+def _describe_set(root: Path, name: str, full: bool = True) -> str:
     """An atmosphere set: its settings, provenance record and constituents."""
     from dustoptics.atmosphere.build import SET_PROVENANCE_SUFFIX
     from dustoptics.io import check_cosmoscout_set
@@ -267,7 +356,10 @@ def _describe_set(root: Path, name: str) -> str:
             )
             if entry["number_density_per_m3"] is not None:
                 lines.append(f"number density:  {entry['number_density_per_m3']:.6g} m^-3")
-    if record is not None:
+    if record is not None and not full:
+        given = {k: v for k, v in record["inputs"].items() if k != "constituents"}
+        lines += ["", f"made from:       {_compact(given)[1:-1]}", f"{_MORE}every input {_FULL}"]
+    elif record is not None:
         lines.append("")
         lines.append("inputs:")
         lines += [
@@ -299,7 +391,7 @@ def _describe_glsl(path: Path) -> str:
     return "\n".join(lines)
 
 
-def _describe_texture(sidecar: Path) -> str:
+def _describe_texture(sidecar: Path, full: bool = True) -> str:
     """A texture, from its JSON sidecar (the raw file it names is read and checked too)."""
     from dustoptics.io import read_texture
 
@@ -317,8 +409,10 @@ def _describe_texture(sidecar: Path) -> str:
         + ", ".join(f"{v:.6g}" for v in meta["sphere_integral_of_samples"]),
         f"input hash:      {meta['input_hash']}",
         f"written by:      {meta['written_by']}",
-        "inputs:",
     ]
+    if not full:
+        return "\n".join([*lines, f"{_MORE}every input {_FULL}"])
+    lines.append("inputs:")
     lines += [
         "  " + line
         for line in json.dumps(meta["provenance"]["inputs"], indent=2, sort_keys=True).splitlines()
