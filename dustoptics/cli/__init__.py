@@ -5,33 +5,38 @@ Usage::
     dustoptics build [NAME_OR_CONFIG] [--out DIR] [--format FMT[,FMT...]] [--force] [--quiet]
     dustoptics build mars|earth [--out DIR] [--dust PRESET] [--optical-depth TAU] [--force]
     dustoptics export FILE --out DIR --format FMT[,FMT...] [--force]
-    dustoptics info FILE_OR_FOLDER
+    dustoptics info FILE_OR_FOLDER [--full]
     dustoptics plot FILE --kind {phase,polar,map,spectra} [--wavelengths-nm LIST] --out FIG.png|.svg
     dustoptics presets [--show NAME]
     dustoptics materials
-    dustoptics fit NAME_OR_FILE [--model MODEL] [--colour C] [--out DIR]
-    dustoptics sweep CONFIG --out STORE [--scheduler ADDRESS] [--workers N] [--quiet]
+    dustoptics fit NAME_OR_FILE [--model MODEL] [--colour C] [--out DIR] [--force]
+    dustoptics sweep CONFIG --out STORE|FILE.nc [--scheduler ADDRESS] [--workers N] [--force]
     dustoptics sky mars|earth|compare --out DIR [--force]
     dustoptics --version
 
 ``build`` computes a preset (``dustoptics presets``) or a TOML configuration
 file (:mod:`dustoptics.models.config`; copy a preset with ``presets --show NAME``)
 and writes it into ``DIR/NAME/`` in each format of :data:`dustoptics.io.FORMATS`
-(``hdf5``, ``csv``, ``cosmoscout``, ``glsl``, ``hlsl``, ``wgsl``, ``texture``,
-``ktx2``, ``exr``, ``npy``, ...); ``build mars`` and
+(``--help`` lists them; by default ``NAME.nc`` and the seed CSVs); ``build mars`` and
 ``build earth`` write CosmoScout VR's whole atmosphere set (molecules,
 aerosols, ozone, densities and the settings JSON).  ``export`` turns
-an HDF5 table into other formats in ``DIR``; ``info`` says what a table file
-holds and how it was made; ``plot`` draws it (needs the ``plot`` extra).
+a table file into other formats in ``DIR/NAME/``, as do ``fit`` (its JSON and
+shader constants) and ``sky`` (``DIR/mars-PRESET/``, ``DIR/earth/``,
+``DIR/mars-comparison/``); ``info`` says what a file holds and how it was made (a
+summary; ``--full`` for everything); ``plot`` draws it (needs the ``plot`` extra).
+What would fail when the files are written (a name no file can carry, an option
+out of range, a format's needs, files that exist and differ without ``--force``)
+is refused before any work.
 ``sweep`` computes a configuration over the axes of its ``[sweep]`` table
 into a resumable Zarr store (or a ``.nc`` file) on Dask (needs the ``sweep``
 extra; :func:`dustoptics.sweep.sweep`).
 
 Exit status: 0 on success, 1 on failure (an output exists without ``--force``,
 a damaged input file, an input the physics rejects), 2 on a usage error
-(unknown preset, format or option value).  Errors are printed as
+(unknown preset, format or option value), 130 on an interrupt (Ctrl-C: one
+line, ``dustoptics: interrupted``).  Errors are printed as
 ``dustoptics: error: <message>`` on stderr, without a traceback.  A closed
-output pipe (``dustoptics info f.h5 | head``) is not an error.
+output pipe (``dustoptics info f.nc | head``) is not an error.
 
 Each command is a module of this package that parses its options, calls the
 library and reports (:mod:`~dustoptics.cli.parser` holds the options they

@@ -20,15 +20,20 @@ from typing import Any, TextIO
 
 from dustoptics.atmosphere.build import ATMOSPHERES, DEFAULT_DUST
 from dustoptics.cli.errors import PROG, UsageError
-from dustoptics.cli.export import NEEDS_DENSITY, same_table, write_table
-from dustoptics.cli.parser import _add_format_options, _float_list, _positive_float
+from dustoptics.cli.export import check_needs, check_outputs, same_table, write_table
+from dustoptics.cli.parser import (
+    _add_format_options,
+    _float_list,
+    _positive_float,
+    add_command,
+)
 from dustoptics.cli.report import report_placement
 from dustoptics.models.build import TableBuilder, is_config_path
 
 __all__ = ["DEFAULT_FORMATS", "add_parser", "run", "table_builder"]
 
-#: Formats written by ``build`` when ``--format`` is not given.
-DEFAULT_FORMATS = ("hdf5", "csv")
+#: Formats written by ``build`` when ``--format`` is not given: ``NAME.nc`` and the seed CSVs.
+DEFAULT_FORMATS = ("netcdf", "csv")
 
 #: Options of ``build`` that only a table's formats use, and those only a set uses.
 _TABLE_OPTIONS = (
@@ -50,7 +55,16 @@ def add_parser(sub: Any) -> None:
     """Add the ``build`` subcommand to the subparsers ``sub``."""
     from dustoptics.models.presets import DEFAULT_PRESET
 
-    p = sub.add_parser("build", help="compute a preset or configuration file and write its tables")
+    p = add_command(
+        sub,
+        "build",
+        help="compute a preset or configuration file and write its tables",
+        examples=(
+            f"{PROG} build hybrid --out tables --format netcdf,glsl",
+            f"{PROG} build my-dust.toml --out tables --format netcdf,disort,libradtran",
+            f"{PROG} build mars --out sets --optical-depth 0.7",
+        ),
+    )
     p.set_defaults(run=run)
     p.add_argument(
         "name",
@@ -69,7 +83,7 @@ def add_parser(sub: Any) -> None:
         "already hold the same table are left untouched",
     )
     p.add_argument("--quiet", action="store_true", help="no progress or summary output")
-    _add_format_options(p, default=",".join(DEFAULT_FORMATS), required=False)
+    _add_format_options(p, default=DEFAULT_FORMATS, required=False)
     g = p.add_argument_group(
         "atmosphere sets ('build mars', 'build earth': CosmoScout VR's full set)"
     )
@@ -169,28 +183,28 @@ def run(args: argparse.Namespace) -> int:
 
 def _check_build_request(args: argparse.Namespace, builder: TableBuilder) -> None:
     """What the formats need and where the files go, checked before the table is computed."""
-    from dustoptics._validation import check_file_name, check_inside
-
     formats = args.format or DEFAULT_FORMATS
-    rt_formats = sorted({"disort", "libradtran"} & set(formats))
-    if rt_formats:
-        # Configurations compute no expansion coefficients: refuse before computing.
+    config = builder.config
+    if not config.phase.uses_mie and args.number_density_per_m3 is not None:
         raise UsageError(
-            f"--format {','.join(rt_formats)} needs the phase function's Legendre moments, which "
-            "a configuration does not compute: compute the table with "
-            "compute_optics(..., expansion=True), save it (table.save) and run "
-            f"'{PROG} export FILE --format {','.join(rt_formats)}'"
+            f"--number-density-per-m3 changes nothing in 'build {args.name}': "
+            f"{builder.name!r} is a phase function without cross-sections; remove it"
         )
+    check_needs(
+        formats,
+        name=builder.name,
+        cross_sections=config.phase.uses_mie,
+        density=args.number_density_per_m3 is not None
+        or config.number_density_per_m3 is not None
+        or (getattr(args, "optical_depth", None) is not None and "cosmoscout" in formats),
+        no_expansion=None
+        if config.optics.expansion is not None
+        else _no_expansion(args.name, builder),
+    )
     if "cosmoscout" in formats:
-        # What write_table needs, checked before the table is computed.
+        # The density profile write_table samples, checked before the table is computed.
         from dustoptics.atmosphere.column import ExponentialProfile, sample_profile
 
-        if (
-            getattr(args, "optical_depth", None) is None
-            and args.number_density_per_m3 is None
-            and builder.config.number_density_per_m3 is None
-        ):
-            raise UsageError(NEEDS_DENSITY)
         sample_profile(
             ExponentialProfile(scale_height_m=args.scale_height_m),
             top_altitude_m=args.top_altitude_m,
@@ -205,8 +219,66 @@ def _check_build_request(args: argparse.Namespace, builder: TableBuilder) -> Non
             colour=args.colour,
             resolution_deg=args.resolution_deg or DEFAULT_RESOLUTION_DEG,
         )
-    # Where the files go is checked before any work, too.
-    check_inside(args.out, args.out / check_file_name("name", builder.name))
+    # Where the files go, and what they would replace, is checked before any work, too.
+    check_outputs(
+        args.out,
+        builder.name,
+        formats,
+        inputs=builder.config.to_inputs(),
+        force=args.force,
+        what="the configuration's name",
+    )
+
+
+def _no_expansion(name: str, builder: TableBuilder) -> str:
+    """Why a configuration gives no expansion coefficients, and what to change."""
+    model = builder.config.phase.model
+    if model != "mie":
+        return (
+            f"which only a Mie model has (phase.model = 'mie' with optics.expansion = true); "
+            f"{builder.name!r} has phase.model = {model!r}"
+        )
+    where = (
+        f"under [optics] in {name}"
+        if is_config_path(name)
+        else f"under [optics] in a copy of the preset ('{PROG} presets --show {name} > "
+        f"my-{name}.toml', then give it a name of its own and build my-{name}.toml)"
+    )
+    return (
+        f"which {builder.name!r} does not ask for: set 'expansion = true' (optics.expansion) "
+        f"{where}"
+    )
+
+
+def _check_set_outputs(args: argparse.Namespace, *, dust: str, optical_depth: float) -> None:
+    """A set's record that exists in ``DIR/NAME/`` with other inputs: refused before any
+    work without ``--force`` (the files could not be placed)."""
+    import json
+
+    from dustoptics.atmosphere.build import SET_PROVENANCE_SUFFIX, set_inputs
+    from dustoptics.table import canonical_json
+
+    record = args.out / args.name / f"{args.name}{SET_PROVENANCE_SUFFIX}"
+    if args.force or not record.is_file():
+        return
+    # The inputs known before any work (the ozone file is read, and checked, by the work).
+    expected = set_inputs(
+        args.name,
+        dust=dust,
+        optical_depth=optical_depth,
+        reference_wavelength_nm=args.reference_wavelength_nm,
+        wavelength_nm=args.wavelengths_nm,
+    )
+    try:
+        found = json.loads(record.read_text(encoding="utf-8"))["inputs"]
+        same = all(canonical_json(found.get(k)) == canonical_json(v) for k, v in expected.items())
+    except (OSError, ValueError, KeyError, TypeError, AttributeError, RecursionError):
+        same = False
+    if not same:
+        raise FileExistsError(
+            f"{str(record)!r} exists and records another set (other inputs); use --force to "
+            "replace the set, or another --out"
+        )
 
 
 def _run_set(args: argparse.Namespace) -> int:
@@ -234,6 +306,7 @@ def _run_set(args: argparse.Namespace) -> int:
                 f"dust {dust!r} has no cross-sections (a phase-function-only model); "
                 "choose a Mie preset"
             )
+    _check_set_outputs(args, dust=dust, optical_depth=optical_depth)
     atm = build_atmosphere(
         args.name,
         dust=dust if dust_config is None else dust_config,

@@ -6,18 +6,29 @@ import argparse
 import sys
 from typing import Any
 
-from dustoptics.cli.errors import UsageError
+from dustoptics.cli.errors import PROG, UsageError
+from dustoptics.cli.parser import add_command
 
 __all__ = ["add_parser", "run_materials", "run_presets"]
 
 
 def add_parser(sub: Any) -> None:
     """Add the ``presets`` and ``materials`` subcommands to the subparsers ``sub``."""
-    p = sub.add_parser("presets", help="list the presets, or print one's configuration file")
+    p = add_command(
+        sub,
+        "presets",
+        help="list the presets, or print one's configuration file",
+        examples=(f"{PROG} presets", f"{PROG} presets --show hybrid > my-dust.toml"),
+    )
     p.set_defaults(run=run_presets)
     p.add_argument("--show", metavar="NAME", help="print the TOML of preset NAME (copy it to edit)")
 
-    p = sub.add_parser("materials", help="list the refractive-index catalogue")
+    p = add_command(
+        sub,
+        "materials",
+        help="list the refractive-index catalogue",
+        examples=(f"{PROG} materials",),
+    )
     p.set_defaults(run=run_materials)
 
 

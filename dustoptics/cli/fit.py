@@ -1,4 +1,9 @@
-"""``dustoptics fit``: an analytic phase function fitted to a table, per wavelength or channel."""
+"""``dustoptics fit``: an analytic phase function fitted to a table, per wavelength or channel.
+
+With ``--out DIR`` the fit's JSON and shader constants go into ``DIR/NAME/``
+(NAME the table's name), as ``build`` and ``export`` place theirs; the files
+are named, and refused if they exist without ``--force``, before any work.
+"""
 
 from __future__ import annotations
 
@@ -6,9 +11,10 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from dustoptics.cli.parser import _float_list
+from dustoptics.cli.errors import PROG, UsageError
+from dustoptics.cli.parser import _float_list, add_command
 
-__all__ = ["add_parser", "run"]
+__all__ = ["add_parser", "fit_targets", "run"]
 
 _FIT_MODEL_HELP = (
     "henyey-greenstein (hg), dhg-costa2021 (dhg), dhg-kobe2026 (dhg-kobe), cornette-shanks1992 (cs), "
@@ -18,7 +24,15 @@ _FIT_MODEL_HELP = (
 
 def add_parser(sub: Any) -> None:
     """Add the ``fit`` subcommand to the subparsers ``sub``."""
-    p = sub.add_parser("fit", help="fit an analytic phase function (HG, double HG, ...) to a table")
+    p = add_command(
+        sub,
+        "fit",
+        help="fit an analytic phase function (HG, double HG, ...) to a table",
+        examples=(
+            f"{PROG} fit tables/blue-moons/blue-moons.nc --model dhg --out fits",
+            f"{PROG} fit hybrid --model hg --colour linear-srgb-astmg173",
+        ),
+    )
     p.set_defaults(run=run)
     p.add_argument("table", metavar="NAME_OR_FILE", help="a preset name or a table file")
     p.add_argument(
@@ -43,25 +57,63 @@ def add_parser(sub: Any) -> None:
         help="leave angles below DEG out of the loss (default 0)",
     )
     p.add_argument("--prefix", default="DUST", help="name prefix of the shader constants")
-    p.add_argument("--out", type=Path, metavar="DIR", help="write JSON, GLSL, HLSL and WGSL there")
+    p.add_argument(
+        "--out",
+        type=Path,
+        metavar="DIR",
+        help="write JSON, GLSL, HLSL and WGSL into DIR/NAME/, NAME the table's name",
+    )
     p.add_argument("--force", action="store_true", help="replace existing files")
 
 
-def run(args: argparse.Namespace) -> int:
-    """Run ``fit``; returns the exit status."""
-    from dustoptics.cli.build import table_builder
-    from dustoptics.io.engines.fit import write_fit
-    from dustoptics.io.outputs import read_table
-    from dustoptics.scattering.fit import fit_table
+def fit_targets(out: Path, name: str, model: str) -> list[Path]:
+    """The files ``fit --out DIR`` writes for table ``name`` and model ``model``
+    (:func:`dustoptics.io.engines.fit.write_fit`), in ``DIR/NAME/``."""
+    from dustoptics._validation import check_file_name, check_inside
+    from dustoptics.io._atomic import safe_stem
+    from dustoptics.io.engines.fit import FIT_LANGUAGES
+    from dustoptics.io.shaders.common import shader_syntax
 
+    folder = out / check_file_name("name", name)
+    check_inside(out, folder)
+    stem = f"{safe_stem(name)}_{model}"
+    extensions = [".json"] + [shader_syntax(lang).extension for lang in FIT_LANGUAGES]
+    return [folder / f"{stem}{ext}" for ext in extensions]
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run ``fit``; returns the exit status.  The model, the prefix and where the files go
+    are checked before the table is computed or fitted."""
+    from dustoptics.cli.build import table_builder
+    from dustoptics.io._atomic import check_targets
+    from dustoptics.io.engines.fit import _IDENTIFIER, write_fit
+    from dustoptics.io.outputs import read_table
+    from dustoptics.scattering.fit import fit_table, resolve_model
+
+    try:
+        model = resolve_model(args.model)
+    except ValueError as exc:
+        raise UsageError(f"--model: {exc}") from None
+    if not _IDENTIFIER.match(args.prefix) or "__" in args.prefix:
+        raise UsageError(
+            "--prefix must start with a letter and hold only letters, digits and '_' (no '__'); "
+            f"got {args.prefix!r}"
+        )
     source = Path(args.table)
     if source.exists() and source.suffix.lower() != ".toml":
         table = read_table(source)
+        name, builder = table.name, None
     else:
-        table = table_builder(args.table).build()
+        builder = table_builder(args.table)
+        name = builder.name
+    if args.out is not None:
+        targets = fit_targets(args.out, name, model)
+        check_targets(targets, overwrite=args.force)  # before any work
+    if builder is not None:
+        table = builder.build()
     result = fit_table(
         table,
-        model=args.model,
+        model=model,
         colour=args.colour,
         channels_nm=args.channels,
         forward_cutoff_deg=args.forward_cutoff,
@@ -77,8 +129,11 @@ def run(args: argparse.Namespace) -> int:
             f"{result.median_relative_error[i]:9.3g}  {result.g_error[i]:+9.2e}"
         )
     if args.out is not None:
-        for path in write_fit(
-            result, args.out, stem=table.name, prefix=args.prefix, overwrite=args.force
-        ):
+        written = write_fit(
+            result, targets[0].parent, stem=name, prefix=args.prefix, overwrite=args.force
+        )
+        if sorted(written) != sorted(targets):
+            raise RuntimeError(f"fit: wrote {sorted(written)}, announced {targets}")
+        for path in written:
             print(f"wrote {path}")
     return 0

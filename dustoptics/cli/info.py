@@ -1,4 +1,9 @@
-"""``dustoptics info``: what a file or folder dustoptics writes holds and how it was made."""
+"""``dustoptics info``: what a file or folder dustoptics writes holds and how it was made.
+
+A summary by default (a dozen lines per table: what it holds, what it was made
+from, its accuracy and input hash); ``--full`` adds the software versions, the
+citations, the notes and every input (:func:`dustoptics.io.describe.describe_path`).
+"""
 
 from __future__ import annotations
 
@@ -6,12 +11,23 @@ import argparse
 from pathlib import Path
 from typing import Any
 
+from dustoptics.cli.errors import PROG
+from dustoptics.cli.parser import add_command
+
 __all__ = ["add_parser", "run"]
 
 
 def add_parser(sub: Any) -> None:
     """Add the ``info`` subcommand to the subparsers ``sub``."""
-    p = sub.add_parser("info", help="what a table file holds and how it was made")
+    p = add_command(
+        sub,
+        "info",
+        help="what a table file holds and how it was made",
+        examples=(
+            f"{PROG} info tables/blue-moons/blue-moons.nc",
+            f"{PROG} info --full tables/blue-moons/",
+        ),
+    )
     p.set_defaults(run=run)
     p.add_argument(
         "file",
@@ -20,6 +36,11 @@ def add_parser(sub: Any) -> None:
         help="any file or folder dustoptics writes: HDF5, seed CSV, GLSL, texture (sidecar or "
         ".raw), CosmoScout VR CSV, an atmosphere set's folder or files",
     )
+    p.add_argument(
+        "--full",
+        action="store_true",
+        help="everything: software versions, citations, notes and every input (default: a summary)",
+    )
 
 
 def run(args: argparse.Namespace) -> int:
@@ -27,5 +48,5 @@ def run(args: argparse.Namespace) -> int:
     from dustoptics.io.describe import describe_path
 
     # What a file says is shown, never obeyed: describe_path escapes control characters.
-    print(describe_path(args.file))
+    print(describe_path(args.file, full=args.full))
     return 0

@@ -9,13 +9,15 @@ reference is generated from this parser (``docs/_ext/argparse_reference.py``).
 from __future__ import annotations
 
 import argparse
-from typing import NoReturn
+import re
+from collections.abc import Sequence
+from typing import Any, NoReturn
 
 import numpy as np
 
 from dustoptics.cli.errors import PROG
 
-__all__ = ["build_parser"]
+__all__ = ["add_command", "build_parser", "format_lines"]
 
 #: Command modules of :mod:`dustoptics.cli`, in the order of the help's command list.
 _COMMAND_MODULES = ("build", "export", "info", "plot", "catalogue", "fit", "sweep", "sky")
@@ -28,6 +30,40 @@ class _Parser(argparse.ArgumentParser):
         from dustoptics.io._text import printable
 
         self.exit(2, f"{PROG}: error: {printable(message)} (see '{self.prog} --help')\n")
+
+
+def add_command(
+    sub: Any, name: str, *, help: str, examples: Sequence[str], description: str | None = None
+) -> argparse.ArgumentParser:
+    """A subcommand's parser, its ``--help`` ending with examples.
+
+    Parameters
+    ----------
+    sub : argparse subparsers action
+        Where the subcommand goes (``parser.add_subparsers()``).
+    name : str
+        The subcommand.
+    help : str
+        One line for the program's list of commands (and the description).
+    examples : sequence of str
+        Command lines shown at the end of the subcommand's ``--help``, each
+        a complete command (``dustoptics ...``).
+    description : str, optional
+        Shown under the usage; default ``help``, capitalized.
+
+    Returns
+    -------
+    argparse.ArgumentParser
+    """
+    label = "example" if len(examples) == 1 else "examples"
+    parser: argparse.ArgumentParser = sub.add_parser(
+        name,
+        help=help,
+        description=description or help[:1].upper() + help[1:] + ".",
+        epilog=f"{label}:\n" + "\n".join(f"  {line}" for line in examples),
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    return parser
 
 
 def _formats(text: str) -> tuple[str, ...]:
@@ -75,15 +111,73 @@ def _positive_int(text: str) -> int:
     return value
 
 
-def _add_format_options(p: argparse.ArgumentParser, *, default: str | None, required: bool) -> None:
-    help_default = f" (default {default})" if default else ""
-    p.add_argument(
+#: One line per format for ``--help``, by name; a format registered without one here is
+#: described by the first sentence of its writer's docstring (:func:`format_lines`).
+_FORMAT_HELP = {
+    "bruneton": "Bruneton's (2017) aerosol: NAME_bruneton_mie.json, .glsl (needs N0)",
+    "cosmoscout": "CosmoScout VR's NAME_phase.csv, _scattering, ... (needs N0)",
+    "csv": "the seed's Mie*Spectrum.csv files and table_summary.json",
+    "disort": "NAME_disort.txt: DISORT's moments (needs [optics] expansion)",
+    "exr": "NAME_phase_*.exr: the phase texture as OpenEXR",
+    "glsl": "NAME_phase.glsl: MiePhaseFunction(nu), GLSL 1.30+ or ES 1.00",
+    "hdf5": "NAME.h5: the same file as netcdf, named .h5",
+    "hlsl": "NAME_phase.hlsl: the same lookup in HLSL",
+    "ktx2": "NAME_phase_*.ktx2: the phase texture as KTX2",
+    "libradtran": "NAME_aerosol_*.dat: libRadtran's (needs [optics] expansion, N0)",
+    "netcdf": "NAME.nc: the table and its provenance, CF netCDF-4",
+    "npy": "NAME_phase_*.npy: the phase texture as NumPy .npy, JSON sidecar",
+    "texture": "NAME_phase_theta.raw: float32 texture, JSON sidecar",
+    "wgsl": "NAME_phase.wgsl: the same lookup in WGSL (WebGPU)",
+}
+
+
+def _writer_summary(writer: object) -> str:
+    """The first sentence of a writer's docstring, without reST markup."""
+    doc = (getattr(writer, "__doc__", None) or "").strip().split("\n\n")[0]
+    text = " ".join(doc.split())
+    text = re.sub(r":[a-z:]+:`~?([^`<]*?)(?: <[^>]*>)?`", lambda m: m[1].rsplit(".", 1)[-1], text)
+    text = text.replace("``", "")
+    return text.split(". ")[0].rstrip(".") or "(no description)"
+
+
+def format_lines(default: Sequence[str] = ()) -> str:
+    """One line per format of :data:`dustoptics.io.FORMATS`, for ``--help``.
+
+    Parameters
+    ----------
+    default : sequence of str, optional
+        The formats written when ``--format`` is not given, marked ``(default)``.
+
+    Returns
+    -------
+    str
+        ``"NAME  description"`` lines, names sorted.
+    """
+    from dustoptics.io import FORMATS
+
+    width = max(map(len, FORMATS))
+    lines = []
+    for name in sorted(FORMATS):
+        text = _FORMAT_HELP.get(name) or _writer_summary(FORMATS[name])
+        mark = " (default)" if name in default else ""
+        lines.append(f"{name:<{width}}  {text}{mark}")
+    return "\n".join(lines)
+
+
+def _add_format_options(
+    p: argparse.ArgumentParser, *, default: Sequence[str], required: bool
+) -> None:
+    g = p.add_argument_group(
+        "formats (--format FMT[,FMT...], from dustoptics.io.FORMATS)", format_lines(default)
+    )
+    help_default = f" (default {','.join(default)})" if default else ""
+    g.add_argument(
         "--format",
         type=_formats,
         default=None,
         required=required,
         metavar="FMT[,FMT...]",
-        help=f"output formats: netcdf (.nc), hdf5 (.h5, the same format), csv, cosmoscout, glsl, hlsl, wgsl, texture, disort, libradtran{help_default}",
+        help=f"output formats, comma-separated: one or more of the formats listed here{help_default}",
     )
     p.add_argument("--force", action="store_true", help="replace existing output files")
     p.add_argument(

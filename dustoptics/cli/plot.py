@@ -6,14 +6,22 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from dustoptics.cli.parser import _float_list
+from dustoptics.cli.errors import PROG
+from dustoptics.cli.parser import _float_list, add_command
 
 __all__ = ["add_parser", "run"]
 
 
 def add_parser(sub: Any) -> None:
     """Add the ``plot`` subcommand to the subparsers ``sub``."""
-    p = sub.add_parser("plot", help="plot a table (needs the 'plot' extra: matplotlib)")
+    p = add_command(
+        sub,
+        "plot",
+        help="plot a table (needs the 'plot' extra: matplotlib)",
+        examples=(
+            f"{PROG} plot tables/blue-moons/blue-moons.nc --kind polar --out blue-moons.png",
+        ),
+    )
     p.set_defaults(run=run)
     p.add_argument("file", type=Path, metavar="FILE")
     p.add_argument(

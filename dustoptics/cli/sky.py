@@ -1,4 +1,9 @@
-"""``dustoptics sky``: the sky an atmosphere makes, as images and data (:class:`~dustoptics.sky.job.SkyJob`)."""
+"""``dustoptics sky``: the sky an atmosphere makes, as images and data (:class:`~dustoptics.sky.job.SkyJob`).
+
+The files go into ``DIR/NAME/``, NAME the job's (``mars-hybrid``, ``earth``,
+``mars-comparison``), as ``build`` and ``export`` place theirs.  The presets,
+the image size and the files that would be replaced are checked before any work.
+"""
 
 from __future__ import annotations
 
@@ -6,23 +11,51 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from dustoptics.cli.errors import UsageError
-from dustoptics.cli.parser import _positive_float, _positive_int
+from dustoptics.cli.errors import PROG, UsageError
+from dustoptics.cli.parser import _positive_float, add_command
 from dustoptics.cli.report import say
 
 __all__ = ["add_parser", "run"]
 
+#: Fisheye sizes ``--size`` accepts, those of :meth:`dustoptics.sky.scene.Sky.fisheye`. [pixels]
+SIZE_RANGE_PX = (16, 8192)
+
+
+def _size(text: str) -> int:
+    """``--size``: an integer within :data:`SIZE_RANGE_PX`."""
+    low, high = SIZE_RANGE_PX
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer; got {text!r}") from None
+    if not low <= value <= high:
+        raise argparse.ArgumentTypeError(f"must be an integer in [{low}, {high}]; got {text!r}")
+    return value
+
 
 def add_parser(sub: Any) -> None:
     """Add the ``sky`` subcommand (``mars``, ``earth``, ``compare``) to the subparsers ``sub``."""
-    p = sub.add_parser(
-        "sky", help="render the sky an atmosphere makes: images, data and the thesis's comparisons"
+    p = add_command(
+        sub,
+        "sky",
+        help="render the sky an atmosphere makes: images, data and the thesis's comparisons",
+        examples=(
+            f"{PROG} sky mars --dust hybrid --sunset --out skies",
+            f"{PROG} sky compare --out skies",
+        ),
     )
     p.set_defaults(run=run)
     skies = p.add_subparsers(dest="sky_command", metavar="{mars,earth,compare}", required=True)
     for planet in ("mars", "earth"):
-        q = skies.add_parser(
-            planet, help=f"spectral sky of {planet} over an observer near the ground"
+        q = add_command(
+            skies,
+            planet,
+            help=f"spectral sky of {planet} over an observer near the ground",
+            examples=(
+                f"{PROG} sky mars --dust blue-moons --sun-elevation 2 --out skies"
+                if planet == "mars"
+                else f"{PROG} sky earth --sun-elevation 30 --size 1024 --out skies",
+            ),
         )
         if planet == "mars":
             q.add_argument(
@@ -53,7 +86,11 @@ def add_parser(sub: Any) -> None:
             help="Lambertian ground albedo (default 0.2)",
         )
         q.add_argument(
-            "--size", type=_positive_int, default=512, metavar="PX", help="fisheye size [pixels]"
+            "--size",
+            type=_size,
+            default=512,
+            metavar="PX",
+            help=f"fisheye size [pixels], {SIZE_RANGE_PX[0]} .. {SIZE_RANGE_PX[1]} (default 512)",
         )
         q.add_argument(
             "--exposure",
@@ -72,10 +109,15 @@ def add_parser(sub: Any) -> None:
             help="also the limb seen from space, Sun in quadrature (NAME_limb.png, its own "
             "exposure unless --exposure)",
         )
-        q.add_argument("--out", type=Path, required=True, metavar="DIR", help="output directory")
+        q.add_argument("--out", type=Path, required=True, metavar="DIR", help=_OUT_HELP)
         q.add_argument("--force", action="store_true", help="replace existing files")
         q.add_argument("--quiet", action="store_true", help="no summary output")
-    q = skies.add_parser("compare", help="the seed thesis's comparisons of the Mars dust models")
+    q = add_command(
+        skies,
+        "compare",
+        help="the seed thesis's comparisons of the Mars dust models",
+        examples=(f"{PROG} sky compare --models costa,hybrid --optical-depth 1 --out skies",),
+    )
     q.add_argument(
         "--models",
         type=lambda t: tuple(x.strip() for x in t.split(",") if x.strip()),
@@ -97,16 +139,40 @@ def add_parser(sub: Any) -> None:
         metavar="DEG",
         help="Sun elevation of the radiance and luminance comparisons [degree]",
     )
-    q.add_argument("--out", type=Path, required=True, metavar="DIR", help="output directory")
+    q.add_argument("--out", type=Path, required=True, metavar="DIR", help=_OUT_HELP)
     q.add_argument("--force", action="store_true", help="replace existing files")
     q.add_argument("--quiet", action="store_true", help="no summary output")
 
 
+_OUT_HELP = (
+    "output directory; files go to DIR/NAME/, NAME mars-PRESET, earth or mars-comparison "
+    "(as for build)"
+)
+
+
+def _check_presets(option: str, names: tuple[str, ...]) -> None:
+    """Each name a preset (it names the files, too): a usage error before any work."""
+    from dustoptics.models.presets import list_presets
+
+    known = list_presets()
+    unknown = [n for n in names if n not in known]
+    if unknown:
+        raise UsageError(
+            f"{option}: unknown preset {', '.join(map(repr, unknown))}; choose from "
+            f"{', '.join(known)}"
+        )
+
+
 def run(args: argparse.Namespace) -> int:
     """Run ``sky``: the job's files, known and checked before any work; returns the exit status."""
+    from dataclasses import replace
+
+    from dustoptics._validation import check_inside
     from dustoptics.sky.job import SkyJob
 
     if args.sky_command == "compare":
+        if args.models is not None:
+            _check_presets("--models", args.models)
         job = SkyJob(
             "compare",
             out_dir=args.out,
@@ -121,6 +187,8 @@ def run(args: argparse.Namespace) -> int:
             )
         if not (0.0 <= args.albedo <= 1.0):
             raise UsageError(f"--albedo must be within [0, 1]; got {args.albedo!r}")
+        if args.sky_command == "mars":
+            _check_presets("--dust", (args.dust,))
         job = SkyJob(
             args.sky_command,
             out_dir=args.out,
@@ -134,6 +202,9 @@ def run(args: argparse.Namespace) -> int:
             dust=getattr(args, "dust", "hybrid"),
             optical_depth=getattr(args, "optical_depth", 0.5),
         )
+    # The job's own folder, DIR/NAME/, checked to stay inside DIR (NAME is a preset's).
+    job = replace(job, out_dir=args.out / job.name)
+    check_inside(args.out, job.out_dir)
     for path in job.write(overwrite=args.force):
         say(args, f"wrote {path}")
     return 0

@@ -1,4 +1,8 @@
-"""``dustoptics sweep``: a configuration over its ``[sweep]`` axes on Dask, into a store."""
+"""``dustoptics sweep``: a configuration over its ``[sweep]`` axes on Dask, into a store.
+
+A Zarr store that exists is resumed; a ``FILE.nc`` that exists is replaced only
+with ``--force``, which is checked before any work.
+"""
 
 from __future__ import annotations
 
@@ -7,7 +11,8 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from dustoptics.cli.parser import _worker_count
+from dustoptics.cli.errors import PROG
+from dustoptics.cli.parser import _worker_count, add_command
 from dustoptics.cli.report import say
 
 __all__ = ["add_parser", "run"]
@@ -15,9 +20,11 @@ __all__ = ["add_parser", "run"]
 
 def add_parser(sub: Any) -> None:
     """Add the ``sweep`` subcommand to the subparsers ``sub``."""
-    p = sub.add_parser(
+    p = add_command(
+        sub,
         "sweep",
         help="compute a configuration over its [sweep] axes on Dask (needs the 'sweep' extra)",
+        examples=(f"{PROG} sweep my-sweep.toml --out my-sweep.zarr --workers 2",),
     )
     p.set_defaults(run=run)
     p.add_argument(
@@ -31,6 +38,11 @@ def add_parser(sub: Any) -> None:
         required=True,
         metavar="STORE",
         help="Zarr store directory (resumed if it exists), or FILE.nc for netCDF",
+    )
+    p.add_argument(
+        "--force",
+        action="store_true",
+        help="replace an existing FILE.nc (a Zarr store is resumed, never replaced)",
     )
     p.add_argument(
         "--scheduler",
@@ -55,6 +67,10 @@ def run(args: argparse.Namespace) -> int:
     """Run ``sweep`` (:func:`dustoptics.sweep.sweep`); returns the exit status."""
     from dustoptics.sweep import sweep
 
+    out = Path(args.out)
+    if str(out).endswith(".nc") and (out.exists() or out.is_symlink()) and not args.force:
+        # The library replaces it at the end; the command line asks first, before any work.
+        raise FileExistsError(f"{str(out)!r} already exists; use --force to replace it")
     ds = sweep(
         args.config,
         out=args.out,

@@ -350,3 +350,166 @@ def test_compiled_stamp_follows_the_kernel_sources(tmp_path, monkeypatch):
     with (sources / "scattering" / "mie.py").open("a") as f:
         f.write("\n# edited\n")
     assert not _numba_cache.kernels_compiled()
+
+
+def test_build_writes_netcdf_by_default(config, tmp_path):
+    """NAME.nc (the file name the CF conventions ask for) and the seed CSVs; .h5 on request."""
+    assert run_build(config, tmp_path) == 0
+    folder = tmp_path / "small-dust"
+    assert sorted(p.name for p in folder.iterdir()) == [
+        "MieExtinctionSpectrum.csv",
+        "MiePhaseFunctionSpectrum.csv",
+        "small-dust.nc",
+        "table_summary.json",
+    ]
+    assert do.open_table(folder / "small-dust.nc").equals(read_seed_csv(folder))
+    assert run_build(config, tmp_path, "--format", "hdf5") == 0
+    assert (folder / "small-dust.h5").read_bytes() == (folder / "small-dust.nc").read_bytes()
+
+
+def _no_work(monkeypatch):
+    from dustoptics.models.build import TableBuilder
+
+    def no_work(self):
+        raise AssertionError("computed before the request was checked")
+
+    monkeypatch.setattr(TableBuilder, "build", no_work)
+
+
+def test_disort_and_libradtran_from_a_configuration_that_asks_for_the_expansion(tmp_path):
+    path = tmp_path / "rt.toml"
+    path.write_text(SMALL.replace("n_theta = 19", "n_theta = 19\nexpansion = true"), "utf-8")
+    argv = ["--format", "netcdf,disort,libradtran", "--number-density-per-m3", "1e8"]
+    assert run_build(path, tmp_path, *argv) == 0
+    folder = tmp_path / "small-dust"
+    assert sorted(p.name for p in folder.iterdir()) == [
+        "small-dust.nc",
+        "small-dust_aerosol_explicit.dat",
+        "small-dust_aerosol_layer.dat",
+        "small-dust_disort.txt",
+    ]
+    table = do.open_table(folder / "small-dust.nc")
+    assert table.provenance.inputs["optics"]["expansion"] is True
+    np.testing.assert_allclose(table.alpha1[:, 0], 1.0)
+    np.testing.assert_allclose(table.alpha1[:, 1], 3 * table.g, rtol=1e-6)
+
+
+@pytest.mark.parametrize(
+    ("name", "phase", "needle"),
+    [
+        ("CONFIG", 'model = "mie"', "set 'expansion = true' (optics.expansion) under [optics] in"),
+        ("blue-moons", None, "presets --show blue-moons > my-blue-moons.toml"),
+        ("hybrid", None, "which only a Mie model has (phase.model = 'mie'"),
+    ],
+)
+def test_rt_formats_without_the_expansion_are_refused_naming_the_key(
+    config, tmp_path, capsys, monkeypatch, name, phase, needle
+):
+    _no_work(monkeypatch)
+    target = str(config) if name == "CONFIG" else name
+    argv = ["build", target, "--out", str(tmp_path / "o"), "--format", "disort", "--quiet"]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert "--format disort needs" in err and needle in err and len(err.splitlines()) == 1, err
+    assert not (tmp_path / "o").exists()
+
+
+def test_the_expansion_is_a_mie_models_key(tmp_path, capsys):
+    path = tmp_path / "hybrid.toml"
+    text = SMALL.replace("n_theta = 19", "n_theta = 19\nexpansion = 16")
+    path.write_text(text.replace('model = "mie"', 'model = "hybrid"'), "utf-8")
+    assert run_build(path, tmp_path) == 2
+    assert "optics.expansion: is available for phase.model = 'mie' only" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(("name", "status"), [("small dust", 1), ("a\\\\b", 2), ("x y", 1)])
+def test_a_name_no_file_can_carry_is_refused_before_any_work(
+    tmp_path, capsys, monkeypatch, name, status
+):
+    """A space fails at write time (the netCDF file is named by it); a path separator is a
+    configuration error.  Both are refused before the table is computed."""
+    _no_work(monkeypatch)
+    path = tmp_path / "named.toml"
+    path.write_text(SMALL.replace('name = "small-dust"', f'name = "{name}"'), "utf-8")
+    assert run_build(path, tmp_path / "o") == status
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "file name" in err, err
+    assert not (tmp_path / "o").exists()
+
+
+def test_an_existing_table_of_other_inputs_is_refused_before_any_work(
+    config, tmp_path, capsys, monkeypatch
+):
+    """The table file (NAME.nc) records its inputs: another configuration under the same
+    name is refused without --force before the table is computed, not after."""
+    assert run_build(config, tmp_path) == 0
+    other = tmp_path / "other.toml"
+    other.write_text(SMALL.replace("r_eff_um = 1.0", "r_eff_um = 1.2"), "utf-8")
+    _no_work(monkeypatch)
+    assert run_build(other, tmp_path) == 1
+    err = capsys.readouterr().err
+    assert "hold another table (other inputs); use --force" in err
+    assert "small-dust.nc" in err and "table_summary.json" in err
+    monkeypatch.undo()
+    # The same inputs go ahead (and find the files up to date); --force replaces.
+    assert main(["build", str(config), "--out", str(tmp_path), "--format", "netcdf,csv"]) == 0
+    assert "4 files up to date" in capsys.readouterr().out
+    assert run_build(other, tmp_path, "--force") == 0
+    table = do.open_table(tmp_path / "small-dust" / "small-dust.nc")
+    assert table.provenance.inputs["size_distribution"]["r_eff_um"] == 1.2
+
+
+@pytest.mark.parametrize(
+    ("argv", "needle"),
+    [
+        (["costa", "--format", "cosmoscout", "--number-density-per-m3", "1e8"], "changes nothing"),
+        (["costa", "--format", "bruneton"], "needs cross-sections, which 'costa' does not have"),
+        (["CONFIG", "--format", "bruneton"], "--format bruneton needs a number density"),
+        (["CONFIG", "--format", "cosmoscout"], "--number-density-per-m3"),
+    ],
+)
+def test_what_a_format_needs_is_checked_before_any_work(
+    config, tmp_path, capsys, monkeypatch, argv, needle
+):
+    _no_work(monkeypatch)
+    target = str(config) if argv[0] == "CONFIG" else argv[0]
+    assert main(["build", target, *argv[1:], "--out", str(tmp_path / "o"), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert needle in err, err
+    assert not (tmp_path / "o").exists()
+
+
+def test_the_presets_say_how_to_get_disort_and_libradtran_files(tmp_path, capsys, monkeypatch):
+    """Following blue-moons' comment: a copy with a name of its own and the expansion line
+    passes every check of --format disort,libradtran without a warning (the expansion adds
+    coefficients to the same model: the copy's sources and choices still describe it)."""
+    assert main(["presets", "--show", "blue-moons"]) == 0
+    text = capsys.readouterr().out
+    assert "#   expansion = true" in text
+    mine = text.replace('name = "blue-moons"', 'name = "my-dust"', 1)
+    mine = mine.replace("#   expansion = true", "expansion = true", 1)
+    path = tmp_path / "my-dust.toml"
+    path.write_text(mine, "utf-8")
+    _no_work(monkeypatch)
+    argv = ["build", str(path), "--out", str(tmp_path / "o"), "--format", "disort,libradtran"]
+    with pytest.raises(AssertionError, match="computed before the request was checked"):
+        main([*argv, "--number-density-per-m3", "1e8"])
+    assert "warning" not in capsys.readouterr().err
+    assert do.load_config(path).optics.expansion is True
+
+
+def test_r_eff_in_metres_is_refused_before_any_work(tmp_path, capsys, monkeypatch):
+    """r_eff_um = 1.6e-6 (metres) is a one-line error naming the key and the unit meant,
+    from the configuration and from the API alike, as wavelengths in micrometres are."""
+    _no_work(monkeypatch)
+    path = tmp_path / "metres.toml"
+    path.write_text(SMALL.replace("r_eff_um = 1.0", "r_eff_um = 1.6e-6"), "utf-8")
+    assert run_build(path, tmp_path / "o") == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "size_distribution" in err, err
+    assert "r_eff_um must be in micrometres" in err and "(1.6e-06 m = 1.6 um)" in err
+    assert not (tmp_path / "o").exists()
+    with pytest.raises(ValueError, match=r"was it in metres\? \(1.6e-06 m = 1.6 um\)"):
+        do.ModifiedGamma(r_eff_um=1.6e-6, v_eff=0.2)
+    with pytest.raises(ValueError, match="r_eff_um .* must be in micrometres"):
+        do.LogNormal(median_radius_um=1.2e-6, sigma=0.5)

@@ -47,3 +47,51 @@ def test_damaged_or_missing_input_is_a_clean_failure(config, tmp_path, capsys, d
         assert err.startswith("dustoptics: error: ") and "small-dust.h5" in err
         assert "Traceback" not in err
     assert not (tmp_path / "x").exists()
+
+
+def _no_writing(monkeypatch):
+    from dustoptics.io import outputs
+
+    def no_work(*args, **kwargs):
+        raise AssertionError("rendered before the request was checked")
+
+    monkeypatch.setattr(outputs, "write_formats", no_work)
+
+
+def test_export_over_another_table_is_refused_before_any_work(
+    config, tmp_path, capsys, monkeypatch
+):
+    assert run_build(config, tmp_path / "a", "--format", "netcdf") == 0
+    source = tmp_path / "a" / "small-dust" / "small-dust.nc"
+    out = tmp_path / "out"
+    argv = ["export", str(source), "--out", str(out), "--format", "netcdf", "--quiet"]
+    assert main([*argv, "--number-density-per-m3", "1e8"]) == 0  # another table's inputs
+    before = (out / "small-dust" / "small-dust.nc").read_bytes()
+    _no_writing(monkeypatch)
+    assert main(argv) == 1
+    assert "hold another table (other inputs); use --force" in capsys.readouterr().err
+    assert (out / "small-dust" / "small-dust.nc").read_bytes() == before
+    monkeypatch.undo()
+    assert main([*argv, "--force"]) == 0
+    assert read_hdf5(out / "small-dust" / "small-dust.nc").number_density_per_m3 is None
+
+
+@pytest.mark.parametrize(
+    ("formats", "needle"),
+    [
+        ("netcdf,disort", "needs the phase function's expansion coefficients"),
+        ("libradtran", "needs the phase function's expansion coefficients"),
+        ("bruneton", "--format bruneton needs a number density"),
+    ],
+)
+def test_export_of_what_a_table_lacks_is_refused_before_any_work(
+    config, tmp_path, capsys, monkeypatch, formats, needle
+):
+    assert run_build(config, tmp_path / "a", "--format", "netcdf") == 0
+    source = tmp_path / "a" / "small-dust" / "small-dust.nc"
+    _no_writing(monkeypatch)
+    argv = ["export", str(source), "--out", str(tmp_path / "out"), "--format", formats]
+    assert main([*argv, "--quiet"]) in (1, 2)
+    err = capsys.readouterr().err
+    assert needle in err and len(err.splitlines()) == 1, err
+    assert not (tmp_path / "out").exists()

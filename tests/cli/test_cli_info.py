@@ -69,7 +69,9 @@ def test_info_reads_an_atmosphere_set(config, tmp_path, capsys):
         assert "atmosphere set:  mars" in out
         assert f"input hash:      {record['input_hash']}" in out
         assert "constituent:     mars_aerosols" in out and "constituent:     mars_molecules" in out
-        assert '"optical_depth": 0.5' in out
+        assert "optical_depth=0.5" in out  # the summary: what the set was made from
+        assert main(["info", "--full", str(tmp_path / target)]) == 0
+        assert '"optical_depth": 0.5' in capsys.readouterr().out  # every input, as JSON
 
 
 def test_info_refuses_what_dustoptics_does_not_write(tmp_path, capsys):
@@ -79,3 +81,25 @@ def test_info_refuses_what_dustoptics_does_not_write(tmp_path, capsys):
     assert "not a file dustoptics writes" in capsys.readouterr().err
     assert main(["info", str(tmp_path)]) == 1
     assert "holds no file dustoptics writes" in capsys.readouterr().err
+
+
+def test_info_shows_a_summary_and_everything_with_full(config, tmp_path, capsys):
+    """A summary by default (what the table holds, what made it, its accuracy and hash);
+    --full adds the software, the citations, the notes and every input."""
+    assert run_build(config, tmp_path, "--format", "netcdf") == 0
+    path = tmp_path / "small-dust" / "small-dust.nc"
+    table = read_hdf5(path)
+    capsys.readouterr()
+    assert main(["info", str(path)]) == 0
+    summary = capsys.readouterr().out
+    lines = summary.splitlines()
+    assert len(lines) <= 16
+    assert "sizes:           modified_gamma(r_eff_um=1, v_eff=0.2)" in lines
+    assert "phase model:     mie, scattering-weighted" in lines
+    assert f"input hash:      {table.provenance.input_hash}" in lines
+    assert lines[-1].startswith("more:            software") and "info --full" in lines[-1]
+    assert "inputs:" not in lines and "software:" not in summary
+    assert main(["info", "--full", str(path)]) == 0
+    full = capsys.readouterr().out
+    assert "inputs:" in full.splitlines() and "software:        dustoptics " in full
+    assert len(full.splitlines()) > len(lines)

@@ -65,8 +65,18 @@ def test_sigint_during_a_build_is_one_line_and_writes_nothing(tmp_path):
 
 def test_sigint_while_the_package_imports_is_one_line(tmp_path):
     """The import takes a second or more: an interrupt there is the same one line."""
-    proc = _command("build", "blue-moons", "--out", str(tmp_path / "out"), "--quiet")
-    time.sleep(0.3)  # Python itself has started; dustoptics is importing numpy, numba, ...
+    # As the dustoptics script does: argv[0] names the command, then the import; the
+    # first line says Python has started (an interrupt before that is Python's own).
+    script = (
+        "import sys; print('started', file=sys.stderr, flush=True); "
+        f"sys.argv = ['dustoptics', 'build', 'blue-moons', '--out', {str(tmp_path / 'out')!r}]; "
+        "from dustoptics.cli import main; sys.exit(main())"
+    )
+    proc = subprocess.Popen(
+        [sys.executable, "-c", script], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+    )
+    assert proc.stderr.readline() == "started\n"
+    time.sleep(0.1)  # dustoptics is importing numpy, numba, ... (a second or more)
     proc.send_signal(signal.SIGINT)
     stdout, stderr = proc.communicate(timeout=300)
     assert (proc.returncode, stderr, stdout) == (130, LINE, "")

@@ -144,14 +144,14 @@ def test_full_disk_leaves_the_old_set_with_a_one_line_error(tmp_path, capsys, mo
 def test_leftovers_of_a_killed_run_do_not_block_a_rerun(tmp_path, capsys):
     out = tmp_path / "out" / "small"
     out.mkdir(parents=True)
-    (out / ".small.h5.k3j4l5m6.tmp").write_bytes(
+    (out / ".small.nc.k3j4l5m6.tmp").write_bytes(
         b"half an HDF5 file"
     )  # an older version's temporary
     (out / ".dustoptics-stage-abcd1234").mkdir()  # a staging directory whose lock is free
-    (out / ".dustoptics-stage-abcd1234" / "small.h5").write_bytes(b"half")
+    (out / ".dustoptics-stage-abcd1234" / "small.nc").write_bytes(b"half")
     assert main(["build", str(_config(tmp_path)), "--out", str(tmp_path / "out"), "--quiet"]) == 0
     names = sorted(p.name for p in out.iterdir())
-    assert "small.h5" in names and not any(_atomic.is_leftover(n) for n in names)
+    assert "small.nc" in names and not any(_atomic.is_leftover(n) for n in names)
 
 
 def test_a_request_beyond_the_budget_names_the_flag(tmp_path, capsys):

@@ -307,12 +307,12 @@ def test_cli_fit_prints_and_writes(tmp_path: Path, capsys: pytest.CaptureFixture
     )
     out = capsys.readouterr().out
     assert "dhg-costa2021" in out and "680 nm" in out
-    names = sorted(p.name for p in tmp_path.iterdir())
+    names = sorted(p.name for p in (tmp_path / "costa").iterdir())  # DIR/NAME/, as build's
     assert names == [f"costa_dhg-costa2021.{e}" for e in ("glsl", "hlsl", "json", "wgsl")]
-    data = json.loads((tmp_path / "costa_dhg-costa2021.json").read_text())
+    data = json.loads((tmp_path / "costa" / "costa_dhg-costa2021.json").read_text())
     np.testing.assert_allclose(data["rows"][1]["parameters"]["g1"], 0.4, atol=1e-9)  # 550 nm
     assert main(["fit", str(path), "--out", str(tmp_path)]) == 1  # files exist: no overwrite
-    assert main(["fit", str(path), "--model", "nope"]) == 1
+    assert main(["fit", str(path), "--model", "nope"]) == 2  # a usage error, before any work
     assert write_fit  # the writer the command uses
 
 

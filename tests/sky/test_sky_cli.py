@@ -17,11 +17,11 @@ def test_sky_earth_writes_images_and_data(tmp_path: Path) -> None:
     out = tmp_path / "sky"
     argv = ["sky", "earth", "--sun-elevation", "30", "--size", "64", "--out", str(out), "--quiet"]
     assert main(argv) == 0
-    names = sorted(p.name for p in out.iterdir())
+    names = sorted(p.name for p in (out / "earth").iterdir())  # DIR/NAME/, as build writes
     assert names == ["earth_fisheye.png", "earth_panorama.png", "earth_sky.nc"]
-    img = mpl_image.imread(out / "earth_fisheye.png")
+    img = mpl_image.imread(out / "earth" / "earth_fisheye.png")
     assert img.shape[:2] == (64, 64)
-    ds = xr.open_dataset(out / "earth_sky.nc", engine="scipy")
+    ds = xr.open_dataset(out / "earth" / "earth_sky.nc", engine="scipy")
     assert ds.radiance.attrs["units"] == "sr-1"
     assert np.all(ds.radiance.values >= 0)
     # Zenith of a clear Earth sky: bluer than the sunlight's white.
@@ -35,7 +35,7 @@ def test_sky_earth_space_writes_the_limb(tmp_path: Path) -> None:
     out = tmp_path / "sky"
     argv = ["sky", "earth", "--sun-elevation", "30", "--size", "32", "--space"]
     assert main([*argv, "--out", str(out), "--quiet"]) == 0
-    img = mpl_image.imread(out / "earth_limb.png")
+    img = mpl_image.imread(out / "earth" / "earth_limb.png")
     assert img.shape[:2] == (120, 61)
     # Rows run from the top of the atmosphere (dark) down to the ground (bright).
     luminance = img[..., :3].mean(axis=(1, 2))
