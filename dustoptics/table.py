@@ -434,6 +434,35 @@ def _per_wavelength_2d(name: str, value: Any, n: int, m: int | None) -> np.ndarr
     return arr
 
 
+def _provenance_json(text: Any) -> Any:
+    """The provenance record of a dataset attribute: JSON nested at most 32 deep."""
+    from dustoptics._files import MAX_JSON_DEPTH, _json_depth
+
+    if not isinstance(text, str):
+        raise TypeError(f"expected JSON text; got {type(text).__name__}")
+    if _json_depth(text) > MAX_JSON_DEPTH:
+        raise ValueError(f"JSON nested deeper than {MAX_JSON_DEPTH} levels; refused")
+    try:
+        return json.loads(text)
+    except RecursionError:  # pragma: no cover - the depth is checked first
+        raise ValueError("JSON nested too deeply to read") from None
+
+
+def _storable_text(name: str, value: str) -> None:
+    """Refuse text that files cannot store: NUL, or a lone surrogate (not UTF-8)."""
+    if "\x00" in value:
+        raise ValueError(
+            f"{name} must not contain a NUL character (files cannot store it); got {value!r}"
+        )
+    try:
+        value.encode("utf-8")
+    except UnicodeEncodeError as exc:
+        raise ValueError(
+            f"{name} must be Unicode text that UTF-8 can encode; got {value!r}, with the lone "
+            f"surrogate {value[exc.start]!r} at index {exc.start}"
+        ) from None
+
+
 # ---------------------------------------- what a table does through modules above it
 #
 # This module is the bottom of the package: of the package it imports only the
@@ -663,6 +692,7 @@ class Table:
     def __post_init__(self) -> None:
         if not isinstance(self.name, str) or not self.name:
             raise ValueError(f"name must be a non-empty string; got {self.name!r}")
+        _storable_text("name", self.name)
         wl = as_float_array("wavelength_nm", self.wavelength_nm)
         if wl.ndim != 1 or wl.size == 0 or not np.all(np.isfinite(wl)) or np.any(wl <= 0):
             raise ValueError(
@@ -735,6 +765,11 @@ class Table:
             raise TypeError(
                 f"provenance must be a Provenance; got {type(self.provenance).__name__}"
             )
+        for i, source in enumerate(self.provenance.sources):
+            for key in ("name", "role", "citation"):
+                value = getattr(source, key, None)
+                if isinstance(value, str):
+                    _storable_text(f"provenance.sources[{i}].{key}", value)
         for key, arr in arrays.items():
             if arr is not None:
                 arr = np.array(arr, copy=True)
@@ -961,7 +996,7 @@ class Table:
             if name not in DERIVED and name != ORDER_DIM:
                 values[name] = var.values
         try:
-            provenance = Provenance.from_dict(json.loads(ds.attrs["provenance"]))
+            provenance = Provenance.from_dict(_provenance_json(ds.attrs["provenance"]))
         except (KeyError, TypeError, ValueError) as exc:
             raise ValueError(
                 f"dataset attribute 'provenance' is missing or not a provenance record: {exc}"

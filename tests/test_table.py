@@ -364,3 +364,39 @@ def test_pmom_is_alpha1_over_2l_plus_1() -> None:
     np.testing.assert_array_equal(t.pmom, [[1.0, 0.5, 0.5]])
     np.testing.assert_array_equal(do.table.alpha1_from_pmom(t.pmom), t.alpha1)
     assert do.expansion.pmom_from_alpha1 is do.table.pmom_from_alpha1
+
+
+# ------------------------------------------------------- text files cannot store (issue 29)
+
+
+def _small(**changes) -> Table:
+    fields = {
+        "wavelength_nm": [550.0],
+        "theta_deg": [0.0, 180.0],
+        "phase": [[1 / (4 * np.pi)] * 2],
+        "g": [0.0],
+    }
+    return Table(**{**fields, **changes})
+
+
+@pytest.mark.parametrize("bad", ["a\x00b", "a\ud800b"], ids=["NUL", "lone surrogate"])
+def test_the_constructor_refuses_text_files_cannot_store(bad: str, tmp_path) -> None:
+    from dustoptics.table import Provenance, Source
+
+    with pytest.raises(ValueError, match=r"^name must .*(NUL|lone surrogate)"):
+        _small(name=bad)
+    sources = (Source(name="ok", role="test", citation=bad),)
+    with pytest.raises(ValueError, match=r"provenance\.sources\[0\]\.citation must"):
+        _small(provenance=Provenance(sources=sources))
+    # What is accepted is saved: any other text, escapes and all.
+    fine = _small(
+        name="n\u00e9\U0001f600", provenance=Provenance(sources=(Source("s", "r", "c\x1b"),))
+    )
+    assert do.open_table(fine.save(tmp_path / "t.nc")).equals(fine)
+
+
+def test_provenance_json_nested_too_deeply_is_a_value_error() -> None:
+    ds = _small().to_xarray()
+    ds.attrs["provenance"] = "[" * 100_000 + "]" * 100_000
+    with pytest.raises(ValueError, match="provenance.*nested deeper than 32 levels"):
+        Table.from_xarray(ds)

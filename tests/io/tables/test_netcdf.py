@@ -581,3 +581,9 @@ def test_a_constant_phase_function_compresses_within_the_bound(tmp_path):
         g=[0.0, 0.0, 0.0],
     )
     assert open_table(table.save(tmp_path / "iso.nc")).equals(table)
+
+
+def test_provenance_nested_100000_deep_is_named(written):
+    _edit(written, lambda f: f.attrs.__setitem__("provenance", "[" * 100_000 + "]" * 100_000))
+    with pytest.raises(FormatError, match=r"t\.nc: .*'provenance'.*nested deeper than 32 levels"):
+        open_table(written)
