@@ -358,9 +358,13 @@ def _type_name(value: Any) -> str:
 def _number(ctx: _Context, key: str, value: Any) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise ctx.error(key, f"must be a number; got {value!r} ({_type_name(value)})")
-    out = float(value)
+    try:
+        out = float(value)
+    except OverflowError:  # an integer beyond the float range (10**400)
+        out = math.inf
     if not math.isfinite(out):
-        raise ctx.error(key, f"must be a finite number; got {value!r}")
+        shown = "an integer beyond the float range" if isinstance(value, int) else repr(value)
+        raise ctx.error(key, f"must be a finite number; got {shown}")
     return out
 
 
@@ -1075,6 +1079,12 @@ def parse_config(text: str, *, source: str = "<string>") -> BuildConfig:
             line=int(match.group(1)) if match else None,
             source=source,
         ) from None
+    except RecursionError:
+        raise ConfigError(
+            "invalid TOML: nested too deeply to read", key=None, line=None, source=source
+        ) from None
+    except ValueError as exc:  # tomllib's own: an integer of more than 4300 digits
+        raise ConfigError(f"invalid TOML: {exc}", key=None, line=None, source=source) from None
     _known_keys(ctx, "", data, _TOP_KEYS)
     name = _string(ctx, "name", _required(ctx, "", data, "name"))
     try:

@@ -235,6 +235,28 @@ def test_malformed_toml_line_from_tomllib() -> None:
     assert str(info.value).startswith(f"my.toml:{info.value.line}: invalid TOML: ")
 
 
+@pytest.mark.parametrize(
+    ("extra", "message"),
+    [
+        ("x = " + "[" * 3000 + "]" * 3000, "invalid TOML: nested too deeply to read"),
+        ("x = " + "1" * 5000, "invalid TOML: Exceeds the limit"),
+    ],
+    ids=["3000 levels deep", "5000 digits"],
+)
+def test_toml_too_deep_or_too_long_is_a_config_error(extra: str, message: str) -> None:
+    with pytest.raises(ConfigError, match=f"^my.toml: {message}"):
+        parse_config(SMALL + "\n" + extra + "\n", source="my.toml")
+
+
+def test_an_integer_beyond_the_float_range_is_named() -> None:
+    text = edit(SMALL, "r_eff_um = 0.2", "r_eff_um = 1" + "0" * 400)
+    with pytest.raises(
+        ConfigError,
+        match="size_distribution.r_eff_um: must be a finite number; got an integer beyond",
+    ):
+        parse_config(text)
+
+
 def test_config_error_is_value_error() -> None:
     assert issubclass(ConfigError, ValueError)
 
