@@ -252,8 +252,10 @@ def _describe_file(p: Path, full: bool = True) -> str:
 
 
 def _is_texture_sidecar(path: Path) -> bool:
+    from dustoptics._files import load_json
+
     try:
-        data = json.loads(path.read_text(encoding="utf-8"))
+        data = load_json(path)  # bounded in size and depth
     except (OSError, ValueError):
         return False
     return isinstance(data, dict) and str(data.get("format", "")).startswith(_TEXTURE_FORMAT)
@@ -328,13 +330,28 @@ def _describe_constituent(root: Path, name: str) -> str:
 
 def _describe_set(root: Path, name: str, full: bool = True) -> str:
     """An atmosphere set: its settings, provenance record and constituents."""
+    from dustoptics.io import FormatError
+
+    try:
+        return _set_text(root, name, full)
+    except FormatError:
+        raise
+    except (KeyError, TypeError, ValueError, AttributeError) as exc:
+        raise FormatError(
+            f"{root / name}: the set's settings or provenance record is damaged "
+            f"({type(exc).__name__}: {exc})"
+        ) from None
+
+
+def _set_text(root: Path, name: str, full: bool) -> str:
+    from dustoptics._files import load_json
     from dustoptics.atmosphere.build import SET_PROVENANCE_SUFFIX
     from dustoptics.io import check_cosmoscout_set
 
     lines = [f"atmosphere set:  {name} (CosmoScout VR, in {root})"]
     settings = root / f"{name}{_SETTINGS_SUFFIX}"
     if settings.is_file():
-        data = json.loads(settings.read_text(encoding="utf-8"))
+        data = load_json(settings)
         lines.append(
             f"radii:           planet {data['minAltitude']:.6g} m, atmosphere top "
             f"{data['maxAltitude']:.6g} m; sun distance {data['sunDistance']:.6g} m"
@@ -342,7 +359,7 @@ def _describe_set(root: Path, name: str, full: bool = True) -> str:
     record_path = root / f"{name}{SET_PROVENANCE_SUFFIX}"
     record = None
     if record_path.is_file():
-        record = json.loads(record_path.read_text(encoding="utf-8"))
+        record = load_json(record_path)
         lines.append(f"input hash:      {record['input_hash']}")
     members = [c for c in check_cosmoscout_set(root) if c.startswith(f"{name}_")]
     for member in members:
@@ -398,12 +415,13 @@ def _describe_texture(sidecar: Path, full: bool = True) -> str:
     t = read_texture(sidecar)
     meta = t.metadata
     lines = [
-        f"texture:         {meta['file']} ({meta['dtype']}, {meta['byte_order']}), sidecar "
+        f"texture:         {meta['file']} ({meta['dtype']}, "
+        f"{meta.get('byte_order', 'little-endian')}), sidecar "
         f"{sidecar.name}",
         f"table:           {meta['table']}",
         f"shape:           {t.phase.shape[0]} wavelengths x {t.phase.shape[1]} angles",
         f"wavelengths:     {_range(t.wavelength_nm, 'nm')}",
-        f"sampling:        {meta['sampling_description']}",
+        f"sampling:        {meta.get('sampling_description', meta.get('sampling_rule'))}",
         f"values:          {_range(t.phase, meta['unit'])}, {meta['normalization']}",
         "sphere integral of the samples: "
         + ", ".join(f"{v:.6g}" for v in meta["sphere_integral_of_samples"]),

@@ -95,3 +95,30 @@ def test_describe_path_refuses_what_dustoptics_does_not_write(tmp_path):
     (tmp_path / "fake.glsl").write_text("// not ours\n")
     with pytest.raises(FormatError, match="not a GLSL snippet written by dustoptics"):
         describe_path(tmp_path / "fake.glsl")
+
+
+@pytest.mark.parametrize(
+    ("suffix", "text"),
+    [
+        ("_provenance.json", "[" * 100_000 + "]" * 100_000),
+        ("_settings.json", "[" * 100_000 + "]" * 100_000),
+        ("_provenance.json", '{"input_hash": 1}'),
+        ("_settings.json", "[]"),
+    ],
+)
+def test_a_damaged_set_record_is_a_format_error(tmp_path, suffix, text):
+    """Nested 100,000 deep or missing its keys: one FormatError, never a RecursionError or
+    a KeyError (issue 29 item 7)."""
+    from dustoptics.atmosphere.build import set_inputs
+    from dustoptics.atmosphere.sets import earth_atmosphere
+    from dustoptics.io.outputs import write_atmosphere_set
+
+    grid = [440.0, 550.0, 680.0]
+    write_atmosphere_set(
+        earth_atmosphere(wavelength_nm=grid),
+        tmp_path,
+        inputs=set_inputs("earth", wavelength_nm=grid),
+    )
+    (tmp_path / f"earth{suffix}").write_text(text)
+    with pytest.raises(FormatError, match="earth"):
+        describe_path(tmp_path)

@@ -338,94 +338,228 @@ def write_texture(
 
 
 def read_texture(sidecar_path: str | os.PathLike[str]) -> TextureData:
-    """Read a texture written by :func:`write_texture`, checking size and checksum.
+    """Read a texture written by :func:`write_texture` or :func:`~dustoptics.io.textures.npy.write_npy`.
+
+    Both write a JSON sidecar beside the array file: :data:`TEXTURE_FORMAT`
+    (this module's ``.raw`` file) or
+    :data:`~dustoptics.io.textures.phase_texture.PHASE_TEXTURE_FORMAT` (a
+    ``.npy`` file).  The sidecar is checked whole (every entry the format
+    defines, of its type), the array file's size against the sidecar's shape
+    before it is read, and its SHA-256.
 
     Parameters
     ----------
     sidecar_path : path-like
-        The ``.json`` sidecar; the raw file is the one it names, in the same
+        The ``.json`` sidecar; the array file is the one it names, in the same
         directory.
 
     Returns
     -------
     TextureData
-        The float32 array (read-only) with its coordinates and the sidecar.
+        The texture as float32 (read-only), one row per wavelength, with its
+        coordinates and the sidecar.  An RGB ``.npy`` texture (one row, three
+        channels) gives one row per channel, at the channels' wavelengths
+        (their centroids for colour bands).
 
     Raises
     ------
     FormatError
-        The sidecar is not JSON or not a texture sidecar of this format, the
-        raw file is missing, shorter or longer than the sidecar's shape needs
-        (e.g. a truncated download), or its SHA-256 differs from the
-        sidecar's.
+        The sidecar is not JSON, not a texture sidecar of these formats, or
+        has a missing or malformed entry; the array file is missing, shorter
+        or longer than the sidecar's shape needs (e.g. a truncated download),
+        or its SHA-256 differs from the sidecar's.
     """
+    from dustoptics.io.textures.phase_texture import PHASE_TEXTURE_FORMAT
+
     path = Path(sidecar_path)
     try:
         meta = load_json(path)
     except FormatError as exc:
         detail = str(exc).removeprefix(f"{path}: ")
         raise FormatError(f"{path}: cannot read the texture sidecar as JSON: {detail}") from None
-    if not isinstance(meta, dict) or meta.get("format") != TEXTURE_FORMAT:
+    formats = (TEXTURE_FORMAT, PHASE_TEXTURE_FORMAT)
+    if not isinstance(meta, dict) or meta.get("format") not in formats:
         found = meta.get("format") if isinstance(meta, dict) else type(meta).__name__
-        raise FormatError(f"{path}: not a {TEXTURE_FORMAT!r} sidecar (format {found!r})")
-    try:
-        shape = tuple(int(n) for n in meta["shape"])
-        dtype = meta["dtype"]
-        raw_name = meta["file"]
-        digest = meta["sha256"]
-        sampling = meta["sampling"]
-        wl_axis, angle_axis = meta["axes"]
-    except (KeyError, TypeError, ValueError) as exc:
         raise FormatError(
-            f"{path}: texture sidecar is missing or has a malformed entry: {exc}"
-        ) from None
-    if dtype != "<f4" or len(shape) != 2 or sampling not in SAMPLINGS:
-        raise FormatError(
-            f"{path}: unsupported texture (dtype {dtype!r}, shape {shape}, sampling {sampling!r}); "
-            f"this reader reads dtype '<f4', 2-D, sampling one of {SAMPLINGS}"
+            f"{path}: not a texture sidecar of {' or '.join(map(repr, formats))} (format {found!r})"
         )
-    if Path(raw_name).name != raw_name:
-        raise FormatError(f"{path}: raw file name {raw_name!r} must not contain a directory")
+    try:
+        if meta["format"] == TEXTURE_FORMAT:
+            return _read_raw(path, meta)
+        return _read_npy(path, meta)
+    except FormatError:
+        raise
+    except (KeyError, TypeError, ValueError, OverflowError, IndexError, AttributeError) as exc:
+        raise FormatError(
+            f"{path}: texture sidecar has a missing or malformed entry "
+            f"({type(exc).__name__}: {exc})"
+        ) from None
+
+
+def _text_entries(path: Path, meta: dict[str, Any], keys: tuple[str, ...]) -> None:
+    for key in keys:
+        if not isinstance(meta[key], str):
+            raise FormatError(f"{path}: sidecar entry {key!r} must be a string; got {meta[key]!r}")
+    provenance = meta["provenance"]
+    if not isinstance(provenance, dict) or not isinstance(provenance.get("inputs"), dict):
+        raise FormatError(f"{path}: sidecar entry 'provenance' must hold the table's inputs")
+    integrals = meta["sphere_integral_of_samples"]
+    if not isinstance(integrals, list) or not all(
+        isinstance(v, (int, float)) and not isinstance(v, bool) for v in integrals
+    ):
+        raise FormatError(f"{path}: sidecar entry 'sphere_integral_of_samples' must be numbers")
+
+
+def _axis(path: Path, key: str, values: Any, n: int) -> np.ndarray:
+    """An axis of ``n`` finite float coordinates from the sidecar, read-only."""
+    if not isinstance(values, list) or not all(
+        isinstance(v, (int, float)) and not isinstance(v, bool) for v in values
+    ):
+        raise FormatError(f"{path}: sidecar axis {key!r} must be a list of numbers")
+    out = np.asarray(values, dtype=np.float64)
+    if out.shape != (n,) or not np.all(np.isfinite(out)):
+        raise FormatError(
+            f"{path}: sidecar axis {key!r} has {out.size} values; the shape needs {n} finite ones"
+        )
+    out.setflags(write=False)
+    return out
+
+
+def _shape(path: Path, value: Any, ndim: int) -> tuple[int, ...]:
+    if (
+        not isinstance(value, list)
+        or len(value) != ndim
+        or not all(type(n) is int and 1 <= n <= MAX_GRID_POINTS for n in value)
+    ):
+        raise FormatError(
+            f"{path}: texture shape {value!r} must be {ndim} integers in [1, {MAX_GRID_POINTS}]"
+        )
+    return tuple(value)
+
+
+def _array_file(
+    path: Path, meta: dict[str, Any], least: int, most: int, kind: str
+) -> tuple[Path, bytes]:
+    """The array file the sidecar names: its size in [least, most] before reading, its digest."""
+    raw_name = meta["file"]
+    if not isinstance(raw_name, str) or not raw_name or Path(raw_name).name != raw_name:
+        raise FormatError(f"{path}: array file name {raw_name!r} must be a plain file name")
     raw_path = path.parent / raw_name
-    expected = 4 * shape[0] * shape[1]
-    if min(shape) < 1:
-        raise FormatError(f"{path}: texture shape {list(shape)} must be positive")
     try:
         size = raw_path.stat().st_size
-    except OSError as exc:
-        raise FormatError(f"{path}: cannot read the raw texture {raw_path}: {exc}") from None
+    except (OSError, ValueError) as exc:
+        raise FormatError(f"{path}: cannot read the array file {raw_path}: {exc}") from None
     # Sizes compared before reading: a sidecar's shape cannot make the reader
     # allocate more than the file holds.
-    if size != expected:
-        what = "truncated" if size < expected else "longer than expected"
+    if not least <= size <= most:
+        what = "truncated" if size < least else "longer than expected"
+        need = f"{least} bytes" if least == most else f"{least} to {most} bytes"
+        number = {"<f4": "float32", "<f2": "float16"}[meta["dtype"]]
         raise FormatError(
-            f"{raw_path}: raw texture is {what}: {size} bytes, but shape {list(shape)} of "
-            f"float32 needs {expected} bytes"
+            f"{raw_path}: {kind} is {what}: {size} bytes, but shape "
+            f"{list(meta['shape'])} of {number} needs {need}"
         )
-    data = read_checked(raw_path, limit=expected)
+    data = read_checked(raw_path, limit=most)
     actual = hashlib.sha256(data).hexdigest()
-    if actual != digest:
+    if actual != meta["sha256"]:
         raise FormatError(
-            f"{raw_path}: SHA-256 {actual} differs from the sidecar's {digest}: the file was "
-            "altered or damaged"
+            f"{raw_path}: SHA-256 {actual} differs from the sidecar's {meta['sha256']!r}: the "
+            "file was altered or damaged"
         )
+    return raw_path, data
+
+
+def _read_raw(path: Path, meta: dict[str, Any]) -> TextureData:
+    """A :data:`TEXTURE_FORMAT` sidecar and its ``.raw`` file."""
+    dtype, sampling = meta["dtype"], meta["sampling"]
+    if dtype != "<f4" or sampling not in SAMPLINGS:
+        raise FormatError(
+            f"{path}: unsupported texture (dtype {dtype!r}, sampling {sampling!r}); "
+            f"this reader reads dtype '<f4', 2-D, sampling one of {SAMPLINGS}"
+        )
+    shape = _shape(path, meta["shape"], 2)
+    _text_entries(
+        path,
+        meta,
+        ("table", "input_hash", "written_by", "unit", "normalization", "sampling_description"),
+    )
+    wl_axis, angle_axis = meta["axes"]
+    wavelength = _axis(path, "wavelength_nm", wl_axis["values"], shape[0])
+    mu = None
+    if sampling == "theta":
+        theta = _axis(path, "theta_deg", angle_axis["values"], shape[1])
+    else:
+        mu = _axis(path, "mu", angle_axis["values"], shape[1])
+        theta = _axis(path, "theta_deg", angle_axis["theta_deg"], shape[1])
+    expected = 4 * shape[0] * shape[1]
+    _, data = _array_file(path, meta, expected, expected, "raw texture")
     phase = np.frombuffer(data, dtype="<f4").reshape(shape).copy()
     phase.setflags(write=False)
-    wavelength = np.asarray(wl_axis["values"], dtype=np.float64)
-    if sampling == "theta":
-        theta = np.asarray(angle_axis["values"], dtype=np.float64)
-        mu = None
-    else:
-        mu = np.asarray(angle_axis["values"], dtype=np.float64)
-        theta = np.asarray(angle_axis["theta_deg"], dtype=np.float64)
-        mu.setflags(write=False)
-    if wavelength.shape != (shape[0],) or theta.shape != (shape[1],):
+    return TextureData(
+        phase=phase,
+        wavelength_nm=wavelength,
+        theta_deg=theta,
+        mu=mu,
+        sampling=sampling,
+        metadata=meta,
+    )
+
+
+#: Most bytes of a ``.npy`` header (format 1.0 pads it to a multiple of 64).
+_NPY_HEADER_MAX = 4096
+
+
+def _read_npy(path: Path, meta: dict[str, Any]) -> TextureData:
+    """A :data:`~dustoptics.io.textures.phase_texture.PHASE_TEXTURE_FORMAT` sidecar and its ``.npy``."""
+    import io
+
+    dtype, sampling, layout = meta["dtype"], meta["sampling"], meta["layout"]
+    if (
+        dtype not in ("<f4", "<f2")
+        or sampling not in SAMPLINGS
+        or layout not in ("wavelength", "rgb")
+    ):
         raise FormatError(
-            f"{path}: axis lengths ({wavelength.size} wavelengths, {theta.size} angles) do not "
-            f"match the shape {list(shape)}"
+            f"{path}: unsupported texture (dtype {dtype!r}, sampling {sampling!r}, layout "
+            f"{layout!r}); this reader reads dtype '<f4' or '<f2', sampling one of {SAMPLINGS}, "
+            "layout 'wavelength' or 'rgb'"
         )
-    wavelength.setflags(write=False)
-    theta.setflags(write=False)
+    height, width, channels = _shape(path, meta["shape"], 3)
+    if not (
+        (layout == "rgb" and (height, channels) == (1, 3))
+        or (layout == "wavelength" and channels == 1)
+    ):
+        raise FormatError(
+            f"{path}: a {layout!r} texture of shape {[height, width, channels]}: expected "
+            "(1, width, 3) for 'rgb', (n_wavelength, width, 1) for 'wavelength'"
+        )
+    _text_entries(path, meta, ("table", "input_hash", "written_by", "unit", "normalization"))
+    columns = meta["axes"]["columns"]
+    mu = None
+    if sampling == "theta":
+        theta = _axis(path, "theta_deg", columns["values"], width)
+    else:
+        mu = _axis(path, "mu", columns["values"], width)
+        theta = _axis(path, "theta_deg", columns["theta_deg"], width)
+    if layout == "rgb":
+        wavelength = _axis(path, "channels.wavelength_nm", meta["channels"]["wavelength_nm"], 3)
+    else:
+        wavelength = _axis(path, "wavelength_nm", meta["axes"]["rows"]["values"], height)
+    itemsize = 4 if dtype == "<f4" else 2
+    nbytes = height * width * channels * itemsize
+    _, data = _array_file(path, meta, nbytes, nbytes + _NPY_HEADER_MAX, ".npy array")
+    try:
+        pixels = np.load(io.BytesIO(data), allow_pickle=False)
+    except (ValueError, OSError, EOFError) as exc:
+        raise FormatError(f"{path}: the array file is not a NumPy .npy array ({exc})") from None
+    if pixels.dtype != np.dtype(dtype) or pixels.shape != (height, width, channels):
+        raise FormatError(
+            f"{path}: the array file holds {pixels.dtype.str} of shape {list(pixels.shape)}; the "
+            f"sidecar says {dtype} of shape {[height, width, channels]}"
+        )
+    rows = pixels[0].T if layout == "rgb" else pixels[:, :, 0]
+    phase = np.ascontiguousarray(rows, dtype=np.float32)
+    phase.setflags(write=False)
     return TextureData(
         phase=phase,
         wavelength_nm=wavelength,

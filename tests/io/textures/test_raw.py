@@ -141,7 +141,9 @@ def test_altered_raw_file_fails_checksum(tmp_path) -> None:
 def test_not_a_sidecar(tmp_path) -> None:
     path = tmp_path / "x.json"
     path.write_text('{"format": "something else"}')
-    with pytest.raises(FormatError, match="not a 'dustoptics-phase-texture/1' sidecar"):
+    with pytest.raises(
+        FormatError, match="not a texture sidecar of 'dustoptics-phase-texture/1' or '.*/2'"
+    ):
         read_texture(path)
     path.write_text("{")
     with pytest.raises(FormatError, match="cannot read the texture sidecar as JSON"):
@@ -170,3 +172,80 @@ def test_texture_values_two_samples() -> None:
         assert theta.tolist() == [0.0, 180.0]
         np.testing.assert_array_equal(phase, table.phase[:, [0, -1]].astype(np.float32))
     assert math.isclose(float(np.degrees(np.arccos(-1.0))), 180.0)
+
+
+# ------------------------------------------------- the .npy sidecars, damaged sidecars (issue 29)
+
+
+@pytest.mark.parametrize("layout", ["wavelength", "rgb"])
+@pytest.mark.parametrize(("sampling", "precision"), [("theta", "float32"), ("cos", "float16")])
+def test_reads_the_npy_textures_our_writer_writes(tmp_path, layout, sampling, precision) -> None:
+    """write_npy writes format version 2; read_texture refused it before."""
+    from dustoptics.io.textures.npy import write_npy
+    from dustoptics.io.textures.phase_texture import phase_texture
+
+    table = make_table()
+    options = {"layout": layout, "sampling": sampling, "precision": precision, "n_angles": 91}
+    array, side = write_npy(table, tmp_path, **options)
+    tex = read_texture(side)
+    pixels = phase_texture(table, **options).pixels
+    rows = pixels[0].T if layout == "rgb" else pixels[:, :, 0]
+    np.testing.assert_array_equal(tex.phase, rows.astype(np.float32))
+    assert tex.phase.shape == (3, 91) and tex.sampling == sampling
+    assert tex.theta_deg.size == 91 and (tex.mu is None) == (sampling == "theta")
+    if layout == "wavelength":
+        np.testing.assert_array_equal(tex.wavelength_nm, table.wavelength_nm)
+    array.write_bytes(array.read_bytes()[:100])
+    with pytest.raises(FormatError, match=r"\.npy array is truncated"):
+        read_texture(side)
+
+
+def _damaged_sidecars() -> list[tuple[str, object]]:
+    """(path in the sidecar, replacement): entries of the wrong type or shape."""
+    return [
+        ("shape", [1e400]),
+        ("shape", ["3", 721]),
+        ("shape", [3, 721, 1]),
+        ("shape", [-3, -721]),
+        ("shape", None),
+        ("file", 7),
+        ("file", "a\x00b.raw"),
+        ("file", "../x.raw"),
+        ("sha256", None),
+        ("axes", "values"),
+        ("axes", [{"values": "abc"}, {"values": []}]),
+        ("axes", [{"values": [[1.0]] * 3}, {"values": [0.0] * 721}]),
+        ("axes", [{}, {}]),
+        ("provenance", None),
+        ("table", ["a"]),
+        ("sphere_integral_of_samples", "one"),
+        ("sampling", ["theta"]),
+        ("dtype", {"a": 1}),
+    ]
+
+
+@pytest.mark.parametrize(("key", "value"), _damaged_sidecars())
+def test_a_damaged_sidecar_is_a_format_error(tmp_path, key, value) -> None:
+    """Valid JSON with an entry of another type: one FormatError naming the sidecar, never
+    a TypeError, KeyError or OverflowError from inside the reader (nor from info)."""
+    from dustoptics.io.describe import describe_path
+
+    _, side = write_texture(make_table(), tmp_path)
+    meta = json.loads(side.read_text())
+    meta[key] = value
+    side.write_text(json.dumps(meta))
+    with pytest.raises(FormatError, match=rf"{side}|{tmp_path}"):
+        read_texture(side)
+    with pytest.raises(FormatError):
+        describe_path(side)
+
+
+def test_info_on_a_sidecar_nested_too_deeply_is_a_format_error(tmp_path) -> None:
+    from dustoptics.io.describe import describe_path
+
+    _, side = write_texture(make_table(), tmp_path)
+    side.write_text("[" * 100_000 + "]" * 100_000)
+    with pytest.raises(FormatError, match="nested deeper than 32 levels"):
+        read_texture(side)
+    with pytest.raises(FormatError, match="not a file dustoptics writes"):
+        describe_path(side)
