@@ -446,13 +446,16 @@ def read_extinction_csv(path: str | os.PathLike[str]) -> dict[str, np.ndarray]:
     return arrays
 
 
-def _verify_checksums(root: Path, summary: dict[str, Any]) -> None:
+def _verify_checksums(root: Path, summary: dict[str, Any], names: list[str]) -> None:
     summary_path = root / SUMMARY_FILENAME
     files = summary["files"]
-    for name in (PHASE_FILENAME, EXTINCTION_FILENAME):
+    for name in names:
         entry = files.get(name)
-        if not isinstance(entry, dict) or "sha256" not in entry:
-            continue
+        if not isinstance(entry, dict) or not isinstance(entry.get("sha256"), str):
+            raise FormatError(
+                f"{summary_path}: records no sha256 for {name} (removed from the summary?), so "
+                "the file cannot be checked; pass verify=False to read it unchecked"
+            )
         actual = hashlib.sha256(read_checked(root / name)).hexdigest()
         if actual != entry["sha256"]:
             raise FormatError(
@@ -527,7 +530,10 @@ def read_seed_csv(directory: str | os.PathLike[str], *, verify: bool = True) -> 
         ``table_summary.json`` and (for tables with cross-sections)
         ``MieExtinctionSpectrum.csv``.
     verify : bool, optional
-        Check each CSV file's sha256 against the summary first.  Default True.
+        Check each CSV file's sha256 against the summary first (default True):
+        a file whose digest differs, or that the summary records no digest
+        for, is an error.  False reads the files unchecked (files edited by
+        hand); their shapes are still checked against the summary's.
 
     Returns
     -------
@@ -541,9 +547,9 @@ def read_seed_csv(directory: str | os.PathLike[str], *, verify: bool = True) -> 
         A file is missing.
     FormatError
         A file is malformed or truncated, its checksum does not match the
-        summary, a derived column disagrees with the stored ones, or the
-        files disagree with each other; the message names the file and the
-        problem.
+        summary or is missing from it, a derived column disagrees with the
+        stored ones, or the files disagree with each other or with the shapes
+        the summary records; the message names the file and the problem.
     """
     root = Path(directory)
     summary_path = root / SUMMARY_FILENAME
@@ -556,8 +562,22 @@ def read_seed_csv(directory: str | os.PathLike[str], *, verify: bool = True) -> 
         if not path.is_file():
             raise FileNotFoundError(f"{path}: no such file (listed in {summary_path})")
     if verify:
-        _verify_checksums(root, summary)
+        _verify_checksums(root, summary, [path.name for path in needed])
     phase = read_phase_csv(root / PHASE_FILENAME)
+    entry = summary["files"].get(PHASE_FILENAME)
+    recorded = (
+        (entry.get("n_wavelength"), entry.get("n_theta")) if isinstance(entry, dict) else None
+    )
+    if (
+        recorded is not None
+        and all(type(n) is int for n in recorded)
+        and (recorded != phase.phase.shape)
+    ):
+        raise FormatError(
+            f"{root / PHASE_FILENAME}: {phase.phase.shape[0]} wavelengths x "
+            f"{phase.phase.shape[1]} angles, but {summary_path} records {recorded[0]} x "
+            f"{recorded[1]} (a cut or edited file)"
+        )
     per_wavelength = summary["per_wavelength"]
 
     def array(key: str) -> np.ndarray | None:

@@ -303,6 +303,30 @@ def test_malformed_files_name_the_file_and_problem(written, name, edit, message)
         read_seed_csv(written, verify=False)
 
 
+@pytest.mark.parametrize("name", [PHASE_FILENAME, EXTINCTION_FILENAME])
+def test_a_summary_without_digests_is_refused_unless_verify_is_false(written, name):
+    """The digests deleted from the summary: not read as valid (issue 29 item 9)."""
+    summary = json.loads((written / SUMMARY_FILENAME).read_text())
+    del summary["files"][name]["sha256"]
+    (written / SUMMARY_FILENAME).write_text(json.dumps(summary))
+    with pytest.raises(FormatError, match=f"records no sha256 for {name}.*verify=False"):
+        read_seed_csv(written)
+    assert read_seed_csv(written, verify=False).phase.shape == (2, 19)
+
+
+def test_a_cut_phase_csv_without_digests_is_not_read_as_a_smaller_table(written):
+    summary = json.loads((written / SUMMARY_FILENAME).read_text())
+    for entry in summary["files"].values():
+        del entry["sha256"]
+    (written / SUMMARY_FILENAME).write_text(json.dumps(summary))
+    path = written / PHASE_FILENAME
+    path.write_text("".join(path.read_text().splitlines(keepends=True)[:7]))  # 6 angles
+    with pytest.raises(FormatError, match="records no sha256"):
+        read_seed_csv(written)
+    with pytest.raises(FormatError, match=r"2 wavelengths x 6 angles, but .* records 2 x 19"):
+        read_seed_csv(written, verify=False)
+
+
 def test_missing_files(written):
     (written / EXTINCTION_FILENAME).unlink()
     with pytest.raises(FileNotFoundError, match=EXTINCTION_FILENAME):
