@@ -51,14 +51,17 @@ nitpicky = False
 suppress_warnings = ["ref.citation"]
 exclude_patterns = ["_build", "examples/README.rst"]
 templates_path = ["_templates"]
-html_static_path: list[str] = []
+# _static/custom.css: literal blocks wrap long lines instead of cutting them.
+html_static_path = ["_static"]
 html_theme = "alabaster"
 html_theme_options = {
     "description": "Exact, reproducible optics of atmospheric dust",
     "fixed_sidebar": True,
-    # Room for 100-column code (the project's line length) beside the sidebar.
+    # Room for 100-column code (the project's line length) beside the sidebar: the body
+    # takes the page's width (the basic theme would stop it at 800 px).
     "page_width": "1240px",
     "sidebar_width": "250px",
+    "body_max_width": "none",
 }
 html_title = f"dustoptics {release}"
 html_show_sourcelink = False
