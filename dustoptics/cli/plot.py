@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from dustoptics.cli.errors import PROG
+from dustoptics.cli.errors import PROG, UsageError
 from dustoptics.cli.parser import _float_list, add_command
 
 __all__ = ["add_parser", "run"]
@@ -45,8 +45,15 @@ def add_parser(sub: Any) -> None:
 def run(args: argparse.Namespace) -> int:
     """Run ``plot``; returns the exit status."""
     from dustoptics import plot
+    from dustoptics.io._atomic import check_targets
     from dustoptics.io.outputs import read_table
 
+    # What would fail when the figure is saved, refused before any work.
+    if args.out.suffix.lower() not in plot.SAVE_FORMATS:
+        raise UsageError(
+            f"--out must end in {' or '.join(plot.SAVE_FORMATS)}; got {str(args.out)!r}"
+        )
+    check_targets([args.out], overwrite=args.force)
     table = read_table(args.file)
     if args.kind in ("phase", "polar"):
         figure = plot.phase_function(

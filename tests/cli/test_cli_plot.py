@@ -32,3 +32,16 @@ def test_plot_writes_a_figure(config, tmp_path, capsys):
         == 1
     )
     assert "551" in capsys.readouterr().err
+
+
+def test_plot_refuses_what_would_fail_at_saving_before_any_work(config, tmp_path, capsys):
+    """An existing figure without --force, or a suffix no figure can have: refused before the
+    table is read or anything drawn."""
+    missing = str(tmp_path / "no-such-table.nc")  # reading it would fail: nothing is read
+    existing = tmp_path / "fig.png"
+    existing.write_bytes(b"an earlier figure")
+    assert main(["plot", missing, "--out", str(existing)]) == 1
+    assert "already exist" in capsys.readouterr().err
+    assert main(["plot", missing, "--out", str(tmp_path / "fig.pdf")]) == 2
+    assert "--out must end in .png or .svg" in capsys.readouterr().err
+    assert existing.read_bytes() == b"an earlier figure"
