@@ -6,11 +6,16 @@ Usage::
     python scripts/fuzz.py --cases 200 --seed 7 # a longer search
     python scripts/fuzz.py --kinds api,files    # some kinds only
     python scripts/fuzz.py --kinds sweeps,stores --cases 25 --seed 1   # the sweep families
+    python scripts/fuzz.py --kinds kills,bounds,inputs,digests --cases 50 # the files' families
 
 Kinds: ``api``, ``config``, ``cli``, ``files``, ``sweeps`` (sweep specifications: axes
-spelled several ways, huge and refused sizes, by the API and the command line) and
+spelled several ways, huge and refused sizes, by the API and the command line),
 ``stores`` (a tiny sweep store damaged, held by another run, written by two runs at once or
-on a full disk, then checked and resumed).
+on a full disk, then checked and resumed), ``kills`` (a table's set killed with SIGKILL at
+any step of the writer, then ``info`` and a later write), ``bounds`` (crafted table files,
+devices, FIFOs and oversized files given to every reader), ``inputs`` (arguments, TOML,
+provenance and texture sidecars that raised tracebacks) and ``digests`` (seed-CSV sets
+without their checksums, and a process that forks after rendering a sky).
 
 Every case runs in a forked process with an address-space limit
 (``resource.setrlimit(RLIMIT_AS)``) and a timeout, and with the package's
@@ -67,7 +72,18 @@ CASE_ADDRESS_SPACE = 1536 * 1024**2
 #: Seconds before a case counts as a hang.
 CASE_TIMEOUT_S = 60.0
 
-KINDS = ("api", "config", "cli", "files", "sweeps", "stores")
+KINDS = (
+    "api",
+    "config",
+    "cli",
+    "files",
+    "sweeps",
+    "stores",
+    "kills",
+    "bounds",
+    "inputs",
+    "digests",
+)
 
 
 @dataclass(frozen=True)
@@ -896,6 +912,432 @@ def _warm_up_sweeps() -> None:
     )
 
 
+# ------------------------------------------------------------------ kill -9, bounds, inputs, digests
+
+
+#: How a set is written when the writer is killed (issue 29 item 5).
+KILL_ROUTES = ("replace a set", "a new set", "another run after the killed one")
+
+
+def kills_cases(rng: random.Random, n: int) -> list[Case]:
+    """A table's files (``place_table``, as ``dustoptics build`` writes them) killed with
+    SIGKILL at a random step of the writer; then ``info`` must refuse the set or describe
+    it whole (the old or the new files, never a mix), and after a later write into the
+    folder (an unrelated file, or another run with ``force``) the set must be one run's,
+    whole: the killed run's if it had begun to publish, else the old one."""
+    cases = []
+    for _ in range(n):
+        route = rng.choice(KILL_ROUTES)
+        step = rng.randrange(64)
+        formats = rng.choice((("hdf5", "csv"), ("hdf5", "csv", "texture", "glsl"), ("csv",)))
+
+        def run(
+            workdir: Path, route: str = route, step: int = step, formats: tuple = formats
+        ) -> str:
+            return _kill_case(workdir, route, step, formats)
+
+        cases.append(Case("kills", f"{route}, killed at step {step}, formats {formats}", run))
+    return cases
+
+
+def _kill_case(workdir: Path, route: str, step: int, formats: tuple[str, ...]) -> str:
+    from dustoptics.io import _atomic
+    from dustoptics.io._atomic import whole_set, write_files
+    from dustoptics.io.outputs import place_table, with_inputs
+
+    base = _small_table()
+    old, new, third = (with_inputs(base, run=k) for k in ("old", "new", "third"))
+
+    def files(table: Any, where: Path) -> dict[str, bytes]:
+        place_table(table, where, formats, force=True)
+        return _snapshot(where / "fuzz")
+
+    expect = {k: files(t, workdir / f"ref-{k}") for k, t in (("old", old), ("new", new))}
+    seen: list[str] = []
+    _atomic._STEP_HOOK = seen.append
+    try:
+        place_table(new, workdir / "scratch", formats, force=True)
+    finally:
+        _atomic._STEP_HOOK = None
+    k = step % len(seen)
+    out = workdir / "out"
+    if route != "a new set":
+        place_table(old, out, formats)
+    pid = os.fork()
+    if pid == 0:  # pragma: no cover - the killed writer
+        count = iter(range(10**6))
+
+        def hook(name: str) -> None:
+            if next(count) == k:
+                os.kill(os.getpid(), signal.SIGKILL)
+
+        _atomic._STEP_HOOK = hook
+        try:
+            place_table(new, out, formats, force=True)
+        finally:
+            os._exit(0)
+    _, status = os.waitpid(pid, 0)
+    assert os.WIFSIGNALED(status), f"the writer was not killed at step {k} ({seen[k]})"
+    folder = out / "fuzz"
+    whole = (
+        {"old": expect["old"], "new": expect["new"]}
+        if route != "a new set"
+        else {"new": expect["new"]}
+    )
+
+    def state() -> str:
+        present = _snapshot(folder) if folder.exists() else {}
+        present = {n: d for n, d in present.items() if not n.startswith(".") and n != "notes.txt"}
+        if not present:
+            return ""
+        for label, wanted in whole.items():
+            if present == wanted:
+                return label
+        raise AssertionError(f"a mixed or partial set after a kill at {seen[k]!r}")
+
+    try:
+        with whole_set(folder if folder.exists() else out):
+            before = state()
+        assert run_cli(workdir, ["info", str(folder)]) == "exit 0" or not before
+    except ValueError as exc:
+        assert "interrupted write" in str(exc), str(exc)
+        assert run_cli(workdir, ["info", str(folder)]).startswith("exit 1")
+        before = "refused"
+    # The last journal is the placement's (the formats are rendered by a write of their own).
+    publishing = len(seen) - 1 - seen[::-1].index("journal")
+    killed_run = "new" if k >= publishing else ("old" if route != "a new set" else "")
+    if route == "another run after the killed one":
+        place_table(third, out, formats, force=True)
+        assert _snapshot(folder) == files(third, workdir / "ref-third"), "not the last run's set"
+        return f"killed at {seen[k]!r}: {before or 'nothing'}; the next run's set whole"
+    write_files({folder / "notes.txt": b"an unrelated write\n"})
+    after = state()
+    assert after == killed_run, f"killed at {seen[k]!r}: {after!r}, expected {killed_run!r}"
+    if after:
+        assert run_cli(workdir, ["info", str(folder)]) == "exit 0"
+    return f"killed at {seen[k]!r}: {before or 'nothing'}, then {after or 'nothing'}"
+
+
+#: Files that must be refused within bounds (issue 29 item 6): what, and how it is made.
+BOUND_INPUTS = (
+    "a table declaring chunks never written",
+    "a table with an unknown filter",
+    "a table of zeros compressed at deflate's limit",
+    "/dev/zero",
+    "a FIFO",
+    "a sparse 100 MiB file",
+    "a 200 KiB CSV cell",
+)
+#: The readers each input is given to.
+BOUND_READERS = ("open_table", "info", "size table", "index table", "ozone table", "seed CSV")
+
+
+def bounds_cases(rng: random.Random, n: int) -> list[Case]:
+    """Crafted or special files given to the readers: each must answer (a clean error)
+    within the case's memory limit and timeout, never read a FIFO or a device."""
+    cases = []
+    for _ in range(n):
+        what, reader = rng.choice(BOUND_INPUTS), rng.choice(BOUND_READERS)
+
+        def run(workdir: Path, what: str = what, reader: str = reader) -> str:
+            return _bounds_case(workdir, what, reader)
+
+        cases.append(Case("bounds", f"{what} given to {reader}", run))
+    return cases
+
+
+def _bounds_case(workdir: Path, what: str, reader: str) -> str:
+    import h5py
+    import numpy as np
+
+    from dustoptics.atmosphere.gases import read_ozone_csv
+    from dustoptics.io import open_table, read_seed_csv, write_hdf5
+    from dustoptics.particles.custom_sizedist import TabulatedDistribution
+    from dustoptics.particles.materials import read_index_csv
+
+    path = workdir / "input.h5"
+    if what.startswith("a table"):
+        write_hdf5(_small_table(), path)
+        with h5py.File(path, "r+") as f:
+            if what == "a table with an unknown filter":
+                values = f["g"][()]
+                del f["g"]
+                f.create_dataset("g", data=values, chunks=(3,), compression="lzf")
+            else:
+                n = 1 << 23
+                for key in ("theta_deg", "phase"):
+                    del f[key]
+                f.create_dataset(
+                    "theta_deg", shape=(n,), dtype="<f8", chunks=(1 << 16,), compression="gzip"
+                )
+                f["theta_deg"].attrs["units"] = "degree"
+                phase = f.create_dataset(
+                    "phase", shape=(3, n), dtype="<f8", chunks=(1, 1 << 16), compression="gzip"
+                )
+                phase.attrs["units"] = "sr-1"
+                if what.startswith("a table of zeros"):
+                    f["theta_deg"][...] = np.arange(n, dtype="<f8") * (180.0 / n)
+                    phase[...] = 0.0
+    elif what == "/dev/zero":
+        path = Path("/dev/zero")
+    elif what == "a FIFO":
+        path = workdir / "input.csv"
+        os.mkfifo(path)
+    elif what == "a sparse 100 MiB file":
+        path = workdir / "input.csv"
+        with open(path, "wb") as handle:
+            handle.truncate(100 * 1024**2)
+    else:
+        path = workdir / "input.csv"
+        path.write_bytes(b"a," + b"9" * (200 * 1024) + b"\n")
+    if reader == "info":
+        return run_cli(workdir, ["info", str(path)])
+    if reader == "seed CSV":
+        d = workdir / "seed"
+        d.mkdir()
+        (d / "table_summary.json").write_text("{}")
+        target = d / "MiePhaseFunctionSpectrum.csv"
+        target.symlink_to(path)
+        call: Callable[[], Any] = lambda: read_seed_csv(d)  # noqa: E731
+    else:
+        call = {
+            "open_table": lambda: open_table(path),
+            "size table": lambda: TabulatedDistribution.from_csv(path),
+            "index table": lambda: read_index_csv(path),
+            "ozone table": lambda: read_ozone_csv(path),
+        }[reader]
+    start = time.perf_counter()
+    try:
+        call()
+    except (ValueError, TypeError, FileNotFoundError) as exc:
+        assert str(exc) and "\n" not in str(exc), repr(exc)
+        return f"{type(exc).__name__} in {time.perf_counter() - start:.2f} s: {str(exc)[:120]}"
+    raise AssertionError(f"{reader} read {what}")
+
+
+#: Inputs that raised a traceback before issue 29 (item 7): API calls and command lines.
+INPUT_CALLS: tuple[str, ...] = (
+    "do.MultiModal(modes=None, relative_number_densities=(1.0,))",
+    "do.MultiModal(modes=3, relative_number_densities=(1.0,))",
+    "do.MultiModal(modes='abc', relative_number_densities=(1.0,))",
+    "do.compute_optics(1.5, do.ModifiedGamma(r_eff_um=1.0, v_eff=0.2).truncated(r_min_um=0.5),"
+    " [550.0], [0.0, 90.0, 180.0], rtol=1e-2, workers=1)",
+    "do.compute_optics(1.5, do.ModifiedGamma(r_eff_um=1.0, v_eff=0.2).truncated(r_min_um=0.5,"
+    " r_max_um=None), [550.0], [0.0, 180.0], rtol=1e-2, workers=1).save('t.nc')",
+    "Medium.from_atmosphere(earth, n_radii=1)",
+    "Medium.from_atmosphere(earth, n_mu=1)",
+    "Medium.from_atmosphere(earth, n_mu=10**9)",
+    "small().replace(name='a\\x00b').save('t.nc')",
+    "small().replace(name='a\\ud800b').save('t.nc')",
+    "small().replace(provenance=Provenance(sources=(Source('s', 'r', 'c\\x00'),))).save('t.nc')",
+    "small().replace(provenance=Provenance(sources=(Source('s', 'r', '\\udfff'),))).save('t.h5')",
+)
+#: TOML edits of :data:`SMALL_CONFIG` built by ``dustoptics build``.
+INPUT_TOML: tuple[tuple[str, str], ...] = (
+    ("r_eff_um = 0.5", "r_eff_um = 1" + "0" * 400),
+    ("r_eff_um = 0.5", "r_eff_um = 1" + "0" * 5000),
+    ("n_theta = 19", "n_theta = 19\nx = " + "[" * 3000 + "]" * 3000),
+    ("k = 0.001", "k = -1" + "0" * 400),
+    ("wavelengths_nm = [440.0, 550.0, 680.0]", "wavelengths_nm = [440.0, 1" + "0" * 400 + "]"),
+)
+#: Entries of a texture sidecar replaced by values of another type (then info, read_texture).
+SIDECAR_DAMAGE: tuple[tuple[str, Any], ...] = (
+    ("shape", [1e400]),
+    ("shape", ["3", 721]),
+    ("shape", [10**30, 10**30]),
+    ("file", 7),
+    ("file", "a\x00b.raw"),
+    ("axes", "values"),
+    ("axes", [{"values": [[1.0]] * 3}, {"values": []}]),
+    ("provenance", None),
+    ("provenance", {"inputs": "x"}),
+    ("table", ["a"]),
+    ("sphere_integral_of_samples", ["one"]),
+    ("sampling", ["theta"]),
+    ("dtype", {"a": 1}),
+    ("format", "dustoptics-phase-texture/2"),
+)
+
+
+def inputs_cases(rng: random.Random, n: int) -> list[Case]:
+    """What raised a traceback before issue 29: odd API arguments, TOML deep or huge, a
+    table file whose provenance is nested 100,000 deep (info, export), a damaged texture
+    sidecar (info, read_texture).  Every one must be a result or a one-line error."""
+    cases = []
+    for _ in range(n):
+        route = rng.choice(("api", "toml", "provenance", "sidecar"))
+        if route == "api":
+            code = rng.choice(INPUT_CALLS)
+            cases.append(Case("inputs", code, _inputs_evaluator(code)))
+        elif route == "toml":
+            key, value = rng.choice(INPUT_TOML)
+            text = SMALL_CONFIG.replace(key, value)
+
+            def run_toml(workdir: Path, text: str = text) -> str:
+                (workdir / "fuzz.toml").write_text(text, encoding="utf-8")
+                return run_cli(workdir, ["build", "fuzz.toml", "--out", "out", "--quiet"])
+
+            cases.append(Case("inputs", f"build with {value[:60]!r}", run_toml))
+        elif route == "provenance":
+            depth = rng.choice((33, 1000, 100_000))
+            command = rng.choice(("info", "export"))
+
+            def run_deep(workdir: Path, depth: int = depth, command: str = command) -> str:
+                import h5py
+
+                from dustoptics.io import write_hdf5
+                from dustoptics.io.tables.netcdf import DIGEST_ATTRIBUTE, dataset_digest
+
+                path = write_hdf5(_small_table(), workdir / "deep.h5")
+                with h5py.File(path, "r+") as f:
+                    f.attrs["provenance"] = "[" * depth + "]" * depth
+                    skip = {"CLASS", "NAME", "DIMENSION_LIST", "REFERENCE_LIST", "_Netcdf4Dimid"}
+                    variables = {
+                        k: (f[k][()], {a: _text(v) for a, v in f[k].attrs.items() if a not in skip})
+                        for k in f
+                    }
+                    attrs = {a: _text(v) for a, v in f.attrs.items()}
+                    f.attrs[DIGEST_ATTRIBUTE] = dataset_digest(variables, attrs)
+                argv = (
+                    ["info", str(path)]
+                    if command == "info"
+                    else ["export", str(path), "--out", "out", "--format", "csv"]
+                )
+                return run_cli(workdir, argv)
+
+            cases.append(
+                Case("inputs", f"{command} of a table with provenance {depth} deep", run_deep)
+            )
+        else:
+            key, value = rng.choice(SIDECAR_DAMAGE)
+
+            def run_sidecar(workdir: Path, key: str = key, value: Any = value) -> str:
+                from dustoptics.io import read_texture, write_texture
+
+                _, side = write_texture(_small_table(), workdir / "tex")
+                meta = json.loads(side.read_text())
+                meta[key] = value
+                side.write_text(json.dumps(meta))
+                result = run_cli(workdir, ["info", str(side)])
+                try:
+                    read_texture(side)
+                except ValueError as exc:
+                    assert "\n" not in str(exc), repr(exc)
+                    return result + f"; read_texture: {str(exc)[:100]}"
+                return result + "; read_texture: read"
+
+            cases.append(Case("inputs", f"texture sidecar with {key} = {value!r:.60}", run_sidecar))
+    return cases
+
+
+def _text(value: Any) -> Any:
+    return value.decode() if isinstance(value, bytes) else value
+
+
+def _inputs_evaluator(code: str) -> Callable[[Path], Any]:
+    def run(workdir: Path) -> Any:
+        import numpy as np
+
+        import dustoptics as do
+        from dustoptics.atmosphere.sets import earth_atmosphere
+        from dustoptics.sky.medium import Medium
+        from dustoptics.table import Provenance, Source
+
+        def small() -> Any:
+            return do.Table(
+                wavelength_nm=[550.0],
+                theta_deg=[0.0, 180.0],
+                phase=[[1 / (4 * np.pi)] * 2],
+                g=[0.0],
+            )
+
+        names = {"do": do, "Medium": Medium, "Provenance": Provenance, "Source": Source}
+        names.update(small=small, earth=earth_atmosphere(wavelength_nm=[440.0, 550.0]))
+        result = eval(code, names)
+        _check_result(result)
+        return result
+
+    return run
+
+
+def digests_cases(rng: random.Random, n: int) -> list[Case]:
+    """Seed-CSV sets whose ``sha256`` entries were deleted and whose phase file may be cut
+    (issue 29 item 9): refused unless ``verify=False``, and then a cut file still refused;
+    and a process that has rendered a sky forks, the child renders again (the harness
+    selects numba's fork-safe threading layer, as a program that forks must)."""
+    cases = []
+    for _ in range(n):
+        if rng.random() < 0.2:
+            cases.append(Case("digests", "a sky rendered, then a fork renders again", _sky_fork))
+            continue
+        deleted = rng.choice(((), ("phase",), ("extinction",), ("phase", "extinction")))
+        cut = rng.choice((None, 2, 3, 5))  # the phase file has 6 lines
+
+        def run(workdir: Path, deleted: tuple = deleted, cut: int | None = cut) -> str:
+            return _digest_case(workdir, deleted, cut)
+
+        cases.append(Case("digests", f"sha256 of {deleted or 'none'} deleted, cut at {cut}", run))
+    return cases
+
+
+def _digest_case(workdir: Path, deleted: tuple[str, ...], cut: int | None) -> str:
+    from dustoptics.io import read_seed_csv, write_seed_csv
+    from dustoptics.io.csv.seed import EXTINCTION_FILENAME, PHASE_FILENAME, SUMMARY_FILENAME
+
+    d = workdir / "set"
+    write_seed_csv(_small_table(), d)
+    summary = json.loads((d / SUMMARY_FILENAME).read_text())
+    for name in deleted:
+        del summary["files"][PHASE_FILENAME if name == "phase" else EXTINCTION_FILENAME]["sha256"]
+    (d / SUMMARY_FILENAME).write_text(json.dumps(summary))
+    if cut is not None:
+        path = d / PHASE_FILENAME
+        path.write_text("".join(path.read_text().splitlines(keepends=True)[:cut]))
+    info = run_cli(workdir, ["info", str(d)])
+    try:
+        read_seed_csv(d)
+        assert not deleted and cut is None, "read as valid"
+        return info
+    except ValueError as exc:
+        assert deleted or cut is not None, repr(exc)
+    if cut is not None:
+        try:
+            read_seed_csv(d, verify=False)
+        except ValueError:
+            return info + "; refused, also unchecked"
+        raise AssertionError(f"a phase file cut at line {cut} read as a table with verify=False")
+    return info + "; refused"
+
+
+def _sky_fork(workdir: Path) -> str:
+    import numpy as np
+
+    from dustoptics.atmosphere.sets import earth_atmosphere
+    from dustoptics.sky.scene import sky_radiance
+
+    atmosphere = earth_atmosphere(wavelength_nm=[440.0, 550.0, 680.0])
+
+    def render() -> float:
+        sky = sky_radiance(
+            atmosphere,
+            sun_elevation_deg=60.0,
+            view_zenith_deg=np.array([0.0, 45.0]),
+            azimuth_step_deg=45.0,
+        )
+        return float(sky.at(0.0, 0.0)[0])
+
+    first = render()
+    pid = os.fork()
+    if pid == 0:  # pragma: no cover - the forked child
+        try:
+            os._exit(0 if render() == first else 5)
+        finally:
+            os._exit(4)
+    _, status = os.waitpid(pid, 0)
+    assert os.waitstatus_to_exitcode(status) == 0, f"the forked child: status {status}"
+    return "the forked child rendered the same sky"
+
+
 GENERATORS = {
     "api": api_cases,
     "config": config_cases,
@@ -903,11 +1345,24 @@ GENERATORS = {
     "files": files_cases,
     "sweeps": sweeps_cases,
     "stores": stores_cases,
+    "kills": kills_cases,
+    "bounds": bounds_cases,
+    "inputs": inputs_cases,
+    "digests": digests_cases,
 }
 
 
 def warm_up(kinds: tuple[str, ...] = KINDS) -> None:
-    """Compile (or load) the kernels once, so that forked cases inherit them."""
+    """Compile (or load) the kernels once, so that forked cases inherit them.
+
+    Before any parallel kernel runs, numba's fork-safe threading layer is chosen (unless
+    the environment chose one): the harness forks, and GNU OpenMP, numba's default on
+    Linux, kills a process forked after a parallel region ran (issue 29 item 9).
+    """
+    import numba
+
+    if numba.config.THREADING_LAYER == "default":
+        numba.config.THREADING_LAYER = "forksafe"
     _small_table()
     if {"sweeps", "stores"} & set(kinds):
         _warm_up_sweeps()

@@ -2,7 +2,8 @@
 
 CI runs seed 0 with 5 cases of each kind (API calls, TOML configurations,
 command lines, damaged files, sweep specifications, sweep stores damaged or
-contended), each forked with an address-space limit and a timeout.  ``pytest --hypothesis-profile=explore`` runs 60 cases of each kind
+contended, sets killed while written, files beyond the readers' bounds, inputs
+that raised tracebacks, seed-CSV sets without checksums), each forked with an address-space limit and a timeout.  ``pytest --hypothesis-profile=explore`` runs 60 cases of each kind
 from a seed taken from the clock (printed, to reproduce a failure with
 ``python scripts/fuzz.py --seed SEED --cases 60``).
 """
@@ -119,3 +120,28 @@ def test_the_sweep_families_reach_every_kind_of_input():
         routes |= {c.description.split(" ")[0] for c in fuzz.sweeps_cases(rng, 10)}
     assert events == set(fuzz.STORE_EVENTS)
     assert routes == {"load_sweep(SMALL_CONFIG,", "load_sweep", "dustoptics"}
+
+
+def test_the_file_families_reach_every_kind_of_input():
+    """Within a few draws the kill family reaches every route and the early, the
+    publishing and the late steps; the bounds family every input and reader; the inputs
+    family every route; the digest family a sky that forks (issue 29 items 5-7, 9)."""
+    import random
+
+    routes, steps, inputs, readers, kinds, sky = set(), set(), set(), set(), set(), False
+    for seed in range(4):
+        rng = random.Random(seed)
+        for case in fuzz.kills_cases(rng, 10):
+            route, step = case.description.split(", killed at step ")
+            routes.add(route)
+            steps.add(int(step.split(",")[0]) // 16)
+        for case in fuzz.bounds_cases(rng, 20):
+            what, reader = case.description.split(" given to ")
+            inputs.add(what)
+            readers.add(reader)
+        kinds |= {c.description.split(" ")[0] for c in fuzz.inputs_cases(rng, 20)}
+        sky |= any("sky" in c.description for c in fuzz.digests_cases(rng, 10))
+    assert routes == set(fuzz.KILL_ROUTES) and steps == {0, 1, 2, 3}
+    assert inputs == set(fuzz.BOUND_INPUTS) and readers == set(fuzz.BOUND_READERS)
+    assert {"build", "info", "export", "texture", "do.MultiModal(modes=None,"} <= kinds
+    assert sky
