@@ -19,10 +19,9 @@ command line.
 >>> t = do.compute_optics(do.mars_dust(), dist)     # doctest: +SKIP
 """
 
+from dustoptics.cli import _interrupt  # noqa: F401, I001  (first: Ctrl-C while the command imports)
 from importlib.metadata import PackageNotFoundError
 from importlib.metadata import version as _version
-
-from dustoptics.cli import _interrupt  # noqa: F401  (Ctrl-C while the command imports: one line)
 
 try:
     __version__ = _version("dustoptics")

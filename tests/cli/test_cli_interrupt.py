@@ -76,7 +76,7 @@ def test_sigint_while_the_package_imports_is_one_line(tmp_path):
         [sys.executable, "-c", script], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
     )
     assert proc.stderr.readline() == "started\n"
-    time.sleep(0.1)  # dustoptics is importing numpy, numba, ... (a second or more)
+    time.sleep(0.5)  # dustoptics is importing numpy, numba, ... (a second or more)
     proc.send_signal(signal.SIGINT)
     stdout, stderr = proc.communicate(timeout=300)
     assert (proc.returncode, stderr, stdout) == (130, LINE, "")
