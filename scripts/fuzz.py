@@ -1245,10 +1245,10 @@ def _inputs_evaluator(code: str) -> Callable[[Path], Any]:
 
         def small() -> Any:
             return do.Table(
-                wavelength_nm=[550.0],
-                theta_deg=[0.0, 180.0],
-                phase=[[1 / (4 * np.pi)] * 2],
-                g=[0.0],
+                wavelength_nm=np.array([550.0]),
+                theta_deg=np.array([0.0, 180.0]),
+                phase=np.full((1, 2), 1 / (4 * np.pi)),
+                g=np.array([0.0]),
             )
 
         names = {"do": do, "Medium": Medium, "Provenance": Provenance, "Source": Source}
