@@ -19,14 +19,11 @@ from pathlib import Path
 from typing import Any, TextIO
 
 from dustoptics.atmosphere.build import ATMOSPHERES, DEFAULT_DUST
+from dustoptics.cli.checks import check_needs, check_outputs, check_set_outputs, no_expansion
 from dustoptics.cli.errors import PROG, UsageError
-from dustoptics.cli.export import check_needs, check_outputs, same_table, write_table
-from dustoptics.cli.parser import (
-    _add_format_options,
-    _float_list,
-    _positive_float,
-    add_command,
-)
+from dustoptics.cli.export import same_table, write_table
+from dustoptics.cli.formats import add_format_options
+from dustoptics.cli.parser import _float_list, _positive_float, add_command
 from dustoptics.cli.report import report_placement
 from dustoptics.models.build import TableBuilder, is_config_path
 
@@ -83,7 +80,7 @@ def add_parser(sub: Any) -> None:
         "already hold the same table are left untouched",
     )
     p.add_argument("--quiet", action="store_true", help="no progress or summary output")
-    _add_format_options(p, default=DEFAULT_FORMATS, required=False)
+    add_format_options(p, default=DEFAULT_FORMATS, required=False)
     g = p.add_argument_group(
         "atmosphere sets ('build mars', 'build earth': CosmoScout VR's full set)"
     )
@@ -199,7 +196,7 @@ def _check_build_request(args: argparse.Namespace, builder: TableBuilder) -> Non
         or (getattr(args, "optical_depth", None) is not None and "cosmoscout" in formats),
         no_expansion=None
         if config.optics.expansion is not None
-        else _no_expansion(args.name, builder),
+        else no_expansion(args.name, builder.config),
     )
     if "cosmoscout" in formats:
         # The density profile write_table samples, checked before the table is computed.
@@ -230,57 +227,6 @@ def _check_build_request(args: argparse.Namespace, builder: TableBuilder) -> Non
     )
 
 
-def _no_expansion(name: str, builder: TableBuilder) -> str:
-    """Why a configuration gives no expansion coefficients, and what to change."""
-    model = builder.config.phase.model
-    if model != "mie":
-        return (
-            f"which only a Mie model has (phase.model = 'mie' with optics.expansion = true); "
-            f"{builder.name!r} has phase.model = {model!r}"
-        )
-    where = (
-        f"under [optics] in {name}"
-        if is_config_path(name)
-        else f"under [optics] in a copy of the preset ('{PROG} presets --show {name} > "
-        f"my-{name}.toml', then give it a name of its own and build my-{name}.toml)"
-    )
-    return (
-        f"which {builder.name!r} does not ask for: set 'expansion = true' (optics.expansion) "
-        f"{where}"
-    )
-
-
-def _check_set_outputs(args: argparse.Namespace, *, dust: str, optical_depth: float) -> None:
-    """A set's record that exists in ``DIR/NAME/`` with other inputs: refused before any
-    work without ``--force`` (the files could not be placed)."""
-    import json
-
-    from dustoptics.atmosphere.build import SET_PROVENANCE_SUFFIX, set_inputs
-    from dustoptics.table import canonical_json
-
-    record = args.out / args.name / f"{args.name}{SET_PROVENANCE_SUFFIX}"
-    if args.force or not record.is_file():
-        return
-    # The inputs known before any work (the ozone file is read, and checked, by the work).
-    expected = set_inputs(
-        args.name,
-        dust=dust,
-        optical_depth=optical_depth,
-        reference_wavelength_nm=args.reference_wavelength_nm,
-        wavelength_nm=args.wavelengths_nm,
-    )
-    try:
-        found = json.loads(record.read_text(encoding="utf-8"))["inputs"]
-        same = all(canonical_json(found.get(k)) == canonical_json(v) for k, v in expected.items())
-    except (OSError, ValueError, KeyError, TypeError, AttributeError, RecursionError):
-        same = False
-    if not same:
-        raise FileExistsError(
-            f"{str(record)!r} exists and records another set (other inputs); use --force to "
-            "replace the set, or another --out"
-        )
-
-
 def _run_set(args: argparse.Namespace) -> int:
     """``build mars|earth|earth-kobe2026``: the set's files in ``DIR/NAME/``."""
     from dustoptics.atmosphere.build import build_atmosphere, set_inputs
@@ -306,7 +252,7 @@ def _run_set(args: argparse.Namespace) -> int:
                 f"dust {dust!r} has no cross-sections (a phase-function-only model); "
                 "choose a Mie preset"
             )
-    _check_set_outputs(args, dust=dust, optical_depth=optical_depth)
+    check_set_outputs(args, dust=dust, optical_depth=optical_depth)
     atm = build_atmosphere(
         args.name,
         dust=dust if dust_config is None else dust_config,

@@ -12,182 +12,17 @@ a table name that a format cannot write and the table files (``NAME.nc``,
 from __future__ import annotations
 
 import argparse
-import re
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+from dustoptics.cli.checks import NEEDS_DENSITY, check_needs, check_outputs
 from dustoptics.cli.errors import PROG, UsageError
-from dustoptics.cli.parser import _add_format_options, add_command
+from dustoptics.cli.formats import add_format_options
+from dustoptics.cli.parser import add_command
 from dustoptics.cli.report import report_placement
 
-__all__ = [
-    "NEEDS_DENSITY",
-    "add_parser",
-    "check_needs",
-    "check_outputs",
-    "run",
-    "same_table",
-    "write_table",
-]
-
-#: The usage error of the cosmoscout format without a number density.
-NEEDS_DENSITY = (
-    "the cosmoscout format needs a number density for beta [m^-1]: give "
-    "--optical-depth (with --reference-wavelength-nm), --number-density-per-m3 or "
-    "number_density_per_m3 in the configuration"
-)
-
-
-#: Formats whose files are named by the table's name as it is, which their writers
-#: require to be letters, digits, '.', '_' and '-', starting with a letter or digit.
-_PLAIN_NAME_FORMATS = ("cosmoscout", "hdf5", "netcdf")
-_PLAIN_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]*")
-
-
-#: Formats that need the table's cross-sections, and those that need a number density too
-#: (their coefficients are N C [m^-1]).
-_NEEDS_CROSS_SECTIONS = ("bruneton", "cosmoscout", "disort", "libradtran")
-_NEEDS_NUMBER_DENSITY = ("bruneton", "cosmoscout", "libradtran")
-
-
-def check_needs(
-    formats: Sequence[str],
-    *,
-    name: str,
-    cross_sections: bool,
-    density: bool,
-    no_expansion: str | None = None,
-) -> None:
-    """What the formats need of the table, checked before any work.
-
-    Parameters
-    ----------
-    formats : sequence of str
-        The formats to write.
-    name : str
-        The table's name, for the message.
-    cross_sections : bool
-        Whether the table has (will have) cross-sections.
-    density : bool
-        Whether it has (will have) a number density.
-    no_expansion : str, optional
-        Why the table has (will have) no expansion coefficients, for the
-        ``disort`` and ``libradtran`` formats' message; None: it has them.
-
-    Raises
-    ------
-    UsageError
-        A format needs what the table lacks; the message says what to give.
-    """
-    lacking = sorted(set(formats) & set(_NEEDS_CROSS_SECTIONS))
-    if lacking and not cross_sections:
-        raise UsageError(
-            f"--format {','.join(lacking)} needs cross-sections, which {name!r} does not have "
-            "(a phase function only): build a Mie or hybrid model"
-        )
-    lacking = sorted(set(formats) & {"disort", "libradtran"})
-    if lacking and no_expansion is not None:
-        raise UsageError(
-            f"--format {','.join(lacking)} needs the phase function's expansion coefficients, "
-            f"{no_expansion}"
-        )
-    lacking = sorted(set(formats) & set(_NEEDS_NUMBER_DENSITY))
-    if lacking and not density:
-        if lacking == ["cosmoscout"]:
-            raise UsageError(NEEDS_DENSITY)
-        raise UsageError(
-            f"--format {','.join(lacking)} needs a number density for the coefficients N C: "
-            "give --number-density-per-m3 (or number_density_per_m3 in a configuration)"
-        )
-
-
-def _recorded_inputs(path: Path) -> Mapping[str, Any] | None:
-    """The provenance inputs a table file or seed-CSV summary records; None if unreadable."""
-    import json
-
-    from dustoptics.io import FormatError, read_hdf5
-
-    try:
-        if path.suffix == ".json":
-            inputs = json.loads(path.read_text(encoding="utf-8"))["provenance"]["inputs"]
-        else:
-            inputs = read_hdf5(path).provenance.inputs
-    except (FormatError, OSError, ValueError, KeyError, TypeError, RecursionError):
-        return None
-    return inputs if isinstance(inputs, Mapping) else None
-
-
-def check_outputs(
-    out: Path,
-    name: str,
-    formats: Sequence[str],
-    *,
-    inputs: Mapping[str, Any],
-    force: bool,
-    what: str = "the table's name",
-) -> None:
-    """What would fail when the files are written, refused before any work.
-
-    Parameters
-    ----------
-    out : pathlib.Path
-        ``--out DIR``: the files go into ``DIR/NAME/``.
-    name : str
-        The table's name.
-    formats : sequence of str
-        The formats to write.
-    inputs : mapping
-        Inputs the table records (:attr:`~dustoptics.table.Provenance.inputs`), or
-        those known before it is computed (a configuration's); the inputs a file
-        records are compared key by key for these keys only.
-    force : bool
-        ``--force``: existing files may be replaced.
-    what : str, optional
-        What ``name`` is, for the message.
-
-    Raises
-    ------
-    ValueError
-        ``name`` is not a plain file name, leads outside ``out``, or is not usable
-        by a format that names its files by it.
-    FileExistsError
-        Without ``force``: ``DIR/NAME/NAME.nc`` or ``.h5`` or the seed CSVs'
-        ``table_summary.json`` exists for a format asked for and records other
-        inputs (or cannot be read), so the files could not be placed.
-    """
-    from dustoptics._validation import check_file_name, check_inside
-    from dustoptics.io.csv.seed import SUMMARY_FILENAME
-    from dustoptics.table import canonical_json
-
-    folder = out / check_file_name("name", name)
-    check_inside(out, folder)
-    strict = sorted(set(formats) & set(_PLAIN_NAME_FORMATS))
-    if strict and not _PLAIN_NAME.fullmatch(name):
-        raise ValueError(
-            f"{what} {name!r} is not usable as a file name by --format {','.join(strict)}: "
-            "use letters, digits, '.', '_' and '-', starting with a letter or digit"
-        )
-    if force:
-        return
-    recorded = [folder / f"{name}.nc"] if "netcdf" in formats else []
-    recorded += [folder / f"{name}.h5"] if "hdf5" in formats else []
-    recorded += [folder / SUMMARY_FILENAME] if "csv" in formats else []
-    expected = {key: canonical_json(value) for key, value in inputs.items()}
-    other = []
-    for path in recorded:
-        if not path.is_file():
-            continue
-        found = _recorded_inputs(path)
-        if found is None or any(
-            key not in found or canonical_json(found[key]) != text for key, text in expected.items()
-        ):
-            other.append(path)
-    if other:
-        raise FileExistsError(
-            "these files exist and hold another table (other inputs); use --force to replace "
-            "them, or another --out: " + ", ".join(repr(str(p)) for p in other)
-        )
+__all__ = ["NEEDS_DENSITY", "add_parser", "run", "same_table", "write_table"]
 
 
 def same_table(existing: Path, new: Path) -> bool:
@@ -230,7 +65,7 @@ def add_parser(sub: Any) -> None:
         help="output directory; files go to DIR/NAME/, NAME the table's name (as for build)",
     )
     p.add_argument("--quiet", action="store_true", help="no summary output")
-    _add_format_options(p, default=(), required=True)
+    add_format_options(p, default=(), required=True)
 
 
 def run(args: argparse.Namespace) -> int:
