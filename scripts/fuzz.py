@@ -680,8 +680,9 @@ def _threads_client() -> Any:
     return cluster, Client(cluster)
 
 
-def _timed_refusal(call: Callable[[], Any], limit_s: float = 5.0) -> Any:
-    """``call()``, which must return or refuse within ``limit_s`` (before any work)."""
+def _timed_refusal(call: Callable[[], Any], limit_s: float = 20.0) -> Any:
+    """``call()``, which must return or refuse within ``limit_s`` (before any work; a
+    million points took minutes to validate, a loaded 2-core machine takes seconds)."""
     start = time.perf_counter()
     try:
         return call()
@@ -890,8 +891,14 @@ def _store_case(workdir: Path, event: str, local: random.Random) -> str:
 
 
 def _warm_up_sweeps() -> None:
-    """Load the shared solver's kernels and Dask once, before the cases fork."""
+    """Load the shared solver's kernels, Dask and the command line once, before the
+    cases fork."""
     try:
+        import distributed  # noqa: F401
+        import xarray  # noqa: F401
+        import zarr  # noqa: F401
+
+        import dustoptics.cli
         from dustoptics.sweep.shared import solve_shared
     except ImportError:
         return

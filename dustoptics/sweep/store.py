@@ -62,8 +62,9 @@ _LARGEST_RECORD = 64 * 1024**2
 
 _NOT_COMPUTED = "is not computed (no marker)"
 
-#: Suffix of a marker being written (``.NAME.XXXXXXXX.tmp``).
-_TEMPORARY = ".tmp"
+#: Suffix of a marker being written (``.NAME.XXXXXXXX.partial``; not the set writer's
+#: ``.tmp``, which its cleanup removes whoever is writing it).
+_TEMPORARY = ".partial"
 
 
 class StoreBusyError(ValueError):
