@@ -59,6 +59,7 @@ from dustoptics.colour import channel_phase
 from dustoptics.io.shaders.common import choose_channels
 from dustoptics.io.textures.raw import (
     DEFAULT_N_ANGLES,
+    PHASE_TEXTURE_FORMAT,
     SAMPLINGS,
     _normalization_check,
     _sampling_grid,
@@ -68,16 +69,12 @@ from dustoptics.table import PHASE_NORMALIZATION
 __all__ = [
     "DEFAULT_MAX_DIMENSION",
     "LAYOUTS",
-    "PHASE_TEXTURE_FORMAT",
     "PRECISIONS",
     "PhaseTexture",
     "check_dimensions",
     "metadata_json",
     "phase_texture",
 ]
-
-#: Format name and version in every texture's metadata.
-PHASE_TEXTURE_FORMAT = "dustoptics-phase-texture/2"
 
 #: Image layouts :func:`phase_texture` makes.
 LAYOUTS = ("wavelength", "rgb")

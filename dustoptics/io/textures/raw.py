@@ -57,6 +57,7 @@ from dustoptics.table import PHASE_NORMALIZATION
 
 __all__ = [
     "DEFAULT_N_ANGLES",
+    "PHASE_TEXTURE_FORMAT",
     "SAMPLINGS",
     "TEXTURE_FORMAT",
     "TextureData",
@@ -64,6 +65,10 @@ __all__ = [
     "texture_values",
     "write_texture",
 ]
+
+#: Format name and version in the metadata of the engines' textures
+#: (:mod:`dustoptics.io.textures.phase_texture`; their ``.npy`` sidecars are read here too).
+PHASE_TEXTURE_FORMAT = "dustoptics-phase-texture/2"
 
 #: Format name and version written in every sidecar and required by the reader.
 TEXTURE_FORMAT = "dustoptics-phase-texture/1"
@@ -342,7 +347,7 @@ def read_texture(sidecar_path: str | os.PathLike[str]) -> TextureData:
 
     Both write a JSON sidecar beside the array file: :data:`TEXTURE_FORMAT`
     (this module's ``.raw`` file) or
-    :data:`~dustoptics.io.textures.phase_texture.PHASE_TEXTURE_FORMAT` (a
+    :data:`~dustoptics.io.textures.raw.PHASE_TEXTURE_FORMAT` (a
     ``.npy`` file).  The sidecar is checked whole (every entry the format
     defines, of its type), the array file's size against the sidecar's shape
     before it is read, and its SHA-256.
@@ -369,8 +374,6 @@ def read_texture(sidecar_path: str | os.PathLike[str]) -> TextureData:
         or longer than the sidecar's shape needs (e.g. a truncated download),
         or its SHA-256 differs from the sidecar's.
     """
-    from dustoptics.io.textures.phase_texture import PHASE_TEXTURE_FORMAT
-
     path = Path(sidecar_path)
     try:
         meta = load_json(path)
@@ -510,7 +513,7 @@ _NPY_HEADER_MAX = 4096
 
 
 def _read_npy(path: Path, meta: dict[str, Any]) -> TextureData:
-    """A :data:`~dustoptics.io.textures.phase_texture.PHASE_TEXTURE_FORMAT` sidecar and its ``.npy``."""
+    """A :data:`~dustoptics.io.textures.raw.PHASE_TEXTURE_FORMAT` sidecar and its ``.npy``."""
     import io
 
     dtype, sampling, layout = meta["dtype"], meta["sampling"], meta["layout"]

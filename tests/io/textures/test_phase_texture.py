@@ -27,7 +27,8 @@ from dustoptics.io import FORMATS, write
 from dustoptics.io.textures.exr import write_exr
 from dustoptics.io.textures.ktx2 import KTX2_IDENTIFIER, VK_FORMATS, write_ktx2
 from dustoptics.io.textures.npy import write_npy
-from dustoptics.io.textures.phase_texture import PHASE_TEXTURE_FORMAT, phase_texture
+from dustoptics.io.textures.phase_texture import phase_texture
+from dustoptics.io.textures.raw import PHASE_TEXTURE_FORMAT
 from dustoptics.scattering.phase import henyey_greenstein
 from dustoptics.table import Provenance, Table
 
