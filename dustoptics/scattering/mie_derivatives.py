@@ -88,6 +88,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from numba import njit
+from numpy.typing import ArrayLike
 
 from dustoptics._validation import as_float_array, check_budget, check_choice
 from dustoptics.scattering.mie import check_sphere_inputs, wiscombe_nmax
@@ -631,7 +632,7 @@ class SphereDerivatives:
         return float(value) if np.ndim(value) == 0 else value.copy()
 
 
-def sphere_derivatives(*, m: complex, x: float, mu: np.ndarray | float = 1.0) -> SphereDerivatives:
+def sphere_derivatives(*, m: complex, x: float, mu: ArrayLike = 1.0) -> SphereDerivatives:
     """Mie results of one sphere and their exact derivatives with respect to n, k and x.
 
     Parameters
