@@ -83,6 +83,24 @@ def test_sigint_while_the_package_imports_is_one_line(tmp_path):
     assert not (tmp_path / "out").exists()
 
 
+def test_sigint_during_the_first_compile_is_one_line(tmp_path):
+    """An empty numba cache: the kernels compile (tens of seconds); an interrupt there is the
+    same one line, however deep in numba and llvmlite it lands."""
+    config = tmp_path / "small.toml"
+    config.write_text(SMALL, encoding="utf-8")
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "empty-cache")}
+    proc = _command("build", str(config), "--out", str(tmp_path / "out"), env=env)
+    first = proc.stderr.readline()
+    assert first.startswith("dustoptics: compiling the Mie kernels"), first
+    time.sleep(2.0)  # well inside the compilation
+    proc.send_signal(signal.SIGINT)
+    stdout, stderr = proc.communicate(timeout=300)
+    assert proc.returncode == 130
+    lines = [line for line in stderr.splitlines() if "wavelengths" not in line]  # progress
+    assert lines == ["dustoptics: interrupted"] and stdout == "", stderr
+    assert not (tmp_path / "out").exists()
+
+
 def test_sigint_inside_numba_exits_at_once():
     """An interrupt that lands in numba or llvmlite (compiling or loading a kernel, where
     llvmlite's ctypes callbacks would swallow the exception) exits at once with the line."""
