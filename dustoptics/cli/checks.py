@@ -103,13 +103,12 @@ def check_needs(
 
 def _recorded_inputs(path: Path) -> Mapping[str, Any] | None:
     """The provenance inputs a table file or seed-CSV summary records; None if unreadable."""
-    import json
-
+    from dustoptics._files import load_json
     from dustoptics.io import FormatError, read_hdf5
 
     try:
         if path.suffix == ".json":
-            inputs = json.loads(path.read_text(encoding="utf-8"))["provenance"]["inputs"]
+            inputs = load_json(path)["provenance"]["inputs"]
         else:
             inputs = read_hdf5(path).provenance.inputs
     except (FormatError, OSError, ValueError, KeyError, TypeError, RecursionError):
@@ -184,17 +183,17 @@ def check_outputs(
             other.append(path)
     if other:
         raise FileExistsError(
-            "these files exist and hold another table (other inputs); use --force to replace "
-            "them, or another --out: " + ", ".join(repr(str(p)) for p in other)
+            "these files exist and hold another table (other inputs, or unreadable); use --force "
+            "to replace them, or another --out: " + ", ".join(repr(str(p)) for p in other)
         )
 
 
 def check_set_outputs(args: argparse.Namespace, *, dust: str, optical_depth: float) -> None:
     """A set's record that exists in ``DIR/NAME/`` with other inputs: refused before any
     work without ``--force`` (the files could not be placed)."""
-    import json
-
+    from dustoptics._files import load_json
     from dustoptics.atmosphere.build import SET_PROVENANCE_SUFFIX, set_inputs
+    from dustoptics.io import FormatError
     from dustoptics.table import canonical_json
 
     record = args.out / args.name / f"{args.name}{SET_PROVENANCE_SUFFIX}"
@@ -209,9 +208,9 @@ def check_set_outputs(args: argparse.Namespace, *, dust: str, optical_depth: flo
         wavelength_nm=args.wavelengths_nm,
     )
     try:
-        found = json.loads(record.read_text(encoding="utf-8"))["inputs"]
+        found = load_json(record)["inputs"]
         same = all(canonical_json(found.get(k)) == canonical_json(v) for k, v in expected.items())
-    except (OSError, ValueError, KeyError, TypeError, AttributeError, RecursionError):
+    except (FormatError, OSError, ValueError, KeyError, TypeError, AttributeError):
         same = False
     if not same:
         raise FileExistsError(

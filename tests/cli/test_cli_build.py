@@ -448,7 +448,7 @@ def test_an_existing_table_of_other_inputs_is_refused_before_any_work(
     _no_work(monkeypatch)
     assert run_build(other, tmp_path) == 1
     err = capsys.readouterr().err
-    assert "hold another table (other inputs); use --force" in err
+    assert "hold another table (other inputs, or unreadable); use --force" in err
     assert "small-dust.nc" in err and "table_summary.json" in err
     monkeypatch.undo()
     # The same inputs go ahead (and find the files up to date); --force replaces.

@@ -69,7 +69,7 @@ def test_export_over_another_table_is_refused_before_any_work(
     before = (out / "small-dust" / "small-dust.nc").read_bytes()
     _no_writing(monkeypatch)
     assert main(argv) == 1
-    assert "hold another table (other inputs); use --force" in capsys.readouterr().err
+    assert "hold another table (other inputs, or unreadable)" in capsys.readouterr().err
     assert (out / "small-dust" / "small-dust.nc").read_bytes() == before
     monkeypatch.undo()
     assert main([*argv, "--force"]) == 0
