@@ -747,11 +747,13 @@ def optics_derivatives(
             stacklevel=2,
         )
     positions = [order.index(p) for p in names]
+    values_of = {k: np.stack([r["values"][k] for r in per_wl]) for k in QUANTITIES}
     stacked = {
-        k: np.stack([np.stack([r["derivs"][k][j] for r in per_wl]) for j in positions])
+        k: np.array([np.stack([r["derivs"][k][j] for r in per_wl]) for j in positions]).reshape(
+            (len(positions), *values_of[k].shape)
+        )
         for k in QUANTITIES
     }
-    values_of = {k: np.stack([r["values"][k] for r in per_wl]) for k in QUANTITIES}
     param_values = np.array(
         [
             m_all.real

@@ -277,6 +277,9 @@ def test_errors_name_the_parameter() -> None:
         optics_derivatives(1.5, d, [550.0], [0.0], parameters="n")
     with pytest.raises(ValueError, match="weighting"):
         optics_derivatives(1.5, d, [550.0], [0.0], weighting="area")
+    none = optics_derivatives(1.5 + 0.01j, d, [550.0], [0.0, 90.0], parameters=())
+    assert none.parameters == () and none.derivative_error_estimate.shape == (0, 1)
+    assert none.phase.shape == (1, 2)
     r = optics_derivatives(1.5 + 0.01j, d, [550.0], [0.0], parameters=("k",))
     with pytest.raises(ValueError, match="parameter must be one of 'k'"):
         r.derivative("g", "n")
