@@ -108,7 +108,7 @@ def test_cli_build_refuses_before_computing(
     code = main(["build", "blue-moons", "--out", str(tmp_path), "--format", "disort", "--quiet"])
     assert code == 2
     err = capsys.readouterr().err
-    assert "expansion=True" in err and "export FILE --format disort" in err
+    assert "optics.expansion" in err and "presets --show blue-moons" in err
     assert list(tmp_path.iterdir()) == []
 
 
