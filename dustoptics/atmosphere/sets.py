@@ -186,8 +186,8 @@ class Atmosphere:
         ``n - 1`` of the air at the ground (CosmoScout's ``ior``, for
         refraction), at 550 nm. [-]
     n_altitudes : int
-        Samples of each density profile, evenly spaced from the ground to the
-        top (CosmoScout's default 1024).
+        Samples of each density profile in CosmoScout VR's density file
+        (its default 1024), at the texel centres :attr:`density_altitudes_m`.
     """
 
     name: str
@@ -243,6 +243,19 @@ class Atmosphere:
         return self.atmosphere_radius_m - self.planet_radius_m
 
     @property
+    def density_altitudes_m(self) -> np.ndarray:
+        """Altitudes of the density samples: the texel centres ``(i + 1/2) T / N``. [m]
+
+        CosmoScout VR's preprocessor puts the N values of a density file into
+        a linearly filtered texture that spans the thickness ``T`` and reads
+        it at ``u = altitude / T``, so value ``i`` stands at the centre of
+        texel ``i``; samples taken there are read back where they belong
+        (samples at ``i T / (N - 1)`` would be read half a texel too high).
+        """
+        n = self.n_altitudes
+        return (np.arange(n) + 0.5) * (self.thickness_m / n)
+
+    @property
     def wavelength_nm(self) -> np.ndarray:
         """The shared wavelengths. [nm]"""
         return self.constituents[0].table.wavelength_nm
@@ -261,16 +274,20 @@ class Atmosphere:
     def cosmoscout_constituents(self) -> dict[str, tuple[Table, np.ndarray]]:
         """Mapping for :func:`~dustoptics.io.csv.cosmoscout.write_cosmoscout_set`.
 
-        Each profile is sampled at :attr:`n_altitudes` evenly spaced altitudes
-        from the ground to the top and rescaled to a largest sample of 1; the
-        table's number density is multiplied by the same factor, so ``beta``
-        times the written density is the constituent's coefficient at every
-        sampled altitude.
+        Each profile is sampled at the :attr:`n_altitudes` texel centres
+        :attr:`density_altitudes_m` (where CosmoScout VR's preprocessor reads
+        the values) and rescaled to a largest sample of 1; the table's number
+        density is multiplied by the same factor, so ``beta`` times the written
+        density is the constituent's coefficient at every sampled altitude.
         """
         out: dict[str, tuple[Table, np.ndarray]] = {}
+        half_texel = 0.5 * self.thickness_m / self.n_altitudes
         for c in self.constituents:
             s = sample_profile(
-                c.profile, top_altitude_m=self.thickness_m, n_altitudes=self.n_altitudes
+                c.profile,
+                bottom_altitude_m=half_texel,
+                top_altitude_m=self.thickness_m - half_texel,
+                n_altitudes=self.n_altitudes,
             )
             table = c.table
             if s.peak != 1.0:

@@ -5,18 +5,20 @@ CosmoScout VR's Bruneton atmosphere loads each constituent of an atmosphere
 reader rules in the project brief, section 7):
 
 ``<name>_phase.csv``
-    Header ``lambda,0.0,1.0,...,180.0``; one row per wavelength: lambda [m],
-    then the phase function [sr^-1] at ``n_theta`` evenly spaced angles from
-    0 to 180 deg (default 181), normalized to 1 over the sphere.
+    Header ``lambda`` then the ``n_theta`` angles [deg]; one row per
+    wavelength: lambda [m], then the phase function [sr^-1], normalized to 1
+    over the sphere, at the texel centres ``(j + 1/2) 180 / n_theta`` deg
+    (below).
 ``<name>_scattering.csv``
     Header ``lambda,beta_sca``; lambda [m] and the scattering coefficient
     [m^-1] at the peak number density.
 ``<name>_absorption.csv``
     Header ``lambda,beta_abs``; the absorption coefficient [m^-1].
 ``<name>_density.csv``
-    A header line, then one relative density [-] per line at evenly spaced
-    altitudes from the ground to the top of the atmosphere; the largest is
-    exactly 1, so beta times this profile is the coefficient at each altitude.
+    A header line, then one relative density [-] per line, value ``i`` of
+    ``N`` at the altitude ``(i + 1/2) T / N`` above the ground (``T`` the
+    thickness of the atmosphere; below); the largest is exactly 1, so beta
+    times this profile is the coefficient at each altitude.
 
 CosmoScout's reader skips the first line of each file, splits lines on commas,
 reads lambda as a 32-bit float times 1e9 (nm), and demands exactly the same
@@ -29,6 +31,34 @@ A constituent that does not scatter (``csca`` zero at every wavelength, e.g.
 ozone, which only absorbs) gets no phase and no scattering file: CosmoScout
 configures such a constituent (its ozone) with only absorption and density
 files, and a phase function of a non-scattering medium is undefined.
+
+Where the preprocessor reads the values (CosmoScout VR at commit
+e59005a3bbea2426c841f30da6cb35a4d313455e, whose ``bruneton-preprocessor``
+files are those of release v1.10.0; ``Preprocessor.cpp`` and
+``csp-atmosphere-preprocessing-functions.glsl``): the N values of a density
+file fill a linearly filtered texture spanning the atmosphere, read at
+``u = altitude / T``, and the n columns of a phase file fill one read at
+``u = acos(nu) / pi``; with no half-texel correction, value ``i`` stands at
+the centre of texel ``i``.  Sampling the profile at ``i T / (N - 1)`` and the
+phase function at ``j 180 / (n - 1)`` (the layout of CosmoScout's own
+scattering-table generator) shifts both by up to half a texel: the column of
+an exponential layer of scale height ``H`` comes out ``(T/2 - H) / (N H)`` too
+large (0.4 % for the Martian dust at N = 1024), and the dust's forward peak is
+stretched so that its integral over the sphere is 1.088 at 561 nm with 181
+columns (1.008 with 1801).  This module therefore writes both at the texel
+centres: density value ``i`` at ``(i + 1/2) T / N`` (the profile sampled there by
+:meth:`~dustoptics.atmosphere.sets.Atmosphere.cosmoscout_constituents`),
+phase column ``j`` at ``(j + 1/2) 180 / n`` deg, the angles stated in the
+header (the preprocessor does not parse it).  Molecules and aerosols get the
+same angles, as the preprocessor requires.  :func:`read_cosmoscout_constituent`
+returns the header's angles, and :func:`check_cosmoscout_set` accepts both
+layouts (texel centres, or 0 to 180 deg with both ends).
+
+The whole set (:func:`write_atmosphere`) comes with the preprocessor's
+settings (:func:`settings_json`): every sampling option it reads, chosen for
+the set by :mod:`dustoptics.io.engines.cosmoscout_preprocessor`, and file
+names that resolve wherever it runs (absolute paths; it opens them relative
+to its working directory, which must be CosmoScout's root).
 """
 
 from __future__ import annotations
@@ -40,7 +70,7 @@ import re
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -51,10 +81,14 @@ from dustoptics.io._atomic import FormatError, check_targets, file_set, write_fi
 from dustoptics.io._text import floats, number, parse, read_rows
 from dustoptics.table import Table
 
+if TYPE_CHECKING:
+    from dustoptics.io.engines.cosmoscout_preprocessor import CosmoScoutSampling
+
 __all__ = [
     "COSMOSCOUT_KINDS",
     "CosmoScoutConstituent",
     "check_cosmoscout_set",
+    "cosmoscout_phase_angles",
     "cosmoscout_wavelength_text",
     "read_cosmoscout_constituent",
     "settings_json",
@@ -93,7 +127,9 @@ class CosmoScoutConstituent:
     beta_abs_per_m : numpy.ndarray, shape (n_wavelength,)
         Absorption coefficient at the peak density. [m^-1]
     density : numpy.ndarray, shape (n_altitude,)
-        Relative density at evenly spaced altitudes, maximum 1. [-]
+        Relative density, value ``i`` of ``N`` at ``(i + 1/2) T / N`` above the
+        ground of an atmosphere of thickness ``T`` (where the preprocessor
+        reads it), maximum 1. [-]
     """
 
     name: str
@@ -121,6 +157,19 @@ def cosmoscout_wavelength_text(wavelength_nm: float) -> str:
     return format(value, "e")
 
 
+def cosmoscout_phase_angles(n_theta: int) -> np.ndarray:
+    """Angles of the phase columns: the texel centres ``(j + 1/2) 180 / n_theta``. [deg]
+
+    Where the preprocessor's linearly filtered phase texture, read at
+    ``u = acos(nu) / pi``, puts column ``j`` (module docstring).
+
+    >>> cosmoscout_phase_angles(4).tolist()
+    [22.5, 67.5, 112.5, 157.5]
+    """
+    n = _check_n_theta(n_theta)
+    return (np.arange(n) + 0.5) * (180.0 / n)
+
+
 def _check_name(name: Any) -> str:
     if not isinstance(name, str) or not _NAME.fullmatch(name):
         raise ValueError(
@@ -133,7 +182,7 @@ def _check_name(name: Any) -> str:
 def _check_n_theta(n_theta: Any) -> int:
     if isinstance(n_theta, bool) or not isinstance(n_theta, (int, np.integer)) or n_theta < 2:
         raise ValueError(
-            f"n_theta must be an integer >= 2 (angles from 0 to 180 deg); got {n_theta!r}"
+            f"n_theta must be an integer >= 2 (phase columns over 0 to 180 deg); got {n_theta!r}"
         )
     return int(n_theta)
 
@@ -184,7 +233,7 @@ def _constituent_files(
     assert table.csca_um2 is not None  # checked by _check_density's caller
     scatters = bool(np.any(table.csca_um2 > 0))
     if scatters:
-        theta = np.linspace(0.0, 180.0, n_theta)
+        theta = cosmoscout_phase_angles(n_theta)
         phase = table.phase_at(theta)
         header = "lambda," + ",".join(number(t) for t in floats("theta_deg", theta))
         rows = [header]
@@ -229,11 +278,15 @@ def write_cosmoscout_constituent(
         Constituent name, the prefix of the file names (letters, digits,
         ``.``, ``_``, ``-``).
     density : array_like, shape (n_altitude,)
-        Relative density at evenly spaced altitudes from the ground to the
-        top of the atmosphere: finite, >= 0, maximum exactly 1. [-]
+        Relative density, value ``i`` of ``N`` at the altitude
+        ``(i + 1/2) T / N`` above the ground of an atmosphere of thickness
+        ``T``, where CosmoScout's preprocessor reads it (module docstring;
+        :attr:`~dustoptics.atmosphere.sets.Atmosphere.density_altitudes_m`):
+        finite, >= 0, maximum exactly 1. [-]
     n_theta : int, optional
-        Number of evenly spaced phase-function angles from 0 to 180 deg.
-        Default 181 (1 deg steps, CosmoScout's default).
+        Number of phase-function columns, at the texel centres
+        ``(j + 1/2) 180 / n_theta`` deg (:func:`cosmoscout_phase_angles`).
+        Default 181.
     overwrite : bool, optional
         Replace existing files.  Default False.
 
@@ -256,11 +309,12 @@ def write_cosmoscout_constituent(
     -----
     The phase function is resampled from the table's angle grid with
     :meth:`~dustoptics.table.Table.phase_at` (linear in angle, as a renderer
-    interpolates it).  When the ``n_theta`` angles are a subset of the
-    table's grid (e.g. 181 angles from a table on 1,801 angles), the written
-    values are the table's own values, exactly.  Otherwise they are linear
-    interpolates, and the resampled function's normalization can differ from
-    1 by the interpolation error; it is not renormalized.
+    interpolates it) at the texel centres; the values are not renormalized.
+    As the preprocessor interpolates them (linear between the centres,
+    constant within half a column of 0 and 180 deg), the Martian dust's phase
+    function integrates over the sphere to within 0.7 % of 1 with 181
+    columns, 0.18 % with 361 and 0.05 % with 721 (at 427 nm, the narrowest
+    forward peak of CosmoScout's wavelengths).
     """
     files = _constituent_files(
         table,
@@ -290,7 +344,8 @@ def write_cosmoscout_set(
         :func:`write_cosmoscout_constituent`.  All tables must have identical
         wavelengths (CosmoScout demands the same wavelengths in every file).
     n_theta : int, optional
-        Number of phase-function angles from 0 to 180 deg.  Default 181.
+        Number of phase-function columns (:func:`cosmoscout_phase_angles`).
+        Default 181.
     overwrite : bool, optional
         Replace existing files.  Default False.
 
@@ -472,10 +527,15 @@ def read_cosmoscout_constituent(
         theta = np.array(
             [parse(paths["phase"], 1, f"{j} (header)", c) for j, c in enumerate(head[1:], 2)]
         )
-        expected = np.linspace(0.0, 180.0, theta.size)
-        if not np.allclose(theta, expected, rtol=0, atol=1e-9):
+        centres = (np.arange(theta.size) + 0.5) * (180.0 / theta.size)
+        ends = np.linspace(0.0, 180.0, theta.size)
+        if not (
+            np.allclose(theta, centres, rtol=0, atol=1e-9)
+            or np.allclose(theta, ends, rtol=0, atol=1e-9)
+        ):
             raise FormatError(
-                f"{paths['phase']}: header angles must be {theta.size} evenly spaced values from 0 to "
+                f"{paths['phase']}: header angles must be the {theta.size} texel centres "
+                f"(j + 1/2) 180 / {theta.size} deg or {theta.size} evenly spaced values from 0 to "
                 f"180 deg; got {theta.tolist()}"
             )
         same_wavelengths(paths["phase"], data[:, 0])
@@ -521,7 +581,9 @@ def check_cosmoscout_set(directory: str | os.PathLike[str]) -> list[str]:
     The rules (project brief, section 7): the first line of every file is a
     header and is skipped; lines are split on commas; every data line of a
     phase file has 1 + n_theta cells (lambda, then one value per header
-    angle, angles evenly spaced from 0 to 180 deg), of a scattering or
+    angle; the angles are the texel centres ``(j + 1/2) 180 / n_theta`` deg,
+    or, as other writers lay them out, evenly spaced from 0 to 180 deg), of a
+    scattering or
     absorption file 2 cells, of a density file 1 cell; lambda, read as a
     32-bit float times 1e9, gives exactly the same wavelengths in every file
     of the set (all constituents); each constituent has an absorption and a
@@ -595,48 +657,89 @@ def check_cosmoscout_set(directory: str | os.PathLike[str]) -> list[str]:
 # ---------------------------------------------------------------- whole atmospheres
 
 
-def settings_json(atmosphere: Atmosphere, *, path_prefix: str = "") -> str:
-    """CosmoScout VR's Bruneton-preprocessor settings for the atmosphere.
+def settings_json(
+    atmosphere: Atmosphere,
+    *,
+    directory: str | os.PathLike[str] = ".",
+    path_prefix: str | None = None,
+    sampling: CosmoScoutSampling | None = None,
+) -> str:
+    """CosmoScout VR's Bruneton-preprocessor input for the atmosphere.
 
     Parameters
     ----------
     atmosphere : Atmosphere
         The atmosphere.
+    directory : path-like, default "."
+        Where the set's CSV files are: the file names are their absolute paths
+        (this directory resolved against the current working directory), which
+        the preprocessor opens from wherever it runs.
     path_prefix : str, optional
-        Prepended to every file name (e.g. the directory of the set as seen
-        from where the preprocessor runs, ending in ``/``).  Default: bare
-        file names, relative to the directory of the set.
+        Instead, prepend this text to the bare file names, verbatim.  The
+        preprocessor opens the names relative to its working directory, which
+        must be CosmoScout VR's repository root (it loads its shaders from
+        there), so a relative prefix is a path from that root (e.g.
+        ``"plugins/csp-atmospheres/data/mars/"``).
+    sampling : CosmoScoutSampling, optional
+        The sampling options
+        (:func:`~dustoptics.io.engines.cosmoscout_preprocessor.cosmoscout_sampling`,
+        which also takes options of your own and refuses those the set cannot
+        live with); default chosen for the set at a tolerance of 0.5 %.
 
     Returns
     -------
     str
         JSON text (2-space indent, fixed key order, trailing newline):
         ``sunDistance`` [m], ``minAltitude`` and ``maxAltitude`` (the planet
-        and atmosphere radii [m], as CosmoScout names them), ``molecules``,
-        ``aerosols`` (``phase``, ``betaSca``, ``betaAbs``, ``density`` files),
-        ``ozone`` (``betaAbs``, ``density``) when present, and ``ior``
-        (``n - 1``).  The preprocessor's sampling settings are left to its
-        defaults.
+        and atmosphere radii [m], as CosmoScout names them), ``ior``
+        (``n - 1``), ``molecules``, ``aerosols`` (``phase``, ``betaSca``,
+        ``betaAbs``, ``density`` files), ``ozone`` (``betaAbs``, ``density``)
+        when present, then every sampling option the preprocessor reads
+        (``refraction``, ``groundAlbedo``, ``multiScatteringOrder``, the step
+        sizes [m] and sample counts, the texture sizes, ``maxSunZenithAngle``
+        [rad]), and ``dustoptics``: why each was chosen and the errors they
+        leave (the preprocessor ignores keys it does not read).
     """
+    from dustoptics.io.engines.cosmoscout_preprocessor import (
+        CosmoScoutSampling,
+        cosmoscout_sampling,
+    )
+
     if not isinstance(atmosphere, Atmosphere):
         raise TypeError(f"atmosphere must be an Atmosphere; got {type(atmosphere).__name__}")
+    if sampling is None:
+        sampling = cosmoscout_sampling(atmosphere)
+    elif not isinstance(sampling, CosmoScoutSampling):
+        raise TypeError(f"sampling must be a CosmoScoutSampling; got {type(sampling).__name__}")
+    if path_prefix is not None and not isinstance(path_prefix, str):
+        raise TypeError(f"path_prefix must be a string or None; got {path_prefix!r}")
+    root = Path(os.fspath(directory)).resolve()
+
+    def name(role: str, kind: str) -> str:
+        file = f"{atmosphere.file_prefix(role)}_{kind}.csv"
+        return path_prefix + file if path_prefix is not None else str(root / file)
+
     data: dict[str, Any] = {
         "sunDistance": atmosphere.sun_distance_m,
         "minAltitude": atmosphere.planet_radius_m,
         "maxAltitude": atmosphere.atmosphere_radius_m,
+        "ior": atmosphere.refractivity,
     }
     for c in atmosphere.constituents:
-        p = path_prefix + atmosphere.file_prefix(c.role)
         if c.role == "ozone":
-            data["ozone"] = {"betaAbs": f"{p}_absorption.csv", "density": f"{p}_density.csv"}
+            data["ozone"] = {
+                "betaAbs": name(c.role, "absorption"),
+                "density": name(c.role, "density"),
+            }
         else:
             data[c.role] = {
-                "phase": f"{p}_phase.csv",
-                "betaSca": f"{p}_scattering.csv",
-                "betaAbs": f"{p}_absorption.csv",
-                "density": f"{p}_density.csv",
+                "phase": name(c.role, "phase"),
+                "betaSca": name(c.role, "scattering"),
+                "betaAbs": name(c.role, "absorption"),
+                "density": name(c.role, "density"),
             }
-    data["ior"] = atmosphere.refractivity
+    data.update(sampling.settings)
+    data["dustoptics"] = sampling.to_dict()
     return json.dumps(data, indent=2, allow_nan=False) + "\n"
 
 
@@ -644,11 +747,17 @@ def write_atmosphere(
     atmosphere: Atmosphere,
     directory: str | os.PathLike[str],
     *,
-    n_theta: int = 181,
+    n_theta: int = 721,
     overwrite: bool = False,
-    path_prefix: str = "",
+    path_prefix: str | None = None,
+    sampling: CosmoScoutSampling | None = None,
 ) -> list[Path]:
-    """Write CosmoScout VR's CSV set and ``<name>_settings.json``.
+    """Write CosmoScout VR's CSV set and ``<name>_settings.json``, the preprocessor's input.
+
+    Run the preprocessor from CosmoScout VR's repository root,
+    ``bruneton-preprocessor <directory>/<name>_settings.json <output>``, and
+    point the plugin's ``dataDirectory`` at ``<output>``
+    (``docs/howto/renderer.rst`` has the recipe).
 
     Parameters
     ----------
@@ -656,11 +765,15 @@ def write_atmosphere(
         The atmosphere.
     directory : path-like
         Output directory (created if missing).
-    n_theta : int, default 181
-        Phase-function angles from 0 to 180 deg.
+    n_theta : int, default 721
+        Phase-function columns (:func:`cosmoscout_phase_angles`; 721 keeps the
+        Martian dust's integral over the sphere, as the preprocessor
+        interpolates it, within 0.05 % of 1).
     overwrite : bool, default False
         Replace existing files.
     path_prefix : str, optional
+        See :func:`settings_json` (default: absolute paths of the files written).
+    sampling : CosmoScoutSampling, optional
         See :func:`settings_json`.
 
     Returns
@@ -677,7 +790,7 @@ def write_atmosphere(
     root = Path(directory)
     settings_path = root / f"{atmosphere.name}_settings.json"
     check_targets([settings_path], overwrite=overwrite)
-    text = settings_json(atmosphere, path_prefix=path_prefix)
+    text = settings_json(atmosphere, directory=root, path_prefix=path_prefix, sampling=sampling)
     # One set: the CSV files and the settings appear together or not at all.
     with file_set(root, overwrite=overwrite):
         written = write_cosmoscout_set(

@@ -4,6 +4,10 @@
   atmospheric scattering (2017) for a whole atmosphere
   (:func:`~dustoptics.io.engines.bruneton.write_bruneton`) or, as the ``bruneton``
   format, one aerosol table's Mie part and phase-function snippet.
+- :mod:`~dustoptics.io.engines.cosmoscout_preprocessor`: every sampling option of CosmoScout
+  VR's ``bruneton-preprocessor`` chosen for a set, and its transmittance quadrature.
+- :mod:`~dustoptics.io.engines.precomputation`: the orders, NU size and scattering-density
+  directions a Bruneton-style precomputation needs for a set (both engines use them).
 - :mod:`~dustoptics.io.engines.fit`: fitted analytic phase-function parameters
   (:mod:`dustoptics.scattering.fit`) as JSON and as GLSL, HLSL and WGSL constants
   (:func:`~dustoptics.io.engines.fit.write_fit`).
@@ -11,6 +15,6 @@
 
 from __future__ import annotations
 
-from dustoptics.io.engines import bruneton, fit
+from dustoptics.io.engines import bruneton, cosmoscout_preprocessor, fit, precomputation
 
-__all__ = ["bruneton", "fit"]
+__all__ = ["bruneton", "cosmoscout_preprocessor", "fit", "precomputation"]

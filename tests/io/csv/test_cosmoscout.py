@@ -112,9 +112,12 @@ def test_set_passes_the_reader_rules(aerosols, ozone, tmp_path):
 def test_headers_and_wavelength_text(aerosols, tmp_path):
     write_cosmoscout_constituent(aerosols, tmp_path, name="dust", density=DENSITY)
     phase = (tmp_path / "dust_phase.csv").read_text().splitlines()
-    assert phase[0] == "lambda," + ",".join(
-        f"{t:.1f}" for t in range(181)
-    )  # lambda,0.0,1.0,...,180.0
+    # The texel centres (j + 1/2) 180 / 181 deg, where CosmoScout's preprocessor reads column j.
+    header = phase[0].split(",")
+    assert header[0] == "lambda" and len(header) == 182
+    np.testing.assert_array_equal(
+        [float(c) for c in header[1:]], (np.arange(181) + 0.5) * (180.0 / 181)
+    )
     assert [row.split(",")[0] for row in phase[1:]] == ["4.4e-7", "5.5e-7", "6.8e-7"]
     assert (tmp_path / "dust_scattering.csv").read_text().splitlines()[0] == "lambda,beta_sca"
     assert (tmp_path / "dust_absorption.csv").read_text().splitlines()[0] == "lambda,beta_abs"
@@ -132,18 +135,32 @@ def test_beta_is_number_density_times_cross_section(aerosols, tmp_path):
     np.testing.assert_array_equal(back.density, DENSITY)  # repr text: exact
 
 
-def test_phase_on_a_subset_grid_is_exact(aerosols, tmp_path):
-    write_cosmoscout_constituent(aerosols, tmp_path, name="dust", density=DENSITY)
+def test_phase_at_the_texel_centres(aerosols, tmp_path):
+    write_cosmoscout_constituent(aerosols, tmp_path, name="dust", density=DENSITY, n_theta=4)
     back = read_cosmoscout_constituent(tmp_path, "dust")
-    np.testing.assert_array_equal(back.theta_deg, np.linspace(0.0, 180.0, 181))
-    np.testing.assert_array_equal(back.phase, aerosols.phase[:, ::2])  # 1 deg of a 0.5 deg grid
+    # 4 columns of a texture over 0-180 deg: centres at 22.5, 67.5, 112.5, 157.5 deg.
+    np.testing.assert_array_equal(back.theta_deg, [22.5, 67.5, 112.5, 157.5])
+    # On the table's 0.5 deg grid 22.5 and 67.5 ... are nodes: the table's own values.
+    np.testing.assert_array_equal(back.phase, aerosols.phase[:, [45, 135, 225, 315]])
 
 
 def test_other_angle_counts_interpolate_linearly(aerosols, tmp_path):
     write_cosmoscout_constituent(aerosols, tmp_path, name="dust", density=DENSITY, n_theta=7)
     back = read_cosmoscout_constituent(tmp_path, "dust")
-    np.testing.assert_array_equal(back.theta_deg, [0.0, 30.0, 60.0, 90.0, 120.0, 150.0, 180.0])
+    np.testing.assert_allclose(back.theta_deg, (np.arange(7) + 0.5) * 180.0 / 7, rtol=1e-15)
     np.testing.assert_array_equal(back.phase, aerosols.phase_at(back.theta_deg))
+
+
+def test_the_reader_takes_both_layouts(aerosols, tmp_path):
+    # Other writers (CosmoScout's scattering-table generator) put the angles 0..180 deg.
+    write_cosmoscout_constituent(aerosols, tmp_path, name="dust", density=DENSITY, n_theta=7)
+    path = tmp_path / "dust_phase.csv"
+    lines = path.read_text().splitlines()
+    lines[0] = "lambda,0,30,60,90,120,150,180"
+    path.write_text("\n".join(lines) + "\n")
+    back = read_cosmoscout_constituent(tmp_path, "dust")
+    np.testing.assert_array_equal(back.theta_deg, [0.0, 30.0, 60.0, 90.0, 120.0, 150.0, 180.0])
+    assert check_cosmoscout_set(tmp_path) == ["dust"]
 
 
 def test_non_scattering_constituent_has_no_phase_file(ozone, tmp_path):
@@ -281,8 +298,8 @@ def _edit(path, change) -> None:
         ),
         (
             "aerosols_phase.csv",
-            lambda t: t.replace("lambda,0.0,1.0,", "lambda,0.0,1.5,", 1),
-            "evenly spaced",
+            lambda t: t.replace("lambda,0.4972", "lambda,0.6", 1),
+            "texel centres",
         ),
         (
             "aerosols_scattering.csv",
