@@ -960,16 +960,18 @@ def _kill_case(workdir: Path, route: str, step: int, formats: tuple[str, ...]) -
         return _snapshot(where / "fuzz")
 
     expect = {k: files(t, workdir / f"ref-{k}") for k, t in (("old", old), ("new", new))}
+    out, scratch = workdir / "out", workdir / "scratch"
+    if route != "a new set":
+        place_table(old, out, formats)
+        shutil.copytree(out, scratch)
+    # The steps of the same write on a copy (files that are already the same are not moved).
     seen: list[str] = []
     _atomic._STEP_HOOK = seen.append
     try:
-        place_table(new, workdir / "scratch", formats, force=True)
+        place_table(new, scratch, formats, force=True)
     finally:
         _atomic._STEP_HOOK = None
     k = step % len(seen)
-    out = workdir / "out"
-    if route != "a new set":
-        place_table(old, out, formats)
     pid = os.fork()
     if pid == 0:  # pragma: no cover - the killed writer
         count = iter(range(10**6))
