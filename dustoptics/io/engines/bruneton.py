@@ -30,8 +30,15 @@ function with the one-line change his ``MiePhaseFunction`` needs:
 
 replacing the Cornette-Shanks function of ``atmosphere/functions.glsl`` (its
 callers multiply the result by a ``vec3`` of Mie scattering, so a ``vec3``
-of the three channels fits them), with the snippet placed before it (e.g.
-prepended to the shader header his ``Model`` builds).  The snippet's channels
+of the three channels fits them).  The snippet goes in ``functions.glsl``
+immediately above ``MiePhaseFunction`` (its line 744 at d9954923), where his
+Makefile turns the file into ``functions.glsl.inc``; there every program his
+``Model`` compiles sees it.  The other place that works is the header
+``model.cc`` builds (``glsl_header_factory_``), right after its
+``"#version 330\n"`` line, which must stay first (so the snippet cannot be
+"prepended" to that header).  Either way his ``atmosphere/reference``
+C++ build, which includes ``functions.glsl`` as C++, no longer compiles; the
+demo and the ``Model`` do.  The snippet's channels
 are his rendering wavelengths ``kLambdaR, kLambdaG, kLambdaB`` = 680, 550,
 440 nm, which are also the precomputation's wavelengths when
 ``num_precomputed_wavelengths <= 3``.  With more precomputed wavelengths (his
@@ -40,6 +47,21 @@ them the 680/550/440 nm channels: use 3, or keep his Cornette-Shanks
 function with ``mie_phase_function_g``, which is fitted here to the dust's
 phase function at 550 nm (:mod:`dustoptics.scattering.fit`; its errors are
 in the JSON).
+
+What his precomputation must use for the set is chosen by
+:func:`dustoptics.io.engines.precomputation.precomputation_sampling` at his
+three wavelengths and stated in both files (JSON ``precomputation``; C++
+constants ``kScatteringTextureNuSize``, ``kNumScatteringOrders``,
+``kScatteringDensitySampleCount``): ``SCATTERING_TEXTURE_NU_SIZE`` in
+``atmosphere/constants.h``, ``Init(K)``, the scattering-density
+``SAMPLE_COUNT`` of ``ComputeScatteringDensity`` in ``functions.glsl`` (16 in
+his file), ``combine_scattering_textures = false`` (his combined texture keeps
+only the red channel of single Mie scattering and rebuilds green and blue
+from a Rayleigh-shaped spectrum, which a dust sky does not have) and three
+precomputed wavelengths.  The C++ header checks the NU size against
+``constants.h`` when that file is included first (``static_assert``).
+A value given that the set cannot live with (e.g. ``nu_size=8`` for dust) is
+refused before anything is written, with the smallest that does.
 
 Choices not in the atmosphere, with their defaults (Bruneton's demo
 ``atmosphere/demo/demo.cc``): ground albedo 0.1, maximum Sun zenith angle
@@ -79,6 +101,11 @@ from dustoptics.atmosphere.column import (
 )
 from dustoptics.io import register_format
 from dustoptics.io._atomic import write_files
+from dustoptics.io.engines.precomputation import (
+    BRUNETON_DEFAULTS,
+    PrecomputationSampling,
+    precomputation_sampling,
+)
 from dustoptics.io.shaders.glsl import glsl_snippet
 
 __all__ = [
@@ -91,6 +118,8 @@ __all__ = [
     "bruneton_mie",
     "bruneton_parameters",
     "bruneton_phase_glsl",
+    "bruneton_precomputation",
+    "bruneton_precomputation_dict",
     "write_bruneton",
 ]
 
@@ -511,6 +540,101 @@ def bruneton_parameters(
     )
 
 
+def bruneton_precomputation(
+    atmosphere: Any,
+    *,
+    tolerance: float = 0.005,
+    nu_size: int | None = None,
+    num_scattering_orders: int | None = None,
+    scattering_density_sample_count: int | None = None,
+) -> PrecomputationSampling:
+    """NU size, orders and scattering-density directions his precomputation needs for the set.
+
+    :func:`~dustoptics.io.engines.precomputation.precomputation_sampling` at
+    his three wavelengths 680, 550, 440 nm (``num_precomputed_wavelengths =
+    3``).  A value given is checked, not chosen: one below what the set needs
+    raises ``ValueError`` naming the smallest that does.
+
+    Parameters
+    ----------
+    atmosphere : dustoptics.atmosphere.sets.Atmosphere
+    tolerance : float, default 0.005
+        Error allowed to the orders and to the scattering-density rule. [-]
+    nu_size, num_scattering_orders, scattering_density_sample_count : int, optional
+        ``SCATTERING_TEXTURE_NU_SIZE``, ``Init(K)`` and ``SAMPLE_COUNT`` of
+        ``ComputeScatteringDensity`` to use instead of the chosen ones.
+
+    Returns
+    -------
+    PrecomputationSampling
+    """
+    return precomputation_sampling(
+        atmosphere,
+        tolerance=tolerance,
+        wavelength_nm=BRUNETON_CHANNELS_NM,
+        nu_size=nu_size,
+        num_scattering_orders=num_scattering_orders,
+        scattering_density_sample_count=scattering_density_sample_count,
+    )
+
+
+def bruneton_precomputation_dict(sampling: PrecomputationSampling) -> dict[str, Any]:
+    """The ``precomputation`` section of the JSON: each value, where it goes, why.
+
+    Returns
+    -------
+    dict
+        His names (``constants.h``: texture sizes; ``Init``; ``functions.glsl``:
+        ``SAMPLE_COUNT`` of ``ComputeScatteringDensity``; the ``Model``
+        arguments ``num_precomputed_wavelengths``, ``combine_scattering_textures``,
+        ``half_precision``), the place of the phase snippet, and the rules'
+        errors (:meth:`PrecomputationSampling.to_dict`).
+    """
+    sizes = dict(BRUNETON_DEFAULTS)
+    sizes["scattering_texture_nu_size"] = sampling.scattering_texture_nu_size
+    sizes["scattering_texture_mu_s_size"] = sampling.scattering_texture_mu_s_size
+    return {
+        "constants.h": {
+            "TRANSMITTANCE_TEXTURE_WIDTH": sizes["transmittance_texture_width"],
+            "TRANSMITTANCE_TEXTURE_HEIGHT": sizes["transmittance_texture_height"],
+            "SCATTERING_TEXTURE_R_SIZE": sizes["scattering_texture_r_size"],
+            "SCATTERING_TEXTURE_MU_SIZE": sizes["scattering_texture_mu_size"],
+            "SCATTERING_TEXTURE_MU_S_SIZE": sizes["scattering_texture_mu_s_size"],
+            "SCATTERING_TEXTURE_NU_SIZE": sizes["scattering_texture_nu_size"],
+            "IRRADIANCE_TEXTURE_WIDTH": sizes["irradiance_texture_width"],
+            "IRRADIANCE_TEXTURE_HEIGHT": sizes["irradiance_texture_height"],
+        },
+        "scattering_texture_nu_size": sampling.scattering_texture_nu_size,
+        "num_scattering_orders": sampling.num_scattering_orders,
+        "init": f"model->Init({sampling.num_scattering_orders})",
+        "scattering_density_sample_count": sampling.scattering_density_sample_count,
+        "functions.glsl": {
+            "ComputeScatteringDensity SAMPLE_COUNT": sampling.scattering_density_sample_count,
+            "where": "const int SAMPLE_COUNT = 16; in ComputeScatteringDensity (line 1187 at "
+            "d9954923): S zenith x 2S azimuth incident directions",
+            "mie phase function": "paste <name>_bruneton_mie_phase.glsl immediately above "
+            "'InverseSolidAngle MiePhaseFunction(Number g, Number nu) {' (line 744) and replace "
+            f"that function by the line '{_ONE_LINE_CHANGE}'; or insert the snippet into the "
+            'header model.cc builds, right after its "#version 330\\n" line',
+        },
+        "model_arguments": {
+            "num_precomputed_wavelengths": 3,
+            "combine_scattering_textures": False,
+            "half_precision": False,
+        },
+        "why": {
+            "combine_scattering_textures": "false: the combined texture keeps only the red "
+            "channel of single Mie scattering and extrapolates green and blue with the Rayleigh "
+            "spectrum of the multiple scattering, wrong when dust dominates it",
+            "num_precomputed_wavelengths": "3: the tabulated phase function has the channels "
+            "680, 550, 440 nm, which are the precomputation's wavelengths only in this mode",
+            "half_precision": "false: float32 textures (his demo's half precision also limits "
+            "the Sun zenith angle to 102 deg)",
+        },
+        **sampling.to_dict(),
+    }
+
+
 def _cpp_double(value: float) -> str:
     text = repr(float(value))
     return text if ("." in text or "e" in text or "inf" in text or "nan" in text) else text + ".0"
@@ -545,12 +669,17 @@ def _identifier(name: str) -> str:
     return text if text and not text[0].isdigit() else f"atm_{text}"
 
 
-def bruneton_cpp(params: BrunetonParameters) -> str:
+def bruneton_cpp(params: BrunetonParameters, sampling: PrecomputationSampling | None = None) -> str:
     """C++ header: the parameters as constants to pass to ``atmosphere::Model``.
 
     Everything is in SI units as his constructor documents them (lengths in
     m, coefficients in m^-1); his ``Model`` divides by
     ``length_unit_in_meters`` itself.  Include it after ``atmosphere/model.h``.
+    With ``sampling`` (:func:`bruneton_precomputation`) it also states the
+    precomputation the set needs (``kScatteringTextureNuSize``,
+    ``kNumScatteringOrders``, ``kScatteringDensitySampleCount``) and, when
+    ``atmosphere/constants.h`` is included before it, checks his NU size with
+    a ``static_assert``.
     """
     ns = f"dustoptics_{_identifier(params.name)}"
     lines = [
@@ -577,19 +706,39 @@ def bruneton_cpp(params: BrunetonParameters) -> str:
         _cpp_vector("kGroundAlbedo", params.ground_albedo),
         f"const double kMaxSunZenithAngle = {_cpp_double(params.max_sun_zenith_angle_rad)};",
         f"const double kLengthUnitInMeters = {_cpp_double(params.length_unit_in_meters)};",
+        "const unsigned int kNumPrecomputedWavelengths = 3;  // the phase snippet's channels",
+        "const bool kCombineScatteringTextures = false;  // dust: keep single Mie in 3 channels",
+        "const bool kHalfPrecision = false;",
+    ]
+    if sampling is not None:
+        nu = sampling.scattering_texture_nu_size
+        lines += [
+            "",
+            f"// The precomputation this atmosphere needs (tolerance {sampling.tolerance:g}):",
+            "// SCATTERING_TEXTURE_NU_SIZE in atmosphere/constants.h, Init(kNumScatteringOrders),",
+            "// and SAMPLE_COUNT of ComputeScatteringDensity in atmosphere/functions.glsl.",
+            f"const int kScatteringTextureNuSize = {nu};",
+            f"const unsigned int kNumScatteringOrders = {sampling.num_scattering_orders};",
+            "const int kScatteringDensitySampleCount = "
+            f"{sampling.scattering_density_sample_count};",
+            "#ifdef ATMOSPHERE_CONSTANTS_H_",
+            f"static_assert(atmosphere::SCATTERING_TEXTURE_NU_SIZE >= {nu},",
+            f'    "set SCATTERING_TEXTURE_NU_SIZE to {nu} in atmosphere/constants.h");',
+            "#endif",
+        ]
+    lines += [
         "",
         "// new atmosphere::Model(kWavelengths, kSolarIrradiance, kSunAngularRadius, kBottomRadius,",
         "//     kTopRadius, RayleighDensity(), kRayleighScattering, MieDensity(), kMieScattering,",
         "//     kMieExtinction, kMiePhaseFunctionG, AbsorptionDensity(), kAbsorptionExtinction,",
         "//     kGroundAlbedo, kMaxSunZenithAngle, kLengthUnitInMeters,",
-        "//     3 /* num_precomputed_wavelengths: 3 for the tabulated phase function */,",
-        "//     false /* combine_scattering_textures */, false /* half_precision */);",
+        "//     kNumPrecomputedWavelengths, kCombineScatteringTextures, kHalfPrecision);",
         "inline atmosphere::Model* MakeModel() {",
         "  return new atmosphere::Model(kWavelengths, kSolarIrradiance, kSunAngularRadius,",
         "      kBottomRadius, kTopRadius, RayleighDensity(), kRayleighScattering, MieDensity(),",
         "      kMieScattering, kMieExtinction, kMiePhaseFunctionG, AbsorptionDensity(),",
-        "      kAbsorptionExtinction, kGroundAlbedo, kMaxSunZenithAngle, kLengthUnitInMeters, 3,",
-        "      false, false);",
+        "      kAbsorptionExtinction, kGroundAlbedo, kMaxSunZenithAngle, kLengthUnitInMeters,",
+        "      kNumPrecomputedWavelengths, kCombineScatteringTextures, kHalfPrecision);",
         "}",
         f"}}  // namespace {ns}",
     ]
@@ -612,9 +761,11 @@ def bruneton_phase_glsl(table: Any) -> str:
         function_name=_PHASE_FUNCTION_NAME,
     )
     header = [
-        "// For Bruneton's precomputed_atmospheric_scattering (2017): place this snippet before",
-        "// atmosphere/functions.glsl (e.g. prepend it to the header his Model builds) and replace",
-        "// MiePhaseFunction there by this one line:",
+        "// For Bruneton's precomputed_atmospheric_scattering (2017): paste this snippet into",
+        "// atmosphere/functions.glsl immediately above",
+        "//   InverseSolidAngle MiePhaseFunction(Number g, Number nu) {",
+        "// (line 744 at d9954923; or into the header model.cc builds, right after its",
+        '// "#version 330\\n" line) and replace that MiePhaseFunction by this one line:',
         f"//   {_ONE_LINE_CHANGE}",
         "// Channels are his kLambdaR, kLambdaG, kLambdaB (680, 550, 440 nm): exact with",
         "// num_precomputed_wavelengths <= 3 (the passes then use these wavelengths).",
@@ -628,6 +779,10 @@ def write_bruneton(
     out_dir: str | os.PathLike[str],
     *,
     overwrite: bool = False,
+    tolerance: float = 0.005,
+    nu_size: int | None = None,
+    num_scattering_orders: int | None = None,
+    scattering_density_sample_count: int | None = None,
     **options: Any,
 ) -> list[Path]:
     """Write ``NAME_bruneton.json``, ``NAME_bruneton_parameters.h`` and ``NAME_bruneton_mie_phase.glsl``.
@@ -640,6 +795,10 @@ def write_bruneton(
         not at all.
     overwrite : bool
         Replace existing files.
+    tolerance, nu_size, num_scattering_orders, scattering_density_sample_count
+        The precomputation (:func:`bruneton_precomputation`), written into
+        the JSON (``precomputation``) and the C++ header; a value the set
+        cannot live with is refused before anything is written.
     **options
         Passed to :func:`bruneton_parameters`.
 
@@ -647,15 +806,24 @@ def write_bruneton(
     -------
     list of pathlib.Path
     """
+    sampling = bruneton_precomputation(
+        atmosphere,
+        tolerance=tolerance,
+        nu_size=nu_size,
+        num_scattering_orders=num_scattering_orders,
+        scattering_density_sample_count=scattering_density_sample_count,
+    )
     params = bruneton_parameters(atmosphere, **options)
     base = Path(out_dir)
     stem = re.sub(r"[^A-Za-z0-9._-]", "_", atmosphere.name)
     aerosols = atmosphere.constituent("aerosols").table
+    document = params.to_dict()
+    document["precomputation"] = bruneton_precomputation_dict(sampling)
     files = {
         base / f"{stem}_bruneton.json": (
-            json.dumps(params.to_dict(), indent=2, allow_nan=False) + "\n"
+            json.dumps(document, indent=2, allow_nan=False) + "\n"
         ).encode("utf-8"),
-        base / f"{stem}_bruneton_parameters.h": bruneton_cpp(params).encode("ascii"),
+        base / f"{stem}_bruneton_parameters.h": bruneton_cpp(params, sampling).encode("ascii"),
         base / f"{stem}_bruneton_mie_phase.glsl": bruneton_phase_glsl(aerosols).encode("ascii"),
     }
     return write_files(files, overwrite=overwrite)

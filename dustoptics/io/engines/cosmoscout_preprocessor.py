@@ -27,9 +27,10 @@ The options and how they are chosen (tolerance ``tol``, default 0.5 %):
     Without, the trapezoid with N + 1 points over the straight ray.  Both are
     chosen by running that quadrature here, on the density file as the
     preprocessor reads it (below), against the exact column of each profile:
-    the largest step, and the smallest count, that keep the transmittance
-    within ``tol / 2`` of ``exp(-tau)`` at every wavelength of the set (the
-    preprocessor runs one pass per three of them): from the ground to the top
+    the largest step, and the smallest count from the default 500 up, that
+    keep the transmittance within ``tol / 2`` of ``exp(-tau)`` at every
+    wavelength of the set (the preprocessor runs one pass per three of
+    them): from the ground to the top
     along the zenith for the steps, along straight rays from the zenith to the
     horizon for the counts (where ``exp(-tau) >= 1e-3``).  The other half of
     ``tol`` is left to what the simulation does not model (float32 sums on the
@@ -132,8 +133,8 @@ _STEPS_M: Final = (
     10000, 8000, 6000, 5000, 4000, 3000, 2500, 2000, 1500, 1200, 1000, 800, 600, 500, 400, 300,
     250, 200, 150, 100, 50, 20, 10,
 )  # fmt: skip
-#: Sample counts tried for the transmittance, smallest first.
-_COUNTS: Final = (100, 200, 300, 500, 750, 1000, 1500, 2000, 3000, 5000, 10000, 20000)
+#: Sample counts tried for the transmittance, smallest first (from the preprocessor's default).
+_COUNTS: Final = (500, 750, 1000, 1500, 2000, 3000, 5000, 10000, 20000)
 #: Zenith cosines of the straight rays checked (refraction off).
 _MUS: Final = (1.0, 0.5, 0.2, 0.1, 0.05, 0.02, 0.0)
 #: Share of the tolerance the simulated transmittance may use (the rest is left to what the

@@ -10,6 +10,9 @@ the seed shader (680, 550, 440 nm; brief section 7) in increasing order.
 
 from __future__ import annotations
 
+import json
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -18,6 +21,8 @@ from dustoptics.io.csv.cosmoscout import (
     check_cosmoscout_set,
     cosmoscout_wavelength_text,
     read_cosmoscout_constituent,
+    settings_json,
+    write_atmosphere,
     write_cosmoscout_constituent,
     write_cosmoscout_set,
 )
@@ -330,3 +335,242 @@ def test_checker_on_an_empty_directory(tmp_path):
         check_cosmoscout_set(tmp_path)
     with pytest.raises(FileNotFoundError, match="no such directory"):
         check_cosmoscout_set(tmp_path / "missing")
+
+
+# ------------------------------------------------------------------ the preprocessor's input
+#
+# CosmoScout VR's bruneton-preprocessor (cosmoscout/cosmoscout-vr at e59005a3, = v1.10.0 for its
+# files), written here again from its source, independently of the package: the CSV reader
+# (csv.cpp: skip a line, first field, float32; lambda float32 times 1e9), the density texture
+# (GL_LINEAR, clamp to edge, N texels over the thickness, read at u = altitude / T), and the
+# loops of computeOpticalLengthToTopAtmosphereBoundary (refraction on: samples k dx, weight 1/2
+# for the first, the last weighted by the part of its segment below the top; off: N + 1
+# trapezoid points) and of computeSingleScattering with steps (the optical depth to a sample
+# includes the sample's own segment).
+
+PREPROCESSOR_KEYS = (  # Params.cpp, in its order
+    "sunDistance", "molecules", "aerosols", "ior", "minAltitude", "maxAltitude", "refraction",
+    "groundAlbedo", "multiScatteringOrder", "sampleCountOpticalDepth", "stepSizeOpticalDepth",
+    "sampleCountSingleScattering", "stepSizeSingleScattering", "sampleCountMultiScattering",
+    "stepSizeMultiScattering", "sampleCountScatteringDensity", "sampleCountIndirectIrradiance",
+    "transmittanceTextureWidth", "transmittanceTextureHeight", "scatteringTextureRSize",
+    "scatteringTextureMuSize", "scatteringTextureMuSSize", "scatteringTextureNuSize",
+    "irradianceTextureWidth", "irradianceTextureHeight", "maxSunZenithAngle",
+)  # fmt: skip
+
+
+def _data_lines(path):
+    lines = [line.strip() for line in Path(path).read_text().split("\n")[1:]]
+    return [line.split(",") for line in lines if line]
+
+
+def _read_density(path):
+    return np.array([np.float32(row[0]) for row in _data_lines(path)], dtype=np.float32)
+
+
+def _read_coefficient(path):
+    rows = _data_lines(path)
+    lam = np.array([np.float32(row[0]) * np.float32(1e9) for row in rows], dtype=np.float32)
+    return lam, np.array([np.float32(row[1]) for row in rows], dtype=np.float32)
+
+
+def _texture(values, altitude, thickness):
+    n = values.size
+    x = np.clip(altitude / thickness, 0.0, 1.0) * n - 0.5
+    i = np.floor(x).astype(int)
+    t = x - i
+    lo = values[np.clip(i, 0, n - 1)].astype(float)
+    hi = values[np.clip(i + 1, 0, n - 1)].astype(float)
+    return lo * (1.0 - t) + hi * t
+
+
+def _fixed_steps(dx, r0, mu, top):
+    """The refraction-on loop along a straight ray: sample radii and weights (x dx)."""
+    st = np.sqrt(1.0 - mu * mu)
+    radii, weights, k = [], [], 0
+    while True:
+        s = k * dx
+        px, py = st * s, r0 + mu * s
+        r_start = np.hypot(px - st * dx / 2, py - mu * dx / 2)
+        r_end = np.hypot(px + st * dx / 2, py + mu * dx / 2)
+        w = 0.5 if k == 0 else 1.0
+        if r_end > top:
+            w = 1.0 - (r_end - top) / (r_end - r_start)
+        radii.append(np.hypot(px, py))
+        weights.append(w * dx)
+        if r_end > top:
+            return np.array(radii), np.array(weights)
+        k += 1
+
+
+class _Preprocessor:
+    """What the preprocessor reads from a settings file, run from ``cwd``."""
+
+    def __init__(self, settings_path, cwd):
+        self.settings = json.loads(settings_path.read_text())
+        self.bottom = float(self.settings["minAltitude"])
+        self.top = float(self.settings["maxAltitude"])
+        self.thickness = self.top - self.bottom
+        self.media = {}
+        for role in ("molecules", "aerosols", "ozone"):
+            if role not in self.settings:
+                continue
+            files = {k: cwd / v for k, v in self.settings[role].items()}  # absolute stays absolute
+            lam, absorption = _read_coefficient(files["betaAbs"])
+            scattering = _read_coefficient(files["betaSca"])[1] if "betaSca" in files else 0.0
+            self.media[role] = (_read_density(files["density"]), absorption + scattering)
+            self.wavelength_nm = lam
+
+    def optical_depth(self, radii, weights):
+        return sum(beta.astype(float) * np.sum(weights * _texture(rho, radii - self.bottom,
+                   self.thickness)) for rho, beta in self.media.values())  # fmt: skip
+
+    def zenith_transmittance(self, *, refraction):
+        if refraction:
+            radii, weights = _fixed_steps(int(self.settings["stepSizeOpticalDepth"]), self.bottom,
+                                          1.0, self.top)  # fmt: skip
+        else:
+            n = int(self.settings["sampleCountOpticalDepth"])
+            radii = self.bottom + np.linspace(0.0, self.thickness, n + 1)
+            weights = np.full(n + 1, self.thickness / n)
+            weights[[0, -1]] *= 0.5
+        return np.exp(-self.optical_depth(radii, weights))
+
+    def exact_transmittance(self):
+        """exp(-tau) of the CSVs as meant: value i at (i + 1/2) T / N, linear between."""
+        z = np.linspace(0.0, self.thickness, 400001)
+        w = np.full(z.size, z[1])
+        w[[0, -1]] *= 0.5
+        return np.exp(-self.optical_depth(self.bottom + z, w))
+
+
+@pytest.fixture(scope="module", params=["mars", "earth"])
+def preprocessor_input(request, tmp_path_factory):
+    from dustoptics.atmosphere.build import build_atmosphere
+
+    atmosphere = build_atmosphere(request.param)
+    directory = tmp_path_factory.mktemp(request.param)
+    write_atmosphere(atmosphere, directory)
+    return atmosphere, directory / f"{request.param}_settings.json"
+
+
+def test_settings_state_every_option_and_absolute_files(preprocessor_input):
+    atmosphere, path = preprocessor_input
+    settings = json.loads(path.read_text())
+    assert set(PREPROCESSOR_KEYS) - {"ozone"} <= set(settings)
+    for role in ("molecules", "aerosols", "ozone"):
+        for name in settings.get(role, {}).values():
+            assert Path(name).is_absolute() and Path(name).is_file()
+    assert settings["dustoptics"]["cosmoscout_commit"].startswith("e59005a3")
+    assert isinstance(settings["stepSizeOpticalDepth"], int)
+    # Refraction: Mars's bending at the horizon (0.005 deg) is far below a tenth of the Sun's
+    # radius (0.175 deg); Earth's (0.56 deg) is not.
+    assert settings["refraction"] is (atmosphere.name == "earth")
+
+
+def test_preprocessor_transmittance_within_half_a_percent(preprocessor_input):
+    atmosphere, path = preprocessor_input
+    pre = _Preprocessor(path, Path("/nonexistent-working-directory"))
+    assert np.allclose(pre.wavelength_nm, atmosphere.wavelength_nm, rtol=1e-6)
+    truth = pre.exact_transmittance()
+    # The same from the profiles themselves (no CSV at all): the files hold the atmosphere.
+    tau = sum(
+        c.table.beta_ext_per_m * c.profile.column_length_m(top_altitude_m=atmosphere.thickness_m)
+        for c in atmosphere.constituents
+    )
+    np.testing.assert_allclose(truth, np.exp(-tau), rtol=2e-4)
+    for refraction in (True, False):  # both options are written: either setting is right
+        got = pre.zenith_transmittance(refraction=refraction)
+        assert np.max(np.abs(got / truth - 1.0)) <= 0.005, (refraction, got / truth - 1.0)
+    # Bare defaults (10 km steps) are not: the issue's 0.585 against 0.605 at 550 nm on Mars.
+    pre.settings["stepSizeOpticalDepth"] = 10000
+    worst = np.max(np.abs(pre.zenith_transmittance(refraction=True) / truth - 1.0))
+    assert worst > (0.03 if atmosphere.name == "mars" else 0.05)
+
+
+def test_preprocessor_in_scattering_along_the_horizon(preprocessor_input):
+    """The first-order bias of the stepped in-scattering sum, and the trapezoid without steps."""
+    _, path = preprocessor_input
+    pre = _Preprocessor(path, Path("/"))
+    settings = pre.settings
+
+    def beta(radii):  # extinction along the ray, the largest of the set's wavelengths
+        return sum(np.outer(_texture(rho, radii - pre.bottom, pre.thickness), b.astype(float))
+                   for rho, b in pre.media.values())  # fmt: skip
+
+    length = np.sqrt(pre.top**2 - pre.bottom**2)
+    s = np.linspace(0.0, length, 400001)
+    b = beta(np.hypot(s, pre.bottom))
+    tau = np.vstack(
+        [np.zeros(b.shape[1]), np.cumsum(0.5 * (b[1:] + b[:-1]) * np.diff(s)[:, None], 0)]
+    )
+    exact = np.sum(
+        0.5 * ((b * np.exp(-tau))[1:] + (b * np.exp(-tau))[:-1]) * np.diff(s)[:, None], 0
+    )
+    radii, w = _fixed_steps(int(settings["stepSizeSingleScattering"]), pre.bottom, 0.0, pre.top)
+    bs = beta(radii)
+    stepped = np.sum(w[:, None] * bs * np.exp(-np.cumsum(w[:, None] * bs, 0)), 0)
+    assert np.max(np.abs(stepped / exact - 1.0)) <= 0.005
+    # Without steps: N + 1 trapezoid points, the transmittance to each from its texture (exact).
+    n = int(settings["sampleCountSingleScattering"])
+    s_n = np.linspace(0.0, length, n + 1)
+    t_n = np.exp(-np.array([np.interp(s_n, s, t) for t in tau.T]).T)
+    w_n = np.full(n + 1, length / n)
+    w_n[[0, -1]] *= 0.5
+    trapezoid = np.sum(w_n[:, None] * beta(np.hypot(s_n, pre.bottom)) * t_n, 0)
+    assert np.max(np.abs(trapezoid / exact - 1.0)) <= 0.005
+    # CosmoScout's own 2 km steps leave the Martian horizon about 4 % dark.
+    radii, w = _fixed_steps(2000, pre.bottom, 0.0, pre.top)
+    bs = beta(radii)
+    coarse = np.sum(w[:, None] * bs * np.exp(-np.cumsum(w[:, None] * bs, 0)), 0) / exact - 1.0
+    assert coarse.min() < -0.03
+
+
+def test_orders_follow_the_optical_depth(preprocessor_input):
+    """The path model, by hand: m = sum f beta_sca sqrt(pi R H / 2) / 2 at each wavelength."""
+    from scipy.stats import poisson
+
+    atmosphere, path = preprocessor_input
+    settings = json.loads(path.read_text())
+    heights = {"mars": {"molecules": 8000.0, "aerosols": 11100.0},
+               "earth": {"molecules": 8000.0, "aerosols": 1200.0}}[atmosphere.name]  # fmt: skip
+    m = 0.0
+    for role, h in heights.items():
+        table = atmosphere.constituent(role).table
+        f = 1.0 if role == "aerosols" else 0.4  # forward-peaked / Rayleigh (module docstring)
+        m = m + f * table.beta_sca_per_m * np.sqrt(np.pi * atmosphere.planet_radius_m * h / 2) / 2
+    k = [next(k for k in range(1, 60) if poisson.sf(k, v) / -np.expm1(-v) <= 0.005) for v in m]
+    assert settings["multiScatteringOrder"] == max(k) - 1
+    # Mars: 13 orders over its 15 wavelengths (ω reaches 0.97 at 830 nm); CosmoScout's own
+    # mars.json has 10 beyond the first.
+    assert settings["multiScatteringOrder"] == {"mars": 12, "earth": 9}[atmosphere.name]
+
+
+def test_path_prefix_and_refused_options(tmp_path):
+    from dustoptics.atmosphere.sets import earth_atmosphere
+    from dustoptics.io.engines.cosmoscout_preprocessor import cosmoscout_sampling
+
+    earth = earth_atmosphere()
+    text = settings_json(earth, path_prefix="plugins/csp-atmospheres/data/")
+    assert (
+        json.loads(text)["ozone"]["density"]
+        == "plugins/csp-atmospheres/data/earth_ozone_density.csv"
+    )
+    with pytest.raises(
+        ValueError,
+        match=r"stepSizeOpticalDepth'\] = 10000 m is too large .* the largest that does is 1500 m",
+    ):
+        cosmoscout_sampling(earth, options={"stepSizeOpticalDepth": 10000})
+    with pytest.raises(
+        ValueError, match=r"multiScatteringOrder'\] = 4 is too small .* the smallest that does is 9"
+    ):
+        cosmoscout_sampling(earth, options={"multiScatteringOrder": 4})
+    with pytest.raises(ValueError, match="not sampling options"):
+        cosmoscout_sampling(earth, options={"stepSize": 10})
+    ok = cosmoscout_sampling(earth, options={"stepSizeOpticalDepth": 1000, "refraction": False})
+    assert ok.settings["stepSizeOpticalDepth"] == 1000 and ok.settings["refraction"] is False
+    # Refused before anything is written.
+    with pytest.raises(ValueError, match="the smallest that does is 32"):
+        write_atmosphere(earth, tmp_path / "x", sampling=cosmoscout_sampling(
+            earth, options={"sampleCountScatteringDensity": 16}))  # fmt: skip
+    assert not (tmp_path / "x").exists()

@@ -29,6 +29,7 @@ from dustoptics.io.engines.bruneton import (
     bruneton_density_layers,
     bruneton_parameters,
     bruneton_phase_glsl,
+    bruneton_precomputation,
     write_bruneton,
 )
 from dustoptics.io.tables.netcdf import read_hdf5
@@ -238,3 +239,126 @@ def test_write_bruneton_and_cli(tmp_path: Path, mars) -> None:
     np.testing.assert_array_equal(mie["mie_scattering"], dust.beta_sca_per_m)
     with pytest.raises(ValueError, match="needs cross-sections and a number density"):
         dio.write(read_hdf5(TABLES / "costa" / "costa.nc"), tmp_path / "u", format="bruneton")
+
+
+# ------------------------------------------------------------------ the precomputation
+
+
+def test_precomputation_is_stated_for_the_set(tmp_path: Path, mars) -> None:
+    write_bruneton(mars, tmp_path)
+    data = json.loads((tmp_path / "mars_bruneton.json").read_text())
+    pre = data["precomputation"]
+    chosen = bruneton_precomputation(mars)
+    assert pre["scattering_texture_nu_size"] == chosen.scattering_texture_nu_size
+    assert pre["constants.h"]["SCATTERING_TEXTURE_NU_SIZE"] == chosen.scattering_texture_nu_size
+    assert pre["num_scattering_orders"] == chosen.num_scattering_orders
+    assert pre["init"] == f"model->Init({chosen.num_scattering_orders})"
+    assert pre["functions.glsl"]["ComputeScatteringDensity SAMPLE_COUNT"] == (
+        chosen.scattering_density_sample_count
+    )
+    assert pre["model_arguments"] == {
+        "num_precomputed_wavelengths": 3,
+        "combine_scattering_textures": False,
+        "half_precision": False,
+    }
+    assert (
+        "above 'InverseSolidAngle MiePhaseFunction" in pre["functions.glsl"]["mie phase function"]
+    )
+    # The Martian dust at his three wavelengths: 12 orders (his default is 4), 48 x 96
+    # scattering-density directions (his 16 x 32 integrate the dust's phase function to
+    # 0.8-1.4), NU at the largest a 2048-texel-wide 3-D texture allows, with the residual said.
+    assert chosen.num_scattering_orders == 12
+    assert chosen.scattering_density_sample_count == 48
+    assert chosen.scattering_texture_nu_size == 64
+    header = (tmp_path / "mars_bruneton_parameters.h").read_text()
+    for line in (
+        "const int kScatteringTextureNuSize = 64;",
+        "const unsigned int kNumScatteringOrders = 12;",
+        "const int kScatteringDensitySampleCount = 48;",
+        "const bool kCombineScatteringTextures = false;",
+        "static_assert(atmosphere::SCATTERING_TEXTURE_NU_SIZE >= 64,",
+    ):
+        assert line in header
+    snippet = (tmp_path / "mars_bruneton_mie_phase.glsl").read_text()
+    assert "//   InverseSolidAngle MiePhaseFunction(Number g, Number nu) {" in snippet
+    assert '"#version 330\\n" line' in snippet
+
+
+def test_orders_by_hand_at_his_wavelengths(mars) -> None:
+    """The path model of the module docstring, written again: m = sum f beta_sca L_h / 2."""
+    from scipy.stats import poisson
+
+    r = mars.planet_radius_m
+    m = 0.0
+    for role, h, f in (("molecules", 8000.0, 0.4), ("aerosols", 11100.0, 1.0)):
+        table = mars.constituent(role).table
+        beta = np.interp([680.0, 550.0, 440.0], table.wavelength_nm, table.beta_sca_per_m)
+        m = m + f * beta * math.sqrt(math.pi * r * h / 2.0) / 2.0
+    k = max(next(k for k in range(1, 60) if poisson.sf(k, v) / -math.expm1(-v) <= 0.005) for v in m)
+    assert bruneton_precomputation(mars).num_scattering_orders == k == 12
+    # Earth (his own atmosphere, Kobe's aerosols): 6, near his 4.
+    assert bruneton_precomputation(atm.earth_atmosphere()).num_scattering_orders == 6
+
+
+def test_options_the_set_cannot_live_with_are_refused(tmp_path: Path, mars) -> None:
+    out = tmp_path / "refused"
+    with pytest.raises(ValueError, match=r"nu_size 8 is too small .* the smallest that does is 64"):
+        write_bruneton(mars, out, nu_size=8)
+    with pytest.raises(ValueError, match=r"num_scattering_orders 4 is too small .* is 12"):
+        write_bruneton(mars, out, num_scattering_orders=4)
+    with pytest.raises(
+        ValueError, match=r"scattering_density_sample_count 16 is too small .* that does is 48"
+    ):
+        write_bruneton(mars, out, scattering_density_sample_count=16)
+    with pytest.raises(ValueError, match="GL_MAX_3D_TEXTURE_SIZE 2048; at most 64"):
+        write_bruneton(mars, out, nu_size=128)
+    assert not out.exists()  # refused before anything was written
+    # More than needed is accepted and stated.
+    write_bruneton(mars, out, num_scattering_orders=14, scattering_density_sample_count=64)
+    assert "kNumScatteringOrders = 14;" in (out / "mars_bruneton_parameters.h").read_text()
+
+
+@pytest.mark.skipif(GXX is None, reason="g++ not installed")
+def test_header_checks_his_nu_size(tmp_path: Path, mars) -> None:
+    (tmp_path / "params.h").write_text(
+        bruneton_cpp(bruneton_parameters(mars), bruneton_precomputation(mars))
+    )
+    main_cc = "int main() { delete dustoptics_mars::MakeModel(); return 0; }\n"
+    for nu, compiles in ((8, False), (64, True)):
+        # Stand-in for his atmosphere/constants.h: its include guard and the NU constant.
+        constants = (
+            "#define ATMOSPHERE_CONSTANTS_H_\nnamespace atmosphere {\n"
+            f"constexpr int SCATTERING_TEXTURE_NU_SIZE = {nu};\n}}\n"
+        )
+        source = tmp_path / f"nu{nu}.cc"
+        source.write_text(_STAND_IN + constants + '#include "params.h"\n' + main_cc)
+        result = subprocess.run(
+            [GXX, "-std=c++11", "-fsyntax-only", str(source)], capture_output=True, text=True
+        )
+        assert (result.returncode == 0) is compiles, result.stderr
+        if not compiles:
+            assert "set SCATTERING_TEXTURE_NU_SIZE to 64 in atmosphere/constants.h" in result.stderr
+
+
+@pytest.mark.skipif(
+    not BRUNETON_REPO, reason="DUSTOPTICS_BRUNETON_REPO does not name a checkout of his repository"
+)
+@pytest.mark.skipif(GXX is None, reason="g++ not installed")
+def test_his_precomputation_headless_against_our_sky(tmp_path: Path) -> None:
+    """His model.cc with our export, precomputed headless (EGL, Mesa), against dustoptics.sky.
+
+    scripts/bruneton_headless.py does the work (it copies his files, applies the export's
+    changes, compiles our harness against his model.cc and runs it).  Hours on llvmpipe at
+    the Martian sizes; minutes on a GPU driver.
+    """
+    import importlib.util
+
+    path = Path(__file__).resolve().parents[3] / "scripts" / "bruneton_headless.py"
+    spec = importlib.util.spec_from_file_location("bruneton_headless", path)
+    assert spec is not None and spec.loader is not None
+    headless = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(headless)
+    assert BRUNETON_REPO is not None
+    result = headless.compare(Path(BRUNETON_REPO), set_name="mars", work=tmp_path)
+    print(headless.report(result, tolerance=0.05))
+    assert result["max_error_outside_5deg"] <= 0.05
