@@ -749,7 +749,7 @@ def local_cluster(workers: int | None = None, *, threads: int = 1, processes: bo
     -------
     distributed.LocalCluster
         With :data:`_LOCAL_CLUSTER_CONFIG`'s settings, the dashboard on a
-        free port, and logs below errors silenced.  Its worker processes
+        free port, and Dask's logs below critical silenced.  Its worker processes
         ignore SIGINT (:mod:`dustoptics.sweep._worker`): a Ctrl-C stops the
         process that started it, which closes the cluster (a sweep does),
         rather than printing every worker's traceback.  Close it (or use it
@@ -764,7 +764,10 @@ def local_cluster(workers: int | None = None, *, threads: int = 1, processes: bo
             threads_per_worker=threads,
             processes=processes,
             dashboard_address=":0",
-            silence_logs=40,
+            # Only critical logs: a chunk's own errors come back as values (ChunkResult), and
+            # the errors Dask logs while a cluster closes under it (a worker's heartbeat to a
+            # scheduler already gone, after a Ctrl-C on a loaded machine) are not the user's.
+            silence_logs=50,
             preload=["dustoptics.sweep._worker"],
         )
 
