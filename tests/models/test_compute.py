@@ -8,17 +8,17 @@ from _model_configs import SMALL
 
 from dustoptics.models.compute import build_table
 from dustoptics.models.config import ConfigError, parse_config
-from dustoptics.scattering import phase
+from dustoptics.scattering import phase, tabulated_phase
 
 
 def test_mean_cosine_of_sampled_henyey_greenstein() -> None:
     """HG(g) sampled at 0.1 deg and renormalized: mean cosine g to the sampling error."""
     theta = np.linspace(0, 180, 1801)
     for g in (-0.3, 0.0, 0.5, 0.8):
-        p = phase.renormalize(
-            phase.tabulate(phase.henyey_greenstein, theta_deg=theta, g=g), theta_deg=theta
+        p = tabulated_phase.renormalize(
+            tabulated_phase.tabulate(phase.henyey_greenstein, theta_deg=theta, g=g), theta_deg=theta
         )
-        assert phase.mean_cosine(p, theta_deg=theta) == pytest.approx(g, abs=1e-5)
+        assert tabulated_phase.mean_cosine(p, theta_deg=theta) == pytest.approx(g, abs=1e-5)
 
 
 def test_progress_does_not_change_the_result() -> None:
@@ -58,7 +58,7 @@ def test_analytic_model_table() -> None:
     table = build_table(parse_config(text))
     assert table.cext_um2 is None and table.phase.shape == (2, 721)
     np.testing.assert_allclose(
-        phase.sphere_integral(table.phase, theta_deg=table.theta_deg), 1.0, rtol=1e-13
+        tabulated_phase.sphere_integral(table.phase, theta_deg=table.theta_deg), 1.0, rtol=1e-13
     )
     np.testing.assert_allclose(table.g, 0.6, atol=1e-4)
     assert any("from the analytic formula" in n for n in table.provenance.notes)
