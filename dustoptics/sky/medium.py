@@ -28,6 +28,7 @@ References
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 from typing import Final
@@ -57,6 +58,15 @@ N_STREAMS: Final = 16
 AUREOLE_MOMENTS: Final = 512
 
 
+@functools.lru_cache(maxsize=1)
+def _projection_rule() -> tuple[np.ndarray, np.ndarray]:
+    # The Gauss-Legendre rule of the projections (0.4 s to compute; shared).
+    mu, w = roots_legendre(_PROJECTION_NODES)
+    mu.setflags(write=False)
+    w.setflags(write=False)
+    return mu, w
+
+
 def legendre_moments(table: Table, n_moments: int) -> np.ndarray:
     """Legendre moments ``chi_l = 2 pi int P(mu) P_l(mu) dmu`` of a table.
 
@@ -77,7 +87,7 @@ def legendre_moments(table: Table, n_moments: int) -> np.ndarray:
         ``chi_l``; ``chi_0`` is the table's normalization (1 to its accuracy),
         ``chi_1`` its asymmetry parameter g. [-]
     """
-    mu, w = roots_legendre(_PROJECTION_NODES)
+    mu, w = _projection_rule()
     theta = np.rad2deg(np.arccos(mu))
     p = table.phase_at(theta)
     vander = legendre.legvander(mu, n_moments - 1)
@@ -389,7 +399,7 @@ def _slant_columns(
 _SLANT_NODES: Final = 160
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True, nogil=True, parallel=True)
 def _slant_kernel(
     r_grid: np.ndarray,
     mu_grid: np.ndarray,
@@ -407,7 +417,7 @@ def _slant_kernel(
     r_top = radius + top
     out = np.zeros((n_c, r_grid.size, mu_grid.size))
     nz = altitude.size
-    for i in range(r_grid.size):
+    for i in numba.prange(r_grid.size):
         r = r_grid[i]
         for j in range(mu_grid.size):
             m = mu_grid[j]

@@ -11,18 +11,35 @@ The phase function enters through its Legendre moments and the addition
 theorem, with the normalized associated Legendre functions
 ``L_l^m = sqrt((l - m)! / (l + m)!) P_l^m``: order n + 1's source is
 
-    J^m(mu) = (omega / 2) sum_l (2 l + 1) chi_l L_l^m(mu) sum_j w_j L_l^m(mu_j) I_n^m(mu_j)
+    J^m(mu) = (omega / 2) sum_l (2 l + 1) chi_l L_l^m(mu) M_l^m,
+    M_l^m = sum_j w_j L_l^m(mu_j) I_n^m(mu_j),
 
 and the first order's is the Sun's beam scattered once,
 ``omega F0 T(z) / (4 pi) (2 - delta_m0) sum_l (2 l + 1) chi_l L_l^m(mu) L_l^m(-mu0)``.
-Each order's radiance is the formal solution through the layers with a source
-linear in optical depth within each layer (exact integration of the
-exponentials), downward from the top (no incoming diffuse light) and upward
-from a Lambertian ground that reflects the previous order's downward flux
-(the direct beam for the first order).  Orders are added until the estimated
-remainder of the series, ``|I_n| r / (1 - r)`` with ``r`` the ratio of
-successive orders' largest radiances, is below ``tol`` times the sum: that is
-the stated tolerance of the diffuse field.
+Each order's radiance is the formal solution through the layers, downward
+from the top (no incoming diffuse light) and upward from a Lambertian ground
+that reflects the previous order's downward flux (the direct beam for the
+first order).  Within a layer the first order's source follows the beam
+exactly (it falls exponentially, at the rate the beam's transmittances at the
+layer's two levels give); the later orders' sources are linear in optical
+depth (exact integration of the exponentials in both cases).
+
+The first order's radiance is sharply peaked around the Sun's direction (the
+aureole of the scaled phase function), which ``n_streams`` nodes cannot
+integrate: its moments ``M_l^m`` would carry the quadrature's error into
+every later order (1-3 % of the sky radiance with 16 streams, oscillating
+with the scattering angle).  The first :data:`FINE_ORDERS` orders are
+therefore computed on a finer double-Gauss quadrature of :data:`FINE_FACTOR`
+times as many nodes, the later ones, which are smooth, on the
+``n_streams`` ordinates.
+
+Each Fourier mode is a problem of its own.  A mode stops at a wavelength when
+the estimated remainder of its series, ``|I_n| r / (1 - r)`` with ``r`` the
+ratio of its successive orders' largest radiances, is below ``tol / (2
+n_streams)`` times the largest diffuse radiance, so that the remainders of
+all modes together are below ``tol``: the stated tolerance of the diffuse
+field.  High modes (the sharp structure) die within a few orders; the low
+ones carry the many orders of a thick atmosphere.
 
 The Sun's beam is attenuated along its real, spherical path to each level
 (``geometry="pseudo-spherical"``, so that a Sun a little below the horizon
@@ -45,18 +62,41 @@ from __future__ import annotations
 import math
 import warnings
 from dataclasses import dataclass
-from typing import Final
+from typing import Final, TextIO
 
+import numba
 import numpy as np
 from numpy.polynomial import legendre
 from scipy.special import gammaln, lpmv
 
-from dustoptics._validation import check_choice, check_closed_interval
+from dustoptics._validation import BudgetError, check_budget, check_choice, check_closed_interval
+from dustoptics.sky._progress import Reporter, reporter
 from dustoptics.sky.medium import Medium
 
-__all__ = ["GEOMETRIES", "DiffuseField", "normalized_legendre", "solve_orders"]
+__all__ = [
+    "FINE_FACTOR",
+    "FINE_ORDERS",
+    "GEOMETRIES",
+    "N_LAYERS",
+    "WORK_BUDGET",
+    "DiffuseField",
+    "OrdersCost",
+    "check_orders_cost",
+    "estimate_orders_cost",
+    "normalized_legendre",
+    "solve_orders",
+]
 
 GEOMETRIES: Final = ("pseudo-spherical", "plane-parallel")
+#: Layers of the column (thin near the ground).
+N_LAYERS: Final = 120
+#: The quadrature of the first orders has this many times ``n_streams`` nodes.
+FINE_FACTOR: Final = 2
+#: Orders computed on the fine quadrature.
+FINE_ORDERS: Final = 2
+#: Largest work (multiply-adds) of one call without ``allow_large``: about
+#: five minutes at the rate this machine's BLAS reaches on two cores.
+WORK_BUDGET: Final = 3e12
 _MAX_ORDERS: Final = 400
 
 
@@ -101,21 +141,26 @@ class DiffuseField:
     mu, weights : numpy.ndarray, shape (2 n_streams,)
         Ordinates (upward first) and their weights over [-1, 1]. [-]
     radiance : numpy.ndarray, shape (n_modes, n_wavelength, n_level, 2 n_streams)
-        Fourier components of the diffuse radiance (all orders). [sr^-1]
+        Fourier components of the diffuse radiance (all orders) at the
+        ordinates ``mu``. [sr^-1]
     moments : numpy.ndarray, shape (n_modes, n_wavelength, n_level, n_modes)
-        ``M_l^m = sum_j w_j L_l^m(mu_j) I^m(mu_j)``, from which the source of
-        the next order is evaluated in any direction. [sr^-1]
+        ``M_l^m = sum_j w_j L_l^m(mu_j) I^m(mu_j)`` summed over the orders
+        (the first :data:`FINE_ORDERS` on the fine quadrature), from which
+        the multiple-scattering source is evaluated in any direction. [sr^-1]
     sun_transmittance : numpy.ndarray, shape (n_wavelength, n_level)
         Scaled direct-beam transmittance to each level. [-]
     ground_albedo : numpy.ndarray, shape (n_wavelength,)
         Lambertian albedo of the ground. [-]
     n_orders : int
-        Orders of scattering summed.
+        Orders of scattering summed (the most any mode needed).
     error_estimate : numpy.ndarray, shape (n_wavelength,)
         Estimated remainder of the series relative to the largest diffuse
         radiance. [-]
     geometry : str
         How the direct beam was attenuated.
+    diffuse_flux_up, diffuse_flux_down : numpy.ndarray, shape (n_wavelength, n_level)
+        Upward and downward diffuse fluxes at each level, from each order's
+        own quadrature. [-]
     """
 
     mu0: float
@@ -129,20 +174,18 @@ class DiffuseField:
     n_orders: int
     error_estimate: np.ndarray
     geometry: str
+    diffuse_flux_up: np.ndarray
+    diffuse_flux_down: np.ndarray
 
     @property
     def flux_down_diffuse(self) -> np.ndarray:
         """Diffuse downward flux at each level, shape (n_wavelength, n_level). [-]"""
-        n = self.mu.size // 2
-        i0 = self.radiance[0, :, :, n:]
-        return 2.0 * np.pi * np.einsum("xkj,j->xk", i0, self.weights[n:] * -self.mu[n:])
+        return self.diffuse_flux_down
 
     @property
     def flux_up(self) -> np.ndarray:
         """Upward (diffuse) flux at each level, shape (n_wavelength, n_level). [-]"""
-        n = self.mu.size // 2
-        i0 = self.radiance[0, :, :, :n]
-        return 2.0 * np.pi * np.einsum("xkj,j->xk", i0, self.weights[:n] * self.mu[:n])
+        return self.diffuse_flux_up
 
     @property
     def flux_down_direct(self) -> np.ndarray:
@@ -184,14 +227,259 @@ def _exit_weights(dtau: np.ndarray, mu: np.ndarray) -> tuple[np.ndarray, ...]:
     return e, 1.0 - c, c - e
 
 
+def _divided_exp(u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    # (exp(-u) - exp(-v)) / (v - u), with its limit exp(-u) where v -> u.
+    d = v - u
+    small = np.abs(d) < 1e-6
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        out = -np.exp(-u) * np.expm1(-d) / np.where(small, 1.0, d)
+    return np.where(small, np.exp(-0.5 * (u + v)), out)
+
+
+def _beam_weights(
+    dtau: np.ndarray, mu: np.ndarray, t_sun: np.ndarray, e: np.ndarray, a: np.ndarray, b: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Exit weights of the first order's source, exact for the beam in each layer.
+
+    Within a layer of scaled optical depth ``dtau`` the beam falls as
+    ``exp(-c t)`` from its top, ``c = ln(T_top / T_bottom) / dtau``; with the
+    source ``J_top exp(-c t)`` the radiance leaving the layer is
+    ``I_enter E + J_top w``: downward ``w = (dtau / mu) (e^(-c dtau) -
+    e^(-dtau / mu)) / (dtau / mu - c dtau)``, upward ``w = (dtau / mu) (1 -
+    e^(-(c + 1 / mu) dtau)) / ((c + 1 / mu) dtau)``.  Where a level is dark
+    (``T = 0``) the linear weights stay.  Returns ``(a_down, b_down, a_up,
+    b_up)`` in the form of :func:`_exit_weights` (``a`` multiplies the source
+    at the exit level, ``b`` at the entry level).
+    """
+    top, bot = t_sun[:, :-1], t_sun[:, 1:]
+    lit = (top > 0) & (bot > 0) & (dtau > 0)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        a1 = np.where(lit, np.log(np.where(lit, top / np.where(bot > 0, bot, 1.0), 1.0)), 0.0)
+    a1 = a1[..., None]  # c dtau
+    a2 = dtau[..., None] / np.abs(mu)  # dtau / mu
+    down = a2 * _divided_exp(a1, a2)
+    up = a2 * _divided_exp(np.zeros_like(a1 + a2), a1 + a2)
+    lit3 = np.broadcast_to(lit[..., None], e.shape)
+    zero = np.zeros(e.shape)
+    # Downward: J_exit = J_bottom (weight a), J_enter = J_top (weight b).
+    a_down = np.where(lit3, zero, a)
+    b_down = np.where(lit3, down, b)
+    # Upward: J_exit = J_top (weight a), J_enter = J_bottom (weight b).
+    a_up = np.where(lit3, up, a)
+    b_up = np.where(lit3, zero, b)
+    return a_down, b_down, a_up, b_up
+
+
+@numba.njit(cache=True, nogil=True)
+def _sweep_kernel(
+    j_top: np.ndarray,
+    j_bot: np.ndarray,
+    e: np.ndarray,
+    a_down: np.ndarray,
+    b_down: np.ndarray,
+    a_up: np.ndarray,
+    b_up: np.ndarray,
+    ground: np.ndarray,
+    xs: np.ndarray,
+    out: np.ndarray,
+) -> None:
+    """One order's radiance at every level of one mode, for wavelengths ``xs``.
+
+    ``j_top``, ``j_bot``: (n_x, n_layer, 2n) sources at each layer's top and
+    bottom level (upward directions first); ``e``, ``a_*``, ``b_*``: (n_wl,
+    n_layer, n) exit weights; ``ground``: (n_x,) upward radiance leaving the
+    ground; ``out``: (n_x, n_layer + 1, 2n).
+    """
+    n_x, n_layer, nd = j_top.shape
+    n = nd // 2
+    down = np.empty(n)
+    up = np.empty(n)
+    for i in range(n_x):
+        x = xs[i]
+        # Downward from the top (no diffuse light enters).
+        for d in range(n):
+            down[d] = 0.0
+            out[i, 0, n + d] = 0.0
+        for k in range(n_layer):
+            for d in range(n):
+                down[d] = (
+                    down[d] * e[x, k, d]
+                    + j_bot[i, k, n + d] * a_down[x, k, d]
+                    + j_top[i, k, n + d] * b_down[x, k, d]
+                )
+                out[i, k + 1, n + d] = down[d]
+        # Upward from the ground.
+        for d in range(n):
+            up[d] = ground[i]
+            out[i, n_layer, d] = up[d]
+        for k in range(n_layer - 1, -1, -1):
+            for d in range(n):
+                up[d] = (
+                    up[d] * e[x, k, d]
+                    + j_top[i, k, d] * a_up[x, k, d]
+                    + j_bot[i, k, d] * b_up[x, k, d]
+                )
+                out[i, k, d] = up[d]
+
+
+@dataclass(frozen=True)
+class _Grid:
+    """A double-Gauss quadrature and what an order on it needs."""
+
+    n: int
+    mu: np.ndarray  # (2n,), upward first
+    weights: np.ndarray  # (2n,)
+    basis: np.ndarray  # (n_mom [m], n_mom [l], 2n): L_l^m(mu_d)
+    project: np.ndarray  # (n_mom [m], 2n, n_mom [l]): w_d L_l^m(mu_d)
+    linear: tuple[np.ndarray, ...]  # e, a_down, b_down, a_up, b_up: (n_wl, n_layer, n)
+    beam: tuple[np.ndarray, ...]  # the same for the first order's source
+
+    @classmethod
+    def make(cls, n: int, n_mom: int, dtau: np.ndarray, t_sun: np.ndarray) -> _Grid:
+        x, w = _double_gauss(n)
+        mu = np.concatenate([x, -x])
+        weights = np.concatenate([w, w])
+        basis = normalized_legendre(n_mom, mu)
+        project = np.ascontiguousarray((basis * weights).transpose(0, 2, 1))
+        e, a, b = _exit_weights(dtau, x)
+        linear = tuple(np.ascontiguousarray(v) for v in (e, a, b, a, b))
+        beam = (e,) + tuple(np.ascontiguousarray(v) for v in _beam_weights(dtau, x, t_sun, e, a, b))
+        return cls(n, mu, weights, basis, project, linear, beam)
+
+
+class OrdersCost:
+    """What :func:`estimate_orders_cost` expects a :func:`solve_orders` call to need.
+
+    Attributes
+    ----------
+    memory_bytes : float
+        Peak memory of the arrays. [bytes]
+    work : float
+        Multiply-adds, for the expected number of orders. [-]
+    orders : int
+        Orders expected (from the column's optical depth and albedo).
+    """
+
+    def __init__(self, memory_bytes: float, work: float, orders: int) -> None:
+        self.memory_bytes = memory_bytes
+        self.work = work
+        self.orders = orders
+
+
+def _expected_orders(medium: Medium, tol: float) -> int:
+    # The ratio of successive orders is about omega (1 - escape), the escape
+    # of a column of scaled optical depth tau about exp(-tau) (the diffuse
+    # light's mean path is about one optical depth); a geometric series with
+    # that ratio reaches tol after log(tol (1 - r)) / log(r) orders.
+    tau = medium.vertical_optical_depth()
+    sca = tau * np.where(
+        medium.sigma_ext_m2 > 0,
+        medium.sigma_sca_m2 / np.where(medium.sigma_ext_m2 > 0, medium.sigma_ext_m2, 1.0),
+        0.0,
+    )
+    tau_s = (tau - medium.truncation * sca).sum(axis=0)
+    sca_s = ((1.0 - medium.truncation) * sca).sum(axis=0)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        omega = np.where(tau_s > 0, sca_s / np.where(tau_s > 0, tau_s, 1.0), 0.0)
+    r = float(np.clip(np.max(omega * (1.0 - np.exp(-2.0 * tau_s))), 1e-3, 0.999))
+    return int(
+        min(_MAX_ORDERS, max(FINE_ORDERS + 2, math.ceil(math.log(tol * (1 - r)) / math.log(r))))
+    )
+
+
+def estimate_orders_cost(medium: Medium, *, n_layers: int, tol: float) -> OrdersCost:
+    """Estimate the memory and work of :func:`solve_orders` before any is done.
+
+    Memory: the moments and the radiance at the ordinates of every mode (kept
+    with the result), the previous order's moments and, for one mode at a
+    time, the fields and sources on the fine quadrature.  Work: per order and
+    mode, three products of (wavelengths x levels) by the quadrature's
+    directions by the mode's moments (sources at the layers' two levels,
+    moments), for the expected number of orders, all modes on every order (an
+    upper bound: high modes stop early).
+
+    Parameters
+    ----------
+    medium : Medium
+        The atmosphere's optics.
+    n_layers : int
+        Layers of the column.
+    tol : float
+        Tolerance on the remainder of the series of orders. [-]
+
+    Returns
+    -------
+    OrdersCost
+    """
+    n = medium.n_streams
+    n_mom = 2 * n
+    n_wl = medium.wavelength_nm.size
+    levels = n_layers + 1
+    fine = FINE_FACTOR * n
+    per_mode = n_wl * levels * 8.0
+    memory = (
+        2.5 * n_mom * n_mom * per_mode  # total and previous moments (+ the result's copy)
+        + n_mom * 2 * n * per_mode  # radiance at the ordinates
+        + 8 * 2 * fine * per_mode  # one mode's fields and sources on the fine quadrature
+        + 12 * n_wl * n_layers * fine * 8.0  # exit weights of both quadratures
+    )
+    orders = _expected_orders(medium, tol)
+    tri = n_mom * (n_mom + 1) / 2.0  # sum over modes of the moments l >= m
+    work = (
+        3.0 * n_wl * levels * tri * (2 * fine * FINE_ORDERS + 2 * n * max(orders - FINE_ORDERS, 0))
+    )
+    return OrdersCost(memory, work, orders)
+
+
+def check_orders_cost(
+    medium: Medium, *, n_layers: int, tol: float, allow_large: bool
+) -> OrdersCost:
+    """:func:`estimate_orders_cost`, then refuse a request beyond the budget.
+
+    Raises
+    ------
+    dustoptics._validation.BudgetError
+        Estimated memory above :data:`dustoptics._validation.MEMORY_BUDGET_BYTES`
+        or work above :data:`WORK_BUDGET`, and ``allow_large`` is False; the
+        message names ``n_layers`` and its largest allowed value with these
+        wavelengths and streams.
+    """
+    cost = estimate_orders_cost(medium, n_layers=n_layers, tol=tol)
+    if allow_large:
+        return cost
+    from dustoptics._validation import MEMORY_BUDGET_BYTES
+
+    per_layer_mem = cost.memory_bytes / (n_layers + 1)
+    per_layer_work = cost.work / (n_layers + 1)
+    largest = int(min(MEMORY_BUDGET_BYTES / per_layer_mem, WORK_BUDGET / per_layer_work)) - 1
+    what = (
+        f"{medium.wavelength_nm.size} wavelengths x n_streams={medium.n_streams} x "
+        f"n_layers={n_layers} (about {cost.orders} orders of scattering)"
+    )
+    change = (
+        f"n_layers must be at most {max(largest, 0)} with {medium.wavelength_nm.size} "
+        f"wavelengths and n_streams={medium.n_streams}; use fewer layers, wavelengths or streams"
+    )
+    check_budget(f"solve_orders ({what})", cost.memory_bytes, allow_large=False, change=change)
+    if cost.work > WORK_BUDGET:
+        raise BudgetError(
+            f"solve_orders ({what}) would need about {cost.work:.3g} multiply-adds, beyond the "
+            f"budget of {WORK_BUDGET:g} (about five minutes); {change}, or pass allow_large=True "
+            "(--allow-large on the command line) to go ahead"
+        )
+    return cost
+
+
 def solve_orders(
     medium: Medium,
     *,
     sun_zenith_deg: float,
     ground_albedo: float | np.ndarray = 0.0,
-    n_layers: int = 120,
+    n_layers: int = N_LAYERS,
     tol: float = 1e-4,
     geometry: str = "pseudo-spherical",
+    progress: TextIO | Reporter | None = None,
+    allow_large: bool = False,
 ) -> DiffuseField:
     """Diffuse radiance in the column by successive orders of scattering.
 
@@ -205,15 +493,26 @@ def solve_orders(
     ground_albedo : float or array_like
         Lambertian albedo, one value or one per wavelength, in [0, 1]. [-]
     n_layers : int
-        Layers of the column (thin near the ground).
+        Layers of the column (thin near the ground); default :data:`N_LAYERS`.
     tol : float
         Tolerance on the remainder of the series of orders. [-]
     geometry : {"pseudo-spherical", "plane-parallel"}
         Attenuation of the Sun's beam.
+    progress : text stream, optional
+        Where to report the orders after the first two seconds (e.g.
+        ``sys.stderr``); None is silent.
+    allow_large : bool
+        Go ahead beyond the memory and work budget
+        (:func:`check_orders_cost`).
 
     Returns
     -------
     DiffuseField
+
+    Raises
+    ------
+    dustoptics._validation.BudgetError
+        The estimate is beyond the budget and ``allow_large`` is False.
     """
     check_choice("geometry", geometry, GEOMETRIES)
     sza = check_closed_interval("sun_zenith_deg", sun_zenith_deg, 0.0, 100.0)
@@ -226,16 +525,14 @@ def solve_orders(
     albedo = np.broadcast_to(np.asarray(ground_albedo, dtype=float), (nwl,)).copy()
     if not np.all((albedo >= 0) & (albedo <= 1)):
         raise ValueError(f"ground_albedo must be within [0, 1]; got {ground_albedo!r}")
-    if not (isinstance(n_layers, int) and 4 <= n_layers <= 1000):
-        raise ValueError(f"n_layers must be an integer in [4, 1000]; got {n_layers!r}")
+    if not (isinstance(n_layers, int) and 4 <= n_layers <= 100_000):
+        raise ValueError(f"n_layers must be an integer in [4, 100000]; got {n_layers!r}")
+    report = reporter(progress)
+    cost = check_orders_cost(medium, n_layers=n_layers, tol=tol, allow_large=bool(allow_large))
 
     n = medium.n_streams
     n_mom = 2 * n
     mu0 = math.cos(math.radians(sza))
-    x, w = _double_gauss(n)
-    mu = np.concatenate([x, -x])
-    weights = np.concatenate([w, w])
-    lam = normalized_legendre(n_mom, mu)  # (m, l, d)
     lam0 = normalized_legendre(n_mom, np.array([-mu0]))[:, :, 0]  # (m, l)
 
     z = _level_altitudes(medium.top_altitude_m, n_layers)
@@ -249,7 +546,7 @@ def solve_orders(
         chi = np.einsum("cx,ck,cxl->xkl", sig_s, amount, medium.scaled_chi)
         chi = np.where(sca[..., None] > 0, chi / np.where(sca > 0, sca, 1.0)[..., None], 0.0)
     two_l = 2.0 * np.arange(n_mom) + 1.0
-    coef = 0.5 * omega[..., None] * two_l * chi  # (x, k, l)
+    coef = np.ascontiguousarray(0.5 * omega[..., None] * two_l * chi)  # (x, k, l)
 
     radius = medium.planet_radius_m + z
     if geometry == "pseudo-spherical":
@@ -258,94 +555,137 @@ def solve_orders(
         tau_cum = np.concatenate([np.zeros((nwl, 1)), np.cumsum(dtau, axis=1)], axis=1)
         t_sun = np.exp(-tau_cum / mu0)
 
-    e, a_exit, b_enter = _exit_weights(dtau, mu[:n])  # (x, k, n)
+    regular = _Grid.make(n, n_mom, dtau, t_sun)
+    fine = _Grid.make(FINE_FACTOR * n, n_mom, dtau, t_sun) if FINE_FACTOR > 1 else regular
     n_levels = z.size
     total = np.zeros((n_mom, nwl, n_levels, 2 * n))
-
-    # First order: the Sun's beam scattered once, at each layer's two levels.
+    moments = np.zeros((n_mom, nwl, n_levels, n_mom))
+    flux_up = np.zeros((nwl, n_levels))
+    flux_down = np.zeros((nwl, n_levels))
+    prev_moments: list[np.ndarray | None] = [None] * n_mom  # (x, level, l >= m)
+    prev_norm = np.zeros((n_mom, nwl))
+    remainder = np.full((n_mom, nwl), np.inf)
+    active = np.ones((n_mom, nwl), dtype=bool)
+    orders_done = np.zeros(n_mom, dtype=int)
+    ground_flux = max(mu0, 0.0) * t_sun[:, -1]  # direct beam at the ground
     dm0 = np.where(np.arange(n_mom) == 0, 1.0, 2.0)
-    # beam[m, x, k, d] = (2 - d_m0)/(4 pi) sum_l (2l+1) chi_l omega L(mu_d) L(-mu0)
-    beam = (
-        np.einsum("xkl,mld,ml->mxkd", coef, lam, lam0) * (dm0 / (2.0 * np.pi))[:, None, None, None]
-    )
-    j_top = beam * t_sun[None, :, :-1, None]
-    j_bot = beam * t_sun[None, :, 1:, None]
-    flux_prev = max(mu0, 0.0) * t_sun[:, -1]  # direct beam at the ground
-    prev_norm = None
-    err = np.full(nwl, np.inf)
+    all_x = np.arange(nwl)
+
+    def sources(grid: _Grid, m: int, xs: np.ndarray, mom: np.ndarray | None) -> tuple:
+        # Sources at each layer's top and bottom level, (x, k, 2n).
+        basis = grid.basis[m, m:]  # (l, d)
+        cm = coef[xs, :, m:] if xs.size < nwl else coef[:, :, m:]
+        if mom is None:  # the beam
+            beam = (cm * (lam0[m, m:] * dm0[m] / (2.0 * np.pi))) @ basis  # (x, k, d)
+            ts = t_sun[xs]
+            return beam * ts[:, :-1, None], beam * ts[:, 1:, None]
+        return (cm * mom[:, :-1]) @ basis, (cm * mom[:, 1:]) @ basis
+
+    def sweep(grid: _Grid, j: tuple, xs: np.ndarray, ground: np.ndarray, beam: bool) -> np.ndarray:
+        out = np.empty((xs.size, n_levels, 2 * grid.n))
+        weights = grid.beam if beam else grid.linear
+        _sweep_kernel(
+            np.ascontiguousarray(j[0]), np.ascontiguousarray(j[1]), *weights, ground, xs, out
+        )
+        return out
+
     n_orders = 0
     for order in range(1, _MAX_ORDERS + 1):
+        modes = np.flatnonzero(active.any(axis=1))
+        if modes.size == 0:
+            break
         n_orders = order
-        field = _sweep(j_top, j_bot, e, a_exit, b_enter, albedo, flux_prev, n)
-        total += field
-        norm = np.abs(field).max(axis=(0, 2, 3))
-        ref = np.abs(total).max(axis=(0, 2, 3))
-        if prev_norm is not None:
+        grid = fine if order <= FINE_ORDERS else regular
+        next_ground = np.zeros(nwl)
+        norm = np.zeros((n_mom, nwl))
+        for m in modes.tolist():
+            xs = all_x[active[m]]
+            prev = prev_moments[m]
+            mom_in = (
+                None
+                if order == 1
+                else (prev if xs.size == nwl or prev is None else prev[active[m]])
+            )
+            if order > 1 and mom_in is None:
+                continue
+            ground = (albedo[xs] * ground_flux[xs] / np.pi) if m == 0 else np.zeros(xs.size)
+            j = sources(grid, m, xs, mom_in)
+            field = sweep(grid, j, xs, ground, beam=order == 1)
+            if grid is regular:
+                field_r = field
+            else:
+                j_r = sources(regular, m, xs, mom_in)
+                field_r = sweep(regular, j_r, xs, ground, beam=order == 1)
+            mom = field.reshape(-1, 2 * grid.n) @ grid.project[m][:, m:]
+            mom = mom.reshape(xs.size, n_levels, n_mom - m)
+            if xs.size == nwl:
+                total[m] += field_r
+                moments[m, :, :, m:] += mom
+            else:
+                total[m, xs] += field_r
+                moments[m, xs, :, m:] += mom
+            if xs.size == nwl:
+                prev_moments[m] = mom
+            else:
+                full = np.zeros((nwl, n_levels, n_mom - m)) if prev is None else prev
+                full[xs] = mom
+                prev_moments[m] = full
+            norm[m, xs] = np.abs(field_r).max(axis=(1, 2))
+            orders_done[m] = order
+            if m == 0:
+                g = grid.n
+                wmu = grid.weights[:g] * grid.mu[:g]
+                flux_up[xs] += 2.0 * np.pi * field[:, :, :g] @ wmu
+                down = 2.0 * np.pi * field[:, :, g:] @ wmu
+                flux_down[xs] += down
+                next_ground[xs] = down[:, -1]
+        ground_flux = next_ground
+        # Convergence of each (mode, wavelength): the geometric remainder.
+        ref = np.abs(total[0]).max(axis=(1, 2))  # (x,)
+        if order >= 3:
             with np.errstate(invalid="ignore", divide="ignore"):
                 r = np.where(prev_norm > 0, norm / np.where(prev_norm > 0, prev_norm, 1.0), 0.0)
-                err = np.where(
-                    ref > 0,
-                    norm
-                    * np.where(r < 1, r / (1 - np.minimum(r, 1 - 1e-12)), np.inf)
-                    / np.where(ref > 0, ref, 1.0),
-                    0.0,
-                )
-            if np.all(err <= tol):
-                break
-        prev_norm = norm
-        # Next order's source from this order's radiance.
-        mom = np.einsum("mld,d,mxkd->mxkl", lam, weights, field)  # (m, x, level, l)
-        j_top = np.einsum("xkl,mxkl,mld->mxkd", coef, mom[:, :, :-1], lam)
-        j_bot = np.einsum("xkl,mxkl,mld->mxkd", coef, mom[:, :, 1:], lam)
-        flux_prev = 2.0 * np.pi * np.einsum("xj,j->x", field[0, :, -1, n:], w * x)
+                rem = np.where(r < 1.0, norm * r / (1.0 - np.minimum(r, 1.0 - 1e-12)), np.inf)
+            rem = np.where(norm > 0, rem, 0.0)
+            remainder = np.where(active, rem, remainder)
+            limit = tol * ref / n_mom
+            active &= ~(remainder <= limit[None, :])
+        prev_norm = np.where(active | (norm > 0), norm, prev_norm)
+        left = int(active.any(axis=1).sum())
+        if left:
+            report(
+                f"orders of scattering: order {order}, {left} of {n_mom} Fourier modes still converging"
+            )
     else:
+        with np.errstate(invalid="ignore", divide="ignore"):
+            est = float(np.max(remainder.sum(axis=0) / np.abs(total).max(axis=(0, 2, 3))))
         warnings.warn(
             f"orders of scattering did not reach tol={tol:g} in {_MAX_ORDERS} orders "
-            f"(estimate {float(np.max(err)):.2g})",
+            f"(estimate {est:.2g})",
             SkyConvergenceWarning,
             stacklevel=2,
         )
-    moments = np.einsum("mld,d,mxkd->mxkl", lam, weights, total)
+    ref = np.abs(total).max(axis=(0, 2, 3))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        err = np.where(
+            ref > 0,
+            np.where(np.isfinite(remainder), remainder, 0.0).sum(axis=0)
+            / np.where(ref > 0, ref, 1.0),
+            0.0,
+        )
+    report(f"orders of scattering: {n_orders} orders (expected about {cost.orders})", last=True)
     return DiffuseField(
         mu0=mu0,
         altitude_m=z,
-        mu=mu,
-        weights=weights,
+        mu=regular.mu,
+        weights=regular.weights,
         radiance=total,
         moments=moments,
         sun_transmittance=t_sun,
         ground_albedo=albedo,
         n_orders=n_orders,
-        error_estimate=np.where(np.isfinite(err), err, 0.0),
+        error_estimate=err,
         geometry=geometry,
+        diffuse_flux_up=flux_up,
+        diffuse_flux_down=flux_down,
     )
-
-
-def _sweep(
-    j_top: np.ndarray,
-    j_bot: np.ndarray,
-    e: np.ndarray,
-    a_exit: np.ndarray,
-    b_enter: np.ndarray,
-    albedo: np.ndarray,
-    ground_flux: np.ndarray,
-    n: int,
-) -> np.ndarray:
-    """One order's radiance at every level from its layer sources."""
-    n_mom, nwl, n_layers, _ = j_top.shape
-    out = np.zeros((n_mom, nwl, n_layers + 1, 2 * n))
-    # Downward: enter at the layer's top, exit at its bottom.
-    down = np.zeros((n_mom, nwl, 2 * n - n))
-    for k in range(n_layers):
-        ek, ak, bk = e[None, :, k], a_exit[None, :, k], b_enter[None, :, k]
-        down = down * ek + j_bot[:, :, k, n:] * ak + j_top[:, :, k, n:] * bk
-        out[:, :, k + 1, n:] = down
-    # Upward from the Lambertian ground (isotropic: the m = 0 term only).
-    up = np.zeros((n_mom, nwl, n))
-    up[0] = (albedo * ground_flux / np.pi)[:, None]
-    out[:, :, n_layers, :n] = up
-    for k in range(n_layers - 1, -1, -1):
-        ek, ak, bk = e[None, :, k], a_exit[None, :, k], b_enter[None, :, k]
-        up = up * ek + j_top[:, :, k, :n] * ak + j_bot[:, :, k, :n] * bk
-        out[:, :, k, :n] = up
-    return out

@@ -7,24 +7,49 @@ the atmosphere or to the ground:
     L = int sum_c beta_sca,c(s) P_c(Theta) F0 T'_sun(s) T'(0, s) ds           (single scattering)
       + int sum_c N_c(s) sigma'_sca,c J'_c(s, mu_s, phi_s) T'(0, s) ds       (orders >= 2)
       + T'(0, s_g) (A / pi) E_ground                                         (the ground)
+      + Delta L_aureole(Theta)                                               (secondary scattering)
 
 Single scattering takes every constituent's tabulated phase function at the
 scattering angle ``Theta`` (the angle between the view and the Sun) and the
 Sun's path to each point in the spherical shell.  The orders >= 2 use the
 converged diffuse field of :mod:`dustoptics.sky.orders` (delta-M scaled
 problem, pseudo-spherical beam): its source function ``J'`` at each point's
-altitude, in the local direction of propagation and azimuth from the local
-Sun.  Every beam, the Sun's and the line of sight, is attenuated with the
-delta-M scaled extinction ``T'``: light scattered into the truncated forward
+altitude, evaluated exactly in the local direction of propagation from the
+field's Legendre moments (a sum over ``l`` of ``L_l^m(mu)``, the levels'
+moments interpolated linearly in altitude) and summed over the Fourier modes
+at the local azimuth from the Sun.
+
+Every beam, the Sun's and the line of sight, is attenuated with the delta-M
+scaled extinction ``T'``, while the single scattering takes the true phase
+function: this is Nakajima & Tanaka's TMS method (DISORT's intensity
+correction does the same: the exact phase function over ``1 - f omega``,
+with the scaled optical depths).  Light scattered into the truncated forward
 peak (a few degrees wide for micron-sized dust) stays in the beam, as the
-delta-M approximation assumes.  Attenuating the single scattering with the
-true extinction instead (Nakajima & Tanaka's TMS) loses the light that is
-scattered first into the peak and then anywhere: against the independent
-Monte Carlo of the tests it made the Mars sky 4-16 % too dark at 440 nm
-(tau 0.5, 24 streams); with scaled beams it agrees within the Monte Carlo's
-statistics (1-4 %).  Only the multiple-scattering source takes the column
-above the observer as laterally uniform; single scattering and every
-transmittance are spherical.
+delta-M approximation assumes.
+
+The truncation leaves one error that no affordable number of streams
+removes: light scattered twice within the forward peak spreads over a few
+to about twenty degrees around the Sun, where the delta-M problem keeps it
+in the beam.  ``Delta L_aureole`` is Nakajima & Tanaka's IMS correction for
+it, the second order of scattering in the column above the observer taken as
+homogeneous: ``F0 / (4 pi) sum_l (2 l + 1) a_l P_l(cos Theta) xi(A, B)`` with
+``a_l = (omega chi_l - omega f)^2 - (omega f)^2`` for ``l >= 2 n_streams`` and
+``-(omega f)^2`` below (the column's scattering-weighted moments of the true
+phase functions to :data:`~dustoptics.sky.medium.AUREOLE_MOMENTS`), and
+``xi(A, B) = A B ((A - B - 1) e^-B + e^-A) / (A - B)^2`` the double-scattering
+path integral with ``A`` the line of sight's optical depth to the top and
+``B`` the Sun's scaled one.  It is applied in every direction (it vanishes
+away from the Sun); with it the radiance is within 0.3 % of converged CDISORT
+in every direction a plane-parallel model can judge (``scripts/sky_vs_disort.py``).
+
+The line of sight is sampled at ``s_end expm1(a i / n) / expm1(a)`` (dense
+near the observer) and integrated with a source function (emission over
+scaled extinction) linear in optical depth between samples and each
+segment's optical depth exact for densities exponential between samples.
+Rays that share a view cosine (a row of the sky dome) share their samples,
+view transmittances and diffuse source modes, computed once per row.  Only
+the multiple-scattering source takes the column above the observer as
+laterally uniform; single scattering and every transmittance are spherical.
 
 Radiances are per unit solar irradiance normal to the beam (``F0 = 1``):
 [sr^-1].  The direct Sun is not included.
@@ -35,28 +60,51 @@ References
    calculations in moderately thick atmospheres using a truncation
    approximation," J. Quant. Spectrosc. Radiat. Transfer 40, 51-69 (1988),
    doi:10.1016/0022-4073(88)90031-3.
+.. [2] K. Stamnes, S.-C. Tsay, W. Wiscombe and I. Laszlo, "DISORT, a
+   general-purpose Fortran program for discrete-ordinate-method radiative
+   transfer in scattering and emitting layered media: documentation of
+   methodology," report (2000), sec. 3.6 (TMS and IMS as DISORT applies them).
 """
 
 from __future__ import annotations
 
 import math
-from typing import Final
+from typing import Final, NamedTuple, TextIO
 
 import numba
 import numpy as np
 
+from dustoptics._validation import MEMORY_BUDGET_BYTES, BudgetError, check_budget
+from dustoptics.sky._progress import Reporter, reporter
 from dustoptics.sky.medium import Medium, _interp_columns, _scatters
 from dustoptics.sky.orders import DiffuseField, normalized_legendre
 
-__all__ = ["MODE_CUTOFF", "line_of_sight_radiance", "source_modes", "source_table"]
+__all__ = [
+    "MODE_CUTOFF",
+    "N_PATH",
+    "WORK_BUDGET",
+    "RenderCost",
+    "aureole_correction",
+    "check_render_cost",
+    "estimate_render_cost",
+    "line_of_sight_radiance",
+    "source_modes",
+    "source_table",
+]
 
-#: Samples of the direction-cosine grid of the multiple-scattering source.
+#: Samples of the direction-cosine grid of :func:`source_table`.
 N_SOURCE_MU: Final = 181
 #: Samples along each line of sight.
-N_PATH: Final = 96
+N_PATH: Final = 64
 #: Stretch of the samples along a line of sight from the ground: dense near
 #: the observer, where the densities are largest.
 PATH_STRETCH: Final = 6.0
+#: Largest work (multiply-adds) of one call without ``allow_large``: some
+#: five minutes on two cores.
+WORK_BUDGET: Final = 1e12
+#: Rows of the sky dome computed per call of the kernels (between progress
+#: reports).
+_ROWS_PER_CHUNK: Final = 16
 
 
 def source_table(medium: Medium, field: DiffuseField) -> np.ndarray:
@@ -64,25 +112,20 @@ def source_table(medium: Medium, field: DiffuseField) -> np.ndarray:
 
     ``J_c^m(level, mu) = (1/2) sum_l (2 l + 1) chi'_{c,l} L_l^m(mu) M_l^m(level)``,
     on ``mu = linspace(-1, 1, N_SOURCE_MU)`` (direction of propagation).
+    The renderer evaluates the same sum at each point's own direction.
 
     Returns
     -------
     numpy.ndarray, shape (n_constituent, n_modes, n_wavelength, n_level, N_SOURCE_MU)
         Per unit scaled scattering cross-section and number density. [sr^-1]
     """
-    return _source_grid(medium, field, 2 * medium.n_streams).transpose(2, 3, 4, 0, 1)
-
-
-def _source_grid(medium: Medium, field: DiffuseField, n_modes: int) -> np.ndarray:
-    # The source of :func:`source_table` for modes m < n_modes, laid out as the
-    # kernel reads it: (level, mu, constituent, mode, wavelength).
     n_mom = 2 * medium.n_streams
     grid = np.linspace(-1.0, 1.0, N_SOURCE_MU)
-    lam = normalized_legendre(n_mom, grid)[:n_modes]  # (m, l, u)
+    lam = normalized_legendre(n_mom, grid)  # (m, l, u)
     two_l = 2.0 * np.arange(n_mom) + 1.0
     chi = 0.5 * two_l * medium.scaled_chi  # (c, x, l)
-    weighted = chi[:, None, :, None, :] * field.moments[None, :n_modes]  # (c, m, x, k, l)
-    return np.einsum("cmxkl,mlu->kucmx", weighted, lam, optimize=True)
+    weighted = chi[:, None, :, None, :] * field.moments[None]  # (c, m, x, k, l)
+    return np.einsum("cmxkl,mlu->cmxku", weighted, lam, optimize=True)
 
 
 #: Fourier modes of the multiple-scattering source whose largest contribution
@@ -131,84 +174,268 @@ def source_modes(medium: Medium, field: DiffuseField) -> np.ndarray:
     return out
 
 
+def _packed_index(n_mom: int, n_modes: int) -> np.ndarray:
+    # Offset of (m, l = m) in the packed (m, l >= m) layout, m < n_modes (+ the end).
+    sizes = n_mom - np.arange(n_modes)
+    return np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
+
+
+def _source_coefficients(
+    medium: Medium, field: DiffuseField, scatterers: np.ndarray, n_modes: int
+) -> np.ndarray:
+    """``(1/2) (2 l + 1) chi'_{c,l} M_l^m(level)``, packed as the row kernel reads it.
+
+    Shape (n_level, n_scatterer, packed (m, l >= m), n_wavelength).
+    """
+    n_mom = 2 * medium.n_streams
+    two_l = 2.0 * np.arange(n_mom) + 1.0
+    chi = 0.5 * two_l * medium.scaled_chi[scatterers]  # (c, x, l)
+    offsets = _packed_index(n_mom, n_modes)
+    n_level = field.altitude_m.size
+    out = np.empty((n_level, scatterers.size, int(offsets[-1]), medium.wavelength_nm.size))
+    for m in range(n_modes):
+        mom = field.moments[m, :, :, m:]  # (x, k, l)
+        part = chi[:, None, :, m:] * mom.transpose(1, 0, 2)[None]  # (c, k, x, l)
+        out[:, :, offsets[m] : offsets[m + 1], :] = part.transpose(1, 0, 3, 2)
+    return out
+
+
+@numba.njit(cache=True, nogil=True)
+def _normalized_legendre_packed(mu: float, n_mom: int, n_modes: int, out: np.ndarray) -> None:
+    """``L_l^m(mu)`` (the normalization of :func:`normalized_legendre`) packed by (m, l >= m)."""
+    s = math.sqrt(max(0.0, 1.0 - mu * mu))
+    mm = 1.0  # L_m^m
+    p = 0
+    for m in range(n_modes):
+        if m > 0:
+            mm = -mm * s * math.sqrt((2.0 * m - 1.0) / (2.0 * m))
+        out[p] = mm
+        if m + 1 < n_mom:
+            prev, cur = mm, math.sqrt(2.0 * m + 1.0) * mu * mm
+            out[p + 1] = cur
+            for ell in range(m + 1, n_mom - 1):
+                nxt = ((2.0 * ell + 1.0) * mu * cur - math.sqrt((ell - m) * (ell + m)) * prev) / (
+                    math.sqrt((ell + 1.0 - m) * (ell + 1.0 + m))
+                )
+                prev, cur = cur, nxt
+                out[p + ell + 1 - m] = cur
+        p += n_mom - m
+
+
+@numba.njit(cache=True, nogil=True)
+def _phi_b(t: float) -> float:
+    # (1 - e^-t (1 + t)) / t, the weight of the far end of a linear source.
+    if t < 1e-4:
+        return t * (0.5 - t * (1.0 / 3.0 - t * 0.125))
+    return -(math.expm1(-t) + t * math.exp(-t)) / t
+
+
+@numba.njit(cache=True, nogil=True)
+def _log_mean(a: float, b: float) -> float:
+    # Mean of a quantity exponential between two samples (arithmetic if one is 0).
+    if a <= 0.0 or b <= 0.0:
+        return 0.5 * (a + b)
+    r = a / b
+    if abs(r - 1.0) < 1e-6:
+        return 0.5 * (a + b)
+    return (a - b) / math.log(r)
+
+
 @numba.njit(cache=True, nogil=True, parallel=True)
-def _radiance_kernel(
-    mu_view: np.ndarray,
-    phi_view: np.ndarray,
+def _row_kernel(
+    mu_rows: np.ndarray,
     r0: float,
-    mu_sun_ray: np.ndarray,
     r_top: float,
+    r_ground: float,
+    n_path: int,
+    stretch: float,
     altitude: np.ndarray,
     density: np.ndarray,
+    sig_ext_scaled: np.ndarray,
+    sig_sca_scaled: np.ndarray,
+    level_altitude: np.ndarray,
+    coeffs: np.ndarray,
+    scatterers: np.ndarray,
+    modes_used: np.ndarray,
+    n_mom: int,
+    geo: np.ndarray,
+    dens_out: np.ndarray,
+    wb: np.ndarray,
+    g: np.ndarray,
+    t_end: np.ndarray,
+    hits: np.ndarray,
+) -> None:
+    """Per row (one view cosine): samples, densities, path weights, diffuse source modes.
+
+    ``wb[row, i, x]`` is sample i's weight in the path integral over its
+    scaled extinction (multiplies the emission); ``g[row, i, m, x]`` is that
+    weight times the diffuse emission's mode m.
+    """
+    n_rows = mu_rows.shape[0]
+    n_c, nwl = sig_ext_scaled.shape
+    n_s = scatterers.shape[0]
+    n_modes = g.shape[2]
+    n_lev = level_altitude.shape[0]
+    nz = altitude.shape[0]
+    n_packed = coeffs.shape[2]
+    a = stretch
+    norm = math.expm1(a)
+    for row in numba.prange(n_rows):
+        mv = mu_rows[row]
+        b = r0 * mv
+        disc_g = b * b - (r0 * r0 - r_ground * r_ground)
+        ground = mv < 0.0 and disc_g >= 0.0
+        if ground:
+            s_end = -b - math.sqrt(disc_g)
+        else:
+            s_end = -b + math.sqrt(max(0.0, b * b + r_top * r_top - r0 * r0))
+        hits[row] = ground
+        lv = np.empty(n_packed)
+        beta = np.empty(nwl)
+        beta_prev = np.empty(nwl)
+        tau = np.zeros(nwl)
+        dtau_prev = np.zeros(nwl)
+        tsum = np.empty(n_s * nwl)
+        for i in range(n_path + 1):
+            s = s_end * math.expm1(a * i / n_path) / norm
+            x_r = math.sqrt(max(r0 * r0 + s * s + 2.0 * r0 * s * mv, 0.0))
+            z = x_r - r_ground
+            mu_loc = min(max((r0 * mv + s) / x_r, -1.0), 1.0)
+            geo[row, i, 0] = s
+            geo[row, i, 1] = x_r
+            geo[row, i, 2] = mu_loc
+            iz = int(np.searchsorted(altitude, z)) - 1
+            iz = min(max(iz, 0), nz - 2)
+            fz = (z - altitude[iz]) / (altitude[iz + 1] - altitude[iz])
+            fz = min(max(fz, 0.0), 1.0)
+            for c in range(n_c):
+                dens_out[row, i, c] = density[c, iz] * (1.0 - fz) + density[c, iz + 1] * fz
+            for x in range(nwl):
+                acc = 0.0
+                for c in range(n_c):
+                    acc += sig_ext_scaled[c, x] * dens_out[row, i, c]
+                beta[x] = acc
+            if i > 0:
+                ds = s - geo[row, i - 1, 0]
+                for x in range(nwl):
+                    dt = 0.0
+                    for c in range(n_c):
+                        dt += sig_ext_scaled[c, x] * _log_mean(
+                            dens_out[row, i - 1, c], dens_out[row, i, c]
+                        )
+                    dt *= ds
+                    # The previous sample's weight gains its share of this segment.
+                    e0 = math.exp(-tau[x])
+                    pb = _phi_b(dt)
+                    pa = -math.expm1(-dt) - pb
+                    w_prev = wb[row, i - 1, x] + e0 * pa
+                    wb[row, i - 1, x] = w_prev / beta_prev[x] if beta_prev[x] > 0.0 else 0.0
+                    wb[row, i, x] = e0 * pb
+                    tau[x] += dt
+                    dtau_prev[x] = dt
+            else:
+                for x in range(nwl):
+                    wb[row, i, x] = 0.0
+            for x in range(nwl):
+                beta_prev[x] = beta[x]
+        # The last sample's weight over its extinction.
+        for x in range(nwl):
+            wb[row, n_path, x] = wb[row, n_path, x] / beta[x] if beta[x] > 0.0 else 0.0
+            t_end[row, x] = math.exp(-tau[x])
+        # Diffuse source modes at each sample, times the sample's weight.
+        for i in range(n_path + 1):
+            x_r = geo[row, i, 1]
+            z = x_r - r_ground
+            _normalized_legendre_packed(-geo[row, i, 2], n_mom, n_modes, lv)
+            k = 0
+            while k < n_lev - 2 and level_altitude[k + 1] > z:
+                k += 1
+            fk = (level_altitude[k] - z) / (level_altitude[k] - level_altitude[k + 1])
+            fk = min(max(fk, 0.0), 1.0)
+            for m in range(n_modes):
+                for x in range(nwl):
+                    g[row, i, m, x] = 0.0
+            for q in range(n_s):
+                c = scatterers[q]
+                d = dens_out[row, i, c]
+                if d == 0.0:
+                    continue
+                p = 0
+                for m in range(n_modes):
+                    if m >= modes_used[q]:
+                        break
+                    for j in range(n_s * nwl):
+                        tsum[j] = 0.0
+                    for _ell in range(m, n_mom):
+                        w0 = lv[p] * (1.0 - fk)
+                        w1 = lv[p] * fk
+                        for x in range(nwl):
+                            tsum[x] += w0 * coeffs[k, q, p, x] + w1 * coeffs[k + 1, q, p, x]
+                        p += 1
+                    for x in range(nwl):
+                        g[row, i, m, x] += d * sig_sca_scaled[c, x] * tsum[x]
+            for m in range(n_modes):
+                for x in range(nwl):
+                    g[row, i, m, x] *= wb[row, i, x]
+
+
+@numba.njit(cache=True, nogil=True, parallel=True)
+def _ray_kernel(
+    ray_row: np.ndarray,
+    mu_view: np.ndarray,
+    phi_view: np.ndarray,
+    mu_sun_ray: np.ndarray,
+    r0: float,
     n0: np.ndarray,
     sig_sca: np.ndarray,
     sig_ext_scaled: np.ndarray,
-    sig_sca_scaled: np.ndarray,
     phase_ss: np.ndarray,
     radius_grid: np.ndarray,
     mu_grid: np.ndarray,
     columns: np.ndarray,
-    level_altitude: np.ndarray,
-    source: np.ndarray,
+    geo: np.ndarray,
+    dens: np.ndarray,
+    wb: np.ndarray,
+    t_end: np.ndarray,
+    hits: np.ndarray,
     ground_albedo: np.ndarray,
     ground_diffuse: np.ndarray,
-    modes_used: np.ndarray,
-    n_path: int,
-    stretch: float,
+    cosm: np.ndarray,
 ) -> np.ndarray:
-    n_rays = mu_view.shape[0]
+    """Single scattering and the ground per ray; ``cosm[ray, i, m]`` gets ``cos(m phi)``
+    at each sample (the diffuse part is then a product with the rows' modes)."""
+    n_rays = ray_row.shape[0]
+    n_modes = cosm.shape[2]
     n_c, nwl = sig_ext_scaled.shape
-    n_modes = source.shape[3]
-    n_lev = level_altitude.shape[0]
-    n_u = source.shape[1]
+    n_samples = geo.shape[1]
     r_ground = radius_grid[0]
     out = np.zeros((n_rays, nwl))
     for ray in numba.prange(n_rays):
+        row = ray_row[ray]
         mu_sun = mu_sun_ray[ray]
         sin_sun = math.sqrt(max(0.0, 1.0 - mu_sun * mu_sun))
         mv = mu_view[ray]
         sv = math.sqrt(max(0.0, 1.0 - mv * mv))
         cos_theta = mv * mu_sun + sv * sin_sun * math.cos(phi_view[ray])
-        # Length of the line of sight: to the ground or to the top.
-        b = r0 * mv
-        disc_g = b * b - (r0 * r0 - r_ground * r_ground)
-        hits_ground = mv < 0.0 and disc_g >= 0.0
-        if hits_ground:
-            s_end = -b - math.sqrt(disc_g)
-        else:
-            s_end = -b + math.sqrt(max(0.0, b * b + r_top * r_top - r0 * r0))
-        tau_s = np.zeros(nwl)
-        prev_e = np.zeros(nwl)
-        prev_ms = np.zeros(nwl)
-        prev_bes = np.zeros(nwl)
         acc = np.zeros(nwl)
         col = np.zeros(n_c)
-        dens = np.zeros(n_c)
-        cosm = np.zeros(n_modes)
-        tsun = np.zeros(nwl)
-        bes = np.zeros(nwl)
-        ss = np.zeros(nwl)
-        ms = np.zeros(nwl)
-        jm = np.zeros(nwl)
-        s_prev = 0.0
-        a = stretch
-        norm = math.expm1(a)
-        for i in range(n_path + 1):
-            s = s_end * math.expm1(a * i / n_path) / norm
-            x_r = math.sqrt(max(r0 * r0 + s * s + 2.0 * r0 * s * mv, 0.0))
-            z = x_r - r_ground
-            mu_loc = (r0 * mv + s) / x_r
+        for i in range(n_samples):
+            s = geo[row, i, 0]
+            x_r = geo[row, i, 1]
+            mu_loc = geo[row, i, 2]
             mus_loc = (r0 * mu_sun + s * cos_theta) / x_r
-            # Densities at the point (linear in altitude).
-            iz = int(np.searchsorted(altitude, z)) - 1
-            iz = min(max(iz, 0), altitude.shape[0] - 2)
-            fz = (z - altitude[iz]) / (altitude[iz + 1] - altitude[iz])
-            fz = min(max(fz, 0.0), 1.0)
-            for c in range(n_c):
-                dens[c] = density[c, iz] * (1.0 - fz) + density[c, iz + 1] * fz
-            lit = _interp_columns(x_r, mus_loc, radius_grid, mu_grid, columns, col)
-            # Local azimuth between the view and the Sun (cosine), for the
-            # Fourier series of the diffuse source.
+            # Single scattering, the Sun's beam through the shell.
+            if _interp_columns(x_r, mus_loc, radius_grid, mu_grid, columns, col):
+                for x in range(nwl):
+                    tau_sun = 0.0
+                    ss = 0.0
+                    for c in range(n_c):
+                        tau_sun += sig_ext_scaled[c, x] * col[c] * n0[c]
+                        ss += sig_sca[c, x] * dens[row, i, c] * phase_ss[ray, c, x]
+                    acc[x] += wb[row, i, x] * ss * math.exp(-tau_sun)
+            if n_modes == 0:
+                continue
+            # Diffuse source: its modes at the local azimuth from the Sun.
             sl = math.sqrt(max(0.0, 1.0 - mu_loc * mu_loc))
             ssl = math.sqrt(max(0.0, 1.0 - mus_loc * mus_loc))
             if sl * ssl > 1e-12:
@@ -216,74 +443,17 @@ def _radiance_kernel(
                 cphi = min(max(cphi, -1.0), 1.0)
             else:
                 cphi = 1.0
-            phi = math.acos(cphi)
-            for m in range(n_modes):
-                cosm[m] = math.cos(m * phi)
-            # Source direction of propagation: toward the observer, -view.
-            u = (-mu_loc + 1.0) * 0.5 * (n_u - 1)
-            iu = min(max(int(u), 0), n_u - 2)
-            fu = u - iu
-            # Level interval (levels run from the top down).
-            k = 0
-            while k < n_lev - 2 and level_altitude[k + 1] > z:
-                k += 1
-            fk = (level_altitude[k] - z) / (level_altitude[k] - level_altitude[k + 1])
-            fk = min(max(fk, 0.0), 1.0)
-            # Scattering and extinction at the point, wavelength innermost.
-            for x in range(nwl):
-                tau_sun = 0.0
-                if lit:
-                    for c in range(n_c):
-                        tau_sun += sig_ext_scaled[c, x] * col[c] * n0[c]
-                    tsun[x] = math.exp(-tau_sun)
-                else:
-                    tsun[x] = 0.0
-                bes[x] = 0.0
-                ss[x] = 0.0
-                ms[x] = 0.0
-            for c in range(n_c):
-                d = dens[c]
-                if d == 0.0:
-                    continue
-                for x in range(nwl):
-                    jm[x] = 0.0
-                # Only the Fourier modes this constituent's source has
-                # (Rayleigh: m <= 2; none for a pure absorber).
-                for m in range(modes_used[c]):
-                    cm = cosm[m]
-                    w0 = cm * (1.0 - fk) * (1.0 - fu)
-                    w1 = cm * (1.0 - fk) * fu
-                    w2 = cm * fk * (1.0 - fu)
-                    w3 = cm * fk * fu
-                    s00 = source[k, iu, c, m]
-                    s01 = source[k, iu + 1, c, m]
-                    s10 = source[k + 1, iu, c, m]
-                    s11 = source[k + 1, iu + 1, c, m]
-                    for x in range(nwl):
-                        jm[x] += w0 * s00[x] + w1 * s01[x] + w2 * s10[x] + w3 * s11[x]
-                for x in range(nwl):
-                    bes[x] += sig_ext_scaled[c, x] * d
-                    ss[x] += sig_sca[c, x] * d * phase_ss[ray, c, x]
-                    ms[x] += sig_sca_scaled[c, x] * d * jm[x]
-            for x in range(nwl):
-                e_ss = ss[x] * tsun[x]
-                if i > 0:
-                    ds = s - s_prev
-                    tau_s[x] += 0.5 * (prev_bes[x] + bes[x]) * ds
-                    cur_ss = e_ss * math.exp(-tau_s[x])
-                    cur_ms = ms[x] * math.exp(-tau_s[x])
-                    acc[x] += 0.5 * (prev_e[x] + cur_ss) * ds + 0.5 * (prev_ms[x] + cur_ms) * ds
-                    prev_e[x] = cur_ss
-                    prev_ms[x] = cur_ms
-                else:
-                    prev_e[x] = e_ss
-                    prev_ms[x] = ms[x]
-                prev_bes[x] = bes[x]
-            s_prev = s
-        if hits_ground:
-            x_r = r_ground
-            mus_g = (r0 * mu_sun + s_end * cos_theta) / x_r
-            lit = mus_g > 0.0 and _interp_columns(x_r, mus_g, radius_grid, mu_grid, columns, col)
+            cosm[ray, i, 0] = 1.0
+            if n_modes > 1:
+                cosm[ray, i, 1] = cphi
+            for m in range(2, n_modes):
+                cosm[ray, i, m] = 2.0 * cphi * cosm[ray, i, m - 1] - cosm[ray, i, m - 2]
+        if hits[row]:
+            s_end = geo[row, n_samples - 1, 0]
+            mus_g = (r0 * mu_sun + s_end * cos_theta) / r_ground
+            lit = mus_g > 0.0 and _interp_columns(
+                r_ground, mus_g, radius_grid, mu_grid, columns, col
+            )
             for x in range(nwl):
                 direct = 0.0
                 if lit:
@@ -292,10 +462,170 @@ def _radiance_kernel(
                         tau_sun += sig_ext_scaled[c, x] * col[c] * n0[c]
                     direct = mus_g * math.exp(-tau_sun)
                 e_g = ground_albedo[x] / math.pi * (direct + ground_diffuse[x])
-                acc[x] += e_g * math.exp(-tau_s[x])
+                acc[x] += e_g * t_end[row, x]
         for x in range(nwl):
             out[ray, x] = acc[x]
     return out
+
+
+class RenderCost(NamedTuple):
+    """What :func:`estimate_render_cost` expects a line-of-sight call to need."""
+
+    memory_bytes: float
+    work: float
+
+
+def estimate_render_cost(medium: Medium, *, n_rays: int, n_rows: int, n_path: int) -> RenderCost:
+    """Estimate the memory and work of the line-of-sight integration.
+
+    Memory: the radiances and single-scattering phases of every ray, the
+    diffuse source's coefficients at every level, and one chunk of rows'
+    samples and source modes.  Work: per row and sample, the diffuse source
+    (every scattering constituent's packed moments at two levels); per ray and
+    sample, the source modes and the single scattering at every wavelength.
+
+    Parameters
+    ----------
+    medium : Medium
+        The atmosphere's optics.
+    n_rays, n_rows : int
+        Lines of sight, and distinct view cosines among them.
+    n_path : int
+        Samples along each line of sight.
+
+    Returns
+    -------
+    RenderCost
+    """
+    n_mom = 2 * medium.n_streams
+    nwl = medium.wavelength_nm.size
+    n_c = len(medium.tables)
+    n_s = sum(1 for t in medium.tables if _scatters(t))
+    packed = n_mom * (n_mom + 1) / 2.0
+    levels = 121.0
+    chunk = min(n_rows, _ROWS_PER_CHUNK)
+    memory = 8.0 * (
+        n_rays * nwl * (3 + n_c)
+        + levels * n_s * packed * nwl
+        + chunk * (n_path + 1) * (n_mom + 2 + n_c) * nwl
+    )
+    work = (
+        n_rows * (n_path + 1) * 2.0 * n_s * packed * nwl
+        + n_rays * (n_path + 1) * (n_mom + 2 * n_c + 8) * nwl
+    )
+    return RenderCost(memory, work)
+
+
+def check_render_cost(
+    medium: Medium, *, n_rays: int, n_rows: int, n_path: int, allow_large: bool, what: str
+) -> RenderCost:
+    """:func:`estimate_render_cost`, then refuse a request beyond the budget.
+
+    Raises
+    ------
+    dustoptics._validation.BudgetError
+        Estimated memory above :data:`dustoptics._validation.MEMORY_BUDGET_BYTES`
+        or work above :data:`WORK_BUDGET`, and ``allow_large`` is False; the
+        message names the number of lines of sight and the largest allowed.
+    """
+    cost = estimate_render_cost(medium, n_rays=n_rays, n_rows=n_rows, n_path=n_path)
+    if allow_large:
+        return cost
+    per_ray_mem = cost.memory_bytes / max(n_rays, 1)
+    per_ray_work = cost.work / max(n_rays, 1)
+    largest = int(min(MEMORY_BUDGET_BYTES / per_ray_mem, WORK_BUDGET / per_ray_work))
+    change = (
+        f"{what} must be at most about {largest} lines of sight with "
+        f"{medium.wavelength_nm.size} wavelengths, n_streams={medium.n_streams} and "
+        f"n_path={n_path}; ask for fewer directions"
+    )
+    label = f"the line-of-sight integration ({n_rays} lines of sight)"
+    check_budget(label, cost.memory_bytes, allow_large=False, change=change)
+    if cost.work > WORK_BUDGET:
+        raise BudgetError(
+            f"{label} would need about {cost.work:.3g} multiply-adds, beyond the budget of "
+            f"{WORK_BUDGET:g} (about five minutes); {change}, or pass allow_large=True "
+            "(--allow-large on the command line) to go ahead"
+        )
+    return cost
+
+
+def _xi(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    # A B ((A - B - 1) e^-B + e^-A) / (A - B)^2, and A^2 e^-A / 2 where A = B.
+    d = a - b
+    near = np.abs(d) < 1e-4 * np.maximum(1.0, np.abs(a))
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        far = a * b * ((d - 1.0) * np.exp(-b) + np.exp(-a)) / np.where(near, 1.0, d * d)
+        # Series about A = B: A^2 e^-A (1/2 + d/6 + ...) with b = a - d.
+        close = a * b * np.exp(-b) * (0.5 - d / 6.0)
+    return np.where(near, close, far)
+
+
+#: Scattering angles of the tabulated aureole correction. [deg]
+_AUREOLE_THETA_DEG: Final = np.linspace(0.0, 180.0, 3601)
+
+
+def aureole_correction(
+    medium: Medium,
+    *,
+    theta_deg: np.ndarray,
+    view_optical_depth: np.ndarray,
+    sun_optical_depth: np.ndarray,
+    column_optical_depth: np.ndarray | None = None,
+) -> np.ndarray:
+    """Nakajima & Tanaka's IMS correction of the secondary scattering (per unit F0).
+
+    ``Delta L = (1 / 4 pi) sum_l (2 l + 1) a_l P_l(cos Theta) xi(A, B)``, the
+    column above the observer taken as homogeneous (its scattering-weighted
+    moments; see the module's docstring).
+
+    Parameters
+    ----------
+    medium : Medium
+        The atmosphere's optics (``chi`` to :data:`~dustoptics.sky.medium.AUREOLE_MOMENTS`).
+    theta_deg : array_like, shape (n,)
+        Scattering angles. [deg]
+    view_optical_depth : array_like, shape (n, n_wavelength)
+        ``A``: true optical depth of each line of sight to the top. [-]
+    sun_optical_depth : array_like, shape (n, n_wavelength)
+        ``B``: scaled optical depth of the Sun's path to the observer. [-]
+    column_optical_depth : array_like, shape (n_constituent, n_wavelength), optional
+        Vertical optical depth of each constituent above the observer
+        (default the whole column). [-]
+
+    Returns
+    -------
+    numpy.ndarray, shape (n, n_wavelength)
+        The correction to add to the radiance. [sr^-1]
+    """
+    n_mom = 2 * medium.n_streams
+    tau_c = (
+        medium.vertical_optical_depth() if column_optical_depth is None else column_optical_depth
+    )
+    with np.errstate(invalid="ignore", divide="ignore"):
+        ssa = np.where(
+            medium.sigma_ext_m2 > 0,
+            medium.sigma_sca_m2 / np.where(medium.sigma_ext_m2 > 0, medium.sigma_ext_m2, 1.0),
+            0.0,
+        )
+    tau_sca = tau_c * ssa  # (c, x)
+    tau = tau_c.sum(axis=0)
+    safe = np.where(tau > 0, tau, 1.0)
+    w_chi = np.einsum("cx,cxl->xl", tau_sca, medium.chi) / safe[:, None]  # omega chi_l
+    w_f = (tau_sca * medium.truncation).sum(axis=0) / safe  # omega f
+    a = (w_chi - w_f[:, None]) ** 2 - w_f[:, None] ** 2
+    a[:, :n_mom] = -(w_f[:, None] ** 2)
+    a[tau <= 0] = 0.0
+    ell = np.arange(a.shape[1])
+    grid = np.cos(np.deg2rad(_AUREOLE_THETA_DEG))
+    p_l = np.polynomial.legendre.legvander(grid, ell[-1])  # (theta, l)
+    table = (p_l * ((2 * ell + 1) / (4.0 * np.pi))) @ a.T  # (theta, x)
+    th = np.asarray(theta_deg, dtype=float)
+    idx = np.clip(th / 0.05, 0.0, _AUREOLE_THETA_DEG.size - 1.0)
+    i0 = np.minimum(idx.astype(np.int64), _AUREOLE_THETA_DEG.size - 2)
+    f = (idx - i0)[:, None]
+    c = table[i0] * (1.0 - f) + table[i0 + 1] * f  # (n, x)
+    return c * _xi(np.asarray(view_optical_depth, float), np.asarray(sun_optical_depth, float))
 
 
 def line_of_sight_radiance(
@@ -306,6 +636,9 @@ def line_of_sight_radiance(
     view_azimuth_deg: np.ndarray,
     observer_altitude_m: float = 2.0,
     n_path: int = N_PATH,
+    aureole: bool = True,
+    progress: TextIO | Reporter | None = None,
+    allow_large: bool = False,
 ) -> np.ndarray:
     """Sky radiance in viewing directions from an observer in the atmosphere.
 
@@ -324,6 +657,13 @@ def line_of_sight_radiance(
         Observer above the ground, below the top. [m]
     n_path : int
         Samples along each line of sight.
+    aureole : bool
+        Add the secondary-scattering correction (:func:`aureole_correction`).
+    progress : text stream, optional
+        Where to report the lines of sight done after the first two seconds
+        (e.g. ``sys.stderr``); None is silent.
+    allow_large : bool
+        Go ahead beyond the memory and work budget (:func:`check_render_cost`).
 
     Returns
     -------
@@ -347,18 +687,57 @@ def line_of_sight_radiance(
             f"observer_altitude_m must be within [0, {medium.top_altitude_m:g}) m (inside the "
             f"atmosphere); got {observer_altitude_m!r}"
         )
+    if not (isinstance(n_path, int) and 4 <= n_path <= 100_000):
+        raise ValueError(f"n_path must be an integer in [4, 100000]; got {n_path!r}")
     mu_view = np.cos(np.deg2rad(vz)).ravel()
     phi_view = np.deg2rad(va).ravel()
+    radius = medium.planet_radius_m + h
     out = _radiance(
         medium,
         field,
         mu_view=mu_view,
         phi_view=phi_view,
         mu_sun=np.full(mu_view.shape, field.mu0),
-        radius_m=medium.planet_radius_m + h,
-        n_path=int(n_path),
+        radius_m=radius,
+        n_path=n_path,
+        report=reporter(progress),
+        allow_large=allow_large,
     )
+    if aureole and field.mu0 > 0.0:
+        out += _aureole_for_observer(medium, field, mu_view, phi_view, radius)
     return out.reshape(vz.shape + (medium.wavelength_nm.size,))
+
+
+def _aureole_for_observer(
+    medium: Medium, field: DiffuseField, mu_view: np.ndarray, phi_view: np.ndarray, radius: float
+) -> np.ndarray:
+    """:func:`aureole_correction` for lines of sight upward from radius ``radius``."""
+    mu0 = field.mu0
+    cos_t = np.clip(
+        mu_view * mu0
+        + np.sqrt(np.maximum(0.0, 1 - mu_view**2)) * math.sqrt(1 - mu0**2) * np.cos(phi_view),
+        -1.0,
+        1.0,
+    )
+    up = mu_view > 0.0
+    out = np.zeros((mu_view.size, medium.wavelength_nm.size))
+    if not np.any(up):
+        return out
+    r = np.full(int(up.sum()), radius)
+    view = -np.log(np.maximum(medium.transmittance(r, mu_view[up]), 1e-300)).T  # (n, x)
+    sun = -np.log(
+        np.maximum(medium.transmittance(np.array([radius]), np.array([mu0]), scaled=True), 1e-300)
+    ).T  # (1, x)
+    vertical = medium.slant.columns(np.array([radius]), np.array([1.0]))[:, 0]  # (c,)
+    column = medium.sigma_ext_m2 * (medium.number_density_per_m3 * vertical)[:, None]
+    out[up] = aureole_correction(
+        medium,
+        theta_deg=np.rad2deg(np.arccos(cos_t[up])),
+        view_optical_depth=view,
+        sun_optical_depth=np.broadcast_to(sun, view.shape),
+        column_optical_depth=column,
+    )
+    return out
 
 
 def _radiance(
@@ -371,15 +750,30 @@ def _radiance(
     radius_m: float,
     n_path: int,
     stretch: float = PATH_STRETCH,
+    report: Reporter | None = None,
+    allow_large: bool = False,
 ) -> np.ndarray:
     """Radiance along rays from radius ``radius_m`` (checked by the callers).
 
     Each ray has its own view cosine, azimuth from the Sun [rad] and Sun
     cosine at its start; the multiple-scattering source is ``field``'s.
     Samples along each ray are at ``s_end expm1(stretch i / n) / expm1(stretch)``
-    (dense near the start; nearly uniform for a small ``stretch``).
+    (dense near the start; nearly uniform for a small ``stretch``).  Rays with
+    the same view cosine share their samples (a row).
     Returns shape (n_rays, n_wavelength). [sr^-1]
     """
+    report = report if report is not None else reporter(None)
+    mu_rows, ray_row = np.unique(np.asarray(mu_view, dtype=float), return_inverse=True)
+    ray_row = ray_row.ravel()
+    n_rays = mu_view.size
+    check_render_cost(
+        medium,
+        n_rays=n_rays,
+        n_rows=mu_rows.size,
+        n_path=n_path,
+        allow_large=allow_large,
+        what="the request",
+    )
     cos_theta = np.clip(
         mu_view * mu_sun
         + np.sqrt(np.maximum(0.0, 1 - mu_view**2))
@@ -389,39 +783,98 @@ def _radiance(
         1.0,
     )
     theta = np.rad2deg(np.arccos(cos_theta))
-    phase = np.stack(
-        [
-            t.phase_at(theta).T if _scatters(t) else np.zeros((theta.size, t.wavelength_nm.size))
-            for t in medium.tables
-        ],
-        axis=1,
+    phase = np.ascontiguousarray(
+        np.stack(
+            [
+                t.phase_at(theta).T
+                if _scatters(t)
+                else np.zeros((theta.size, t.wavelength_nm.size))
+                for t in medium.tables
+            ],
+            axis=1,
+        )
     )  # (ray, c, x)
-    density = medium.density(medium.altitude_m)
+    density = np.ascontiguousarray(medium.density(medium.altitude_m))
     modes_used = source_modes(medium, field)
-    source = _source_grid(medium, field, max(int(modes_used.max()), 1))
+    scatterers = np.flatnonzero([_scatters(t) for t in medium.tables]).astype(np.int64)
+    n_modes = int(modes_used.max()) if modes_used.size else 0
+    coeffs = _source_coefficients(medium, field, scatterers, max(n_modes, 1))
     ground_diffuse = field.flux_down_diffuse[:, -1]
-    out: np.ndarray = _radiance_kernel(
-        np.ascontiguousarray(mu_view, dtype=float),
-        np.ascontiguousarray(phi_view, dtype=float),
-        float(radius_m),
-        np.ascontiguousarray(mu_sun, dtype=float),
-        medium.planet_radius_m + medium.top_altitude_m,
-        medium.altitude_m,
-        np.ascontiguousarray(density),
-        medium.number_density_per_m3,
-        medium.sigma_sca_m2,
-        medium.scaled_sigma_ext_m2,
-        medium.scaled_sigma_sca_m2,
-        np.ascontiguousarray(phase),
-        medium.slant.radius_m,
-        medium.slant.mu,
-        medium.slant.column_m,
-        field.altitude_m,
-        np.ascontiguousarray(source),  # (level, mu, c, m, x)
-        field.ground_albedo,
-        ground_diffuse,
-        modes_used,
-        int(n_path),
-        float(stretch),
-    )
+    nwl = medium.wavelength_nm.size
+    n_c = len(medium.tables)
+    n_mom = 2 * medium.n_streams
+    r_ground = medium.planet_radius_m
+    r_top = medium.planet_radius_m + medium.top_altitude_m
+    out = np.zeros((n_rays, nwl))
+    order = np.argsort(ray_row, kind="stable")
+    bounds = np.searchsorted(ray_row[order], np.arange(mu_rows.size + 1))
+    done = 0
+    for start in range(0, mu_rows.size, _ROWS_PER_CHUNK):
+        stop = min(start + _ROWS_PER_CHUNK, mu_rows.size)
+        rows = mu_rows[start:stop]
+        nr = rows.size
+        geo = np.empty((nr, n_path + 1, 3))
+        dens = np.empty((nr, n_path + 1, n_c))
+        wb = np.zeros((nr, n_path + 1, nwl))
+        g = np.zeros((nr, n_path + 1, max(n_modes, 1), nwl))
+        t_end = np.empty((nr, nwl))
+        hits = np.zeros(nr, dtype=np.bool_)
+        _row_kernel(
+            rows,
+            float(radius_m),
+            r_top,
+            r_ground,
+            int(n_path),
+            float(stretch),
+            medium.altitude_m,
+            density,
+            medium.scaled_sigma_ext_m2,
+            medium.scaled_sigma_sca_m2,
+            field.altitude_m,
+            coeffs,
+            scatterers,
+            modes_used[scatterers].astype(np.int64),
+            n_mom,
+            geo,
+            dens,
+            wb,
+            g,
+            t_end,
+            hits,
+        )
+        rays = order[bounds[start] : bounds[stop]]
+        if rays.size:
+            cosm = np.zeros((rays.size, n_path + 1, n_modes))
+            part = _ray_kernel(
+                (ray_row[rays] - start).astype(np.int64),
+                np.ascontiguousarray(mu_view[rays], dtype=float),
+                np.ascontiguousarray(phi_view[rays], dtype=float),
+                np.ascontiguousarray(mu_sun[rays], dtype=float),
+                float(radius_m),
+                medium.number_density_per_m3,
+                medium.sigma_sca_m2,
+                medium.scaled_sigma_ext_m2,
+                np.ascontiguousarray(phase[rays]),
+                medium.slant.radius_m,
+                medium.slant.mu,
+                medium.slant.column_m,
+                geo,
+                dens,
+                wb,
+                t_end,
+                hits,
+                field.ground_albedo,
+                ground_diffuse,
+                cosm,
+            )
+            # The diffuse part: each row's modes weighted by its rays' cos(m phi).
+            local = ray_row[rays] - start
+            edges = np.searchsorted(local, np.arange(nr + 1))
+            for j in range(nr):
+                a, b = edges[j], edges[j + 1]
+                if b > a and n_modes:
+                    part[a:b] += cosm[a:b].reshape(b - a, -1) @ g[j, :, :n_modes].reshape(-1, nwl)
+            out[rays] = part
+        done += rays.size
+        report(f"lines of sight: {done} of {n_rays}", last=done == n_rays)
     return out

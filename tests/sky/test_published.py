@@ -128,14 +128,24 @@ def test_disort_test_problem_2(tau: float, omega: float) -> None:
         n_path=800,
     )[:, 0]
     fbeam = math.pi
-    # Tolerance: the solver's discretization, a source linear in optical
-    # depth within each layer.  With tau = 0.2 (200 layers) the agreement is
-    # 1.5e-4 at worst (measured), near DISORT's printed 6 digits.  With
-    # tau = 5 the grazing beam (tau / mu0 = 62) dies within the top layers,
-    # where the linear source is coarsest: the error falls as 1 / n_layers^2,
-    # 11 % at 200 layers, 3 % at 400, 0.45 % at 1,000 (used here).
-    rtol = 3e-4 if tau < 1 else 1e-2
-    np.testing.assert_allclose(fbeam * top, up_ref, rtol=rtol)
-    np.testing.assert_allclose(fbeam * bottom, down_ref, rtol=rtol)
-    np.testing.assert_allclose(fbeam * field.flux_up[0, 0], flup_ref, rtol=rtol)
-    np.testing.assert_allclose(fbeam * field.flux_down_diffuse[0, -1], rfldn_ref, rtol=rtol)
+    # Tolerance: the printed values are DISORT's with NSTR = 16, which at the
+    # grazing view mu = 0.018014 are below converged CDISORT (NSTR = 128) by
+    # 6.4e-4 (omega 0.5) and 1.3e-3 (omega 1); elsewhere they agree with it to
+    # 1e-4.  With tau = 0.2 (200 layers) the solver is within 2.8e-4 of
+    # converged CDISORT everywhere (measured), so 4e-4 of the printed values
+    # except at the grazing view (1.2e-3).  With tau = 5 the grazing beam
+    # (tau / mu0 = 62) dies within the top layers, where the layers of
+    # this set-up are thickest and the diffuse source's linear interpolation is
+    # coarsest: within 0.6 % of the printed values with 1,000 layers (measured;
+    # the first order's source follows the beam exactly, so 200 layers give
+    # 1.6 %, 400 give 0.8 %).
+    if tau < 1:
+        rtol_mu = np.array([4e-4, 4e-4, 1.2e-3])
+        rtol_flux = 4e-4
+    else:
+        rtol_mu = np.full(3, 6e-3)
+        rtol_flux = 6e-3
+    assert np.all(np.abs(fbeam * top / np.array(up_ref) - 1) < rtol_mu), (top, up_ref)
+    assert np.all(np.abs(fbeam * bottom / np.array(down_ref) - 1) < rtol_mu), (bottom, down_ref)
+    np.testing.assert_allclose(fbeam * field.flux_up[0, 0], flup_ref, rtol=rtol_flux)
+    np.testing.assert_allclose(fbeam * field.flux_down_diffuse[0, -1], rfldn_ref, rtol=rtol_flux)
