@@ -65,12 +65,13 @@ from __future__ import annotations
 
 import decimal
 import json
+import math
 import os
 import re
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Final
 
 import numpy as np
 
@@ -86,9 +87,11 @@ if TYPE_CHECKING:
 
 __all__ = [
     "COSMOSCOUT_KINDS",
+    "SPICE_RADII_M",
     "CosmoScoutConstituent",
     "check_cosmoscout_set",
     "cosmoscout_phase_angles",
+    "cosmoscout_plugin_entry",
     "cosmoscout_wavelength_text",
     "read_cosmoscout_constituent",
     "settings_json",
@@ -741,6 +744,67 @@ def settings_json(
     data.update(sampling.settings)
     data["dustoptics"] = sampling.to_dict()
     return json.dumps(data, indent=2, allow_nan=False) + "\n"
+
+
+#: Radii CosmoScout VR takes from SPICE for its bodies (``pck00010.tpc``, the first of the
+#: three): Mars and Earth. [m]
+SPICE_RADII_M: Final = {"Mars": 3_396_190.0, "Earth": 6_378_136.6}
+
+
+def cosmoscout_plugin_entry(
+    atmosphere: Atmosphere,
+    *,
+    data_directory: str | os.PathLike[str],
+    body_radius_m: float,
+) -> dict[str, Any]:
+    """The ``csp-atmospheres`` plugin's entry for the body, loading the preprocessor's output.
+
+    At run time the plugin sets the ground and the top of the atmosphere at
+    the body's radius (from SPICE unless the object sets ``"radii"``) plus
+    ``bottomAltitude`` and ``topAltitude``; the radii the textures were
+    computed for (the settings' ``minAltitude``, ``maxAltitude``) are not
+    passed on, and the textures' parametrization depends on both.  This entry
+    puts them back: ``bottomAltitude = planet radius - body radius``,
+    ``topAltitude = atmosphere radius - body radius``.
+
+    Parameters
+    ----------
+    atmosphere : Atmosphere
+        The set the textures were computed from.
+    data_directory : path-like
+        The preprocessor's output directory, as CosmoScout VR sees it (a
+        relative path is relative to its working directory,
+        ``install/<os>-<build type>/bin``).
+    body_radius_m : float
+        The radius CosmoScout VR has for the body (:data:`SPICE_RADII_M`). [m]
+
+    Returns
+    -------
+    dict
+        ``{"topAltitude", "bottomAltitude", "model": "Bruneton",
+        "modelSettings": {"dataDirectory"}}``, to go under
+        ``plugins / csp-atmospheres / atmospheres / <body>`` of a scene file.
+
+    Examples
+    --------
+    >>> from dustoptics.atmosphere.sets import earth_atmosphere
+    >>> entry = cosmoscout_plugin_entry(
+    ...     earth_atmosphere(), data_directory="/data/earth", body_radius_m=SPICE_RADII_M["Earth"]
+    ... )
+    >>> entry["bottomAltitude"], entry["topAltitude"]
+    (-7136.6, 72863.4)
+    """
+    if not isinstance(atmosphere, Atmosphere):
+        raise TypeError(f"atmosphere must be an Atmosphere; got {type(atmosphere).__name__}")
+    radius = float(body_radius_m)
+    if not (math.isfinite(radius) and radius > 0.0):
+        raise ValueError(f"body_radius_m must be a positive radius [m]; got {body_radius_m!r}")
+    return {
+        "topAltitude": round(atmosphere.atmosphere_radius_m - radius, 6),
+        "bottomAltitude": round(atmosphere.planet_radius_m - radius, 6),
+        "model": "Bruneton",
+        "modelSettings": {"dataDirectory": os.fspath(data_directory)},
+    }
 
 
 def write_atmosphere(

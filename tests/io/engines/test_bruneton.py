@@ -272,10 +272,10 @@ def test_precomputation_is_stated_for_the_set(tmp_path: Path, mars) -> None:
     assert chosen.scattering_texture_nu_size == 64
     header = (tmp_path / "mars_bruneton_parameters.h").read_text()
     for line in (
-        "const int kScatteringTextureNuSize = 64;",
-        "const unsigned int kNumScatteringOrders = 12;",
-        "const int kScatteringDensitySampleCount = 48;",
-        "const bool kCombineScatteringTextures = false;",
+        "constexpr int kScatteringTextureNuSize = 64;",
+        "constexpr unsigned int kNumScatteringOrders = 12;",
+        "constexpr int kScatteringDensitySampleCount = 48;",
+        "constexpr bool kCombineScatteringTextures = false;",
         "static_assert(atmosphere::SCATTERING_TEXTURE_NU_SIZE >= 64,",
     ):
         assert line in header
