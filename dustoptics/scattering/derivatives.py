@@ -17,7 +17,7 @@ density are w_i = n(r_i) J_i, and every polydisperse sum
 
     S[Y] = sum_i w_i Y(r_i)  ~  int n Y dr
 
-has the derivatives
+has the derivatives::
 
     dS/dp = sum_i J_i (dn/dp)(r_i) Y(r_i) (+ sum_b c_b Y(r_b))
           = sum_i w_i [(dn/dp) / n](r_i) Y(r_i) (+ ...)       (p of the distribution),
@@ -61,11 +61,11 @@ each with a ``nodes_per_panel`` Gauss-Legendre rule.  Each level halves every
 panel (twice the nodes).  A wavelength is converged when the change from the
 previous level is below the tolerances in every value and every derivative:
 
-- angular values F_q: max over angles of |change| / F11, below ``rtol``
+- angular values F_q: max over angles of abs(change) / F11, below ``rtol``
   (as ``compute_optics`` measures the matrix);
 - cross-sections, relative; g and ssa, absolute: below ``cross_section_rtol``;
 - derivatives: the same measures applied to s_p times the derivative,
-  s_p = max(|p|, 1e-3) (a relative change of the parameter; k = 0 counts as
+  s_p = max(abs(p), 1e-3) (a relative change of the parameter; k = 0 counts as
   1e-3), so that the tolerance bounds the error of a linear prediction of
   the output for a change of p by a fraction of itself.
 
@@ -171,7 +171,7 @@ class OpticsDerivatives:
         Per wavelength, the cross-sections' last relative change (g and ssa absolute). [-]
     derivative_error_estimate : numpy.ndarray
         Per parameter and wavelength, the derivatives' last change, measured as
-        the values' (times max(|p|, 1e-3)), the larger of the angular and the
+        the values' (times max(abs(p), 1e-3)), the larger of the angular and the
         cross-section measure. [-]
     n_nodes : numpy.ndarray
         Radius nodes of the final level, per wavelength (the angles' level may

@@ -38,13 +38,13 @@ D_n(z) comes from the downward recurrence D_{n-1} = n/z - 1/(D_n + n/z)
 derivative from the same recurrence differentiated,
 D_{n-1}' = -n/z^2 + (D_n' - n/z^2) / (D_n + n/z)^2, started at D_N' = 0.  The
 start's error decays in both by the factor 1/(D_n + n/z)^2 per step, but only
-above the turning point n ~ |z|: BHMIE's N = max(n_max, |z|) + 15 leaves
+above the turning point n ~ abs(z): BHMIE's N = max(n_max, abs(z)) + 15 leaves
 errors of 2e-5 at x = 50 and 0.2 at x = 200 for real m = 1.5 (measured against
-a start at 4 |z|), so N = max(n_max, |z|) + 16 + 8 |z|^(1/3) here (the width of
-the turning region grows as |z|^(1/3)), which agrees with a start at 4 |z| to
+a start at 4 abs(z)), so N = max(n_max, abs(z)) + 16 + 8 abs(z)^(1/3) here (the width of
+the turning region grows as abs(z)^(1/3)), which agrees with a start at 4 abs(z) to
 the last bit for m from 1.0001 to 4 and x from 0.5 to 2e4.  The derivative is
 then that of the computed D_n.  (The Riccati equation
-D_n' = n(n+1)/z^2 - 1 - D_n^2 gives it too, but cancels for n >> |z|.)  The
+D_n' = n(n+1)/z^2 - 1 - D_n^2 gives it too, but cancels for n >> abs(z).)  The
 x derivative adds the terms of psi_n' and xi_n':
 
     da_n/dx = -i (dt_a/dx) / d^2 + [(t_a psi_n' - psi_{n-1}') - a_n (t_a xi_n' - xi_{n-1}')] / d
@@ -57,16 +57,16 @@ recurrence are derived here.
 The coefficients a_n, b_n and the amplitudes S1(mu), S2(mu) (BH Eq. 4.74) are
 holomorphic in m, so d/dn = d/dm and d/dk = i d/dm.  Real quantities follow by
 the chain rule: for R(a, conj(a)), dR/dp = 2 Re(dR/da da/dp) with the
-Wirtinger derivative dR/da, e.g. d|a|^2/dp = 2 Re(conj(a) da/dp).  So
+Wirtinger derivative dR/da, e.g. d abs(a)^2/dp = 2 Re(conj(a) da/dp).  So::
 
     Q_ext = (2/x^2) sum (2n+1) Re(a_n + b_n),
-    Q_sca = (2/x^2) sum (2n+1) (|a_n|^2 + |b_n|^2),
+    Q_sca = (2/x^2) sum (2n+1) (abs(a_n)^2 + abs(b_n)^2),
     g Q_sca = (4/x^2) sum [n(n+2)/(n+1) Re(a_n a_{n+1}* + b_n b_{n+1}*)
                            + (2n+1)/(n(n+1)) Re(a_n b_n*)],
-    Q_back = (1/x^2) |sum (2n+1) (-1)^n (a_n - b_n)|^2
+    Q_back = (1/x^2) abs(sum (2n+1) (-1)^n (a_n - b_n))^2
 
 (BH Eqs. 4.61, 4.62, p. 120 and p. 122) and the scattering matrix
-I = |S1|^2 + |S2|^2, Q = |S2|^2 - |S1|^2, U = 2 Re(S2 S1*), V = 2 Im(S2 S1*)
+I = abs(S1)^2 + abs(S2)^2, Q = abs(S2)^2 - abs(S1)^2, U = 2 Re(S2 S1*), V = 2 Im(S2 S1*)
 (BH Eq. 4.77: 2 S11, 2 S12, 2 S33, 2 S34) are differentiated term by term.
 The phase matrix is normalized as the table's: F11 = I / (2 pi x^2 Q_sca),
 2 pi int F11 dmu = 1, F12 = Q / (2 pi x^2 Q_sca), F33 and F34 likewise.
@@ -175,7 +175,7 @@ def _riccati_bessel(x: float, nmax: int) -> tuple[np.ndarray, np.ndarray]:
 def _log_derivative(z: complex, nmax: int) -> tuple[np.ndarray, np.ndarray]:
     """D_n(z) and dD_n/dz, n = 0..nmax, by the downward recurrence and its
     derivative (module docstring), from D_N = D_N' = 0 at
-    N = max(nmax, |z|) + 16 + 8 |z|^(1/3)."""
+    N = max(nmax, abs(z)) + 16 + 8 abs(z)^(1/3)."""
     d = np.empty(nmax + 1, dtype=np.complex128)
     dd = np.empty(nmax + 1, dtype=np.complex128)
     start = int(max(nmax, abs(z)) + 16.0 + 8.0 * abs(z) ** (1.0 / 3.0))
@@ -251,7 +251,7 @@ def _coefficient_derivatives(
 @njit(cache=True, nogil=True)
 def _pi_tau(mu: np.ndarray, nmax: int) -> tuple[np.ndarray, np.ndarray]:
     """pi_n(mu), tau_n(mu), n = 1..nmax, shape (len(mu), nmax), by the upward
-    recurrences of BH Eq. 4.47 (stable for |mu| <= 1)."""
+    recurrences of BH Eq. 4.47 (stable for abs(mu) <= 1)."""
     n_mu = mu.shape[0]
     pi_t = np.empty((n_mu, nmax))
     tau_t = np.empty((n_mu, nmax))
@@ -570,7 +570,7 @@ class SphereDerivatives:
         Amplitudes S1(mu), S2(mu) (complex, van de Hulst's normalization). [-]
     f11, f12, f33, f34 : numpy.ndarray
         Phase matrix normalized so that 2 pi int F11 dmu = 1, Bohren & Huffman's
-        signs (F12 = (|S2|^2 - |S1|^2) / (2 pi x^2 Q_sca)). [sr^-1]
+        signs (F12 = (abs(S2)^2 - abs(S1)^2) / (2 pi x^2 Q_sca)). [sr^-1]
     """
 
     m: complex
