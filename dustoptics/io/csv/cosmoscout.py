@@ -80,6 +80,7 @@ from dustoptics.atmosphere.sets import Atmosphere
 from dustoptics.io import register_format
 from dustoptics.io._atomic import FormatError, check_targets, file_set, write_files
 from dustoptics.io._text import floats, number, parse, read_rows
+from dustoptics.scattering.tabulated_phase import sphere_integral
 from dustoptics.table import Table
 
 if TYPE_CHECKING:
@@ -87,10 +88,12 @@ if TYPE_CHECKING:
 
 __all__ = [
     "COSMOSCOUT_KINDS",
+    "PHASE_COLUMN_COUNTS",
     "SPICE_RADII_M",
     "CosmoScoutConstituent",
     "check_cosmoscout_set",
     "cosmoscout_phase_angles",
+    "cosmoscout_phase_error",
     "cosmoscout_plugin_entry",
     "cosmoscout_wavelength_text",
     "read_cosmoscout_constituent",
@@ -315,9 +318,9 @@ def write_cosmoscout_constituent(
     interpolates it) at the texel centres; the values are not renormalized.
     As the preprocessor interpolates them (linear between the centres,
     constant within half a column of 0 and 180 deg), the Martian dust's phase
-    function integrates over the sphere to within 0.7 % of 1 with 181
-    columns, 0.18 % with 361 and 0.05 % with 721 (at 427 nm, the narrowest
-    forward peak of CosmoScout's wavelengths).
+    function integrates over the sphere to within 1.1 % of 1 with 181
+    columns, 0.27 % with 361 and 0.07 % with 721 (at 360 nm, the narrowest
+    forward peak of CosmoScout's wavelengths; :func:`cosmoscout_phase_error`).
     """
     files = _constituent_files(
         table,
@@ -746,6 +749,69 @@ def settings_json(
     return json.dumps(data, indent=2, allow_nan=False) + "\n"
 
 
+#: Phase-column counts tried for a whole set, smallest first (1 deg, 1/2, 1/4, ... steps).
+PHASE_COLUMN_COUNTS: Final = (181, 361, 721, 1441, 2881, 5761)
+
+
+def cosmoscout_phase_error(table: Table, n_theta: int) -> float:
+    """How far the phase columns, as the preprocessor reads them, are from integrating to 1.
+
+    The ``n_theta`` columns at the texel centres (:func:`cosmoscout_phase_angles`),
+    read linearly between centres and held constant within half a column of 0
+    and 180 deg, integrated over the sphere exactly
+    (:func:`~dustoptics.scattering.tabulated_phase.sphere_integral`) and
+    compared with the table's own integral.
+
+    Returns
+    -------
+    float
+        The largest ``|integral / table's integral - 1|`` over the wavelengths. [-]
+    """
+    centres = cosmoscout_phase_angles(n_theta)
+    p = np.asarray(table.phase_at(centres), dtype=np.float64)
+    grid = np.concatenate([[0.0], centres, [180.0]])
+    read = sphere_integral(np.concatenate([p[:, :1], p, p[:, -1:]], axis=1), theta_deg=grid)
+    theta = np.asarray(table.theta_deg, dtype=np.float64)
+    own = (
+        sphere_integral(table.phase, theta_deg=theta)
+        if theta[0] == 0.0 and theta[-1] == 180.0
+        else 1.0
+    )
+    return float(np.max(np.abs(np.asarray(read) / own - 1.0)))
+
+
+def _phase_columns(atmosphere: Atmosphere, n_theta: int | None, tolerance: float) -> int:
+    """The set's phase-column count: chosen, or checked (refused naming the smallest that does)."""
+    tables = [
+        c.table
+        for c in atmosphere.constituents
+        if c.table.csca_um2 is not None and np.any(c.table.csca_um2 > 0)
+    ]
+
+    def ok(n: int) -> bool:
+        return all(cosmoscout_phase_error(t, n) <= tolerance for t in tables)
+
+    if n_theta is None:
+        return next((n for n in PHASE_COLUMN_COUNTS if ok(n)), PHASE_COLUMN_COUNTS[-1])
+    n = _check_n_theta(n_theta)
+    if ok(n):
+        return n
+    low, high = n, 2 * n  # smallest passing count, by bisection (the error falls as n grows)
+    while not ok(high):
+        low, high = high, 2 * high
+        if high > 1_000_000:
+            break
+    while high - low > 1:
+        mid = (low + high) // 2
+        low, high = (low, mid) if ok(mid) else (mid, high)
+    worst = max(cosmoscout_phase_error(t, n) for t in tables)
+    raise ValueError(
+        f"n_theta {n} is too few phase columns for atmosphere {atmosphere.name!r} at tolerance "
+        f"{tolerance:g}: as CosmoScout's preprocessor reads them the phase function's integral "
+        f"over the sphere is off by {worst:.3g}; the smallest that does is {high}"
+    )
+
+
 #: Radii CosmoScout VR takes from SPICE for its bodies (``pck00010.tpc``, the first of the
 #: three): Mars and Earth. [m]
 SPICE_RADII_M: Final = {"Mars": 3_396_190.0, "Earth": 6_378_136.6}
@@ -811,7 +877,7 @@ def write_atmosphere(
     atmosphere: Atmosphere,
     directory: str | os.PathLike[str],
     *,
-    n_theta: int = 721,
+    n_theta: int | None = None,
     overwrite: bool = False,
     path_prefix: str | None = None,
     sampling: CosmoScoutSampling | None = None,
@@ -829,10 +895,13 @@ def write_atmosphere(
         The atmosphere.
     directory : path-like
         Output directory (created if missing).
-    n_theta : int, default 721
-        Phase-function columns (:func:`cosmoscout_phase_angles`; 721 keeps the
-        Martian dust's integral over the sphere, as the preprocessor
-        interpolates it, within 0.05 % of 1).
+    n_theta : int, optional
+        Phase-function columns (:func:`cosmoscout_phase_angles`).  Default:
+        the smallest of :data:`PHASE_COLUMN_COUNTS` whose columns, as the
+        preprocessor reads them, integrate every phase function of the set
+        to within the sampling's tolerance of 1 (:func:`cosmoscout_phase_error`;
+        the Martian dust needs 361, where 181 leave 1.1 %).  A count that
+        does not is refused, naming the smallest that does.
     overwrite : bool, default False
         Replace existing files.
     path_prefix : str, optional
@@ -847,13 +916,21 @@ def write_atmosphere(
 
     Raises
     ------
+    ValueError
+        Too few phase columns for the set (the message names the smallest
+        count that does), before anything is written.
     FileExistsError
         A target exists and ``overwrite`` is False (checked before anything
         is written).
     """
+    from dustoptics.io.engines.cosmoscout_preprocessor import cosmoscout_sampling
+
     root = Path(directory)
     settings_path = root / f"{atmosphere.name}_settings.json"
     check_targets([settings_path], overwrite=overwrite)
+    if sampling is None:
+        sampling = cosmoscout_sampling(atmosphere)
+    n_theta = _phase_columns(atmosphere, n_theta, sampling.tolerance)
     text = settings_json(atmosphere, directory=root, path_prefix=path_prefix, sampling=sampling)
     # One set: the CSV files and the settings appear together or not at all.
     with file_set(root, overwrite=overwrite):

@@ -546,6 +546,21 @@ def test_orders_follow_the_optical_depth(preprocessor_input):
     assert settings["multiScatteringOrder"] == {"mars": 12, "earth": 9}[atmosphere.name]
 
 
+def test_phase_columns_enough_for_the_set(preprocessor_input, tmp_path):
+    atmosphere, path = preprocessor_input
+    settings = json.loads(path.read_text())
+    header = Path(settings["aerosols"]["phase"]).read_text().splitlines()[0].split(",")
+    # The dust's forward peak needs 361 columns (181 leave its integral 1.1 % off at 360 nm,
+    # as the preprocessor reads them); Kobe's Cornette-Shanks aerosols do with 181.
+    assert len(header) - 1 == {"mars": 361, "earth": 181}[atmosphere.name]
+    if atmosphere.name == "mars":
+        with pytest.raises(
+            ValueError, match="n_theta 181 is too few .* the smallest that does is 264"
+        ):
+            write_atmosphere(atmosphere, tmp_path / "refused", n_theta=181)
+        assert not (tmp_path / "refused").exists()
+
+
 def test_path_prefix_and_refused_options(tmp_path):
     from dustoptics.atmosphere.sets import earth_atmosphere
     from dustoptics.io.engines.cosmoscout_preprocessor import cosmoscout_sampling
