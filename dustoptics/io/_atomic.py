@@ -447,12 +447,19 @@ def _commit(
     for target in targets:
         check_inside(base, target)
     relative = dict(zip(targets, (t.relative_to(base) for t in targets)))
-    stage = Path(tempfile.mkdtemp(prefix=STAGE_PREFIX, dir=base))
-    stage_fd = os.open(stage, os.O_RDONLY)
+    with _locked(base):
+        # Created and locked under the root's lock, which another writer's cleanup holds:
+        # that cleanup never sees this staging directory before its lock is taken.
+        stage = Path(tempfile.mkdtemp(prefix=STAGE_PREFIX, dir=base))
+        try:
+            stage_fd = os.open(stage, os.O_RDONLY)
+            fcntl.flock(stage_fd, fcntl.LOCK_EX)
+        except BaseException:
+            shutil.rmtree(stage, ignore_errors=True)
+            raise
     done = False
     written: list[Path] = []
     try:
-        fcntl.flock(stage_fd, fcntl.LOCK_EX)
         for target, content in zip(targets, contents.values()):
             path = stage / relative[target]
             path.parent.mkdir(parents=True, exist_ok=True)

@@ -545,3 +545,40 @@ def test_info_refuses_a_set_killed_while_moving(tmp_path):
     write_files({out / "notes.txt": b"later\n"})  # the next write completes it
     assert do.open_table(out / "t.h5").equals(new)
     assert "name:            t" in describe_path(out / "t.h5")
+
+
+def test_a_new_staging_directory_is_locked_before_another_writer_can_clean(tmp_path, monkeypatch):
+    """Another writer cleans leftovers holding the root's lock: by the time it has that lock,
+    a new staging directory must hold its own (else it is taken for a killed run's)."""
+    import tempfile
+    import threading
+
+    from dustoptics.io import _atomic
+
+    real, seen = tempfile.mkdtemp, []
+
+    def other_writer(root: Path, stage: str) -> None:
+        with _atomic._locked(root):  # a separate open of the folder: it waits like a process
+            fd = os.open(stage, os.O_RDONLY)
+            try:
+                seen.append("free" if _atomic._try_lock(fd) else "held")
+            finally:
+                os.close(fd)
+
+    def racing(*args, **kwargs):
+        stage = real(*args, **kwargs)
+        thread = threading.Thread(target=other_writer, args=(Path(kwargs["dir"]), stage))
+        thread.start()
+        threads.append(thread)
+        thread.join(0.3)  # the other writer cleans now, if it can
+        return stage
+
+    threads: list[threading.Thread] = []
+    monkeypatch.setattr(_atomic.tempfile, "mkdtemp", racing)
+    out = tmp_path / "out"
+    out.mkdir()
+    write_files({out / "a": b"1\n", out / "b": b"2\n"})
+    for thread in threads:
+        thread.join()
+    assert seen == ["held"], "the staging directory was unlocked when another writer could clean"
+    assert _listing(out) == ["a", "b"]
