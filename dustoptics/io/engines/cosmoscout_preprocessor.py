@@ -344,6 +344,11 @@ class CosmoScoutSampling:
         Orders, NU size and scattering-density directions.
     reasons : dict
         Why each chosen value (by JSON key).
+    notes : tuple of str
+        What the preprocessor will not do with this set (its wavelength rules,
+        ``main.cpp`` and ``Preprocessor.cpp``: at least three; exactly 440,
+        550, 680 nm when three; passes of three with the remainder dropped;
+        luminance weights for evenly spaced wavelengths).
     """
 
     settings: dict[str, Any]
@@ -353,6 +358,7 @@ class CosmoScoutSampling:
     horizon_refraction_rad: float
     precomputation: PrecomputationSampling
     reasons: dict[str, str] = field(default_factory=dict)
+    notes: tuple[str, ...] = ()
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready record of the choices (the ``dustoptics`` entry of the settings)."""
@@ -363,8 +369,35 @@ class CosmoScoutSampling:
             "inactive_transmittance_error": self.inactive_transmittance_error,
             "horizon_refraction_deg": math.degrees(self.horizon_refraction_rad),
             "reasons": dict(self.reasons),
+            "notes": list(self.notes),
             "precomputation": self.precomputation.to_dict(),
         }
+
+
+def _wavelength_notes(wavelength_nm: np.ndarray) -> tuple[str, ...]:
+    """The preprocessor's wavelength rules the set breaks (``main.cpp``, ``Preprocessor.cpp``)."""
+    wl = np.asarray(wavelength_nm, dtype=np.float64)
+    n = wl.size
+    notes = []
+    if n < 3:
+        notes.append(f"the preprocessor refuses fewer than three wavelengths; the set has {n}")
+    elif n == 3 and not np.allclose(wl, (440.0, 550.0, 680.0), rtol=0, atol=1e-6):
+        notes.append(
+            f"the preprocessor refuses three wavelengths other than 440, 550, 680 nm; the set has "
+            f"{wl.tolist()} nm"
+        )
+    elif n > 3:
+        if n % 3:
+            notes.append(
+                f"the preprocessor runs passes of three wavelengths and drops the last {n % 3} "
+                f"of the set's {n}"
+            )
+        if not np.allclose(np.diff(wl), wl[1] - wl[0], rtol=1e-6, atol=0):
+            notes.append(
+                "the preprocessor's luminance weights take the wavelengths as evenly spaced "
+                "(the first step for all); the set's are not"
+            )
+    return tuple(notes)
 
 
 def _round_down(value: float, quantum: int) -> int:
@@ -606,4 +639,5 @@ def cosmoscout_sampling(
         horizon_refraction_rad=bend,
         precomputation=pre,
         reasons=reasons,
+        notes=_wavelength_notes(atmosphere.wavelength_nm),
     )

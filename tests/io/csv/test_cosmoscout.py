@@ -561,6 +561,14 @@ def test_phase_columns_enough_for_the_set(preprocessor_input, tmp_path):
         assert not (tmp_path / "refused").exists()
 
 
+def test_settings_say_what_the_preprocessor_will_not_do():
+    from dustoptics.atmosphere.sets import earth_atmosphere_kobe2026
+
+    # main.cpp: three wavelengths must be exactly 440, 550, 680 nm; Kobe's are 475, 510, 650.
+    notes = json.loads(settings_json(earth_atmosphere_kobe2026()))["dustoptics"]["notes"]
+    assert any("other than 440, 550, 680 nm" in note for note in notes)
+
+
 def test_path_prefix_and_refused_options(tmp_path):
     from dustoptics.atmosphere.sets import earth_atmosphere
     from dustoptics.io.engines.cosmoscout_preprocessor import cosmoscout_sampling
