@@ -1,12 +1,14 @@
-"""Where numba keeps the compiled kernels, and whether they are compiled yet.
+"""The compiled kernels: where numba caches them, and compiling them once, in parallel.
 
-The kernels are compiled with ``cache=True``: the first call compiles them
-(about 10 s) and writes the machine code to disk, later processes load it.
-numba's default location is a ``__pycache__`` folder beside each source file.
-For an installed package that is inside ``site-packages``, where the cache
-outlives the install: ``pip`` removes only the files it installed, and the
-folder left behind (holding only numba's ``.nbi``/``.nbc`` files) turns
-``dustoptics`` into a namespace package that shadows a later editable install.
+Where
+-----
+The kernels are compiled with ``cache=True``: the first call compiles them and
+writes the machine code to disk, later processes load it.  numba's default
+location is a ``__pycache__`` folder beside each source file.  For an installed
+package that is inside ``site-packages``, where the cache outlives the install:
+``pip`` removes only the files it installed, and the folder left behind
+(holding only numba's ``.nbi``/``.nbc`` files) turns ``dustoptics`` into a
+namespace package that shadows a later editable install.
 
 So :func:`configure`, called by ``dustoptics/__init__.py`` before any kernel
 is defined, chooses the directory:
@@ -24,26 +26,73 @@ is defined, chooses the directory:
 
 numba checks each cached function against its source file's modification
 time and size and its own version, so a stale entry is recompiled, never
-used.  :func:`kernels_compiled` and :func:`mark_compiled` keep a stamp beside
-the cache so that the command line can say, before the first build, that it
-is about to compile.
+used (a reinstall rewrites the files, so it compiles again).
+
+What
+----
+Every compiled function of the numerical core is declared with :func:`kernel`:
+``numba.njit(cache=True, nogil=True)`` and the one signature the package
+calls it with, beside the function.  Small helpers that numba inlines into
+their callers (``inline="always"``) are not kernels: they are never compiled
+on their own.
+
+Compiling
+---------
+A kernel compiles on its first call (numba's lazy compilation), one after the
+other, about 20 s of CPU time for the Mie kernels.  :func:`compile_kernels`
+compiles in advance those of the kernels asked for that numba's cache does
+not hold, in this process and in child processes that write to the same
+cache (one per further core, at most :data:`MAX_PROCESSES` in all): each
+takes the next kernel whose callees are compiled, the longest chain of
+callers first, and the kernels compiled by a child are loaded from the cache
+at their first call.  It reports each kernel as it is compiled; a cache that
+holds them all costs a look at numba's index files and says nothing.  The
+command line calls it before a build (``models.build.TableBuilder``).
 """
 
 from __future__ import annotations
 
 import contextlib
-import hashlib
 import os
-import platform
+import subprocess
 import sys
+import threading
+import time
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any, TextIO
 
-__all__ = ["cache_dir", "configure", "kernels_compiled", "mark_compiled"]
+__all__ = [
+    "B1",
+    "C16",
+    "F8",
+    "F8_1D",
+    "F8_1D_RO",
+    "F8_2D",
+    "I8",
+    "I8_1D",
+    "NONE",
+    "CompileReport",
+    "cache_dir",
+    "compile_kernels",
+    "configure",
+    "kernel",
+    "kernels_cached",
+    "variant",
+]
 
 ENV = "NUMBA_CACHE_DIR"
 
-#: The modules that define compiled kernels (relative to the package).
-KERNEL_MODULES = ("scattering/mie.py", "scattering/quadrature.py", "scattering/optics.py")
+#: The groups of kernels: those of every Mie table of homogeneous spheres (the
+#: phase function, its refinement over radius and the node placement); those
+#: the scattering matrix and the expansion coefficients add; those of single
+#: spheres (:func:`dustoptics.scattering.mie.single_sphere`); those coated
+#: spheres add (:class:`dustoptics.particles.coated.CoatedSphere`).
+GROUPS = ("optics", "matrix", "sphere", "coated")
+
+#: Processes that compile at once, this one included.
+MAX_PROCESSES = 4
 
 _PACKAGE_DIR = Path(__file__).resolve().parent
 
@@ -92,34 +141,453 @@ def configure(version: str) -> Path | None:
 
 
 def cache_dir() -> Path:
-    """The directory that holds (or will hold) the compiled kernels' stamp."""
+    """The directory that holds (or will hold) the compiled kernels."""
     if os.environ.get(ENV):
         return Path(os.environ[ENV])
     return _PACKAGE_DIR / "scattering" / "__pycache__"
 
 
-def _stamp() -> Path:
-    import numba
-
-    key = hashlib.sha256()
-    key.update(f"{numba.__version__} {sys.version} {platform.machine()}".encode())
-    for module in KERNEL_MODULES:
-        st = (_PACKAGE_DIR / module).stat()
-        key.update(f"{module} {st.st_mtime_ns} {st.st_size}".encode())
-    return cache_dir() / f"dustoptics-kernels-{key.hexdigest()[:16]}.stamp"
+# ----------------------------------------------------------------------------
+# Kernels
+# ----------------------------------------------------------------------------
 
 
-def kernels_compiled() -> bool:
-    """True if the kernels of the current sources were compiled and cached before."""
-    try:
-        return _stamp().is_file()
-    except OSError:
+@dataclass(frozen=True)
+class Kernel:
+    """A compiled function and the one signature it is compiled for."""
+
+    #: ``module.function``, the module without its package (``mie._accumulate_grids``).
+    name: str
+    #: numba's dispatcher.
+    dispatcher: Any = field(repr=False)
+    #: The arguments' numba types.
+    signature: tuple[Any, ...] = field(repr=False)
+    #: One of :data:`GROUPS`.
+    group: str
+
+
+_KERNELS: dict[str, Kernel] = {}
+
+
+#: Argument types of :func:`kernel` signatures, in numba's notation.
+F8, I8, C16, B1, NONE = "float64", "int64", "complex128", "boolean", "none"
+#: C-contiguous arrays; F8_1D_RO read-only (the cached Gauss rules).
+F8_1D, F8_2D, I8_1D = "float64[::1]", "float64[:, ::1]", "int64[::1]"
+F8_1D_RO = "Array(float64, 1, 'C', readonly=True)"
+
+
+def kernel(*arg_types: str, group: str = "optics", **options: Any) -> Callable[[Any], Any]:
+    """Declare a kernel: ``numba.njit(cache=True, nogil=True, **options)``, one signature.
+
+    Parameters
+    ----------
+    *arg_types : str
+        The arguments' types in numba's notation (:data:`F8`, :data:`F8_1D`,
+        ...); the return type is inferred.
+    group : str, optional
+        One of :data:`GROUPS`: which builds call it.
+    **options
+        Further options of ``numba.njit`` (``error_model="numpy"``).
+
+    Returns
+    -------
+    callable
+        A decorator returning numba's dispatcher, which still compiles lazily:
+        :func:`compile_kernels` compiles the signature in advance, and a call
+        with other types would compile another specialization (the tests
+        check that the package makes none).
+    """
+    if group not in GROUPS:
+        raise ValueError(f"group must be one of {GROUPS}; got {group!r}")
+    signature = "(" + "".join(f"{t}, " for t in arg_types) + ")"
+
+    def decorate(func: Any) -> Any:
+        from numba import njit
+        from numba.core.sigutils import normalize_signature
+
+        dispatcher = njit(cache=True, nogil=True, **options)(func)
+        args, _ = normalize_signature(signature)
+        name = f"{func.__module__.rsplit('.', 1)[-1]}.{func.__qualname__}"
+        _KERNELS[name] = Kernel(name, dispatcher, tuple(args), group)
+        return dispatcher
+
+    return decorate
+
+
+def variant(dispatcher: Any, *arg_types: str, group: str) -> None:
+    """Declare a second signature of a kernel, for the builds of another group.
+
+    For an argument that is None in the common case and changes what numba
+    compiles otherwise (``if arg is not None:`` is decided at compile time):
+    the common signature leaves that code out.  Arguments as for :func:`kernel`.
+    """
+    if group not in GROUPS:
+        raise ValueError(f"group must be one of {GROUPS}; got {group!r}")
+    from numba.core.sigutils import normalize_signature
+
+    base = next(k for k in _KERNELS.values() if k.dispatcher is dispatcher)
+    args, _ = normalize_signature("(" + "".join(f"{t}, " for t in arg_types) + ")")
+    name = f"{base.name}[{group}]"
+    _KERNELS[name] = Kernel(name, dispatcher, tuple(args), group)
+
+
+def kernels(groups: Iterable[str] = GROUPS) -> list[Kernel]:
+    """The declared kernels of ``groups``, of the modules imported so far (``import
+    dustoptics`` imports them all)."""
+    wanted = set(groups)
+    unknown = wanted - set(GROUPS)
+    if unknown:
+        raise ValueError(f"groups must be among {GROUPS}; got {sorted(unknown)}")
+    return [k for k in _KERNELS.values() if k.group in wanted]
+
+
+def _in_cache(k: Kernel) -> bool:
+    """Whether this process holds ``k`` compiled, or numba's cache index lists it for
+    the current source (numba's own key: signature, CPU and the function's bytecode)."""
+    if k.signature in k.dispatcher.overloads:
+        return True
+    try:  # numba's private cache API; on any change, "not cached" (it compiles)
+        cache = k.dispatcher._cache
+        key = cache._index_key(k.signature, k.dispatcher.targetctx.codegen())
+        return key in cache._cache_file._load_index()
+    except Exception:
         return False
 
 
-def mark_compiled() -> None:
-    """Record that the kernels of the current sources are in the cache."""
-    with contextlib.suppress(OSError):  # unwritable: the message is only shown again
-        path = _stamp()
-        path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_bytes(b"")
+def kernels_cached(groups: Iterable[str] = ("optics",)) -> bool:
+    """True if numba's cache holds every kernel of ``groups`` for the current sources
+    (nothing would compile)."""
+    return all(_in_cache(k) for k in kernels(groups))
+
+
+def _shares_the_cache(k: Kernel) -> bool:
+    """Whether what another process compiles reaches this one (a writable cache)."""
+    return type(getattr(k.dispatcher, "_cache", None)).__name__ not in ("NullCache", "NoneType")
+
+
+# ----------------------------------------------------------------------------
+# Compiling
+# ----------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class CompiledKernel:
+    """One kernel's compilation: by which process (0: this one), its CPU and wall time [s],
+    and when it ended after the start [s]."""
+
+    name: str
+    process: int
+    cpu_s: float
+    wall_s: float
+    end_s: float
+
+
+@dataclass(frozen=True)
+class CompileReport:
+    """What :func:`compile_kernels` compiled.
+
+    Attributes
+    ----------
+    kernels : tuple of CompiledKernel
+        In the order they were compiled.
+    processes : int
+        Processes that compiled (this one included).
+    wall_s : float
+        From the start to the last kernel. [s]
+    """
+
+    kernels: tuple[CompiledKernel, ...]
+    processes: int
+    wall_s: float
+
+
+def _dependencies(targets: list[Kernel]) -> dict[str, set[str]]:
+    """For each kernel of ``targets``, the kernels of ``targets`` that it calls,
+    directly or through helpers numba inlines: the global names its code uses
+    (``mie._add_sphere`` counts as ``_add_sphere``), followed through every
+    numba dispatcher that is not a kernel."""
+    by_function = {id(k.dispatcher): k.name for k in targets}
+    deps: dict[str, set[str]] = {}
+    for k in targets:
+        found: set[str] = set()
+        seen: set[int] = set()
+        stack = [k.dispatcher.py_func]
+        while stack:
+            func = stack.pop()
+            for name in func.__code__.co_names:
+                for value in _globals_named(func, name):
+                    if id(value) in by_function:
+                        found.add(by_function[id(value)])
+                    elif hasattr(value, "py_func") and id(value) not in seen:
+                        seen.add(id(value))
+                        stack.append(value.py_func)
+        found.discard(k.name)
+        # Two signatures of one function share numba's index file: one process
+        # writes it at a time, so a variant waits for the kernel's first signature.
+        found.update(
+            j.name
+            for j in targets
+            if j.dispatcher is k.dispatcher and j.name != k.name and "[" not in j.name
+        )
+        found.discard(k.name)
+        deps[k.name] = found
+    return deps
+
+
+def _globals_named(func: Any, name: str) -> list[Any]:
+    """The global ``name`` of ``func``'s module, and the attribute ``name`` of its
+    modules (``mie`` in ``mie._add_sphere``)."""
+    g = func.__globals__
+    out = [g[name]] if name in g else []
+    out.extend(getattr(v, name) for v in g.values() if type(v) is type(sys) and hasattr(v, name))
+    return out
+
+
+def _cost(k: Kernel) -> float:
+    """A kernel's relative compile cost: its bytecode and that of the helpers inlined into it."""
+    total = len(k.dispatcher.py_func.__code__.co_code)
+    for name in k.dispatcher.py_func.__code__.co_names:
+        for value in _globals_named(k.dispatcher.py_func, name):
+            if getattr(value, "targetoptions", {}).get("inline") == "always":
+                total += len(value.py_func.__code__.co_code)
+    return float(total)
+
+
+class _Schedule:
+    """Kernels to compile, handed out in order: ready (callees done), longest
+    chain of callers (by cost) first."""
+
+    def __init__(self, todo: list[Kernel], progress: TextIO | None, start: float) -> None:
+        self.todo = {k.name: k for k in todo}
+        deps = _dependencies(todo)
+        self.deps = {name: d & set(self.todo) for name, d in deps.items()}
+        callers: dict[str, set[str]] = {name: set() for name in self.todo}
+        for name, d in self.deps.items():
+            for callee in d:
+                callers[callee].add(name)
+        level: dict[str, float] = {}
+
+        def chain(name: str) -> float:
+            if name not in level:
+                level[name] = _cost(self.todo[name]) + max(
+                    (chain(c) for c in callers[name]), default=0.0
+                )
+            return level[name]
+
+        self.order = sorted(self.todo, key=lambda n: (-chain(n), n))
+        self.pending = list(self.order)
+        self.running: set[str] = set()
+        self.done: list[CompiledKernel] = []
+        self.lock = threading.Condition()
+        self.progress = progress
+        self.tty = progress is not None and progress.isatty()
+        self.width = 0
+        self.start = start
+
+    def take(self) -> Kernel | None:
+        """The next kernel whose callees are compiled, waiting if need be; None at the end."""
+        with self.lock:
+            while True:
+                finished = {c.name for c in self.done}
+                for name in self.pending:
+                    if self.deps[name] <= finished:
+                        self.pending.remove(name)
+                        self.running.add(name)
+                        return self.todo[name]
+                if not self.pending:
+                    return None
+                self.lock.wait()
+
+    def finish(self, name: str, process: int, cpu_s: float, wall_s: float) -> None:
+        with self.lock:
+            self.running.discard(name)
+            end = time.perf_counter() - self.start
+            self.done.append(CompiledKernel(name, process, cpu_s, wall_s, end))
+            if self.progress is not None:
+                n, total = len(self.done), len(self.todo)
+                line = f"dustoptics: compiled kernel {n}/{total}, {name} ({end:.1f} s)"
+                if self.tty:  # one line, rewritten (padded over a longer previous one)
+                    self.width = max(self.width, len(line))
+                    line = "\r" + line.ljust(self.width) + ("\n" if n == total else "")
+                else:
+                    line += "\n"
+                self.progress.write(line)
+                self.progress.flush()
+            self.lock.notify_all()
+
+    def give_back(self, name: str) -> None:
+        """A kernel a child could not compile: this process will."""
+        with self.lock:
+            self.running.discard(name)
+            self.pending.insert(0, name)
+            self.lock.notify_all()
+
+
+def _cores() -> int:
+    """The cores this process may run on."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except (AttributeError, OSError):
+        return os.cpu_count() or 1
+
+
+def _compile_here(k: Kernel) -> tuple[float, float]:
+    cpu, wall = time.thread_time(), time.perf_counter()
+    k.dispatcher.compile(k.signature)
+    return time.thread_time() - cpu, time.perf_counter() - wall
+
+
+def _child_command(modules: Iterable[str]) -> list[str]:
+    """A child that imports ``modules`` (which declare the kernels) and serves."""
+    code = "import sys, dustoptics._numba_cache as c; sys.exit(c._serve(sys.argv[1:]))"
+    return [sys.executable, "-c", code, *sorted(modules)]
+
+
+def _child_env() -> dict[str, str]:
+    env = dict(os.environ)
+    # The child imports this very package (a checkout, an install, a test's copy).
+    root = str(_PACKAGE_DIR.parent)
+    env["PYTHONPATH"] = os.pathsep.join(p for p in (root, env.get("PYTHONPATH")) if p)
+    # numba colours the messages of the typing attempts it discards; a child shows none.
+    env.setdefault("NUMBA_DISABLE_ERROR_MESSAGE_HIGHLIGHTING", "1")
+    return env
+
+
+def _serve(modules: list[str]) -> int:
+    """A child's loop: import ``modules``, then compile the kernels named on stdin,
+    one a line, answering ``done NAME CPU_S WALL_S`` (or ``fail NAME``) on stdout;
+    ends at the end of its input."""
+    import importlib
+
+    for module in modules:
+        importlib.import_module(module)
+    out = sys.stdout
+    out.write("ready\n")
+    out.flush()
+    for line in sys.stdin:
+        name = line.strip()
+        try:
+            cpu, wall = _compile_here(_KERNELS[name])
+        except Exception:
+            out.write(f"fail {name}\n")
+        else:
+            out.write(f"done {name} {cpu:.6f} {wall:.6f}\n")
+        out.flush()
+    return 0
+
+
+def _feed(child: subprocess.Popen[str], process: int, schedule: _Schedule) -> None:
+    """Hand kernels to one child until none is left or it fails."""
+    stdin, stdout = child.stdin, child.stdout
+    assert stdin is not None and stdout is not None
+    if stdout.readline().strip() != "ready":
+        return
+    while (k := schedule.take()) is not None:
+        try:
+            stdin.write(k.name + "\n")
+            stdin.flush()
+            answer = stdout.readline().split()
+        except OSError:
+            answer = []
+        if len(answer) == 4 and answer[:2] == ["done", k.name]:
+            schedule.finish(k.name, process, float(answer[2]), float(answer[3]))
+        else:
+            schedule.give_back(k.name)
+            return
+
+
+def compile_kernels(
+    groups: Iterable[str] = ("optics",),
+    *,
+    progress: TextIO | None = None,
+    processes: int | None = None,
+) -> CompileReport | None:
+    """Compile the kernels of ``groups`` that numba's cache does not hold yet.
+
+    Parameters
+    ----------
+    groups : iterable of str, optional
+        Among :data:`GROUPS`; default the kernels of every Mie table.
+    progress : text stream, optional
+        Where to say that the kernels compile, then each kernel as it is done
+        (on a terminal, on one line): ``dustoptics: compiled kernel k/N, NAME
+        (elapsed s)``.  Nothing when the cache holds them all.
+    processes : int, optional
+        Processes that compile, this one included; default one per core, at
+        most :data:`MAX_PROCESSES`.  1 compiles here alone.
+
+    Returns
+    -------
+    CompileReport or None
+        What was compiled, or None when nothing was.
+
+    Notes
+    -----
+    The kernels compiled by a child process reach this one through numba's
+    cache, which each kernel's first call loads; a child that fails leaves
+    its kernels to this process.  Without a writable cache everything
+    compiles here.
+    """
+    todo = [k for k in kernels(groups) if not _in_cache(k)]
+    if not todo:
+        return None
+    if processes is None:
+        processes = min(_cores(), MAX_PROCESSES)
+    processes = max(1, min(int(processes), len(todo)))
+    if not _shares_the_cache(todo[0]) or not sys.executable or getattr(sys, "frozen", False):
+        processes = 1  # nothing to share, or no interpreter to start
+    start = time.perf_counter()
+    if progress is not None:
+        where = f"{processes} processes, " if processes > 1 else ""
+        progress.write(
+            f"dustoptics: compiling {len(todo)} kernels, once for this installation "
+            f"({where}cached in {cache_dir()}) ...\n"
+        )
+        progress.flush()
+    schedule = _Schedule(todo, progress, start)
+    children: list[subprocess.Popen[str]] = []
+    feeders: list[threading.Thread] = []
+    try:
+        for i in range(1, processes):
+            try:
+                child = subprocess.Popen(
+                    _child_command({k.dispatcher.py_func.__module__ for k in todo}),
+                    stdin=subprocess.PIPE,
+                    stdout=subprocess.PIPE,
+                    stderr=subprocess.DEVNULL,
+                    text=True,
+                    env=_child_env(),
+                )
+            except OSError:
+                break  # no child: this process compiles what it would have
+            children.append(child)
+            feeder = threading.Thread(target=_feed, args=(child, i, schedule), daemon=True)
+            feeder.start()
+            feeders.append(feeder)
+        for _ in range(2):  # then what a failed child gave back
+            while (k := schedule.take()) is not None:
+                cpu, wall = _compile_here(k)
+                schedule.finish(k.name, 0, cpu, wall)
+            for feeder in feeders:
+                feeder.join()
+    except BaseException:
+        for child in children:  # interrupted, or a kernel failed to compile here
+            child.kill()
+        raise
+    finally:
+        for child in children:
+            with contextlib.suppress(OSError):
+                if child.stdin is not None:
+                    child.stdin.close()  # the child ends at the end of its input
+        for child in children:
+            try:
+                child.wait(timeout=10)
+            except subprocess.TimeoutExpired:
+                child.kill()
+                child.wait()
+        for feeder in feeders:
+            feeder.join(timeout=5)
+        for child in children:
+            if child.stdout is not None:
+                child.stdout.close()
+    return CompileReport(tuple(schedule.done), 1 + len(children), time.perf_counter() - start)

@@ -149,14 +149,11 @@ class TableBuilder:
         start = time.perf_counter()
         progress = self.progress
         tty = progress is not None and progress.isatty()
-        compiling = self.config.phase.uses_mie and not _numba_cache.kernels_compiled()
-        if compiling and progress is not None:
-            print(
-                f"{_PROG}: compiling the Mie kernels (once per install, about "
-                f"{COMPILE_ESTIMATE_S} s; cached in {_numba_cache.cache_dir()}) ...",
-                file=progress,
-            )
-            progress.flush()
+        compiled = None
+        if self.config.phase.uses_mie:
+            # The kernels numba's cache lacks, on every core, each reported as it is done.
+            groups = ["optics"] + ([] if self.config.optics.expansion is None else ["matrix"])
+            compiled = _numba_cache.compile_kernels(groups, progress=progress)
 
         def report(done: int, total: int) -> None:
             if progress is None:
@@ -172,14 +169,12 @@ class TableBuilder:
                 progress.flush()
 
         table = build_table(self.config, progress=report, allow_large=self.allow_large)
-        if compiling:
-            _numba_cache.mark_compiled()
-            if progress is not None:
-                print(
-                    f"{_PROG}: this first build took {time.perf_counter() - start:.1f} s; later "
-                    "builds load the compiled kernels from the cache",
-                    file=progress,
-                )
+        if compiled is not None and progress is not None:
+            print(
+                f"{_PROG}: this first build took {time.perf_counter() - start:.1f} s; later "
+                "builds load the compiled kernels from the cache",
+                file=progress,
+            )
         return table
 
 

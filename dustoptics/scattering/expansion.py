@@ -66,7 +66,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
+
+from dustoptics._numba_cache import F8_1D, F8_2D, I8, kernel
 
 # The moments are the table's convention (Table.pmom), defined with the data model.
 from dustoptics.table import alpha1_from_pmom, pmom_from_alpha1
@@ -80,12 +81,19 @@ __all__ = [
 ]
 
 
-@njit(cache=True, nogil=True)
+#: (m, n) of the four d^l_mn the expansion uses.  The kernel reads them from
+#: this array: passed as literals, numba would compile :func:`_wigner_d` once
+#: for each pair.
+_MN = np.array([[0, 0], [0, 2], [2, 2], [2, -2]], dtype=np.int64)
+
+
+@kernel(F8_1D, I8, I8, I8, group="matrix")
 def _wigner_d(mu: np.ndarray, lmax: int, m: int, n: int) -> np.ndarray:
     """d^l_mn(arccos mu) for l = 0..lmax, shape (lmax + 1, len(mu)), for
     (m, n) in (0, 0), (0, 2), (2, 2), (2, -2) (Mishchenko et al. 2002, Eq. B.22)."""
     n_mu = mu.shape[0]
-    d = np.zeros((lmax + 1, n_mu))
+    d = np.empty((lmax + 1, n_mu))
+    d[:] = 0.0
     if m == 0 and n == 0:
         for i in range(n_mu):
             d[0, i] = 1.0
@@ -120,7 +128,7 @@ def _wigner_d(mu: np.ndarray, lmax: int, m: int, n: int) -> np.ndarray:
     return d
 
 
-@njit(cache=True, nogil=True)
+@kernel(F8_1D, F8_1D, F8_1D, F8_2D, group="matrix")
 def _project(mu: np.ndarray, w: np.ndarray, f: np.ndarray, d: np.ndarray) -> np.ndarray:
     """(2l + 1)/2 sum_i w_i f_i d[l, i] for every l."""
     lmax = d.shape[0] - 1
@@ -133,7 +141,7 @@ def _project(mu: np.ndarray, w: np.ndarray, f: np.ndarray, d: np.ndarray) -> np.
     return out
 
 
-@njit(cache=True, nogil=True)
+@kernel(F8_1D, F8_1D, F8_1D, F8_1D, F8_1D, F8_1D, I8, group="matrix")
 def _greek_coefficients(
     mu: np.ndarray,
     w: np.ndarray,
@@ -146,27 +154,33 @@ def _greek_coefficients(
     """alpha1..alpha4, beta1, beta2 (rows 0..5), l = 0..lmax, of a spheres'
     matrix (a2 = a1, a4 = a3) given at the nodes ``mu`` of a Gauss rule with
     weights ``w`` that integrates the products exactly."""
-    d00 = _wigner_d(mu, lmax, 0, 0)
-    d02 = _wigner_d(mu, lmax, 0, 2)
-    d22 = _wigner_d(mu, lmax, 2, 2)
-    d2m2 = _wigner_d(mu, lmax, 2, -2)
+    d00 = _wigner_d(mu, lmax, _MN[0, 0], _MN[0, 1])
+    d02 = _wigner_d(mu, lmax, _MN[1, 0], _MN[1, 1])
+    d22 = _wigner_d(mu, lmax, _MN[2, 0], _MN[2, 1])
+    d2m2 = _wigner_d(mu, lmax, _MN[3, 0], _MN[3, 1])
     n_mu = mu.shape[0]
     plus = np.empty(n_mu)
     minus = np.empty(n_mu)
     for i in range(n_mu):
         plus[i] = a1[i] + a3[i]
         minus[i] = a1[i] - a3[i]
-    out = np.zeros((6, lmax + 1))
-    out[0] = _project(mu, w, a1, d00)
+    # Every row is written element by element: numba's array-to-row assignment
+    # and unary minus of an array each compile code of their own.
+    out = np.empty((6, lmax + 1))
+    row0 = _project(mu, w, a1, d00)
     sum23 = _project(mu, w, plus, d22)
     dif23 = _project(mu, w, minus, d2m2)
+    row3 = _project(mu, w, a3, d00)
+    # P^l_02 = -d^l_02 (module docstring).
+    row4 = _project(mu, w, b1, d02)
+    row5 = _project(mu, w, b2, d02)
     for ell in range(lmax + 1):
+        out[0, ell] = row0[ell]
         out[1, ell] = 0.5 * (sum23[ell] + dif23[ell])
         out[2, ell] = 0.5 * (sum23[ell] - dif23[ell])
-    out[3] = _project(mu, w, a3, d00)
-    # P^l_02 = -d^l_02 (module docstring).
-    out[4] = -_project(mu, w, b1, d02)
-    out[5] = -_project(mu, w, b2, d02)
+        out[3, ell] = row3[ell]
+        out[4, ell] = -row4[ell]
+        out[5, ell] = -row5[ell]
     return out
 
 
@@ -198,7 +212,11 @@ def greek_coefficients(
     numpy.ndarray, shape (6, lmax + 1)
         alpha1, alpha2, alpha3, alpha4, beta1, beta2. [-]
     """
-    arrays = [np.ascontiguousarray(v, dtype=np.float64) for v in (mu, weight, a1, a3, b1, b2)]
+    # C-contiguous, writable float64: the kernel's one signature.
+    arrays = [
+        np.require(v, dtype=np.float64, requirements=["C", "W"])
+        for v in (mu, weight, a1, a3, b1, b2)
+    ]
     return _greek_coefficients(*arrays, int(lmax))
 
 

@@ -44,6 +44,19 @@ from typing import Any, cast
 import numpy as np
 from numba import njit
 
+from dustoptics._numba_cache import (
+    B1,
+    C16,
+    F8,
+    F8_1D,
+    F8_1D_RO,
+    F8_2D,
+    I8,
+    I8_1D,
+    NONE,
+    kernel,
+    variant,
+)
 from dustoptics._validation import as_float_array, check_budget, check_positive
 
 __all__ = [
@@ -53,7 +66,7 @@ __all__ = [
 ]
 
 
-@njit(cache=True, nogil=True)
+@kernel(F8)
 def wiscombe_nmax(x: float) -> int:
     """Number of terms of the Mie series (Wiscombe 1980, Eq. 1 for 8 < x < 4200).
 
@@ -115,25 +128,19 @@ _N_PLANES = 8
 _BLK = _N_PLANES * LANES  # length of one order's block
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _workspace(n_top: int) -> np.ndarray:
     """Workspace of the coefficient kernels for up to LANES spheres with n_max <= n_top
     (orders 0..n_top + 1: the upward sweep computes chi_{n_top + 1} too)."""
     return np.empty(_LANE + (n_top + 2) * _BLK)
 
 
-@njit(cache=True, nogil=True)
-def _orders(ws: np.ndarray, n: int, count: int) -> np.ndarray:
-    """View of the blocks of orders n .. n + count - 1 of workspace ``ws``."""
-    return ws[_LANE + n * _BLK : _LANE + (n + count) * _BLK]
-
-
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _miller_start(x: float, nmax: int) -> int:
     return int(max(nmax, x) + 25 + 1.5 * np.sqrt(x))
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@njit(cache=True, nogil=True, error_model="numpy", inline="always")
 def _reciprocal(re: float, im: float) -> tuple[float, float]:
     """1 / (re + i im), scaled by max(|re|, |im|) so that no square overflows;
     branch-free, so loops over spheres vectorize (error_model="numpy": no
@@ -146,7 +153,7 @@ def _reciprocal(re: float, im: float) -> tuple[float, float]:
     return u * q, -v * q
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@njit(cache=True, nogil=True, error_model="numpy", inline="always")
 def _reciprocal_moderate(re: float, im: float) -> tuple[float, float]:
     """1 / (re + i im) with one division, for |re + i im| within 1e-150..1e150:
     the continued fraction's and the D_n recurrence's denominators, of order
@@ -155,7 +162,7 @@ def _reciprocal_moderate(re: float, im: float) -> tuple[float, float]:
     return re * q, -im * q
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@njit(cache=True, nogil=True, error_model="numpy", inline="always")
 def _log_derivative_top(
     m: complex, n_sph: int, n_top: int, lane: np.ndarray, ws: np.ndarray
 ) -> None:
@@ -211,13 +218,13 @@ def _log_derivative_top(
         j += 1
         if n_done == n_sph or j > 10_000_000:
             break
-    top = _orders(ws, n_top, 1)
+    top = ws[_LANE + n_top * _BLK : _LANE + (n_top + 1) * _BLK]  # order n_top's block
     for s in range(n_sph):
         top[_DNR + s] = lane[_FR + s] - n_top * lane[_IZR + s]
         top[_DNI + s] = lane[_FI + s] - n_top * lane[_IZI + s]
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@kernel(C16, F8_1D, I8_1D, F8_1D, error_model="numpy")
 def _mie_coefficients(m: complex, x: np.ndarray, nmax: np.ndarray, ws: np.ndarray) -> int:
     """External coefficients a_n, b_n (n = 1..n_top), Q_ext, Q_sca and g Q_sca
     of a batch of spheres.
@@ -275,7 +282,7 @@ def _mie_coefficients(m: complex, x: np.ndarray, nmax: np.ndarray, ws: np.ndarra
                 lane[_PC + s] = p
                 big |= abs(p) > 1e250
         else:
-            o = _orders(ws, n - 1, 2)  # order n - 1 at 0, order n at _BLK
+            o = ws[_LANE + (n - 1) * _BLK : _LANE + (n + 1) * _BLK]  # orders n - 1, n
             for s in range(n_sph):
                 p = (2 * n + 1) * lane[_INVX + s] * lane[_PC + s] - lane[_PN + s]
                 lane[_PN + s] = lane[_PC + s]
@@ -296,7 +303,7 @@ def _mie_coefficients(m: complex, x: np.ndarray, nmax: np.ndarray, ws: np.ndarra
                         ws[_LANE + k * _BLK + _PSI + s] *= 1e-250
 
     # psi_0 (lane _PC, unscaled), the scale, chi_0 and chi_1.
-    o = _orders(ws, 0, 2)
+    o = ws[_LANE : _LANE + 2 * _BLK]  # orders 0, 1
     for s in range(n_sph):
         sx = np.sin(lane[_X + s])
         cx = np.cos(lane[_X + s])
@@ -323,7 +330,8 @@ def _mie_coefficients(m: complex, x: np.ndarray, nmax: np.ndarray, ws: np.ndarra
         c = 2.0 * n + 1.0
         c_ab = c / (n * (n + 1.0))
         c_prev = (n - 1.0) * (n + 1.0) / n  # of a_{n-1} a_n* + b_{n-1} b_n* in g Q_sca
-        o = _orders(ws, n - 1, 3)  # orders n - 1 (receives a_n, b_n), n, n + 1
+        # Orders n - 1 (receives a_n, b_n), n, n + 1.
+        o = ws[_LANE + (n - 1) * _BLK : _LANE + (n + 2) * _BLK]
         for s in range(n_sph):
             p1 = o[_BLK + _PSI + s] * lane[_PC + s]
             o[_BLK + _PSI + s] = p1
@@ -368,7 +376,7 @@ def _mie_coefficients(m: complex, x: np.ndarray, nmax: np.ndarray, ws: np.ndarra
     return n_top
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@njit(cache=True, nogil=True, error_model="numpy", inline="always")
 def _bh_ratio(
     tr: float, ti: float, p1: float, p0: float, c1: float, c0: float
 ) -> tuple[float, float]:
@@ -381,7 +389,7 @@ def _bh_ratio(
     return nr * u - ni * v, nr * v + ni * u
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _log_derivatives_down(z: complex, n_top: int) -> np.ndarray:
     """D_n(z) = psi_n'(z) / psi_n(z), n = 0..n_top, by the downward recurrence
     D_{n-1} = n/z - 1/(D_n + n/z) (Bohren & Huffman 1983, Eq. 4.89, stable for
@@ -398,7 +406,7 @@ def _log_derivatives_down(z: complex, n_top: int) -> np.ndarray:
     return d
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@kernel(C16, C16, F8, I8_1D, I8, F8_1D, group="coated", error_model="numpy")
 def _coat(
     m_core: complex, m: complex, fraction: float, nmax: np.ndarray, n_sph: int, ws: np.ndarray
 ) -> None:
@@ -433,7 +441,7 @@ def _coat(
     """
     for s in range(n_sph):
         y = ws[_X + s]
-        n_s = int(nmax[s])
+        n_s = nmax[s]
         x = fraction * y
         z_cx = m_core * x
         z_x = m * x
@@ -499,7 +507,7 @@ def _coefficients(ws: np.ndarray, n_top: int, n_sph: int) -> tuple[np.ndarray, n
     return a, b
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _pi_tau_table(mu: np.ndarray, nmax: int) -> tuple[np.ndarray, np.ndarray]:
     """Angular functions pi_n(mu), tau_n(mu) for n = 1..nmax, shape (len(mu), nmax).
 
@@ -522,14 +530,14 @@ def _pi_tau_table(mu: np.ndarray, nmax: int) -> tuple[np.ndarray, np.ndarray]:
     return pi_t, tau_t
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _amplitudes(
     nmax: int, a: np.ndarray, b: np.ndarray, pi_t: np.ndarray, tau_t: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
     """S1, S2 at the angles of the tables (BH Eq. 4.74)."""
     n_mu = pi_t.shape[0]
-    s1 = np.zeros(n_mu, dtype=np.complex128)
-    s2 = np.zeros(n_mu, dtype=np.complex128)
+    s1 = np.empty(n_mu, dtype=np.complex128)
+    s2 = np.empty(n_mu, dtype=np.complex128)
     for i in range(n_mu):
         acc1 = 0.0 + 0.0j
         acc2 = 0.0 + 0.0j
@@ -545,20 +553,24 @@ def _amplitudes(
     return s1, s2
 
 
-@njit(cache=True, nogil=True)
+@kernel(C16, F8, F8_1D, C16, F8, group="sphere")
 def _single_sphere_kernel(
     m: complex, x: float, mu: np.ndarray, m_core: complex, core_fraction: float
 ):
     nmax = wiscombe_nmax(x)
     ws = _workspace(nmax)
-    nmax_arr = np.full(1, nmax)
-    _mie_coefficients(m, np.full(1, x), nmax_arr, ws)
+    # Arrays of one sphere, typed as the polydisperse kernel's batches are.
+    nmax_arr = np.empty(1, dtype=np.int64)
+    nmax_arr[0] = nmax
+    x_arr = np.empty(1)
+    x_arr[0] = x
+    _mie_coefficients(m, x_arr, nmax_arr, ws)
     if core_fraction > 0.0:
-        _coat(m_core, m, core_fraction, nmax_arr, 1, ws)
+        _coat(m_core, m, core_fraction, nmax_arr, nmax_arr.shape[0], ws)
     a = np.empty(nmax, dtype=np.complex128)
     b = np.empty(nmax, dtype=np.complex128)
     for k in range(nmax):
-        o = _orders(ws, k, 1)
+        o = ws[_LANE + k * _BLK : _LANE + (k + 1) * _BLK]
         a[k] = complex(o[_AR], o[_AI])
         b[k] = complex(o[_BR], o[_BI])
     pi_t, tau_t = _pi_tau_table(mu, nmax)
@@ -615,6 +627,11 @@ MIN_INDEX_CONTRAST = 1e-6
 #: Largest |m| accepted. [-]  Beyond it m x overflows the recurrences' range
 #: for the size parameters of interest; metals in the infrared reach |m| ~ 100.
 MAX_INDEX = 1e4
+
+
+def _kernel_mu(mu: np.ndarray) -> np.ndarray:
+    """``mu`` as :func:`_single_sphere_kernel` takes it: C-contiguous, writable float64."""
+    return np.require(mu, dtype=np.float64, requirements=["C", "W"])
 
 
 def check_sphere_inputs(m: Any, x: Any = None) -> complex:
@@ -698,7 +715,7 @@ def single_sphere(
         allow_large=allow_large,
         change=f"x = {x:g} needs n_max = {n_max:.3g} orders: use a smaller sphere or fewer angles",
     )
-    qext, qsca, gq, s1, s2 = _single_sphere_kernel(m, x, mu_arr, 0j, 0.0)
+    qext, qsca, gq, s1, s2 = _single_sphere_kernel(m, x, _kernel_mu(mu_arr), 0j, 0.0)
     phase = (np.abs(s1) ** 2 + np.abs(s2) ** 2) / (2.0 * np.pi * x * x * qsca)
     return SingleSphere(
         qext=qext, qsca=qsca, qabs=qext - qsca, g=gq / qsca, mu=mu_arr, s1=s1, s2=s2, phase=phase
@@ -770,7 +787,9 @@ def coated_sphere(
         allow_large=False,
         change=f"x = {x:g} needs n_max = {n_max:.3g} orders: use a smaller sphere or fewer angles",
     )
-    qext, qsca, gq, s1, s2 = _single_sphere_kernel(m_shell, x, mu_arr, m_core, x_core / x)
+    qext, qsca, gq, s1, s2 = _single_sphere_kernel(
+        m_shell, x, _kernel_mu(mu_arr), m_core, x_core / x
+    )
     phase = (np.abs(s1) ** 2 + np.abs(s2) ** 2) / (2.0 * np.pi * x * x * qsca)
     return SingleSphere(
         qext=qext, qsca=qsca, qabs=qext - qsca, g=gq / qsca, mu=mu_arr, s1=s1, s2=s2, phase=phase
@@ -803,7 +822,7 @@ N_STOKES = 4
 BLOCK = 16
 
 
-@njit(cache=True, nogil=True)
+@kernel(F8_1D_RO, I8)
 def angular_table(mu: np.ndarray, nmax: int) -> np.ndarray:
     """pi_n(mu) and tau_n(mu), n = 1..nmax, in the blocked layout of the kernel.
 
@@ -817,7 +836,8 @@ def angular_table(mu: np.ndarray, nmax: int) -> np.ndarray:
     n_mu = mu.shape[0]
     n_pad = BLOCK * ((n_mu + BLOCK - 1) // BLOCK)
     n_pass = (nmax + 3) // 4
-    tab = np.zeros((n_pass, 8 * n_pad))
+    tab = np.empty((n_pass, 8 * n_pad))
+    tab[:] = 0.0
     for i in range(n_mu):
         u = mu[i]
         base = (i // BLOCK) * 8 * BLOCK + i % BLOCK
@@ -833,7 +853,6 @@ def angular_table(mu: np.ndarray, nmax: int) -> np.ndarray:
     return tab
 
 
-@njit(cache=True, nogil=True)
 def _accumulate(
     m: complex,
     x_nodes: np.ndarray,
@@ -874,50 +893,38 @@ def _accumulate(
 
     The Mie coefficients are computed for LANES consecutive nodes at a time,
     up to the largest n_max among them: give the nodes sorted by x.
+
+    :func:`_accumulate_grids` on one grid (``table`` must have the layout
+    :func:`angular_table` gives for n_mu angles).
     """
-    n_nodes = x_nodes.shape[0]
-    n_f = 2 * n_mu if symmetric else n_mu
-    out = np.zeros((n_panels, n_stokes * n_f + N_SUMS))
-    if n_nodes == 0:
-        return out
-    x_top = x_nodes[0]
-    for j in range(n_nodes):
-        x_top = max(x_top, x_nodes[j])
-    nmax_all = wiscombe_nmax(x_top)
-    x_b = np.empty(LANES)
-    nmax_b = np.empty(LANES, dtype=np.int64)
-    ws = _workspace(nmax_all)
-    coef = np.empty((nmax_all + 4, 4))
-    acc = np.empty(table.shape[1] if n_mu > 0 else 0)
-    for j0 in range(0, n_nodes, LANES):
-        n_live = min(LANES, n_nodes - j0)
-        for s in range(LANES):  # a short last batch repeats its last sphere
-            x_b[s] = x_nodes[j0 + min(s, n_live - 1)]
-            nmax_b[s] = wiscombe_nmax(x_b[s])
-        _mie_coefficients(m, x_b, nmax_b, ws)
-        if core_fraction > 0.0:
-            _coat(m_core, m, core_fraction, nmax_b, n_live, ws)
-        for s in range(n_live):
-            j = j0 + s
-            _add_sphere(
-                out[node_panel[j]],
-                w_nodes[j],
-                x_b[s],
-                nmax_b[s],
-                ws,
-                s,
-                per_particle,
-                table,
-                n_mu,
-                symmetric,
-                n_stokes,
-                coef,
-                acc,
-            )
-    return out
+    width = _table_width(n_mu)
+    if table.ndim != 2 or (n_mu > 0 and table.shape[1] != width):
+        raise ValueError(
+            f"table must be angular_table's for n_mu = {n_mu} angles (shape (n_pass, {width})); "
+            f"got shape {table.shape}"
+        )
+    flat = np.ascontiguousarray(table, dtype=np.float64).ravel() if n_mu > 0 else np.empty(0)
+    return _accumulate_grids(
+        complex(m),
+        np.ascontiguousarray(x_nodes, dtype=np.float64),
+        np.ascontiguousarray(w_nodes, dtype=np.float64),
+        np.ascontiguousarray(node_panel, dtype=np.int64),
+        np.zeros(len(x_nodes), dtype=np.int64),
+        int(n_panels),
+        bool(per_particle),
+        np.array([n_mu], dtype=np.int64),
+        flat,
+        np.array([0, flat.size], dtype=np.int64),
+        np.empty(0),
+        np.zeros(1, dtype=np.int64),
+        bool(symmetric),
+        int(n_stokes),
+        _core_index(m_core, core_fraction),
+        float(core_fraction),
+    )
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _backscatter(ws: np.ndarray, s: int, nmax: int) -> float:
     """x^2 Q_back = |sum_n (2n + 1) (-1)^n (a_n - b_n)|^2 of sphere ``s`` of
     workspace ``ws`` (Bohren & Huffman 1983, p. 122): 4 pi times the
@@ -934,7 +941,7 @@ def _backscatter(ws: np.ndarray, s: int, nmax: int) -> float:
     return back_r * back_r + back_i * back_i
 
 
-@njit(cache=True, nogil=True)
+@kernel(F8_1D, F8, F8, I8, F8_1D, I8, B1, F8_2D, I8, B1, I8, F8_2D, F8_1D)
 def _add_sphere(
     row: np.ndarray,
     w: float,
@@ -1051,7 +1058,7 @@ def _add_sphere(
                 minus[i] += c * (s1r * s1r + s1i * s1i + s2r * s2r + s2i * s2i)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _add_matrix(
     row: np.ndarray,
     c: float,
@@ -1090,7 +1097,17 @@ def _add_matrix(
                 r_v[i] += 2.0 * c * (s2i * s1r - s2r * s1i)
 
 
-@njit(cache=True, nogil=True)
+def _core_index(m_core: complex, core_fraction: float) -> complex | None:
+    """``m_core`` as :func:`_accumulate_grids` takes it: None for homogeneous spheres
+    (``core_fraction`` 0), for which numba compiles the kernel without :func:`_coat`."""
+    return complex(m_core) if core_fraction > 0.0 else None
+
+
+def _table_width(n_mu: int) -> int:
+    """Columns of :func:`angular_table`'s rows for ``n_mu`` angles."""
+    return 8 * BLOCK * ((n_mu + BLOCK - 1) // BLOCK)
+
+
 def _accumulate_tiers(
     m: complex,
     x_nodes: np.ndarray,
@@ -1120,14 +1137,83 @@ def _accumulate_tiers(
     (n_panels, 2 n_stokes tier_size[-1] + N_SUMS), as :func:`_accumulate`
     would on the largest grid (to the rounding of the interpolation; every
     block I, Q, U, V of the scattering matrix is a polynomial in mu of degree
-    2 n_max, as the intensity is).
+    2 n_max, as the intensity is).  :func:`_accumulate_grids` with
+    ``symmetric`` true.
+    """
+    return _accumulate_grids(
+        m,
+        x_nodes,
+        w_nodes,
+        node_panel,
+        node_tier,
+        n_panels,
+        per_particle,
+        tier_size,
+        tables,
+        table_start,
+        maps,
+        map_start,
+        True,
+        n_stokes,
+        _core_index(m_core, core_fraction),
+        core_fraction,
+    )
+
+
+#: :func:`_accumulate_grids`' argument types but the last two (m_core, core_fraction).
+_GRIDS_ARGS = (C16, F8_1D, F8_1D, I8_1D, I8_1D, I8, B1, I8_1D, F8_1D, I8_1D, F8_1D, I8_1D, B1, I8)
+
+
+@kernel(*_GRIDS_ARGS, NONE, F8)
+def _accumulate_grids(
+    m: complex,
+    x_nodes: np.ndarray,
+    w_nodes: np.ndarray,
+    node_panel: np.ndarray,
+    node_tier: np.ndarray,
+    n_panels: int,
+    per_particle: bool,
+    tier_size: np.ndarray,
+    tables: np.ndarray,
+    table_start: np.ndarray,
+    maps: np.ndarray,
+    map_start: np.ndarray,
+    symmetric: bool,
+    n_stokes: int,
+    m_core: complex | None,
+    core_fraction: float,
+) -> np.ndarray:
+    """The sums of :func:`_accumulate` and :func:`_accumulate_tiers`: the one
+    compiled loop over spheres that both run.
+
+    Node j is summed on grid ``node_tier[j]``, of tier_size[t] angles (half-grid
+    angles if ``symmetric``) whose :func:`angular_table` is
+    ``tables[table_start[t]:table_start[t + 1]]`` (flattened); a grid of 0
+    angles sums the cross-sections alone.  The nodes come sorted by grid, then
+    by x, and each panel's nodes share one grid.  Rows of grids below the last
+    (symmetric Gauss grids only) are moved to the last one by the maps of
+    :func:`_interpolation_maps` (R_even then R_odd, flattened, at
+    ``maps[map_start[t]:]``).  Returns rows of shape (n_panels, n_stokes n_f
+    + N_SUMS), n_f = 2 tier_size[-1] if ``symmetric`` else tier_size[-1].
+
+    Per grid, the spheres are summed as :func:`_accumulate` describes: their
+    Mie coefficients LANES at a time (:func:`_mie_coefficients`, coated by
+    :func:`_coat` if ``core_fraction`` > 0; ``m_core`` is None for homogeneous
+    spheres, a signature compiled without :func:`_coat`), each added to its
+    panel's row by :func:`_add_sphere`.  One function, not a loop calling
+    another compiled one: numba optimizes every compiled caller again with its
+    callees inlined, so each level of calls above the sphere kernels cost
+    seconds of compile time.
     """
     n_top = tier_size[tier_size.shape[0] - 1]
-    # True, but not the literal: that would compile _accumulate a second time.
-    symmetric = n_top > 0
-    width_top = 2 * n_stokes * n_top
-    out = np.zeros((n_panels, width_top + N_SUMS))
-    local = np.full(n_panels, -1, dtype=np.int64)
+    n_f_top = 2 * n_top if symmetric else n_top
+    width_top = n_stokes * n_f_top
+    # np.empty and a fill rather than np.zeros and np.full: each numpy
+    # constructor is compiled apart per dtype and shape, tenths of a second each.
+    out = np.empty((n_panels, width_top + N_SUMS))
+    out[:] = 0.0
+    local = np.empty(n_panels, dtype=np.int64)
+    local[:] = -1
     panel_of = np.empty(n_panels, dtype=np.int64)
     n_nodes = x_nodes.shape[0]
     j0 = 0
@@ -1146,23 +1232,50 @@ def _accumulate_tiers(
         for j in range(j0, j1):
             node_local[j - j0] = local[node_panel[j]]
         n_t = tier_size[t]
-        width = 8 * n_t  # n_t is a multiple of BLOCK
+        n_f = 2 * n_t if symmetric else n_t
+        width = 8 * BLOCK * ((n_t + BLOCK - 1) // BLOCK)  # angular_table's row
         flat = tables[table_start[t] : table_start[t + 1]]
-        table = flat.reshape((flat.shape[0] // width, width))
-        rows = _accumulate(
-            m,
-            x_nodes[j0:j1],
-            w_nodes[j0:j1],
-            node_local,
-            n_loc,
-            per_particle,
-            table,
-            n_t,
-            symmetric,
-            n_stokes,
-            m_core,
-            core_fraction,
-        )
+        table = flat.reshape((flat.shape[0] // width if width > 0 else 0, width))
+        # The grid's spheres, LANES at a time (a short last batch repeats its
+        # last sphere), into rows of the grid's panels.
+        rows = np.empty((n_loc, n_stokes * n_f + N_SUMS))
+        rows[:] = 0.0
+        x_top = x_nodes[j0]
+        for j in range(j0, j1):
+            x_top = max(x_top, x_nodes[j])
+        nmax_all = wiscombe_nmax(x_top)
+        x_b = np.empty(LANES)
+        nmax_b = np.empty(LANES, dtype=np.int64)
+        ws = _workspace(nmax_all)
+        coef = np.empty((nmax_all + 4, 4))
+        acc = np.empty(width)
+        for b0 in range(j0, j1, LANES):
+            n_live = min(LANES, j1 - b0)
+            for s in range(LANES):
+                x_b[s] = x_nodes[b0 + min(s, n_live - 1)]
+                nmax_b[s] = wiscombe_nmax(x_b[s])
+            _mie_coefficients(m, x_b, nmax_b, ws)
+            # m_core None (homogeneous spheres) is decided when numba compiles:
+            # that signature has no _coat in it.
+            if m_core is not None and core_fraction > 0.0:
+                _coat(m_core, m, core_fraction, nmax_b, n_live, ws)
+            for s in range(n_live):
+                j = b0 + s
+                _add_sphere(
+                    rows[node_local[j - j0]],
+                    w_nodes[j],
+                    x_b[s],
+                    nmax_b[s],
+                    ws,
+                    s,
+                    per_particle,
+                    table,
+                    n_t,
+                    symmetric,
+                    n_stokes,
+                    coef,
+                    acc,
+                )
         # Rows are copied element by element: numba's array-to-slice assignment
         # compiles a shape-mismatch message (string formatting), about 2 s.
         if n_t == n_top:
@@ -1175,9 +1288,11 @@ def _accumulate_tiers(
             r_even = maps[map_start[t] : map_start[t] + size].reshape((n_t, n_top))
             r_odd = maps[map_start[t] + size : map_start[t] + 2 * size].reshape((n_t, n_top))
             # Each block of 2 n_t values moves on its own: as rows of their own.
-            blocks = np.ascontiguousarray(rows[:, : 2 * n_stokes * n_t]).reshape(
-                (n_loc * n_stokes, 2 * n_t)
-            )
+            blocks = np.empty((n_loc * n_stokes, 2 * n_t))
+            for r in range(n_loc):
+                for k in range(n_stokes):
+                    for c in range(2 * n_t):
+                        blocks[r * n_stokes + k, c] = rows[r, k * 2 * n_t + c]
             moved = _legendre_regrid(blocks, r_even, r_odd).reshape((n_loc, width_top))
             for r in range(n_loc):
                 p = panel_of[r]
@@ -1191,7 +1306,11 @@ def _accumulate_tiers(
     return out
 
 
-@njit(cache=True, nogil=True)
+# Coated spheres: a complex m_core, and _coat compiled in.
+variant(_accumulate_grids, *_GRIDS_ARGS, C16, F8, group="coated")
+
+
+@kernel(F8_1D_RO, F8_1D_RO, F8_1D, I8)
 def _legendre_project(
     mu_half: np.ndarray, w_half: np.ndarray, f: np.ndarray, lmax: int
 ) -> np.ndarray:
@@ -1210,8 +1329,10 @@ def _legendre_project(
     for i in range(n_half):
         fe[i] = w_half[i] * (f[i] + f[n_half + i])  # even part, times weight
         fo[i] = w_half[i] * (f[i] - f[n_half + i])  # odd part, times weight
-    p_prev = np.zeros(n_half)
-    p_cur = np.ones(n_half)
+    p_prev = np.empty(n_half)
+    p_prev[:] = 0.0
+    p_cur = np.empty(n_half)
+    p_cur[:] = 1.0
     beta = np.empty(lmax + 1)
     for ell in range(lmax + 1):
         g = fe if ell % 2 == 0 else fo
@@ -1239,7 +1360,6 @@ def _legendre_project(
     return beta
 
 
-@njit(cache=True, nogil=True)
 def _interpolation_maps(
     mu_half: np.ndarray, w_half: np.ndarray, mu_half_out: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -1251,7 +1371,9 @@ def _interpolation_maps(
     return r_even, r_odd
 
 
-@njit(cache=True, nogil=True, error_model="numpy")  # y at a node: inf, then replaced
+@kernel(
+    F8_1D_RO, F8_1D_RO, F8_1D_RO, F8_2D, F8_2D, error_model="numpy"
+)  # y at a node: inf, then replaced
 def _interpolation_maps_into(
     mu_half: np.ndarray,
     w_half: np.ndarray,
@@ -1312,7 +1434,7 @@ def _interpolation_maps_into(
             r_odd[i, k] = cp - cm
 
 
-@njit(cache=True, nogil=True)
+@kernel(F8_2D, F8_2D, F8_2D)
 def _legendre_regrid(rows: np.ndarray, r_even: np.ndarray, r_odd: np.ndarray) -> np.ndarray:
     """Each row's values (+mu_half, then -mu_half) moved to the output grid
     (+mu_half_out, then -mu_half_out) by the maps of
@@ -1340,7 +1462,7 @@ def _legendre_regrid(rows: np.ndarray, r_even: np.ndarray, r_odd: np.ndarray) ->
     return out
 
 
-@njit(cache=True, nogil=True)
+@kernel(F8_1D, F8_1D)
 def _legendre_evaluate(beta: np.ndarray, mu: np.ndarray) -> np.ndarray:
     """Sum_l beta_l P_l(mu) by Clenshaw's recurrence.
 
@@ -1350,8 +1472,10 @@ def _legendre_evaluate(beta: np.ndarray, mu: np.ndarray) -> np.ndarray:
     """
     lmax = beta.shape[0] - 1
     n_mu = mu.shape[0]
-    b1 = np.zeros(n_mu)
-    b2 = np.zeros(n_mu)
+    b1 = np.empty(n_mu)
+    b1[:] = 0.0
+    b2 = np.empty(n_mu)
+    b2[:] = 0.0
     for ell in range(lmax, 0, -1):
         c1 = (2 * ell + 1) / (ell + 1)
         c2 = (ell + 1) / (ell + 2)

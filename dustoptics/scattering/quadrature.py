@@ -44,9 +44,9 @@ from dataclasses import dataclass, field
 from functools import lru_cache
 
 import numpy as np
-from numba import njit
 from scipy.special import roots_legendre
 
+from dustoptics._numba_cache import F8, F8_1D, F8_1D_RO, kernel
 from dustoptics._validation import check_open_interval, check_positive
 from dustoptics.particles.sizedist import SizeDistribution
 
@@ -190,7 +190,7 @@ def _stretch(x: np.ndarray | float, x_c: float) -> np.ndarray | float:
 _EPS = float(np.finfo(np.float64).eps)
 
 
-@njit(cache=True, nogil=True)
+@kernel(F8)
 def _wright_omega(s: float) -> float:
     """Wright omega of real s: the w > 0 with w + ln w = s.
 
@@ -232,7 +232,7 @@ def _wright_omega(s: float) -> float:
     return w
 
 
-@njit(cache=True, nogil=True)
+@kernel(F8_1D, F8)
 def _unstretch(s: np.ndarray, x_c: float) -> np.ndarray:
     """x = x_c omega(s) for a 1-d array s."""
     x = np.empty(s.shape[0])
@@ -312,7 +312,7 @@ def panel_nodes(
     return RadiusNodes(size_parameter=x, weight=w, radius_um=r), node_panel
 
 
-@njit(cache=True, nogil=True)
+@kernel(F8_1D, F8_1D, F8_1D_RO, F8_1D_RO, F8)
 def _gauss_points(
     lower: np.ndarray, upper: np.ndarray, t: np.ndarray, gw: np.ndarray, x_c: float
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -333,7 +333,7 @@ def _gauss_points(
     return x, ds_weight, node_panel
 
 
-@njit(cache=True, nogil=True)
+@kernel(F8_1D, F8_1D, F8_1D, F8, F8)
 def _node_weights(
     x: np.ndarray, density: np.ndarray, ds_weight: np.ndarray, x_c: float, k_um: float
 ) -> np.ndarray:

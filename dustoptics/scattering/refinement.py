@@ -40,6 +40,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
+from dustoptics._numba_cache import B1, F8, F8_1D, F8_2D, I8, I8_1D, kernel
 from dustoptics.particles.sizedist import SizeDistribution
 from dustoptics.scattering import mie
 from dustoptics.scattering.expansion import greek_coefficients
@@ -55,7 +56,7 @@ from dustoptics.scattering.quadrature import (
 __all__: list[str] = []
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _n_max(x: float) -> float:
     """:func:`mie.wiscombe_nmax` before rounding down: x + 4.05 x^(1/3) + 2."""
     return x + 4.05 * np.cbrt(x) + 2.0
@@ -107,6 +108,14 @@ class _Panels(NamedTuple):
     coarse: np.ndarray
     left: np.ndarray
     right: np.ndarray
+
+
+def _read_only(a: np.ndarray) -> np.ndarray:
+    """A read-only C-contiguous float64 view (or copy) of ``a``: the kernels that take
+    the cached Gauss rules take other angles in the same type, so one signature serves."""
+    v = np.require(a, dtype=np.float64, requirements=["C"]).view()
+    v.flags.writeable = False
+    return v
 
 
 @lru_cache(maxsize=32)
@@ -178,11 +187,12 @@ def _stacked_interpolation_maps(sizes: np.ndarray, n_half: int) -> tuple[np.ndar
     return maps, start
 
 
-@njit(cache=True, nogil=True)
+@kernel(F8_2D, I8_1D, I8_1D)
 def _halves_total(pool: np.ndarray, left: np.ndarray, right: np.ndarray) -> np.ndarray:
     """Sum over panels p of the rows ``pool[left[p]] + pool[right[p]]``, panel
     after panel: the refinement's current result."""
-    total = np.zeros(pool.shape[1])
+    total = np.empty(pool.shape[1])
+    total[:] = 0.0
     for p in range(left.shape[0]):
         a = pool[left[p]]
         b = pool[right[p]]
@@ -191,7 +201,7 @@ def _halves_total(pool: np.ndarray, left: np.ndarray, right: np.ndarray) -> np.n
     return total
 
 
-@njit(cache=True, nogil=True)
+@kernel(F8_2D, I8_1D, I8_1D, I8_1D, I8, I8)
 def _phase_refinement_errors(
     pool: np.ndarray, coarse: np.ndarray, left: np.ndarray, right: np.ndarray, n_f: int, norm: int
 ) -> tuple[np.ndarray, np.ndarray, float]:
@@ -206,7 +216,8 @@ def _phase_refinement_errors(
     """
     n_p = coarse.shape[0]
     total = _halves_total(pool, left, right)
-    column = np.zeros(n_f)
+    column = np.empty(n_f)
+    column[:] = 0.0
     panel_error = np.empty(n_p)
     norm_sum = 0.0
     for p in range(n_p):
@@ -229,7 +240,7 @@ def _phase_refinement_errors(
     return total, panel_error, worst_sum + norm_sum
 
 
-@njit(cache=True, nogil=True)
+@kernel(F8_2D, I8_1D, I8_1D, I8_1D, I8, I8)
 def _cross_refinement_errors(
     pool: np.ndarray, coarse: np.ndarray, left: np.ndarray, right: np.ndarray, norm: int, gnum: int
 ) -> tuple[np.ndarray, np.ndarray, float]:
@@ -243,7 +254,8 @@ def _cross_refinement_errors(
     total = _halves_total(pool, left, right)
     g = abs(total[gnum] / total[norm])
     panel_error = np.empty(n_p)
-    sums = np.zeros(3)
+    sums = np.empty(3)
+    sums[:] = 0.0
     for p in range(n_p):
         a = pool[left[p]]
         b = pool[right[p]]
@@ -260,7 +272,7 @@ def _cross_refinement_errors(
     return total, panel_error, max(sums[0], sums[1], sums[2])
 
 
-@njit(cache=True, nogil=True)
+@kernel(F8_1D)
 def _stable_argsort(keys: np.ndarray) -> np.ndarray:
     """np.argsort(keys, kind="mergesort") for 1-d float64 keys (stable, NaN last).
 
@@ -269,7 +281,9 @@ def _stable_argsort(keys: np.ndarray) -> np.ndarray:
     unique, so the result is the same.
     """
     n = keys.shape[0]
-    order = np.arange(n)
+    order = np.empty(n, dtype=np.int64)
+    for i in range(n):
+        order[i] = i
     scratch = np.empty(n, dtype=np.int64)
     width = 1
     while width < n:
@@ -303,7 +317,7 @@ def _stable_argsort(keys: np.ndarray) -> np.ndarray:
     return order
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _search_left(a: np.ndarray, v: float) -> int:
     """np.searchsorted(a, v) (side "left", NaN sorted last) for increasing float64 ``a``.
 
@@ -321,7 +335,7 @@ def _search_left(a: np.ndarray, v: float) -> int:
     return lo
 
 
-@njit(cache=True, nogil=True)
+@kernel(F8_1D, F8_1D, F8, F8, F8_1D, F8_1D)
 def _choose_splits(
     panel_error: np.ndarray,
     cost: np.ndarray,
@@ -339,15 +353,34 @@ def _choose_splits(
     halves, and each is evaluated on its own two halves (left halves of all
     new panels first).
     """
-    badness = panel_error / tol
-    order = _stable_argsort(-badness / cost)
-    cumulative = np.cumsum(badness[order])
+    # Loops, not numpy's array expressions, cumsum and flatnonzero: the same
+    # operations in the same order, without compiling each of those apart.
+    n_p = panel_error.shape[0]
+    badness = np.empty(n_p)
+    key = np.empty(n_p)
+    for i in range(n_p):
+        badness[i] = panel_error[i] / tol
+        key[i] = -badness[i] / cost[i]
+    order = _stable_argsort(key)
+    cumulative = np.empty(n_p)
+    running = 0.0
+    for i in range(n_p):
+        running += badness[order[i]]
+        cumulative[i] = running
     n_split = min(_search_left(cumulative, cumulative[-1] - keep_fraction) + 1, order.shape[0])
-    chosen = np.zeros(badness.shape[0], dtype=np.bool_)
+    chosen = np.empty(n_p, dtype=np.bool_)
+    chosen[:] = False
     for i in range(n_split):
         chosen[order[i]] = True
-    split = np.flatnonzero(chosen)  # increasing
-    k = split.shape[0]
+    k = 0
+    for i in range(n_p):
+        k += 1 if chosen[i] else 0
+    split = np.empty(k, dtype=np.int64)  # increasing
+    k = 0
+    for i in range(n_p):
+        if chosen[i]:
+            split[k] = i
+            k += 1
     new_lower = np.empty(2 * k)
     new_upper = np.empty(2 * k)
     for i in range(k):
@@ -369,7 +402,7 @@ def _choose_splits(
     return split, eval_lower, eval_upper
 
 
-@njit(cache=True, nogil=True)
+@kernel(F8_2D, I8, F8_2D, I8_1D, I8_1D, I8_1D, I8_1D, F8_1D, F8_1D, F8_1D, F8_1D, F8_1D, F8_1D)
 def _apply_splits(
     pool: np.ndarray,
     n_rows: int,
@@ -403,7 +436,8 @@ def _apply_splits(
     for r in range(2 * k2):
         for c in range(width):
             pool[n_rows + r, c] = rows[r, c]
-    keep = np.ones(lower.shape[0], dtype=np.bool_)
+    keep = np.empty(lower.shape[0], dtype=np.bool_)
+    keep[:] = True
     for p in split:
         keep[p] = False
     n_keep = lower.shape[0] - split.shape[0]
@@ -437,7 +471,7 @@ def _apply_splits(
     return pool, n_rows + 2 * k2, new_coarse, new_left, new_right, new_lower, new_upper, new_costs
 
 
-@njit(cache=True, nogil=True)
+@kernel(F8_1D, F8, B1)
 def _panel_cost(upper: np.ndarray, x_c: float, angles: bool) -> np.ndarray:
     """Relative work of evaluating a panel ending at s = ``upper``: with n =
     n_max at its end (x = x_c omega(s)), ~ (n + 8)^2 with angles (orders x
@@ -449,7 +483,6 @@ def _panel_cost(upper: np.ndarray, x_c: float, angles: bool) -> np.ndarray:
     return cost
 
 
-@njit(cache=True, nogil=True)
 def _accumulate_by_tier(
     m: complex,
     x: np.ndarray,
@@ -472,13 +505,47 @@ def _accumulate_by_tier(
     its largest sphere (wiscombe_nmax + 1, plus 1 so that the rounding of the
     cube root can never pick a tier one order short: the kernel reads the
     tables without bounds checks).  The nodes go to the kernel by tier, then
-    by size, so that its batches hold spheres of similar n_max.
+    by size, so that its batches hold spheres of similar n_max
+    (:func:`_order_by_tier`).  Two compiled calls from Python rather than one
+    calling the other: a compiled caller is compiled again with the kernel
+    inlined, seconds of a first build's compile time for a microsecond a call.
     """
+    x_sorted, w_sorted, panel_sorted, node_tier, n_panels = _order_by_tier(
+        x, w, node_panel, nodes_per_panel, tiers
+    )
+    return mie._accumulate_grids(
+        m,
+        x_sorted,
+        w_sorted,
+        panel_sorted,
+        node_tier,
+        n_panels,
+        per_particle,
+        tiers,
+        tables,
+        table_start,
+        maps,
+        map_start,
+        True,
+        n_stokes,
+        mie._core_index(m_core, core_fraction),
+        core_fraction,
+    )
+
+
+@kernel(F8_1D, F8_1D, I8_1D, I8, I8_1D)
+def _order_by_tier(
+    x: np.ndarray, w: np.ndarray, node_panel: np.ndarray, nodes_per_panel: int, tiers: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, int]:
+    """The nodes of :func:`_accumulate_by_tier` (given panel after panel)
+    ordered by tier, then by size: their size parameters, weights, panels and
+    tiers, and the number of panels."""
     n_panels = x.shape[0] // nodes_per_panel
     n_tiers = tiers.shape[0]
     panel_tier = np.empty(n_panels, dtype=np.int64)
     x_first = np.empty(n_panels)
-    count = np.zeros(n_tiers + 1, dtype=np.int64)
+    count = np.empty(n_tiers + 1, dtype=np.int64)
+    count[:] = 0
     for p in range(n_panels):
         x_top = x[p * nodes_per_panel]
         for j in range(p * nodes_per_panel, (p + 1) * nodes_per_panel):
@@ -516,23 +583,7 @@ def _accumulate_by_tier(
             w_sorted[k * nodes_per_panel + i] = w[j]
             panel_sorted[k * nodes_per_panel + i] = node_panel[j]
             node_tier[k * nodes_per_panel + i] = panel_tier[p]
-    return mie._accumulate_tiers(
-        m,
-        x_sorted,
-        w_sorted,
-        panel_sorted,
-        node_tier,
-        n_panels,
-        per_particle,
-        tiers,
-        tables,
-        table_start,
-        maps,
-        map_start,
-        n_stokes,
-        m_core,
-        core_fraction,
-    )
+    return x_sorted, w_sorted, panel_sorted, node_tier, n_panels
 
 
 # ----------------------------------------------------------------------------
@@ -542,7 +593,7 @@ def _accumulate_by_tier(
 # ----------------------------------------------------------------------------
 
 
-@njit(cache=True, nogil=True)
+@kernel(F8_2D, I8_1D, I8_1D, I8_1D, I8, I8, I8, group="matrix")
 def _matrix_refinement_errors(
     pool: np.ndarray,
     coarse: np.ndarray,
@@ -564,7 +615,8 @@ def _matrix_refinement_errors(
     """
     n_p = coarse.shape[0]
     total = _halves_total(pool, left, right)
-    columns = np.zeros((n_stokes, n_f + 1))
+    columns = np.empty((n_stokes, n_f + 1))
+    columns[:] = 0.0
     panel_error = np.empty(n_p)
     norm_sum = 0.0
     for p in range(n_p):
@@ -585,7 +637,15 @@ def _matrix_refinement_errors(
     error = 0.0
     for k in range(n_stokes):
         columns[k, n_f] = norm_sum
-        error = max(error, np.max(columns[k, :n_f]) + norm_sum)
+        # np.max(columns[k, :n_f]) (the first NaN, if any), without its generic compile.
+        col = columns[k]
+        worst = col[0]
+        for i in range(1, n_f):
+            if worst != worst:
+                break
+            if col[i] != col[i] or col[i] > worst:
+                worst = col[i]
+        error = max(error, worst + norm_sum)
     return total, panel_error, error, columns
 
 
@@ -726,7 +786,7 @@ class _WavelengthSolver:
                 self.table = _gauss_angles(n_half)[2]
         else:
             # Summed at the output angles directly (few angles, or one sphere).
-            self.table = mie.angular_table(mu_out, self.nmax)
+            self.table = mie.angular_table(_read_only(mu_out), self.nmax)
             self.n_f = mu_out.size
         self.matrix = n_stokes > 1
         # Cross-sections alone: no angles.
@@ -992,7 +1052,7 @@ class _WavelengthSolver:
         return m2, m3, m4
 
 
-@njit(cache=True, nogil=True)
+@kernel(F8_1D, F8_1D)
 def _moment_sums(w: np.ndarray, radius: np.ndarray) -> tuple[float, float, float]:
     """Sums of w r^2, w r^3 and w r^4, compensated (Neumaier 1974): for these
     positive terms within an ulp or two of the correctly rounded sum
@@ -1002,8 +1062,10 @@ def _moment_sums(w: np.ndarray, radius: np.ndarray) -> tuple[float, float, float
     Reference: A. Neumaier, Z. Angew. Math. Mech. 54, 39-51 (1974),
     doi:10.1002/zamm.19740540106.
     """
-    sums = np.zeros(3)
-    comp = np.zeros(3)
+    sums = np.empty(3)
+    sums[:] = 0.0
+    comp = np.empty(3)
+    comp[:] = 0.0
     for j in range(w.shape[0]):
         # The terms as numpy forms them (x * x, then pow).
         r = radius[j]

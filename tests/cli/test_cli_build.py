@@ -312,44 +312,33 @@ def test_options_that_would_change_nothing_are_refused(argv, named, tmp_path, ca
 
 
 def test_first_build_says_it_compiles_the_kernels(config, tmp_path, capsys, monkeypatch):
-    """Before the kernels of these sources were ever compiled (no stamp beside numba's cache),
-    build says so on stderr and how long the build took; later builds and --quiet say nothing."""
+    """While numba's cache lacks kernels, build has them compiled first (compile_kernels
+    reports each on stderr) and says how long the build took; later builds and --quiet say
+    nothing.  (tests/test_numba_cache.py builds from a real empty cache.)"""
     from dustoptics import _numba_cache
 
-    marked = []
-    monkeypatch.setattr(_numba_cache, "kernels_compiled", lambda: marked != [])
-    monkeypatch.setattr(_numba_cache, "mark_compiled", lambda: marked.append(True))
+    calls = []
+
+    def compile_kernels(groups, *, progress=None, processes=None):
+        calls.append((list(groups), progress))
+        if len(calls) > 1:
+            return None  # in the cache now
+        if progress is not None:
+            progress.write("dustoptics: compiling 1 kernels, once for this installation ...\n")
+        return _numba_cache.CompileReport((), 1, 0.0)
+
+    monkeypatch.setattr(_numba_cache, "compile_kernels", compile_kernels)
     assert main(["build", str(config), "--out", str(tmp_path / "a"), "--format", "hdf5"]) == 0
     err = capsys.readouterr().err
-    assert "dustoptics: compiling the Mie kernels (once per install, about 10-15 s" in err
+    assert "dustoptics: compiling 1 kernels, once for this installation" in err
     assert "dustoptics: this first build took" in err
-    assert marked == [True]
+    assert calls[0][0] == ["optics"]
     assert main(["build", str(config), "--out", str(tmp_path / "b"), "--format", "hdf5"]) == 0
-    assert "compiling" not in capsys.readouterr().err
-    marked.clear()
+    assert "compil" not in capsys.readouterr().err
+    calls.clear()
     assert run_build(config, tmp_path / "c", "--format", "hdf5") == 0  # --quiet
     assert capsys.readouterr().err == ""
-
-
-def test_compiled_stamp_follows_the_kernel_sources(tmp_path, monkeypatch):
-    """The stamp is keyed by the kernels' source files: editing one invalidates it."""
-    import shutil
-
-    from dustoptics import _numba_cache
-
-    sources = tmp_path / "package"
-    for module in _numba_cache.KERNEL_MODULES:
-        (sources / module).parent.mkdir(parents=True, exist_ok=True)
-        shutil.copy2(_numba_cache._PACKAGE_DIR / module, sources / module)
-    monkeypatch.setattr(_numba_cache, "_PACKAGE_DIR", sources)
-    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "cache"))
-    assert not _numba_cache.kernels_compiled()
-    _numba_cache.mark_compiled()
-    assert _numba_cache.kernels_compiled()
-    assert len(list((tmp_path / "cache").glob("dustoptics-kernels-*.stamp"))) == 1
-    with (sources / "scattering" / "mie.py").open("a") as f:
-        f.write("\n# edited\n")
-    assert not _numba_cache.kernels_compiled()
+    assert calls[0][1] is None
 
 
 def test_build_writes_netcdf_by_default(config, tmp_path):
