@@ -1,0 +1,290 @@
+"""The compiled kernels: one signature each, compiled in advance in parallel and with
+progress, loaded silently once cached; ``import dustoptics`` compiles nothing and stays lazy.
+
+The tests that compile from an empty cache run ``dustoptics`` in a subprocess with its own
+temporary ``NUMBA_CACHE_DIR``; the scheduler's tests replace numba by a stand-in.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import pytest
+
+import dustoptics
+from dustoptics import _numba_cache
+from dustoptics._numba_cache import _dependencies, compile_kernels, kernels
+
+ROOT = Path(dustoptics.__file__).resolve().parents[1]
+
+SMALL = """\
+name = "cache-test"
+description = "three wavelengths, for the tests of numba's cache"
+
+[material]
+model = "mars_dust"
+
+[size_distribution]
+model = "modified_gamma"
+r_eff_um = 1.0
+v_eff = 0.2
+
+[optics]
+rtol = 1e-3
+wavelengths_nm = [440.0, 550.0, 680.0]
+n_theta = 361
+
+[phase]
+model = "mie"
+"""
+
+
+def _run(code: str, cache: Path | None, *, timeout: float = 600) -> subprocess.CompletedProcess:
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join(p for p in (str(ROOT), env.get("PYTHONPATH")) if p)
+    if cache is not None:
+        env["NUMBA_CACHE_DIR"] = str(cache)
+    return subprocess.run(
+        [sys.executable, "-c", textwrap.dedent(code)],
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=timeout,
+    )
+
+
+# ----------------------------------------------------------------------------- signatures
+
+
+def test_the_package_calls_each_kernel_with_its_declared_signature_only():
+    """Every configuration of the optics (phase function and few angles, number weighting,
+    matrix and expansion, coated spheres, one size), single and coated spheres: each kernel
+    is compiled for a declared signature and no other, and no inlined helper on its own."""
+    code = """
+        import json, warnings
+        import numpy as np
+        import dustoptics as do
+        from dustoptics import _numba_cache
+        from dustoptics.scattering import expansion, mie
+
+        wl = np.array([450.0, 680.0])
+        dist = do.ModifiedGamma(r_eff_um=1.6, v_eff=0.2)
+        core = do.CoatedSphere(
+            core=do.ConstantIndex(value=2.0 + 0.5j), shell=do.mars_dust(), core_radius_fraction=0.5
+        )
+        runs = [
+            dict(),
+            dict(theta_deg=np.linspace(0.0, 180.0, 19), weighting="number"),
+            dict(polarization=True, expansion=True),
+            dict(refractive_index=core, polarization=True),
+            dict(distribution=do.Monodisperse(radius_um=1.3)),
+        ]
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            for kw in runs:
+                index = kw.pop("refractive_index", do.mars_dust())
+                do.compute_optics(index, kw.pop("distribution", dist), wavelength_nm=wl, **kw)
+        mie.single_sphere(m=1.5 + 0.01j, x=3.0, mu=np.linspace(-1.0, 1.0, 9)[::2])
+        mie.coated_sphere(m_core=2.0 + 0.1j, m_shell=1.5, x_core=1.0, x=3.0, mu=0.5)
+        expansion.evaluate_matrix(np.ones((6, 4)), np.array([0.0, 90.0]))
+
+        declared, compiled = {}, {}
+        for k in _numba_cache.kernels():
+            declared.setdefault(k.name.split("[")[0], set()).add(str(k.signature))
+            compiled[k.name.split("[")[0]] = {str(s) for s in k.dispatcher.signatures}
+        helpers = {}
+        for module in (mie, expansion, do.scattering.refinement, do.scattering.quadrature):
+            for name, value in vars(module).items():
+                if getattr(value, "targetoptions", {}).get("inline") == "always":
+                    helpers[name] = len(value.signatures)
+        print(json.dumps({
+            "declared": {k: sorted(v) for k, v in declared.items()},
+            "compiled": {k: sorted(v) for k, v in compiled.items()},
+            "helpers": helpers,
+        }))
+    """
+    done = _run(code, None)
+    assert done.returncode == 0, done.stderr
+    report = json.loads(done.stdout.splitlines()[-1])
+    extra = {
+        name: sorted(set(sigs) - set(report["declared"][name]))
+        for name, sigs in report["compiled"].items()
+        if set(sigs) - set(report["declared"][name])
+    }
+    assert extra == {}, f"kernels compiled for undeclared signatures: {extra}"
+    assert all(report["compiled"].values()), "every kernel is called by these computations"
+    assert report["helpers"] and not any(report["helpers"].values())
+
+
+def test_a_second_signature_is_a_declared_variant_of_its_own_group():
+    names = {k.name: k for k in kernels()}
+    assert "mie._accumulate_grids[coated]" in names
+    coated = names["mie._accumulate_grids[coated]"]
+    assert (
+        coated.group == "coated" and coated.dispatcher is names["mie._accumulate_grids"].dispatcher
+    )
+    assert [k.name for k in kernels(["optics"]) if "[" in k.name] == []
+    with pytest.raises(ValueError, match="group must be one of"):
+        _numba_cache.kernel("float64", group="nope")
+    with pytest.raises(ValueError, match="groups must be among"):
+        kernels(["nope"])
+
+
+def test_dependencies_follow_the_calls_through_inlined_helpers():
+    """A kernel waits for the kernels it calls: directly, through a module
+    (``mie._accumulate_grids``) or through helpers numba inlines, only among those asked for."""
+    deps = _dependencies(kernels(["optics"]))
+    assert {"mie._mie_coefficients", "mie._add_sphere", "mie._legendre_regrid"} <= deps[
+        "mie._accumulate_grids"
+    ]
+    assert "mie.wiscombe_nmax" in deps["mie._accumulate_grids"]
+    assert "mie._coat" not in deps["mie._accumulate_grids"]  # another group
+    assert deps["refinement._order_by_tier"] == {"refinement._stable_argsort"}
+    assert "quadrature._wright_omega" in deps["refinement._panel_cost"]  # through _n_max, inlined
+    assert deps["mie._mie_coefficients"] == set()
+    both = _dependencies(kernels(["optics", "coated"]))
+    assert {"mie._accumulate_grids", "mie._coat"} <= both["mie._accumulate_grids[coated]"]
+
+
+# ----------------------------------------------------------------------------- the scheduler
+
+
+_FAKE_CHILD = """\
+import sys
+print("ready", flush=True)
+for n, line in enumerate(sys.stdin):
+    if {stop_after} is not None and n >= {stop_after}:
+        sys.exit(1)
+    print("done", line.strip(), 0.5, 0.5, flush=True)
+"""
+
+
+def _fake_compile(monkeypatch, stop_after: int | None = None) -> list[str]:
+    """numba replaced: nothing is cached, this process 'compiles' by recording the name,
+    a child answers as a real one would (and stops after ``stop_after`` kernels)."""
+    here: list[str] = []
+
+    def compile_here(k):
+        here.append(k.name)
+        return 0.0, 0.0
+
+    monkeypatch.setattr(_numba_cache, "_in_cache", lambda k: False)
+    monkeypatch.setattr(_numba_cache, "_shares_the_cache", lambda k: True)
+    monkeypatch.setattr(_numba_cache, "_compile_here", compile_here)
+    monkeypatch.setattr(
+        _numba_cache,
+        "_child_command",
+        lambda modules: [sys.executable, "-c", _FAKE_CHILD.format(stop_after=stop_after)],
+    )
+    return here
+
+
+def _check_order(report) -> None:
+    names = [k.name for k in report.kernels]
+    assert sorted(names) == sorted(k.name for k in kernels(["optics", "matrix"]))
+    done_at = {name: i for i, name in enumerate(names)}
+    for name, callees in _dependencies(kernels(["optics", "matrix"])).items():
+        for callee in callees:
+            assert done_at[callee] < done_at[name], (callee, name)
+
+
+def test_compile_kernels_hands_each_kernel_out_once_callees_first(monkeypatch):
+    here = _fake_compile(monkeypatch)
+    report = compile_kernels(["optics", "matrix"], processes=2)
+    assert report is not None and report.processes == 2
+    _check_order(report)
+    by_child = [k.name for k in report.kernels if k.process == 1]
+    assert sorted(here + by_child) == sorted(k.name for k in report.kernels)
+
+
+@pytest.mark.parametrize("stop_after", [0, 2])
+def test_a_child_that_stops_leaves_its_kernels_to_this_process(monkeypatch, stop_after):
+    here = _fake_compile(monkeypatch, stop_after=stop_after)
+    report = compile_kernels(["optics", "matrix"], processes=2)
+    assert report is not None
+    _check_order(report)
+    assert len(here) == len(report.kernels) - sum(k.process == 1 for k in report.kernels)
+    assert sum(k.process == 1 for k in report.kernels) <= stop_after
+
+
+def test_progress_names_each_kernel_k_of_n_with_the_time(monkeypatch, capsys):
+    _fake_compile(monkeypatch)
+    compile_kernels(["optics"], processes=1, progress=sys.stderr)
+    lines = capsys.readouterr().err.splitlines()
+    n = len(kernels(["optics"]))
+    assert re.fullmatch(
+        rf"dustoptics: compiling {n} kernels, once for this installation \(cached in .+\) \.\.\.",
+        lines[0],
+    )
+    assert len(lines) == n + 1
+    for k, line in enumerate(lines[1:], start=1):
+        assert re.fullmatch(rf"dustoptics: compiled kernel {k}/{n}, \w+\.\w+ \(\d+\.\d s\)", line)
+
+
+def test_nothing_to_compile_is_silent(monkeypatch, capsys):
+    monkeypatch.setattr(_numba_cache, "_in_cache", lambda k: True)
+    assert compile_kernels(["optics", "matrix"], progress=sys.stderr) is None
+    assert capsys.readouterr().err == ""
+
+
+# ----------------------------------------------------------------------------- numba's cache
+
+
+def test_first_build_compiles_with_progress_and_the_next_process_loads_silently(tmp_path):
+    """From an empty cache, ``dustoptics build`` compiles the kernels once (in parallel where
+    there are cores), each on a progress line; a second process finds them in numba's cache
+    and says nothing of compiling, and :func:`kernels_cached` agrees."""
+    config = tmp_path / "small.toml"
+    config.write_text(SMALL, encoding="utf-8")
+    cache = tmp_path / "cache"
+    build = f"""
+        import sys
+        from dustoptics.cli import main
+        sys.exit(main(["build", {str(config)!r}, "--out", sys.argv[1], "--format", "hdf5"]))
+    """
+    cached = """
+        import dustoptics
+        from dustoptics import _numba_cache
+        print(_numba_cache.kernels_cached(["optics"]))
+    """
+    assert _run(cached, cache).stdout.split() == ["False"]
+    n = len(kernels(["optics"]))
+
+    first = _run(build.replace("sys.argv[1]", repr(str(tmp_path / "a"))), cache)
+    assert first.returncode == 0, first.stderr
+    err = first.stderr.splitlines()
+    assert re.match(rf"dustoptics: compiling {n} kernels, once for this installation \(", err[0])
+    progress = [line for line in err if line.startswith("dustoptics: compiled kernel ")]
+    assert [line.split(",")[0] for line in progress] == [
+        f"dustoptics: compiled kernel {k}/{n}" for k in range(1, n + 1)
+    ]
+    assert any(line.startswith("dustoptics: this first build took") for line in err)
+
+    assert _run(cached, cache).stdout.split() == ["True"]
+    second = _run(build.replace("sys.argv[1]", repr(str(tmp_path / "b"))), cache)
+    assert second.returncode == 0, second.stderr
+    assert "compil" not in second.stderr
+    assert (tmp_path / "b" / "cache-test" / "cache-test.h5").is_file()
+
+
+def test_import_compiles_nothing_and_imports_no_heavy_package():
+    """``import dustoptics`` defines the kernels without compiling or loading any, and
+    imports neither xarray, dask, distributed, zarr nor matplotlib."""
+    code = """
+        import sys
+        import dustoptics
+        from dustoptics import _numba_cache
+        heavy = [m for m in ("xarray", "dask", "distributed", "zarr", "matplotlib")
+                 if m in sys.modules]
+        loaded = [k.name for k in _numba_cache.kernels() if k.dispatcher.signatures]
+        print(heavy, loaded)
+    """
+    done = _run(code, None)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == "[] []"
