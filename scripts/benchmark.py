@@ -5,6 +5,7 @@ Usage::
     python scripts/benchmark.py [--quick] [--json OUT.json] [--repeats N]
     python scripts/benchmark.py --sweep [--quick] [--json OUT.json]
     python scripts/benchmark.py --sky [--json OUT.json]
+    python scripts/benchmark.py --compile [--json OUT.json]
 
 Everything below is measured in one run on one machine, and printed as a plain
 text table (progress goes to stderr); ``--json`` writes the same figures with
@@ -26,7 +27,16 @@ What is measured, and how
      this script's own first call.
    * compile: a subprocess with ``NUMBA_CACHE_DIR`` pointing at a fresh empty
      temporary directory times its first call (excluding the import); the
-     compile time is that first-call time minus the warm time of step 1.
+     compile time is that first-call time minus the warm time of step 1.  This
+     is the library's path: each kernel compiles at its first call, in one
+     process.
+   * first build: what a new user waits for, the quick start's ``dustoptics
+     build`` (default preset, files included) in a fresh process with an empty
+     ``NUMBA_CACHE_DIR``: wall time, and the CPU time of the process and its
+     children (``RUSAGE_CHILDREN``: the processes that compile kernels in
+     parallel included); the median of 3 runs (1 with ``--quick``), each
+     followed by a second build in the same cache (which must not say it
+     compiles); its rows are section 10's.
 
 2. Baseline A: miepython with its JIT on, one ``efficiencies_mx`` and one
    ``i_unpolarized(..., norm="one")`` call per radius node, looping over the
@@ -118,6 +128,15 @@ the default table: best of N.
    * image: ``sky_radiance`` over the dome with that field (121 zenith x 91
      azimuth lines of sight) plus ``SkyRadiance.fisheye(size=512)``.
 
+10. First use (``--compile`` runs this section alone, a few minutes on 2
+    cores): ``import dustoptics`` in 5 fresh interpreters (3 with
+    ``--quick``; the import's own time, the median, and whether it imported
+    xarray, dask, distributed, matplotlib or zarr, which it must not); each
+    kernel's compile time
+    (``dustoptics._numba_cache.compile_kernels(processes=1)`` in a fresh
+    process with an empty cache: CPU and wall time per kernel, callees
+    compiled before their callers); and the first build as in step 1, 3 runs.
+
 Timings are wall-clock (``time.perf_counter``); dustoptics runs on all cores,
 the miepython baselines on one, as their users would run them.  Other load on
 the machine inflates everything: the load average at the start is printed.
@@ -186,6 +205,27 @@ TARGET_RATIO_B = 400.0
 TARGET_STORM_S = 5.0
 TARGET_COLD_S = 3.0
 TARGET_MEMORY_MB = 500.0
+
+# Issue 26: the first `dustoptics build` from an empty numba cache, on a quiet 2-core machine.
+TARGET_FIRST_BUILD_S = 10.0
+# Modules `import dustoptics` must not import (issue 26).
+HEAVY_MODULES = ("xarray", "dask", "distributed", "matplotlib", "zarr")
+
+IMPORT_SNIPPET = """\
+import json, sys, time
+t0 = time.perf_counter()
+import dustoptics
+t1 = time.perf_counter()
+heavy = sorted(m for m in {heavy!r} if m in sys.modules)
+print(json.dumps({{"import_s": t1 - t0, "heavy": heavy}}))
+"""
+
+KERNELS_SNIPPET = """\
+import json
+from dustoptics import _numba_cache
+report = _numba_cache.compile_kernels(["optics"], processes=1)
+print(json.dumps([[k.name, k.cpu_s, k.wall_s] for k in report.kernels]))
+"""
 
 COLD_SNIPPET = """\
 import json, time
@@ -379,35 +419,18 @@ def measure_cold(quick: bool) -> dict:
     }
 
 
-def measure_compile(warm_s: float) -> dict:
-    """Step 1: first call in a subprocess whose numba cache directory is empty."""
+def measure_compile(warm_s: float, first: dict) -> dict:
+    """Step 1: first call in a subprocess whose numba cache directory is empty; ``first``,
+    the first builds of :func:`measure_first_build`."""
     cache_dir = tempfile.mkdtemp(prefix="dustoptics-numba-cache-")
     try:
         log("compile subprocess (empty NUMBA_CACHE_DIR) ...")
         run = run_cold_subprocess(subprocess_env(NUMBA_CACHE_DIR=cache_dir))
     finally:
         shutil.rmtree(cache_dir, ignore_errors=True)
-    # What a new user waits for: the quick start's `dustoptics build`, empty cache.
-    cache_dir = tempfile.mkdtemp(prefix="dustoptics-numba-cache-")
-    out_dir = tempfile.mkdtemp(prefix="dustoptics-build-")
-    try:
-        log("first `dustoptics build` (empty NUMBA_CACHE_DIR) ...")
-        t0 = time.perf_counter()
-        proc = subprocess.run(
-            [sys.executable, "-m", "dustoptics.cli", "build", "--out", out_dir, "--quiet"],
-            env=subprocess_env(NUMBA_CACHE_DIR=cache_dir),
-            capture_output=True,
-            text=True,
-            check=False,
-        )
-        first_build_s = time.perf_counter() - t0
-        if proc.returncode != 0:
-            raise RuntimeError(f"dustoptics build failed:\n{proc.stderr}")
-    finally:
-        shutil.rmtree(cache_dir, ignore_errors=True)
-        shutil.rmtree(out_dir, ignore_errors=True)
     return {
-        "first_cli_build_s": first_build_s,
+        "first_build": first,
+        "first_cli_build_s": first["wall_s"],
         "first_call_empty_cache_s": run["compute_s"],
         "import_s": run["import_s"],
         "wall_s": run["wall_s"],
@@ -415,6 +438,128 @@ def measure_compile(warm_s: float) -> dict:
         "compile_s": run["compute_s"] - warm_s,
         "method": "first call in a subprocess with an empty NUMBA_CACHE_DIR (import excluded) "
         "minus the in-process warm time",
+    }
+
+
+def children_cpu_s() -> float | None:
+    """User + system CPU time of the waited-for children (and theirs) so far. [s]"""
+    if resource is None:
+        return None
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return usage.ru_utime + usage.ru_stime
+
+
+def cli_build(cache_dir: str) -> dict:
+    """`dustoptics build` (default preset) in a fresh process: wall and CPU time, stderr."""
+    out_dir = tempfile.mkdtemp(prefix="dustoptics-build-")
+    try:
+        cpu0 = children_cpu_s()
+        t0 = time.perf_counter()
+        proc = subprocess.run(
+            [sys.executable, "-m", "dustoptics.cli", "build", "--out", out_dir],
+            env=subprocess_env(NUMBA_CACHE_DIR=cache_dir),
+            capture_output=True,
+            text=True,
+            check=False,
+        )
+        wall = time.perf_counter() - t0
+        cpu1 = children_cpu_s()
+    finally:
+        shutil.rmtree(out_dir, ignore_errors=True)
+    if proc.returncode != 0:
+        raise RuntimeError(f"dustoptics build failed:\n{proc.stderr}")
+    return {
+        "wall_s": wall,
+        "cpu_s": None if cpu0 is None or cpu1 is None else cpu1 - cpu0,
+        "stderr": proc.stderr,
+    }
+
+
+def measure_first_build(runs: int) -> dict:
+    """The first `dustoptics build` with an empty numba cache, then a second one in that
+    cache, ``runs`` times: medians, each run, and what the builds said about compiling."""
+    first, later = [], []
+    for i in range(runs):
+        cache_dir = tempfile.mkdtemp(prefix="dustoptics-numba-cache-")
+        try:
+            load = os.getloadavg()[0] if hasattr(os, "getloadavg") else None
+            log(f"first `dustoptics build`, empty NUMBA_CACHE_DIR ({i + 1}/{runs}) ...")
+            first.append(cli_build(cache_dir) | {"load_1min": load})
+            log("  and a second build in the same cache ...")
+            later.append(cli_build(cache_dir))
+        finally:
+            shutil.rmtree(cache_dir, ignore_errors=True)
+    compiled = [
+        line
+        for line in first[0]["stderr"].splitlines()
+        if line.startswith("dustoptics: compiled kernel ")
+    ]
+    cpu = [r["cpu_s"] for r in first]
+    return {
+        "runs": [{k: v for k, v in r.items() if k != "stderr"} for r in first],
+        "wall_s": float(np.median([r["wall_s"] for r in first])),
+        "cpu_s": None if None in cpu else float(np.median(cpu)),
+        "kernels_compiled": len(compiled),
+        "progress_lines": compiled[-1:] if compiled else [],
+        "first_says_compiling": all("compiling" in r["stderr"] for r in first),
+        "later_wall_s": float(np.median([r["wall_s"] for r in later])),
+        "later_says_compiling": any("compil" in r["stderr"] for r in later),
+        "method": "python -m dustoptics.cli build --out TMP (default preset, files written), "
+        "fresh process, empty NUMBA_CACHE_DIR; CPU = RUSAGE_CHILDREN of the build and the "
+        "processes it starts; median of the runs",
+    }
+
+
+def measure_import(runs: int) -> dict:
+    """`import dustoptics` in fresh interpreters (kernels already in numba's cache or not:
+    the import compiles and loads none)."""
+    times, heavy = [], set()
+    for _ in range(runs):
+        code = IMPORT_SNIPPET.format(heavy=HEAVY_MODULES)
+        proc = subprocess.run(
+            [sys.executable, "-c", code],
+            env=subprocess_env(),
+            capture_output=True,
+            text=True,
+            check=False,
+        )
+        if proc.returncode != 0:
+            raise RuntimeError(f"import subprocess failed:\n{proc.stderr}")
+        report = json.loads(proc.stdout.strip().splitlines()[-1])
+        times.append(report["import_s"])
+        heavy.update(report["heavy"])
+    return {
+        "import_s": float(np.median(times)),
+        "times_s": times,
+        "heavy_modules_imported": sorted(heavy),
+        "method": f"time of `import dustoptics` inside {runs} fresh interpreters, median",
+    }
+
+
+def measure_kernels() -> dict:
+    """Each kernel's compile time, one process, empty cache (callees before callers)."""
+    cache_dir = tempfile.mkdtemp(prefix="dustoptics-numba-cache-")
+    try:
+        log("each kernel's compile time (one process, empty NUMBA_CACHE_DIR) ...")
+        proc = subprocess.run(
+            [sys.executable, "-c", KERNELS_SNIPPET],
+            env=subprocess_env(NUMBA_CACHE_DIR=cache_dir),
+            capture_output=True,
+            text=True,
+            check=False,
+        )
+    finally:
+        shutil.rmtree(cache_dir, ignore_errors=True)
+    if proc.returncode != 0:
+        raise RuntimeError(f"kernel compile subprocess failed:\n{proc.stderr}")
+    rows = json.loads(proc.stdout.strip().splitlines()[-1])
+    kernels = [{"kernel": n, "cpu_s": c, "wall_s": w} for n, c, w in rows]
+    return {
+        "kernels": sorted(kernels, key=lambda k: -k["cpu_s"]),
+        "cpu_s": sum(k["cpu_s"] for k in kernels),
+        "wall_s": sum(k["wall_s"] for k in kernels),
+        "method": "dustoptics._numba_cache.compile_kernels(['optics'], processes=1) in a fresh "
+        "process with an empty NUMBA_CACHE_DIR; CPU (thread time) and wall time per kernel",
     }
 
 
@@ -839,6 +984,30 @@ def targets(res: dict) -> list[dict]:
     return [{"target": t, "measured": m, "pass": bool(p)} for t, m, p in rows]
 
 
+def first_build_rows(row, f: dict) -> None:
+    """The first build's rows (step 1 and section 10)."""
+    runs = ", ".join(
+        f"{r['wall_s']:.1f}"
+        + (f" (load {r['load_1min']:.1f})" if r["load_1min"] is not None else "")
+        for r in f["runs"]
+    )
+    cpu = "n/a" if f["cpu_s"] is None else f"{f['cpu_s']:.1f} s"
+    row(
+        "first `dustoptics build`, empty numba cache (wall; CPU)",
+        f"{f['wall_s']:.1f} s; CPU {cpu}  (median of {len(f['runs'])}: {runs} s)",
+    )
+    row(
+        "  kernels compiled; said so; progress",
+        f"{f['kernels_compiled']}; {'yes' if f['first_says_compiling'] else 'NO'}; "
+        + (f["progress_lines"][0].strip() if f["progress_lines"] else "none"),
+    )
+    row(
+        "later build, cache filled (wall); says it compiles",
+        f"{f['later_wall_s']:.1f} s; {'YES' if f['later_says_compiling'] else 'no'}",
+    )
+    row("  method", f["method"])
+
+
 def format_report(res: dict) -> str:
     """Plain-text table of the results."""
     lines: list[str] = []
@@ -885,13 +1054,16 @@ def format_report(res: dict) -> str:
     row("  method", c["method"])
     k = res["compile"]
     row(
-        "compile time, empty numba cache",
+        "compile time, empty numba cache (library: first call, one process)",
         f"{k['compile_s']:.3f} s  (first call {k['first_call_empty_cache_s']:.3f} s - warm {k['warm_s']:.3f} s)",
     )
     row("  method", k["method"])
+    f = k["first_build"]
     row(
-        "first `dustoptics build`, empty numba cache (wall)",
-        f"{k['first_cli_build_s']:.3f} s  (fresh process: import, compile, default table, files)",
+        "first `dustoptics build`, empty numba cache (wall; CPU)",
+        f"{f['wall_s']:.1f} s; "
+        + ("n/a" if f["cpu_s"] is None else f"{f['cpu_s']:.1f} s")
+        + "  (median; section 10)",
     )
 
     a = res["baseline_a"]
@@ -1026,6 +1198,8 @@ def format_report(res: dict) -> str:
     row("baseline B / dustoptics", f"{r['baseline_b']:.1f}x")
     lines.append(f"  (dustoptics on {mach['cpu_count']} cores, baselines on one)")
 
+    first_use_rows(lines, res["first_use"])
+
     head("Targets (issue 3)")
     for t in res["targets"]:
         lines.append(f"  {'PASS' if t['pass'] else 'FAIL'}  {t['target']:<62} {t['measured']}")
@@ -1058,7 +1232,8 @@ def run(quick: bool, repeats: int) -> dict:
     table = default["_table"]
     res["dustoptics_default"] = public(default)
     res["cold_process"] = measure_cold(quick)
-    res["compile"] = measure_compile(default["warm_s"])
+    res["first_use"] = measure_first_use(quick)
+    res["compile"] = measure_compile(default["warm_s"], res["first_use"]["first_build"])
     a = measure_baseline_a(table, 1 if quick else 3)
     b = measure_baseline_b(table, 1 if quick else 2, B_RADII_QUICK if quick else B_RADII)
     res["accuracy"] = measure_accuracy(dust, table, a, b)
@@ -1469,6 +1644,76 @@ def format_sky(res: dict, mach: dict) -> str:
     return "\n".join(lines)
 
 
+def measure_first_use(quick: bool) -> dict:
+    """Section 10: `import dustoptics`, each kernel's compile time, the first build."""
+    log("import dustoptics (fresh interpreters) ...")
+    return {
+        "import": measure_import(3 if quick else 5),
+        "kernels": measure_kernels(),
+        "first_build": measure_first_build(1 if quick else 3),
+    }
+
+
+def first_use_rows(lines: list[str], res: dict) -> None:
+    """Section 10's rows and targets."""
+
+    def row(label: str, value: str) -> None:
+        lines.append(f"  {label:<62} {value}")
+
+    lines.append("")
+    lines.append("10. First use: import, compile, first build")
+    lines.append("-" * 43)
+    imp = res["import"]
+    row(
+        "import dustoptics (median, fresh interpreter)",
+        f"{imp['import_s']:.2f} s  [{', '.join(f'{t:.2f}' for t in imp['times_s'])}]",
+    )
+    row(
+        "  xarray, dask, distributed, matplotlib, zarr imported",
+        ", ".join(imp["heavy_modules_imported"]) or "none",
+    )
+    ker = res["kernels"]
+    row(
+        f"compile, one process, empty cache: {len(ker['kernels'])} kernels (CPU; wall)",
+        f"{ker['cpu_s']:.1f} s; {ker['wall_s']:.1f} s",
+    )
+    for k in ker["kernels"]:
+        row(f"  {k['kernel']}", f"{k['cpu_s']:.2f} s  (wall {k['wall_s']:.2f} s)")
+    row("  method", ker["method"])
+    first_build_rows(row, res["first_build"])
+    lines.append("")
+    lines.append("Targets (issue 26)")
+    f = res["first_build"]
+    for label, ok, value in (
+        (
+            f"first build, empty cache <= {TARGET_FIRST_BUILD_S:g} s (quiet 2-core machine)",
+            f["wall_s"] <= TARGET_FIRST_BUILD_S,
+            f"{f['wall_s']:.1f} s",
+        ),
+        ("first build says it compiles, with progress", f["first_says_compiling"], ""),
+        ("later build does not say it compiles", not f["later_says_compiling"], ""),
+        ("import dustoptics imports none of them", not imp["heavy_modules_imported"], ""),
+    ):
+        lines.append(f"  {'PASS' if ok else 'FAIL'}  {label:<62} {value}")
+
+
+def format_first_use(res: dict, mach: dict) -> str:
+    lines = ["dustoptics first-use benchmark", "=" * 30]
+
+    def row(label: str, value: str) -> None:
+        lines.append(f"  {label:<62} {value}")
+
+    row("cores (os.cpu_count)", str(mach["cpu_count"]))
+    row(
+        "load average at start (1, 5, 15 min)",
+        ", ".join(f"{x:.2f}" for x in mach["load_average"]) if mach["load_average"] else "n/a",
+    )
+    for name in ("python", "numpy", "numba", "dustoptics"):
+        row(name, mach[name])
+    first_use_rows(lines, res)
+    return "\n".join(lines)
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
         description="Benchmark dustoptics against miepython baselines (see the module docstring)."
@@ -1493,7 +1738,26 @@ def main(argv: list[str] | None = None) -> int:
         action="store_true",
         help="only the sky rows (section 9, a few minutes on 2 cores)",
     )
+    parser.add_argument(
+        "--compile",
+        action="store_true",
+        help="only the first-use rows (section 10: import, each kernel's compile time, "
+        "first build from an empty cache; a few minutes on 2 cores)",
+    )
     args = parser.parse_args(argv)
+    if args.compile:
+        t0 = time.perf_counter()
+        mach = machine_info()
+        first_use = measure_first_use(args.quick)
+        print(format_first_use(first_use, mach))
+        print(f"(benchmark ran {time.perf_counter() - t0:.0f} s)")
+        if args.json is not None:
+            args.json.write_text(
+                json.dumps({"machine": mach, "first_use": first_use}, indent=2, sort_keys=True)
+                + "\n"
+            )
+            log(f"wrote {args.json}")
+        return 0
     if args.sky:
         t0 = time.perf_counter()
         mach = machine_info()
