@@ -273,7 +273,9 @@ def _run_set(args: argparse.Namespace) -> int:
     bruneton = args.format is not None and "bruneton" in args.format
     out_dir = args.out / args.name
     placed = place_outputs(
-        lambda directory: write_atmosphere_set(atm, directory, inputs=inputs, bruneton=bruneton),
+        lambda directory: write_atmosphere_set(
+            atm, directory, inputs=inputs, bruneton=bruneton, final_directory=out_dir
+        ),
         out_dir,
         force=args.force,
         same=same_table,

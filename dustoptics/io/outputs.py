@@ -345,6 +345,7 @@ def write_atmosphere_set(
     inputs: Mapping[str, Any],
     bruneton: bool = False,
     overwrite: bool = False,
+    final_directory: str | os.PathLike[str] | None = None,
 ) -> list[Path]:
     """Write a set's files into a directory: CosmoScout VR's, Bruneton's, its provenance.
 
@@ -362,6 +363,10 @@ def write_atmosphere_set(
         (:func:`dustoptics.io.engines.bruneton.write_bruneton`).  Default False.
     overwrite : bool, optional
         Replace existing files.  Default False.
+    final_directory : path-like, optional
+        Where the files will stand when ``directory`` is a staging folder
+        (:func:`place_outputs` renders into one): CosmoScout's settings name the
+        CSV files by their absolute paths there.  Default: ``directory``.
 
     Returns
     -------
@@ -378,7 +383,11 @@ def write_atmosphere_set(
     from dustoptics.io.csv.cosmoscout import write_atmosphere
 
     record = set_provenance(atmosphere, inputs)
-    written = write_atmosphere(atmosphere, directory, overwrite=overwrite)
+    # The settings name the CSV files where they will stand, not in a staging folder.
+    final = Path(final_directory if final_directory is not None else directory).resolve()
+    written = write_atmosphere(
+        atmosphere, directory, overwrite=overwrite, path_prefix=f"{final.as_posix()}/"
+    )
     if bruneton:
         from dustoptics.io.engines.bruneton import write_bruneton
 

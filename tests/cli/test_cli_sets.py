@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -40,7 +41,8 @@ def test_build_mars_and_earth_write_whole_cosmoscout_sets(config, tmp_path):
         "earth_ozone",
     ]
     # The dust's column reproduces the optical depth at 550 nm: tau = N0 <C_ext> L
-    # (exponential profile, 11.1 km, cut at the 120 km top), with <C_ext> computed here.
+    # (exponential profile, 11.1 km, cut at the 120 km top), with <C_ext> computed here and N0
+    # the number density at the ground.
     dust = read_cosmoscout_constituent(tmp_path / "mars", "mars_aerosols")
     cfg = do.load_config(config)
     from dataclasses import replace
@@ -48,11 +50,18 @@ def test_build_mars_and_earth_write_whole_cosmoscout_sets(config, tmp_path):
     at550 = replace(cfg, optics=replace(cfg.optics, wavelengths_nm=(550.0,), n_theta=2))
     cext_m2 = do.build_table(at550).cext_um2[0] * 1e-12
     h, top = 11100.0, 120e3
-    n0 = float(dust.beta_sca_per_m[0] / (read_hdf5_free_csca(cfg, 0)))
+    # The files give the coefficient where the relative density is 1: the first density
+    # sample, at the centre of the first of N texels, (1/2) top / N above the ground.
+    lowest_m = 0.5 * top / dust.density.size
+    n0 = float(dust.beta_sca_per_m[0] / (read_hdf5_free_csca(cfg, 0))) * np.exp(lowest_m / h)
     length = h * (1 - np.exp(-top / h))
     np.testing.assert_allclose(n0 * cext_m2 * length, 0.6, rtol=1e-12)
     settings = json.loads((tmp_path / "mars" / "mars_settings.json").read_text())
     assert settings["minAltitude"] == 3390e3 and settings["maxAltitude"] == 3510e3
+    # The preprocessor finds the files where they stand (not in the writer's staging folder).
+    for role in ("molecules", "aerosols"):
+        for name in settings[role].values():
+            assert Path(name).parent == (tmp_path / "mars").resolve() and Path(name).is_file()
     # Again: the same files, up to date; another optical depth: they differ, --force needed.
     assert main(["build", "mars", *args]) == 0
     assert main(["build", "mars", *args[:-1], "0.7"]) == 1
