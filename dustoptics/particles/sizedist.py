@@ -1043,10 +1043,12 @@ class DeirmendjianGamma(SizeDistribution):
 
     Examples
     --------
-    Deirmendjian's haze L (alpha = 1, b = 15.1186, gamma = 1/2) and cloud C.1
-    (alpha = 6, b = 3/2, gamma = 1):
+    Deirmendjian's haze L (alpha = 2, b = 15.1186, gamma = 1/2; his mode radius
+    0.07 um) and cloud C.1 (alpha = 6, b = 3/2, gamma = 1; mode radius 4 um):
 
-    >>> haze_l = DeirmendjianGamma(alpha=1.0, b=15.1186, gamma=0.5)
+    >>> haze_l = DeirmendjianGamma(alpha=2.0, b=15.1186, gamma=0.5)
+    >>> round(haze_l.mode_radius_um, 4)
+    0.07
     >>> round(DeirmendjianGamma(alpha=6.0, b=1.5, gamma=1.0).mode_radius_um, 12)
     4.0
 
