@@ -34,12 +34,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import replace
-from typing import Any, Final
+from typing import Any, Final, TextIO
 
 import numpy as np
 
 from dustoptics._validation import check_positive
 from dustoptics.atmosphere.sets import Atmosphere, mars_atmosphere
+from dustoptics.sky._progress import reporter
 from dustoptics.sky.medium import Medium
 from dustoptics.sky.scene import SkyRadiance, sky_radiance
 from dustoptics.table import Table
@@ -149,6 +150,8 @@ def compare_mars_models(
     ground_albedo: float = 0.2,
     tol: float = 1e-4,
     azimuth_step_deg: float = 2.0,
+    progress: TextIO | None = None,
+    allow_large: bool = False,
 ) -> Any:
     """The thesis's sky comparisons for several Mars dust models.
 
@@ -168,6 +171,11 @@ def compare_mars_models(
         Tolerance of the orders of scattering. [-]
     azimuth_step_deg : float
         Azimuth step of the sky grid. [deg]
+    progress : text stream, optional
+        Where to report the models, orders of scattering and lines of sight
+        done after the first two seconds; None is silent.
+    allow_large : bool
+        Go ahead beyond the memory and work budget of each sky.
 
     Returns
     -------
@@ -182,6 +190,7 @@ def compare_mars_models(
     for m in models:
         if not isinstance(m, str):
             raise ValueError(f"models must be preset names; got {m!r}")
+    report = reporter(progress, label="sky compare")
     grid = _grid(COMPARISON_WAVELENGTHS_NM)
     mie = _preset_table(_MIE_CROSS_SECTIONS, grid)
     sel = [grid.index(w) for w in COMPARISON_WAVELENGTHS_NM]
@@ -190,7 +199,8 @@ def compare_mars_models(
     pp_zen = np.arange(0.0, 90.01, 1.0)
     per_model: dict[str, dict[str, np.ndarray]] = {}
     sky: SkyRadiance | None = None
-    for model in models:
+    for k, model in enumerate(models):
+        report(f"model {k + 1} of {len(models)} ({model})")
         atm = mars_sky_atmosphere(
             model, optical_depth=optical_depth, wavelength_nm=grid, cross_sections=mie
         )
@@ -201,6 +211,8 @@ def compare_mars_models(
             ground_albedo=ground_albedo,
             tol=tol,
             azimuth_step_deg=azimuth_step_deg,
+            progress=report,
+            allow_large=allow_large,
         )
         almu = sky.at(np.full(almu_az.shape, sun_zen), almu_az)[:, sel]
         pp = np.concatenate(
@@ -217,6 +229,8 @@ def compare_mars_models(
                 tol=tol,
                 view_zenith_deg=np.array([59.0, 60.0, 61.0]),
                 azimuth_step_deg=45.0,
+                progress=report,
+                allow_large=allow_large,
             )
             chrom.append(s.chromaticity(s.at(**AWAY_FROM_SUN)))
             trans.append(s.sun_transmittance[sel])

@@ -49,9 +49,10 @@ _PROJECTION_NODES: Final = 4096
 #: Altitude samples of the relative densities (linear interpolation between).
 _N_DENSITY_SAMPLES: Final = 4001
 #: Discrete ordinates per hemisphere unless given: with the fine first orders
-#: and the aureole correction, the radiance is within 0.5 % of converged
-#: CDISORT for Mars dust up to optical depth 2 (docs/concepts/sky.rst).
-N_STREAMS: Final = 16
+#: and the aureole correction, the radiance is within 0.3 % of converged
+#: CDISORT for Mars dust up to optical depth 2, 3 deg or more from the Sun
+#: (16 streams: 1.1 % there; docs/concepts/sky.rst).
+N_STREAMS: Final = 20
 #: Legendre moments of each phase function kept for the aureole correction
 #: (:func:`dustoptics.sky.render.aureole_correction`): the correction at 3 deg
 #: from the Sun changes by less than 1e-4 of the radiance beyond them.

@@ -10,26 +10,44 @@ a fisheye (equidistant, zenith at the centre) and a panorama
 (equirectangular).  Exposure is explicit: display white is
 ``Y * exposure = 1``, with Y the luminance factor (radiance times the solar
 spectrum, per unit of the Sun's illuminance).
+
+The sky's accuracy travels with it: the series' tolerance and remainder, and
+the estimated relative error of the radiance per wavelength
+(:func:`~dustoptics.sky.accuracy.radiance_error_estimate`, a model checked
+against CDISORT).  Every computation is held to an up-front estimate of its
+memory and work (``allow_large=True`` lifts it) and reports its progress on a
+text stream when it takes longer than two seconds (``progress=``).
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any, Final
+from dataclasses import field as dataclass_field
+from typing import Any, Final, TextIO
 
 import numpy as np
 
 from dustoptics import colour
-from dustoptics._validation import check_closed_interval, check_positive
+from dustoptics._validation import (
+    MEMORY_BUDGET_BYTES,
+    BudgetError,
+    check_closed_interval,
+    check_positive,
+)
 from dustoptics.atmosphere.sets import Atmosphere
+from dustoptics.sky._progress import Reporter, reporter
+from dustoptics.sky.accuracy import VALIDATED_DOMAIN, radiance_error_estimate
 from dustoptics.sky.medium import Medium
-from dustoptics.sky.orders import DiffuseField, solve_orders
-from dustoptics.sky.render import line_of_sight_radiance
+from dustoptics.sky.orders import N_LAYERS, DiffuseField, check_orders_cost, solve_orders
+from dustoptics.sky.render import N_PATH, check_render_cost, line_of_sight_radiance
 
 __all__ = [
     "ILLUMINANT",
+    "MAX_IMAGE_SIZE",
     "SkyRadiance",
+    "check_image_size",
+    "check_png_support",
     "default_view_zenith_deg",
     "display_rgb",
     "png_bytes",
@@ -39,6 +57,50 @@ __all__ = [
 
 #: Spectrum of the sunlight that lights every sky (shape only; see colour).
 ILLUMINANT: Final = "astm-g173"
+#: Largest image side without ``allow_large`` (a 8192 x 8192 fisheye: 0.2 GB
+#: of pixels, a few seconds). [pixels]
+MAX_IMAGE_SIZE: Final = 8192
+#: Image rows drawn at a time (bounds the memory of the interpolation).
+_ROWS_PER_BLOCK: Final = 256
+
+
+def check_image_size(name: str, value: Any, *, minimum: int = 16, allow_large: bool = False) -> int:
+    """Return an image side ``value`` [pixels], refused before any work if out of range.
+
+    Without ``allow_large`` the side must be within ``[minimum,``
+    :data:`MAX_IMAGE_SIZE` ``]``; with it, up to the side whose 8-bit RGB
+    pixels fit the memory budget.
+
+    Raises
+    ------
+    ValueError
+        Not an integer or below ``minimum``.
+    dustoptics._validation.BudgetError
+        Above :data:`MAX_IMAGE_SIZE` without ``allow_large`` (or beyond the
+        memory budget with it); the message names the largest allowed value.
+    """
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < minimum:
+        raise ValueError(f"{name} must be an integer >= {minimum} pixels; got {value!r}")
+    value = int(value)
+    hard = math.isqrt(MEMORY_BUDGET_BYTES // 3)
+    limit = hard if allow_large else MAX_IMAGE_SIZE
+    if value > limit:
+        hint = "" if allow_large else ", or pass allow_large=True (--allow-large) to go ahead"
+        raise BudgetError(f"{name} = {value} pixels is beyond the largest allowed, {limit}{hint}")
+    return value
+
+
+def check_png_support() -> None:
+    """Raise ImportError now if PNG images cannot be written (matplotlib is missing).
+
+    Call it before a long computation whose results go to PNG files.
+    """
+    try:
+        import matplotlib.image  # noqa: F401
+    except ImportError as exc:
+        raise ImportError(
+            "writing PNG images needs matplotlib: pip install 'dustoptics[plot]'"
+        ) from exc
 
 
 def default_view_zenith_deg() -> np.ndarray:
@@ -78,6 +140,12 @@ class SkyRadiance:
         Estimated relative remainder of the series of orders. [-]
     tol : float
         Requested tolerance of the series. [-]
+    radiance_error : numpy.ndarray, shape (n_wavelength,)
+        Estimated relative error of the radiance
+        (:func:`~dustoptics.sky.accuracy.radiance_error_estimate`; validated
+        in :data:`~dustoptics.sky.accuracy.VALIDATED_DOMAIN`). [-]
+    n_streams : int
+        Discrete ordinates per hemisphere of the multiple scattering.
     """
 
     name: str
@@ -92,6 +160,8 @@ class SkyRadiance:
     n_orders: int
     error_estimate: float
     tol: float
+    radiance_error: np.ndarray = dataclass_field(default_factory=lambda: np.zeros(0))
+    n_streams: int = 0
 
     @property
     def sun_elevation_deg(self) -> float:
@@ -104,6 +174,12 @@ class SkyRadiance:
         Azimuths are folded into [0, 180] by the sky's mirror symmetry.
         Returns shape ``broadcast(zenith, azimuth).shape + (n_wavelength,)``.
         """
+        return self._interpolate(self.radiance, view_zenith_deg, view_azimuth_deg)
+
+    def _interpolate(
+        self, values: np.ndarray, view_zenith_deg: Any, view_azimuth_deg: Any
+    ) -> np.ndarray:
+        # Bilinear in zenith and azimuth of values (n_zenith, n_azimuth, k).
         z, a = np.broadcast_arrays(
             np.asarray(view_zenith_deg, dtype=float), np.asarray(view_azimuth_deg, dtype=float)
         )
@@ -117,7 +193,7 @@ class SkyRadiance:
         fz = ((z - zg[iz]) / (zg[iz + 1] - zg[iz]))[..., None]
         ia = np.clip(np.searchsorted(ag, a) - 1, 0, ag.size - 2)
         fa = ((a - ag[ia]) / (ag[ia + 1] - ag[ia]))[..., None]
-        r = self.radiance
+        r = values
         return (
             r[iz, ia] * (1 - fz) * (1 - fa)
             + r[iz + 1, ia] * fz * (1 - fa)
@@ -148,31 +224,51 @@ class SkyRadiance:
         y = self.xyz()[..., 1]
         return float(1.0 / np.percentile(y, 99.0))
 
-    def fisheye(self, *, size: int = 512, exposure: float | None = None) -> np.ndarray:
+    def fisheye(
+        self, *, size: int = 512, exposure: float | None = None, allow_large: bool = False
+    ) -> np.ndarray:
         """Display sRGB fisheye image (equidistant; zenith centre, horizon rim).
 
         The Sun's azimuth points up in the image.  Pixels outside the horizon
-        circle are black.
+        circle are black.  The sky's XYZ (linear in the radiance) is
+        interpolated to the pixels, a block of rows at a time.
+
+        Parameters
+        ----------
+        size : int
+            Image side, 16 .. :data:`MAX_IMAGE_SIZE` (:func:`check_image_size`). [pixels]
+        exposure : float, optional
+            Display white at ``Y * exposure = 1`` (default :meth:`default_exposure`).
+        allow_large : bool
+            Allow a side beyond :data:`MAX_IMAGE_SIZE`.
 
         Returns
         -------
         numpy.ndarray, shape (size, size, 3), dtype uint8
         """
-        if not (isinstance(size, int) and 16 <= size <= 8192):
-            raise ValueError(f"size must be an integer in [16, 8192] pixels; got {size!r}")
+        size = check_image_size("size", size, allow_large=allow_large)
         e = self.default_exposure() if exposure is None else check_positive("exposure", exposure)
+        xyz = self.xyz()
         c = (np.arange(size) + 0.5) / size * 2.0 - 1.0
-        xx, yy = np.meshgrid(c, -c)
-        rad = np.hypot(xx, yy)
-        inside = rad <= 1.0
-        zen = np.where(inside, rad * 90.0, 0.0)
-        azi = np.rad2deg(np.arctan2(xx, yy))
-        rgb = self._display(self.at(zen, azi), e)
-        rgb[~inside] = 0
-        return rgb
+        out = np.zeros((size, size, 3), dtype=np.uint8)
+        for start in range(0, size, _ROWS_PER_BLOCK):
+            xx, yy = np.meshgrid(c, -c[start : start + _ROWS_PER_BLOCK])
+            rad = np.hypot(xx, yy)
+            inside = rad <= 1.0
+            zen = np.where(inside, rad * 90.0, 0.0)
+            azi = np.rad2deg(np.arctan2(xx, yy))
+            rgb = display_rgb(self._interpolate(xyz, zen, azi), e)
+            rgb[~inside] = 0
+            out[start : start + rgb.shape[0]] = rgb
+        return out
 
     def panorama(
-        self, *, width: int = 1024, height: int = 256, exposure: float | None = None
+        self,
+        *,
+        width: int = 1024,
+        height: int = 256,
+        exposure: float | None = None,
+        allow_large: bool = False,
     ) -> np.ndarray:
         """Display sRGB panorama: azimuth -180..180 (Sun at the centre), elevation 0..90.
 
@@ -180,14 +276,17 @@ class SkyRadiance:
         -------
         numpy.ndarray, shape (height, width, 3), dtype uint8
         """
-        for key, value in (("width", width), ("height", height)):
-            if not (isinstance(value, int) and 8 <= value <= 16384):
-                raise ValueError(f"{key} must be an integer in [8, 16384] pixels; got {value!r}")
+        width = check_image_size("width", width, minimum=8, allow_large=allow_large)
+        height = check_image_size("height", height, minimum=8, allow_large=allow_large)
         e = self.default_exposure() if exposure is None else check_positive("exposure", exposure)
+        xyz = self.xyz()
         azi = (np.arange(width) + 0.5) / width * 360.0 - 180.0
         elev = 90.0 - (np.arange(height) + 0.5) / height * 90.0
-        aa, ee = np.meshgrid(azi, elev)
-        return self._display(self.at(90.0 - ee, aa), e)
+        out = np.zeros((height, width, 3), dtype=np.uint8)
+        for start in range(0, height, _ROWS_PER_BLOCK):
+            aa, ee = np.meshgrid(azi, elev[start : start + _ROWS_PER_BLOCK])
+            out[start : start + aa.shape[0]] = display_rgb(self._interpolate(xyz, 90.0 - ee, aa), e)
+        return out
 
     def to_xarray(self) -> Any:
         """The sky as an ``xarray.Dataset`` (radiance, XYZ, chromaticity)."""
@@ -218,6 +317,23 @@ class SkyRadiance:
                     {"units": "1", "long_name": "direct transmittance of the Sun to the observer"},
                 ),
                 "ground_albedo": (("wavelength",), self.ground_albedo, {"units": "1"}),
+                **(
+                    {
+                        "radiance_relative_error": (
+                            ("wavelength",),
+                            self.radiance_error,
+                            {
+                                "units": "1",
+                                "long_name": "estimated relative error of the radiance",
+                                "comment": "dustoptics.sky.accuracy.radiance_error_estimate: "
+                                "1e-3 + c(n_streams) sqrt(tau_f) + the orders' remainder; "
+                                f"validated against CDISORT for {VALIDATED_DOMAIN}",
+                            },
+                        )
+                    }
+                    if self.radiance_error.size == self.wavelength_nm.size
+                    else {}
+                ),
             },
             coords={
                 "view_zenith_angle": (
@@ -239,12 +355,14 @@ class SkyRadiance:
                 "orders_of_scattering": self.n_orders,
                 "orders_error_estimate": self.error_estimate,
                 "orders_tolerance": self.tol,
+                "n_streams": self.n_streams,
+                "radiance_relative_error_max": float(np.max(self.radiance_error))
+                if self.radiance_error.size
+                else float("nan"),
+                "radiance_error_domain": VALIDATED_DOMAIN,
                 "illuminant": "ASTM G-173 extraterrestrial (shape), CIE 1931 2-degree observer",
             },
         )
-
-    def _display(self, spectra: np.ndarray, exposure: float) -> np.ndarray:
-        return display_rgb(self.xyz(spectra), exposure)
 
 
 def sunlit_xyz(wavelength_nm: np.ndarray, spectra: np.ndarray) -> np.ndarray:
@@ -272,6 +390,8 @@ def sky_radiance(
     view_zenith_deg: np.ndarray | None = None,
     azimuth_step_deg: float = 2.0,
     field: DiffuseField | None = None,
+    progress: TextIO | Reporter | None = None,
+    allow_large: bool = False,
 ) -> SkyRadiance:
     """The spectral sky over an observer near the ground.
 
@@ -298,11 +418,26 @@ def sky_radiance(
         (:func:`~dustoptics.sky.orders.solve_orders` with ``tol``), to render
         the dome without solving again; ``ground_albedo`` must equal the
         field's.
+    progress : text stream, optional
+        Where to report the orders of scattering and the lines of sight done,
+        after the first two seconds (the command line passes ``sys.stderr``);
+        None is silent.
+    allow_large : bool
+        Go ahead beyond the memory and work budget of the orders and of the
+        lines of sight (both checked before any work).
 
     Returns
     -------
     SkyRadiance
+
+    Raises
+    ------
+    dustoptics._validation.BudgetError
+        The orders or the lines of sight would need more memory or work than
+        the budget and ``allow_large`` is False (the message names the
+        parameter and its largest allowed value).
     """
+    report = reporter(progress)
     medium = atmosphere if isinstance(atmosphere, Medium) else Medium.from_atmosphere(atmosphere)
     elev = check_closed_interval("sun_elevation_deg", sun_elevation_deg, -10.0, 90.0)
     step = check_closed_interval("azimuth_step_deg", azimuth_step_deg, 0.05, 45.0)
@@ -313,9 +448,25 @@ def sky_radiance(
         raise ValueError("view_zenith_deg must increase strictly within [0, 90] deg")
     n_az = round(180.0 / step) + 1
     azi = np.linspace(0.0, 180.0, n_az)
+    # Both budgets before any work.
+    if field is None:
+        check_orders_cost(medium, n_layers=N_LAYERS, tol=tol, allow_large=allow_large)
+    check_render_cost(
+        medium,
+        n_rays=zen.size * azi.size,
+        n_rows=zen.size,
+        n_path=N_PATH,
+        allow_large=allow_large,
+        what="view_zenith_deg x azimuth_step_deg",
+    )
     if field is None:
         field = solve_orders(
-            medium, sun_zenith_deg=90.0 - elev, ground_albedo=ground_albedo, tol=tol
+            medium,
+            sun_zenith_deg=90.0 - elev,
+            ground_albedo=ground_albedo,
+            tol=tol,
+            progress=report,
+            allow_large=allow_large,
         )
     elif not isinstance(field, DiffuseField):
         raise TypeError(f"field must be a DiffuseField; got {type(field).__name__}")
@@ -339,6 +490,8 @@ def sky_radiance(
         view_zenith_deg=zz,
         view_azimuth_deg=aa,
         observer_altitude_m=observer_altitude_m,
+        progress=report,
+        allow_large=allow_large,
     )
     t_sun = medium.transmittance(
         np.array(medium.planet_radius_m + observer_altitude_m),
@@ -357,6 +510,10 @@ def sky_radiance(
         n_orders=field.n_orders,
         error_estimate=float(np.max(field.error_estimate)),
         tol=float(tol),
+        radiance_error=radiance_error_estimate(
+            medium, field, observer_altitude_m=float(observer_altitude_m)
+        ),
+        n_streams=medium.n_streams,
     )
 
 
@@ -367,12 +524,9 @@ def png_bytes(rgb: np.ndarray) -> bytes:
     """
     import io as _io
 
-    try:
-        import matplotlib.image
-    except ImportError as exc:  # pragma: no cover - depends on the extra
-        raise ImportError(
-            "writing PNG images needs matplotlib: pip install 'dustoptics[plot]'"
-        ) from exc
+    check_png_support()
+    import matplotlib.image
+
     buf = _io.BytesIO()
     no_stamp: dict[str, Any] = {"Software": None}  # same bytes on every run
     matplotlib.image.imsave(buf, rgb, format="png", metadata=no_stamp)

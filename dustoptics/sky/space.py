@@ -29,15 +29,16 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any, Final
+from typing import Any, Final, TextIO
 
 import numpy as np
 
-from dustoptics._validation import check_closed_interval, check_positive
+from dustoptics._validation import BudgetError, check_closed_interval, check_positive
 from dustoptics.atmosphere.sets import Atmosphere
+from dustoptics.sky._progress import Reporter, reporter
 from dustoptics.sky.medium import Medium
-from dustoptics.sky.orders import solve_orders
-from dustoptics.sky.render import _radiance
+from dustoptics.sky.orders import N_LAYERS, WORK_BUDGET, estimate_orders_cost, solve_orders
+from dustoptics.sky.render import _radiance, check_render_cost
 from dustoptics.sky.scene import display_rgb, sunlit_xyz
 
 __all__ = ["LimbRadiance", "limb_radiance"]
@@ -157,6 +158,8 @@ def limb_radiance(
     tol: float = 1e-4,
     field_step_deg: float = 10.0,
     n_path: int = N_LIMB_PATH,
+    progress: TextIO | Reporter | None = None,
+    allow_large: bool = False,
 ) -> LimbRadiance:
     """The limb of an atmosphere seen from far away in space.
 
@@ -180,10 +183,21 @@ def limb_radiance(
         Step of the Sun zenith angles at which the diffuse field is solved. [deg]
     n_path : int
         Samples along each line of sight (nearly uniform).
+    progress : text stream, optional
+        Where to report the diffuse fields and lines of sight done after the
+        first two seconds; None is silent.
+    allow_large : bool
+        Go ahead beyond the memory and work budget (checked before any work:
+        every diffuse field and every line of sight).
 
     Returns
     -------
     LimbRadiance
+
+    Raises
+    ------
+    dustoptics._validation.BudgetError
+        Beyond the budget and ``allow_large`` is False.
     """
     medium = atmosphere if isinstance(atmosphere, Medium) else Medium.from_atmosphere(atmosphere)
     beta = check_closed_interval("sun_view_angle_deg", sun_view_angle_deg, 1.0, 179.0)
@@ -229,6 +243,25 @@ def limb_radiance(
     else:
         weight_hi = (sza_t - nodes[k]) / (nodes[k + 1] - nodes[k])
     nwl = medium.wavelength_nm.size
+    report = reporter(progress)
+    # The budget of every field and every line of sight, before any work.
+    check_render_cost(
+        medium,
+        n_rays=2 * sza_t.size,
+        n_rows=2 * h.size,
+        n_path=n_path,
+        allow_large=allow_large,
+        what="tangent_altitude_m x limb_angle_deg",
+    )
+    orders = estimate_orders_cost(medium, n_layers=N_LAYERS, tol=tol)
+    if not allow_large and orders.work * nodes.size > WORK_BUDGET:
+        largest = max(int(WORK_BUDGET / orders.work), 1)
+        raise BudgetError(
+            f"limb_radiance would solve {nodes.size} diffuse fields of about {orders.work:.3g} "
+            f"multiply-adds each, beyond the budget of {WORK_BUDGET:g}; field_step_deg must give "
+            f"at most {largest} fields (a larger step, or fewer wavelengths), or pass "
+            "allow_large=True (--allow-large on the command line) to go ahead"
+        )
     radiance = np.zeros(sza_t.shape + (nwl,))
     n_orders, err = 0, 0.0
     for j, sza in enumerate(nodes):
@@ -238,8 +271,14 @@ def limb_radiance(
         rays = share > 0
         if not np.any(rays):
             continue
+        report(f"limb: diffuse field {j + 1} of {nodes.size} (Sun at {float(sza):g} deg)")
         field = solve_orders(
-            medium, sun_zenith_deg=float(sza), ground_albedo=ground_albedo, tol=tol
+            medium,
+            sun_zenith_deg=float(sza),
+            ground_albedo=ground_albedo,
+            tol=tol,
+            progress=report,
+            allow_large=allow_large,
         )
         n_orders = max(n_orders, field.n_orders)
         err = max(err, float(np.max(field.error_estimate)))
@@ -252,6 +291,8 @@ def limb_radiance(
             radius_m=medium.planet_radius_m + top,
             n_path=n_path,
             stretch=_LIMB_STRETCH,
+            report=report,
+            allow_large=allow_large,
         )
         radiance[rays] += share[rays, None] * part
     return LimbRadiance(
