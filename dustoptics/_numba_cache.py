@@ -39,15 +39,17 @@ on their own.
 Compiling
 ---------
 A kernel compiles on its first call (numba's lazy compilation), one after the
-other, about 20 s of CPU time for the Mie kernels.  :func:`compile_kernels`
-compiles in advance those of the kernels asked for that numba's cache does
-not hold, in this process and in child processes that write to the same
-cache (one per further core, at most :data:`MAX_PROCESSES` in all): each
-takes the next kernel whose callees are compiled, the longest chain of
-callers first, and the kernels compiled by a child are loaded from the cache
-at their first call.  It reports each kernel as it is compiled; a cache that
-holds them all costs a look at numba's index files and says nothing.  The
-command line calls it before a build (``models.build.TableBuilder``).
+other: 15-17 s of CPU time for the 22 kernels of a Mie table on the
+benchmark's 2-core machine (``scripts/benchmark.py --compile``, busy).
+:func:`compile_kernels` compiles in advance those of the kernels asked for
+that numba's cache does not hold, in this process and in child processes
+that write to the same cache (one per further core, at most
+:data:`MAX_PROCESSES` in all): each takes the next kernel whose callees are
+compiled, the longest chain of callers first, and the kernels compiled by a
+child are loaded from the cache at their first call.  It reports each kernel
+as it is compiled; a cache that holds them all costs a look at numba's index
+files and says nothing.  The command line calls it before a build
+(``models.build.TableBuilder``).
 """
 
 from __future__ import annotations
@@ -448,8 +450,6 @@ def _child_env() -> dict[str, str]:
     # The child imports this very package (a checkout, an install, a test's copy).
     root = str(_PACKAGE_DIR.parent)
     env["PYTHONPATH"] = os.pathsep.join(p for p in (root, env.get("PYTHONPATH")) if p)
-    # numba colours the messages of the typing attempts it discards; a child shows none.
-    env.setdefault("NUMBA_DISABLE_ERROR_MESSAGE_HIGHLIGHTING", "1")
     return env
 
 

@@ -36,10 +36,11 @@ __all__ = [
     "prepare_export",
 ]
 
-#: About how long the first build compiles the kernels: 12 s of CPU time measured
-#: on a 2-core machine (``/usr/bin/time`` of a first ``dustoptics build`` with an
-#: empty ``NUMBA_CACHE_DIR``, minus a warm build's), longer on a busy machine. [s]
-COMPILE_ESTIMATE_S = "10-15"
+#: About how long the first build's kernels take to compile on two idle cores: half of
+#: the 15-17 s of CPU time they took in one process on the benchmark's 2-core machine
+#: while it was busy (``scripts/benchmark.py --compile``); longer on a busy machine.
+#: Not printed: the build names each kernel as it is compiled. [s]
+COMPILE_ESTIMATE_S = "5-10"
 
 #: Prefix of the lines :class:`TableBuilder` reports (the program's name).
 _PROG = "dustoptics"
