@@ -30,12 +30,16 @@ The same atmosphere is rendered by ``dustoptics.sky`` (orders of scattering to 1
 three wavelengths 680, 550 and 440 nm (the set is built at exactly those wavelengths, so
 neither side interpolates coefficients), and the two skies are compared direction by
 direction, per unit solar irradiance [sr^-1].  The script prints a table and exits 1 if any
-direction more than 5 deg from the Sun differs by more than ``--tolerance`` (default 5 %).
+direction differs by more than ``--tolerance`` (default 5 %) beyond the angle from the Sun
+where the export says its NU slices keep 5 % (the JSON's ``precomputation`` errors; 14 deg for
+the Martian dust at NU 64, the most a 2048-texel-wide texture allows).
 
-His precomputation on llvmpipe takes minutes (tens of minutes at NU 64 with 12 orders and
-64 x 128 scattering-density directions on 2 cores); ``--sizes-from`` lets a run reuse the
-sizes of another export, and ``--nu``, ``--orders``, ``--density-samples`` override the
-export's choices (to measure what a smaller choice costs).
+His precomputation is slow on llvmpipe: with his own sizes (NU 8, S 16, 4 orders) about 6
+minutes on 2 cores here; its cost grows with NU x S^2 x (orders - 1), so the Martian sizes
+(NU 64, S 48, 12 orders) take days there (far less on a GPU; the harness runs on any
+Mesa EGL driver).  ``--nu``, ``--orders`` and ``--density-samples`` override the export's
+choices (to measure what another choice costs), and ``--sizes R,MU,MU_S`` shrinks the other
+texture sizes (his 32, 128, 32) for runs that compare one choice with another.
 """
 
 from __future__ import annotations
@@ -448,7 +452,7 @@ def main(argv: list[str] | None = None) -> int:
     print(report(result, tolerance=args.tolerance))
     if args.json:
         Path(args.json).write_text(json.dumps(result, indent=2) + "\n")
-    return 0 if result["max_error_outside_5deg"] <= args.tolerance else 1
+    return 0 if result["max_error_beyond_clear_angle"] <= args.tolerance else 1
 
 
 def build_set(set_name: str) -> Any:
@@ -523,6 +527,9 @@ def compare(
     error = his_per_irradiance / ours - 1.0
     angle = scattering_angle_deg(geometry)
     outside = angle > 5.0
+    # The export states how far from the Sun its NU slices leave more than 5 %.
+    clear = max(5.0, pre["errors"]["nu: within the NU tolerance beyond, from the Sun [deg]"])
+    beyond = angle > clear
     return {
         "set": set_name,
         "sun_elevation_deg": geometry.sun_elevation_deg,
@@ -541,6 +548,10 @@ def compare(
         "dustoptics": ours.tolist(),
         "relative_error": error.tolist(),
         "max_error_outside_5deg": float(np.max(np.abs(error[outside]))) if outside.any() else 0.0,
+        "nu_clear_angle_deg": clear,
+        "max_error_beyond_clear_angle": float(np.max(np.abs(error[beyond])))
+        if beyond.any()
+        else 0.0,
         "zenith_transmittance_bruneton": his["transmittance"][0],
     }
 
@@ -561,10 +572,12 @@ def report(result: dict[str, Any], *, tolerance: float) -> str:
             f" {z:6.1f}  {a:7.1f}  {t:5.1f}   " + "  ".join(f"{100 * v:+7.2f} %" for v in e)
         )
     worst = result["max_error_outside_5deg"]
+    rows.append(f"largest difference more than 5 deg from the Sun: {100 * worst:.2f} %")
+    worst = result["max_error_beyond_clear_angle"]
     verdict = "within" if worst <= tolerance else "OUTSIDE"
     rows.append(
-        f"largest difference more than 5 deg from the Sun: {100 * worst:.2f} % ({verdict} "
-        f"{100 * tolerance:g} %)"
+        f"largest difference beyond {result['nu_clear_angle_deg']:.3g} deg from the Sun (where the "
+        f"export says its NU slices keep 5 %): {100 * worst:.2f} % ({verdict} {100 * tolerance:g} %)"
     )
     return "\n".join(rows)
 

@@ -30,13 +30,22 @@ NU size (:func:`nu_interpolation_error`)
     interpolates linearly in ``nu`` between two slices; the slice next to the Sun
     is ``arccos(1 - 2 / (N - 1))`` away (44 deg at N = 8, 21 deg at 32, 14.5 deg at
     64).  The stored field near the Sun has the angular shape of the phase
-    function convolved with itself (the second order).  The error measure is
-    that kernel's interpolation error, weighted by the second order's share of
-    the diffuse sky (``m / 2`` of the first order in the path model, at most 1)
-    and taken relative to the sky ``p + w (p * p)`` between 5 and 90 deg from the
+    function convolved with itself (the second order, ``p * p``).  The estimate
+    is that kernel's interpolation error, weighted by the second order's share
+    of the diffuse sky (``w = m / 2`` of the first order in the path model, at
+    most 1), relative to the sky ``p + w (p * p)`` between 5 and 90 deg from the
     Sun (single scattering, applied exactly at render time, is not
-    interpolated).  ``N x MU_S <= 2048`` (``GL_MAX_3D_TEXTURE_SIZE`` of
-    llvmpipe and of many GPUs) caps N at 64 for ``MU_S = 32``.
+    interpolated), times 0.08.  That factor is measured: his precomputation run
+    headless (``scripts/bruneton_headless.py``: the Mars set at 680, 550,
+    440 nm, Sun 30 deg high, 3 orders, S = 48, textures R/MU/MU_S 8/32/16)
+    differs from the same at NU 128 by 89, 40 and 17 % at NU 16, 32 and 64
+    (10-20 deg from the Sun), 0.078-0.087 of the ideal kernel's error; with
+    S = 16 the coarser scattering density blurs the field and the errors are
+    smaller (24, 6.5, under 4 %), so the estimate is on the safe side for
+    S < 48.  ``N x MU_S <= 2048`` (``GL_MAX_3D_TEXTURE_SIZE`` of llvmpipe and
+    of many GPUs) caps N at 64 for ``MU_S = 32``: for the Martian dust that
+    leaves about 16 % near the Sun, within 5 % beyond 14 deg from it (the
+    notes say so), and NU 32 would leave 40 % up to 20 deg.
 Scattering-density directions (:func:`scattering_density_error`)
     ``ComputeScatteringDensity`` integrates over ``S`` zenith by ``2 S``
     azimuth midpoints (``dtheta = dphi = pi / S``); the error measure is how far
@@ -118,6 +127,11 @@ _G_FORWARD: Final = 0.1
 
 #: Angles from the Sun over which the NU error is measured. [deg]
 _NU_ANGLES_DEG: Final = (5.0, 90.0)
+#: The NU estimate's factor: his precomputation run headless (scripts/bruneton_headless.py;
+#: the Mars set at 440, 550, 680 nm, Sun 30 deg high, K = 3, S = 48, R/MU/MU_S 8/32/16) differs
+#: from the same with NU 128 by 89, 40 and 17 % at NU 16, 32, 64, where the ideal kernel's
+#: interpolation error is 10.9, 5.1 and 1.96: 0.082, 0.078, 0.087 of it.
+_NU_CALIBRATION: Final = 0.08
 
 _LEGENDRE_ORDER: Final = 600
 _GAUSS_NODES: Final = 2000
@@ -293,7 +307,10 @@ def _series(chi: np.ndarray, mu: np.ndarray) -> np.ndarray:
     return coef @ _legendre_table(np.asarray(mu, dtype=np.float64), chi.shape[-1] - 1)
 
 
-def _nu_errors(scatterers: list[_Scatterer], sizes: tuple[int, ...]) -> dict[int, float]:
+def _nu_errors(
+    scatterers: list[_Scatterer], sizes: tuple[int, ...], tolerance: float = 0.05
+) -> dict[int, tuple[float, float]]:
+    """NU size -> (estimated sky error 5-90 deg from the Sun, angle beyond which it is <= tol)."""
     beta = np.array([s.beta_sca_per_m for s in scatterers])  # (n_c, n_wl)
     theta = np.linspace(0.0, 180.0, 3601)
     mix = (
@@ -316,20 +333,27 @@ def _nu_errors(scatterers: list[_Scatterer], sizes: tuple[int, ...]) -> dict[int
         at_nodes = _series(chi**2, nodes)
         lerp = np.array([np.interp(mu, nodes, row) for row in at_nodes])
         err = weight[:, None] * np.abs(lerp - kernel) / (single + weight[:, None] * kernel)
-        out[n] = float(err.max())
+        est = _NU_CALIBRATION * err.max(axis=0)  # per angle, worst wavelength
+        beyond = np.maximum.accumulate(est[::-1])[::-1]  # worst at this angle or farther
+        clear = ang[np.argmax(beyond <= tolerance)] if np.any(beyond <= tolerance) else 90.0
+        out[n] = (float(est.max()), float(clear))
     return out
 
 
 def nu_interpolation_error(
     atmosphere: Atmosphere, *, nu_size: int, wavelength_nm: Any = None
 ) -> float:
-    """Largest relative sky error of NU slices between 5 and 90 deg from the Sun (module docstring). [-]"""
+    """Estimated sky error of NU slices, 5 to 90 deg from the Sun (module docstring). [-]
+
+    The largest over the angles and wavelengths of the calibrated estimate
+    ``0.08 w |lerp(p * p) - p * p| / (p + w p * p)``.
+    """
     if isinstance(nu_size, bool) or not isinstance(nu_size, (int, np.integer)) or nu_size < 2:
         raise ValueError(f"nu_size must be an integer >= 2; got {nu_size!r}")
     scatterers = _scatterers(atmosphere, _wavelengths(wavelength_nm))
     if not scatterers:
         return 0.0
-    return _nu_errors(scatterers, (int(nu_size),))[int(nu_size)]
+    return _nu_errors(scatterers, (int(nu_size),))[int(nu_size)][0]
 
 
 # ------------------------------------------------------------------ scattering density
@@ -421,6 +445,9 @@ class PrecomputationSampling:
         model. [-]
     nu_error : float
         :func:`nu_interpolation_error` at the chosen NU. [-]
+    nu_clear_angle_deg : float
+        Angle from the Sun beyond which that estimate is within the NU
+        tolerance. [deg]
     scattering_density_error : float
         :func:`scattering_density_error` at the chosen S. [-]
     wavelength_nm : tuple of float
@@ -438,6 +465,7 @@ class PrecomputationSampling:
     mean_scatterings: float
     orders_error: float
     nu_error: float
+    nu_clear_angle_deg: float
     scattering_density_error: float
     wavelength_nm: tuple[float, ...]
     notes: tuple[str, ...] = field(default=())
@@ -453,7 +481,8 @@ class PrecomputationSampling:
             "scattering_texture_mu_s_size": self.scattering_texture_mu_s_size,
             "errors": {
                 "orders (path model: diffuse radiance beyond K)": self.orders_error,
-                "nu (interpolation between NU slices, 5-90 deg from the Sun)": self.nu_error,
+                "nu (estimated sky error of the NU slices, 5-90 deg from the Sun)": self.nu_error,
+                "nu: within the NU tolerance beyond, from the Sun [deg]": self.nu_clear_angle_deg,
                 "scattering density (S x 2S rule's phase-function integral)": (
                     self.scattering_density_error
                 ),
@@ -474,12 +503,14 @@ def _wavelengths(wavelength_nm: Any) -> np.ndarray | None:
     return wl
 
 
-def _check_given(name: str, value: Any, needed: int, why: str) -> int:
+def _check_given(
+    name: str, value: Any, needed: int, why: str, smallest: str = "the smallest that does"
+) -> int:
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
         raise TypeError(f"{name} must be an integer; got {value!r} ({type(value).__name__})")
     if value < needed:
         raise ValueError(
-            f"{name} {int(value)} is too small for this set: {why}; the smallest that does is {needed}"
+            f"{name} {int(value)} is too small for this set: {why}; {smallest} is {needed}"
         )
     return int(value)
 
@@ -533,18 +564,20 @@ def precomputation_sampling(
     notes: list[str] = []
     if not scatterers:
         k, m, nu, s = 1, 0.0, BRUNETON_DEFAULTS["scattering_texture_nu_size"], 16
-        nu_err = dens_err = 0.0
+        nu_err = dens_err = nu_clear = 0.0
     else:
         m_all = _path_scatterings(scatterers)
         m = float(m_all.max())
         k = max(_orders_for(float(v), tol) for v in m_all)
         sizes = tuple(n for n in NU_SIZES if n <= nu_cap)
-        nu_errs = _nu_errors(scatterers, sizes)
-        nu = next((n for n in sizes if nu_errs[n] <= nu_tol), sizes[-1])
-        if nu_errs[nu] > nu_tol:
+        nu_errs = _nu_errors(scatterers, sizes, nu_tol)
+        nu = next((n for n in sizes if nu_errs[n][0] <= nu_tol), sizes[-1])
+        capped = nu_errs[nu][0] > nu_tol
+        if capped:
             notes.append(
-                f"NU {nu} (the largest with NU x MU_S <= {MAX_3D_TEXTURE_SIZE}) leaves an "
-                f"interpolation error of {nu_errs[nu]:.3g} > {nu_tol:g} near the Sun"
+                f"NU {nu}, the largest with NU x MU_S <= {MAX_3D_TEXTURE_SIZE} at MU_S {mu_s_size}, "
+                f"leaves an estimated {nu_errs[nu][0]:.2g} of the sky radiance near the Sun; "
+                f"within {nu_tol:g} beyond {nu_errs[nu][1]:.3g} deg from it"
             )
         dens = {}
         s = SCATTERING_DENSITY_SAMPLE_COUNTS[-1]
@@ -553,7 +586,7 @@ def precomputation_sampling(
             if dens[count] <= tol:
                 s = count
                 break
-        nu_err, dens_err = nu_errs[nu], dens[s]
+        (nu_err, nu_clear), dens_err = nu_errs[nu], dens[s]
         if num_scattering_orders is not None:
             k = _check_given(
                 "num_scattering_orders", num_scattering_orders, k,
@@ -566,11 +599,20 @@ def precomputation_sampling(
                     f"texels wide, more than GL_MAX_3D_TEXTURE_SIZE {MAX_3D_TEXTURE_SIZE}; at most "
                     f"{nu_cap}"
                 )
-            nu = _check_given(
-                "nu_size", nu_size, nu,
-                f"the interpolation between NU slices would exceed {nu_tol:g} near the Sun",
-            )  # fmt: skip
-            nu_err = _nu_errors(scatterers, (nu,))[nu]
+            given = _nu_errors(scatterers, (int(nu_size),), nu_tol).get(int(nu_size), (0.0, 0.0))
+            why = (
+                f"its slices leave an estimated {given[0]:.2g} of the sky radiance near the Sun, "
+                f"more than {nu_tol:g} up to {given[1]:.3g} deg from it"
+            )
+            smallest = "the smallest that does"
+            if capped:
+                why += (
+                    f"; the largest NU a {MAX_3D_TEXTURE_SIZE}-texel-wide texture allows leaves "
+                    f"{nu_err:.2g} (within {nu_tol:g} beyond {nu_clear:.3g} deg)"
+                )
+                smallest = "the least the set needs"
+            nu = _check_given("nu_size", nu_size, nu, why, smallest)
+            nu_err, nu_clear = _nu_errors(scatterers, (nu,), nu_tol)[nu]
         if scattering_density_sample_count is not None:
             s = _check_given(
                 "scattering_density_sample_count", scattering_density_sample_count, s,
@@ -590,6 +632,7 @@ def precomputation_sampling(
         mean_scatterings=m,
         orders_error=orders_err,
         nu_error=float(nu_err),
+        nu_clear_angle_deg=float(nu_clear),
         scattering_density_error=float(dens_err),
         wavelength_nm=used_wl,
         notes=tuple(notes),
