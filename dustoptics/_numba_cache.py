@@ -245,8 +245,9 @@ def kernels(groups: Iterable[str] = GROUPS) -> list[Kernel]:
 
 def _in_cache(k: Kernel) -> bool:
     """Whether this process holds ``k`` compiled, or numba's cache index lists it for
-    the current source (numba's own key: signature, CPU and the function's bytecode)."""
-    if k.signature in k.dispatcher.overloads:
+    the current source (numba's own key: signature, CPU and the function's bytecode).
+    True with numba's JIT off (``NUMBA_DISABLE_JIT``): nothing is compiled then."""
+    if not hasattr(k.dispatcher, "overloads") or k.signature in k.dispatcher.overloads:
         return True
     try:  # numba's private cache API; on any change, "not cached" (it compiles)
         cache = k.dispatcher._cache

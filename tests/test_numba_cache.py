@@ -227,6 +227,24 @@ def test_progress_names_each_kernel_k_of_n_with_the_time(monkeypatch, capsys):
         assert re.fullmatch(rf"dustoptics: compiled kernel {k}/{n}, \w+\.\w+ \(\d+\.\d s\)", line)
 
 
+def test_with_numbas_jit_off_nothing_compiles(monkeypatch):
+    """NUMBA_DISABLE_JIT=1 (the kernels run as Python, for debugging): nothing to compile,
+    and a table still computes on threads."""
+    code = """
+        import dustoptics as do
+        from dustoptics import _numba_cache
+        assert _numba_cache.compile_kernels(["optics", "matrix"]) is None
+        assert _numba_cache.kernels_cached(["optics"])
+        do.compute_optics(
+            do.mars_dust(), do.ModifiedGamma(r_eff_um=0.3, v_eff=0.1),
+            wavelength_nm=[550.0, 600.0], theta_deg=[0.0, 90.0, 180.0], rtol=1e-2, workers=2,
+        )
+    """
+    monkeypatch.setenv("NUMBA_DISABLE_JIT", "1")
+    done = _run(code, None)
+    assert done.returncode == 0, done.stderr
+
+
 def test_nothing_to_compile_is_silent(monkeypatch, capsys):
     monkeypatch.setattr(_numba_cache, "_in_cache", lambda k: True)
     assert compile_kernels(["optics", "matrix"], progress=sys.stderr) is None

@@ -1087,4 +1087,6 @@ def kernels_loaded() -> bool:
     wavelength calls :func:`_phase_refinement_errors` or
     :func:`_matrix_refinement_errors` from Python, so their signatures say
     whether one has run; kernels called only from compiled code keep none."""
+    if not hasattr(_phase_refinement_errors, "signatures"):
+        return True  # numba's JIT off (NUMBA_DISABLE_JIT): plain Python, nothing to compile
     return bool(_phase_refinement_errors.signatures or _matrix_refinement_errors.signatures)
