@@ -227,3 +227,15 @@ def test_module_size(name: str) -> None:
             f"{path}: {lines} lines (over {LIBRARY_MAX_LINES}, and its docstring does not say "
             f"why it is {ONE_CONCEPT})"
         )
+
+
+def test_test_files_have_unique_names() -> None:
+    # tests/ has no __init__.py: pytest imports each test file by its base name (rootdir
+    # import mode), so two files of one name in different folders fail collection.
+    tests = Path(__file__).resolve().parent
+    seen: dict[str, Path] = {}
+    for path in sorted(tests.rglob("test_*.py")):
+        if "node_modules" in path.parts:
+            continue
+        assert path.name not in seen, f"{path} and {seen[path.name]} share a name"
+        seen[path.name] = path

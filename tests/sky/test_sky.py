@@ -116,7 +116,7 @@ def test_multiple_scattering_agrees_with_monte_carlo(dust: do.Table, planet: str
             atmosphere_radius_m=FLAT_RADIUS_M + 80e3,
             ozone=None,
         )
-    medium = Medium.from_atmosphere(atm, n_streams=12)
+    medium = Medium.from_atmosphere(atm)
     sza = 50.0
     field = solve_orders(medium, sun_zenith_deg=sza, geometry="plane-parallel", tol=1e-6)
     views = [(0.0, 0.0), (40.0, 0.0), (60.0, 90.0), (75.0, 180.0)]
@@ -135,10 +135,12 @@ def test_multiple_scattering_agrees_with_monte_carlo(dust: do.Table, planet: str
                 n_photons=40_000,
                 seed=17 + j,
             )
-            # Agreement within 4 standard errors of the Monte Carlo plus the
-            # solver's discretization (delta-M with 24 streams, 120 layers),
-            # measured below 1 %.
-            assert abs(got[j, i] - mean) < 4 * err + 0.01 * mean, (
+            # The renderer at its defaults (20 streams) is within 0.02 % of
+            # converged CDISORT in these directions (0.14 % with 12 streams;
+            # measured), so the Monte Carlo's statistics decide: its standard
+            # errors are 0.5-8 % here and all 16 values agree within 2 of
+            # them (measured); the test allows 4.
+            assert abs(got[j, i] - mean) < 4 * err, (
                 planet,
                 WL[i],
                 z,
