@@ -25,6 +25,7 @@ from dustoptics._validation import check_choice
 
 if TYPE_CHECKING:
     from dustoptics.atmosphere.sets import Atmosphere
+    from dustoptics.sky.approximations import Approximations
 
 __all__ = ["SKY_JOBS", "SUNSET_ELEVATIONS_DEG", "SkyJob"]
 
@@ -71,6 +72,11 @@ class SkyJob:
     models : tuple of str, optional
         compare: the presets compared (default
         :data:`~dustoptics.sky.compare.MARS_MODELS`).
+    preview : Approximations, optional
+        mars, earth: also the sky an engine draws with these approximations,
+        compared with the exact one (:func:`~dustoptics.sky.approximations.preview_sky`):
+        the differences go into ``NAME_sky.nc``, the images side by side into
+        ``NAME_preview.png``.
 
     Raises
     ------
@@ -90,6 +96,7 @@ class SkyJob:
     sunset: bool = False
     space: bool = False
     models: tuple[str, ...] | None = None
+    preview: Approximations | None = None
 
     def __post_init__(self) -> None:
         check_choice("kind", self.kind, SKY_JOBS)
@@ -98,6 +105,8 @@ class SkyJob:
         if elevation is None:
             elevation = _DEFAULT_SUN_ELEVATION_DEG[self.kind]
             object.__setattr__(self, "sun_elevation_deg", elevation)
+        if self.kind == "compare" and self.preview is not None:
+            raise ValueError("preview is for the mars and earth skies; got kind 'compare'")
         if self.kind != "compare":
             if not (-10.0 <= elevation <= 90.0):
                 raise ValueError(
@@ -134,6 +143,8 @@ class SkyJob:
             names += [f"{stem}_sunset_{e:+05.1f}.png" for e in SUNSET_ELEVATIONS_DEG]
         if self.space:
             names.append(f"{stem}_limb.png")
+        if self.preview is not None:
+            names.append(f"{stem}_preview.png")
         return [out / n for n in names]
 
     def atmosphere(self) -> Atmosphere:
@@ -194,11 +205,29 @@ class SkyJob:
 
         atm = self.atmosphere()
         medium = Medium.from_atmosphere(atm)
+        if self.preview is not None:  # refused before any rendering
+            from dustoptics.sky.approximations import check_approximations
+
+            check_approximations(self.preview, medium)
         sky = sky_radiance(medium, sun_elevation_deg=self._sun_elevation, ground_albedo=self.albedo)
         exposure = self.exposure if self.exposure is not None else sky.default_exposure()
         stem = self.out_dir / atm.name
-        out = {
-            stem.with_name(f"{atm.name}_sky.nc"): bytes(sky.to_xarray().to_netcdf(engine="scipy")),
+        data = sky.to_xarray()
+        out: dict[Path, bytes] = {}
+        if self.preview is not None:
+            from dustoptics.sky.approximations import preview_sky
+
+            pv = preview_sky(
+                medium,
+                self.preview,
+                sun_elevation_deg=self._sun_elevation,
+                ground_albedo=self.albedo,
+                exact=sky,
+            )
+            data = pv.to_xarray()
+            out[stem.with_name(f"{atm.name}_preview.png")] = pv.png(exposure=exposure)
+        out |= {
+            stem.with_name(f"{atm.name}_sky.nc"): bytes(data.to_netcdf(engine="scipy")),
             stem.with_name(f"{atm.name}_fisheye.png"): png_bytes(
                 sky.fisheye(size=self.size_px, exposure=exposure)
             ),
