@@ -14,6 +14,7 @@ from typing import Any
 from dustoptics.cli.errors import PROG, UsageError
 from dustoptics.cli.parser import _positive_float, add_command
 from dustoptics.cli.report import say
+from dustoptics.cli.sky_preview import add_preview_options, approximations_from_args, report_preview
 
 __all__ = ["add_parser", "run"]
 
@@ -112,6 +113,7 @@ def add_parser(sub: Any) -> None:
         q.add_argument("--out", type=Path, required=True, metavar="DIR", help=_OUT_HELP)
         q.add_argument("--force", action="store_true", help="replace existing files")
         q.add_argument("--quiet", action="store_true", help="no summary output")
+        add_preview_options(q)
     q = add_command(
         skies,
         "compare",
@@ -201,10 +203,13 @@ def run(args: argparse.Namespace) -> int:
             # Options of 'sky mars' only.
             dust=getattr(args, "dust", "hybrid"),
             optical_depth=getattr(args, "optical_depth", 0.5),
+            preview=approximations_from_args(args),
         )
     # The job's own folder, DIR/NAME/, checked to stay inside DIR (NAME is a preset's).
     job = replace(job, out_dir=args.out / job.name)
     check_inside(args.out, job.out_dir)
-    for path in job.write(overwrite=args.force):
+    written = job.write(overwrite=args.force)
+    for path in written:
         say(args, f"wrote {path}")
+    report_preview(args, written)
     return 0
