@@ -85,7 +85,7 @@ from dustoptics.scattering.phase import (
 )
 from dustoptics.scattering.quadrature import QuadratureSettings
 from dustoptics.scattering.tabulated_phase import hybrid, renormalize, sphere_integral
-from dustoptics.table import Provenance, Source, Table
+from dustoptics.table import Provenance, Source, Table, TableDerivatives
 
 __all__ = [
     "MARS_DUST_DENSITY_KG_M3",
@@ -110,6 +110,7 @@ __all__ = [
     "SizeDistribution",
     "Source",
     "Table",
+    "TableDerivatives",
     "TabulatedDistribution",
     "TabulatedIndex",
     "Truncated",

@@ -81,6 +81,7 @@ __all__ = [
     "Provenance",
     "Source",
     "Table",
+    "TableDerivatives",
     "alpha1_from_pmom",
     "canonical_json",
     "plain",
@@ -581,6 +582,188 @@ def alpha1_from_pmom(pmom: np.ndarray) -> np.ndarray:
     return p * (2.0 * np.arange(p.shape[-1]) + 1.0)
 
 
+# ------------------------------------------------------------ derivatives
+
+#: Quantities whose derivatives a table stores (the others are derived from
+#: them, :meth:`Table.derivative`); angular ones have shape (n_wavelength, n_theta).
+DERIVATIVE_FIELDS = ("phase", "f12", "f33", "f34", "g", "cext_um2", "csca_um2", "cback_um2")
+#: Derived quantities whose derivatives follow from the stored ones.
+DERIVED_DERIVATIVES = ("ssa", "cabs_um2", "lidar_ratio_sr")
+#: The dimension of the parameters in :meth:`Table.to_xarray`.
+PARAMETER_DIM = "parameter"
+
+
+def derivative_variable(quantity: str) -> str:
+    """Name of the variable holding d(quantity)/d(parameter): ``d_phase_d_parameter``."""
+    return f"d_{quantity}_d_{PARAMETER_DIM}"
+
+
+def derivative_unit(quantity_unit: str, parameter_unit: str) -> str:
+    """udunits2 spelling of (quantity unit) per (parameter unit): ``sr-1`` per ``um``
+    is ``sr-1 um-1``; per ``1`` it is the quantity's unit.
+
+    Examples
+    --------
+    >>> derivative_unit("sr-1", "um"), derivative_unit("um2", "1"), derivative_unit("1", "um")
+    ('sr-1 um-1', 'um2', 'um-1')
+    """
+    if parameter_unit == "1":
+        return quantity_unit
+    inverse = " ".join(
+        part[:-1] + str(-int(part[-1])) if part[-1].isdigit() else part + "-1"
+        for part in parameter_unit.split()
+    )
+    return inverse if quantity_unit == "1" else f"{quantity_unit} {inverse}"
+
+
+@dataclass(frozen=True, eq=False, kw_only=True)
+class TableDerivatives:
+    """Derivatives of a table's outputs with respect to named input parameters.
+
+    :func:`dustoptics.compute_optics` fills them (``derivatives=(...)``) and
+    :meth:`Table.derivative` reads them.
+
+    Attributes
+    ----------
+    parameters : tuple of str
+        The parameters, in the order of every array's first axis: a size
+        distribution's (``"r_eff_um"``, ``"v_eff"``, ``"modes[0].sigma"``, ...),
+        ``"n"`` and ``"k"`` (real and imaginary part of the refractive index
+        at each wavelength), a mixture's (``"hematite_fraction"``).
+    parameter_units : tuple of str
+        Each parameter's unit, udunits2 spelling (``"um"``, ``"1"``).
+    values : mapping of str to numpy.ndarray
+        Quantity (one of :data:`DERIVATIVE_FIELDS` the table holds) -> derivative,
+        shape (n_parameter, n_wavelength[, n_theta]), in the quantity's unit
+        per unit of the parameter.
+    error_estimates : mapping of str to numpy.ndarray
+        Quantity -> estimated error of its derivative, shape (n_parameter,
+        n_wavelength) (for angular quantities the largest over angle), in
+        the derivative's unit.
+    method : str
+        How the derivatives and their error estimates were obtained.
+    """
+
+    parameters: tuple[str, ...]
+    parameter_units: tuple[str, ...]
+    values: Mapping[str, np.ndarray]
+    error_estimates: Mapping[str, np.ndarray]
+    method: str = ""
+
+    def __post_init__(self) -> None:
+        params = tuple(self.parameters)
+        units = tuple(self.parameter_units)
+        if not params or not all(isinstance(p, str) and p for p in params):
+            raise ValueError(f"parameters must be non-empty strings; got {params!r}")
+        if len(set(params)) != len(params):
+            raise ValueError(f"parameters must not repeat a name; got {params!r}")
+        if len(units) != len(params) or not all(isinstance(u, str) and u for u in units):
+            raise ValueError(
+                f"parameter_units must give one unit string per parameter; got {units!r}"
+            )
+        for p in params:
+            _storable_text("parameters", p)
+        unknown = sorted(set(self.values) - set(DERIVATIVE_FIELDS))
+        if unknown or set(self.values) != set(self.error_estimates):
+            raise ValueError(
+                f"values must be keyed by quantities of {DERIVATIVE_FIELDS}, error_estimates by "
+                f"the same; got {sorted(self.values)} and {sorted(self.error_estimates)}"
+            )
+        values: dict[str, np.ndarray] = {}
+        errors: dict[str, np.ndarray] = {}
+        for key in DERIVATIVE_FIELDS:
+            if key not in self.values:
+                continue
+            v = np.array(as_float_array(f"values[{key!r}]", self.values[key]), copy=True)
+            e = np.array(
+                as_float_array(f"error_estimates[{key!r}]", self.error_estimates[key]), copy=True
+            )
+            if v.ndim not in (2, 3) or v.shape[0] != len(params) or e.shape != v.shape[:2]:
+                raise ValueError(
+                    f"values[{key!r}] must have shape (n_parameter, n_wavelength[, n_theta]) and "
+                    f"error_estimates[{key!r}] (n_parameter, n_wavelength); got {v.shape} and "
+                    f"{e.shape}"
+                )
+            if not (np.all(np.isfinite(v)) and np.all(np.isfinite(e)) and np.all(e >= 0)):
+                raise ValueError(
+                    f"derivatives of {key!r} must be finite, their error estimates >= 0"
+                )
+            v.setflags(write=False)
+            e.setflags(write=False)
+            values[key], errors[key] = v, e
+        object.__setattr__(self, "parameters", params)
+        object.__setattr__(self, "parameter_units", units)
+        object.__setattr__(self, "values", values)
+        object.__setattr__(self, "error_estimates", errors)
+
+    def equals(self, other: object) -> bool:
+        """Whether both hold the same parameters and bit-identical arrays."""
+        return (
+            isinstance(other, TableDerivatives)
+            and self.parameters == other.parameters
+            and self.parameter_units == other.parameter_units
+            and self.method == other.method
+            and list(self.values) == list(other.values)
+            and all(
+                np.array_equal(self.values[k], other.values[k])
+                and np.array_equal(self.error_estimates[k], other.error_estimates[k])
+                for k in self.values
+            )
+        )
+
+
+def _is_derivative_variable(name: str) -> bool:
+    return name in (PARAMETER_DIM, "parameter_units") or (
+        name.startswith("d_") and f"_d_{PARAMETER_DIM}" in name
+    )
+
+
+def _derivatives_from_xarray(ds: xr.Dataset) -> TableDerivatives | None:
+    """The :class:`TableDerivatives` a :meth:`Table.to_xarray` dataset holds, or None."""
+    names = [str(k) for k in ds.variables if _is_derivative_variable(str(k))]
+    if not names:
+        return None
+    if PARAMETER_DIM not in ds.variables or "parameter_units" not in ds.variables:
+        raise ValueError(
+            f"dataset has derivative variables {names} but no {PARAMETER_DIM!r} and "
+            "'parameter_units' coordinates"
+        )
+    parameters = tuple(str(p) for p in ds[PARAMETER_DIM].values)
+    units = tuple(str(u) for u in ds["parameter_units"].values)
+    known = {derivative_variable(k): k for k in (*DERIVATIVE_FIELDS, *DERIVED_DERIVATIVES)}
+    allowed = set(known) | {f"{k}_error_estimate" for k in known}
+    allowed |= {PARAMETER_DIM, "parameter_units"}
+    unknown = sorted(set(names) - allowed)
+    if unknown:
+        raise ValueError(
+            f"dataset has variables the table schema {SCHEMA} does not define: {unknown}"
+        )
+    values: dict[str, np.ndarray] = {}
+    errors: dict[str, np.ndarray] = {}
+    for name, key in known.items():
+        if name not in ds.variables or key in DERIVED_DERIVATIVES:
+            continue
+        var = ds.variables[name]
+        expected = [derivative_unit(UNITS[key][0], u) for u in units]
+        if var.attrs.get("units_by_parameter") != "; ".join(expected):
+            raise ValueError(
+                f"variable {name!r} must be in {'; '.join(expected)} (per parameter); its "
+                f"units_by_parameter are {var.attrs.get('units_by_parameter')!r}"
+            )
+        if f"{name}_error_estimate" not in ds.variables:
+            raise ValueError(f"dataset lacks the variable {name + '_error_estimate'!r}")
+        values[key] = np.asarray(var.values)
+        errors[key] = np.asarray(ds.variables[f"{name}_error_estimate"].values)
+    method = str(ds.variables[PARAMETER_DIM].attrs.get("derivative_method", ""))
+    return TableDerivatives(
+        parameters=parameters,
+        parameter_units=units,
+        values=values,
+        error_estimates=errors,
+        method=method,
+    )
+
+
 @dataclass(frozen=True, eq=False, kw_only=True)
 class Table:
     """One constituent's optical table over wavelength and scattering angle.
@@ -653,6 +836,9 @@ class Table:
         The radius panels, quadrature settings and size distribution of the
         computation that made the table (in memory only: files do not store
         them, :meth:`equals` ignores them; they follow from the provenance).
+    derivatives : TableDerivatives or None
+        Derivatives of the outputs with respect to named parameters
+        (``compute_optics(derivatives=...)``), read by :meth:`derivative`.
     """
 
     wavelength_nm: np.ndarray
@@ -688,6 +874,7 @@ class Table:
     particle_density_kg_m3: float | None = None
     provenance: Provenance = field(default_factory=Provenance)
     diagnostics: QuadratureDiagnostics | None = field(default=None, repr=False)
+    derivatives: TableDerivatives | None = field(default=None, repr=False)
 
     def __post_init__(self) -> None:
         if not isinstance(self.name, str) or not self.name:
@@ -775,6 +962,21 @@ class Table:
                 arr = np.array(arr, copy=True)
                 arr.setflags(write=False)
             object.__setattr__(self, key, arr)
+        if self.derivatives is not None:
+            self._check_derivatives(self.derivatives)
+
+    def _check_derivatives(self, d: Any) -> None:
+        if not isinstance(d, TableDerivatives):
+            raise TypeError(f"derivatives must be a TableDerivatives; got {type(d).__name__}")
+        for key, values in d.values.items():
+            if getattr(self, key) is None:
+                raise ValueError(f"derivatives of {key!r} given, but the table has no {key!r}")
+            want = (len(d.parameters), *np.shape(getattr(self, key)))
+            if values.shape != want:
+                raise ValueError(
+                    f"derivatives of {key!r} must have shape (n_parameter, ...) = {want}; "
+                    f"got {values.shape}"
+                )
 
     # ------------------------------------------------------------ xarray, pandas, files
 
@@ -913,7 +1115,48 @@ class Table:
                     np.array(getattr(self, key)),
                     self.variable_attributes(key),
                 )
+        if self.derivatives is not None:
+            self._derivative_variables(coords, data)
         return xr.Dataset(data, coords=coords, attrs=self.global_attributes())
+
+    def _derivative_variables(self, coords: dict[str, Any], data: dict[str, Any]) -> None:
+        """The derivatives as variables with a ``parameter`` dimension (see :meth:`to_xarray`)."""
+        d = self.derivatives
+        assert d is not None
+        wl, angle, par = WAVELENGTH_DIM, ANGLE_DIM, PARAMETER_DIM
+        coords[par] = (
+            par,
+            np.array(d.parameters, dtype=str),
+            {
+                "long_name": "parameter the derivatives are taken with respect to",
+                "derivative_method": d.method,
+            },
+        )
+        coords["parameter_units"] = (
+            par,
+            np.array(d.parameter_units, dtype=str),
+            {"long_name": "unit of each parameter (udunits2)"},
+        )
+        for key in self.derivative_quantities:
+            unit, meaning = UNITS[key]
+            values = np.stack([self.derivative(key, p) for p in d.parameters])
+            errors = np.stack([self.derivative_error_estimate(key, p) for p in d.parameters])
+            per_parameter = [derivative_unit(unit, u) for u in d.parameter_units]
+            attrs = {"long_name": f"derivative of the {meaning} with respect to each parameter"}
+            if len(set(per_parameter)) == 1:
+                attrs["units"] = per_parameter[0]
+            attrs["units_by_parameter"] = "; ".join(per_parameter)
+            if key not in d.values:
+                attrs["derived_from"] = f"derivatives of {DERIVED[key]} (chain rule)"
+            name = derivative_variable(key)
+            attrs["error_estimate"] = f"{name}_error_estimate"
+            dims = (par, wl, angle) if values.ndim == 3 else (par, wl)
+            data[name] = (dims, values, attrs)
+            err_attrs = {
+                "long_name": f"estimated error of {name} (largest over angle)",
+                **{k: v for k, v in attrs.items() if k in ("units", "units_by_parameter")},
+            }
+            data[f"{name}_error_estimate"] = ((par, wl), errors, err_attrs)
 
     @classmethod
     def from_xarray(cls, ds: xr.Dataset) -> Table:
@@ -972,7 +1215,8 @@ class Table:
         expected_dims[ORDER_DIM] = (ORDER_DIM,)
         for key in EXPANSION_FIELDS:
             expected_dims[key] = (wl, ORDER_DIM)
-        names = [str(k) for k in ds.variables]
+        derivatives = _derivatives_from_xarray(ds)
+        names = [str(k) for k in ds.variables if not _is_derivative_variable(str(k))]
         unknown = [k for k in names if k not in expected_dims]
         if unknown:
             raise ValueError(
@@ -1017,6 +1261,7 @@ class Table:
             name=name,
             refractive_index=None if real is None else real + 1j * imag,
             provenance=provenance,
+            derivatives=derivatives,
             **values,
         )
 
@@ -1119,6 +1364,9 @@ class Table:
             stale += ("expansion_error_estimate",)
         if "wavelength_nm" in changes:
             stale += _RT_PER_WAVELENGTH
+        # Derivatives belong to the numbers they differentiate.
+        if changes.keys() & {"phase", "theta_deg", "wavelength_nm", "cext_um2", "csca_um2", "g"}:
+            stale += ("derivatives",)
         for key in stale:
             changes.setdefault(key, None)
         return replace(self, **changes)
@@ -1246,6 +1494,92 @@ class Table:
             )
         return pmom_from_alpha1(self.alpha1)
 
+    # ------------------------------------------------------------ derivatives
+
+    def _derivative_pair(self, quantity: str, parameter: str) -> tuple[np.ndarray, np.ndarray]:
+        d = self.derivatives
+        if d is None:
+            raise ValueError(
+                f"table {self.name!r} holds no derivatives; compute it with "
+                "compute_optics(..., derivatives=(...))"
+            )
+        if parameter not in d.parameters:
+            raise ValueError(
+                f"parameter must be one of {', '.join(map(repr, d.parameters))} (the table's "
+                f"derivatives); got {parameter!r}"
+            )
+        j = d.parameters.index(parameter)
+        if quantity in d.values:
+            return d.values[quantity][j], d.error_estimates[quantity][j]
+        if quantity in DERIVED_DERIVATIVES and all(k in d.values for k in ("cext_um2", "csca_um2")):
+            cext = self._need_cross_sections(quantity)[0]
+            dext, eext = d.values["cext_um2"][j], d.error_estimates["cext_um2"][j]
+            dsca, esca = d.values["csca_um2"][j], d.error_estimates["csca_um2"][j]
+            if quantity == "ssa":
+                ssa = self.ssa
+                return (dsca - ssa * dext) / cext, (esca + ssa * eext) / cext
+            if quantity == "cabs_um2":
+                return dext - dsca, eext + esca
+            if "cback_um2" in d.values and self.cback_um2 is not None:
+                ratio = self.lidar_ratio_sr
+                dback, eback = d.values["cback_um2"][j], d.error_estimates["cback_um2"][j]
+                return (
+                    ratio * (dext / cext - dback / self.cback_um2),
+                    ratio * (eext / cext + eback / self.cback_um2),
+                )
+        have = [
+            k for k in (*DERIVATIVE_FIELDS, *DERIVED_DERIVATIVES) if k in self.derivative_quantities
+        ]
+        raise ValueError(
+            f"quantity must be one of {', '.join(map(repr, have))} (the table's derivatives); "
+            f"got {quantity!r}"
+        )
+
+    @property
+    def derivative_quantities(self) -> tuple[str, ...]:
+        """The quantities :meth:`derivative` gives (stored, then derived), or ()."""
+        d = self.derivatives
+        if d is None:
+            return ()
+        names = [k for k in DERIVATIVE_FIELDS if k in d.values]
+        if "cext_um2" in d.values and "csca_um2" in d.values:
+            names += ["ssa", "cabs_um2"]
+            if "cback_um2" in d.values:
+                names += ["lidar_ratio_sr"]
+        return tuple(names)
+
+    def derivative(self, quantity: str, parameter: str) -> np.ndarray:
+        """d(quantity)/d(parameter), per wavelength (and angle).
+
+        Parameters
+        ----------
+        quantity : str
+            ``"phase"``, ``"f12"``, ``"f33"``, ``"f34"`` (shape (n_wavelength,
+            n_theta)), ``"g"``, ``"cext_um2"``, ``"csca_um2"``, ``"cback_um2"``,
+            or the derived ``"ssa"``, ``"cabs_um2"``, ``"lidar_ratio_sr"``
+            (chain rule), where the table has them (:attr:`derivative_quantities`).
+        parameter : str
+            One of ``table.derivatives.parameters``.
+
+        Returns
+        -------
+        numpy.ndarray
+            In the quantity's unit per unit of the parameter (e.g. sr^-1 um^-1
+            for the phase function and ``r_eff_um``).
+
+        Raises
+        ------
+        ValueError
+            No derivatives, or an unknown quantity or parameter (the message
+            lists the allowed ones).
+        """
+        return np.array(self._derivative_pair(quantity, parameter)[0])
+
+    def derivative_error_estimate(self, quantity: str, parameter: str) -> np.ndarray:
+        """Estimated error of :meth:`derivative`, per wavelength (largest over angle),
+        in the derivative's unit (derived quantities: propagated linearly)."""
+        return np.array(self._derivative_pair(quantity, parameter)[1])
+
     @property
     def achieved_error(self) -> float | None:
         """Largest phase-function error estimate over wavelength, or None. [-]"""
@@ -1305,6 +1639,11 @@ class Table:
             and self.mean_volume_um3 == other.mean_volume_um3
             and self.particle_density_kg_m3 == other.particle_density_kg_m3
             and self.provenance.to_dict() == other.provenance.to_dict()
+            and (
+                self.derivatives is None
+                if other.derivatives is None
+                else other.derivatives.equals(self.derivatives)
+            )
         )
 
     def phase_at(self, theta_deg: Any) -> np.ndarray:

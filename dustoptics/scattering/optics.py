@@ -74,6 +74,12 @@ from dustoptics.scattering.quadrature import (
     _stretch,
 )
 from dustoptics.scattering.refinement import _Result, _WavelengthSolver, kernels_loaded
+from dustoptics.scattering.table_derivatives import (
+    check_parameters,
+    index_directions,
+    index_parameter_names,
+    table_derivatives,
+)
 from dustoptics.table import DEFAULT_NAME, Provenance, Source, Table, plain
 
 __all__ = [
@@ -391,6 +397,7 @@ def compute_optics(
     polarization: bool = False,
     expansion: bool | int = False,
     particle_density_kg_m3: float | None = None,
+    derivatives: Sequence[str] = (),
 ) -> Table:
     """Polydisperse Mie optics of spheres, converged over the size distribution.
 
@@ -452,8 +459,19 @@ def compute_optics(
         Density of the particle material, for the mass extinction, scattering
         and absorption coefficients (``table.mass_ext_m2_per_kg``, ...); for
         Mars dust :data:`dustoptics.particles.mixing.MARS_DUST_DENSITY_KG_M3`. [kg m^-3]
+    derivatives : sequence of str, optional
+        Parameters to differentiate every output with respect to: the size
+        distribution's by name (``"r_eff_um"``, ``"v_eff"``, ``"sigma"``,
+        ``"modes[0].r_eff_um"``, ...; ``"radius_um"`` of a monodisperse one),
+        ``"n"`` and ``"k"`` (the refractive index's real and imaginary parts,
+        each wavelength's own), and a mixture's (``"volume_fraction"``, for
+        :func:`~dustoptics.particles.mixing.mars_dust` also
+        ``"hematite_fraction"``, ``"host_n"``, ``"host_k"``).  Exact
+        derivatives on the converged quadrature, with error estimates
+        (:mod:`dustoptics.scattering.table_derivatives`); read them with
+        :meth:`Table.derivative`.  Default ``()``: none, and the table is the
+        same to the bit as without the argument.
 
-    Returns
     -------
     Table
         Phase function, cross-sections, g, error estimates, node counts and
@@ -555,6 +573,14 @@ def compute_optics(
     if not isinstance(polarization, (bool, np.bool_)):
         raise ValueError(f"polarization must be True or False; got {polarization!r}")
     n_order = _check_expansion(expansion)
+    derivative_names = check_parameters(
+        derivatives, distribution, index_parameter_names(refractive_index)
+    )
+    if derivative_names and isinstance(refractive_index, CoatedSphere):
+        raise ValueError(
+            "derivatives are not available for coated spheres (CoatedSphere); got "
+            f"derivatives={derivative_names!r}"
+        )
     density = (
         None
         if particle_density_kg_m3 is None
@@ -672,6 +698,8 @@ def compute_optics(
         inputs["expansion"] = True if n_order < 0 else n_order
     if density is not None:
         inputs["particle_density_kg_m3"] = density
+    if derivative_names:
+        inputs["derivatives"] = list(derivative_names)
     if core_fraction > 0.0 or isinstance(refractive_index, CoatedSphere):
         inputs["core"] = {
             "n": m_core.real,
@@ -696,7 +724,7 @@ def compute_optics(
         _index_source(refractive_index, label),
         Source(name=distribution.model, role="size distribution", citation=distribution.citation),
     )
-    return Table(
+    table = Table(
         name=name,
         wavelength_nm=wl,
         theta_deg=theta,
@@ -724,6 +752,17 @@ def compute_optics(
             panels=tuple(r.panels_s for r in results),
             cross_section_panels=tuple(r.cross_section_panels_s for r in results),
         ),
+    )
+    if not derivative_names:
+        return table
+    return table.replace(
+        derivatives=table_derivatives(
+            table,
+            parameters=derivative_names,
+            index_directions=index_directions(refractive_index, derivative_names, wl),
+            weighting=weighting,
+            workers=workers,
+        )
     )
 
 

@@ -66,6 +66,7 @@ Writes are atomic (:mod:`dustoptics.io._atomic`) and byte reproducible.
 from __future__ import annotations
 
 import hashlib
+import json
 import os
 import re
 from collections.abc import Callable, Mapping
@@ -78,16 +79,20 @@ from dustoptics.io import register_format
 from dustoptics.io._atomic import FormatError, write_files
 from dustoptics.table import (
     ANGLE_DIM,
+    DERIVATIVE_FIELDS,
     DERIVED,
+    DERIVED_DERIVATIVES,
     EXPANSION_FIELDS,
     MATRIX_FIELDS,
     ORDER_DIM,
+    PARAMETER_DIM,
     SCALAR_FIELDS,
     SCHEMA,
     UNITS,
     WAVELENGTH_DIM,
     Table,
     canonical_json,
+    derivative_variable,
     register_table_writer,
 )
 
@@ -125,7 +130,13 @@ _HDF5_ATTRIBUTES = frozenset({"CLASS", "NAME", "DIMENSION_LIST", "REFERENCE_LIST
 #: Most bytes deflate can expand one stored byte to (its format's limit is about 1032:1).
 _MAX_DEFLATE_RATIO = 1100
 _SCALARS = SCALAR_FIELDS
-_INTEGERS = ("n_nodes", "cross_section_n_nodes")
+_INTEGERS = ("n_nodes", "cross_section_n_nodes", PARAMETER_DIM)
+#: Attributes of the ``parameter`` dimension scale that hold the parameters'
+#: names and units (JSON lists): HDF5 dimension scales here hold numbers only.
+_PARAMETER_NAMES = "parameter_names"
+_PARAMETER_UNITS = "parameter_units"
+#: Angular quantities (their derivatives have dimensions parameter, wavelength, angle).
+_ANGULAR = ("phase", *MATRIX_FIELDS)
 
 
 def _h5py() -> Any:
@@ -170,7 +181,31 @@ def dataset_digest(
 
 
 def _dataset_variables(ds: Any) -> dict[str, tuple[np.ndarray, dict[str, Any]]]:
-    return {str(k): (np.asarray(v.values), dict(v.attrs)) for k, v in ds.variables.items()}
+    """The dataset's variables as the file stores them: the ``parameter``
+    coordinate of a table with derivatives becomes the indices 0, 1, ... with
+    the names and units as JSON attributes."""
+    out = {str(k): (np.asarray(v.values), dict(v.attrs)) for k, v in ds.variables.items()}
+    if PARAMETER_DIM in out:
+        names, attrs = out.pop(PARAMETER_DIM)
+        units, _ = out.pop("parameter_units")
+        attrs[_PARAMETER_NAMES] = json.dumps([str(n) for n in names])
+        attrs[_PARAMETER_UNITS] = json.dumps([str(u) for u in units])
+        out[PARAMETER_DIM] = (np.arange(names.size, dtype=np.int64), attrs)
+    return out
+
+
+def _derivative_dims() -> dict[str, tuple[str, ...]]:
+    """Dimensions of every derivative variable the schema defines."""
+    dims: dict[str, tuple[str, ...]] = {}
+    for key in (*DERIVATIVE_FIELDS, *DERIVED_DERIVATIVES):
+        name = derivative_variable(key)
+        dims[name] = (
+            (PARAMETER_DIM, WAVELENGTH_DIM, ANGLE_DIM)
+            if key in _ANGULAR
+            else (PARAMETER_DIM, WAVELENGTH_DIM)
+        )
+        dims[f"{name}_error_estimate"] = (PARAMETER_DIM, WAVELENGTH_DIM)
+    return dims
 
 
 # ------------------------------------------------------------------ writing
@@ -218,6 +253,9 @@ def _writer(table: Table) -> Callable[[Path], None]:
             if ORDER_DIM in ds.coords:
                 scales[ORDER_DIM] = dataset(ORDER_DIM)
                 scales[ORDER_DIM].make_scale(ORDER_DIM)
+            if PARAMETER_DIM in ds.coords:
+                scales[PARAMETER_DIM] = dataset(PARAMETER_DIM)
+                scales[PARAMETER_DIM].make_scale(PARAMETER_DIM)
             for key in ds.data_vars:
                 key = str(key)
                 if key == "phase":
@@ -390,13 +428,19 @@ def _string_attribute(path: Path, owner: Any, key: str, where: str) -> str:
     return value
 
 
-def _expected_shapes(n_wl: int, n_theta: int, n_order: int) -> dict[str, tuple[int, ...]]:
+def _expected_shapes(
+    n_wl: int, n_theta: int, n_order: int, n_parameter: int = 0
+) -> dict[str, tuple[int, ...]]:
     shapes: dict[str, tuple[int, ...]] = {
         WAVELENGTH_DIM: (n_wl,),
         ANGLE_DIM: (n_theta,),
         "phase": (n_wl, n_theta),
         ORDER_DIM: (n_order,),
+        PARAMETER_DIM: (n_parameter,),
     }
+    sizes = {PARAMETER_DIM: n_parameter, WAVELENGTH_DIM: n_wl, ANGLE_DIM: n_theta}
+    for key, dims in _derivative_dims().items():
+        shapes[key] = tuple(sizes[d] for d in dims)
     for key in MATRIX_FIELDS:
         shapes[key] = (n_wl, n_theta)
     for key in EXPANSION_FIELDS:
@@ -506,10 +550,16 @@ def _open_checked(
     order = objects.get(ORDER_DIM)
     if order is not None and order.ndim != 1:
         raise FormatError(f"{path}: coordinate {ORDER_DIM!r} must be 1-D; got shape {order.shape}")
+    parameter = objects.get(PARAMETER_DIM)
+    if parameter is not None and parameter.ndim != 1:
+        raise FormatError(
+            f"{path}: coordinate {PARAMETER_DIM!r} must be 1-D; got shape {parameter.shape}"
+        )
     shapes = _expected_shapes(
         objects[WAVELENGTH_DIM].shape[0],
         objects[ANGLE_DIM].shape[0],
         0 if order is None else order.shape[0],
+        0 if parameter is None else parameter.shape[0],
     )
     for key, obj in objects.items():
         if key not in shapes:
@@ -575,6 +625,40 @@ def _check_derived(
             )
 
 
+def _parameter_coordinates(
+    path: Path, values: np.ndarray, attrs: Mapping[str, Any]
+) -> dict[str, tuple[str, np.ndarray, dict[str, Any]]]:
+    """The ``parameter`` and ``parameter_units`` coordinates from the stored indices."""
+    try:
+        names = json.loads(attrs[_PARAMETER_NAMES])
+        units = json.loads(attrs[_PARAMETER_UNITS])
+    except (KeyError, TypeError, ValueError) as exc:
+        raise FormatError(
+            f"{path}: variable {PARAMETER_DIM!r} lacks its {_PARAMETER_NAMES!r} and "
+            f"{_PARAMETER_UNITS!r} attributes (JSON lists): {exc}"
+        ) from None
+    ok = (
+        isinstance(names, list)
+        and isinstance(units, list)
+        and len(names) == len(units) == values.size
+        and all(isinstance(v, str) for v in (*names, *units))
+        and np.array_equal(values, np.arange(values.size))
+    )
+    if not ok:
+        raise FormatError(
+            f"{path}: variable {PARAMETER_DIM!r} must index {values.size} parameter names and units"
+        )
+    own = {k: v for k, v in attrs.items() if k not in (_PARAMETER_NAMES, _PARAMETER_UNITS)}
+    return {
+        PARAMETER_DIM: (PARAMETER_DIM, np.array(names, dtype=str), own),
+        "parameter_units": (
+            PARAMETER_DIM,
+            np.array(units, dtype=str),
+            {"long_name": "unit of each parameter (udunits2)"},
+        ),
+    }
+
+
 def read_netcdf(path: str | os.PathLike[str]) -> Table:
     """Read a table file written by :func:`write_netcdf` (any suffix), verifying it.
 
@@ -626,9 +710,15 @@ def read_netcdf(path: str | os.PathLike[str]) -> Table:
         for key in (WAVELENGTH_DIM, ANGLE_DIM, ORDER_DIM)
         if key in variables
     }
+    if PARAMETER_DIM in variables:
+        coords.update(_parameter_coordinates(path, *variables[PARAMETER_DIM]))
+    derivative_dims = _derivative_dims()
     data = {}
     for key, (values, var_attrs) in variables.items():
         if key in coords:
+            continue
+        if key in derivative_dims:
+            data[key] = (derivative_dims[key], values, var_attrs)
             continue
         dims: tuple[str, ...] = (
             (WAVELENGTH_DIM, ANGLE_DIM)

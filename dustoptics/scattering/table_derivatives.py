@@ -1,0 +1,530 @@
+"""Exact derivatives of a computed table, on the table's own converged quadrature.
+
+:func:`~dustoptics.scattering.optics.compute_optics` with ``derivatives=(...)``
+first refines its radius quadrature as always (the table's numbers do not
+change), then calls :func:`table_derivatives`, which sums the derivatives over
+the same radius nodes: the halves of the final panels the table records in
+its :class:`~dustoptics.scattering.quadrature.QuadratureDiagnostics` (the
+phase matrix's panels for the angular outputs, the finer cross-section panels
+for <C_ext>, <C_sca>, <C_back> and g).
+
+At fixed nodes r_i with rule weights J_i, each polydisperse sum
+S[Y] = sum_i J_i n(r_i) Y(r_i) has the exact derivatives
+
+- dS/dp = sum_i J_i (dn/dp)(r_i) Y(r_i), plus the point masses of
+  :func:`~dustoptics.particles.sizedist_derivatives.boundary_terms` where p
+  moves an end of the support (p a parameter of the size distribution, by
+  name: :func:`~dustoptics.particles.sizedist_derivatives.parameter_names`);
+- dS/dm = sum_i J_i n(r_i) dY/dm(r_i), with dY/dn and dY/dk of each sphere
+  from the recurrences of :mod:`dustoptics.scattering.mie_derivatives`; a
+  parameter q of the refractive index (``"n"``, ``"k"``, a mixture's volume
+  fraction) moves m along dm/dq at each wavelength, so
+  dS/dq = Re(dm/dq) dS/dn + Im(dm/dq) dS/dk (the chain rule);
+
+and the outputs are quotients of such sums, differentiated by the quotient
+rule (:mod:`dustoptics.scattering.derivatives` writes them out; that module is
+the slower reference path, on its own uniformly refined rule).  On many
+angles the angular sums are taken at Gauss angles and projected on Legendre
+polynomials of degree <= 2 n_max, exactly as the table's phase function is
+(the derivative of a polynomial in mu of that degree is one too).
+
+Error estimate
+--------------
+Each sum is also taken with the coarse rule of every final panel (one
+Gauss-Legendre rule on the panel instead of one on each half), as the
+table's own refinement estimates its error; the difference of the two
+derivatives, the largest over angle for the angular outputs, is the
+reported ``error_estimate`` (in the derivative's unit).  It overstates the
+error of the finer rule that gives the values when the rule converges fast.
+The quadrature's panels were refined for the values, not for the
+derivatives: where the estimate is large (lossless spheres with size
+parameters of tens, whose n derivatives have narrow resonance spikes) it says
+so, it does not refine further.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping, Sequence
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from dustoptics.particles.sizedist import SizeDistribution
+from dustoptics.particles.sizedist_derivatives import (
+    boundary_terms,
+    number_density_derivative,
+    parameter_names,
+)
+from dustoptics.scattering import mie
+from dustoptics.scattering.mie_derivatives import _accumulate
+from dustoptics.scattering.quadrature import (
+    QuadratureDiagnostics,
+    _gauss_points,
+    _node_weights,
+    gauss_legendre,
+)
+from dustoptics.table import Table, TableDerivatives
+
+__all__ = [
+    "INDEX_PARAMETERS",
+    "check_parameters",
+    "index_directions",
+    "index_parameter_names",
+    "parameter_unit",
+    "table_derivatives",
+]
+
+#: Parameters of the refractive index itself: m = n + i k at every wavelength.
+INDEX_PARAMETERS = ("n", "k")
+
+#: How the derivatives are computed (recorded with them).
+METHOD = (
+    "exact derivatives summed over the table's final radius nodes (dn/dp in closed form, "
+    "dS/dm from the Mie recurrences, quotient and chain rules); error estimate = difference "
+    "from the panels' coarse rule"
+)
+
+
+def parameter_unit(name: str) -> str:
+    """udunits2 unit of a parameter: ``"um"`` for names ending in ``_um``, else ``"1"``."""
+    return "um" if name.endswith(("_um", "_um]")) else "1"
+
+
+def index_parameter_names(refractive_index: Any) -> tuple[str, ...]:
+    """Parameters of a refractive index besides ``"n"`` and ``"k"``: those of an
+    object with ``index_parameters`` and ``index_derivatives`` (a
+    :class:`~dustoptics.particles.mixing.Mixture`: its volume fraction and host index)."""
+    names = getattr(refractive_index, "index_parameters", None)
+    if names is None or not callable(getattr(refractive_index, "index_derivatives", None)):
+        return ()
+    return tuple(names)
+
+
+def index_directions(
+    refractive_index: Any, parameters: Sequence[str], wavelength_nm: np.ndarray
+) -> dict[str, np.ndarray]:
+    """dm/dp per wavelength for every parameter of the refractive index among
+    ``parameters``: 1 for ``"n"``, 1j for ``"k"``, the index's own
+    ``index_derivatives`` for the others (a mixture's, by the chain rule). [-]"""
+    out: dict[str, np.ndarray] = {}
+    own = [p for p in parameters if p in index_parameter_names(refractive_index)]
+    if own:
+        found = refractive_index.index_derivatives(wavelength_nm)
+        for p in own:
+            out[p] = np.asarray(found[p], dtype=np.complex128) * np.ones(wavelength_nm.size)
+    for p, dm in (("n", 1.0 + 0j), ("k", 1j)):
+        if p in parameters:
+            out[p] = np.full(wavelength_nm.size, dm, dtype=np.complex128)
+    return out
+
+
+def check_parameters(
+    derivatives: Any,
+    distribution: SizeDistribution,
+    extra: Sequence[str] = (),
+) -> tuple[str, ...]:
+    """The parameter names of ``compute_optics(derivatives=...)``, checked before any work.
+
+    Parameters
+    ----------
+    derivatives : sequence of str
+        Names: the distribution's (:func:`parameter_names`, or ``"radius_um"``
+        of a monodisperse one), ``"n"``, ``"k"``, and ``extra`` (the
+        refractive index's own, e.g. a mixture's ``"hematite_fraction"``).
+    distribution : SizeDistribution
+    extra : sequence of str
+        Further allowed names.
+
+    Returns
+    -------
+    tuple of str
+
+    Raises
+    ------
+    TypeError
+        ``derivatives`` is a string or not a sequence of strings.
+    ValueError
+        An unknown or repeated name; the message lists the allowed ones.
+    """
+    if isinstance(derivatives, str) or not isinstance(derivatives, Sequence):
+        raise TypeError(
+            "derivatives must be a sequence of parameter names, e.g. ('r_eff_um', 'n'); "
+            f"got {derivatives!r}"
+        )
+    names = tuple(derivatives)
+    if not names:
+        return names
+    if distribution.is_monodisperse:
+        own: tuple[str, ...] = ("radius_um",)
+    else:
+        try:
+            own = parameter_names(distribution)
+        except (TypeError, ValueError):
+            own = ()
+    allowed = (*own, *INDEX_PARAMETERS, *extra)
+    for p in names:
+        if not isinstance(p, str) or p not in allowed:
+            raise ValueError(
+                f"derivatives: unknown parameter {p!r}; allowed for this distribution and "
+                f"refractive index: {', '.join(map(repr, allowed))}"
+            )
+    if len(set(names)) != len(names):
+        raise ValueError(f"derivatives must not repeat a parameter; got {names!r}")
+    return names
+
+
+@dataclass(frozen=True)
+class _Sums:
+    """Sums of one node set: angular values (n_w, 4, n_mu) and sums (n_w, 6) per
+    weight column, and their n, k (and x) derivatives with column 0's weights."""
+
+    ang: np.ndarray
+    dang: np.ndarray
+    sums: np.ndarray
+    dsums: np.ndarray
+
+
+def _rule_nodes(
+    panels: np.ndarray, *, wavelength_nm: float, settings: Any, halves: bool
+) -> tuple[np.ndarray, np.ndarray]:
+    """Size parameters and rule weights J (dr per node, no density) of the panels'
+    rule: one on each half (``halves``, the table's) or one per panel."""
+    lower, upper = panels[:, 0], panels[:, 1]
+    if halves:
+        mid = 0.5 * (lower + upper)
+        lower, upper = np.concatenate([lower, mid]), np.concatenate([mid, upper])
+    k_um = 2.0 * math.pi / (wavelength_nm * 1e-3)
+    x_c = settings.transition_size_parameter
+    t, gw = gauss_legendre(settings.nodes_per_panel)
+    x, ds_weight, _ = _gauss_points(
+        np.ascontiguousarray(lower, dtype=np.float64),
+        np.ascontiguousarray(upper, dtype=np.float64),
+        t,
+        gw,
+        x_c,
+    )
+    rule = _node_weights(x, np.ones_like(x), ds_weight, x_c, k_um)
+    return x, rule
+
+
+def _sums(
+    m: complex,
+    distribution: SizeDistribution,
+    x: np.ndarray,
+    rule: np.ndarray,
+    *,
+    k_um: float,
+    dist_parameters: Sequence[str],
+    mu: np.ndarray,
+    per_particle: bool,
+) -> _Sums:
+    r = x / k_um
+    columns = [np.asarray(distribution.pdf(r), dtype=np.float64) * rule]
+    columns += [number_density_derivative(distribution, r, p) * rule for p in dist_parameters]
+    weights = np.column_stack(columns)
+    extra_x: list[float] = []
+    extra_w: list[np.ndarray] = []
+    for j, p in enumerate(dist_parameters):
+        for r_b, c_b in boundary_terms(distribution, p):
+            row = np.zeros(weights.shape[1])
+            row[1 + j] = c_b
+            extra_x.append(k_um * r_b)
+            extra_w.append(row)
+    if extra_x:
+        x = np.concatenate([x, extra_x])
+        weights = np.vstack([weights, np.array(extra_w)])
+    order = np.argsort(x, kind="stable")
+    ang, dang, sums, dsums = _accumulate(
+        m,
+        np.ascontiguousarray(x[order]),
+        np.ascontiguousarray(weights[order]),
+        mu,
+        per_particle,
+        False,
+    )
+    return _Sums(ang, dang, sums, dsums)
+
+
+def _directions(
+    s: _Sums, n_dist: int, index_directions: Sequence[complex]
+) -> tuple[list[np.ndarray], list[np.ndarray]]:
+    """Derivatives of the angular values and the sums along every parameter:
+    the distribution's (weight columns 1..), then the index's (dm = a + i b:
+    a d/dn + b d/dk)."""
+    d_ang = [s.ang[1 + j] for j in range(n_dist)]
+    d_sums = [s.sums[1 + j] for j in range(n_dist)]
+    for dm in index_directions:
+        d_ang.append(dm.real * s.dang[0] + dm.imag * s.dang[1])
+        d_sums.append(dm.real * s.dsums[0] + dm.imag * s.dsums[1])
+    return d_ang, d_sums
+
+
+@dataclass(frozen=True)
+class _Wavelength:
+    """Derivatives at one wavelength: per quantity, (n_parameter, ...) arrays."""
+
+    values: dict[str, np.ndarray]
+    errors: dict[str, np.ndarray]
+
+
+def _angular(
+    s: _Sums,
+    n_dist: int,
+    index_directions: Sequence[complex],
+    *,
+    per_particle: bool,
+    n_q: int,
+    project: Callable[[np.ndarray], np.ndarray],
+) -> np.ndarray:
+    """dF_q/dp at the output angles, shape (n_parameter, n_q, n_theta)."""
+    d_ang, d_sums = _directions(s, n_dist, index_directions)
+    norm = s.sums[0, 0] if per_particle else 2.0 * math.pi * s.sums[0, 2]
+    f = s.ang[0] / norm
+    out = []
+    for da, ds in zip(d_ang, d_sums, strict=True):
+        d_norm = ds[0] if per_particle else 2.0 * math.pi * ds[2]
+        out.append(np.stack([project((da[q] - f[q] * d_norm) / norm) for q in range(n_q)]))
+    return np.array(out)
+
+
+def _cross(
+    s: _Sums,
+    n_dist: int,
+    index_directions: Sequence[complex],
+    *,
+    per_particle: bool,
+    area: float,
+    lossless: bool,
+) -> dict[str, np.ndarray]:
+    """Derivatives of g, <C_ext>, <C_sca>, <C_back>, one per parameter."""
+    d_ang, d_sums = _directions(s, n_dist, index_directions)
+    del d_ang
+    s_w, _, s_sca, s_gsca, s_g, _ = s.sums[0]
+    g = s_g / s_w if per_particle else s_gsca / s_sca
+    out: dict[str, list[float]] = {"g": [], "cext_um2": [], "csca_um2": [], "cback_um2": []}
+    for j, ds in enumerate(d_sums):
+        if per_particle:
+            out["g"].append((ds[4] - g * ds[0]) / s_w)
+        else:
+            out["g"].append((ds[3] - g * ds[2]) / s_sca)
+        d_ext = ds[1]
+        if lossless:
+            # The table holds C_ext = C_sca where k = 0 (no absorption): along n and
+            # the distribution the same holds, along k C_ext moves as absorption does.
+            dm = index_directions[j - n_dist] if j >= n_dist else 0j
+            d_ext = ds[2] + dm.imag * (s.dsums[1, 1] - s.dsums[1, 2])
+        out["cext_um2"].append(area * d_ext)
+        out["csca_um2"].append(area * ds[2])
+        out["cback_um2"].append(area * ds[5])
+    return {k: np.array(v) for k, v in out.items()}
+
+
+def _one_wavelength(
+    i: int,
+    table: Table,
+    diagnostics: QuadratureDiagnostics,
+    *,
+    m: complex,
+    index_directions: Sequence[complex],
+    dist_parameters: Sequence[str],
+    with_radius: bool,
+    per_particle: bool,
+) -> _Wavelength:
+    wavelength_nm = float(table.wavelength_nm[i])
+    k_um = 2.0 * math.pi / (wavelength_nm * 1e-3)
+    area = math.pi / k_um**2
+    distribution = diagnostics.distribution
+    settings = diagnostics.settings
+    matrix = table.f12 is not None
+    n_q = 4 if matrix else 1
+    angular_keys = ("phase", "f12", "f33", "f34")[:n_q]
+    mu_out = np.cos(np.deg2rad(np.asarray(table.theta_deg, dtype=np.float64)))
+    lossless = m.imag == 0.0
+    n_dist = len(dist_parameters)
+    values: dict[str, np.ndarray] = {}
+    errors: dict[str, np.ndarray] = {}
+
+    if distribution.is_monodisperse:
+        x = np.array([k_um * distribution.mean_radius_um])
+        ang, dang, sums, dsums = _accumulate(
+            m, x, np.ones((1, 1)), np.ascontiguousarray(mu_out), per_particle, with_radius
+        )
+        s = _Sums(ang, dang, sums, dsums)
+        directions = list(index_directions)
+        ang_d = _angular(s, 0, directions, per_particle=per_particle, n_q=n_q, project=lambda f: f)
+        cross = _cross(s, 0, directions, per_particle=per_particle, area=area, lossless=lossless)
+        if with_radius:
+            # d/dr = k d/dx: the kernel's x direction, read as a direction "n" of weight k.
+            radial = _Sums(ang, dang[[2, 2]] * k_um, sums, dsums[[2, 2]] * k_um)
+            ang_r = _angular(
+                radial, 0, [1.0 + 0j], per_particle=per_particle, n_q=n_q, project=lambda f: f
+            )
+            cross_r = _cross(
+                radial, 0, [1.0 + 0j], per_particle=per_particle, area=area, lossless=False
+            )
+            if lossless:
+                cross_r["cext_um2"] = cross_r["csca_um2"]
+            ang_d = np.concatenate([ang_r, ang_d])
+            cross = {k: np.concatenate([cross_r[k], cross[k]]) for k in cross}
+        for q, key in enumerate(angular_keys):
+            values[key] = ang_d[:, q]
+            errors[key] = np.zeros(ang_d.shape[0])
+        for key, v in cross.items():
+            values[key] = v
+            errors[key] = np.zeros(v.shape[0])
+        return _Wavelength(values, errors)
+
+    # Angles: at the output angles, or at Gauss angles projected on Legendre
+    # polynomials when there are fewer of those (as the table's phase function).
+    panels = diagnostics.panels[i]
+    x_fine, rule_fine = _rule_nodes(
+        panels, wavelength_nm=wavelength_nm, settings=settings, halves=True
+    )
+    x_coarse, rule_coarse = _rule_nodes(
+        panels, wavelength_nm=wavelength_nm, settings=settings, halves=False
+    )
+    nmax = mie.wiscombe_nmax(max(float(x_fine.max()), 1e-3) * 1.0001 + 1.0)
+    n_half = 16 * ((nmax + 1 + 15) // 16)
+    if 2 * n_half < mu_out.size:
+        mu_g, w_g = gauss_legendre(2 * n_half)
+        mu_half = np.ascontiguousarray(mu_g[n_half:])
+        w_half = np.ascontiguousarray(w_g[n_half:])
+        mu = np.ascontiguousarray(np.concatenate([mu_half, -mu_half]))
+        lmax = 2 * nmax
+        mu_eval = np.ascontiguousarray(mu_out)
+
+        def project(f: np.ndarray) -> np.ndarray:
+            beta = mie._legendre_project(mu_half, w_half, np.ascontiguousarray(f), lmax)
+            return np.asarray(mie._legendre_evaluate(beta, mu_eval))
+
+    else:
+        mu = np.ascontiguousarray(mu_out)
+
+        def project(f: np.ndarray) -> np.ndarray:
+            return f
+
+    common = {"k_um": k_um, "dist_parameters": dist_parameters, "per_particle": per_particle}
+    fine = _angular(
+        _sums(m, distribution, x_fine, rule_fine, mu=mu, **common),  # type: ignore[arg-type]
+        n_dist,
+        index_directions,
+        per_particle=per_particle,
+        n_q=n_q,
+        project=project,
+    )
+    coarse = _angular(
+        _sums(m, distribution, x_coarse, rule_coarse, mu=mu, **common),  # type: ignore[arg-type]
+        n_dist,
+        index_directions,
+        per_particle=per_particle,
+        n_q=n_q,
+        project=project,
+    )
+    for q, key in enumerate(angular_keys):
+        values[key] = fine[:, q]
+        errors[key] = np.max(np.abs(fine[:, q] - coarse[:, q]), axis=-1)
+
+    no_angles = np.empty(0)
+    cross_panels = diagnostics.cross_section_panels[i]
+    found = []
+    for halves in (True, False):
+        x, rule = _rule_nodes(
+            cross_panels, wavelength_nm=wavelength_nm, settings=settings, halves=halves
+        )
+        s = _sums(m, distribution, x, rule, mu=no_angles, **common)  # type: ignore[arg-type]
+        found.append(
+            _cross(
+                s,
+                n_dist,
+                index_directions,
+                per_particle=per_particle,
+                area=area,
+                lossless=lossless,
+            )
+        )
+    for key, v in found[0].items():
+        values[key] = v
+        errors[key] = np.abs(v - found[1][key])
+    return _Wavelength(values, errors)
+
+
+def table_derivatives(
+    table: Table,
+    *,
+    parameters: Sequence[str],
+    index_directions: Mapping[str, np.ndarray],
+    weighting: str,
+    workers: int = 1,
+) -> TableDerivatives:
+    """Derivatives of a table of :func:`~dustoptics.scattering.optics.compute_optics`.
+
+    Parameters
+    ----------
+    table : Table
+        A table computed by ``compute_optics`` in this process (its
+        ``diagnostics`` hold the radius panels), of homogeneous spheres.
+    parameters : sequence of str
+        Checked names (:func:`check_parameters`), in the order wanted.
+    index_directions : mapping of str to numpy.ndarray
+        For each parameter of the refractive index, dm/dp per wavelength
+        (complex; ``"n"``: 1, ``"k"``: 1j). [-] per unit of the parameter
+    weighting : {"scattering", "number"}
+        The table's weighting.
+    workers : int
+        Threads over wavelengths; the result does not depend on it.
+
+    Returns
+    -------
+    TableDerivatives
+        Of ``phase`` (and ``f12``, ``f33``, ``f34`` where the table has the
+        matrix), ``g``, ``cext_um2``, ``csca_um2``, ``cback_um2``, with error
+        estimates (module docstring).
+    """
+    diagnostics = table.diagnostics
+    if diagnostics is None or table.refractive_index is None:
+        raise ValueError(
+            f"table {table.name!r} has no quadrature diagnostics: derivatives need the table "
+            "compute_optics returns, not one read from a file or changed"
+        )
+    distribution = diagnostics.distribution
+    index_names = [p for p in parameters if p in index_directions]
+    with_radius = distribution.is_monodisperse and "radius_um" in parameters
+    dist_parameters = (
+        [] if distribution.is_monodisperse else [p for p in parameters if p not in index_directions]
+    )
+    order = (["radius_um"] if with_radius else []) + dist_parameters + index_names
+    per_particle = weighting == "number"
+    m_all = np.asarray(table.refractive_index)
+
+    def one(i: int) -> _Wavelength:
+        return _one_wavelength(
+            i,
+            table,
+            diagnostics,
+            m=complex(m_all[i]),
+            index_directions=[complex(index_directions[p][i]) for p in index_names],
+            dist_parameters=dist_parameters,
+            with_radius=with_radius,
+            per_particle=per_particle,
+        )
+
+    n_wl = table.wavelength_nm.size
+    if workers > 1 and n_wl > 1:
+        with ThreadPoolExecutor(max_workers=min(workers, n_wl)) as pool:
+            results = list(pool.map(one, range(n_wl)))
+    else:
+        results = [one(i) for i in range(n_wl)]
+    positions = [order.index(p) for p in parameters]
+    keys = list(results[0].values)
+    values = {k: np.stack([r.values[k] for r in results], axis=1)[positions] for k in keys}
+    errors = {k: np.stack([r.errors[k] for r in results], axis=1)[positions] for k in keys}
+    return TableDerivatives(
+        parameters=tuple(parameters),
+        parameter_units=tuple(parameter_unit(p) for p in parameters),
+        values=values,
+        error_estimates=errors,
+        method=METHOD,
+    )

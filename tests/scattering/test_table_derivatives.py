@@ -1,0 +1,208 @@
+"""compute_optics(derivatives=...): exact derivatives of every output against central
+finite differences of compute_optics itself, the file round trip, and the boundary.
+
+Tolerances come from the tables: the derivative's own error estimate, plus the
+finite difference's error bound, (E(p + h) + E(p - h)) / (2 h) from the two
+tables' error estimates, plus its truncation error, bounded by the change of
+the difference from step 2h to step h (Richardson: the O(h^2) term shrinks 4x).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import dustoptics as do
+from dustoptics.particles.sizedist import LogNormal, ModifiedGamma, Monodisperse
+from dustoptics.particles.sizedist_derivatives import with_parameter
+
+THETA = np.linspace(0.0, 180.0, 37)
+WL = [450.0, 700.0]
+
+
+def _table(m: complex, dist: do.SizeDistribution, **kw: object) -> do.Table:
+    return do.compute_optics(m, dist, WL, THETA, rtol=1e-5, workers=1, **kw)  # type: ignore[arg-type]
+
+
+def _shifted(m: complex, dist: do.SizeDistribution, p: str, h: float, **kw: object) -> do.Table:
+    if p == "n":
+        return _table(m + h, dist, **kw)
+    if p == "k":
+        return _table(m + 1j * h, dist, **kw)
+    if p == "radius_um":
+        return _table(m, Monodisperse(radius_um=dist.mean_radius_um + h), **kw)
+    from dustoptics.particles.sizedist_derivatives import parameter_value
+
+    return _table(m, with_parameter(dist, p, parameter_value(dist, p) + h), **kw)
+
+
+def _value_error(t: do.Table, q: str) -> np.ndarray:
+    """The table's absolute error estimate of quantity q (per wavelength, angle)."""
+    if q in ("phase", "f12", "f33", "f34"):
+        assert t.error_estimate is not None
+        rel = t.error_estimate
+        if q != "phase" and t.matrix_error_estimate is not None:
+            rel = np.maximum(rel, t.matrix_error_estimate)
+        return rel[:, None] * t.phase
+    assert t.cross_section_error_estimate is not None
+    if q == "g":
+        return t.cross_section_error_estimate
+    return t.cross_section_error_estimate * np.abs(getattr(t, q))
+
+
+def _check_against_differences(
+    m: complex,
+    dist: do.SizeDistribution,
+    steps: dict[str, float],
+    quantities: tuple[str, ...],
+    **kw: object,
+) -> None:
+    t = _table(m, dist, derivatives=tuple(steps), **kw)
+    for p, h in steps.items():
+        plus, minus = _shifted(m, dist, p, h, **kw), _shifted(m, dist, p, -h, **kw)
+        plus2, minus2 = _shifted(m, dist, p, 2 * h, **kw), _shifted(m, dist, p, -2 * h, **kw)
+        for q in quantities:
+            fd = (getattr(plus, q) - getattr(minus, q)) / (2 * h)
+            fd2 = (getattr(plus2, q) - getattr(minus2, q)) / (4 * h)
+            exact = t.derivative(q, p)
+            err = t.derivative_error_estimate(q, p)
+            if exact.ndim == 2:
+                err = err[:, None]
+            tables = (_value_error(plus, q) + _value_error(minus, q)) / (2 * h)
+            tol = 3.0 * (err + tables + np.abs(fd2 - fd) / 3.0) + 1e-10 * np.max(np.abs(exact))
+            bad = np.abs(exact - fd) > tol
+            assert not bad.any(), (
+                f"d{q}/d{p}: exact {exact[bad][:3]}, finite difference {fd[bad][:3]}, "
+                f"tolerance {tol[bad][:3]}"
+            )
+
+
+def test_gamma_absorbing_every_output_against_finite_differences() -> None:
+    _check_against_differences(
+        1.52 + 0.01j,
+        ModifiedGamma(r_eff_um=0.4, v_eff=0.15),
+        {"r_eff_um": 2e-3, "v_eff": 2e-3, "n": 1e-3, "k": 1e-4},
+        ("phase", "f12", "f33", "f34", "g", "cext_um2", "csca_um2", "cback_um2", "ssa"),
+        polarization=True,
+    )
+
+
+def test_lognormal_lossless_small_spheres_against_finite_differences() -> None:
+    dist = LogNormal(median_radius_um=0.15, sigma=0.4)
+    _check_against_differences(
+        1.45 + 0j,
+        dist,
+        {"median_radius_um": 1e-3, "sigma": 1e-3, "n": 1e-3},
+        ("phase", "g", "cext_um2", "csca_um2"),
+    )
+    t = _table(1.45 + 0j, dist, derivatives=("n", "sigma"))
+    # No absorption whatever n or the sizes: ssa = 1 and C_abs = 0 hold exactly.
+    assert np.all(t.derivative("ssa", "n") == 0.0)
+    assert np.all(t.derivative("cabs_um2", "sigma") == 0.0)
+
+
+def test_number_weighting_and_monodisperse_radius() -> None:
+    _check_against_differences(
+        1.5 + 0.005j,
+        ModifiedGamma(r_eff_um=0.3, v_eff=0.1),
+        {"r_eff_um": 2e-3, "k": 1e-4},
+        ("phase", "g", "cext_um2", "csca_um2"),
+        weighting="number",
+    )
+    _check_against_differences(
+        1.5 + 0.005j,
+        Monodisperse(radius_um=0.4),
+        {"radius_um": 1e-4, "n": 1e-4},
+        ("phase", "g", "cext_um2", "csca_um2", "cback_um2"),
+    )
+
+
+def test_no_derivatives_gives_the_same_table_bit_for_bit() -> None:
+    dist = ModifiedGamma(r_eff_um=0.4, v_eff=0.15)
+    plain = _table(1.5 + 0.01j, dist)
+    empty = _table(1.5 + 0.01j, dist, derivatives=())
+    assert empty.equals(plain) and empty.derivatives is None
+    with_d = _table(1.5 + 0.01j, dist, derivatives=("k",))
+    for key in ("phase", "g", "cext_um2", "csca_um2", "cback_um2", "error_estimate"):
+        assert np.array_equal(getattr(with_d, key), getattr(plain, key)), key
+    assert with_d.provenance.inputs["derivatives"] == ["k"]
+
+
+def test_unknown_parameter_is_refused_before_any_work() -> None:
+    calls: list[int] = []
+    with pytest.raises(
+        ValueError, match=r"unknown parameter 'r_eff'.*'r_eff_um', 'v_eff', 'n', 'k'"
+    ):
+        do.compute_optics(
+            1.5 + 0.01j,
+            ModifiedGamma(r_eff_um=0.4, v_eff=0.15),
+            WL,
+            derivatives=("r_eff",),
+            progress=lambda done, total: calls.append(done),
+        )
+    assert calls == []
+    with pytest.raises(TypeError, match="sequence of parameter names"):
+        do.compute_optics(1.5, ModifiedGamma(r_eff_um=0.4, v_eff=0.15), WL, derivatives="n")
+    with pytest.raises(ValueError, match="repeat"):
+        do.compute_optics(1.5, ModifiedGamma(r_eff_um=0.4, v_eff=0.15), WL, derivatives=("n", "n"))
+
+
+def test_table_derivative_and_xarray_and_file_round_trip(tmp_path: Path) -> None:
+    t = _table(1.5 + 0.01j, ModifiedGamma(r_eff_um=0.4, v_eff=0.15), derivatives=("r_eff_um", "k"))
+    with pytest.raises(ValueError, match="parameter must be one of 'r_eff_um', 'k'"):
+        t.derivative("phase", "v_eff")
+    with pytest.raises(ValueError, match="quantity must be one of"):
+        t.derivative("qext", "k")
+    ds = t.to_xarray()
+    assert list(ds["parameter"].values) == ["r_eff_um", "k"]
+    d_phase = ds["d_phase_d_parameter"]
+    assert d_phase.dims == ("parameter", "wavelength_nm", "theta_deg")
+    assert d_phase.attrs["units_by_parameter"] == "sr-1 um-1; sr-1"
+    assert ds["d_g_d_parameter"].attrs["units_by_parameter"] == "um-1; 1"
+    np.testing.assert_array_equal(d_phase.sel(parameter="k").values, t.derivative("phase", "k"))
+    np.testing.assert_array_equal(
+        ds["d_ssa_d_parameter_error_estimate"].sel(parameter="r_eff_um").values,
+        t.derivative_error_estimate("ssa", "r_eff_um"),
+    )
+    assert do.Table.from_xarray(ds).equals(t)
+    path = t.save(tmp_path / "d.nc")
+    back = do.open_table(path)
+    assert back.equals(t) and back.derivatives is not None
+    np.testing.assert_array_equal(back.derivative("ssa", "k"), t.derivative("ssa", "k"))
+    # A table without derivatives writes and reads as before.
+    plain = _table(1.5 + 0.01j, ModifiedGamma(r_eff_um=0.4, v_eff=0.15))
+    assert do.open_table(plain.save(tmp_path / "p.nc")).derivatives is None
+    # Derivatives belong to the numbers they differentiate.
+    assert t.replace(phase=t.phase * 1.0).derivatives is None
+    assert t.replace(name="other").derivatives is not None
+
+
+def test_against_the_reference_path_on_its_own_uniform_rule() -> None:
+    """The backscatter has no error estimate of its own in the table (the refinement
+    watches cext, csca and g), so its derivatives are checked against the reference
+    path of dustoptics.scattering.derivatives, an independent quadrature refined to
+    rtol 1e-7 (cross-sections 1e-9)."""
+    from dustoptics.scattering.derivatives import optics_derivatives
+
+    dist = LogNormal(median_radius_um=0.15, sigma=0.4)
+    names = ("median_radius_um", "sigma", "n", "k")
+    t = _table(1.5 + 0.002j, dist, derivatives=names)
+    ref = optics_derivatives(1.5 + 0.002j, dist, WL, THETA, parameters=names, rtol=1e-7)
+    for p in names:
+        for q in ("phase", "g", "cext_um2", "csca_um2", "cback_um2"):
+            exact, other = t.derivative(q, p), ref.derivative(q, p)
+            err = t.derivative_error_estimate(q, p)
+            scale = np.abs(other) if exact.ndim == 1 else np.max(np.abs(other), axis=-1)
+            # Reference: its derivative estimate (relative to s_p = max(|p|, 1e-3)) is
+            # below 1e-7 of the values; 1e-6 of the derivative's size covers it.
+            tol = 3.0 * err + 1e-6 * scale
+            if q == "cback_um2":
+                # C_back = 4 pi C_sca F11(180 deg): the table refines it no better
+                # than the phase function, to its error estimate relative to F11.
+                assert t.error_estimate is not None
+                tol = tol + 3.0 * t.error_estimate * scale
+            if exact.ndim == 2:
+                tol = tol[:, None]
+            assert np.all(np.abs(exact - other) <= tol), (q, p, np.max(np.abs(exact - other)))
