@@ -111,7 +111,7 @@ def add_preview_options(parser: Any) -> None:
         default=None,
         metavar="SAMPLING:N",
         help=f"phase functions at an engine's N angles, SAMPLING one of "
-        f"{', '.join(ANGLE_SAMPLINGS)} (e.g. theta:721, cosmoscout:181)",
+        f"{', '.join(ANGLE_SAMPLINGS)} (e.g. theta:721, cosmoscout:721)",
     )
     g.add_argument(
         "--float16",

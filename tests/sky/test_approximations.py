@@ -1,0 +1,220 @@
+"""The preview of an engine's approximations: identity, an independent fit, float16, refusals, files."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from dustoptics.cli import main
+from dustoptics.scattering.phase import henyey_greenstein
+from dustoptics.scattering.tabulated_phase import mean_cosine, sphere_integral
+from dustoptics.sky import Medium
+from dustoptics.sky.approximations import (
+    PHASE_CHOICES,
+    Approximations,
+    PreviewSummary,
+    approximate_medium,
+    check_approximations,
+    preview_sky,
+)
+from dustoptics.sky.compare import mars_sky_atmosphere
+from dustoptics.sky.scene import sky_radiance
+
+xr = pytest.importorskip("xarray")
+mpl_image = pytest.importorskip("matplotlib.image")
+
+#: A coarse dome and few streams: the tests compare skies with each other, not with nature.
+SKY = {"view_zenith_deg": np.arange(0.0, 90.1, 10.0), "azimuth_step_deg": 20.0}
+SUN_DEG = 10.0
+ALBEDO = 0.2
+#: Unit roundoff of IEEE binary16 (11 significant bits, round to nearest).
+U16 = 2.0**-11
+
+
+@pytest.fixture(scope="module")
+def atmosphere():  # type: ignore[no-untyped-def]
+    return mars_sky_atmosphere("hybrid", optical_depth=0.5)
+
+
+@pytest.fixture(scope="module")
+def medium(atmosphere):  # type: ignore[no-untyped-def]
+    return Medium.from_atmosphere(atmosphere, n_streams=8)
+
+
+@pytest.fixture(scope="module")
+def exact(medium):  # type: ignore[no-untyped-def]
+    return sky_radiance(medium, sun_elevation_deg=SUN_DEG, ground_albedo=ALBEDO, **SKY)
+
+
+def _preview(medium, exact, **kw):  # type: ignore[no-untyped-def]
+    return preview_sky(
+        medium, Approximations(**kw), sun_elevation_deg=SUN_DEG, ground_albedo=ALBEDO, exact=exact
+    )
+
+
+def test_exact_against_exact_differs_by_nothing(medium, exact) -> None:  # type: ignore[no-untyped-def]
+    pv = _preview(medium, exact)
+    assert np.array_equal(pv.approximated.radiance, exact.radiance)
+    assert np.all(pv.delta_xy == 0.0)
+    assert np.all(pv.luminance_ratio == 1.0)
+    s = pv.summary
+    assert (s.dome_delta_xy_max, s.sun_delta_xy_max) == (0.0, 0.0)
+    assert s.dome_luminance_ratio_mean == 1.0 and s.sun_luminance_ratio_mean == 1.0
+
+
+def test_rebuilt_moments_are_the_medium_s_own(medium) -> None:  # type: ignore[no-untyped-def]
+    # The table's own angles (1801, 0.1 deg) as the engine's: the same phase
+    # function, so the moments projected again are those of Medium.from_atmosphere.
+    n = medium.tables[1].theta_deg.size
+    assert np.array_equal(medium.tables[1].theta_deg, np.linspace(0.0, 180.0, n))
+    approx, fit = approximate_medium(medium, Approximations(angles=f"theta:{n}"))
+    assert fit is None and approx is not medium
+    assert np.array_equal(approx.chi, medium.chi)
+    assert np.array_equal(approx.truncation, medium.truncation)
+    assert approx.slant is medium.slant  # the geometry is reused
+
+
+def _hg(mu: np.ndarray, g: np.ndarray) -> np.ndarray:
+    # Written out here, independently of dustoptics.scattering.phase.
+    return (1.0 - g * g) / (4.0 * math.pi * (1.0 + g * g - 2.0 * g * mu) ** 1.5)
+
+
+def test_dhg_preview_against_an_independent_recomputation(atmosphere, medium, exact) -> None:  # type: ignore[no-untyped-def]
+    pv = _preview(medium, exact, phase="fit:dhg")
+    fit = pv.fit
+    assert fit is not None and fit.model == "dhg-costa2021"
+    # The fitted DHG evaluated by hand at the table's angles, put into the
+    # atmosphere, and the medium and sky made from it the ordinary way.
+    dust = atmosphere.constituent("aerosols")
+    theta = np.asarray(dust.table.theta_deg)
+    mu = np.cos(np.deg2rad(theta))[None, :]
+    g1, g2, alpha = (fit.parameter(n)[:, None] for n in ("g1", "g2", "alpha"))
+    phase = alpha * _hg(mu, g1) + (1.0 - alpha) * _hg(mu, g2)
+    table = dust.table.replace(phase=phase, g=mean_cosine(phase, theta_deg=theta))
+    constituents = tuple(
+        replace(c, table=table) if c.role == "aerosols" else c for c in atmosphere.constituents
+    )
+    other = Medium.from_atmosphere(replace(atmosphere, constituents=constituents), n_streams=8)
+    sky = sky_radiance(other, sun_elevation_deg=SUN_DEG, ground_albedo=ALBEDO, **SKY)
+    np.testing.assert_allclose(pv.approximated.radiance, sky.radiance, rtol=1e-9, atol=0)
+    # And the fit changes the sky (else the comparison above proves nothing).
+    assert pv.summary.dome_delta_xy_max > 1e-3
+
+
+def test_float16_error_within_the_half_float_epsilon(medium, exact) -> None:  # type: ignore[no-untyped-def]
+    approx, _ = approximate_medium(medium, Approximations(float16=True))
+    for t16, t in zip(approx.tables, medium.tables, strict=True):
+        if not np.any(t.csca_um2 > 0):
+            continue
+        assert np.all(t.phase >= 2.0**-14)  # binary16's normal range: relative rounding holds
+        rel = np.abs(t16.phase / t.phase - 1.0)
+        assert rel.max() <= U16  # each sample: round to nearest, 11 significant bits
+        assert rel.max() > U16 / 4  # and it was rounded
+    pv = _preview(medium, exact, float16=True)
+    # Every order n of scattering is a positive-weighted integral of n phase
+    # factors, each renormalized to 1 over the sphere: within (1 + u)/(1 - u)
+    # of its own, so the order is within (1 + 2u)^n and the sky within
+    # (1 + 2u)^N - 1 with N the orders summed.
+    n_orders = max(pv.approximated.n_orders, exact.n_orders)
+    bound = (1.0 + 2.0 * U16 / (1.0 - U16)) ** n_orders - 1.0
+    rel = np.abs(pv.approximated.radiance / exact.radiance - 1.0)
+    assert 0.0 < rel.max() <= bound
+    assert np.abs(pv.luminance_ratio - 1.0).max() <= bound
+
+
+def test_rgb_channels_are_read_at_the_engine_s_wavelengths(medium, exact) -> None:  # type: ignore[no-untyped-def]
+    pv = _preview(medium, exact, channels_nm=(680.0, 550.0, 440.0))
+    assert pv.approximated.wavelength_nm.tolist() == [440.0, 550.0, 680.0]
+    # The three rows of the 10 nm grid: the channels' radiances are the spectral
+    # sky's at those wavelengths up to the multiple scattering's own coupling
+    # (none: each wavelength is solved on its own).
+    rows = [int(np.flatnonzero(exact.wavelength_nm == w)[0]) for w in (440.0, 550.0, 680.0)]
+    np.testing.assert_allclose(pv.approximated.radiance, exact.radiance[..., rows], rtol=1e-9)
+    # Only the colour of three channels differs from the spectrum's.
+    assert 1e-4 < pv.summary.dome_delta_xy_max < 0.05
+
+
+def test_unknown_phase_is_refused_with_the_allowed_list(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    with pytest.raises(ValueError, match="phase must be one of exact, fit:henyey-greenstein"):
+        Approximations(phase="fit:gaussian")
+    out = tmp_path / "x"
+    assert main(["sky", "mars", "--phase", "fit:gaussian", "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "--phase" in err and "fit:dhg" in err and "fit:cornette-shanks" in err
+    assert not out.exists()
+    assert "fit:cornette-shanks" in PHASE_CHOICES
+
+
+def _angle_error(table, n: int) -> float:  # type: ignore[no-untyped-def]
+    # theta:N read linearly in angle, integrated exactly (independent of the module).
+    grid = np.linspace(0.0, 180.0, n)
+    own = sphere_integral(table.phase, theta_deg=table.theta_deg)
+    got = sphere_integral(table.phase_at(grid), theta_deg=grid)
+    return float(np.max(np.abs(np.asarray(got) / np.asarray(own) - 1.0)))
+
+
+def test_too_few_angles_refused_with_the_smallest_that_does(medium) -> None:  # type: ignore[no-untyped-def]
+    with pytest.raises(ValueError, match=r"the smallest that does is theta:(\d+)") as info:
+        check_approximations(Approximations(angles="theta:19"), medium)
+    need = int(info.value.args[0].rsplit("theta:", 1)[1])
+    scattering = [t for t in medium.tables if np.any(t.csca_um2 > 0)]
+    assert max(_angle_error(t, need) for t in scattering) <= 0.005
+    assert max(_angle_error(t, need - 1) for t in scattering) > 0.005
+    check_approximations(Approximations(angles=f"theta:{need}"), medium)  # accepted
+
+
+def test_set_cannot_take_refused_before_any_rendering(
+    medium, tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:  # type: ignore[no-untyped-def]
+    with pytest.raises(ValueError, match=r"R = 900 nm is outside the set's wavelengths"):
+        check_approximations(Approximations(channels_nm=(900.0, 550.0, 440.0)), medium)
+    # A phase function beyond float16's 65504 (a narrow HG lobe).
+    dust = medium.tables[1]
+    mu = np.cos(np.deg2rad(dust.theta_deg))
+    peaked = np.tile(henyey_greenstein(mu, g=0.9999), (dust.wavelength_nm.size, 1))
+    assert peaked.max() > 65504.0
+    narrow = replace(medium, tables=(medium.tables[0], dust.replace(phase=peaked)))
+    with pytest.raises(ValueError, match="float32 textures would do"):
+        check_approximations(Approximations(float16=True), narrow)
+
+    def no_render(*args, **kwargs):  # type: ignore[no-untyped-def]
+        raise AssertionError("the sky was rendered")
+
+    monkeypatch.setattr("dustoptics.sky.scene.sky_radiance", no_render)
+    out = tmp_path / "x"
+    assert main(["sky", "mars", "--angles", "cosmoscout:19", "--out", str(out)]) == 1
+    assert "the smallest that does is cosmoscout:" in capsys.readouterr().err
+    assert not any(out.rglob("*.*"))
+
+
+def test_netcdf_round_trip_and_png(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    out = tmp_path / "sky"
+    argv = ["sky", "mars", "--rgb", "--phase", "fit:cs", "--size", "32", "--out", str(out)]
+    assert main(argv) == 0
+    printed = capsys.readouterr().out
+    assert "CIE xy distance" in printed and "within 10 deg of Sun" in printed
+    folder = out / "mars-hybrid"
+    img = mpl_image.imread(folder / "mars-hybrid_preview.png")
+    assert img.shape[0] > 100 and img.shape[1] > 3 * img.shape[0]  # four panels side by side
+    with xr.open_dataset(folder / "mars-hybrid_sky.nc", engine="scipy") as ds:
+        s = PreviewSummary.from_attributes(ds.attrs)
+        assert s.table() in printed
+        assert ds.attrs["preview_phase"] == "fit:cs"
+        assert ds.attrs["preview_channels_nm"] == "680, 550, 440"
+        # The summary agrees with the variables it was made from.
+        dxy = np.hypot(
+            ds.approximated_chromaticity_x - ds.chromaticity_x,
+            ds.approximated_chromaticity_y - ds.chromaticity_y,
+        )
+        np.testing.assert_allclose(dxy, ds.chromaticity_difference, rtol=1e-12, atol=1e-15)
+        assert s.dome_delta_xy_max == float(ds.chromaticity_difference.max())
+        ratio = ds.approximated_luminance_factor / ds.luminance_factor
+        np.testing.assert_allclose(ratio, ds.luminance_ratio, rtol=1e-12)
+        assert s.dome_luminance_ratio_min == float(ds.luminance_ratio.min())
+        assert ds.approximated_radiance.shape[-1] == 3
