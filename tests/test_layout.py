@@ -27,7 +27,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("dustoptics.scattering",),
     ("dustoptics.models", "dustoptics.atmosphere"),
     ("dustoptics.io",),
-    ("dustoptics.plot", "dustoptics.sweep", "dustoptics.sky"),
+    ("dustoptics.plot", "dustoptics.sweep", "dustoptics.sky", "dustoptics.retrieve"),
     ("dustoptics.cli",),
 )
 

@@ -1,0 +1,506 @@
+"""Retrieval: the dust parameters that fit observations, with their uncertainties.
+
+:func:`retrieve` fits named parameters of a dust model (a size distribution's
+``r_eff_um``, ``v_eff``, ..., the refractive index's ``n`` and ``k``, a
+mixture's ``hematite_fraction``) to observations given as labelled data, by
+weighted least squares with bounds and Gaussian priors:
+
+    minimize  sum_i ((model_i(p) - obs_i) / sigma_i)^2 + sum_j ((p_j - mu_j) / s_j)^2
+
+with :func:`scipy.optimize.least_squares` (trust-region reflective, which
+honours the bounds; a Levenberg-Marquardt-type method) and the exact Jacobian of
+:func:`dustoptics.compute_optics` (``derivatives=...``,
+:mod:`dustoptics.scattering.table_derivatives`): one table per iteration gives
+the residuals and their derivatives together.  The covariance is
+(J^T J)^-1 of the weighted residuals at the solution (the observations'
+stated uncertainties, not rescaled by the misfit), so a fit is as certain as
+its data and priors say.
+
+Observations
+------------
+An :class:`xarray.Dataset` (or one named :class:`xarray.DataArray`) whose
+variables are, by name:
+
+``ssa``
+    single-scattering albedo, dimension ``wavelength_nm`` [nm]; [-]
+``g``
+    asymmetry parameter, dimension ``wavelength_nm``; [-]
+``extinction_ratio``
+    <C_ext>(lambda) / <C_ext>(lambda_ref), dimension ``wavelength_nm``, with
+    the attribute ``reference_wavelength_nm``; for one dust population this is
+    also the ratio of optical depths tau(lambda) / tau(lambda_ref); [-]
+``phase``
+    phase-function samples, dimensions ``wavelength_nm`` and ``theta_deg``
+    [degree], normalized as the tables' (2 pi int P dmu = 1). [sr^-1]
+
+Each variable carries its one-sigma uncertainty: a variable
+``<name>_uncertainty`` of the same dimensions, or a number in the attribute
+``uncertainty`` (in the variable's unit).  NaN samples are left out.
+
+Sky quantities (radiance at given directions, chromaticity through
+:mod:`dustoptics.sky`) are not observations :func:`retrieve` takes yet.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from dustoptics.models.config import BuildConfig
+from dustoptics.particles.mixing import Mixture
+from dustoptics.particles.sizedist import Monodisperse, SizeDistribution
+from dustoptics.particles.sizedist_derivatives import parameter_value, with_parameter
+from dustoptics.scattering.optics import compute_optics
+from dustoptics.scattering.table_derivatives import (
+    INDEX_PARAMETERS,
+    check_parameters,
+    index_parameter_names,
+)
+from dustoptics.table import Table
+
+if TYPE_CHECKING:
+    import xarray as xr
+
+__all__ = ["OBSERVABLES", "Retrieval", "retrieve"]
+
+#: Observation variables :func:`retrieve` understands, and their dimensions.
+OBSERVABLES: Mapping[str, tuple[str, ...]] = {
+    "ssa": ("wavelength_nm",),
+    "g": ("wavelength_nm",),
+    "extinction_ratio": ("wavelength_nm",),
+    "phase": ("wavelength_nm", "theta_deg"),
+}
+
+
+@dataclass(frozen=True)
+class Retrieval:
+    """The result of :func:`retrieve`.
+
+    Attributes
+    ----------
+    parameters : tuple of str
+        The fitted parameters, in the order of every array below.
+    values : numpy.ndarray
+        Fitted values (in each parameter's unit: um for ``*_um``, else 1).
+    covariance : numpy.ndarray
+        (J^T J)^-1 of the weighted residuals at the solution, shape
+        (n_parameters, n_parameters).
+    standard_errors : numpy.ndarray
+        Square roots of the covariance's diagonal.
+    initial_values : numpy.ndarray
+        The model's values, where the fit started.
+    residuals : numpy.ndarray
+        Weighted residuals (model - observation) / uncertainty at the
+        solution, the observations' (in the order of :attr:`labels`) then
+        the priors'. [-]
+    labels : tuple of str
+        What each residual is: ``"ssa@550nm"``, ``"phase@550nm,30deg"``,
+        ``"prior:r_eff_um"``.
+    chi_square : float
+        Sum of the squared residuals. [-]
+    iterations : int
+        Jacobian evaluations (each one table with derivatives).
+    function_evaluations : int
+        Residual evaluations (each one table).
+    converged : bool
+        Whether the optimizer met its tolerances (``message`` says which).
+    message : str
+        The optimizer's account of why it stopped.
+    model : Mapping[str, Any]
+        The compute_optics keywords at the fitted values.
+    table : Table
+        The table at the fitted values, with derivatives.
+    """
+
+    parameters: tuple[str, ...]
+    values: np.ndarray
+    covariance: np.ndarray
+    standard_errors: np.ndarray
+    initial_values: np.ndarray
+    residuals: np.ndarray
+    labels: tuple[str, ...]
+    chi_square: float
+    iterations: int
+    function_evaluations: int
+    converged: bool
+    message: str
+    model: Mapping[str, Any] = dataclasses.field(repr=False)
+    table: Table = dataclasses.field(repr=False)
+
+    def value(self, parameter: str) -> float:
+        """The fitted value of one parameter."""
+        return float(self.values[self._index(parameter)])
+
+    def standard_error(self, parameter: str) -> float:
+        """The standard error of one parameter."""
+        return float(self.standard_errors[self._index(parameter)])
+
+    def _index(self, parameter: str) -> int:
+        if parameter not in self.parameters:
+            raise ValueError(
+                f"parameter must be one of {', '.join(map(repr, self.parameters))}; "
+                f"got {parameter!r}"
+            )
+        return self.parameters.index(parameter)
+
+
+# ----------------------------------------------------------------- the model
+
+
+def _model_keywords(model: Any) -> dict[str, Any]:
+    """compute_optics keywords from a mapping or a BuildConfig."""
+    if isinstance(model, BuildConfig):
+        if model.material is None or model.size_distribution is None:
+            raise ValueError(
+                f"model: configuration {model.name!r} has no Mie dust (material and "
+                "size_distribution); retrieve fits Mie models only"
+            )
+        out: dict[str, Any] = {
+            "refractive_index": model.material.build(),
+            "distribution": model.size_distribution.build(),
+        }
+        if model.optics.rtol is not None:
+            out["rtol"] = model.optics.rtol
+        if model.optics.weighting is not None:
+            out["weighting"] = model.optics.weighting
+        return out
+    if not isinstance(model, Mapping):
+        raise TypeError(
+            "model must be a mapping of compute_optics keywords (refractive_index=, "
+            f"distribution=, ...) or a BuildConfig; got {type(model).__name__}"
+        )
+    out = dict(model)
+    for key in ("refractive_index", "distribution"):
+        if key not in out:
+            raise ValueError(f"model lacks the compute_optics keyword {key!r}")
+    for key in ("wavelength_nm", "theta_deg", "derivatives", "progress"):
+        if key in out:
+            raise ValueError(
+                f"model must not give {key!r}: retrieve chooses it from the observations"
+            )
+    if not isinstance(out["distribution"], SizeDistribution):
+        raise ValueError(
+            f"model's distribution must be a SizeDistribution; got {out['distribution']!r}"
+        )
+    return out
+
+
+def _fraction_name(index: Any, parameter: str) -> bool:
+    return isinstance(index, Mixture) and parameter in index_parameter_names(index)
+
+
+def _get(model: Mapping[str, Any], parameter: str) -> float:
+    index, dist = model["refractive_index"], model["distribution"]
+    if parameter in INDEX_PARAMETERS:
+        m = complex(index)
+        return m.real if parameter == "n" else m.imag
+    if _fraction_name(index, parameter):
+        return float(index.parameter_value(parameter))
+    if isinstance(dist, Monodisperse):
+        return float(dist.radius_um)
+    return parameter_value(dist, parameter)
+
+
+def _set(model: Mapping[str, Any], values: Mapping[str, float]) -> dict[str, Any]:
+    out = dict(model)
+    for parameter, v in values.items():
+        index, dist = out["refractive_index"], out["distribution"]
+        if parameter in INDEX_PARAMETERS:
+            m = complex(index)
+            out["refractive_index"] = complex(v, m.imag) if parameter == "n" else complex(m.real, v)
+        elif _fraction_name(index, parameter):
+            out["refractive_index"] = index.with_parameter(parameter, v)
+        elif isinstance(dist, Monodisperse):
+            out["distribution"] = Monodisperse(radius_um=v)
+        else:
+            out["distribution"] = with_parameter(dist, parameter, v)
+    return out
+
+
+# ----------------------------------------------------------------- observations
+
+
+@dataclass(frozen=True)
+class _Observation:
+    name: str
+    wavelength_nm: np.ndarray  # per sample
+    theta_deg: np.ndarray  # per sample (NaN: none)
+    value: np.ndarray
+    sigma: np.ndarray
+    reference_nm: float = math.nan
+
+
+def _observations(observations: Any) -> list[_Observation]:
+    import xarray as xr
+
+    if isinstance(observations, xr.DataArray):
+        if observations.name is None:
+            raise ValueError(
+                f"observations: a DataArray must be named, one of {', '.join(OBSERVABLES)}"
+            )
+        observations = observations.to_dataset()
+    if not isinstance(observations, xr.Dataset):
+        raise TypeError(
+            f"observations must be an xarray Dataset or named DataArray; got {type(observations).__name__}"
+        )
+    names = [str(k) for k in observations.data_vars if not str(k).endswith("_uncertainty")]
+    unknown = [k for k in names if k not in OBSERVABLES]
+    if unknown or not names:
+        raise ValueError(
+            f"observations: variables must be among {', '.join(OBSERVABLES)} (with "
+            f"<name>_uncertainty); got {names}"
+        )
+    found = []
+    for name in names:
+        var = observations[name]
+        dims = OBSERVABLES[name]
+        if set(var.dims) != set(dims):
+            raise ValueError(f"observations: {name!r} must have dimensions {dims}; got {var.dims}")
+        var = var.transpose(*dims)
+        if f"{name}_uncertainty" in observations:
+            sigma = observations[f"{name}_uncertainty"].transpose(*dims).broadcast_like(var)
+            sigma_values = np.asarray(sigma.values, dtype=np.float64)
+        elif "uncertainty" in var.attrs:
+            sigma_values = np.full(var.shape, float(var.attrs["uncertainty"]))
+        else:
+            raise ValueError(
+                f"observations: {name!r} needs its one-sigma uncertainty: a variable "
+                f"{name + '_uncertainty'!r} or an attribute 'uncertainty'"
+            )
+        values = np.asarray(var.values, dtype=np.float64)
+        wl = np.asarray(var["wavelength_nm"].values, dtype=np.float64)
+        if values.ndim == 2:
+            theta = np.asarray(var["theta_deg"].values, dtype=np.float64)
+            wl_s, theta_s = np.meshgrid(wl, theta, indexing="ij")
+        else:
+            wl_s, theta_s = wl, np.full(wl.shape, np.nan)
+        keep = np.isfinite(values)
+        if not np.all(np.isfinite(sigma_values[keep]) & (sigma_values[keep] > 0)):
+            raise ValueError(f"observations: {name!r} uncertainties must be finite and > 0")
+        reference = math.nan
+        if name == "extinction_ratio":
+            if "reference_wavelength_nm" not in var.attrs:
+                raise ValueError(
+                    "observations: 'extinction_ratio' needs the attribute reference_wavelength_nm"
+                )
+            reference = float(var.attrs["reference_wavelength_nm"])
+        found.append(
+            _Observation(
+                name,
+                wl_s[keep].ravel(),
+                theta_s[keep].ravel(),
+                values[keep].ravel(),
+                sigma_values[keep].ravel(),
+                reference,
+            )
+        )
+    if sum(o.value.size for o in found) == 0:
+        raise ValueError("observations: no finite samples")
+    return found
+
+
+def _predict(
+    table: Table, obs: _Observation, parameters: Sequence[str]
+) -> tuple[np.ndarray, np.ndarray]:
+    """Model values at the samples and their derivatives (n_samples, n_parameters)."""
+    i = np.searchsorted(table.wavelength_nm, obs.wavelength_nm)
+    if obs.name == "phase":
+        j = np.searchsorted(table.theta_deg, obs.theta_deg)
+        value = table.phase[i, j]
+        jac = [table.derivative("phase", p)[i, j] for p in parameters]
+    elif obs.name == "extinction_ratio":
+        assert table.cext_um2 is not None
+        r = int(np.searchsorted(table.wavelength_nm, obs.reference_nm))
+        cext = table.cext_um2
+        value = cext[i] / cext[r]
+        jac = []
+        for p in parameters:
+            d = table.derivative("cext_um2", p)
+            jac.append(value * (d[i] / cext[i] - d[r] / cext[r]))
+    else:
+        value = getattr(table, obs.name)[i]
+        jac = [table.derivative(obs.name, p)[i] for p in parameters]
+    return np.asarray(value), np.column_stack(jac)
+
+
+def _labels(obs: _Observation) -> list[str]:
+    if obs.name == "phase":
+        return [f"phase@{w:g}nm,{t:g}deg" for w, t in zip(obs.wavelength_nm, obs.theta_deg)]
+    return [f"{obs.name}@{w:g}nm" for w in obs.wavelength_nm]
+
+
+# ----------------------------------------------------------------- the fit
+
+
+def retrieve(
+    observations: xr.Dataset | xr.DataArray,
+    *,
+    model: Mapping[str, Any] | BuildConfig,
+    parameters: Sequence[str],
+    bounds: Mapping[str, tuple[float, float]],
+    priors: Mapping[str, tuple[float, float]] | None = None,
+    max_iterations: int = 50,
+    tolerance: float = 1e-6,
+) -> Retrieval:
+    """Fit named parameters of a dust model to observations.
+
+    Parameters
+    ----------
+    observations : xarray.Dataset or xarray.DataArray
+        ``ssa``, ``g``, ``extinction_ratio`` and/or ``phase`` samples with their
+        uncertainties (module docstring).
+    model : mapping or BuildConfig
+        The dust: compute_optics keywords (``refractive_index``,
+        ``distribution``, and optionally ``rtol``, ``weighting``,
+        ``cross_section_rtol``, ``quadrature``, ``workers``), or a build
+        configuration of a Mie dust.  Its values are the starting point.
+    parameters : sequence of str
+        The parameters to fit: the distribution's by name (``"r_eff_um"``,
+        ``"v_eff"``, ...), ``"n"`` and ``"k"`` (the refractive index must then be
+        one constant complex number), a mixture's (``"hematite_fraction"``).
+    bounds : mapping of str to (float, float)
+        Lower and upper bound of every parameter (each parameter must have
+        one; the start must lie inside).
+    priors : mapping of str to (float, float), optional
+        Gaussian priors (mean, standard deviation) of some parameters.
+    max_iterations : int
+        Most Jacobian evaluations (tables with derivatives). [-]
+    tolerance : float
+        Relative tolerance of the cost, the parameters and the gradient
+        (scipy's ftol, xtol, gtol). [-]
+
+    Returns
+    -------
+    Retrieval
+        Fitted values, covariance, standard errors, residuals and what the
+        optimizer did.
+
+    Raises
+    ------
+    ValueError
+        Bad observations, an unknown parameter (the message lists the allowed
+        ones), a parameter without bounds, a start outside them, a prior with a
+        standard deviation <= 0; all before any table is computed.
+
+    Examples
+    --------
+    >>> import numpy as np, xarray as xr
+    >>> import dustoptics as do
+    >>> from dustoptics.retrieve import retrieve
+    >>> truth = do.compute_optics(1.5 + 0.004j, do.ModifiedGamma(r_eff_um=0.6, v_eff=0.1),
+    ...                           [450.0, 550.0, 700.0], [0.0, 180.0])
+    >>> obs = xr.Dataset({"ssa": ("wavelength_nm", truth.ssa, {"uncertainty": 1e-4})},
+    ...                  coords={"wavelength_nm": truth.wavelength_nm})
+    >>> fit = retrieve(obs, model={"refractive_index": 1.5 + 0.01j,
+    ...                            "distribution": do.ModifiedGamma(r_eff_um=0.6, v_eff=0.1)},
+    ...                parameters=["k"], bounds={"k": (0.0, 0.1)})
+    >>> fit.converged, round(fit.value("k"), 5)
+    (True, 0.004)
+    """
+    from scipy import optimize
+
+    keywords = _model_keywords(model)
+    obs = _observations(observations)
+    names = check_parameters(
+        parameters, keywords["distribution"], index_parameter_names(keywords["refractive_index"])
+    )
+    if not names:
+        raise ValueError("parameters must name at least one parameter to fit")
+    if any(p in INDEX_PARAMETERS for p in names):
+        try:
+            complex(keywords["refractive_index"])
+        except TypeError:
+            raise ValueError(
+                "parameters 'n' and 'k' fit one constant refractive index: the model's "
+                f"refractive_index must be a number; got {keywords['refractive_index']!r}"
+            ) from None
+    if not isinstance(bounds, Mapping) or set(names) - set(bounds):
+        raise ValueError(
+            f"bounds must give (lower, upper) for every parameter {list(names)}; got {bounds!r}"
+        )
+    start = np.array([_get(keywords, p) for p in names])
+    lower = np.array([float(bounds[p][0]) for p in names])
+    upper = np.array([float(bounds[p][1]) for p in names])
+    if not np.all((lower < upper) & (lower <= start) & (start <= upper)):
+        raise ValueError(
+            f"bounds {dict(bounds)!r} must satisfy lower < upper and hold the model's values "
+            f"{dict(zip(names, start.tolist()))}"
+        )
+    prior_list = []
+    for p, (mean, sd) in (priors or {}).items():
+        if p not in names:
+            raise ValueError(f"priors: {p!r} is not a fitted parameter ({list(names)})")
+        if not (math.isfinite(mean) and math.isfinite(sd) and sd > 0):
+            raise ValueError(f"priors: {p!r} needs a finite mean and a standard deviation > 0")
+        prior_list.append((names.index(p), float(mean), float(sd)))
+    if not (isinstance(max_iterations, int) and max_iterations >= 1):
+        raise ValueError(f"max_iterations must be a positive integer; got {max_iterations!r}")
+    wavelengths = np.unique(
+        np.concatenate(
+            [o.wavelength_nm for o in obs]
+            + [np.array([o.reference_nm]) for o in obs if math.isfinite(o.reference_nm)]
+        )
+    )
+    thetas = np.concatenate([o.theta_deg[np.isfinite(o.theta_deg)] for o in obs])
+    theta = np.unique(thetas) if thetas.size else np.array([0.0, 180.0])
+    labels = tuple(label for o in obs for label in _labels(o)) + tuple(
+        f"prior:{names[i]}" for i, _, _ in prior_list
+    )
+    cache: dict[bytes, tuple[np.ndarray, np.ndarray, Table]] = {}
+
+    def evaluate(x: np.ndarray) -> tuple[np.ndarray, np.ndarray, Table]:
+        key = np.asarray(x, dtype=np.float64).tobytes()
+        if key not in cache:
+            current = _set(keywords, dict(zip(names, x.tolist())))
+            table = compute_optics(
+                **current, wavelength_nm=wavelengths, theta_deg=theta, derivatives=names
+            )
+            res, jac = [], []
+            for o in obs:
+                value, d = _predict(table, o, names)
+                res.append((value - o.value) / o.sigma)
+                jac.append(d / o.sigma[:, None])
+            for i, mean, sd in prior_list:
+                res.append(np.array([(x[i] - mean) / sd]))
+                row = np.zeros((1, len(names)))
+                row[0, i] = 1.0 / sd
+                jac.append(row)
+            cache.clear()
+            cache[key] = (np.concatenate(res), np.vstack(jac), table)
+        return cache[key]
+
+    result = optimize.least_squares(
+        lambda x: evaluate(x)[0],
+        start,
+        jac=lambda x: evaluate(x)[1],
+        bounds=(lower, upper),
+        method="trf",
+        x_scale="jac",
+        ftol=tolerance,
+        xtol=tolerance,
+        gtol=tolerance,
+        max_nfev=max_iterations,
+    )
+    residuals, jac, table = evaluate(result.x)
+    covariance = np.linalg.pinv(jac.T @ jac)
+    return Retrieval(
+        parameters=names,
+        values=np.array(result.x),
+        covariance=covariance,
+        standard_errors=np.sqrt(np.diag(covariance)),
+        initial_values=start,
+        residuals=residuals,
+        labels=labels,
+        chi_square=float(residuals @ residuals),
+        iterations=int(result.njev or 0),
+        function_evaluations=int(result.nfev),
+        converged=bool(result.status > 0),
+        message=str(result.message),
+        model=_set(keywords, dict(zip(names, result.x.tolist()))),
+        table=table,
+    )

@@ -1,0 +1,138 @@
+"""dustoptics.retrieve: known parameters recovered from synthetic observations with
+seeded noise, within the returned standard errors; the boundary's checks."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import dustoptics as do
+from dustoptics.retrieve import retrieve
+
+xr = pytest.importorskip("xarray")
+
+WL = np.array([400.0, 500.0, 600.0, 750.0, 900.0])
+THETA = np.array([5.0, 30.0, 90.0, 150.0])
+TRUTH = {"r_eff_um": 0.8, "v_eff": 0.15, "k": 0.004}
+
+
+def _observations(seed: int) -> tuple[xr.Dataset, dict[str, float]]:
+    """ssa, extinction ratio to 500 nm and phase samples at two wavelengths of the
+    true dust, with Gaussian noise of the stated uncertainties (seeded)."""
+    t = do.compute_optics(
+        complex(1.5, TRUTH["k"]),
+        do.ModifiedGamma(r_eff_um=TRUTH["r_eff_um"], v_eff=TRUTH["v_eff"]),
+        WL,
+        THETA,
+    )
+    rng = np.random.default_rng(seed)
+    assert t.cext_um2 is not None
+    sigma = {"ssa": 2e-3, "ratio": 5e-3, "phase": 0.02}
+    ssa = t.ssa + sigma["ssa"] * rng.standard_normal(WL.size)
+    ratio = t.cext_um2 / t.cext_um2[1]
+    ratio = ratio + sigma["ratio"] * ratio * rng.standard_normal(WL.size)
+    phase = t.phase[[1, 3]]
+    phase_sigma = sigma["phase"] * phase
+    phase = phase + phase_sigma * rng.standard_normal(phase.shape)
+    ds = xr.Dataset(
+        {
+            "ssa": ("wavelength_nm", ssa, {"uncertainty": sigma["ssa"]}),
+            "extinction_ratio": (
+                "wavelength_nm",
+                ratio,
+                {"reference_wavelength_nm": 500.0},
+            ),
+            "extinction_ratio_uncertainty": ("wavelength_nm", sigma["ratio"] * ratio),
+        },
+        coords={"wavelength_nm": WL},
+    )
+    ph = xr.Dataset(
+        {
+            "phase": (("wavelength_nm", "theta_deg"), phase),
+            "phase_uncertainty": (("wavelength_nm", "theta_deg"), phase_sigma),
+        },
+        coords={"wavelength_nm": WL[[1, 3]], "theta_deg": THETA},
+    )
+    return xr.merge([ds, ph], join="outer"), sigma
+
+
+START = {
+    "refractive_index": 1.5 + 0.01j,
+    "distribution": do.ModifiedGamma(r_eff_um=0.5, v_eff=0.25),
+}
+BOUNDS = {"r_eff_um": (0.1, 3.0), "v_eff": (0.02, 0.45), "k": (0.0, 0.05)}
+
+
+def test_recovers_known_parameters_within_its_standard_errors() -> None:
+    obs, _ = _observations(seed=7)
+    fit = retrieve(obs, model=START, parameters=("r_eff_um", "v_eff", "k"), bounds=BOUNDS)
+    assert fit.converged, fit.message
+    for p, true in TRUTH.items():
+        assert abs(fit.value(p) - true) <= 3.0 * fit.standard_error(p), (
+            p,
+            fit.value(p),
+            true,
+            fit.standard_error(p),
+        )
+        # The data constrain every parameter: far tighter than the bounds.
+        assert fit.standard_error(p) < 0.1 * (BOUNDS[p][1] - BOUNDS[p][0])
+    n_obs = 2 * WL.size + 2 * THETA.size
+    assert fit.residuals.size == len(fit.labels) == n_obs
+    # chi^2 of n_obs - 3 degrees of freedom: well inside its 0.1 % .. 99.9 % range.
+    assert 0.2 * n_obs < fit.chi_square < 2.5 * n_obs
+    assert np.allclose(fit.covariance, fit.covariance.T)
+    assert fit.model["distribution"].r_eff_um == fit.value("r_eff_um")
+    # Deterministic: the same observations give the same numbers, bit for bit.
+    again = retrieve(obs, model=START, parameters=("r_eff_um", "v_eff", "k"), bounds=BOUNDS)
+    assert np.array_equal(again.values, fit.values)
+    assert np.array_equal(again.covariance, fit.covariance)
+
+
+def test_a_prior_pulls_and_tightens() -> None:
+    obs, _ = _observations(seed=7)
+    obs = obs[["ssa"]]
+    free = retrieve(
+        obs, model=START, parameters=("r_eff_um", "k"), bounds=BOUNDS, max_iterations=30
+    )
+    held = retrieve(
+        obs,
+        model=START,
+        parameters=("r_eff_um", "k"),
+        bounds=BOUNDS,
+        priors={"r_eff_um": (0.8, 0.01)},
+        max_iterations=30,
+    )
+    assert held.standard_error("r_eff_um") < 0.01 and held.labels[-1] == "prior:r_eff_um"
+    assert held.standard_error("r_eff_um") < free.standard_error("r_eff_um")
+    assert abs(held.value("r_eff_um") - 0.8) < 3 * 0.01
+
+
+def test_boundary_checks_come_before_any_work() -> None:
+    obs, _ = _observations(seed=1)
+    with pytest.raises(ValueError, match="unknown parameter 'reff'.*'r_eff_um', 'v_eff'"):
+        retrieve(obs, model=START, parameters=("reff",), bounds={"reff": (0, 1)})
+    with pytest.raises(ValueError, match="bounds must give"):
+        retrieve(obs, model=START, parameters=("r_eff_um", "k"), bounds={"k": (0, 1)})
+    with pytest.raises(ValueError, match="hold the model's values"):
+        retrieve(obs, model=START, parameters=("k",), bounds={"k": (0.02, 0.05)})
+    with pytest.raises(ValueError, match="uncertainty"):
+        retrieve(
+            xr.Dataset({"ssa": ("wavelength_nm", [0.9])}, coords={"wavelength_nm": [500.0]}),
+            model=START,
+            parameters=("k",),
+            bounds=BOUNDS,
+        )
+    with pytest.raises(ValueError, match="variables must be among"):
+        retrieve(
+            xr.Dataset({"albedo": ("wavelength_nm", [0.9])}, coords={"wavelength_nm": [500.0]}),
+            model=START,
+            parameters=("k",),
+            bounds=BOUNDS,
+        )
+    with pytest.raises(ValueError, match="refractive_index must be a number"):
+        retrieve(
+            obs,
+            model={**START, "refractive_index": do.mars_dust()},
+            parameters=("k",),
+            bounds=BOUNDS,
+        )
