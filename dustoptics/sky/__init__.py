@@ -8,6 +8,8 @@
   spherical shell (exact single scattering plus the diffuse source);
 - :mod:`~dustoptics.sky.scene`: the sky dome, colour and images;
 - :mod:`~dustoptics.sky.space`: the limb seen from space;
+- :mod:`~dustoptics.sky.approximations`: the sky an engine draws (fitted phase
+  function, RGB channels, float16, its angles) beside the exact one;
 - :mod:`~dustoptics.sky.job`: a sky as files (what ``dustoptics sky`` writes).
 """
 
