@@ -22,10 +22,11 @@ def add_parser(sub: Any) -> None:
     p = add_command(
         sub,
         "info",
-        help="what a table file holds and how it was made",
+        help="what any file or folder dustoptics writes holds and how it was made",
         examples=(
             f"{PROG} info tables/blue-moons/blue-moons.nc",
             f"{PROG} info --full tables/blue-moons/",
+            f"{PROG} info skies/mars-hybrid/mars-hybrid_sky.nc",
         ),
     )
     p.set_defaults(run=run)
@@ -33,8 +34,10 @@ def add_parser(sub: Any) -> None:
         "file",
         type=Path,
         metavar="FILE",
-        help="any file or folder dustoptics writes: HDF5, seed CSV, GLSL, texture (sidecar or "
-        ".raw), CosmoScout VR CSV, an atmosphere set's folder or files",
+        help="any file or folder dustoptics writes: a table (.nc, .h5, seed CSV), a shader "
+        "(GLSL, HLSL, WGSL), a texture (.raw, .npy, .exr, .ktx2, sidecar), DISORT or libRadtran "
+        "file, Bruneton or CosmoScout VR files, an atmosphere set, a fit, a sky (.nc, .png), a "
+        "sweep (store or .nc), or a folder of them",
     )
     p.add_argument(
         "--full",

@@ -38,6 +38,13 @@ _TEXTURE_FORMAT = "dustoptics-phase-texture/"
 #: The file of an atmosphere set's settings, beside CosmoScout VR's CSV files.
 _SETTINGS_SUFFIX = "_settings.json"
 
+#: What ``info`` reads, for the refusal of anything else.
+_WHAT_INFO_READS = (
+    "netCDF/HDF5 tables .nc/.h5/.hdf5, seed CSV, GLSL/HLSL/WGSL, texture .raw/.npy/.json, "
+    ".exr, .ktx2, CosmoScout VR CSV, set settings or provenance, Bruneton .json/.h, DISORT .txt, "
+    "libRadtran .dat, fit .json, the sky's .nc and .png"
+)
+
 #: The last line of a summary (``full=False``): what the full description adds, and how.
 _MORE = "more:            "
 _FULL = "(full=True; dustoptics info --full)"
@@ -190,12 +197,17 @@ def describe_path(path: str | os.PathLike[str], *, full: bool = True) -> str:
     Parameters
     ----------
     path : path-like
-        A file: HDF5 or netCDF (``.h5``, ``.hdf5``, ``.nc``), the seed CSVs or
-        their ``table_summary.json``, a GLSL snippet, a texture (its JSON
-        sidecar or ``.raw`` file), a CosmoScout VR constituent file, an
-        atmosphere set's ``<name>_settings.json`` or ``<name>_provenance.json``.
-        A folder: every output found in it (``build``'s ``DIR/NAME/``, a set
-        from ``build mars``), one section each.
+        Any file that ``build``, ``export``, ``fit``, ``sky`` and ``sweep`` write:
+        a table (``.nc``, ``.h5``, ``.hdf5``; the seed CSVs or their
+        ``table_summary.json``), a shader (GLSL, HLSL, WGSL: the table's, a
+        fit's, Bruneton's phase snippet), a texture (``.raw`` or ``.npy`` with
+        its JSON sidecar, ``.exr``, ``.ktx2``), a DISORT or libRadtran file, a
+        CosmoScout VR constituent file, Bruneton's JSON and C++ header, an
+        atmosphere set's ``<name>_settings.json`` or ``<name>_provenance.json``,
+        a fit's JSON, the sky's netCDF and images, a sweep's netCDF file
+        (:mod:`dustoptics.io.describe_formats` for all but tables and sets).
+        A folder: a sweep's Zarr store, or every output found in it
+        (``build``'s ``DIR/NAME/``, a set from ``build mars``), one section each.
     full : bool, optional
         Everything (default), or a summary (:func:`describe_table`); the
         summary of a set or a texture leaves out their inputs as JSON.
@@ -214,41 +226,46 @@ def describe_path(path: str | os.PathLike[str], *, full: bool = True) -> str:
         write left incomplete (:func:`dustoptics.io._atomic.whole_set`).
     """
     from dustoptics.io._atomic import whole_set
+    from dustoptics.io.describe_formats import kind_of
 
     p = Path(path)
     if not p.exists():
         raise FileNotFoundError(f"no such file or directory: {str(p)!r}")
     with whole_set(p):  # a set a killed write left incomplete is refused, not described
-        text = _describe_directory(p, full) if p.is_dir() else _describe_file(p, full)
+        if p.is_dir() and kind_of(p) is not None:  # a sweep's store
+            text = kind_of(p)(p, full)  # type: ignore[misc]
+        elif p.is_dir():
+            text = _describe_directory(p, full)
+        else:
+            text = _describe_file(p, full)
     return _printable_lines(text)
 
 
 def _describe_file(p: Path, full: bool = True) -> str:
-    """One file, by its name: the describer of its format."""
+    """One file, by its name (and for JSON and netCDF its contents): the describer of its format."""
     from dustoptics.atmosphere.build import SET_PROVENANCE_SUFFIX
     from dustoptics.io import FormatError
     from dustoptics.io.csv.seed import EXTINCTION_FILENAME, PHASE_FILENAME, SUMMARY_FILENAME
+    from dustoptics.io.describe_formats import kind_of
     from dustoptics.io.outputs import TABLE_SUFFIXES, read_table
 
     name, suffix = p.name, p.suffix.lower()
+    describer = kind_of(p)
+    if describer is not None:
+        return describer(p, full)
     if suffix in TABLE_SUFFIXES or name in (SUMMARY_FILENAME, PHASE_FILENAME, EXTINCTION_FILENAME):
         return describe_table(read_table(p if suffix != ".csv" else p.parent), full=full)
     for ending in (SET_PROVENANCE_SUFFIX, _SETTINGS_SUFFIX):
         if name.endswith(ending):
             return _describe_set(p.parent, name[: -len(ending)], full)
-    if suffix == ".glsl":
-        return _describe_glsl(p)
-    if suffix in (".json", ".raw"):
+    if suffix in (".json", ".raw", ".npy"):
         sidecar = p.with_suffix(".json")
         if sidecar.is_file() and _is_texture_sidecar(sidecar):
             return _describe_texture(sidecar, full)
     match = _COSMOSCOUT_FILE.fullmatch(name)
     if match:
         return _describe_constituent(p.parent, match["name"])
-    raise FormatError(
-        f"{str(p)!r}: not a file dustoptics writes (HDF5 .h5/.hdf5/.nc, seed CSV, GLSL "
-        "snippet, texture sidecar or .raw, CosmoScout VR CSV, set settings or provenance)"
-    )
+    raise FormatError(f"{str(p)!r}: not a file dustoptics writes ({_WHAT_INFO_READS})")
 
 
 def _is_texture_sidecar(path: Path) -> bool:
@@ -266,6 +283,7 @@ def _describe_directory(root: Path, full: bool = True) -> str:
     from dustoptics.atmosphere.build import SET_PROVENANCE_SUFFIX
     from dustoptics.io import FormatError
     from dustoptics.io.csv.seed import SUMMARY_FILENAME
+    from dustoptics.io.describe_formats import kind_of
     from dustoptics.io.outputs import TABLE_SUFFIXES, read_table
 
     sections: list[tuple[str, str]] = []
@@ -285,14 +303,15 @@ def _describe_directory(root: Path, full: bool = True) -> str:
         if not any(name.startswith(f"{s}_") for s in in_sets):
             sections.append((f"{name} (CosmoScout VR)", _describe_constituent(root, name)))
     for q in files:
-        if q.suffix.lower() in TABLE_SUFFIXES:
+        if q.suffix.lower() in TABLE_SUFFIXES and kind_of(q) is None:
             sections.append((q.name, describe_table(read_table(q), full=full)))
     if (root / SUMMARY_FILENAME).is_file():
         table = read_table(root)
         sections.append((f"{SUMMARY_FILENAME} (seed CSV)", describe_table(table, full=full)))
     for q in files:
-        if q.suffix.lower() == ".glsl":
-            sections.append((q.name, _describe_glsl(q)))
+        describer = kind_of(q)
+        if describer is not None:
+            sections.append((q.name, describer(q, full)))
         elif q.suffix.lower() == ".json" and _is_texture_sidecar(q):
             sections.append((q.name, _describe_texture(q, full)))
     if not sections:
@@ -383,28 +402,6 @@ def _set_text(root: Path, name: str, full: bool) -> str:
             "  " + line
             for line in json.dumps(record["inputs"], indent=2, sort_keys=True).splitlines()
         ]
-    return "\n".join(lines)
-
-
-def _describe_glsl(path: Path) -> str:
-    """The snippet's header: what the shader must assume, the table's input hash."""
-    from dustoptics.io import FormatError
-
-    text = path.read_text(encoding="utf-8")
-    header = []
-    for line in text.splitlines():
-        if not line.startswith("//"):
-            break
-        header.append(line[2:].strip())
-    if not header or not header[0].startswith("dustoptics"):
-        raise FormatError(f"{str(path)!r}: not a GLSL snippet written by dustoptics")
-    lines = [f"GLSL snippet:    {path.name}"]
-    lines += [f"  {h}" for h in header]
-    lines.append("constants:")
-    for line in text.splitlines():
-        if line.startswith("const "):
-            declaration = line.split(" = vec")[0] if "[" in line.split("=")[0] else line
-            lines.append(f"  {declaration}")
     return "\n".join(lines)
 
 

@@ -13,6 +13,7 @@ https://openexr.com/en/latest/OpenEXRFileLayout.html.
 
 from __future__ import annotations
 
+import json
 import os
 from pathlib import Path
 from typing import Any
@@ -28,7 +29,7 @@ from dustoptics.io.textures.phase_texture import (
 )
 from dustoptics.io.textures.raw import DEFAULT_N_ANGLES
 
-__all__ = ["write_exr"]
+__all__ = ["read_exr_metadata", "write_exr"]
 
 # The data window is stored as int32 coordinates.
 _CONTAINER_LIMIT = 2**31 - 1
@@ -133,3 +134,34 @@ def write_exr(
 
 
 register_format("exr", write_exr)
+
+
+def read_exr_metadata(path: str | os.PathLike[str]) -> dict[str, Any]:
+    """The ``dustoptics`` header attribute (sampling rule, axes, units, provenance) of an EXR
+    texture, read with the OpenEXR library.
+
+    Raises
+    ------
+    ImportError
+        OpenEXR is not installed (the ``textures`` extra).
+    dustoptics.io.FormatError
+        Not an OpenEXR file, or one without dustoptics' metadata.
+    """
+    from dustoptics.io import FormatError
+
+    openexr = _openexr()
+    p = Path(path)
+    try:
+        with openexr.File(str(p), header_only=True) as image:
+            text = image.header().get("dustoptics")
+    except Exception as exc:  # OpenEXR raises plain Exception/RuntimeError on damage
+        raise FormatError(f"{str(p)!r}: not a readable OpenEXR file ({exc})") from None
+    if not isinstance(text, str):
+        raise FormatError(f"{str(p)!r}: an OpenEXR file without dustoptics' metadata")
+    try:
+        meta = json.loads(text)
+    except (ValueError, RecursionError):
+        raise FormatError(f"{str(p)!r}: its dustoptics metadata is not JSON (damaged)") from None
+    if not isinstance(meta, dict):
+        raise FormatError(f"{str(p)!r}: its dustoptics metadata is not a JSON object")
+    return meta

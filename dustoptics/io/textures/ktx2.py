@@ -27,6 +27,7 @@ https://registry.khronos.org/KTX/specs/2.0/ktxspec.v2.html; Khronos Group,
 
 from __future__ import annotations
 
+import json
 import math
 import os
 import struct
@@ -46,7 +47,7 @@ from dustoptics.io.textures.phase_texture import (
 )
 from dustoptics.io.textures.raw import DEFAULT_N_ANGLES
 
-__all__ = ["KTX2_IDENTIFIER", "VK_FORMATS", "ktx2_bytes", "write_ktx2"]
+__all__ = ["KTX2_IDENTIFIER", "VK_FORMATS", "ktx2_bytes", "read_ktx2_metadata", "write_ktx2"]
 
 #: The 12-byte file identifier: «KTX 20»\r\n\x1A\n.
 KTX2_IDENTIFIER = bytes([0xAB, 0x4B, 0x54, 0x58, 0x20, 0x32, 0x30, 0xBB, 0x0D, 0x0A, 0x1A, 0x0A])
@@ -225,3 +226,45 @@ def write_ktx2(
 
 
 register_format("ktx2", write_ktx2)
+
+
+def read_ktx2_metadata(path: str | os.PathLike[str]) -> dict[str, Any]:
+    """The ``dustoptics`` metadata (sampling rule, axes, units, provenance) of a KTX2 texture.
+
+    Reads the file's header and its key/value data only (Khronos KTX 2.0 specification,
+    sections 3 and 3.11), with every offset checked against the file's size.
+
+    Raises
+    ------
+    dustoptics.io.FormatError
+        Not a KTX2 file, a damaged one, or one without dustoptics' metadata.
+    """
+    from dustoptics.io import FormatError
+
+    p = Path(path)
+    size = p.stat().st_size
+    with open(p, "rb") as f:
+        head = f.read(80)
+        if len(head) < 80 or head[:12] != KTX2_IDENTIFIER:
+            raise FormatError(f"{str(p)!r}: not a KTX2 file")
+        kvd_offset, kvd_length = struct.unpack("<2I", head[56:64])
+        if kvd_offset + kvd_length > size or kvd_length > 64 * 1024**2:
+            raise FormatError(f"{str(p)!r}: its key/value data lies beyond the file (damaged)")
+        f.seek(kvd_offset)
+        kvd = f.read(kvd_length)
+    entries, i = {}, 0
+    while i + 4 <= len(kvd):
+        (n,) = struct.unpack("<I", kvd[i : i + 4])
+        entry = kvd[i + 4 : i + 4 + n]
+        key, _, value = entry.partition(b"\0")
+        entries[key.decode("utf-8", "replace")] = value.rstrip(b"\0")
+        i += 4 + n + (-n % 4)
+    if "dustoptics" not in entries:
+        raise FormatError(f"{str(p)!r}: a KTX2 file without dustoptics' metadata")
+    try:
+        meta = json.loads(entries["dustoptics"].decode("utf-8"))
+    except (UnicodeDecodeError, ValueError, RecursionError):
+        raise FormatError(f"{str(p)!r}: its dustoptics metadata is not JSON (damaged)") from None
+    if not isinstance(meta, dict):
+        raise FormatError(f"{str(p)!r}: its dustoptics metadata is not a JSON object")
+    return meta

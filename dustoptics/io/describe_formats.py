@@ -1,0 +1,491 @@
+"""Describers of the files that are not tables: shaders, engine and radiative-transfer files,
+textures in containers, fits, skies and images (``dustoptics info``, one concept: describing).
+
+Each ``describe_*`` function reads one kind of file dustoptics writes and returns lines of text:
+what it holds, units, how it was made (the input hash of the table it came from), and, for
+shaders and textures, the sampling rule.  :mod:`dustoptics.io.describe` chooses the describer by
+the file's name and contents (:func:`kind_of`) and escapes what it prints.
+
+Every read is bounded (:func:`dustoptics._files.read_checked`, :func:`~dustoptics._files.load_json`)
+and a file that is not what its name says is refused with :class:`dustoptics.io.FormatError`.
+"""
+
+from __future__ import annotations
+
+import json
+import struct
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+__all__ = [
+    "SHADER_LANGUAGES",
+    "describe_bruneton",
+    "describe_fit",
+    "describe_image",
+    "describe_rt_text",
+    "describe_shader",
+    "describe_sky",
+    "describe_sweep",
+    "describe_texture_container",
+    "kind_of",
+]
+
+#: Shading languages by file suffix.
+SHADER_LANGUAGES = {".glsl": "GLSL", ".hlsl": "HLSL", ".wgsl": "WGSL"}
+
+#: First line of the radiative-transfer text files, and what each is.
+_RT_FIRST_LINES = {
+    "# dustoptics DISORT moments file": "DISORT phase-function moments",
+    "# dustoptics libRadtran aerosol optical properties": "libRadtran aerosol optical properties",
+}
+
+#: The ``model`` of every Bruneton JSON file.
+_BRUNETON_MODEL = "E. Bruneton, precomputed_atmospheric_scattering (2017)"
+
+#: The file that makes a folder a sweep's Zarr store (``dustoptics.sweep.store.IDENTITY``; this
+#: layer does not import the sweep's).
+_SWEEP_IDENTITY = "sweep-identity.json"
+#: The folder of a store's chunk completion markers (``dustoptics.sweep.store.MARKERS``).
+_SWEEP_MARKERS = "sweep-done"
+
+#: The attributes of a sky file its summary shows.
+_SKY_SUMMARY = (
+    "sun_zenith_angle_degree",
+    "sun_elevation_deg",
+    "observer_altitude_m",
+    "n_streams",
+    "orders_of_scattering",
+    "radiance_relative_error_max",
+    "radiance_error_domain",
+    "illuminant",
+    "source",
+)
+
+#: Most radiance values of a sky file read by ``info`` (a 2,048 x 2,048 dome at 64 wavelengths).
+_MAX_SKY_VALUES = 2048 * 2048 * 64
+
+_PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+
+
+def _format_error(path: Path, what: str) -> Exception:
+    from dustoptics.io import FormatError
+
+    return FormatError(f"{str(path)!r}: {what}")
+
+
+def _text(path: Path) -> str:
+    from dustoptics._files import read_checked
+
+    try:
+        return read_checked(path).decode("utf-8")
+    except UnicodeDecodeError:
+        raise _format_error(path, "not UTF-8 text") from None
+
+
+def _kv(key: Any, value: Any) -> str:
+    """``key:`` padded to the column of the other describers, then the value."""
+    return f"{str(key) + ':':<16} {value}"
+
+
+def _range(values: Any, unit: str = "") -> str:
+    values = np.asarray(values, dtype=float)
+    return f"{np.nanmin(values):.6g} .. {np.nanmax(values):.6g} {unit}".rstrip()
+
+
+# --- What a file is ---------------------------------------------------------------------------
+
+
+def kind_of(path: Path) -> Callable[[Path, bool], str] | None:
+    """The describer of ``path`` among this module's, or None when none applies.
+
+    Chosen by suffix, and for JSON and netCDF by contents (a quick, bounded look).
+    """
+    suffix = path.suffix.lower()
+    if suffix in SHADER_LANGUAGES:
+        return describe_shader
+    if suffix in (".txt", ".dat") and _first_line(path) in _RT_FIRST_LINES:
+        return describe_rt_text
+    if suffix in (".exr", ".ktx2"):
+        return describe_texture_container
+    if suffix == ".png":
+        return describe_image
+    if suffix == ".h" and path.name.endswith("_bruneton_parameters.h"):
+        return describe_bruneton
+    if suffix == ".json":
+        data = _json_or_none(path)
+        if isinstance(data, dict) and str(data.get("model", "")).startswith(_BRUNETON_MODEL):
+            return describe_bruneton
+        if isinstance(data, dict) and {"model", "formula", "rows"} <= data.keys():
+            return describe_fit
+    if suffix == ".nc" and _is_sky(path):
+        return describe_sky
+    if path.is_dir() and (path / _SWEEP_IDENTITY).is_file():
+        return describe_sweep
+    if suffix == ".nc" and _is_sweep_file(path):
+        return describe_sweep
+    return None
+
+
+def _first_line(path: Path) -> str:
+    try:
+        with open(path, "rb") as f:
+            head = f.read(200).split(b"\n", 1)[0].decode("utf-8", "replace")
+    except OSError:
+        return ""
+    return head.split(",", 1)[0].strip()
+
+
+def _json_or_none(path: Path) -> Any:
+    from dustoptics._files import load_json
+
+    try:
+        return load_json(path)
+    except (OSError, ValueError):
+        return None
+
+
+def _is_sweep_file(path: Path) -> bool:
+    import h5py
+
+    try:
+        with h5py.File(path, "r") as f:
+            return "sweep" in f.attrs and str(_attr(f.attrs.get("title", ""))).startswith(
+                "dustoptics sweep"
+            )
+    except (OSError, ValueError):
+        return False
+
+
+def _is_sky(path: Path) -> bool:
+    # The sky writes netCDF-3 (classic or 64-bit offset); tables are netCDF-4 (HDF5).
+    try:
+        with open(path, "rb") as f:
+            return f.read(4) in (b"CDF\x01", b"CDF\x02")
+    except OSError:
+        return False
+
+
+# --- Shaders ----------------------------------------------------------------------------------
+
+
+def describe_shader(path: Path, full: bool = True) -> str:
+    """A GLSL, HLSL or WGSL file: its header comment and its constants' declarations.
+
+    The table snippets (``build --format glsl,hlsl,wgsl``), the fits' shaders (``fit``) and
+    Bruneton's phase snippet all open with comment lines that name what they hold, the language
+    version they need, the table's input hash, the channels and the sampling rule.
+    """
+    language = SHADER_LANGUAGES[path.suffix.lower()]
+    text = _text(path)
+    header = []
+    for line in text.splitlines():
+        if not line.startswith("//"):
+            break
+        header.append(line[2:].strip())
+    if not any(h.startswith("dustoptics") for h in header):
+        raise _format_error(path, f"not a {language} snippet written by dustoptics")
+    lines = [f"{language} snippet:    {path.name}"]
+    lines += [f"  {h}" for h in header]
+    declarations = []
+    for line in text.splitlines():
+        code = line.split("//", 1)[0].strip()
+        if code.startswith(("const ", "static const ")):
+            name = code.split("=", 1)[0].strip()
+            declarations.append(f"  {name}" if "[" in name or "array<" in code else f"  {code}")
+    if declarations:
+        lines.append("constants:")
+        lines += declarations
+    return "\n".join(lines)
+
+
+# --- Radiative-transfer text files ------------------------------------------------------------
+
+
+def describe_rt_text(path: Path, full: bool = True) -> str:
+    """A DISORT moments file or a libRadtran aerosol file: its header and its rows.
+
+    The layer list of libRadtran (``NAME_aerosol_explicit.dat``: altitude [km] and the layer's
+    file) is told as layers; the optical-property files as rows of a wavelength [nm] each.
+    """
+    text = _text(path)
+    what = _RT_FIRST_LINES.get(text.split("\n", 1)[0].split(",", 1)[0].strip())
+    if what is None:
+        raise _format_error(path, "not a DISORT or libRadtran file written by dustoptics")
+    header = [line[1:].strip() for line in text.splitlines() if line.startswith("#")]
+    rows = [line.split() for line in text.splitlines() if line.strip() and line[0] != "#"]
+    lines = [f"{what}: {path.name}", *[f"  {h}" for h in header[1:]]]
+    try:
+        first = np.array([float(r[0]) for r in rows])
+    except (ValueError, IndexError):
+        raise _format_error(path, "a data row does not start with a number") from None
+    if rows and all(len(r) == 2 for r in rows) and rows[0][1] == "NULL":
+        files = [r[1] for r in rows[1:]]
+        lines.append(
+            f"layers:          {len(files)}, altitudes {_range(first, 'km')}: {', '.join(files)}"
+        )
+    elif rows:
+        lines.append(f"wavelengths:     {len(rows)}, {_range(first, 'nm')}")
+        lines.append(f"values per row:  {len(rows[0])}")
+    return "\n".join(lines)
+
+
+# --- Engines ----------------------------------------------------------------------------------
+
+
+def describe_bruneton(path: Path, full: bool = True) -> str:
+    """Bruneton's (2017) files: a table's ``NAME_bruneton_mie.json`` or a set's
+    ``NAME_bruneton.json`` and ``NAME_bruneton_parameters.h``."""
+    from dustoptics._files import load_json
+
+    if path.suffix.lower() == ".h":
+        json_path = path.with_name(path.name.replace("_parameters.h", ".json"))
+        header = [line[2:].strip() for line in _text(path).splitlines() if line.startswith("//")][
+            :6
+        ]
+        lines = [f"Bruneton C++ header: {path.name}", *[f"  {h}" for h in header]]
+        if json_path.is_file():
+            lines.append(f"the same numbers, with units and provenance: {json_path.name}")
+        return "\n".join(lines)
+    data = load_json(path)
+    try:
+        return "\n".join(_bruneton_lines(path, data, full))
+    except (KeyError, TypeError, ValueError) as exc:
+        raise _format_error(
+            path, f"a damaged Bruneton file ({type(exc).__name__}: {exc})"
+        ) from None
+
+
+def _bruneton_lines(path: Path, data: dict[str, Any], full: bool) -> list[str]:
+    wl = np.asarray(data["wavelengths"], dtype=float)
+    lines = [
+        f"Bruneton (2017): {path.name}",
+        f"model:           {data['model']}",
+        f"wavelengths:     {wl.size}, {_range(wl, 'nm')}",
+        f"mie_scattering:  {_range(data['mie_scattering'], 'm^-1')}",
+        f"mie_extinction:  {_range(data['mie_extinction'], 'm^-1')}",
+        f"mie g:           {float(data['mie_phase_function_g']):.6g} (Cornette-Shanks fallback)",
+    ]
+    if "name" in data:  # a whole atmosphere
+        lines[0] = f"Bruneton (2017) atmosphere {data['name']!r}: {path.name}"
+        lines += [
+            f"radii:           bottom {float(data['bottom_radius']):.6g} m, "
+            f"top {float(data['top_radius']):.6g} m",
+            f"solar irradiance: {_range(data['solar_irradiance'], 'W m-2 nm-1')}",
+            f"ground albedo:   {_range(data['ground_albedo'])}",
+        ]
+        pre = data.get("precomputation", {})
+        sizes = pre.get("constants.h", {})
+        if sizes:
+            lines.append(
+                "texture sizes:   "
+                + ", ".join(f"{k} {v}" for k, v in sizes.items() if not k.startswith("_"))
+            )
+        for key, value in pre.items():
+            if key != "constants.h" and not isinstance(value, (dict, list)):
+                lines.append(_kv(key, value))
+        for role, entry in data.get("provenance", {}).items():
+            if isinstance(entry, dict) and "input_hash" in entry:
+                lines.append(
+                    _kv(role, f"table {entry.get('table')}, input hash {entry['input_hash']}")
+                )
+    else:
+        lines.append(f"number density:  {float(data['number_density_per_m3']):.6g} m^-3")
+        lines.append(f"input hash:      {data['input_hash']}")
+    if full:
+        lines.append("units:")
+        lines += [f"  {k}: {v}" for k, v in data.get("units", {}).items()]
+    return lines
+
+
+# --- Textures in containers -------------------------------------------------------------------
+
+
+def describe_texture_container(path: Path, full: bool = True) -> str:
+    """An OpenEXR or KTX2 phase texture, from the metadata inside it (key ``dustoptics``)."""
+    if path.suffix.lower() == ".ktx2":
+        from dustoptics.io.textures.ktx2 import read_ktx2_metadata
+
+        meta, container = read_ktx2_metadata(path), "KTX2"
+    else:
+        from dustoptics.io.textures.exr import read_exr_metadata
+
+        meta, container = read_exr_metadata(path), "OpenEXR"
+    try:
+        return "\n".join(_texture_lines(path, meta, container, full))
+    except (KeyError, TypeError, ValueError) as exc:
+        raise _format_error(
+            path, f"damaged texture metadata ({type(exc).__name__}: {exc})"
+        ) from None
+
+
+def _texture_lines(path: Path, meta: dict[str, Any], container: str, full: bool) -> list[str]:
+    lines = [
+        f"texture:         {path.name} ({container}, {meta['precision']}, layout {meta['layout']})",
+        f"table:           {meta['table']}",
+        f"size:            {meta['width']} x {meta['height']} texels",
+        f"sampling:        {meta.get('sampling_rule')}",
+        f"rows:            {meta.get('row_rule')}",
+        f"values:          [{meta['unit']}], {meta['normalization']}",
+        "sphere integral of the samples: "
+        + ", ".join(f"{float(v):.6g}" for v in meta["sphere_integral_of_samples"]),
+        f"rounding error:  <= {float(meta['max_relative_rounding_error']):.3g} (relative)",
+        f"input hash:      {meta['input_hash']}",
+    ]
+    if full and isinstance(meta.get("provenance"), dict):
+        lines.append("inputs:")
+        inputs = meta["provenance"].get("inputs", {})
+        lines += ["  " + s for s in json.dumps(inputs, indent=2, sort_keys=True).splitlines()]
+    return lines
+
+
+# --- Fits -------------------------------------------------------------------------------------
+
+
+def describe_fit(path: Path, full: bool = True) -> str:
+    """A fit's JSON (``dustoptics fit``): the model, its formula and citation, each row's
+    parameters and errors."""
+    from dustoptics._files import load_json
+
+    data = load_json(path)
+    try:
+        lines = [
+            f"phase-function fit: {path.name}",
+            f"model:           {data['model']}: {data['formula']}",
+            f"citation:        {data['citation']}",
+            f"normalization:   {data['normalization']}",
+            f"loss:            {data['loss']}",
+            f"continuous:      {data.get('continuous')} (parameters continuous in wavelength)",
+            "rows:",
+        ]
+        for row in data["rows"]:
+            params = ", ".join(f"{k} {float(v):.6g}" for k, v in row["parameters"].items())
+            lines.append(
+                f"  {row['label']}: {params}; relative error max "
+                f"{float(row['max_relative_error']):.3g}, median "
+                f"{float(row['median_relative_error']):.3g}"
+            )
+    except (KeyError, TypeError, ValueError) as exc:
+        raise _format_error(path, f"a damaged fit file ({type(exc).__name__}: {exc})") from None
+    return "\n".join(lines)
+
+
+# --- Skies and images -------------------------------------------------------------------------
+
+
+def describe_sky(path: Path, full: bool = True) -> str:
+    """The sky's netCDF (``dustoptics sky``: ``NAME_sky.nc``, ``mars-comparison.nc``): its
+    grids, what it holds with units, its accuracy and how it was made (the global attributes)."""
+    import xarray as xr
+
+    try:
+        ds = xr.open_dataset(path, engine="scipy", decode_times=False, cache=False)
+    except Exception as exc:  # the scipy reader raises TypeError/ValueError/OSError on damage
+        raise _format_error(path, f"a damaged netCDF file ({type(exc).__name__}: {exc})") from None
+    with ds:
+        values = sum(int(v.size) for v in ds.variables.values())
+        if values > _MAX_SKY_VALUES:  # a crafted header: do not read it all
+            raise _format_error(path, f"{values} values: more than a sky file holds")
+        lines = [f"sky:             {path.name}: {ds.attrs.get('title', '(no title)')}"]
+        for name in ds.dims:
+            if name in ds.coords:
+                unit = ds[name].attrs.get("units", "")
+                lines.append(_kv(name, f"{ds.sizes[name]}, {_range(ds[name].values, unit)}"))
+            else:
+                lines.append(_kv(name, ds.sizes[name]))
+        for name, var in ds.data_vars.items():
+            unit = var.attrs.get("units", "")
+            rng = _range(var.values, unit) if var.dtype.kind == "f" and var.size else ""
+            lines.append(f"  {name} ({', '.join(map(str, var.dims))}): {rng}".rstrip(": "))
+        attrs = {k: _attr(v) for k, v in ds.attrs.items() if k != "title"}
+    shown = attrs if full else {k: v for k, v in attrs.items() if k in _SKY_SUMMARY}
+    lines += [_kv(k, v) for k, v in shown.items()]
+    if not full and len(shown) < len(attrs):
+        lines.append(
+            f"more:            {len(attrs) - len(shown)} attributes (full=True; dustoptics info --full)"
+        )
+    return "\n".join(lines)
+
+
+def describe_sweep(path: Path, full: bool = True) -> str:
+    """A sweep (``dustoptics sweep``): its Zarr store or netCDF file: the axes and their values,
+    the variables, each point's accuracy, and for a store how many chunks are done.
+
+    Reads the metadata and the small variables only (the phase functions stay on disk).  The
+    chunks' digests are checked by :func:`dustoptics.sweep.verify_store`, not here.
+    """
+    import xarray as xr
+
+    store = path.is_dir()
+    try:
+        if store:
+            ds = xr.open_zarr(path, consolidated=None, decode_times=False)
+        else:
+            ds = xr.open_dataset(path, decode_times=False, cache=False)
+    except Exception as exc:  # the backends raise many kinds on damage
+        raise _format_error(path, f"a damaged sweep ({type(exc).__name__}: {exc})") from None
+    with ds:
+        axes = [d for d in ds["phase"].dims if d not in ("wavelength_nm", "theta_deg")]
+        lines = [_kv("sweep", f"{path.name}: {ds.attrs.get('title', '')}")]
+        lines.append(_kv("points", f"{int(np.prod([ds.sizes[a] for a in axes]))}"))
+        for name in (*axes, "wavelength_nm", "theta_deg"):
+            values = ds[name].values
+            shown = ", ".join(f"{v:g}" for v in values) if values.size <= 6 else _range(values)
+            lines.append(_kv(name, f"{values.size}: {shown}"))
+        lines.append(_kv("variables", ", ".join(sorted(map(str, ds.data_vars)))))
+        if "error_estimate" in ds and ds["error_estimate"].size <= _MAX_SKY_VALUES:
+            err = ds["error_estimate"].values
+            lines.append(_kv("error estimate", f"phase <= {np.nanmax(err):.2e} (relative)"))
+        lines.append(_kv("method", ds.attrs.get("method", "")))
+        lines.append(_kv("source", ds.attrs.get("source", "")))
+        if store:
+            n_chunks = int(np.prod([len(c) for c in (ds["phase"].chunks or ())]))
+            done = len(list((path / _SWEEP_MARKERS).glob("*")))
+            state = "complete" if done == n_chunks else "incomplete: resume with the same command"
+            lines.append(_kv("chunks", f"{done} of {n_chunks} done ({state})"))
+            lines.append(_kv("verify", "dustoptics.sweep.verify_store(path) checks every chunk"))
+        if full:
+            lines += [_kv(k, _attr(v)) for k, v in sorted(ds.attrs.items()) if k != "title"]
+    return "\n".join(lines)
+
+
+def _attr(value: Any) -> Any:
+    if isinstance(value, bytes):
+        return value.decode("utf-8", "replace")
+    if isinstance(value, np.ndarray) and value.size == 1:
+        return value.reshape(()).item()
+    if isinstance(value, np.generic):
+        return value.item()
+    return value
+
+
+def describe_image(path: Path, full: bool = True) -> str:
+    """A PNG image dustoptics wrote (a sky's fisheye, panorama, sunset or limb, a plot): its size,
+    and the data file it shows where one lies beside it."""
+    data = _png_header(path)
+    width, height, depth, colour = data
+    kinds = {2: "RGB", 6: "RGBA", 0: "grey", 4: "grey + alpha", 3: "palette"}
+    lines = [
+        f"image:           {path.name}, PNG {width} x {height}, {kinds.get(colour, colour)}, "
+        f"{depth} bit"
+    ]
+    stem = path.stem
+    for ending in ("_fisheye", "_panorama", "_limb"):
+        if stem.endswith(ending):
+            stem = stem[: -len(ending)]
+    stem = stem.split("_sunset_")[0]
+    sky = path.with_name(f"{stem}_sky.nc")
+    if sky.is_file():
+        lines.append(f"shows:           the sky in {sky.name} (dustoptics info {sky.name})")
+    return "\n".join(lines)
+
+
+def _png_header(path: Path) -> tuple[int, int, int, int]:
+    with open(path, "rb") as f:
+        head = f.read(33)
+    if len(head) < 33 or head[:8] != _PNG_SIGNATURE or head[12:16] != b"IHDR":
+        raise _format_error(path, "not a PNG image")
+    width, height, depth, colour = struct.unpack(">IIBB", head[16:26])
+    return width, height, depth, colour
