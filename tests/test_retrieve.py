@@ -3,6 +3,8 @@ seeded noise, within the returned standard errors; the boundary's checks."""
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import pytest
 
@@ -16,7 +18,7 @@ THETA = np.array([5.0, 30.0, 90.0, 150.0])
 TRUTH = {"r_eff_um": 0.8, "v_eff": 0.15, "k": 0.004}
 
 
-def _observations(seed: int) -> tuple[xr.Dataset, dict[str, float]]:
+def _observations(seed: int) -> tuple[Any, dict[str, float]]:
     """ssa, extinction ratio to 500 nm and phase samples at two wavelengths of the
     true dust, with Gaussian noise of the stated uncertainties (seeded)."""
     t = do.compute_optics(
