@@ -117,7 +117,8 @@ def add_parser(sub: Any) -> None:
     q = add_command(
         skies,
         "compare",
-        help="the seed thesis's comparisons of the Mars dust models",
+        help="the seed thesis's comparisons of the Mars dust models; prints the sky's "
+        "chromaticity against the Mars Exploration Rovers' range",
         examples=(f"{PROG} sky compare --models costa,hybrid --optical-depth 1 --out skies",),
     )
     q.add_argument(
@@ -212,4 +213,8 @@ def run(args: argparse.Namespace) -> int:
     for path in written:
         say(args, f"wrote {path}")
     report_preview(args, written)
+    if args.sky_command == "compare":
+        from dustoptics.sky.compare import read_rover_comparison
+
+        say(args, read_rover_comparison(job.out_dir / f"{job.name}.nc").to_text())
     return 0
