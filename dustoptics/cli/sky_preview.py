@@ -16,6 +16,7 @@ import argparse
 from pathlib import Path
 from typing import Any
 
+from dustoptics.cli.errors import UsageError
 from dustoptics.cli.report import say
 from dustoptics.sky.approximations import (
     ANGLE_SAMPLINGS,
@@ -136,7 +137,15 @@ def add_preview_options(parser: Any) -> None:
 
 
 def approximations_from_args(args: argparse.Namespace) -> Approximations | None:
-    """The approximations the options ask for, or None when none is asked."""
+    """The approximations the options ask for, or None when none is asked.
+
+    Raises
+    ------
+    UsageError
+        ``--angle-tolerance`` without ``--angles``, or ``--near-sun`` without
+        an approximation (they would change nothing).
+    """
+    default = Approximations()
     a = Approximations(
         phase=args.phase,
         channels_nm=args.rgb,
@@ -145,6 +154,12 @@ def approximations_from_args(args: argparse.Namespace) -> Approximations | None:
         angle_tolerance=args.angle_tolerance,
         near_sun_deg=args.near_sun,
     )
+    if args.angles is None and args.angle_tolerance != default.angle_tolerance:
+        raise UsageError("--angle-tolerance applies to --angles, which is not given")
+    if not a.any and args.near_sun != default.near_sun_deg:
+        raise UsageError(
+            "--near-sun applies to a preview: give --phase fit:MODEL, --rgb, --angles or --float16"
+        )
     return a if a.any else None
 
 

@@ -149,6 +149,11 @@ def test_unknown_phase_is_refused_with_the_allowed_list(
     assert "--phase" in err and "fit:dhg" in err and "fit:cornette-shanks" in err
     assert not out.exists()
     assert "fit:cornette-shanks" in PHASE_CHOICES
+    # Options that tune a preview, without one, would change nothing: refused too.
+    for extra in (["--near-sun", "5"], ["--rgb", "--angle-tolerance", "0.01"]):
+        assert main(["sky", "mars", *extra, "--out", str(out)]) == 2
+        assert "applies to" in capsys.readouterr().err
+        assert not out.exists()
 
 
 def _angle_error(table, n: int) -> float:  # type: ignore[no-untyped-def]
