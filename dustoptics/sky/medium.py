@@ -38,6 +38,7 @@ import numpy as np
 from numpy.polynomial import legendre
 from scipy.special import roots_legendre
 
+from dustoptics._numba_cache import parallel_kernel
 from dustoptics.atmosphere.sets import Atmosphere
 from dustoptics.table import Table
 
@@ -400,6 +401,7 @@ def _slant_columns(
 _SLANT_NODES: Final = 160
 
 
+@parallel_kernel  # numba's fork-safe threading layer, one parallel kernel at a time
 @numba.njit(cache=True, nogil=True, parallel=True)
 def _slant_kernel(
     r_grid: np.ndarray,

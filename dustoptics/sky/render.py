@@ -74,6 +74,7 @@ from typing import Final, NamedTuple, TextIO
 import numba
 import numpy as np
 
+from dustoptics._numba_cache import parallel_kernel
 from dustoptics._validation import MEMORY_BUDGET_BYTES, BudgetError, check_budget
 from dustoptics.sky._progress import Reporter, reporter
 from dustoptics.sky.medium import Medium, _interp_columns, _scatters
@@ -241,6 +242,7 @@ def _log_mean(a: float, b: float) -> float:
     return (a - b) / math.log(r)
 
 
+@parallel_kernel  # numba's fork-safe threading layer, one parallel kernel at a time
 @numba.njit(cache=True, nogil=True, parallel=True)
 def _row_kernel(
     mu_rows: np.ndarray,
@@ -379,6 +381,7 @@ def _row_kernel(
                     g[row, i, m, x] *= wb[row, i, x]
 
 
+@parallel_kernel  # numba's fork-safe threading layer, one parallel kernel at a time
 @numba.njit(cache=True, nogil=True, parallel=True)
 def _ray_kernel(
     ray_row: np.ndarray,
