@@ -138,3 +138,34 @@ def test_boundary_checks_come_before_any_work() -> None:
             parameters=("k",),
             bounds=BOUNDS,
         )
+
+
+def test_hematite_fraction_of_mars_dust_through_the_mixing_rule() -> None:
+    """The hematite fraction of Mars dust (Maxwell Garnett in n = 1.5) from its
+    single-scattering albedo spectrum, 1e-3 noise, started from the default 3 %."""
+    dist = do.ModifiedGamma(r_eff_um=0.6, v_eff=0.15)
+    truth = do.compute_optics(do.mars_dust(hematite_fraction=0.05), dist, WL, [0.0, 180.0])
+    rng = np.random.default_rng(3)
+    ssa = truth.ssa + 1e-3 * rng.standard_normal(WL.size)
+    obs = xr.DataArray(
+        ssa,
+        coords={"wavelength_nm": WL},
+        dims="wavelength_nm",
+        name="ssa",
+        attrs={"uncertainty": 1e-3},
+    )
+    fit = retrieve(
+        obs,
+        model={"refractive_index": do.mars_dust(), "distribution": dist},
+        parameters=("hematite_fraction",),
+        bounds={"hematite_fraction": (0.0, 0.3)},
+    )
+    assert fit.converged
+    assert abs(fit.value("hematite_fraction") - 0.05) <= 3.0 * fit.standard_error(
+        "hematite_fraction"
+    )
+    assert fit.standard_error("hematite_fraction") < 0.005
+    assert (
+        fit.model["refractive_index"].name
+        == do.mars_dust(hematite_fraction=fit.value("hematite_fraction")).name
+    )

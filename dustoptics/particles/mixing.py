@@ -57,8 +57,10 @@ __all__ = [
     "MIXING_RULES",
     "Mixture",
     "bruggeman",
+    "bruggeman_derivatives",
     "mars_dust",
     "maxwell_garnett",
+    "maxwell_garnett_derivatives",
 ]
 
 ComplexArray = NDArray[np.complex128]
@@ -326,6 +328,88 @@ _RULES: Final[dict[str, Callable[..., ComplexArray]]] = {
 
 
 # ---------------------------------------------------------------------------
+# Derivatives of the rules
+# ---------------------------------------------------------------------------
+
+
+def maxwell_garnett_derivatives(
+    *, host: ArrayLike, inclusion: ArrayLike, volume_fraction: ArrayLike
+) -> tuple[ComplexArray, ComplexArray]:
+    """dm_eff/dv and dm_eff/dm_host of :func:`maxwell_garnett`, in closed form.
+
+    With Delta = eps_i - eps_h, N = eps_i + 2 eps_h + 2 v Delta and
+    D = eps_i + 2 eps_h - v Delta (eps_eff = eps_h N / D):
+
+    - d eps_eff / dv = eps_h Delta (N + 2 D) / D^2,
+    - d eps_eff / d eps_h = N / D + eps_h ((2 - 2 v) D - (2 + v) N) / D^2,
+
+    and dm = d eps / (2 m_eff), d eps_h = 2 m_h dm_h.  m_eff is analytic in
+    m_h, so d/dn_h = dm_eff/dm_h and d/dk_h = i dm_eff/dm_h.
+
+    Returns
+    -------
+    (numpy.ndarray, numpy.ndarray) of complex128
+        dm_eff/dv and dm_eff/dm_host, of the inputs' broadcast shape. [-]
+
+    Examples
+    --------
+    >>> d_v, d_h = maxwell_garnett_derivatives(host=1.5, inclusion=2.0, volume_fraction=0.0)
+    >>> round(float(d_v.real), 6)  # 3 eps_h (eps_i - eps_h) / (eps_i + 2 eps_h) / (2 m_h)
+    0.463235
+    """
+    m_host, m_incl, v = _broadcast(host, inclusion, volume_fraction)
+    m = maxwell_garnett(host=m_host, inclusion=m_incl, volume_fraction=v)
+    eps_h = m_host * m_host
+    eps_i = m_incl * m_incl
+    delta = eps_i - eps_h
+    num = eps_i + 2.0 * eps_h + 2.0 * v * delta
+    den = eps_i + 2.0 * eps_h - v * delta
+    d_v = eps_h * delta * (num + 2.0 * den) / den**2
+    d_eps_h = num / den + eps_h * ((2.0 - 2.0 * v) * den - (2.0 + v) * num) / den**2
+    return d_v / (2.0 * m), d_eps_h * 2.0 * m_host / (2.0 * m)
+
+
+def bruggeman_derivatives(
+    *, host: ArrayLike, inclusion: ArrayLike, volume_fraction: ArrayLike
+) -> tuple[ComplexArray, ComplexArray]:
+    """dm_eff/dv and dm_eff/dm_host of :func:`bruggeman`, by implicit differentiation.
+
+    eps = eps_eff solves f = v F(eps_i) + (1 - v) F(eps_h) = 0 with
+    F(a) = (a - eps) / (a + 2 eps); so d eps = -(f_v dv + f_h d eps_h) / f_eps
+    with f_v = F(eps_i) - F(eps_h), f_h = (1 - v) 3 eps / (eps_h + 2 eps)^2 and
+    f_eps = -3 (v eps_i / (eps_i + 2 eps)^2 + (1 - v) eps_h / (eps_h + 2 eps)^2),
+    at the root :func:`bruggeman` chooses; then as for
+    :func:`maxwell_garnett_derivatives`.
+
+    Returns
+    -------
+    (numpy.ndarray, numpy.ndarray) of complex128
+        dm_eff/dv and dm_eff/dm_host. [-]
+    """
+    m_host, m_incl, v = _broadcast(host, inclusion, volume_fraction)
+    m = bruggeman(host=m_host, inclusion=m_incl, volume_fraction=v)
+    eps = m * m
+    eps_h = m_host * m_host
+    eps_i = m_incl * m_incl
+    f_v = (eps_i - eps) / (eps_i + 2.0 * eps) - (eps_h - eps) / (eps_h + 2.0 * eps)
+    f_h = (1.0 - v) * 3.0 * eps / (eps_h + 2.0 * eps) ** 2
+    f_eps = -3.0 * (
+        v * eps_i / (eps_i + 2.0 * eps) ** 2 + (1.0 - v) * eps_h / (eps_h + 2.0 * eps) ** 2
+    )
+    return -f_v / f_eps / (2.0 * m), -f_h / f_eps * 2.0 * m_host / (2.0 * m)
+
+
+_RULE_DERIVATIVES: Final[dict[str, Callable[..., tuple[ComplexArray, ComplexArray]]]] = {
+    "maxwell_garnett": maxwell_garnett_derivatives,
+    "bruggeman": bruggeman_derivatives,
+}
+
+#: Prefix of the names :func:`mars_dust` gives its mixtures (they also answer to
+#: ``hematite_fraction``).
+_MARS_DUST_PREFIX: Final = "mars-dust-ehlers2014("
+
+
+# ---------------------------------------------------------------------------
 # Mixture as a material
 # ---------------------------------------------------------------------------
 
@@ -410,6 +494,85 @@ class Mixture(RefractiveIndex):
             inclusion=inclusion(wavelength_nm),
             volume_fraction=self.volume_fraction,
         )
+
+    # ------------------------------------------------------------ derivatives
+
+    @property
+    def index_parameters(self) -> tuple[str, ...]:
+        """Parameters the effective index can be differentiated with respect to:
+        ``"volume_fraction"`` (for :func:`mars_dust` also ``"hematite_fraction"``),
+        ``"host_n"`` and ``"host_k"`` (the host's index shifted by the same
+        amount at every wavelength)."""
+        names: tuple[str, ...] = ("volume_fraction", "host_n", "host_k")
+        if self.name.startswith(_MARS_DUST_PREFIX):
+            names = ("hematite_fraction", *names)
+        return names
+
+    def index_derivatives(self, wavelength_nm: ArrayLike) -> dict[str, ComplexArray]:
+        """dm_eff/dp for every :attr:`index_parameters` p, per wavelength (chain
+        rule through :func:`maxwell_garnett_derivatives` or
+        :func:`bruggeman_derivatives`). [-] per unit of p
+
+        Examples
+        --------
+        >>> d = mars_dust().index_derivatives([550.0])
+        >>> bool(d["hematite_fraction"][0] == d["volume_fraction"][0]), sorted(d)[:2]
+        (True, ['hematite_fraction', 'host_k'])
+        """
+        wl = np.atleast_1d(np.asarray(wavelength_nm, dtype=np.float64))
+        host = cast(RefractiveIndex, self.host)
+        inclusion = cast(RefractiveIndex, self.inclusion)
+        d_v, d_h = _RULE_DERIVATIVES[self.rule](
+            host=host(wl), inclusion=inclusion(wl), volume_fraction=self.volume_fraction
+        )
+        out = {"volume_fraction": d_v, "host_n": d_h, "host_k": 1j * d_h}
+        if "hematite_fraction" in self.index_parameters:
+            out["hematite_fraction"] = d_v
+        return out
+
+    def parameter_value(self, parameter: str) -> float:
+        """The value of one of :attr:`index_parameters` (host n, k: a constant host's)."""
+        check_choice("parameter", parameter, self.index_parameters)
+        if parameter in ("volume_fraction", "hematite_fraction"):
+            return float(self.volume_fraction)
+        m = complex(self._constant_host(parameter).value)
+        return m.real if parameter == "host_n" else m.imag
+
+    def with_parameter(self, parameter: str, value: float) -> Mixture:
+        """A copy with one of :attr:`index_parameters` set to ``value`` (for
+        :func:`dustoptics.retrieve.retrieve`); the host's n and k only of a
+        constant host."""
+        check_choice("parameter", parameter, self.index_parameters)
+        host = cast(RefractiveIndex, self.host)
+        fraction = self.volume_fraction
+        if parameter in ("volume_fraction", "hematite_fraction"):
+            fraction = check_closed_interval(parameter, value, 0.0, 1.0)
+        else:
+            m = complex(self._constant_host(parameter).value)
+            m = complex(value, m.imag) if parameter == "host_n" else complex(m.real, value)
+            host = ConstantIndex(value=m)
+        name = citation = ""
+        if self.name.startswith(_MARS_DUST_PREFIX):
+            # As mars_dust names it, so that it still answers to hematite_fraction.
+            inclusion = cast(RefractiveIndex, self.inclusion)
+            name = f"{_MARS_DUST_PREFIX}{fraction:g} {inclusion.name} in {host.name}, {self.rule})"
+            citation = self.citation
+        return Mixture(
+            host=host,
+            inclusion=self.inclusion,
+            volume_fraction=fraction,
+            rule=self.rule,
+            name=name,
+            citation=citation,
+        )
+
+    def _constant_host(self, parameter: str) -> ConstantIndex:
+        if not isinstance(self.host, ConstantIndex):
+            raise ValueError(
+                f"{parameter} is a value only of a constant host index; this mixture's host is "
+                f"{getattr(self.host, 'name', self.host)!r}"
+            )
+        return self.host
 
 
 def mars_dust(

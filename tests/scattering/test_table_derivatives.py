@@ -47,7 +47,7 @@ def _value_error(t: do.Table, q: str) -> np.ndarray:
             rel = np.maximum(rel, t.matrix_error_estimate)
         return rel[:, None] * t.phase
     assert t.cross_section_error_estimate is not None
-    if q == "g":
+    if q in ("g", "ssa"):
         return t.cross_section_error_estimate
     return t.cross_section_error_estimate * np.abs(getattr(t, q))
 
@@ -206,3 +206,47 @@ def test_against_the_reference_path_on_its_own_uniform_rule() -> None:
             if exact.ndim == 2:
                 tol = tol[:, None]
             assert np.all(np.abs(exact - other) <= tol), (q, p, np.max(np.abs(exact - other)))
+
+
+@pytest.mark.parametrize("rule", ["maxwell_garnett", "bruggeman"])
+def test_through_the_mixing_rules_against_finite_differences(rule: str) -> None:
+    """d/d(hematite fraction) and d/d(host n) of Mars dust (3 % hematite in n = 1.5)
+    by the chain rule, against central differences of compute_optics on mars_dust."""
+    dist = ModifiedGamma(r_eff_um=0.3, v_eff=0.1)
+    names = ("hematite_fraction", "host_n", "host_k")
+    t = do.compute_optics(
+        do.mars_dust(rule=rule), dist, WL, THETA, rtol=1e-5, workers=1, derivatives=names
+    )
+    assert t.derivatives is not None and t.derivatives.parameter_units == ("1", "1", "1")
+    for p, h in (("hematite_fraction", 1e-3), ("host_n", 1e-3), ("host_k", 1e-4)):
+
+        def at(step: float) -> do.Table:
+            if p == "hematite_fraction":
+                mix = do.mars_dust(rule=rule, hematite_fraction=0.03 + step)
+            else:
+                dm = step if p == "host_n" else 1j * step
+                mix = do.mars_dust(rule=rule, host_index=1.5 + 0.001j + dm)
+            return do.compute_optics(mix, dist, WL, THETA, rtol=1e-5, workers=1)
+
+        if p != "hematite_fraction":
+            # host_n, host_k at a slightly absorbing host (k = 0 is the edge of k >= 0).
+            t = do.compute_optics(
+                do.mars_dust(rule=rule, host_index=1.5 + 0.001j),
+                dist,
+                WL,
+                THETA,
+                rtol=1e-5,
+                workers=1,
+                derivatives=names,
+            )
+        plus, minus, plus2, minus2 = at(h), at(-h), at(2 * h), at(-2 * h)
+        for q in ("phase", "g", "cext_um2", "csca_um2", "ssa"):
+            fd = (getattr(plus, q) - getattr(minus, q)) / (2 * h)
+            fd2 = (getattr(plus2, q) - getattr(minus2, q)) / (4 * h)
+            exact = t.derivative(q, p)
+            err = t.derivative_error_estimate(q, p)
+            if exact.ndim == 2:
+                err = err[:, None]
+            tables = (_value_error(plus, q) + _value_error(minus, q)) / (2 * h)
+            tol = 3.0 * (err + tables + np.abs(fd2 - fd) / 3.0) + 1e-10 * np.max(np.abs(exact))
+            assert np.all(np.abs(exact - fd) <= tol), (rule, p, q, np.max(np.abs(exact - fd)))
