@@ -38,10 +38,12 @@ sky (:func:`~dustoptics.sky.scene.sky_radiance`) over the dome and near the Sun:
     within half a column of 0 and 180 deg
     (:func:`dustoptics.io.csv.cosmoscout.cosmoscout_phase_angles`).  The
     renderer reads a phase function linearly in angle between its table's
-    angles, so ``cos:N`` is drawn on the union of the table's own angles and the
-    samples' (a 0.1 deg table: the linear-in-cosine reading to 1e-6).
+    angles, so ``cos:N`` is drawn on a table of the samples' angles and every
+    0.01 deg, which follows the linear-in-cosine reading to 1e-5 for the Martian
+    dust.
 ``float16=True``
-    The phase-function samples (after ``angles``) rounded to IEEE binary16, as
+    The phase-function samples (the engine's with ``angles``, else the
+    table's own) rounded to IEEE binary16, as
     an engine's half-float texture stores them (11 significant bits: a
     relative error of at most 2^-11 for values from 2^-14 to 65504).  The
     cross-sections stay float32 uniforms in every engine and are not rounded.
@@ -75,6 +77,7 @@ from __future__ import annotations
 import io as _io
 import math
 from dataclasses import dataclass, replace
+from types import MappingProxyType
 from typing import Any, Final
 
 import numpy as np
@@ -104,7 +107,9 @@ __all__ = [
 #: Three-channel wavelengths of the engines, R, G, B: Bruneton's kLambdaR/G/B
 #: (``atmosphere/model.h``) and the only three CosmoScout VR's preprocessor
 #: accepts (``main.cpp``: 440, 550, 680 nm). [nm]
-ENGINE_CHANNELS_NM: Final = {"bruneton": (680.0, 550.0, 440.0), "cosmoscout": (680.0, 550.0, 440.0)}
+ENGINE_CHANNELS_NM: Final = MappingProxyType(
+    {"bruneton": (680.0, 550.0, 440.0), "cosmoscout": (680.0, 550.0, 440.0)}
+)
 
 #: Extra short names of fitted phase models (beside FIT_MODEL_ALIASES).
 _EXTRA_ALIASES: Final = {"cornette-shanks": "cornette-shanks1992"}
@@ -124,6 +129,8 @@ NEAR_SUN_DEG: Final = 10.0
 _FLOAT16_MAX: Final = 65504.0
 #: Angle counts searched for the smallest that does.
 _MAX_ANGLES: Final = 1_000_000
+#: Angles of the linear-in-angle table that stands for a ``cos:N`` reading (0.01 deg apart).
+_COS_GRID_SIZE: Final = 18001
 #: Angle tolerance unless given: the CosmoScout export's (0.5 %).
 _ANGLE_TOLERANCE: Final = 0.005
 
@@ -264,26 +271,29 @@ def _read_as_engine(
         grid = np.concatenate([[0.0], theta, [180.0]])
         return grid, np.concatenate([values[:, :1], values, values[:, -1:]], axis=1)
     assert mu is not None
-    own = np.asarray(table.theta_deg, dtype=float)
-    # Sample angles within 1e-6 deg of a table angle add nothing but round-off.
-    near = np.abs(own[np.clip(np.searchsorted(own, theta), 0, own.size - 1)] - theta) < 1e-6
-    near |= np.abs(own[np.clip(np.searchsorted(own, theta) - 1, 0, own.size - 1)] - theta) < 1e-6
-    grid = np.union1d(own, theta[~near])
-    if grid[0] != 0.0:
-        grid = np.concatenate([[0.0], grid])
-    if grid[-1] != 180.0:
-        grid = np.concatenate([grid, [180.0]])
+    fine = np.linspace(0.0, 180.0, _COS_GRID_SIZE)
+    # Sample angles within 1e-6 deg of a grid angle add nothing but round-off.
+    i = np.clip(np.searchsorted(fine, theta), 1, fine.size - 1)
+    near = np.minimum(np.abs(fine[i] - theta), np.abs(fine[i - 1] - theta)) < 1e-6
+    grid = np.union1d(fine, theta[~near])
     x = np.cos(np.deg2rad(grid))
     read = np.array([np.interp(x, mu[::-1], row[::-1]) for row in values])
     return grid, read
 
 
 def _angle_error(table: Table, sampling: str, n: int) -> float:
-    """Largest |integral over the sphere as read / the table's - 1| over the wavelengths."""
+    """Largest |integral over the sphere as read / the table's - 1| over the wavelengths.
+
+    Exact for the reading: linear in angle (``sphere_integral``) or, for
+    ``"cos"``, the trapezoid rule in cos(theta).
+    """
     theta, values, _, mu = _engine_grid(table, sampling, n)
-    grid, read = _read_as_engine(table, theta, values, sampling, mu)
     own = np.atleast_1d(sphere_integral(table.phase, theta_deg=table.theta_deg))
-    got = np.atleast_1d(sphere_integral(read, theta_deg=grid))
+    if mu is None:
+        grid, read = _read_as_engine(table, theta, values, sampling, mu)
+        got = np.atleast_1d(sphere_integral(read, theta_deg=grid))
+    else:
+        got = 2.0 * math.pi * np.sum(0.5 * (values[:, 1:] + values[:, :-1]) * -np.diff(mu), axis=1)
     return float(np.max(np.abs(got / own - 1.0)))
 
 
