@@ -223,3 +223,23 @@ def test_netcdf_round_trip_and_png(tmp_path: Path, capsys: pytest.CaptureFixture
         np.testing.assert_allclose(ratio, ds.luminance_ratio, rtol=1e-12)
         assert s.dome_luminance_ratio_min == float(ds.luminance_ratio.min())
         assert ds.approximated_radiance.shape[-1] == 3
+
+
+def test_engine_angles_are_read_as_the_engines_read_them(medium) -> None:  # type: ignore[no-untyped-def]
+    dust = medium.tables[1]
+    probe = np.array([0.0, 0.37, 1.3, 7.9, 45.2, 90.0, 179.6, 180.0])
+    # cos:N, linear in cos(theta) between samples uniform in cos(theta).
+    n = 4096
+    approx, _ = approximate_medium(medium, Approximations(angles=f"cos:{n}"))
+    mu = np.linspace(1.0, -1.0, n)
+    samples = dust.phase_at(np.degrees(np.arccos(mu)))
+    want = np.array([np.interp(np.cos(np.deg2rad(probe)), mu[::-1], r[::-1]) for r in samples])
+    np.testing.assert_allclose(approx.tables[1].phase_at(probe), want, rtol=1e-5)
+    # cosmoscout:N, texel centres (j + 1/2) 180 / N, held within half a column of the ends.
+    n = 360
+    approx, _ = approximate_medium(medium, Approximations(angles=f"cosmoscout:{n}"))
+    centres = (np.arange(n) + 0.5) * 180.0 / n
+    samples = dust.phase_at(centres)
+    want = np.array([np.interp(probe, centres, r) for r in samples])
+    np.testing.assert_allclose(approx.tables[1].phase_at(probe), want, rtol=1e-12)
+    assert np.array_equal(approx.tables[1].phase_at(0.0), samples[:, 0])
