@@ -59,6 +59,7 @@ from dustoptics.models.config import BuildConfig
 from dustoptics.scattering import optics
 from dustoptics.scattering.optics import resolve_refractive_index
 from dustoptics.scattering.quadrature import QuadratureSettings
+from dustoptics.sweep import _fork  # noqa: F401  (Dask's pools renewed in forked children)
 from dustoptics.sweep.spec import SweepSpec, _load_points, parse_points
 from dustoptics.sweep.store import (
     MARKERS,
