@@ -19,8 +19,10 @@ Builders (the presets of the seeds)
     set from a measured optical depth at a reference wavelength.
 :func:`earth_atmosphere`
     Air molecules (``"penndorf1957"``: standard air with the King factor, by
-    default; ``"costa2021"`` or ``"kobe2026"``), aerosols (a table, or Kobe's
-    constant coefficients) and ozone (the shipped Serdyuchenko et al. 2014
+    default; ``"costa2021"`` or ``"kobe2026"``), aerosols (one of OPAC's types
+    by :mod:`~dustoptics.atmosphere.aerosols`, by default the continental
+    average at optical depth 0.1 at 550 nm, a typical clear day; Kobe's
+    constant coefficients; or any table) and ozone (the shipped Serdyuchenko et al. 2014
     spectrum in Bruneton's layer by default, or any
     :class:`~dustoptics.atmosphere.gases.OzoneCrossSection` with any profile),
     on CosmoScout VR's 15 wavelengths 360-830 nm by default.
@@ -61,6 +63,7 @@ from numpy.typing import ArrayLike
 
 from dustoptics._deprecated import moved_attribute
 from dustoptics._validation import as_increasing_grid, check_choice, check_positive
+from dustoptics.atmosphere import aerosols as _aerosols
 from dustoptics.atmosphere import gases
 from dustoptics.atmosphere.column import (
     BRUNETON2017_OZONE,
@@ -78,6 +81,10 @@ from dustoptics.table import Provenance, Source, Table
 __all__ = [
     "CONSTITUENT_ROLES",
     "COSMOSCOUT_WAVELENGTHS_NM",
+    "DEFAULT_EARTH_AEROSOL",
+    "DEFAULT_EARTH_AEROSOL_OPTICAL_DEPTH",
+    "EARTH_AEROSOLS",
+    "EARTH_AEROSOL_OPTICAL_DEPTH_RANGE",
     "EARTH_MOLECULE_MODELS",
     "KOBE2026_AEROSOL_BETA_SCA_PER_M",
     "KOBE2026_WAVELENGTHS_NM",
@@ -108,6 +115,19 @@ _MOLECULE_SCALE_HEIGHT_M: Final = {
     "costa2021-mars": 8000.0,
     "collienne2013": 8000.0,
 }
+
+#: Aerosols of :func:`earth_atmosphere` by name: OPAC's types (Hess et al. 1998) and Kobe's.
+EARTH_AEROSOLS: Final = (*_aerosols.AEROSOL_TYPES, "kobe2026")
+#: The default Earth's aerosols: OPAC's continental average (land with human influence,
+#: the commonest setting of an observer on Earth; Angstrom exponent 1.42 at 500-800 nm,
+#: near the 1.3 of Angstrom's and Preetham's standard atmosphere).
+DEFAULT_EARTH_AEROSOL: Final = "continental-average"
+#: Its vertical optical depth at 550 nm: a typical clear day (Preetham's turbidity 2 gives
+#: 0.1007; the CIE clear sky, type 12, is met at this depth: see the sky documentation). [-]
+DEFAULT_EARTH_AEROSOL_OPTICAL_DEPTH: Final = 0.1
+#: Aerosol optical depths :func:`earth_atmosphere` accepts: (0, 5], 5 being a dense dust storm
+#: or smoke plume (no clear-sky reference reaches beyond). [-]
+EARTH_AEROSOL_OPTICAL_DEPTH_RANGE: Final = (0.0, 5.0)
 
 #: Kobe's aerosol scattering coefficient (after Bruneton & Neyret and Bodare &
 #: Sandberg), wavelength independent; extinction is ``beta_sca / 0.9``. [m^-1]
@@ -546,11 +566,111 @@ def _kobe_aerosols(wl: np.ndarray, *, g: float) -> Table:
 _SHIPPED_OZONE: Final = "serdyuchenko2014"
 
 
+def _check_aerosol_optical_depth(value: float) -> float:
+    low, high = EARTH_AEROSOL_OPTICAL_DEPTH_RANGE
+    if isinstance(value, bool) or not (isinstance(value, (int, float)) and low < value <= high):
+        raise ValueError(f"aerosol_optical_depth must be > {low:g} and <= {high:g}; got {value!r}")
+    return float(value)
+
+
+def _earth_aerosols(
+    wl: np.ndarray,
+    *,
+    aerosol: str | None,
+    aerosol_table: Table | None,
+    optical_depth: float | None,
+    reference_nm: float,
+    turbidity: float | None,
+    relative_humidity_percent: int,
+    profile: DensityProfile | None,
+    g: float,
+    top_altitude_m: float,
+) -> tuple[Table, DensityProfile]:
+    """The aerosols' table, at their optical depth, and profile (checked before any work)."""
+    if aerosol is not None and aerosol_table is not None:
+        raise ValueError(
+            f"give aerosol (a name) or aerosol_table (a Table), not both; got aerosol={aerosol!r} "
+            f"and aerosol_table {getattr(aerosol_table, 'name', aerosol_table)!r}"
+        )
+    if optical_depth is not None and turbidity is not None:
+        raise ValueError(
+            "give aerosol_optical_depth or turbidity, not both; got "
+            f"aerosol_optical_depth={optical_depth!r} and turbidity={turbidity!r}"
+        )
+    if aerosol_table is not None and not isinstance(aerosol_table, Table):
+        raise TypeError(f"aerosol_table must be a Table; got {type(aerosol_table).__name__}")
+    name = aerosol if aerosol is not None or aerosol_table is not None else DEFAULT_EARTH_AEROSOL
+    opac = name is not None and name != "kobe2026"
+    if name is not None:
+        check_choice("aerosol", name, EARTH_AEROSOLS)
+    ref = check_positive("aerosol_reference_nm", reference_nm, unit="nm")
+    if opac and not 250.0 <= ref <= 2500.0:
+        raise ValueError(
+            f"aerosol_reference_nm must lie within OPAC's 250-2500 nm; got {reference_nm!r}"
+        )
+    if opac:
+        _aerosols._check_humidity(relative_humidity_percent)
+    tau: float | None
+    if turbidity is not None:
+        tau = _check_aerosol_optical_depth(
+            _aerosols.preetham_optical_depth(turbidity, wavelength_nm=ref)
+        )
+    elif optical_depth is not None:
+        tau = _check_aerosol_optical_depth(optical_depth)
+    else:
+        tau = DEFAULT_EARTH_AEROSOL_OPTICAL_DEPTH if opac else None
+    if not opac and tau is not None and not wl[0] <= ref <= wl[-1]:
+        raise ValueError(
+            f"aerosol_reference_nm must lie within the wavelengths [{wl[0]:g}, {wl[-1]:g}] nm "
+            f"(Kobe's aerosols and a given table are read there); got {reference_nm!r}"
+        )
+    reference_cext: float | None = None
+    if aerosol_table is not None:
+        table = aerosol_table
+    elif opac:
+        assert name is not None
+        table = _aerosols.aerosol_table(
+            name, wavelength_nm=wl, relative_humidity_percent=relative_humidity_percent
+        )
+        if ref not in wl:
+            at_ref = _aerosols.aerosol_table(
+                name,
+                wavelength_nm=[ref],
+                relative_humidity_percent=relative_humidity_percent,
+                theta_deg=[0.0, 180.0],
+            )
+            assert at_ref.cext_um2 is not None  # Mie computes it
+            reference_cext = float(at_ref.cext_um2[0])
+    else:
+        table = _kobe_aerosols(wl, g=g)
+    if profile is None:
+        profile = (
+            _aerosols.AEROSOL_TYPES[name].profile
+            if opac and name is not None
+            else ExponentialProfile(scale_height_m=1200.0)
+        )
+    if tau is not None:
+        table = with_optical_depth(
+            table,
+            optical_depth=tau,
+            reference_wavelength_nm=ref,
+            profile=profile,
+            top_altitude_m=top_altitude_m,
+            reference_cext_um2=reference_cext,
+        )
+    return table, profile
+
+
 def earth_atmosphere(
     *,
     wavelength_nm: ArrayLike = COSMOSCOUT_WAVELENGTHS_NM,
     molecules: str | gases.RayleighModel = "penndorf1957",
     molecules_scale_height_m: float | None = None,
+    aerosol: str | None = None,
+    aerosol_optical_depth: float | None = None,
+    aerosol_reference_nm: float = 550.0,
+    turbidity: float | None = None,
+    aerosol_relative_humidity_percent: int = _aerosols.DEFAULT_RELATIVE_HUMIDITY_PERCENT,
     aerosol_table: Table | None = None,
     aerosol_profile: DensityProfile | None = None,
     aerosol_g: float = 0.76,
@@ -574,15 +694,43 @@ def earth_atmosphere(
         3.1e-4 of Penndorf's 1957 table over 360-800 nm (tested).
     molecules_scale_height_m : float, optional
         Default by model: 7994 m (Kobe), 7995.75 m (Costa), 8000 m. [m]
+    aerosol : str, optional
+        The aerosols by name (:data:`EARTH_AEROSOLS`): one of OPAC's types
+        (:data:`~dustoptics.atmosphere.aerosols.AEROSOL_TYPES`, Hess et al.
+        1998, by :func:`~dustoptics.atmosphere.aerosols.aerosol_table`) or
+        ``"kobe2026"`` (Kobe's constant coefficients, ``beta_sca = 2e-6
+        m^-1``, ``beta_ext = beta_sca / 0.9``, a Cornette-Shanks phase function
+        of ``aerosol_g``: vertical optical depth 0.0027).  Default
+        :data:`DEFAULT_EARTH_AEROSOL` (``"continental-average"``) unless
+        ``aerosol_table`` is given.
+    aerosol_optical_depth : float, optional
+        Vertical aerosol optical depth at ``aerosol_reference_nm``, within
+        :data:`EARTH_AEROSOL_OPTICAL_DEPTH_RANGE`.  Default
+        :data:`DEFAULT_EARTH_AEROSOL_OPTICAL_DEPTH` (0.1, a typical clear
+        day) for OPAC's types; Kobe's aerosols and an ``aerosol_table`` keep
+        their own number density unless it is given. [-]
+    aerosol_reference_nm : float, default 550
+        Wavelength of ``aerosol_optical_depth`` (and of ``turbidity``'s),
+        250-2500 nm for OPAC's types, within ``wavelength_nm`` otherwise; the
+        extinction is computed there exactly. [nm]
+    turbidity : float, optional
+        Instead of ``aerosol_optical_depth``: a turbidity ``T``, 1 < T <= 10,
+        as the optical depth ``beta(T) (lambda / 1 um)^-1.3`` of Preetham et
+        al. (1999, appendix A.3;
+        :func:`~dustoptics.atmosphere.aerosols.preetham_optical_depth`) at
+        ``aerosol_reference_nm``. [-]
+    aerosol_relative_humidity_percent : int, default 80
+        OPAC's types: the humidity of the components (0 dry; 50, 70, 80, 90,
+        95, 98, 99). [%]
     aerosol_table : Table, optional
-        Aerosol optics with cross-sections and ``number_density_per_m3``, at
-        ``wavelength_nm``; default Kobe's constant coefficients
-        (``beta_sca = 2e-6 m^-1``, ``beta_ext = beta_sca / 0.9``) with a
-        Cornette-Shanks phase function of ``aerosol_g``.
+        Any aerosol optics with cross-sections and ``number_density_per_m3``,
+        at ``wavelength_nm``, instead of ``aerosol``.
     aerosol_profile : DensityProfile, optional
-        Default exponential, 1200 m (Kobe, Bruneton).
+        Default: the OPAC type's mixing layer
+        (:attr:`~dustoptics.atmosphere.aerosols.AerosolType.profile`);
+        exponential, 1200 m (Kobe, Bruneton) for the others.
     aerosol_g : float, default 0.76
-        Cornette-Shanks ``g`` of the default aerosols. [-]
+        Cornette-Shanks ``g`` of Kobe's aerosols. [-]
     ozone : OzoneCrossSection, "serdyuchenko2014" or None
         Ozone cross-sections: by default the shipped spectrum
         (:func:`~dustoptics.atmosphere.gases.ozone_serdyuchenko2014`); None
@@ -612,21 +760,26 @@ def earth_atmosphere(
         else _MOLECULE_SCALE_HEIGHT_M.get(mol_name, 8000.0)
     )
     mol_profile = ExponentialProfile(scale_height_m=h_mol)
-    if aerosol_table is None:
-        aerosols = _kobe_aerosols(wl, g=aerosol_g)
-    else:
-        if not isinstance(aerosol_table, Table):
-            raise TypeError(f"aerosol_table must be a Table; got {type(aerosol_table).__name__}")
-        aerosols = aerosol_table
+    r = check_positive("planet_radius_m", planet_radius_m, unit="m")
+    if check_positive("atmosphere_radius_m", atmosphere_radius_m, unit="m") <= r:
+        raise ValueError(
+            f"atmosphere_radius_m must exceed planet_radius_m ({r!r} m); got {atmosphere_radius_m!r}"
+        )
+    aerosols, profile_a = _earth_aerosols(
+        wl,
+        aerosol=aerosol,
+        aerosol_table=aerosol_table,
+        optical_depth=aerosol_optical_depth,
+        reference_nm=aerosol_reference_nm,
+        turbidity=turbidity,
+        relative_humidity_percent=aerosol_relative_humidity_percent,
+        profile=aerosol_profile,
+        g=aerosol_g,
+        top_altitude_m=atmosphere_radius_m - planet_radius_m,
+    )
     cons = [
         Constituent(role="molecules", table=mol_table, profile=mol_profile),
-        Constituent(
-            role="aerosols",
-            table=aerosols,
-            profile=aerosol_profile
-            if aerosol_profile is not None
-            else ExponentialProfile(scale_height_m=1200.0),
-        ),
+        Constituent(role="aerosols", table=aerosols, profile=profile_a),
     ]
     if isinstance(ozone, str):
         check_choice("ozone", ozone, (_SHIPPED_OZONE,))
@@ -683,6 +836,7 @@ def earth_atmosphere_kobe2026(*, name: str = "earth-kobe2026") -> Atmosphere:
     return earth_atmosphere(
         wavelength_nm=KOBE2026_WAVELENGTHS_NM,
         molecules="kobe2026",
+        aerosol="kobe2026",
         ozone=gases.KOBE2026_OZONE,
         ozone_profile=FixedFractionProfile(
             base=ExponentialProfile(scale_height_m=_MOLECULE_SCALE_HEIGHT_M["kobe2026"]),
