@@ -201,7 +201,7 @@ class SkyJob:
 
     def _sky_files(self) -> dict[Path, bytes]:
         from dustoptics.sky import Medium
-        from dustoptics.sky.scene import png_bytes, sky_radiance
+        from dustoptics.sky.scene import png_bytes, sky_radiance, sun_angular_radius_deg_of
 
         atm = self.atmosphere()
         medium = Medium.from_atmosphere(atm)
@@ -209,7 +209,13 @@ class SkyJob:
             from dustoptics.sky.approximations import check_approximations
 
             check_approximations(self.preview, medium)
-        sky = sky_radiance(medium, sun_elevation_deg=self._sun_elevation, ground_albedo=self.albedo)
+        sun_alpha = sun_angular_radius_deg_of(atm.sun_distance_m)  # the disc in the images
+        sky = sky_radiance(
+            medium,
+            sun_elevation_deg=self._sun_elevation,
+            ground_albedo=self.albedo,
+            sun_angular_radius_deg=sun_alpha,
+        )
         exposure = self.exposure if self.exposure is not None else sky.default_exposure()
         stem = self.out_dir / atm.name
         data = sky.to_xarray()
@@ -235,7 +241,12 @@ class SkyJob:
         }
         if self.sunset:
             for elev in SUNSET_ELEVATIONS_DEG:
-                s = sky_radiance(medium, sun_elevation_deg=elev, ground_albedo=self.albedo)
+                s = sky_radiance(
+                    medium,
+                    sun_elevation_deg=elev,
+                    ground_albedo=self.albedo,
+                    sun_angular_radius_deg=sun_alpha,
+                )
                 out[stem.with_name(f"{atm.name}_sunset_{elev:+05.1f}.png")] = png_bytes(
                     s.panorama(exposure=exposure)
                 )

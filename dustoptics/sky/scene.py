@@ -43,8 +43,10 @@ from dustoptics.sky.orders import N_LAYERS, DiffuseField, check_orders_cost, sol
 from dustoptics.sky.render import N_PATH, check_render_cost, line_of_sight_radiance
 
 __all__ = [
+    "EXPOSURE_SUN_EXCLUSION_DEG",
     "ILLUMINANT",
     "MAX_IMAGE_SIZE",
+    "SUN_RADIUS_M",
     "SkyRadiance",
     "check_image_size",
     "check_png_support",
@@ -52,6 +54,8 @@ __all__ = [
     "display_rgb",
     "png_bytes",
     "sky_radiance",
+    "sun_angular_radius_deg_of",
+    "sun_disc_xyz",
     "sunlit_xyz",
 ]
 
@@ -62,6 +66,14 @@ ILLUMINANT: Final = "astm-g173"
 MAX_IMAGE_SIZE: Final = 8192
 #: Image rows drawn at a time (bounds the memory of the interpolation).
 _ROWS_PER_BLOCK: Final = 256
+#: The Sun's photospheric radius (IAU 2015 Resolution B3 nominal value). [m]
+SUN_RADIUS_M: Final = 6.957e8
+#: Directions this close to the Sun are left out of the default exposure: its aureole may
+#: clip, the rest of the sky may not. [deg]
+EXPOSURE_SUN_EXCLUSION_DEG: Final = 10.0
+#: Least samples per pixel side where a pixel meets the Sun's disc (antialiasing: 8 x 8 = 64
+#: samples; more where the disc is smaller than two pixels).
+_SUN_SUPERSAMPLING: Final = 8
 
 
 def check_image_size(name: str, value: Any, *, minimum: int = 16, allow_large: bool = False) -> int:
@@ -146,6 +158,9 @@ class SkyRadiance:
         in :data:`~dustoptics.sky.accuracy.VALIDATED_DOMAIN`). [-]
     n_streams : int
         Discrete ordinates per hemisphere of the multiple scattering.
+    sun_angular_radius_deg : float
+        The Sun's angular radius seen from the planet; the images draw its
+        disc (:func:`sun_disc_xyz`; :func:`sun_angular_radius_deg_of`); 0 draws none. [deg]
     """
 
     name: str
@@ -162,6 +177,7 @@ class SkyRadiance:
     tol: float
     radiance_error: np.ndarray = dataclass_field(default_factory=lambda: np.zeros(0))
     n_streams: int = 0
+    sun_angular_radius_deg: float = 0.0
 
     @property
     def sun_elevation_deg(self) -> float:
@@ -216,13 +232,22 @@ class SkyRadiance:
         return xyz[..., :2] / xyz.sum(axis=-1, keepdims=True)
 
     def default_exposure(self) -> float:
-        """Exposure that puts the 99th percentile of the sky's luminance at white.
+        """Exposure at which the brightest sky farther than
+        :data:`EXPOSURE_SUN_EXCLUSION_DEG` from the Sun just reaches display white.
 
-        Only the brightest 1 % of the computed directions (the Sun's aureole)
-        clip, so the aureole's colour stays visible.
+        The exposure is chosen from the scene: the largest linear sRGB channel
+        of the computed directions outside that cone is put at 1, so no part of
+        the sky away from the Sun clips (the horizon of a clear Earth sky, the
+        brightest region there, keeps its colour); the aureole inside the cone
+        and the Sun's disc may clip.
         """
-        y = self.xyz()[..., 1]
-        return float(1.0 / np.percentile(y, 99.0))
+        zz, aa = np.meshgrid(self.view_zenith_deg, self.view_azimuth_deg, indexing="ij")
+        away = _angle_from_sun_deg(self.sun_zenith_deg, zz, aa) > EXPOSURE_SUN_EXCLUSION_DEG
+        rgb = colour.xyz_to_linear_srgb(self.xyz()[away])
+        brightest = float(np.max(rgb)) if rgb.size else 0.0
+        if not brightest > 0.0:  # a black sky (the Sun far below the horizon): any exposure
+            return 1.0
+        return 1.0 / brightest
 
     def fisheye(
         self, *, size: int = 512, exposure: float | None = None, allow_large: bool = False
@@ -251,15 +276,62 @@ class SkyRadiance:
         xyz = self.xyz()
         c = (np.arange(size) + 0.5) / size * 2.0 - 1.0
         out = np.zeros((size, size, 3), dtype=np.uint8)
+
+        def direction(z: np.ndarray, a: np.ndarray, du: float, dv: float) -> tuple[Any, Any]:
+            # Sub-pixel offsets (du, dv pixels) in the image plane: x = (zen / 90) sin(azi),
+            # y = (zen / 90) cos(azi), one pixel 2 / size; rows go down.
+            x = z / 90.0 * np.sin(np.radians(a)) + du * 2.0 / size
+            y = z / 90.0 * np.cos(np.radians(a)) - dv * 2.0 / size
+            return np.minimum(np.hypot(x, y) * 90.0, 90.0), np.degrees(np.arctan2(x, y))
+
         for start in range(0, size, _ROWS_PER_BLOCK):
             xx, yy = np.meshgrid(c, -c[start : start + _ROWS_PER_BLOCK])
             rad = np.hypot(xx, yy)
             inside = rad <= 1.0
             zen = np.where(inside, rad * 90.0, 0.0)
             azi = np.rad2deg(np.arctan2(xx, yy))
-            rgb = display_rgb(self._interpolate(xyz, zen, azi), e)
+            block = self._interpolate(xyz, zen, azi)
+            block += self._sun_in_pixels(zen, azi, 180.0 / size, direction)
+            rgb = display_rgb(block, e)
             rgb[~inside] = 0
             out[start : start + rgb.shape[0]] = rgb
+        return out
+
+    def _sun_in_pixels(
+        self,
+        zen: np.ndarray,
+        azi: np.ndarray,
+        pixel_deg: float,
+        direction: Any,
+    ) -> np.ndarray:
+        """The Sun's disc, averaged over each pixel (XYZ to add to the sky's).
+
+        Only pixels within a pixel's reach of the disc are sampled, each on a
+        grid of at least 8 x 8 sub-pixel directions and at least 16 across the
+        disc (``direction(zen, azi, du, dv)`` gives them), so the disc's edge
+        is antialiased and its light kept (tested to 1 %).
+        """
+        out = np.zeros(zen.shape + (3,))
+        alpha = self.sun_angular_radius_deg
+        if alpha <= 0.0 or self.sun_zenith_deg >= 90.0 + alpha:
+            return out
+        near = _angle_from_sun_deg(self.sun_zenith_deg, zen, azi) <= alpha + 1.5 * pixel_deg
+        if not np.any(near):
+            return out
+        # At least 8 x 8 samples a pixel, and at least 16 across the disc's diameter.
+        k = min(4 * _SUN_SUPERSAMPLING, max(_SUN_SUPERSAMPLING, math.ceil(8.0 * pixel_deg / alpha)))
+        offsets = (np.arange(k) + 0.5) / k - 0.5
+        total = np.zeros((int(near.sum()), 3))
+        for du in offsets:
+            for dv in offsets:
+                z, a = direction(zen[near], azi[near], du, dv)
+                total += sun_disc_xyz(
+                    self.wavelength_nm,
+                    self.sun_transmittance,
+                    _angle_from_sun_deg(self.sun_zenith_deg, z, a),
+                    sun_angular_radius_deg=alpha,
+                )
+        out[near] = total / (k * k)
         return out
 
     def panorama(
@@ -283,9 +355,16 @@ class SkyRadiance:
         azi = (np.arange(width) + 0.5) / width * 360.0 - 180.0
         elev = 90.0 - (np.arange(height) + 0.5) / height * 90.0
         out = np.zeros((height, width, 3), dtype=np.uint8)
+        pixel_deg = max(360.0 / width, 90.0 / height)
+
+        def direction(z: np.ndarray, a: np.ndarray, du: float, dv: float) -> tuple[Any, Any]:
+            return np.clip(z + dv * 90.0 / height, 0.0, 90.0), a + du * 360.0 / width
+
         for start in range(0, height, _ROWS_PER_BLOCK):
             aa, ee = np.meshgrid(azi, elev[start : start + _ROWS_PER_BLOCK])
-            out[start : start + aa.shape[0]] = display_rgb(self._interpolate(xyz, 90.0 - ee, aa), e)
+            block = self._interpolate(xyz, 90.0 - ee, aa)
+            block += self._sun_in_pixels(90.0 - ee, aa, pixel_deg, direction)
+            out[start : start + aa.shape[0]] = display_rgb(block, e)
         return out
 
     def to_xarray(self) -> Any:
@@ -356,6 +435,7 @@ class SkyRadiance:
                 "orders_error_estimate": self.error_estimate,
                 "orders_tolerance": self.tol,
                 "n_streams": self.n_streams,
+                "sun_angular_radius_degree": self.sun_angular_radius_deg,
                 "radiance_relative_error_max": float(np.max(self.radiance_error))
                 if self.radiance_error.size
                 else float("nan"),
@@ -374,6 +454,67 @@ def sunlit_xyz(wavelength_nm: np.ndarray, spectra: np.ndarray) -> np.ndarray:
     return colour.spectrum_to_xyz(wavelength_nm, spectra, illuminant=ILLUMINANT) / sun[1]
 
 
+def sun_angular_radius_deg_of(sun_distance_m: float) -> float:
+    """The Sun's angular radius seen from ``sun_distance_m``: asin(R_sun / d). [deg]"""
+    d = check_positive("sun_distance_m", sun_distance_m, unit="m")
+    return math.degrees(math.asin(min(1.0, SUN_RADIUS_M / d)))
+
+
+def sun_disc_xyz(
+    wavelength_nm: np.ndarray,
+    sun_transmittance: np.ndarray,
+    angle_from_centre_deg: Any,
+    *,
+    sun_angular_radius_deg: float,
+) -> np.ndarray:
+    """CIE XYZ of the Sun's disc seen through the atmosphere, per unit solar illuminance. [sr^-1]
+
+    The disc's radiance at angle ``psi`` from its centre follows the grey
+    limb darkening of the Eddington approximation (Eddington 1926; Mihalas
+    1978, Stellar Atmospheres, Eq. 3-23):
+
+        I(mu) / I(1) = (2 + 3 mu) / 5,   mu = sqrt(1 - (sin psi / sin alpha)^2),
+
+    normalized so that its integral over the disc is the transmitted beam
+    (the mean of (2 + 3 mu) / 5 over the disc's area is 4/5):
+
+        I(1) = T(lambda) / (0.8 pi sin^2 alpha).
+
+    Grey: the real limb is also redder (the law leaves the colour alone).
+    Zero outside the disc.
+
+    Parameters
+    ----------
+    wavelength_nm : numpy.ndarray, shape (n_wavelength,)
+        Wavelengths. [nm]
+    sun_transmittance : numpy.ndarray, shape (n_wavelength,)
+        Transmittance of the direct beam to the observer. [-]
+    angle_from_centre_deg : array_like
+        Angle of each direction from the disc's centre. [deg]
+    sun_angular_radius_deg : float
+        The disc's angular radius (:func:`sun_angular_radius_deg_of`). [deg]
+
+    Returns
+    -------
+    numpy.ndarray, shape ``angle_from_centre_deg.shape + (3,)``
+    """
+    psi = np.asarray(angle_from_centre_deg, dtype=float)
+    sin_a = math.sin(math.radians(sun_angular_radius_deg))
+    r = np.sin(np.radians(np.minimum(psi, 90.0))) / sin_a
+    inside = (psi < sun_angular_radius_deg) & (r < 1.0)
+    mu = np.sqrt(np.clip(1.0 - r * r, 0.0, 1.0))
+    darkening = np.where(inside, (2.0 + 3.0 * mu) / 5.0, 0.0) / (0.8 * math.pi * sin_a * sin_a)
+    centre = sunlit_xyz(wavelength_nm, np.asarray(sun_transmittance, dtype=float))
+    return darkening[..., None] * centre
+
+
+def _angle_from_sun_deg(sun_zenith_deg: float, zenith_deg: Any, azimuth_deg: Any) -> np.ndarray:
+    """Angle between each view direction and the Sun (azimuths from the Sun's). [deg]"""
+    z, a, s = np.radians(zenith_deg), np.radians(azimuth_deg), math.radians(sun_zenith_deg)
+    cos_psi = np.cos(z) * math.cos(s) + np.sin(z) * math.sin(s) * np.cos(a)
+    return np.degrees(np.arccos(np.clip(cos_psi, -1.0, 1.0)))
+
+
 def display_rgb(xyz: np.ndarray, exposure: float) -> np.ndarray:
     """8-bit display sRGB of XYZ with white at ``Y * exposure = 1``."""
     rgb = colour.xyz_to_display(xyz, exposure=exposure)
@@ -390,6 +531,7 @@ def sky_radiance(
     view_zenith_deg: np.ndarray | None = None,
     azimuth_step_deg: float = 2.0,
     field: DiffuseField | None = None,
+    sun_angular_radius_deg: float | None = None,
     progress: TextIO | Reporter | None = None,
     allow_large: bool = False,
 ) -> SkyRadiance:
@@ -418,6 +560,10 @@ def sky_radiance(
         (:func:`~dustoptics.sky.orders.solve_orders` with ``tol``), to render
         the dome without solving again; ``ground_albedo`` must equal the
         field's.
+    sun_angular_radius_deg : float, optional
+        The Sun's angular radius, for its disc in the images (default: from
+        the atmosphere's ``sun_distance_m``, :func:`sun_angular_radius_deg`;
+        0, no disc, for a Medium, which does not know it). [deg]
     progress : text stream, optional
         Where to report the orders of scattering and the lines of sight done,
         after the first two seconds (the command line passes ``sys.stderr``);
@@ -437,6 +583,14 @@ def sky_radiance(
         the budget and ``allow_large`` is False (the message names the
         parameter and its largest allowed value).
     """
+    if sun_angular_radius_deg is None:
+        alpha = (
+            sun_angular_radius_deg_of(atmosphere.sun_distance_m)
+            if isinstance(atmosphere, Atmosphere)
+            else 0.0
+        )
+    else:
+        alpha = check_closed_interval("sun_angular_radius_deg", sun_angular_radius_deg, 0.0, 45.0)
     report = reporter(progress)
     medium = atmosphere if isinstance(atmosphere, Medium) else Medium.from_atmosphere(atmosphere)
     elev = check_closed_interval("sun_elevation_deg", sun_elevation_deg, -10.0, 90.0)
@@ -514,6 +668,7 @@ def sky_radiance(
             medium, field, observer_altitude_m=float(observer_altitude_m)
         ),
         n_streams=medium.n_streams,
+        sun_angular_radius_deg=float(alpha),
     )
 
 
