@@ -31,8 +31,10 @@ __all__ = ["add_preview_options", "approximations_from_args", "report_preview"]
 
 
 def _phase(text: str) -> str:
-    if text not in PHASE_CHOICES:
-        raise argparse.ArgumentTypeError(f"must be one of {', '.join(PHASE_CHOICES)}; got {text!r}")
+    try:
+        Approximations(phase=text)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
     return text
 
 
@@ -88,8 +90,9 @@ def add_preview_options(parser: Any) -> None:
         "--phase",
         type=_phase,
         default="exact",
-        metavar="exact|fit:MODEL",
-        help="the aerosols' phase function as fitted per wavelength (channel) by MODEL: "
+        metavar="exact|fit:MODEL[@NM]",
+        help="the aerosols' phase function as fitted per wavelength (channel) by MODEL, or "
+        "with @NM one fit at NM nm for all (Bruneton's one g: fit:cornette-shanks@550); MODEL: "
         + ", ".join(c.removeprefix("fit:") for c in PHASE_CHOICES[1:])
         + " (default exact)",
     )

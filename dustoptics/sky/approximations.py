@@ -13,6 +13,10 @@ sky (:func:`~dustoptics.sky.scene.sky_radiance`) over the dome and near the Sun:
     :data:`~dustoptics.scattering.fit.FIT_MODEL_ALIASES` or ``cornette-shanks``),
     evaluated as the engine evaluates it: the analytic function itself
     (:data:`dustoptics.scattering.phase.ANALYTIC_MODELS`) at the table's angles.
+    ``"fit:MODEL@NM"`` fits once, at NM nanometres, and uses that function at
+    every wavelength, as Bruneton's model does with its one
+    ``mie_phase_function_g`` (Cornette-Shanks, fitted at 550 nm by
+    :mod:`dustoptics.io.engines.bruneton`: ``fit:cornette-shanks@550``).
     The molecules keep their phase function (engines draw Rayleigh analytically).
 ``channels_nm=(R, G, B)``
     Three wavelengths instead of the spectrum (:data:`ENGINE_CHANNELS_NM`:
@@ -142,7 +146,10 @@ class Approximations:
     Parameters
     ----------
     phase : str
-        ``"exact"`` or ``"fit:MODEL"`` (:data:`PHASE_CHOICES`).  Default exact.
+        ``"exact"``, ``"fit:MODEL"`` (:data:`PHASE_CHOICES`: one fit per
+        wavelength, or per channel) or ``"fit:MODEL@NM"`` (one fit, at NM
+        nanometres, for every wavelength: Bruneton's single
+        ``mie_phase_function_g``, fitted at 550 nm by his export).  Default exact.
     channels_nm : tuple of 3 floats, optional
         R, G, B wavelengths instead of the spectrum (e.g.
         ``ENGINE_CHANNELS_NM["bruneton"]``). [nm]
@@ -173,8 +180,7 @@ class Approximations:
     near_sun_deg: float = NEAR_SUN_DEG
 
     def __post_init__(self) -> None:
-        if self.phase not in PHASE_CHOICES:
-            raise ValueError(f"phase must be one of {', '.join(PHASE_CHOICES)}; got {self.phase!r}")
+        _parse_phase(self.phase)
         if self.channels_nm is not None:
             ch = tuple(float(v) for v in self.channels_nm)
             if len(ch) != 3 or not all(math.isfinite(v) and v > 0 for v in ch):
@@ -193,11 +199,12 @@ class Approximations:
     @property
     def fit_model(self) -> str | None:
         """The fitted model's full name, or None for the exact phase function."""
-        if self.phase == "exact":
-            return None
-        name = self.phase.removeprefix("fit:")
-        name = _EXTRA_ALIASES.get(name, name)
-        return FIT_MODEL_ALIASES.get(name, name)
+        return _parse_phase(self.phase)[0]
+
+    @property
+    def fit_at_nm(self) -> float | None:
+        """The one wavelength of ``"fit:MODEL@NM"``, else None. [nm]"""
+        return _parse_phase(self.phase)[1]
 
     @property
     def any(self) -> bool:
@@ -221,6 +228,30 @@ class Approximations:
         if self.float16:
             parts.append("float16 phase")
         return ", ".join(parts) if parts else "none (exact)"
+
+
+def _parse_phase(text: str) -> tuple[str | None, float | None]:
+    """The full model name (None for exact) and the one fit's wavelength [nm] (or None)."""
+    if text == "exact":
+        return None, None
+    choice, at, nm = str(text).partition("@")
+    if choice not in PHASE_CHOICES[1:]:
+        raise ValueError(
+            f"phase must be one of {', '.join(PHASE_CHOICES)}, a fit optionally followed by "
+            f"@NM (one fit at NM nanometres for every wavelength); got {text!r}"
+        )
+    name = choice.removeprefix("fit:")
+    name = _EXTRA_ALIASES.get(name, name)
+    name = FIT_MODEL_ALIASES.get(name, name)
+    if not at:
+        return name, None
+    try:
+        value = float(nm)
+    except ValueError:
+        value = math.nan
+    if not (math.isfinite(value) and value > 0):
+        raise ValueError(f"phase: NM in fit:MODEL@NM must be a positive wavelength; got {text!r}")
+    return name, value
 
 
 def _parse_angles(text: str) -> tuple[str, int]:
@@ -347,6 +378,15 @@ def check_approximations(approximations: Approximations, medium: Medium) -> None
     """
     a = approximations
     wl = medium.wavelength_nm
+    at = a.fit_at_nm
+    if at is not None:
+        low, high = (min(a.channels_nm), max(a.channels_nm)) if a.channels_nm else (wl[0], wl[-1])
+        if not low <= at <= high:
+            raise ValueError(
+                f"phase {a.phase}: {at:g} nm is outside the wavelengths the fit would read, "
+                f"{low:g}-{high:g} nm (the set's, or the channels'); a wavelength within them "
+                "would do"
+            )
     if a.channels_nm is not None:
         for name, v in zip("RGB", a.channels_nm, strict=True):
             if not wl[0] <= v <= wl[-1]:
@@ -400,14 +440,25 @@ def _channel_table(
     )
 
 
-def _fitted_phase(table: Table, model: str) -> tuple[np.ndarray, FitResult]:
-    """The fitted analytic model at the table's angles, as an engine evaluates it. [sr^-1]"""
+def _fitted_phase(
+    table: Table, model: str, at_nm: float | None = None
+) -> tuple[np.ndarray, FitResult]:
+    """The fitted analytic model at the table's angles, as an engine evaluates it. [sr^-1]
+
+    One fit per row, or with ``at_nm`` one fit of the row read there (as
+    :func:`~dustoptics.scattering.fit.fit_table` reads a channel) for every row.
+    """
     from dustoptics.scattering.fit import fit_table
     from dustoptics.scattering.phase import ANALYTIC_MODELS, dhg_costa2021
 
-    fit = fit_table(table, model=model)
+    if at_nm is None:
+        fit = fit_table(table, model=model)
+        rows = fit.parameters
+    else:
+        fit = fit_table(table, model=model, colour="wavelengths", channels_nm=(at_nm,) * 3)
+        rows = np.repeat(fit.parameters[:1], table.wavelength_nm.size, axis=0)
     mu = np.cos(np.deg2rad(np.asarray(table.theta_deg, dtype=float)))[None, :]
-    p = {n: fit.parameters[:, k : k + 1] for k, n in enumerate(fit.parameter_names)}
+    p = {n: rows[:, k : k + 1] for k, n in enumerate(fit.parameter_names)}
     if fit.model == "two-term-hg-hapke2012":  # (1 - c)/2 HG(b) + (1 + c)/2 HG(-b)
         values = dhg_costa2021(mu, g1=p["b"], g2=-p["b"], alpha=0.5 * (1.0 - p["c"]))
     else:
@@ -495,7 +546,7 @@ def approximate_medium(
             continue
         phase, theta = np.asarray(t.phase, dtype=float), np.asarray(t.theta_deg, dtype=float)
         if model is not None and role == "aerosols":
-            phase, fit = _fitted_phase(t, model)
+            phase, fit = _fitted_phase(t, model, a.fit_at_nm)
             t = _replace_phase(t, theta, phase)
         if a.angles is not None:
             sampling, n = _parse_angles(a.angles)

@@ -243,3 +243,23 @@ def test_engine_angles_are_read_as_the_engines_read_them(medium) -> None:  # typ
     want = np.array([np.interp(probe, centres, r) for r in samples])
     np.testing.assert_allclose(approx.tables[1].phase_at(probe), want, rtol=1e-12)
     assert np.array_equal(approx.tables[1].phase_at(0.0), samples[:, 0])
+
+
+def test_one_fit_for_all_wavelengths_is_bruneton_s_g(atmosphere, medium) -> None:  # type: ignore[no-untyped-def]
+    from dustoptics.io.engines.bruneton import bruneton_parameters
+
+    g = bruneton_parameters(atmosphere).mie_phase_function_g  # his export's one g, at 550 nm
+    for channels in (None, (680.0, 550.0, 440.0)):
+        a = Approximations(phase="fit:cornette-shanks@550", channels_nm=channels)
+        approx, fit = approximate_medium(medium, a)
+        assert fit is not None and fit.model == "cornette-shanks1992"
+        assert fit.parameters[0, 0] == pytest.approx(g, rel=1e-12)
+        dust = approx.tables[1]
+        mu = np.cos(np.deg2rad(dust.theta_deg))
+        cs = 3.0 * (1.0 - g * g) * (1.0 + mu * mu) / (2.0 * (2.0 + g * g))
+        cs = cs / (4.0 * math.pi * (1.0 + g * g - 2.0 * g * mu) ** 1.5)
+        np.testing.assert_allclose(dust.phase, np.tile(cs, (dust.wavelength_nm.size, 1)), rtol=1e-9)
+    with pytest.raises(ValueError, match="700 nm is outside the wavelengths the fit would read"):
+        check_approximations(
+            Approximations(phase="fit:cs@700", channels_nm=(680.0, 550.0, 440.0)), medium
+        )
