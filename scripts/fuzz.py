@@ -120,7 +120,6 @@ def _child(case: Case, workdir: Path, write_fd: int) -> None:  # pragma: no cove
     limit = _address_space_now() + CASE_ADDRESS_SPACE
     resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
     os.chdir(workdir)
-    _fresh_dask_threads()
     from dustoptics.io import FormatError
 
     try:
@@ -137,18 +136,6 @@ def _child(case: Case, workdir: Path, write_fd: int) -> None:  # pragma: no cove
     with os.fdopen(write_fd, "w") as pipe:
         pipe.write(json.dumps(message))
     os._exit(0)
-
-
-def _fresh_dask_threads() -> None:  # pragma: no cover - runs forked
-    """Give a forked case its own Dask offload thread (the parent's does not survive a
-    fork, and a sweep in a process forked after another waits for it forever)."""
-    utils = sys.modules.get("distributed.utils")
-    if utils is not None and hasattr(utils, "_offload_executor"):
-        from concurrent.futures import ThreadPoolExecutor
-
-        utils._offload_executor = ThreadPoolExecutor(
-            max_workers=1, thread_name_prefix="Dask-Offload"
-        )
 
 
 def run_case(case: Case, *, timeout_s: float = CASE_TIMEOUT_S) -> Outcome:
@@ -1364,14 +1351,11 @@ GENERATORS = {
 def warm_up(kinds: tuple[str, ...] = KINDS) -> None:
     """Compile (or load) the kernels once, so that forked cases inherit them.
 
-    Before any parallel kernel runs, numba's fork-safe threading layer is chosen (unless
-    the environment chose one): the harness forks, and GNU OpenMP, numba's default on
-    Linux, kills a process forked after a parallel region ran (issue 29 item 9).
+    Every case is a forked process: the package itself keeps that safe (numba's
+    fork-safe threading layer for the sky's parallel kernels, ``_numba_cache``; Dask's
+    thread pools renewed in a forked child, ``dustoptics.sweep._fork``), so the harness
+    changes nothing there (issue 29 item 9).
     """
-    import numba
-
-    if numba.config.THREADING_LAYER == "default":
-        numba.config.THREADING_LAYER = "forksafe"
     _small_table()
     if {"sweeps", "stores"} & set(kinds):
         _warm_up_sweeps()
