@@ -168,11 +168,11 @@ def test_mars_sunset_is_bluer_around_the_sun() -> None:
 
 
 def test_mars_chromaticity_against_the_rovers() -> None:
-    # Bell et al. (2006): MER sky means x = 0.396-0.408, y = 0.377-0.383. The
-    # Blue Moon's dust at tau 0.5 gives x = 0.425, y = 0.384 looking away from
-    # the Sun at 30 degree elevation with the Sun at 30 degree (redder than the
-    # rovers by 0.017 in x; the docs discuss why). The test holds the
-    # computed value to that statement.
+    # Bell, Savransky & Wolff (2006): MER sky means x = 0.396-0.408, y =
+    # 0.377-0.383. The Blue Moon's dust at tau 0.5, looking away from the Sun
+    # at 30 degree elevation with the Sun at 30 degree, is redder than the
+    # rovers in x, its y inside (docs/concepts/mars_sky_colour.rst; its value
+    # is held to CDISORT to 5e-4 in tests/sky/test_mer_chromaticity.py).
     atm = mars_sky_atmosphere("blue-moons", optical_depth=0.5)
     s = sky_radiance(
         atm,
