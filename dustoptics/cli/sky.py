@@ -133,7 +133,8 @@ def add_parser(sub: Any) -> None:
         type=_positive_float,
         default=0.5,
         metavar="TAU",
-        help="vertical dust optical depth at 550 nm (default 0.5)",
+        help="vertical dust optical depth at 550 nm (default 0.5; Collienne's model keeps its "
+        "own thin aerosol)",
     )
     q.add_argument(
         "--sun-elevation",
