@@ -28,6 +28,7 @@ if TYPE_CHECKING:
 
 __all__ = [
     "ATMOSPHERES",
+    "EARTH_AEROSOL_KEYWORDS",
     "SET_PROVENANCE_SUFFIX",
     "build_atmosphere",
     "set_inputs",
@@ -36,6 +37,16 @@ __all__ = [
 
 #: Names of the whole atmosphere sets (CosmoScout VR's set of files each).
 ATMOSPHERES = ("mars", "earth", "earth-kobe2026")
+
+#: Keywords of :func:`build_atmosphere` that set the "earth" set's aerosols
+#: (:func:`~dustoptics.atmosphere.sets.earth_atmosphere`'s).
+EARTH_AEROSOL_KEYWORDS = (
+    "aerosol",
+    "aerosol_optical_depth",
+    "aerosol_reference_nm",
+    "turbidity",
+    "aerosol_relative_humidity_percent",
+)
 
 #: File of a set's provenance, beside CosmoScout VR's files: ``<name>_provenance.json``.
 SET_PROVENANCE_SUFFIX = "_provenance.json"
@@ -53,6 +64,7 @@ def build_atmosphere(
     ozone_csv: str | os.PathLike[str] | None = None,
     wavelength_nm: Sequence[float] | None = None,
     progress: TextIO | None = None,
+    **earth_aerosol: Any,
 ) -> Atmosphere:
     """The atmosphere set ``name``, computed.
 
@@ -61,9 +73,10 @@ def build_atmosphere(
     angles every 0.1 deg (a superset of the files' 1 deg), its number density
     set by the vertical ``optical_depth`` at ``reference_wavelength_nm``
     (<C_ext> computed there exactly).
-    Earth: standard air (Penndorf 1957, King factor), Kobe's aerosols and the
-    shipped ozone spectrum (Serdyuchenko et al. 2014) in Bruneton's layer on
-    CosmoScout VR's 15 wavelengths.
+    Earth: standard air (Penndorf 1957, King factor), OPAC's continental
+    average aerosol at optical depth 0.1 at 550 nm (or the aerosols
+    ``earth_aerosol`` names) and the shipped ozone spectrum (Serdyuchenko et
+    al. 2014) in Bruneton's layer on CosmoScout VR's 15 wavelengths.
     "earth-kobe2026": Kobe 2026's air, aerosols and ozone on his three
     wavelengths.
 
@@ -87,8 +100,14 @@ def build_atmosphere(
         Mars and Earth: the wavelengths, replacing CosmoScout VR's 15
         (:data:`~dustoptics.atmosphere.sets.COSMOSCOUT_WAVELENGTHS_NM`). [nm]
     progress : text stream, optional
-        Mars: where the dust's computation reports its progress
+        Where the dust's or aerosols' computation reports its progress
         (:class:`~dustoptics.models.build.TableBuilder`); None is silent.
+    **earth_aerosol
+        Earth: the aerosol keywords of
+        :func:`~dustoptics.atmosphere.sets.earth_atmosphere` (:data:`EARTH_AEROSOL_KEYWORDS`:
+        ``aerosol``, ``aerosol_optical_depth``, ``aerosol_reference_nm``,
+        ``turbidity``, ``aerosol_relative_humidity_percent``), checked before
+        any work.
 
     Returns
     -------
@@ -104,6 +123,7 @@ def build_atmosphere(
     from dustoptics.models.build import TableBuilder
 
     check_choice("name", name, ATMOSPHERES)
+    _check_earth_aerosol(name, earth_aerosol)
     grid_nm = sets.COSMOSCOUT_WAVELENGTHS_NM if wavelength_nm is None else wavelength_nm
     if name == "earth-kobe2026":
         if wavelength_nm is not None:
@@ -114,7 +134,10 @@ def build_atmosphere(
         return sets.earth_atmosphere_kobe2026()
     if name == "earth":
         ozone = "serdyuchenko2014" if ozone_csv is None else gases.read_ozone_csv(ozone_csv)
-        return sets.earth_atmosphere(wavelength_nm=grid_nm, ozone=ozone)
+        report = None if progress is None else (lambda line: print(line, file=progress))
+        if report is not None:
+            report("aerosols: OPAC's components by Mie (once per process)")
+        return sets.earth_atmosphere(wavelength_nm=grid_nm, ozone=ozone, **earth_aerosol)
     cfg = TableBuilder.from_name(dust, progress=progress).config if isinstance(dust, str) else dust
     if not cfg.phase.uses_mie:
         label = dust if isinstance(dust, str) else cfg.name
@@ -140,6 +163,24 @@ def build_atmosphere(
     )
 
 
+def _check_earth_aerosol(name: str, earth_aerosol: Mapping[str, Any]) -> None:
+    """The aerosol keywords: known, for "earth" only, and in range (before any work)."""
+    from dustoptics.atmosphere.sets import check_earth_aerosol
+
+    unknown = sorted(set(earth_aerosol) - set(EARTH_AEROSOL_KEYWORDS))
+    if unknown:
+        raise TypeError(
+            f"unexpected keyword {', '.join(unknown)}; the aerosol keywords are "
+            f"{', '.join(EARTH_AEROSOL_KEYWORDS)}"
+        )
+    if earth_aerosol and name != "earth":
+        raise ValueError(
+            f"{', '.join(sorted(earth_aerosol))} set the aerosols of the 'earth' set only; got "
+            f"name={name!r}"
+        )
+    check_earth_aerosol(**earth_aerosol)
+
+
 def set_inputs(
     name: str,
     *,
@@ -148,6 +189,7 @@ def set_inputs(
     reference_wavelength_nm: float = 550.0,
     ozone_csv: str | os.PathLike[str] | None = None,
     wavelength_nm: Sequence[float] | None = None,
+    **earth_aerosol: Any,
 ) -> dict[str, Any]:
     """The inputs of :func:`build_atmosphere` that change a set's numbers, for its record.
 
@@ -165,12 +207,16 @@ def set_inputs(
         Earth: the ozone file given, recorded with the SHA-256 of its bytes.
     wavelength_nm : sequence of float, optional
         The wavelengths given, if any. [nm]
+    **earth_aerosol
+        Earth: the aerosol keywords given (:data:`EARTH_AEROSOL_KEYWORDS`).
 
     Returns
     -------
     dict
         ``{"set": name, ...}``, JSON-serializable: the Mars dust, its optical
-        depth and reference wavelength; the Earth ozone file; the wavelengths.
+        depth and reference wavelength; the Earth ozone file and aerosols
+        (their name and vertical optical depth at their reference
+        wavelength); the wavelengths.
     """
     inputs: dict[str, Any] = {"set": name}
     if wavelength_nm is not None:
@@ -181,7 +227,19 @@ def set_inputs(
             optical_depth=optical_depth,
             reference_wavelength_nm=reference_wavelength_nm,
         )
-    elif ozone_csv is not None:
+    if name == "earth":
+        from dustoptics.atmosphere.sets import check_earth_aerosol
+
+        _check_earth_aerosol(name, earth_aerosol)
+        aerosol, tau = check_earth_aerosol(**earth_aerosol)
+        inputs["aerosol"] = {
+            "name": aerosol,
+            "optical_depth": tau,
+            "reference_wavelength_nm": float(earth_aerosol.get("aerosol_reference_nm", 550.0)),
+            "relative_humidity_percent": earth_aerosol.get("aerosol_relative_humidity_percent", 80),
+            **({"turbidity": earth_aerosol["turbidity"]} if "turbidity" in earth_aerosol else {}),
+        }
+    if name != "mars" and ozone_csv is not None:
         data = Path(ozone_csv).read_bytes()
         inputs["ozone_csv"] = {
             "path": str(Path(ozone_csv)),

@@ -91,6 +91,7 @@ __all__ = [
     "MARS_MOLECULE_MODELS",
     "Atmosphere",
     "Constituent",
+    "check_earth_aerosol",
     "earth_atmosphere",
     "earth_atmosphere_kobe2026",
     "mars_atmosphere",
@@ -573,6 +574,65 @@ def _check_aerosol_optical_depth(value: float) -> float:
     return float(value)
 
 
+def check_earth_aerosol(
+    *,
+    aerosol: str | None = None,
+    aerosol_optical_depth: float | None = None,
+    aerosol_reference_nm: float = 550.0,
+    turbidity: float | None = None,
+    aerosol_relative_humidity_percent: int = _aerosols.DEFAULT_RELATIVE_HUMIDITY_PERCENT,
+    has_table: bool = False,
+) -> tuple[str | None, float | None]:
+    """Check :func:`earth_atmosphere`'s aerosol keywords without any work.
+
+    Parameters
+    ----------
+    aerosol, aerosol_optical_depth, aerosol_reference_nm, turbidity, aerosol_relative_humidity_percent
+        As for :func:`earth_atmosphere`.
+    has_table : bool, default False
+        Whether an ``aerosol_table`` is given too.
+
+    Returns
+    -------
+    (str or None, float or None)
+        The aerosols' name (None for a given table) and the vertical optical
+        depth at ``aerosol_reference_nm`` they are set to (None: their own).
+
+    Raises
+    ------
+    ValueError
+        An unknown name, an optical depth, turbidity, humidity or reference
+        wavelength out of range, or both an optical depth and a turbidity.
+    """
+    if aerosol is not None and has_table:
+        raise ValueError(
+            f"give aerosol (a name) or aerosol_table (a Table), not both; got aerosol={aerosol!r} and a table"
+        )
+    if aerosol_optical_depth is not None and turbidity is not None:
+        raise ValueError(
+            "give aerosol_optical_depth or turbidity, not both; got "
+            f"aerosol_optical_depth={aerosol_optical_depth!r} and turbidity={turbidity!r}"
+        )
+    name = aerosol if aerosol is not None or has_table else DEFAULT_EARTH_AEROSOL
+    opac = name is not None and name != "kobe2026"
+    if name is not None:
+        check_choice("aerosol", name, EARTH_AEROSOLS)
+    ref = check_positive("aerosol_reference_nm", aerosol_reference_nm, unit="nm")
+    if opac and not 250.0 <= ref <= 2500.0:
+        raise ValueError(
+            f"aerosol_reference_nm must lie within OPAC's 250-2500 nm; got {aerosol_reference_nm!r}"
+        )
+    if opac:
+        _aerosols._check_humidity(aerosol_relative_humidity_percent)
+    if turbidity is not None:
+        return name, _check_aerosol_optical_depth(
+            _aerosols.preetham_optical_depth(turbidity, wavelength_nm=ref)
+        )
+    if aerosol_optical_depth is not None:
+        return name, _check_aerosol_optical_depth(aerosol_optical_depth)
+    return name, DEFAULT_EARTH_AEROSOL_OPTICAL_DEPTH if opac else None
+
+
 def _earth_aerosols(
     wl: np.ndarray,
     *,
@@ -587,38 +647,18 @@ def _earth_aerosols(
     top_altitude_m: float,
 ) -> tuple[Table, DensityProfile]:
     """The aerosols' table, at their optical depth, and profile (checked before any work)."""
-    if aerosol is not None and aerosol_table is not None:
-        raise ValueError(
-            f"give aerosol (a name) or aerosol_table (a Table), not both; got aerosol={aerosol!r} "
-            f"and aerosol_table {getattr(aerosol_table, 'name', aerosol_table)!r}"
-        )
-    if optical_depth is not None and turbidity is not None:
-        raise ValueError(
-            "give aerosol_optical_depth or turbidity, not both; got "
-            f"aerosol_optical_depth={optical_depth!r} and turbidity={turbidity!r}"
-        )
     if aerosol_table is not None and not isinstance(aerosol_table, Table):
         raise TypeError(f"aerosol_table must be a Table; got {type(aerosol_table).__name__}")
-    name = aerosol if aerosol is not None or aerosol_table is not None else DEFAULT_EARTH_AEROSOL
+    name, tau = check_earth_aerosol(
+        aerosol=aerosol,
+        aerosol_optical_depth=optical_depth,
+        aerosol_reference_nm=reference_nm,
+        turbidity=turbidity,
+        aerosol_relative_humidity_percent=relative_humidity_percent,
+        has_table=aerosol_table is not None,
+    )
     opac = name is not None and name != "kobe2026"
-    if name is not None:
-        check_choice("aerosol", name, EARTH_AEROSOLS)
-    ref = check_positive("aerosol_reference_nm", reference_nm, unit="nm")
-    if opac and not 250.0 <= ref <= 2500.0:
-        raise ValueError(
-            f"aerosol_reference_nm must lie within OPAC's 250-2500 nm; got {reference_nm!r}"
-        )
-    if opac:
-        _aerosols._check_humidity(relative_humidity_percent)
-    tau: float | None
-    if turbidity is not None:
-        tau = _check_aerosol_optical_depth(
-            _aerosols.preetham_optical_depth(turbidity, wavelength_nm=ref)
-        )
-    elif optical_depth is not None:
-        tau = _check_aerosol_optical_depth(optical_depth)
-    else:
-        tau = DEFAULT_EARTH_AEROSOL_OPTICAL_DEPTH if opac else None
+    ref = float(reference_nm)
     if not opac and tau is not None and not wl[0] <= ref <= wl[-1]:
         raise ValueError(
             f"aerosol_reference_nm must lie within the wavelengths [{wl[0]:g}, {wl[-1]:g}] nm "

@@ -19,6 +19,7 @@ from pathlib import Path
 from typing import Any, TextIO
 
 from dustoptics.atmosphere.build import ATMOSPHERES, DEFAULT_DUST
+from dustoptics.cli.aerosol_options import AEROSOL_OPTIONS, add_aerosol_options, aerosol_keywords
 from dustoptics.cli.checks import check_needs, check_outputs, check_set_outputs, no_expansion
 from dustoptics.cli.errors import PROG, UsageError
 from dustoptics.cli.export import same_table, write_table
@@ -116,6 +117,7 @@ def add_parser(sub: Any) -> None:
         metavar="FILE",
         help="Earth: ozone cross-sections (see dustoptics.atmosphere.gases.read_ozone_csv) in Bruneton's layer",
     )
+    add_aerosol_options(p)
 
 
 def table_builder(
@@ -136,12 +138,13 @@ def _refuse_unused_options(args: argparse.Namespace) -> None:
     def given(names: Sequence[str]) -> list[str]:
         return ["--" + n.replace("_", "-") for n in names if getattr(args, n, None) is not None]
 
+    unused_aerosol = given(AEROSOL_OPTIONS) if args.name != "earth" else []
     if args.name in ATMOSPHERES:
-        unused = given(_TABLE_OPTIONS)
+        unused = given(_TABLE_OPTIONS) + unused_aerosol
         unused += given(("dust", "optical_depth") if args.name == "earth" else ("ozone_csv",))
         where = f"'build {args.name}' (an atmosphere set)"
     else:
-        unused = given(_SET_OPTIONS)
+        unused = given(_SET_OPTIONS) + unused_aerosol
         if args.optical_depth is not None and "cosmoscout" not in (args.format or ()):
             unused.append("--optical-depth")
         where = f"'build {args.name}' with --format {','.join(args.format or DEFAULT_FORMATS)}"
@@ -252,6 +255,7 @@ def _run_set(args: argparse.Namespace) -> int:
                 f"dust {dust!r} has no cross-sections (a phase-function-only model); "
                 "choose a Mie preset"
             )
+    earth_aerosol = aerosol_keywords(args) if args.name == "earth" else {}
     check_set_outputs(args, dust=dust, optical_depth=optical_depth)
     atm = build_atmosphere(
         args.name,
@@ -261,6 +265,7 @@ def _run_set(args: argparse.Namespace) -> int:
         ozone_csv=args.ozone_csv,
         wavelength_nm=args.wavelengths_nm,
         progress=progress,
+        **earth_aerosol,
     )
     inputs = set_inputs(
         args.name,
@@ -269,6 +274,7 @@ def _run_set(args: argparse.Namespace) -> int:
         reference_wavelength_nm=args.reference_wavelength_nm,
         ozone_csv=args.ozone_csv,
         wavelength_nm=args.wavelengths_nm,
+        **earth_aerosol,
     )
     bruneton = args.format is not None and "bruneton" in args.format
     out_dir = args.out / args.name

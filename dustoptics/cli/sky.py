@@ -11,6 +11,7 @@ import argparse
 from pathlib import Path
 from typing import Any
 
+from dustoptics.cli.aerosol_options import add_aerosol_options, aerosol_keywords
 from dustoptics.cli.errors import PROG, UsageError
 from dustoptics.cli.parser import _positive_float, add_command
 from dustoptics.cli.report import say
@@ -114,6 +115,8 @@ def add_parser(sub: Any) -> None:
         q.add_argument("--force", action="store_true", help="replace existing files")
         q.add_argument("--quiet", action="store_true", help="no summary output")
         add_preview_options(q)
+        if planet == "earth":
+            add_aerosol_options(q)
     q = add_command(
         skies,
         "compare",
@@ -206,6 +209,7 @@ def run(args: argparse.Namespace) -> int:
             dust=getattr(args, "dust", "hybrid"),
             optical_depth=getattr(args, "optical_depth", 0.5),
             preview=approximations_from_args(args),
+            earth_aerosol=aerosol_keywords(args) if args.sky_command == "earth" else {},
         )
     # The job's own folder, DIR/NAME/, checked to stay inside DIR (NAME is a preset's).
     job = replace(job, out_dir=args.out / job.name)

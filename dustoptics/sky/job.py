@@ -17,9 +17,11 @@ from __future__ import annotations
 
 import io
 import os
-from dataclasses import KW_ONLY, dataclass
+from collections.abc import Mapping
+from dataclasses import KW_ONLY, dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Final
+from types import MappingProxyType
+from typing import TYPE_CHECKING, Any, Final
 
 from dustoptics._validation import check_choice
 
@@ -72,6 +74,12 @@ class SkyJob:
     models : tuple of str, optional
         compare: the presets compared (default
         :data:`~dustoptics.sky.compare.MARS_MODELS`).
+    earth_aerosol : mapping, optional
+        earth: the aerosol keywords of
+        :func:`~dustoptics.atmosphere.sets.earth_atmosphere` (``aerosol``,
+        ``aerosol_optical_depth``, ``aerosol_reference_nm``, ``turbidity``,
+        ``aerosol_relative_humidity_percent``); default the continental
+        average at optical depth 0.1 at 550 nm.
     preview : Approximations, optional
         mars, earth: also the sky an engine draws with these approximations,
         compared with the exact one (:func:`~dustoptics.sky.approximations.preview_sky`):
@@ -96,6 +104,7 @@ class SkyJob:
     sunset: bool = False
     space: bool = False
     models: tuple[str, ...] | None = None
+    earth_aerosol: Mapping[str, Any] = field(default_factory=dict)
     preview: Approximations | None = None
 
     def __post_init__(self) -> None:
@@ -114,6 +123,15 @@ class SkyJob:
                 )
             if not (0.0 <= self.albedo <= 1.0):
                 raise ValueError(f"albedo must be within [0, 1]; got {self.albedo!r}")
+        if self.earth_aerosol:
+            from dustoptics.atmosphere.sets import check_earth_aerosol
+
+            if self.kind != "earth":
+                raise ValueError(
+                    f"earth_aerosol sets an 'earth' job's aerosols; got kind {self.kind!r}"
+                )
+            check_earth_aerosol(**self.earth_aerosol)
+        object.__setattr__(self, "earth_aerosol", MappingProxyType(dict(self.earth_aerosol)))
 
     @property
     def _sun_elevation(self) -> float:
@@ -159,7 +177,7 @@ class SkyJob:
 
         if self.kind == "mars":
             return mars_sky_atmosphere(self.dust, optical_depth=self.optical_depth)
-        return sets.earth_atmosphere()
+        return sets.earth_atmosphere(**self.earth_aerosol)
 
     def files(self) -> dict[Path, bytes]:
         """Compute every file's bytes (the keys are :meth:`targets`).
