@@ -310,7 +310,8 @@ def parallel_kernel(dispatcher: Any) -> Callable[..., Any]:
     Parameters
     ----------
     dispatcher : numba.core.registry.CPUDispatcher
-        ``numba.njit(parallel=True, ...)`` of the kernel.
+        ``numba.njit(parallel=True, ...)`` of the kernel (the function itself with
+        numba's JIT off).
 
     Returns
     -------
@@ -324,7 +325,8 @@ def parallel_kernel(dispatcher: Any) -> Callable[..., Any]:
         where the OpenMP runtime would kill the process.
     """
 
-    @functools.wraps(dispatcher.py_func)
+    # With numba's JIT off (NUMBA_DISABLE_JIT=1) njit returns the Python function itself.
+    @functools.wraps(getattr(dispatcher, "py_func", dispatcher))
     def call(*args: Any) -> Any:
         with _parallel_lock:
             layer = select_threading_layer()

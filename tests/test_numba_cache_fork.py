@@ -111,3 +111,18 @@ def test_a_layer_the_user_chose_is_kept_and_gnu_openmp_in_a_child_is_a_clear_err
     assert "RuntimeError: _slant_kernel: this process was forked after" in done.stderr
     assert "NUMBA_THREADING_LAYER=workqueue" in done.stderr
     assert "fork() called from a process already using GNU OpenMP" not in done.stderr
+
+
+def test_parallel_kernel_calls_the_function_numba_jit_off_returns() -> None:
+    # With NUMBA_DISABLE_JIT=1 numba.njit returns the function itself (no py_func): the
+    # declaration must still import and call it (tests/test_numba_cache.py runs a table so).
+    from dustoptics._numba_cache import parallel_kernel
+
+    def add(a: int, b: int) -> int:
+        """Add."""
+        return a + b
+
+    wrapped = parallel_kernel(add)
+    assert wrapped(2, 3) == 5
+    assert wrapped.dispatcher is add  # type: ignore[attr-defined]
+    assert wrapped.__name__ == "add" and wrapped.__doc__ == "Add."
