@@ -539,6 +539,152 @@ def _accumulate(
     return ang, dang, sums, dsums
 
 
+@njit(cache=True, nogil=True)
+def _amplitude_sums_symmetric(
+    nmax: int,
+    a: np.ndarray,
+    b: np.ndarray,
+    da: np.ndarray,
+    db: np.ndarray,
+    pi_k: np.ndarray,
+    tau_k: np.ndarray,
+) -> np.ndarray:
+    """S1, S2, dS1/dm, dS2/dm (rows 0-3) at +mu and then -mu of the tables'
+    angles mu >= 0, shape (4, 2 n_mu), from pi_n, tau_n at mu (``pi_k[n - 1, i]``:
+    orders first).  pi_n(-mu) = (-1)^(n+1) pi_n(mu) and tau_n(-mu) = (-1)^n tau_n(mu),
+    so each sum is E + O at mu and E - O at -mu, E and O its terms of either
+    parity: half the work of both angles.  The loop over angles is innermost
+    and free of reductions, in real arithmetic, which the compiler vectorizes."""
+    n_mu = pi_k.shape[1]
+    # acc[j, i]: real and imaginary parts of E and O of S1, S2, dS1, dS2 (16 rows).
+    acc = np.zeros((16, n_mu))
+    for k in range(nmax):
+        n = k + 1.0
+        c = (2.0 * n + 1.0) / (n * (n + 1.0))
+        ar = c * a[k].real
+        ai = c * a[k].imag
+        br = c * b[k].real
+        bi = c * b[k].imag
+        dar = c * da[k].real
+        dai = c * da[k].imag
+        dbr = c * db[k].real
+        dbi = c * db[k].imag
+        # n odd (k even): the pi terms are even in mu, the tau terms odd; n even:
+        # the reverse.  Rows: 0-7 even, 8-15 odd parts of (re, im) of S1, S2, dS1, dS2.
+        pk = pi_k[k]
+        tk = tau_k[k]
+        if k % 2 == 0:
+            ep, ot = acc[0:8], acc[8:16]
+        else:
+            ep, ot = acc[8:16], acc[0:8]
+        # S1 = a pi + b tau, S2 = a tau + b pi (and the same with da, db).
+        for i in range(n_mu):
+            p = pk[i]
+            t = tk[i]
+            ep[0, i] += ar * p
+            ep[1, i] += ai * p
+            ot[0, i] += br * t
+            ot[1, i] += bi * t
+            ep[2, i] += br * p
+            ep[3, i] += bi * p
+            ot[2, i] += ar * t
+            ot[3, i] += ai * t
+            ep[4, i] += dar * p
+            ep[5, i] += dai * p
+            ot[4, i] += dbr * t
+            ot[5, i] += dbi * t
+            ep[6, i] += dbr * p
+            ep[7, i] += dbi * p
+            ot[6, i] += dar * t
+            ot[7, i] += dai * t
+    out = np.empty((4, 2 * n_mu), dtype=np.complex128)
+    for r in range(4):
+        for i in range(n_mu):
+            e = acc[2 * r, i] + 1j * acc[2 * r + 1, i]
+            o = acc[8 + 2 * r, i] + 1j * acc[8 + 2 * r + 1, i]
+            out[r, i] = e + o
+            out[r, n_mu + i] = e - o
+    return out
+
+
+@njit(cache=True, nogil=True)
+def _accumulate_symmetric(
+    m: complex,
+    x_nodes: np.ndarray,
+    weights: np.ndarray,
+    mu_half: np.ndarray,
+    per_particle: bool,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`_accumulate` (without the x direction) at the angles +mu_half and
+    then -mu_half (mu_half >= 0), from the amplitudes at mu_half alone
+    (:func:`_amplitude_sums_symmetric`): the same sums, half the work."""
+    n_nodes = x_nodes.shape[0]
+    n_w = weights.shape[1]
+    n_half = mu_half.shape[0]
+    n_mu = 2 * n_half
+    ang = np.zeros((n_w, 4, n_mu))
+    dang = np.zeros((2, 4, n_mu))
+    sums = np.zeros((n_w, N_SUMS))
+    dsums = np.zeros((2, N_SUMS))
+    if n_nodes == 0:
+        return ang, dang, sums, dsums
+    x_top = x_nodes[0]
+    for j in range(n_nodes):
+        x_top = max(x_top, x_nodes[j])
+    pi_t, tau_t = _pi_tau(mu_half, wiscombe_nmax(x_top))
+    pi_k = np.ascontiguousarray(pi_t.T)
+    tau_k = np.ascontiguousarray(tau_t.T)
+    for j in range(n_nodes):
+        x = x_nodes[j]
+        nmax = wiscombe_nmax(x)
+        a, b, da, db, dax, dbx = _coefficient_derivatives(m, x, nmax, False)
+        val, der = _sums(nmax, a, b, da, db, dax, dbx)
+        qs = val[1]
+        g = val[2] / qs
+        w0 = weights[j, 0]
+        for c in range(n_w):
+            wc = weights[j, c]
+            sums[c, 0] += wc
+            sums[c, 1] += wc * val[0]
+            sums[c, 2] += wc * val[1]
+            sums[c, 3] += wc * val[2]
+            sums[c, 4] += wc * g
+            sums[c, 5] += wc * val[3]
+        for d in range(2):
+            dsums[d, 1] += w0 * der[d, 0]
+            dsums[d, 2] += w0 * der[d, 1]
+            dsums[d, 3] += w0 * der[d, 2]
+            dsums[d, 4] += w0 * (der[d, 2] - g * der[d, 1]) / qs
+            dsums[d, 5] += w0 * der[d, 3]
+        amp = _amplitude_sums_symmetric(nmax, a, b, da, db, pi_k, tau_k)
+        scale = 1.0 / (2.0 * np.pi * qs) if per_particle else 1.0
+        for i in range(n_mu):
+            s1 = amp[0, i]
+            s2 = amp[1, i]
+            for d in range(2):
+                if d == 0:
+                    e1 = amp[2, i]
+                    e2 = amp[3, i]
+                else:
+                    e1 = 1j * amp[2, i]
+                    e2 = 1j * amp[3, i]
+                xi, xq, xu, xv, di, dq, du, dv = _stokes(s1, s2, e1, e2)
+                if d == 0:
+                    for c in range(n_w):
+                        wc = weights[j, c] * scale
+                        ang[c, 0, i] += wc * xi
+                        ang[c, 1, i] += wc * xq
+                        ang[c, 2, i] += wc * xu
+                        ang[c, 3, i] += wc * xv
+                rel = -der[d, 1] / qs if per_particle else 0.0
+                w = w0 * scale
+                dang[d, 0, i] += w * (di + rel * xi)
+                dang[d, 1, i] += w * (dq + rel * xq)
+                dang[d, 2, i] += w * (du + rel * xu)
+                dang[d, 3, i] += w * (dv + rel * xv)
+    return ang, dang, sums, dsums
+
+
 # ----------------------------------------------------------------------------
 # Public boundary
 # ----------------------------------------------------------------------------

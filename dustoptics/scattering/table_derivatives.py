@@ -59,7 +59,7 @@ from dustoptics.particles.sizedist_derivatives import (
     parameter_names,
 )
 from dustoptics.scattering import mie
-from dustoptics.scattering.mie_derivatives import _accumulate
+from dustoptics.scattering.mie_derivatives import _accumulate, _accumulate_symmetric
 from dustoptics.scattering.quadrature import (
     QuadratureDiagnostics,
     _gauss_points,
@@ -210,17 +210,16 @@ def _rule_nodes(
     return x, rule
 
 
-def _sums(
-    m: complex,
+def _weights(
     distribution: SizeDistribution,
     x: np.ndarray,
     rule: np.ndarray,
     *,
     k_um: float,
     dist_parameters: Sequence[str],
-    mu: np.ndarray,
-    per_particle: bool,
-) -> _Sums:
+) -> tuple[np.ndarray, np.ndarray]:
+    """Nodes sorted by size and their weight columns: n J, then dn/dp J per
+    distribution parameter, with the point-mass nodes of moving support ends."""
     r = x / k_um
     columns = [np.asarray(distribution.pdf(r), dtype=np.float64) * rule]
     columns += [number_density_derivative(distribution, r, p) * rule for p in dist_parameters]
@@ -237,14 +236,80 @@ def _sums(
         x = np.concatenate([x, extra_x])
         weights = np.vstack([weights, np.array(extra_w)])
     order = np.argsort(x, kind="stable")
-    ang, dang, sums, dsums = _accumulate(
-        m,
-        np.ascontiguousarray(x[order]),
-        np.ascontiguousarray(weights[order]),
-        mu,
-        per_particle,
-        False,
-    )
+    return np.ascontiguousarray(x[order]), np.ascontiguousarray(weights[order])
+
+
+def _sums(
+    m: complex,
+    distribution: SizeDistribution,
+    x: np.ndarray,
+    rule: np.ndarray,
+    *,
+    k_um: float,
+    dist_parameters: Sequence[str],
+    mu: np.ndarray,
+    per_particle: bool,
+) -> _Sums:
+    """Sums at the angles ``mu`` (none: the cross-sections alone)."""
+    xs, w = _weights(distribution, x, rule, k_um=k_um, dist_parameters=dist_parameters)
+    return _Sums(*_accumulate(m, xs, w, mu, per_particle, False))
+
+
+#: Gauss grids of the angular tiers: n_half = 16, 32, 48, 64, 96, 128, ... (steps
+#: of about 1.5); a node is summed on the smallest with n_half >= n_max + 1.
+def _tier_sizes(n_top: int) -> list[int]:
+    sizes = [16, 32, 48]
+    while sizes[-1] < n_top:
+        sizes.append(16 * math.ceil(sizes[-1] * 1.5 / 16))
+    return sizes
+
+
+def _legendre_sums(
+    m: complex,
+    distribution: SizeDistribution,
+    x: np.ndarray,
+    rule: np.ndarray,
+    *,
+    k_um: float,
+    dist_parameters: Sequence[str],
+    per_particle: bool,
+    lmax: int,
+) -> _Sums:
+    """Sums whose angular parts are Legendre coefficients (orders 0..lmax):
+    the nodes are summed in tiers of similar n_max, each on the Gauss grid its
+    largest sphere needs (2 n_half >= 2 n_max + 2 nodes integrate the products
+    of two amplitudes, degree <= 2 n_max, exactly), and each tier's sums
+    projected on P_l and added (the projection is linear)."""
+    xs, w = _weights(distribution, x, rule, k_um=k_um, dist_parameters=dist_parameters)
+    n_w = w.shape[1]
+    ang = np.zeros((n_w, 4, lmax + 1))
+    dang = np.zeros((2, 4, lmax + 1))
+    sums = np.zeros((n_w, 6))
+    dsums = np.zeros((2, 6))
+    nmax = np.array([mie.wiscombe_nmax(float(v)) for v in xs])
+    start = 0
+    for n_half in _tier_sizes(int(nmax.max()) + 1):
+        stop = int(np.searchsorted(nmax, n_half - 1, side="right"))
+        if stop <= start:
+            continue
+        mu_g, w_g = gauss_legendre(2 * n_half)
+        mu_half = np.ascontiguousarray(mu_g[n_half:])
+        w_half = np.ascontiguousarray(w_g[n_half:])
+        a, da, s_, ds_ = _accumulate_symmetric(
+            m, xs[start:stop], np.ascontiguousarray(w[start:stop]), mu_half, per_particle
+        )
+        top = min(lmax, 2 * int(nmax[start:stop].max()))
+        for src, dst in ((a, ang), (da, dang)):
+            for c in range(src.shape[0]):
+                for q in range(4):
+                    dst[c, q, : top + 1] += mie._legendre_project(
+                        mu_half, w_half, np.ascontiguousarray(src[c, q]), top
+                    )
+        sums += s_
+        dsums += ds_
+        start = stop
+        if start == xs.size:
+            break
     return _Sums(ang, dang, sums, dsums)
 
 
@@ -386,43 +451,45 @@ def _one_wavelength(
     x_coarse, rule_coarse = _rule_nodes(
         panels, wavelength_nm=wavelength_nm, settings=settings, halves=False
     )
-    nmax = mie.wiscombe_nmax(max(float(x_fine.max()), 1e-3) * 1.0001 + 1.0)
+    common = {"k_um": k_um, "dist_parameters": dist_parameters, "per_particle": per_particle}
+    x_top = max(float(x_fine.max()), float(x_coarse.max()), 1e-3)
+    nmax = mie.wiscombe_nmax(x_top * 1.0001 + 1.0)
     n_half = 16 * ((nmax + 1 + 15) // 16)
+    pair = []
     if 2 * n_half < mu_out.size:
-        mu_g, w_g = gauss_legendre(2 * n_half)
-        mu_half = np.ascontiguousarray(mu_g[n_half:])
-        w_half = np.ascontiguousarray(w_g[n_half:])
-        mu = np.ascontiguousarray(np.concatenate([mu_half, -mu_half]))
         lmax = 2 * nmax
         mu_eval = np.ascontiguousarray(mu_out)
 
         def project(f: np.ndarray) -> np.ndarray:
-            beta = mie._legendre_project(mu_half, w_half, np.ascontiguousarray(f), lmax)
-            return np.asarray(mie._legendre_evaluate(beta, mu_eval))
+            return np.asarray(mie._legendre_evaluate(np.ascontiguousarray(f), mu_eval))
 
+        for x, rule in ((x_fine, rule_fine), (x_coarse, rule_coarse)):
+            s_ = _legendre_sums(m, distribution, x, rule, lmax=lmax, **common)  # type: ignore[arg-type]
+            pair.append(
+                _angular(
+                    s_,
+                    n_dist,
+                    index_directions,
+                    per_particle=per_particle,
+                    n_q=n_q,
+                    project=project,
+                )
+            )
     else:
         mu = np.ascontiguousarray(mu_out)
-
-        def project(f: np.ndarray) -> np.ndarray:
-            return f
-
-    common = {"k_um": k_um, "dist_parameters": dist_parameters, "per_particle": per_particle}
-    fine = _angular(
-        _sums(m, distribution, x_fine, rule_fine, mu=mu, **common),  # type: ignore[arg-type]
-        n_dist,
-        index_directions,
-        per_particle=per_particle,
-        n_q=n_q,
-        project=project,
-    )
-    coarse = _angular(
-        _sums(m, distribution, x_coarse, rule_coarse, mu=mu, **common),  # type: ignore[arg-type]
-        n_dist,
-        index_directions,
-        per_particle=per_particle,
-        n_q=n_q,
-        project=project,
-    )
+        for x, rule in ((x_fine, rule_fine), (x_coarse, rule_coarse)):
+            s_ = _sums(m, distribution, x, rule, mu=mu, **common)  # type: ignore[arg-type]
+            pair.append(
+                _angular(
+                    s_,
+                    n_dist,
+                    index_directions,
+                    per_particle=per_particle,
+                    n_q=n_q,
+                    project=lambda f: f,
+                )
+            )
+    fine, coarse = pair
     for q, key in enumerate(angular_keys):
         values[key] = fine[:, q]
         errors[key] = np.max(np.abs(fine[:, q] - coarse[:, q]), axis=-1)

@@ -10,6 +10,7 @@ the difference from step 2h to step h (Richardson: the O(h^2) term shrinks 4x).
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -22,11 +23,13 @@ THETA = np.linspace(0.0, 180.0, 37)
 WL = [450.0, 700.0]
 
 
-def _table(m: complex, dist: do.SizeDistribution, **kw: object) -> do.Table:
-    return do.compute_optics(m, dist, WL, THETA, rtol=1e-5, workers=1, **kw)  # type: ignore[arg-type]
+def _table(
+    m: complex, dist: do.SizeDistribution, theta_deg: np.ndarray = THETA, **kw: Any
+) -> do.Table:
+    return do.compute_optics(m, dist, WL, theta_deg, rtol=1e-5, workers=1, **kw)
 
 
-def _shifted(m: complex, dist: do.SizeDistribution, p: str, h: float, **kw: object) -> do.Table:
+def _shifted(m: complex, dist: do.SizeDistribution, p: str, h: float, **kw: Any) -> do.Table:
     if p == "n":
         return _table(m + h, dist, **kw)
     if p == "k":
@@ -57,7 +60,7 @@ def _check_against_differences(
     dist: do.SizeDistribution,
     steps: dict[str, float],
     quantities: tuple[str, ...],
-    **kw: object,
+    **kw: Any,
 ) -> None:
     t = _table(m, dist, derivatives=tuple(steps), **kw)
     for p, h in steps.items():
@@ -77,6 +80,19 @@ def _check_against_differences(
                 f"d{q}/d{p}: exact {exact[bad][:3]}, finite difference {fd[bad][:3]}, "
                 f"tolerance {tol[bad][:3]}"
             )
+
+
+def test_on_many_angles_the_legendre_path_against_finite_differences() -> None:
+    """361 angles: the angular sums go through Gauss angles in tiers and Legendre
+    polynomials (fewer Gauss angles than output angles), the table's own path."""
+    _check_against_differences(
+        1.52 + 0.01j,
+        ModifiedGamma(r_eff_um=0.4, v_eff=0.15),
+        {"r_eff_um": 2e-3, "n": 1e-3, "k": 1e-4},
+        ("phase", "f12", "f33", "f34", "g"),
+        polarization=True,
+        theta_deg=np.linspace(0.0, 180.0, 361),
+    )
 
 
 def test_gamma_absorbing_every_output_against_finite_differences() -> None:
@@ -220,7 +236,7 @@ def test_through_the_mixing_rules_against_finite_differences(rule: str) -> None:
     assert t.derivatives is not None and t.derivatives.parameter_units == ("1", "1", "1")
     for p, h in (("hematite_fraction", 1e-3), ("host_n", 1e-3), ("host_k", 1e-4)):
 
-        def at(step: float) -> do.Table:
+        def at(step: float, p: str = p) -> do.Table:
             if p == "hematite_fraction":
                 mix = do.mars_dust(rule=rule, hematite_fraction=0.03 + step)
             else:
