@@ -46,8 +46,10 @@ _PLAIN_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]*")
 
 #: Formats that need the table's cross-sections, and those that need a number density too
 #: (their coefficients are N C [m^-1]).
-_NEEDS_CROSS_SECTIONS = ("bruneton", "cosmoscout", "disort", "libradtran")
-_NEEDS_NUMBER_DENSITY = ("bruneton", "cosmoscout", "libradtran")
+_NEEDS_CROSS_SECTIONS = ("bruneton", "cosmoscout", "disort", "libradtran", "libradtran-nc")
+_NEEDS_NUMBER_DENSITY = ("bruneton", "cosmoscout", "libradtran", "libradtran-nc")
+#: Formats that need the expansion coefficients.
+_NEEDS_EXPANSION = ("disort", "libradtran", "libradtran-nc")
 
 
 def check_needs(
@@ -72,7 +74,7 @@ def check_needs(
         Whether it has (will have) a number density.
     no_expansion : str, optional
         Why the table has (will have) no expansion coefficients, for the
-        ``disort`` and ``libradtran`` formats' message; None: it has them.
+        ``disort``, ``libradtran`` and ``libradtran-nc`` formats' message; None: it has them.
 
     Raises
     ------
@@ -85,7 +87,7 @@ def check_needs(
             f"--format {','.join(lacking)} needs cross-sections, which {name!r} does not have "
             "(a phase function only): build a Mie or hybrid model"
         )
-    lacking = sorted(set(formats) & {"disort", "libradtran"})
+    lacking = sorted(set(formats) & set(_NEEDS_EXPANSION))
     if lacking and no_expansion is not None:
         raise UsageError(
             f"--format {','.join(lacking)} needs the phase function's expansion coefficients, "

@@ -29,6 +29,7 @@ _FORMAT_HELP = {
     "hlsl": "NAME_phase.hlsl: the same lookup in HLSL",
     "ktx2": "NAME_phase_*.ktx2: the phase texture as KTX2",
     "libradtran": "NAME_aerosol_*.dat: libRadtran's (needs [optics] expansion, N0)",
+    "libradtran-nc": "NAME.mie.cdf: libRadtran's P11, P12, P33, P34 (needs [optics] expansion, N0)",
     "netcdf": "NAME.nc: the table and its provenance, CF netCDF-4",
     "npy": "NAME_phase_*.npy: the phase texture as NumPy .npy, JSON sidecar",
     "texture": "NAME_phase_theta.raw: float32 texture, JSON sidecar",

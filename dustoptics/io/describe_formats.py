@@ -40,6 +40,7 @@ SHADER_LANGUAGES = {".glsl": "GLSL", ".hlsl": "HLSL", ".wgsl": "WGSL"}
 _RT_FIRST_LINES = {
     "# dustoptics DISORT moments file": "DISORT phase-function moments",
     "# dustoptics libRadtran aerosol optical properties": "libRadtran aerosol optical properties",
+    "# dustoptics libRadtran aerosol species profile": "libRadtran aerosol species profile",
 }
 
 #: The ``model`` of every Bruneton JSON file.
@@ -108,6 +109,10 @@ def kind_of(path: Path) -> Callable[[Path, bool], str] | None:
         return describe_shader
     if suffix in (".txt", ".dat") and _first_line(path) in _RT_FIRST_LINES:
         return describe_rt_text
+    if suffix == ".cdf":
+        from dustoptics.io.rt.libradtran_netcdf import describe_libradtran_netcdf
+
+        return describe_libradtran_netcdf
     if suffix in (".exr", ".ktx2"):
         return describe_texture_container
     if suffix == ".png":
@@ -221,7 +226,9 @@ def describe_rt_text(path: Path, full: bool = True) -> str:
         first = np.array([float(r[0]) for r in rows])
     except (ValueError, IndexError):
         raise _format_error(path, "a data row does not start with a number") from None
-    if rows and all(len(r) == 2 for r in rows) and rows[0][1] == "NULL":
+    if rows and what == "libRadtran aerosol species profile":
+        lines.append(f"levels:          {len(rows)}, altitudes {_range(first, 'km')}")
+    elif rows and all(len(r) == 2 for r in rows) and rows[0][1] == "NULL":
         files = [r[1] for r in rows[1:]]
         lines.append(
             f"layers:          {len(files)}, altitudes {_range(first, 'km')}: {', '.join(files)}"

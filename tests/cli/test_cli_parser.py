@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import re
 import shlex
 
 import pytest
@@ -53,7 +54,7 @@ def test_the_format_list_comes_from_the_registry(capsys, monkeypatch):
 
     monkeypatch.setitem(io.FORMATS, "fancy", write_fancy)
     text = _help(capsys, "export")
-    assert "fancy       Write write output as NAME.fancy, atomically" in text
+    assert re.search(r"^  fancy +Write write output as NAME\.fancy, atomically$", text, re.M)
 
 
 def test_every_help_ends_with_an_example_that_parses(capsys):

@@ -1,16 +1,19 @@
-"""Plain-text files that radiative-transfer codes read.
+"""Files that radiative-transfer codes read.
 
 - :mod:`~dustoptics.io.rt.disort`: DISORT's phase-function moments with
   extinction and single-scattering albedo (format ``disort``).
 - :mod:`~dustoptics.io.rt.libradtran`: libRadtran's ``aerosol_file explicit``
   list and layer file (format ``libradtran``), with the same moments.
+- :mod:`~dustoptics.io.rt.libradtran_netcdf`: libRadtran's netCDF optical-property
+  file with the phase matrix P11, P12, P33, P34 in libRadtran's signs, and its
+  ``aerosol_species_file`` profile (format ``libradtran-nc``).
 
-Both need ``compute_optics(expansion=...)``.
+All need ``compute_optics(expansion=...)``.
 """
 
 from __future__ import annotations
 
-from dustoptics.io.rt import disort, libradtran
+from dustoptics.io.rt import disort, libradtran, libradtran_netcdf
 from dustoptics.io.rt.disort import DISORT_SUFFIX, disort_text, write_disort
 from dustoptics.io.rt.libradtran import (
     LIBRADTRAN_EXPLICIT_SUFFIX,
@@ -18,6 +21,7 @@ from dustoptics.io.rt.libradtran import (
     libradtran_texts,
     write_libradtran,
 )
+from dustoptics.io.rt.libradtran_netcdf import write_libradtran_netcdf
 
 __all__ = [
     "DISORT_SUFFIX",
@@ -26,7 +30,9 @@ __all__ = [
     "disort",
     "disort_text",
     "libradtran",
+    "libradtran_netcdf",
     "libradtran_texts",
     "write_disort",
     "write_libradtran",
+    "write_libradtran_netcdf",
 ]
