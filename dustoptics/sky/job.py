@@ -272,9 +272,7 @@ class SkyJob:
             from dustoptics.sky.space import limb_radiance
 
             limb = limb_radiance(medium, ground_albedo=self.albedo)
-            out[stem.with_name(f"{atm.name}_limb.png")] = png_bytes(
-                limb.image(exposure=self.exposure)
-            )
+            out[stem.with_name(f"{atm.name}_limb.png")] = limb.view_png(exposure=self.exposure)
         return out
 
     def _comparison_files(self) -> dict[Path, bytes]:

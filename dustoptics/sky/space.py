@@ -78,6 +78,8 @@ class LimbRadiance:
         Largest estimated relative remainder of the series of orders. [-]
     tol : float
         Requested tolerance of the series. [-]
+    planet_radius_m : float
+        The planet's radius, for :meth:`view` (0: unknown). [m]
     """
 
     name: str
@@ -90,15 +92,22 @@ class LimbRadiance:
     n_orders: int
     error_estimate: float
     tol: float
+    planet_radius_m: float = 0.0
 
     def xyz(self) -> np.ndarray:
         """CIE 1931 XYZ under sunlight, per unit solar illuminance. [sr^-1]"""
         return sunlit_xyz(self.wavelength_nm, self.radiance)
 
     def default_exposure(self) -> float:
-        """Exposure that puts the 99th percentile of the limb's luminance at white."""
-        y = self.xyz()[..., 1]
-        return float(1.0 / max(float(np.percentile(y, 99.0)), 1e-300))
+        """Exposure at which the brightest of the limb just reaches display white.
+
+        The largest linear sRGB channel of the computed lines of sight is put
+        at 1: no part of the limb clips (the dense low layers keep their colour).
+        """
+        from dustoptics import colour
+
+        brightest = float(np.max(colour.xyz_to_linear_srgb(self.xyz()), initial=0.0))
+        return 1.0 / brightest if brightest > 0.0 else 1.0
 
     def image(self, *, exposure: float | None = None) -> np.ndarray:
         """Display sRGB image: tangent altitude upward (rows), limb angle across.
@@ -110,6 +119,111 @@ class LimbRadiance:
         """
         e = self.default_exposure() if exposure is None else check_positive("exposure", exposure)
         return display_rgb(self.xyz()[::-1], e)
+
+    def view_xyz(
+        self, *, width: int = 1200, height: int = 400, half_angle_deg: float = 15.0
+    ) -> tuple[np.ndarray, tuple[float, float, float, float]]:
+        """The limb as a distant camera sees it: the planet's curved edge at true scale.
+
+        The image plane is perpendicular to the lines of sight.  Its centre
+        column passes through the limb point at limb angle 0; a pixel at
+        ``(u, v)`` km (u along the limb, v up from the ground there) lies at
+        ``rho = hypot(R + v, u)`` from the planet's centre and limb angle
+        ``psi = atan2(u, R + v)``, so its tangent altitude is ``rho - R``: the
+        sky's XYZ is interpolated bilinearly in (altitude, limb angle).
+        Pixels below the ground (the surface is not rendered) and above the
+        atmosphere are 0.
+
+        Parameters
+        ----------
+        width, height : int
+            Image size, 16 .. 8192 each. [pixels]
+        half_angle_deg : float
+            Limb angles shown either side of the centre, within the computed
+            ones. [deg]
+
+        Returns
+        -------
+        xyz : numpy.ndarray, shape (height, width, 3)
+            CIE XYZ per unit solar illuminance, top row highest. [sr^-1]
+        extent_km : tuple of float
+            (left, right, bottom, top) of the image in km, for a plot's axes.
+        """
+        from dustoptics.sky.scene import check_image_size
+
+        width = check_image_size("width", width)
+        height = check_image_size("height", height)
+        if not self.planet_radius_m > 0.0:
+            raise ValueError("view_xyz needs planet_radius_m (a LimbRadiance from limb_radiance)")
+        psi_grid, h_grid = self.limb_angle_deg, self.tangent_altitude_m
+        half = check_closed_interval(
+            "half_angle_deg", half_angle_deg, 0.5, float(min(-psi_grid[0], psi_grid[-1]))
+        )
+        r_km = self.planet_radius_m / 1e3
+        top_km = float(h_grid[-1]) / 1e3
+        u_max = r_km * math.sin(math.radians(half))
+        sagitta = r_km * (1.0 - math.cos(math.radians(half)))
+        # Room for the atmosphere over the whole arc, and as much planet below it.
+        v_top = 1.3 * top_km
+        v_bottom = -sagitta - 0.5 * top_km
+        u = (np.arange(width) + 0.5) / width * 2.0 * u_max - u_max
+        v = v_top - (np.arange(height) + 0.5) / height * (v_top - v_bottom)
+        uu, vv = np.meshgrid(u, v)
+        rho = np.hypot(r_km + vv, uu)
+        h_m = (rho - r_km) * 1e3
+        psi = np.degrees(np.arctan2(uu, r_km + vv))
+        inside = (h_m >= h_grid[0]) & (h_m <= h_grid[-1])
+        xyz = self.xyz()
+        ih = np.clip(np.searchsorted(h_grid, h_m) - 1, 0, h_grid.size - 2)
+        fh = np.clip((h_m - h_grid[ih]) / (h_grid[ih + 1] - h_grid[ih]), 0.0, 1.0)[..., None]
+        ip = np.clip(np.searchsorted(psi_grid, psi) - 1, 0, psi_grid.size - 2)
+        fp = np.clip((psi - psi_grid[ip]) / (psi_grid[ip + 1] - psi_grid[ip]), 0.0, 1.0)[..., None]
+        out = (
+            xyz[ih, ip] * (1 - fh) * (1 - fp)
+            + xyz[ih + 1, ip] * fh * (1 - fp)
+            + xyz[ih, ip + 1] * (1 - fh) * fp
+            + xyz[ih + 1, ip + 1] * fh * fp
+        )
+        out[~inside] = 0.0
+        return out, (-u_max, u_max, v_bottom, v_top)
+
+    def view_png(
+        self,
+        *,
+        width: int = 1200,
+        height: int = 400,
+        half_angle_deg: float = 15.0,
+        exposure: float | None = None,
+    ) -> bytes:
+        """PNG of :meth:`view_xyz` as a labelled figure: axes in km (the scale), title.
+
+        The exposure puts the brightest of the limb at white
+        (:meth:`default_exposure`).  Needs matplotlib (the ``plot`` extra).
+        """
+        import io
+
+        from dustoptics.sky.scene import check_png_support
+
+        check_png_support()
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        e = self.default_exposure() if exposure is None else check_positive("exposure", exposure)
+        xyz, extent = self.view_xyz(width=width, height=height, half_angle_deg=half_angle_deg)
+        fig, ax = plt.subplots(figsize=(width / 100.0 + 1.0, height / 100.0 + 1.2), dpi=100)
+        ax.imshow(display_rgb(xyz, e), extent=extent, interpolation="nearest")
+        ax.set_xlabel("along the limb [km]")
+        ax.set_ylabel("above the ground at the centre [km]")
+        ax.set_title(
+            f"{self.name}: the limb from space, Sun {self.sun_view_angle_deg:g} deg from the "
+            f"line of sight; the surface is not rendered"
+        )
+        buf = io.BytesIO()
+        fig.savefig(buf, format="png", metadata={"Software": None}, bbox_inches="tight")
+        plt.close(fig)
+        return buf.getvalue()
 
 
 def limb_geometry(
@@ -306,4 +420,5 @@ def limb_radiance(
         n_orders=n_orders,
         error_estimate=err,
         tol=float(tol),
+        planet_radius_m=float(medium.planet_radius_m),
     )

@@ -2,13 +2,15 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
 import dustoptics as do
 from dustoptics.atmosphere import sets
 from dustoptics.sky import Medium
-from dustoptics.sky.space import limb_radiance
+from dustoptics.sky.space import LimbRadiance, limb_radiance
 
 WL = [440.0, 670.0]
 
@@ -106,3 +108,57 @@ def test_limb_bad_input(dust: do.Table) -> None:
         limb_radiance(medium, tangent_altitude_m=np.array([-5.0]))
     with pytest.raises(ValueError, match="sun_view_angle_deg"):
         limb_radiance(medium, sun_view_angle_deg=0.0)
+
+
+def _layered_limb(planet_radius_m: float) -> LimbRadiance:
+    """A limb whose radiance depends on the tangent altitude only (exponential, 10 km)."""
+    wl = np.linspace(360.0, 830.0, 48)
+    h = np.linspace(0.0, 100e3, 101)
+    psi = np.arange(-30.0, 30.01, 1.0)
+    shape = np.exp(-h / 10e3)[:, None, None] * np.ones((1, psi.size, wl.size))
+    return LimbRadiance(
+        name="layered",
+        wavelength_nm=wl,
+        tangent_altitude_m=h,
+        limb_angle_deg=psi,
+        radiance=0.1 * shape,
+        sun_view_angle_deg=90.0,
+        field_sun_zenith_deg=np.array([90.0]),
+        n_orders=1,
+        error_estimate=0.0,
+        tol=1e-4,
+        planet_radius_m=planet_radius_m,
+    )
+
+
+def test_the_limb_view_follows_the_planets_curvature() -> None:
+    r_m = 3389.5e3
+    limb = _layered_limb(r_m)
+    xyz, (left, right, bottom, top) = limb.view_xyz(width=801, height=400, half_angle_deg=15.0)
+    assert right == pytest.approx(r_m / 1e3 * np.sin(np.radians(15.0)))
+    u = np.linspace(left, right, 802)[:-1] + (right - left) / 801 / 2
+    v = top - (np.arange(400) + 0.5) / 400 * (top - bottom)
+    y_ref = limb.xyz()[:, 0, 1]
+    for col in (400, 600, 790):  # the centre, and farther along the arc
+        for h_km in (5.0, 20.0, 50.0):
+            # The pixel nearest the point at altitude h above the curved ground.
+            v_h = np.sqrt((r_m / 1e3 + h_km) ** 2 - u[col] ** 2) - r_m / 1e3
+            row = int(np.argmin(np.abs(v - v_h)))
+            rho = np.hypot(r_m / 1e3 + v[row], u[col])
+            want = np.interp((rho - r_m / 1e3) * 1e3, limb.tangent_altitude_m, y_ref)
+            assert xyz[row, col, 1] == pytest.approx(want, rel=1e-9)
+    # Below the ground at the arc's ends and above the top: nothing.
+    assert xyz[-1, 0, 1] == 0.0 and xyz[0, 400, 1] == 0.0
+
+
+def test_the_limb_exposure_clips_nothing() -> None:
+    from dustoptics import colour
+
+    limb = _layered_limb(3389.5e3)
+    e = limb.default_exposure()
+    assert np.max(e * colour.xyz_to_linear_srgb(limb.xyz())) == pytest.approx(1.0, rel=1e-12)
+    with pytest.raises(ValueError, match="half_angle_deg"):
+        limb.view_xyz(half_angle_deg=45.0)
+    unknown = dataclasses.replace(limb, planet_radius_m=0.0)
+    with pytest.raises(ValueError, match="planet_radius_m"):
+        unknown.view_xyz()
