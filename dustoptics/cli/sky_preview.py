@@ -167,7 +167,9 @@ def approximations_from_args(args: argparse.Namespace) -> Approximations | None:
 
 
 def report_preview(args: argparse.Namespace, written: list[Path]) -> None:
-    """Print the preview's table, read back from the ``*_sky.nc`` just written."""
+    """Print the preview's table, read back from the ``*_sky.nc`` just written (if one was asked)."""
+    if not hasattr(args, "phase") or approximations_from_args(args) is None:
+        return
     import xarray as xr
 
     for path in written:
