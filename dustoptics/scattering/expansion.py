@@ -38,8 +38,14 @@ Sign convention: the table's F12 and F34 are Bohren & Huffman's S12 and S34
 (exp(-i w t), m = n + i k): ``F12 = (|S2|^2 - |S1|^2) / 2`` and
 ``F34 = Im(S2 S1*)`` up to the normalization, so F12 < 0 for Rayleigh scattering
 at 90 deg.  ``beta1`` and ``beta2`` expand these same F12 and F34.  Codes that
-follow Mishchenko, Travis & Lacis (2002) define the Stokes parameter V with
-the opposite sign; their b2 and beta2 are minus ours (b1 and beta1 agree).
+expand in Wigner's d-functions (Mishchenko, Travis & Lacis 2002, Eqs.
+4.75-4.80; scatrs) have both beta1 and beta2 of the opposite sign: their b1
+and b2 are the same functions as ours, expanded in d^l_02 = -P^l_02.
+Measured in ``tests/scattering/test_expansion.py::test_haze_l_against_scatrs``:
+Haze L's six coefficient sets agree with scatrs' to 1e-6, the two betas with
+the opposite sign.  libRadtran and the IPRT phase A files expand each
+element in Legendre polynomials instead, with P34 = -4 pi F34
+(:mod:`dustoptics.io.rt.libradtran_netcdf`).
 
 DISORT's phase-function moments are ``pmom_l = alpha1_l / (2 l + 1)``, the
 Legendre coefficients of P in the normalization (1/2) int P dmu = 1 with
