@@ -19,6 +19,12 @@ Python's shortest round-trip float text (:func:`dustoptics.io._text.number`):
     ``number_density_per_m3`` (``1e-9 N[m-3] cext[um2]`` in km-1); uvspec
     reads the layer file's name relative to its working directory.
 
+These files carry the phase function only (uvspec reads no other element
+from them: ``read_optprop_files`` in libRadtran 2.0.2's ``src/aerosol.c``);
+for polarized solvers, the format ``libradtran-nc``
+(:mod:`dustoptics.io.rt.libradtran_netcdf`) writes the phase matrix in
+libRadtran's signs.
+
 It needs the table's expansion coefficients (``compute_optics(...,
 expansion=True)`` or ``expansion=N``) and cross-sections; a table without
 them is refused with a message naming the option, since projecting the

@@ -48,9 +48,12 @@ Written atomically as one set (:func:`dustoptics.io._atomic.write_files`):
     amount * dz`` is ``N <C_ext> dz``.  libRadtran's own species files are
     per mass (ext per g m-3, the profile in g m-3); per particle number
     instead needs no particle density and gives the same product.  The uvspec
-    input (the library directory with its trailing slash; the species name is
-    the file name before ``.mie.cdf``)::
+    input (``aerosol_default`` switches aerosol on, as in libRadtran's example
+    ``examples/UVSPEC_AEROSOL_OPAC_POL.INP``; the library directory with its
+    trailing slash, since uvspec appends the species name to it; the species
+    name is the file name before ``.mie.cdf``)::
 
+        aerosol_default
         aerosol_species_library ./
         aerosol_species_file <name>_aerosol_species.dat <name>
 
@@ -299,7 +302,7 @@ def libradtran_species_text(table: Any, *, bottom_km: float = 0.0, top_km: float
     n_cm3 = float(table.number_density_per_m3) * 1e-6
     lines = [
         *header_lines(table, "dustoptics libRadtran aerosol species profile, format version 1"),
-        f"# uvspec input: aerosol_species_library ./ + aerosol_species_file "
+        f"# uvspec input: aerosol_default + aerosol_species_library ./ + aerosol_species_file "
         f"{stem + LIBRADTRAN_SPECIES_SUFFIX} {stem} (optical properties: {stem}"
         f"{LIBRADTRAN_NC_SUFFIX}, ext per particle per cm3)",
         f"# columns: altitude [km], number density of {stem} [cm-3] in the layer below the "
@@ -371,7 +374,7 @@ def describe_libradtran_netcdf(path: Path, full: bool = True) -> str:
         f"elements:        {attrs.get('phase_matrix_elements', '?')} (nphamat {nmom.shape[-1]})",
         f"moments:         up to {int(np.max(nmom))} per element; {attrs.get('normalization', '')}",
         f"angles:          {theta.size}, {theta[0]:.6g} .. {theta[-1]:.6g} deg",
-        f"ext:             {np.min(ext):.6g} .. {np.max(ext):.6g} km^-1 cm^3 (per particle per cm3)",
+        f"ext:             {np.min(ext):.6g} .. {np.max(ext):.6g} km^-1 cm^3 (per cm^-3)",
     ]
     if full:
         lines.append(f"signs:           {attrs.get('sign_convention', '?')}")
