@@ -52,7 +52,7 @@ DISTRIBUTIONS: dict[str, SizeDistribution] = {
     "log_normal": LogNormal(median_radius_um=0.5, sigma=0.4),
     "modified_log_normal": ModifiedLogNormal(r_eff_um=1.4, v_eff=0.35),
     "deirmendjian_c1": DeirmendjianGamma(alpha=6.0, b=1.5, gamma=1.0),
-    "deirmendjian_haze_l": DeirmendjianGamma(alpha=1.0, b=15.1186, gamma=0.5),
+    "deirmendjian_haze_l": DeirmendjianGamma(alpha=2.0, b=15.1186, gamma=0.5),
     "power_law": PowerLaw(exponent=3.0, r_min_um=0.1, r_max_um=10.0),
     "power_law_p0": PowerLaw(exponent=1.0, r_min_um=0.1, r_max_um=10.0),  # <ln r> series
     "truncated_inside": Truncated(
