@@ -45,7 +45,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -346,6 +346,7 @@ def retrieve(
     priors: Mapping[str, tuple[float, float]] | None = None,
     max_iterations: int = 50,
     tolerance: float = 1e-6,
+    progress: Callable[[int, float], None] | None = None,
 ) -> Retrieval:
     """Fit named parameters of a dust model to observations.
 
@@ -373,6 +374,9 @@ def retrieve(
     tolerance : float
         Relative tolerance of the cost, the parameters and the gradient
         (scipy's ftol, xtol, gtol). [-]
+    progress : callable, optional
+        Called as ``progress(tables, chi_square)`` after each table computed
+        (at most ``max_iterations`` + 1); it does not change the result.
 
     Returns
     -------
@@ -440,6 +444,10 @@ def retrieve(
         prior_list.append((names.index(p), float(mean), float(sd)))
     if not (isinstance(max_iterations, int) and max_iterations >= 1):
         raise ValueError(f"max_iterations must be a positive integer; got {max_iterations!r}")
+    if progress is not None and not callable(progress):
+        raise TypeError(
+            f"progress must be a callable progress(tables, chi_square); got {progress!r}"
+        )
     wavelengths = np.unique(
         np.concatenate(
             [o.wavelength_nm for o in obs]
@@ -452,6 +460,7 @@ def retrieve(
         f"prior:{names[i]}" for i, _, _ in prior_list
     )
     cache: dict[bytes, tuple[np.ndarray, np.ndarray, Table]] = {}
+    computed = [0]
 
     def evaluate(x: np.ndarray) -> tuple[np.ndarray, np.ndarray, Table]:
         key = np.asarray(x, dtype=np.float64).tobytes()
@@ -472,6 +481,9 @@ def retrieve(
                 jac.append(row)
             cache.clear()
             cache[key] = (np.concatenate(res), np.vstack(jac), table)
+            computed[0] += 1
+            if progress is not None:
+                progress(computed[0], float(cache[key][0] @ cache[key][0]))
         return cache[key]
 
     result = optimize.least_squares(

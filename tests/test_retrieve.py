@@ -169,3 +169,52 @@ def test_hematite_fraction_of_mars_dust_through_the_mixing_rule() -> None:
         fit.model["refractive_index"].name
         == do.mars_dust(hematite_fraction=fit.value("hematite_fraction")).name
     )
+
+
+# ---------------------------------------------------------------- the command line
+
+
+def test_command_line_fits_the_observations_in_a_file(
+    tmp_path: Any, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """dustoptics retrieve OBS.nc --model CONFIG --fit ...: the same numbers as the
+    library call, printed; the JSON result; usage errors exit 2 before any work."""
+    import json
+
+    from dustoptics.cli import main
+
+    obs, _ = _observations(seed=7)
+    obs = obs[["ssa", "extinction_ratio", "extinction_ratio_uncertainty"]].dropna("wavelength_nm")
+    path = tmp_path / "obs.nc"
+    obs.to_netcdf(path, engine="h5netcdf")
+    config = tmp_path / "dust.toml"
+    config.write_text(
+        'name = "start"\ndescription = "a start for the fit"\n'
+        '[material]\nmodel = "constant"\nn = 1.5\nk = 0.01\n'
+        '[size_distribution]\nmodel = "modified_gamma"\nr_eff_um = 0.5\nv_eff = 0.15\n',
+        encoding="utf-8",
+    )
+    out = tmp_path / "fit.json"
+    argv = [
+        "retrieve", str(path), "--model", str(config),
+        "--fit", "r_eff_um=0.1:3", "--fit", "k=0:0.05", "--out", str(out),
+    ]  # fmt: skip
+    assert main(argv) == 0
+    captured = capsys.readouterr()
+    assert "converged" in captured.out and "r_eff_um" in captured.out
+    assert "chi-square" in captured.err  # progress, one line per table
+    record = json.loads(out.read_text(encoding="utf-8"))
+    from dustoptics.models.files import load_config
+
+    direct = retrieve(
+        obs, model=load_config(config), parameters=["r_eff_um", "k"],
+        bounds={"r_eff_um": (0.1, 3.0), "k": (0.0, 0.05)},
+    )  # fmt: skip
+    assert record["values"] == direct.values.tolist()
+    assert record["parameters"] == ["r_eff_um", "k"]
+    # The file exists now: refused without --force, before any table.
+    assert main(argv) == 1
+    assert "already exist" in capsys.readouterr().err
+    assert main(["retrieve", str(path), "--model", str(config), "--fit", "k=0"]) == 2
+    assert "--fit must be PARAM=LO:HI" in capsys.readouterr().err
+    assert main(["retrieve", str(path), "--model", "no-such-preset", "--fit", "k=0:1"]) == 2

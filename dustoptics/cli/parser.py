@@ -19,7 +19,17 @@ from dustoptics.cli.errors import PROG
 __all__ = ["add_command", "build_parser"]
 
 #: Command modules of :mod:`dustoptics.cli`, in the order of the help's command list.
-_COMMAND_MODULES = ("build", "export", "info", "plot", "catalogue", "fit", "sweep", "sky")
+_COMMAND_MODULES = (
+    "build",
+    "export",
+    "info",
+    "plot",
+    "catalogue",
+    "fit",
+    "sweep",
+    "sky",
+    "retrieve",
+)
 
 
 class _Parser(argparse.ArgumentParser):

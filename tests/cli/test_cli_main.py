@@ -102,6 +102,7 @@ def test_the_documented_parser_has_every_command():
         "fit",
         "sweep",
         "sky",
+        "retrieve",
     ]
 
 

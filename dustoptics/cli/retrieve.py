@@ -1,0 +1,191 @@
+"""``dustoptics retrieve``: the dust parameters that fit observations in a file.
+
+Reads the observations (a netCDF file of ``ssa``, ``g``, ``extinction_ratio``
+and/or ``phase`` with their uncertainties, :mod:`dustoptics.retrieve`), takes
+the dust model from a preset or a TOML configuration (its values are the
+start), calls :func:`dustoptics.retrieve.retrieve` and prints the fitted
+values with their standard errors and correlations; ``--out FILE.json``
+writes the whole result.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+from typing import Any
+
+from dustoptics.cli.errors import PROG, UsageError
+from dustoptics.cli.parser import add_command
+
+__all__ = ["add_parser", "run"]
+
+
+def add_parser(sub: Any) -> None:
+    """Add the ``retrieve`` subcommand to the subparsers ``sub``."""
+    p = add_command(
+        sub,
+        "retrieve",
+        help="fit dust parameters (size, index, hematite fraction) to observations",
+        examples=(
+            f"{PROG} retrieve obs.nc --model blue-moons --fit r_eff_um=0.2:5 "
+            "--fit hematite_fraction=0:0.2",
+            f"{PROG} retrieve obs.nc --model my-dust.toml --fit v_eff=0.02:0.45 "
+            "--prior v_eff=0.2,0.05 --out fit.json",
+        ),
+    )
+    p.set_defaults(run=run)
+    p.add_argument(
+        "observations",
+        type=Path,
+        metavar="OBS.nc",
+        help="netCDF file of ssa, g, extinction_ratio and/or phase with uncertainties",
+    )
+    p.add_argument(
+        "--model",
+        required=True,
+        metavar="NAME_OR_TOML",
+        help="the dust to start from: a preset name or a configuration file (Mie dust)",
+    )
+    p.add_argument(
+        "--fit",
+        action="append",
+        required=True,
+        metavar="PARAM=LO:HI",
+        help="a parameter to fit and its bounds (repeat for more): the size distribution's "
+        "(r_eff_um, v_eff, ...), hematite_fraction, host_n, host_k",
+    )
+    p.add_argument(
+        "--prior",
+        action="append",
+        default=[],
+        metavar="PARAM=MEAN,SD",
+        help="a Gaussian prior on a fitted parameter (repeat for more)",
+    )
+    p.add_argument(
+        "--max-iterations",
+        type=int,
+        default=50,
+        metavar="N",
+        help="most tables computed with derivatives (default 50)",
+    )
+    p.add_argument("--out", type=Path, metavar="FILE.json", help="write the result as JSON")
+    p.add_argument("--force", action="store_true", help="replace an existing --out file")
+
+
+def _pairs(options: list[str], flag: str, sep: str) -> dict[str, tuple[float, float]]:
+    """``NAME=A<sep>B`` options as {name: (a, b)}; a malformed one is a usage error."""
+    out: dict[str, tuple[float, float]] = {}
+    for text in options:
+        name, eq, rest = text.partition("=")
+        parts = rest.split(sep)
+        try:
+            if not (eq and name and len(parts) == 2):
+                raise ValueError
+            out[name.strip()] = (float(parts[0]), float(parts[1]))
+        except ValueError:
+            form = "PARAM=LO:HI" if sep == ":" else "PARAM=MEAN,SD"
+            raise UsageError(f"{flag} must be {form}; got {text!r}") from None
+    return out
+
+
+def _model(name: str) -> Any:
+    from dustoptics.models.build import is_config_path
+    from dustoptics.models.files import load_config
+    from dustoptics.models.presets import load_preset
+
+    if is_config_path(name):
+        return load_config(name)
+    try:
+        return load_preset(name)
+    except ValueError as exc:
+        raise UsageError(f"--model: {exc}") from None
+
+
+def _write(result: Any, path: Path, force: bool) -> None:
+    import json
+
+    from dustoptics.io._atomic import check_targets, write_files
+
+    check_targets([path], overwrite=force)
+    record = {
+        "parameters": list(result.parameters),
+        "values": result.values.tolist(),
+        "standard_errors": result.standard_errors.tolist(),
+        "covariance": result.covariance.tolist(),
+        "initial_values": result.initial_values.tolist(),
+        "labels": list(result.labels),
+        "residuals": result.residuals.tolist(),
+        "chi_square": result.chi_square,
+        "iterations": result.iterations,
+        "function_evaluations": result.function_evaluations,
+        "converged": result.converged,
+        "message": result.message,
+    }
+    write_files({path: (json.dumps(record, indent=1) + "\n").encode()}, overwrite=force)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run ``retrieve``; returns the exit status.  The options, the model and the
+    output file are checked before the observations are read or any table computed."""
+    import sys
+
+    import numpy as np
+
+    from dustoptics.retrieve import retrieve
+
+    bounds = _pairs(args.fit, "--fit", ":")
+    priors = _pairs(args.prior, "--prior", ",")
+    if args.max_iterations < 1:
+        raise UsageError(f"--max-iterations must be >= 1; got {args.max_iterations}")
+    model = _model(args.model)
+    if args.out is not None:
+        from dustoptics.io._atomic import check_targets
+
+        check_targets([args.out], overwrite=args.force)
+    if not args.observations.is_file():
+        raise FileNotFoundError(f"{args.observations}: no such file")
+    import xarray as xr
+
+    with xr.open_dataset(args.observations) as ds:
+        observations = ds.load()
+
+    def progress(tables: int, chi_square: float) -> None:
+        print(f"table {tables}: chi-square {chi_square:.6g}", file=sys.stderr, flush=True)
+
+    result = retrieve(
+        observations,
+        model=model,
+        parameters=list(bounds),
+        bounds=bounds,
+        priors=priors or None,
+        max_iterations=args.max_iterations,
+        progress=progress,
+    )
+    state = "converged" if result.converged else "NOT converged"
+    print(
+        f"{args.model}: {state} after {result.iterations} iterations "
+        f"({result.function_evaluations} tables): {result.message}"
+    )
+    n = result.residuals.size
+    print(f"  chi-square {result.chi_square:.6g} from {n} residuals")
+    print(f"  {'parameter':>20s}  {'start':>12s}  {'fitted':>12s}  {'std. error':>12s}")
+    for p, v0, v, se in zip(
+        result.parameters,
+        result.initial_values,
+        result.values,
+        result.standard_errors,
+        strict=True,
+    ):
+        print(f"  {p:>20s}  {v0:12.6g}  {v:12.6g}  {se:12.3g}")
+    if len(result.parameters) > 1:
+        se = result.standard_errors
+        with np.errstate(divide="ignore", invalid="ignore"):
+            corr = result.covariance / np.outer(se, se)
+        print("  correlations:")
+        for i, p in enumerate(result.parameters):
+            row = "  ".join(f"{c:+6.3f}" for c in corr[i])
+            print(f"  {p:>20s}  {row}")
+    if args.out is not None:
+        _write(result, args.out, args.force)
+        print(f"wrote {args.out}")
+    return 0
