@@ -10,6 +10,10 @@
 - :mod:`~dustoptics.sky.space`: the limb seen from space;
 - :mod:`~dustoptics.sky.approximations`: the sky an engine draws (fitted phase
   function, RGB channels, float16, its angles) beside the exact one;
+- :mod:`~dustoptics.sky.compare`: the seed thesis's Mars models compared, and
+  against the rovers' sky colour;
+- :mod:`~dustoptics.sky.mer_search`: published Mars dusts against the rovers'
+  sky colour;
 - :mod:`~dustoptics.sky.job`: a sky as files (what ``dustoptics sky`` writes).
 """
 
