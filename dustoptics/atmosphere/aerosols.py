@@ -183,6 +183,18 @@ class AerosolComponent:
     opac_g: np.ndarray
 
     @property
+    def fraction_within_bounds(self) -> float:
+        """Share of the full log-normal's particles between ``r_min_um`` and ``r_max_um``. [-]
+
+        OPAC counts a component's number density over the whole log-normal and
+        integrates its optics between the bounds (its cross-sections per
+        particle are this fraction of the truncated distribution's).
+        """
+        s = math.log(self.sigma_g) * math.sqrt(2.0)
+        lo, hi = (math.log(r / self.mode_radius_um) / s for r in (self.r_min_um, self.r_max_um))
+        return 0.5 * (math.erf(hi) - math.erf(lo))
+
+    @property
     def distribution(self) -> SizeDistribution:
         """The log-normal, truncated to [r_min, r_max] and renormalized (as OPAC's)."""
         return LogNormal(
@@ -469,7 +481,9 @@ def aerosol_table(
 ) -> Table:
     """An OPAC aerosol type's optics: its components' Mie optics mixed by number.
 
-    With ``f_i = N_i / N`` the components' number fractions:
+    With ``f_i = N_i / N`` the components' number fractions (each times the
+    share of its log-normal within OPAC's radius bounds, as OPAC counts them,
+    :attr:`AerosolComponent.fraction_within_bounds`):
     ``<C_ext> = sum f_i <C_ext>_i``, ``<C_sca>`` likewise, and the phase
     function and ``g`` weighted by each component's scattering,
     ``P = sum f_i <C_sca>_i P_i / <C_sca>`` (an external mixture).  Each
@@ -525,9 +539,11 @@ def aerosol_table(
         comp = aerosol_component(comp_name, relative_humidity_percent=rh)
         if progress is not None:
             progress(f"aerosol {name}: Mie of {AEROSOL_COMPONENTS[comp_name]} ({comp_name})")
-        t = _component_table(comp_name, rh, tuple(wl.tolist()), tuple(theta.tolist()))
+        t = _component_table(
+            comp_name, comp.relative_humidity_percent, tuple(wl.tolist()), tuple(theta.tolist())
+        )
         assert t.cext_um2 is not None and t.csca_um2 is not None  # Mie computes them
-        f = density / total
+        f = density / total * comp.fraction_within_bounds
         cext += f * t.cext_um2
         csca += f * t.csca_um2
         phase_sum += (f * t.csca_um2)[:, None] * t.phase
