@@ -200,7 +200,7 @@ class FormatOptions:
     n_angles : int, optional
         texture, ktx2, exr, npy: samples along the angle axis.
     density : numpy.ndarray, optional
-        cosmoscout: relative density at evenly spaced altitudes (max 1).
+        cosmoscout: density relative to the ground at the texel centres (i + 1/2) T / N.
     prefix : str, optional
         glsl, hlsl, wgsl: prefix of every identifier.
     glsl_version : str, optional
@@ -376,11 +376,23 @@ def prepare_export(
             "the cosmoscout format needs a number density for beta [m^-1]: give optical_depth "
             "or a table with number_density_per_m3"
         )
-    samples = sample_profile(profile, top_altitude_m=top_altitude_m, n_altitudes=n_altitudes)
+    # At the texel centres (i + 1/2) T / N, where CosmoScout VR's preprocessor reads the values
+    # (dustoptics.io.csv.cosmoscout), as the atmosphere sets do.  The profile's own values (the
+    # first below 1): the table keeps its ground number density for every format, and beta
+    # times the written density is the coefficient at every sampled altitude.
+    half_texel = 0.5 * top_altitude_m / n_altitudes
+    samples = sample_profile(
+        profile,
+        bottom_altitude_m=half_texel,
+        top_altitude_m=top_altitude_m - half_texel,
+        n_altitudes=n_altitudes,
+    )
+    density = np.asarray(samples.relative_density) * samples.peak
     recorded = {
         "density_profile": "exponential",
         "scale_height_m": scale_height_m,
         "top_altitude_m": top_altitude_m,
         "n_altitudes": n_altitudes,
+        "density_sampling": "texel centres (i + 1/2) top_altitude_m / n_altitudes",
     }
-    return table, replace(options, density=samples.relative_density, profile=recorded)
+    return table, replace(options, density=density, profile=recorded)

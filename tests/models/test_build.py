@@ -119,10 +119,34 @@ def test_prepare_export_sets_the_density_profile_and_the_optical_depth(small_tab
     tau = table.number_density_per_m3 * table.cext_um2[i] * 1e-12 * length
     np.testing.assert_allclose(tau, 0.4, rtol=1e-12)
     assert options.density is not None and options.density.shape == (64,)
-    assert options.density.max() == 1.0
+    # The exponential at the 64 texel centres (i + 1/2) 120 km / 64, where CosmoScout VR's
+    # preprocessor reads them (dustoptics.io.csv.cosmoscout).
+    z = (np.arange(64) + 0.5) * 120e3 / 64
+    np.testing.assert_allclose(options.density, np.exp(-z / 11_100.0), rtol=1e-14)
     assert options.recorded("cosmoscout") == {
         "density_profile": "exponential",
         "scale_height_m": 11_100.0,
         "top_altitude_m": 120_000.0,
         "n_altitudes": 64,
+        "density_sampling": "texel centres (i + 1/2) top_altitude_m / n_altitudes",
     }
+
+
+def test_the_cosmoscout_files_give_the_coefficient_at_every_texel_centre(small_table, tmp_path):
+    """beta (written at the largest sample) times the written density is N0 C_ext exp(-z / H)
+    at the texel centres z = (i + 1/2) T / N, the altitudes CosmoScout VR's preprocessor reads."""
+    from dustoptics.io import read_cosmoscout_constituent
+    from dustoptics.io.outputs import write_formats
+
+    table, options = prepare_export(
+        small_table.replace(number_density_per_m3=1e8),
+        ["cosmoscout"],
+        scale_height_m=11_100.0,
+        n_altitudes=32,
+    )
+    write_formats(table, tmp_path, ["cosmoscout"], options=options)
+    c = read_cosmoscout_constituent(tmp_path, table.name)
+    z = (np.arange(32) + 0.5) * 120e3 / 32
+    want = 1e8 * table.cext_um2 * 1e-12 * np.exp(-z / 11_100.0)[:, None]
+    got = (c.beta_sca_per_m + c.beta_abs_per_m)[None, :] * c.density[:, None]
+    np.testing.assert_allclose(got, want, rtol=1e-6)  # the CSV's printed digits

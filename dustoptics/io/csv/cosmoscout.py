@@ -412,13 +412,22 @@ def write_cosmoscout_files(
     """The ``"cosmoscout"`` entry of :data:`dustoptics.io.FORMATS`: one constituent.
 
     As :func:`write_cosmoscout_constituent`, with ``name`` defaulting to the
-    table's name; ``density`` (the relative profile [-]) is required.
+    table's name; ``density`` (the profile relative to the table's number
+    density [-], at the texel centres) is required.  Its largest value ``m``
+    need not be 1 (an exponential sampled at the texel centres starts below
+    it): the files then hold ``density / m`` and the coefficients at ``m``
+    times the number density, the same ``beta`` times density everywhere.
     """
     if density is None:
         raise ValueError(
             "the cosmoscout format needs density=, the constituent's relative density at evenly "
-            "spaced altitudes (maximum 1)"
+            "spaced altitudes"
         )
+    density = np.asarray(density, dtype=float)
+    peak = float(np.max(density)) if density.size else 0.0
+    if density.ndim == 1 and 0.0 < peak < 1.0 and table.number_density_per_m3 is not None:
+        table = table.replace(number_density_per_m3=table.number_density_per_m3 * peak)
+        density = density / peak
     return write_cosmoscout_constituent(
         table, out_dir, name=table.name if name is None else name, density=density,
         n_theta=n_theta, overwrite=overwrite,
