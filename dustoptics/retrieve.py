@@ -370,7 +370,8 @@ def retrieve(
     priors : mapping of str to (float, float), optional
         Gaussian priors (mean, standard deviation) of some parameters.
     max_iterations : int
-        Most Jacobian evaluations (tables with derivatives). [-]
+        Most evaluations of the residuals (scipy's ``max_nfev``), each one table
+        with derivatives; one more table gives the result at the solution. [-]
     tolerance : float
         Relative tolerance of the cost, the parameters and the gradient
         (scipy's ftol, xtol, gtol). [-]

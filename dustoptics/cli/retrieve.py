@@ -66,7 +66,7 @@ def add_parser(sub: Any) -> None:
         type=int,
         default=50,
         metavar="N",
-        help="most tables computed with derivatives (default 50)",
+        help="most evaluations of the residuals, each one table with derivatives (default 50)",
     )
     p.add_argument("--out", type=Path, metavar="FILE.json", help="write the result as JSON")
     p.add_argument("--force", action="store_true", help="replace an existing --out file")
@@ -164,7 +164,7 @@ def run(args: argparse.Namespace) -> int:
     state = "converged" if result.converged else "NOT converged"
     print(
         f"{args.model}: {state} after {result.iterations} iterations "
-        f"({result.function_evaluations} tables): {result.message}"
+        f"({result.function_evaluations} evaluations): {result.message}"
     )
     n = result.residuals.size
     print(f"  chi-square {result.chi_square:.6g} from {n} residuals")
