@@ -542,10 +542,12 @@ def approximate_medium(
     model = a.fit_model
     for i, role in enumerate(medium.roles):
         t = tables[i]
-        if not _scatters(t):
-            continue
+        fitted = model is not None and role == "aerosols"
+        if not _scatters(t) or not (fitted or a.angles is not None or a.float16):
+            continue  # its phase function stays as it is
         phase, theta = np.asarray(t.phase, dtype=float), np.asarray(t.theta_deg, dtype=float)
-        if model is not None and role == "aerosols":
+        if fitted:
+            assert model is not None
             phase, fit = _fitted_phase(t, model, a.fit_at_nm)
             t = _replace_phase(t, theta, phase)
         if a.angles is not None:
@@ -945,6 +947,15 @@ def preview_sky(
     Returns
     -------
     SkyPreview
+
+    Raises
+    ------
+    ValueError
+        Approximations the medium cannot take (:func:`check_approximations`),
+        before any rendering; sky options beside ``exact``; an ``exact`` sky
+        of another Sun.
+    TypeError
+        ``approximations`` is not an :class:`Approximations`.
     """
     a = approximations
     if not isinstance(a, Approximations):
