@@ -5,6 +5,8 @@
   number density;
 - :mod:`~dustoptics.atmosphere.parametric`: Angstrom turbidity and anomalous
   diffraction (Costa et al. 2021);
+- :mod:`~dustoptics.atmosphere.aerosols`: the Earth's aerosol types of OPAC
+  (Hess et al. 1998) by Mie theory, and Preetham's turbidity;
 - :mod:`~dustoptics.atmosphere.sets`: an :class:`Atmosphere` of constituents
   (molecules, aerosols, ozone) and its builders for Mars and Earth;
 - :mod:`~dustoptics.atmosphere.build`: the sets by name, their dust computed
@@ -14,7 +16,7 @@
 from typing import Any
 
 from dustoptics._deprecated import moved_attribute
-from dustoptics.atmosphere import build, column, gases, parametric, sets
+from dustoptics.atmosphere import aerosols, build, column, gases, parametric, sets
 from dustoptics.atmosphere.build import ATMOSPHERES, build_atmosphere
 from dustoptics.atmosphere.sets import (
     Atmosphere,
@@ -27,6 +29,7 @@ __all__ = [
     "ATMOSPHERES",
     "Atmosphere",
     "Constituent",
+    "aerosols",
     "build",
     "build_atmosphere",
     "column",
