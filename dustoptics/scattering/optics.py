@@ -823,6 +823,9 @@ def recompute(
     index = inputs["refractive_index"]
     m = np.asarray(index["n"], dtype=np.float64) + 1j * np.asarray(index["k"], dtype=np.float64)
     particle: Any = m.tolist()
+    # Derivatives again, as recorded; a mixture's parameters (hematite_fraction, ...)
+    # are refused before any work: the recorded index values do not hold the mixture.
+    derivatives = tuple(inputs.get("derivatives", ()))
     if "core" in inputs:
         core = inputs["core"]
         m_core = np.asarray(core["n"], dtype=np.float64) + 1j * np.asarray(
@@ -847,6 +850,7 @@ def recompute(
         polarization=bool(inputs.get("polarization", False)),
         expansion=inputs.get("expansion", False),
         particle_density_kg_m3=inputs.get("particle_density_kg_m3"),
+        derivatives=derivatives,
     )
     # The same values of m; only the caller's description of them is restored.
     return table.replace(

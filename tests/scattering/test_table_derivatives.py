@@ -266,3 +266,15 @@ def test_through_the_mixing_rules_against_finite_differences(rule: str) -> None:
             tables = (_value_error(plus, q) + _value_error(minus, q)) / (2 * h)
             tol = 3.0 * (err + tables + np.abs(fd2 - fd) / 3.0) + 1e-10 * np.max(np.abs(exact))
             assert np.all(np.abs(exact - fd) <= tol), (rule, p, q, np.max(np.abs(exact - fd)))
+
+
+def test_recompute_gives_the_derivatives_again() -> None:
+    from dustoptics.scattering.optics import recompute
+
+    t = _table(1.5 + 0.01j, ModifiedGamma(r_eff_um=0.4, v_eff=0.15), derivatives=("v_eff", "k"))
+    assert recompute(t.provenance, workers=1).equals(t)
+    mixed = _table(
+        do.mars_dust(), ModifiedGamma(r_eff_um=0.4, v_eff=0.15), derivatives=("hematite_fraction",)
+    )
+    with pytest.raises(ValueError, match="unknown parameter 'hematite_fraction'"):
+        recompute(mixed.provenance)
