@@ -281,6 +281,11 @@ def mer_distance(x: float, y: float) -> tuple[float, float]:
     return out[0], out[1]
 
 
+def _signed(d: float) -> str:
+    """A distance outside the range: 4 decimals, or 2 digits when below 5e-5."""
+    return f"{d:+.4f}" if abs(d) >= 5e-5 else f"{d:+.1e}"
+
+
 @dataclass(frozen=True)
 class RoverRow:
     """One model at one Sun elevation against the rovers' range.
@@ -314,7 +319,7 @@ class RoverRow:
         """``"inside"`` or how far outside, e.g. ``"x +0.0125"``."""
         if self.inside:
             return "inside"
-        parts = [f"{k} {d:+.4f}" for k, d in (("x", self.dx), ("y", self.dy)) if d != 0.0]
+        parts = [f"{k} {_signed(d)}" for k, d in (("x", self.dx), ("y", self.dy)) if d != 0.0]
         return ", ".join(parts)
 
 

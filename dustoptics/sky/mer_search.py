@@ -49,6 +49,7 @@ from dustoptics.sky.compare import (
     MER_SKY_CHROMATICITY,
     _away_chromaticity,
     _grid,
+    _signed,
     mer_distance,
 )
 from dustoptics.sky.medium import Medium
@@ -224,7 +225,7 @@ class MerDustSearch:
                 + (
                     "inside"
                     if r.distance == 0.0
-                    else f"{r.distance:.4f} (x {r.dx:+.4f}, y {r.dy:+.4f})"
+                    else f"{_signed(r.distance)[1:]} (x {_signed(r.dx)}, y {_signed(r.dy)})"
                 )
             )
         lines.append("dusts:")
@@ -247,7 +248,7 @@ class MerDustSearch:
                 if n_in
                 else f"; closest: {c.dust.name}, tau {c.optical_depth:g}, albedo "
                 f"{c.ground_albedo:g}, Sun {c.sun_elevation_deg:g} degree, "
-                f"{c.distance:.4f} away"
+                f"{_signed(c.distance)[1:]} away"
             )
         )
         return "\n".join(lines)
