@@ -23,9 +23,7 @@ THETA = np.linspace(0.0, 180.0, 37)
 WL = [450.0, 700.0]
 
 
-def _table(
-    m: complex, dist: do.SizeDistribution, theta_deg: np.ndarray = THETA, **kw: Any
-) -> do.Table:
+def _table(m: Any, dist: do.SizeDistribution, theta_deg: np.ndarray = THETA, **kw: Any) -> do.Table:
     return do.compute_optics(m, dist, WL, theta_deg, rtol=1e-5, workers=1, **kw)
 
 
