@@ -110,9 +110,9 @@ def kind_of(path: Path) -> Callable[[Path, bool], str] | None:
     if suffix in (".txt", ".dat") and _first_line(path) in _RT_FIRST_LINES:
         return describe_rt_text
     if suffix == ".cdf":
-        from dustoptics.io.rt.libradtran_netcdf import describe_libradtran_netcdf
+        from dustoptics.io.rt import libradtran_netcdf as lrt
 
-        return describe_libradtran_netcdf
+        return lrt.describe_libradtran_netcdf if lrt.is_libradtran_netcdf(path) else None
     if suffix in (".exr", ".ktx2"):
         return describe_texture_container
     if suffix == ".png":

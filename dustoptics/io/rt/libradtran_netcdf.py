@@ -97,6 +97,7 @@ __all__ = [
     "LIBRADTRAN_NC_SUFFIX",
     "LIBRADTRAN_SPECIES_SUFFIX",
     "describe_libradtran_netcdf",
+    "is_libradtran_netcdf",
     "libradtran_matrix_moments",
     "libradtran_netcdf_bytes",
     "libradtran_species_text",
@@ -348,6 +349,16 @@ def write_libradtran_netcdf(
         },
         overwrite=overwrite,
     )
+
+
+def is_libradtran_netcdf(path: Path) -> bool:
+    """Whether ``path`` is a ``.mie.cdf`` file this format wrote (a look at its header only)."""
+    try:
+        with open(path, "rb") as f:
+            head = f.read(4096)
+    except OSError:
+        return False
+    return head.startswith(b"CDF") and _FILE_INFO.encode("ascii") in head
 
 
 def describe_libradtran_netcdf(path: Path, full: bool = True) -> str:

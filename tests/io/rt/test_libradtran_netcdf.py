@@ -301,3 +301,17 @@ def test_build_export_and_info_from_the_command_line(tmp_path: Path, capsys: Any
     assert "--format libradtran-nc needs the phase function's expansion coefficients" in err
     assert "expansion = true" in err
     assert not (tmp_path / "none").exists()
+
+
+def test_another_cdf_file_is_not_taken_for_one(tmp_path: Path) -> None:
+    from dustoptics.io import FormatError
+    from dustoptics.io.describe_formats import kind_of
+
+    other = tmp_path / "other.mie.cdf"
+    with netcdf_file(other, "w", version=1) as f:
+        f.file_info = "Netcdf file created using libRadtran-Mie-tool"
+        f.createDimension("nlam", 1)
+        f.createVariable("wavelen", "d", ("nlam",))[:] = [0.5]
+    assert kind_of(other) is None
+    with pytest.raises(FormatError, match="not a file dustoptics writes"):
+        describe_path(other)
