@@ -586,7 +586,22 @@ def alpha1_from_pmom(pmom: np.ndarray) -> np.ndarray:
 
 #: Quantities whose derivatives a table stores (the others are derived from
 #: them, :meth:`Table.derivative`); angular ones have shape (n_wavelength, n_theta).
-DERIVATIVE_FIELDS = ("phase", "f12", "f33", "f34", "g", "cext_um2", "csca_um2", "cback_um2")
+DERIVATIVE_FIELDS = (
+    "phase",
+    "f12",
+    "f33",
+    "f34",
+    "g",
+    "cext_um2",
+    "csca_um2",
+    "cback_um2",
+    "alpha1",
+    "alpha2",
+    "alpha3",
+    "alpha4",
+    "beta1",
+    "beta2",
+)
 #: Derived quantities whose derivatives follow from the stored ones.
 DERIVED_DERIVATIVES = ("ssa", "cabs_um2", "lidar_ratio_sr")
 #: The dimension of the parameters in :meth:`Table.to_xarray`.
@@ -1150,7 +1165,13 @@ class Table:
                 attrs["derived_from"] = f"derivatives of {DERIVED[key]} (chain rule)"
             name = derivative_variable(key)
             attrs["error_estimate"] = f"{name}_error_estimate"
-            dims = (par, wl, angle) if values.ndim == 3 else (par, wl)
+            dims = (
+                (par, wl, ORDER_DIM)
+                if key in EXPANSION_FIELDS
+                else (par, wl, angle)
+                if values.ndim == 3
+                else (par, wl)
+            )
             data[name] = (dims, values, attrs)
             err_attrs = {
                 "long_name": f"estimated error of {name} (largest over angle)",

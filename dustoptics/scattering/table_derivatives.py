@@ -59,6 +59,7 @@ from dustoptics.particles.sizedist_derivatives import (
     parameter_names,
 )
 from dustoptics.scattering import mie
+from dustoptics.scattering.expansion import greek_coefficients
 from dustoptics.scattering.mie_derivatives import _accumulate, _accumulate_symmetric
 from dustoptics.scattering.quadrature import (
     QuadratureDiagnostics,
@@ -355,6 +356,51 @@ def _angular(
     return np.array(out)
 
 
+#: The expansion coefficients, in the order of greek_coefficients' rows.
+EXPANSION_KEYS = ("alpha1", "alpha2", "alpha3", "alpha4", "beta1", "beta2")
+
+
+def _greek(
+    s: _Sums,
+    n_dist: int,
+    index_directions: Sequence[complex],
+    per_particle: bool,
+    n_order: int,
+    lmax: int,
+) -> np.ndarray:
+    """Derivatives of the expansion coefficients (orders 0..n_order - 1), shape
+    (n_parameter, 6, n_order), from the Legendre coefficients of the sums:
+    dF11, dF12, dF33, dF34 at Gauss nodes that integrate their products with
+    the generalized spherical functions exactly, then the same projection as
+    the table's (:func:`~dustoptics.scattering.expansion.greek_coefficients`,
+    linear in the elements; the table's division by alpha1_0, 1 to round-off,
+    has zero derivative since 2 pi int dF11 dmu = 0)."""
+    n_nodes = (n_order - 1 + lmax) // 2 + 2
+    mu_g, w_g = gauss_legendre(n_nodes)
+    mu = np.array(mu_g, dtype=np.float64)
+    weight = np.array(w_g, dtype=np.float64)
+
+    def at_nodes(f: np.ndarray) -> np.ndarray:
+        return np.asarray(mie._legendre_evaluate(np.ascontiguousarray(f), mu))
+
+    d_f = _angular(s, n_dist, index_directions, per_particle=per_particle, n_q=4, project=at_nodes)
+    four_pi = 4.0 * math.pi
+    return np.array(
+        [
+            greek_coefficients(
+                mu=mu,
+                weight=weight,
+                a1=four_pi * d[0],
+                a3=four_pi * d[2],
+                b1=four_pi * d[1],
+                b2=four_pi * d[3],
+                lmax=n_order - 1,
+            )
+            for d in d_f
+        ]
+    )
+
+
 def _cross(
     s: _Sums,
     n_dist: int,
@@ -404,8 +450,9 @@ def _one_wavelength(
     distribution = diagnostics.distribution
     settings = diagnostics.settings
     matrix = table.f12 is not None
-    n_q = 4 if matrix else 1
-    angular_keys = ("phase", "f12", "f33", "f34")[:n_q]
+    n_order = 0 if table.alpha1 is None else int(table.alpha1.shape[1])
+    n_q = 4 if (matrix or n_order) else 1
+    angular_keys = ("phase", "f12", "f33", "f34")[: 4 if matrix else 1]
     mu_out = np.cos(np.deg2rad(np.asarray(table.theta_deg, dtype=np.float64)))
     lossless = m.imag == 0.0
     n_dist = len(dist_parameters)
@@ -456,7 +503,8 @@ def _one_wavelength(
     nmax = mie.wiscombe_nmax(x_top * 1.0001 + 1.0)
     n_half = 16 * ((nmax + 1 + 15) // 16)
     pair = []
-    if 2 * n_half < mu_out.size:
+    greek_pair = []
+    if 2 * n_half < mu_out.size or n_order:
         lmax = 2 * nmax
         mu_eval = np.ascontiguousarray(mu_out)
 
@@ -475,6 +523,8 @@ def _one_wavelength(
                     project=project,
                 )
             )
+            if n_order:
+                greek_pair.append(_greek(s_, n_dist, index_directions, per_particle, n_order, lmax))
     else:
         mu = np.ascontiguousarray(mu_out)
         for x, rule in ((x_fine, rule_fine), (x_coarse, rule_coarse)):
@@ -493,6 +543,10 @@ def _one_wavelength(
     for q, key in enumerate(angular_keys):
         values[key] = fine[:, q]
         errors[key] = np.max(np.abs(fine[:, q] - coarse[:, q]), axis=-1)
+    if greek_pair:
+        for j, key in enumerate(EXPANSION_KEYS):
+            values[key] = greek_pair[0][:, j]
+            errors[key] = np.max(np.abs(greek_pair[0][:, j] - greek_pair[1][:, j]), axis=-1)
 
     no_angles = np.empty(0)
     cross_panels = diagnostics.cross_section_panels[i]

@@ -40,7 +40,12 @@ def _shifted(m: complex, dist: do.SizeDistribution, p: str, h: float, **kw: Any)
 
 
 def _value_error(t: do.Table, q: str) -> np.ndarray:
-    """The table's absolute error estimate of quantity q (per wavelength, angle)."""
+    """The table's absolute error estimate of quantity q (per wavelength, angle or order)."""
+    if q.startswith(("alpha", "beta")):
+        # expansion_error_estimate bounds each coefficient's error over (2 l + 1).
+        assert t.expansion_error_estimate is not None and t.alpha1 is not None
+        orders = np.arange(t.alpha1.shape[1])
+        return t.expansion_error_estimate[:, None] * (2.0 * orders + 1.0)
     if q in ("phase", "f12", "f33", "f34"):
         assert t.error_estimate is not None
         rel = t.error_estimate
@@ -100,6 +105,17 @@ def test_gamma_absorbing_every_output_against_finite_differences() -> None:
         {"r_eff_um": 2e-3, "v_eff": 2e-3, "n": 1e-3, "k": 1e-4},
         ("phase", "f12", "f33", "f34", "g", "cext_um2", "csca_um2", "cback_um2", "ssa"),
         polarization=True,
+    )
+
+
+def test_expansion_coefficients_against_finite_differences() -> None:
+    """alpha1..alpha4, beta1, beta2 of orders 0..16 (compute_optics(expansion=16))."""
+    _check_against_differences(
+        1.52 + 0.01j,
+        ModifiedGamma(r_eff_um=0.4, v_eff=0.15),
+        {"r_eff_um": 2e-3, "k": 1e-4},
+        ("alpha1", "alpha2", "alpha3", "alpha4", "beta1", "beta2"),
+        expansion=16,
     )
 
 

@@ -202,6 +202,8 @@ def _derivative_dims() -> dict[str, tuple[str, ...]]:
         dims[name] = (
             (PARAMETER_DIM, WAVELENGTH_DIM, ANGLE_DIM)
             if key in _ANGULAR
+            else (PARAMETER_DIM, WAVELENGTH_DIM, ORDER_DIM)
+            if key in EXPANSION_FIELDS
             else (PARAMETER_DIM, WAVELENGTH_DIM)
         )
         dims[f"{name}_error_estimate"] = (PARAMETER_DIM, WAVELENGTH_DIM)
@@ -438,7 +440,12 @@ def _expected_shapes(
         ORDER_DIM: (n_order,),
         PARAMETER_DIM: (n_parameter,),
     }
-    sizes = {PARAMETER_DIM: n_parameter, WAVELENGTH_DIM: n_wl, ANGLE_DIM: n_theta}
+    sizes = {
+        PARAMETER_DIM: n_parameter,
+        WAVELENGTH_DIM: n_wl,
+        ANGLE_DIM: n_theta,
+        ORDER_DIM: n_order,
+    }
     for key, dims in _derivative_dims().items():
         shapes[key] = tuple(sizes[d] for d in dims)
     for key in MATRIX_FIELDS:
