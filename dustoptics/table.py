@@ -1577,7 +1577,8 @@ class Table:
         quantity : str
             ``"phase"``, ``"f12"``, ``"f33"``, ``"f34"`` (shape (n_wavelength,
             n_theta)), ``"g"``, ``"cext_um2"``, ``"csca_um2"``, ``"cback_um2"``,
-            or the derived ``"ssa"``, ``"cabs_um2"``, ``"lidar_ratio_sr"``
+            the expansion coefficients ``"alpha1"`` ... ``"beta2"`` (shape
+            (n_wavelength, n_order)), or the derived ``"ssa"``, ``"cabs_um2"``, ``"lidar_ratio_sr"``
             (chain rule), where the table has them (:attr:`derivative_quantities`).
         parameter : str
             One of ``table.derivatives.parameters``.

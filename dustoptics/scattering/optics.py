@@ -467,7 +467,9 @@ def compute_optics(
         each wavelength's own), and a mixture's (``"volume_fraction"``, for
         :func:`~dustoptics.particles.mixing.mars_dust` also
         ``"hematite_fraction"``, ``"host_n"``, ``"host_k"``).  Exact
-        derivatives on the converged quadrature, with error estimates
+        derivatives of every output the table holds (the matrix and the
+        expansion coefficients too, when asked for) on the converged
+        quadrature, with error estimates
         (:mod:`dustoptics.scattering.table_derivatives`); read them with
         :meth:`Table.derivative`.  Default ``()``: none, and the table is the
         same to the bit as without the argument.

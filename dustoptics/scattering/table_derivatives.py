@@ -601,8 +601,9 @@ def table_derivatives(
     -------
     TableDerivatives
         Of ``phase`` (and ``f12``, ``f33``, ``f34`` where the table has the
-        matrix), ``g``, ``cext_um2``, ``csca_um2``, ``cback_um2``, with error
-        estimates (module docstring).
+        matrix, ``alpha1`` ... ``beta2`` where it has the expansion of a
+        polydisperse population), ``g``, ``cext_um2``, ``csca_um2``,
+        ``cback_um2``, with error estimates (module docstring).
     """
     diagnostics = table.diagnostics
     if diagnostics is None or table.refractive_index is None:
