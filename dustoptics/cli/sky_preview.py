@@ -103,11 +103,11 @@ def add_preview_options(parser: Any) -> None:
         type=_channels,
         default=None,
         metavar="ENGINE|R,G,B",
-        help="three channels instead of the spectrum: "
+        help="three channels instead of the spectrum, an engine's (without a value: bruneton) "
+        "or three wavelengths R,G,B [nm]: "
         + "; ".join(
             f"{k} {'/'.join(f'{v:g}' for v in nm)} nm" for k, nm in ENGINE_CHANNELS_NM.items()
-        )
-        + " (the default), or three wavelengths [nm]",
+        ),
     )
     g.add_argument(
         "--angles",

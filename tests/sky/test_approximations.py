@@ -263,3 +263,19 @@ def test_one_fit_for_all_wavelengths_is_bruneton_s_g(atmosphere, medium) -> None
         check_approximations(
             Approximations(phase="fit:cs@700", channels_nm=(680.0, 550.0, 440.0)), medium
         )
+
+
+def test_a_sky_grey_in_wavelength_keeps_its_colour_in_three_channels(exact) -> None:  # type: ignore[no-untyped-def]
+    # An identity of the white-sun reading: RGB_sun * L for every channel is the
+    # sunlight's own colour scaled by L, which is what the spectrum gives.
+    from dustoptics.sky.approximations import _channel_xyz
+
+    level = np.linspace(0.01, 0.2, exact.view_zenith_deg.size)[:, None, None]
+    grey = replace(exact, radiance=np.broadcast_to(level, exact.radiance.shape).copy())
+    channels = replace(
+        exact,
+        wavelength_nm=np.array([440.0, 550.0, 680.0]),
+        radiance=np.broadcast_to(level, exact.radiance.shape[:2] + (3,)).copy(),
+    )
+    got = _channel_xyz(grey, channels, np.array([2, 1, 0]))  # R, G, B = 680, 550, 440 nm
+    np.testing.assert_allclose(got, grey.xyz(), rtol=1e-12)
