@@ -38,13 +38,15 @@ gives the dry aerosol.
 
 Vertical profile
 ----------------
-Each type fills OPAC's mixing layer (2 km; 6 km for desert) with the number
-density falling as ``exp(-z / Z)`` (Z of Table 4: 8 km continental, 1 km
-maritime, 2 km desert, 99 km Arctic), sampled every 100 m and dropping to zero
-over the 100 m above the layer (a renderer's density texture cannot hold a
-step; CosmoScout VR's holds one sample every 78 m).  OPAC's free-tropospheric
-and stratospheric aerosol above the mixing layer is left out: the optical
-depth is set by the caller anyway, and the layer's shape is what matters.
+OPAC puts each type into a mixing layer (2 km; 6 km for desert) with the
+number density falling as ``exp(-z / Z)`` (Z of Table 4: 8 km continental,
+1 km maritime, 2 km desert, 99 km Arctic).  Renderers (Bruneton's model,
+CosmoScout VR) take exponential layers, so the type's profile
+(:attr:`AerosolType.profile`) is the exponential with OPAC's ground density
+and OPAC's mixing-layer column, scale height ``Z (1 - exp(-H / Z))``: 1.77 km
+continental, 0.86 km maritime, 1.90 km desert.  OPAC's free-tropospheric and
+stratospheric aerosol above the layer is left out: the optical depth is set
+by the caller anyway.
 
 Turbidity
 ---------
@@ -82,7 +84,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from dustoptics._validation import as_increasing_grid, check_choice, check_positive
-from dustoptics.atmosphere.column import PiecewiseLinearProfile
+from dustoptics.atmosphere.column import ExponentialProfile
 from dustoptics.particles.materials import TabulatedIndex
 from dustoptics.particles.sizedist import LogNormal, SizeDistribution
 from dustoptics.table import Provenance, Source, Table
@@ -142,8 +144,6 @@ _HEADER: Final = (
     "component,rh_percent,mode_radius_um,sigma_g,r_min_um,r_max_um,wavelength_um,n,k,"
     "opac_ext_per_km,opac_ssa,opac_g"
 )
-#: Node spacing of the mixing-layer profile and the ramp above it. [m]
-_PROFILE_STEP_M: Final = 100.0
 
 
 @dataclass(frozen=True)
@@ -240,17 +240,10 @@ class AerosolType:
         return float(sum(self.number_density_per_cm3.values()))
 
     @property
-    def profile(self) -> PiecewiseLinearProfile:
-        """Relative number density: ``exp(-z / Z)`` in the mixing layer, then zero.
-
-        Nodes every 100 m up to the layer top, and a last node of 0 100 m above it.
-        """
-        top = self.mixing_height_m
-        z = np.arange(0.0, top + 0.5 * _PROFILE_STEP_M, _PROFILE_STEP_M)
-        rho = np.exp(-z / self.scale_height_m)
-        return PiecewiseLinearProfile(
-            altitude_m=(*z.tolist(), top + _PROFILE_STEP_M), density=(*rho.tolist(), 0.0)
-        )
+    def profile(self) -> ExponentialProfile:
+        """Exponential with OPAC's mixing-layer column: scale height ``Z (1 - exp(-H / Z))``."""
+        z, h = self.scale_height_m, self.mixing_height_m
+        return ExponentialProfile(scale_height_m=z * -math.expm1(-h / z))
 
 
 def _type(

@@ -766,8 +766,9 @@ def earth_atmosphere(
         Any aerosol optics with cross-sections and ``number_density_per_m3``,
         at ``wavelength_nm``, instead of ``aerosol``.
     aerosol_profile : DensityProfile, optional
-        Default: the OPAC type's mixing layer
-        (:attr:`~dustoptics.atmosphere.aerosols.AerosolType.profile`);
+        Default: the OPAC type's, an exponential with its mixing layer's
+        column (:attr:`~dustoptics.atmosphere.aerosols.AerosolType.profile`;
+        1.77 km for the continental types);
         exponential, 1200 m (Kobe, Bruneton) for the others.
     aerosol_g : float, default 0.76
         Cornette-Shanks ``g`` of Kobe's aerosols. [-]

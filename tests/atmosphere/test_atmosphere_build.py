@@ -87,6 +87,12 @@ def test_set_inputs_records_what_changes_the_numbers(tmp_path):
         "set": "earth",
         "wavelengths_nm": [400.0, 500.0],
         "ozone_csv": {"path": str(ozone), "sha256": hashlib.sha256(b"some bytes\n").hexdigest()},
+        "aerosol": {
+            "name": "continental-average",
+            "optical_depth": 0.1,
+            "reference_wavelength_nm": 550.0,
+            "relative_humidity_percent": 80,
+        },
     }
 
 

@@ -141,7 +141,7 @@ def test_parameters_of_the_mars_set(mars) -> None:
 
 
 def test_earth_set_carries_the_ozone_layer() -> None:
-    p = bruneton_parameters(atm.earth_atmosphere())
+    p = bruneton_parameters(atm.earth_atmosphere(aerosol="kobe2026"))
     assert len(p.absorption_density) == 2
     ozone = atm.earth_atmosphere().constituent("ozone").table
     np.testing.assert_array_equal(p.absorption_extinction_per_m, ozone.beta_abs_per_m)
@@ -299,7 +299,8 @@ def test_orders_by_hand_at_his_wavelengths(mars) -> None:
     k = max(next(k for k in range(1, 60) if poisson.sf(k, v) / -math.expm1(-v) <= 0.005) for v in m)
     assert bruneton_precomputation(mars).num_scattering_orders == k == 12
     # Earth (his own atmosphere, Kobe's aerosols): 6, near his 4.
-    assert bruneton_precomputation(atm.earth_atmosphere()).num_scattering_orders == 6
+    kobe = atm.earth_atmosphere(aerosol="kobe2026")
+    assert bruneton_precomputation(kobe).num_scattering_orders == 6
 
 
 def test_options_the_set_cannot_live_with_are_refused(tmp_path: Path, mars) -> None:
