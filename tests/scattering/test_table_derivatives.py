@@ -292,3 +292,25 @@ def test_recompute_gives_the_derivatives_again() -> None:
     )
     with pytest.raises(ValueError, match="unknown parameter 'hematite_fraction'"):
         recompute(mixed.provenance)
+
+
+def test_bimodal_mixture_and_threads() -> None:
+    """A mixture of two modes: a mode's radius and a relative number density; the
+    result does not depend on the number of threads."""
+    from dustoptics.particles.custom_sizedist import MultiModal
+
+    dist = MultiModal(
+        modes=(ModifiedGamma(r_eff_um=0.2, v_eff=0.1), ModifiedGamma(r_eff_um=0.6, v_eff=0.1)),
+        relative_number_densities=(10.0, 1.0),
+    )
+    _check_against_differences(
+        1.5 + 0.005j,
+        dist,
+        {"modes[1].r_eff_um": 2e-3, "relative_number_densities[0]": 1e-2},
+        ("phase", "g", "cext_um2", "csca_um2"),
+    )
+    names = ("modes[0].v_eff", "k")
+    one = do.compute_optics(1.5 + 0.005j, dist, WL, THETA, workers=1, derivatives=names)
+    two = do.compute_optics(1.5 + 0.005j, dist, WL, THETA, workers=2, derivatives=names)
+    assert one.equals(two)
+    assert one.derivatives is not None and one.derivatives.parameter_units == ("1", "1")
