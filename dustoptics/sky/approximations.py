@@ -88,6 +88,7 @@ import numpy as np
 
 from dustoptics import colour
 from dustoptics._validation import check_closed_interval
+from dustoptics.atmosphere.sets import Atmosphere
 from dustoptics.scattering.fit import FIT_MODEL_ALIASES, FIT_MODELS, FitResult
 from dustoptics.scattering.tabulated_phase import mean_cosine, sphere_integral
 from dustoptics.sky.medium import Medium, legendre_moments
@@ -365,8 +366,15 @@ def smallest_angle_count(tables: Any, sampling: str, *, tolerance: float) -> int
     return high
 
 
-def check_approximations(approximations: Approximations, medium: Medium) -> None:
-    """Refuse, before any rendering, approximations the medium cannot take.
+def check_approximations(approximations: Approximations, medium: Medium | Atmosphere) -> None:
+    """Refuse, before any rendering, approximations the set cannot take.
+
+    Parameters
+    ----------
+    approximations : Approximations
+    medium : Medium or Atmosphere
+        The set (its tables are all the checks read: an atmosphere can be
+        checked before its medium is built).
 
     Raises
     ------
@@ -377,7 +385,10 @@ def check_approximations(approximations: Approximations, medium: Medium) -> None
         scattering constituent (the message names the smallest count that does).
     """
     a = approximations
-    wl = medium.wavelength_nm
+    wl = np.asarray(medium.wavelength_nm, dtype=float)
+    set_tables = (
+        medium.tables if isinstance(medium, Medium) else tuple(c.table for c in medium.constituents)
+    )
     at = a.fit_at_nm
     if at is not None:
         low, high = (min(a.channels_nm), max(a.channels_nm)) if a.channels_nm else (wl[0], wl[-1])
@@ -395,7 +406,7 @@ def check_approximations(approximations: Approximations, medium: Medium) -> None
                     f"{wl[0]:g}-{wl[-1]:g} nm; channels within them would do (nothing is "
                     "extrapolated)"
                 )
-    tables = [t for t in medium.tables if _scatters(t)]
+    tables = [t for t in set_tables if _scatters(t)]
     if a.angles is not None:
         sampling, n = _parse_angles(a.angles)
         worst = max(_angle_error(t, sampling, n) for t in tables)

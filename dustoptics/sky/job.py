@@ -222,11 +222,11 @@ class SkyJob:
         from dustoptics.sky.scene import png_bytes, sky_radiance, sun_angular_radius_deg_of
 
         atm = self.atmosphere()
-        medium = Medium.from_atmosphere(atm)
-        if self.preview is not None:  # refused before any rendering
+        if self.preview is not None:  # refused before the medium and the sky
             from dustoptics.sky.approximations import check_approximations
 
-            check_approximations(self.preview, medium)
+            check_approximations(self.preview, atm)
+        medium = Medium.from_atmosphere(atm)
         sun_alpha = sun_angular_radius_deg_of(atm.sun_distance_m)  # the disc in the images
         sky = sky_radiance(
             medium,
