@@ -6,8 +6,10 @@ single-scattering albedo, g) together with their derivatives with respect to
 named parameters: the size distribution's (any of
 :func:`dustoptics.particles.sizedist_derivatives.parameter_names`) and the real
 and imaginary parts of the refractive index, ``"n"`` and ``"k"``.  It is a
-reference for the later integration into ``compute_optics`` (issue 30): its
-own fixed quadrature, simple and checked, not the adaptive one.
+reference: its own fixed quadrature, simple and checked, not the adaptive
+one.  ``compute_optics(derivatives=...)`` sums the same derivatives on the
+table's converged nodes instead (:mod:`dustoptics.scattering.table_derivatives`,
+tested against this module).
 
 How the parts combine
 ---------------------
