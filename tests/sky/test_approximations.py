@@ -164,10 +164,12 @@ def _angle_error(table, n: int) -> float:  # type: ignore[no-untyped-def]
     return float(np.max(np.abs(np.asarray(got) / np.asarray(own) - 1.0)))
 
 
-def test_too_few_angles_refused_with_the_smallest_that_does(medium) -> None:  # type: ignore[no-untyped-def]
+def test_too_few_angles_refused_with_the_smallest_that_does(atmosphere, medium) -> None:  # type: ignore[no-untyped-def]
     with pytest.raises(ValueError, match=r"the smallest that does is theta:(\d+)") as info:
         check_approximations(Approximations(angles="theta:19"), medium)
     need = int(info.value.args[0].rsplit("theta:", 1)[1])
+    with pytest.raises(ValueError, match=f"the smallest that does is theta:{need}$"):
+        check_approximations(Approximations(angles="theta:19"), atmosphere)  # before the medium
     scattering = [t for t in medium.tables if np.any(t.csca_um2 > 0)]
     assert max(_angle_error(t, need) for t in scattering) <= 0.005
     assert max(_angle_error(t, need - 1) for t in scattering) > 0.005
