@@ -20,8 +20,10 @@ Written atomically as one set (:func:`dustoptics.io._atomic.write_files`):
     whose ``nmom`` moments are all there is (``complete_moments = 1``).
 
     The four elements, in libRadtran's order for spheres (``ip_red`` in
-    ``src/ancillary.c`` maps them to P11, P12, P33, P34, P22 = P11, P44 =
-    P33), and their relation to the table (:mod:`dustoptics.scattering.expansion`)::
+    ``src/ancillary.c`` maps them to its six P11, P12, P33, P34, P22 = P11,
+    P44 = P33; MYSTIC's phase matrix in ``libsrc_c/mystic.c`` puts P34 in row
+    3, column 4 and -P34 in row 4, column 3), and their relation to the table
+    (:mod:`dustoptics.scattering.expansion`)::
 
         P11 = 4 pi F11 = a1      P12 = 4 pi F12 = b1
         P33 = 4 pi F33 = a3      P34 = -4 pi F34 = -b2
