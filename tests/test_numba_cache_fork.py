@@ -10,6 +10,7 @@ each test runs a fresh interpreter (the test process may have started another la
 
 from __future__ import annotations
 
+import importlib
 import os
 import subprocess
 import sys
@@ -96,7 +97,7 @@ def test_a_process_that_rendered_a_sky_forks_a_child_that_renders_it_again() -> 
 
 def test_a_layer_the_user_chose_is_kept_and_gnu_openmp_in_a_child_is_a_clear_error() -> None:
     try:
-        from numba.np.ufunc import omppool
+        omppool = importlib.import_module("numba.np.ufunc.omppool")
     except ImportError:
         pytest.skip("numba without its OpenMP threading layer")
     if getattr(omppool, "openmp_vendor", "GNU") != "GNU":
