@@ -286,6 +286,12 @@ def _signed(d: float) -> str:
     return f"{d:+.4f}" if abs(d) >= 5e-5 else f"{d:+.1e}"
 
 
+def _verdict(dx: float, dy: float) -> str:
+    """``"inside"``, or the coordinates outside the range and by how much."""
+    parts = [f"{k} {_signed(d)}" for k, d in (("x", dx), ("y", dy)) if d != 0.0]
+    return ", ".join(parts) if parts else "inside"
+
+
 @dataclass(frozen=True)
 class RoverRow:
     """One model at one Sun elevation against the rovers' range.
@@ -317,10 +323,7 @@ class RoverRow:
     @property
     def verdict(self) -> str:
         """``"inside"`` or how far outside, e.g. ``"x +0.0125"``."""
-        if self.inside:
-            return "inside"
-        parts = [f"{k} {_signed(d)}" for k, d in (("x", self.dx), ("y", self.dy)) if d != 0.0]
-        return ", ".join(parts)
+        return _verdict(self.dx, self.dy)
 
 
 @dataclass(frozen=True)

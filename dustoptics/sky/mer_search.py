@@ -50,6 +50,7 @@ from dustoptics.sky.compare import (
     _away_chromaticity,
     _grid,
     _signed,
+    _verdict,
     mer_distance,
 )
 from dustoptics.sky.medium import Medium
@@ -225,7 +226,7 @@ class MerDustSearch:
                 + (
                     "inside"
                     if r.distance == 0.0
-                    else f"{_signed(r.distance)[1:]} (x {_signed(r.dx)}, y {_signed(r.dy)})"
+                    else f"{_signed(r.distance)[1:]} ({_verdict(r.dx, r.dy)})"
                 )
             )
         lines.append("dusts:")
