@@ -212,16 +212,23 @@ class LimbRadiance:
 
         e = self.default_exposure() if exposure is None else check_positive("exposure", exposure)
         xyz, extent = self.view_xyz(width=width, height=height, half_angle_deg=half_angle_deg)
-        fig, ax = plt.subplots(figsize=(width / 100.0 + 1.0, height / 100.0 + 1.2), dpi=100)
-        ax.imshow(display_rgb(xyz, e), extent=extent, interpolation="nearest")
+        # The axes hold the view pixel for pixel (no resampling): margins for the labels.
+        left, bottom, right, top = 90, 60, 20, 40  # [pixels]
+        fig_w, fig_h = width + left + right, height + bottom + top
+        fig = plt.figure(figsize=(fig_w / 100.0, fig_h / 100.0), dpi=100)
+        ax = fig.add_axes((left / fig_w, bottom / fig_h, width / fig_w, height / fig_h))
+        ax.imshow(display_rgb(xyz, e), extent=extent, interpolation="nearest", aspect="auto")
         ax.set_xlabel("along the limb [km]")
         ax.set_ylabel("above the ground at the centre [km]")
+        stretch = ((extent[3] - extent[2]) / height) and (
+            (extent[1] - extent[0]) / width / ((extent[3] - extent[2]) / height)
+        )
         ax.set_title(
             f"{self.name}: the limb from space, Sun {self.sun_view_angle_deg:g} deg from the "
-            f"line of sight; the surface is not rendered"
+            f"line of sight; heights drawn {stretch:.2g}x; the surface is not rendered"
         )
         buf = io.BytesIO()
-        fig.savefig(buf, format="png", metadata={"Software": None}, bbox_inches="tight")
+        fig.savefig(buf, format="png", metadata={"Software": None})
         plt.close(fig)
         return buf.getvalue()
 
