@@ -35,8 +35,13 @@ def test_build_writes_every_format_and_they_agree(config, tmp_path, capsys):
     assert texture.phase.shape[0] == 3
     assert check_cosmoscout_set(folder) == ["small-dust"]
     constituent = read_cosmoscout_constituent(folder, "small-dust")
-    # beta = N0 <C_sca>, with <C_sca> in um^2 = 1e-12 m^2.
-    np.testing.assert_allclose(constituent.beta_sca_per_m, 1e8 * ref.csca_um2 * 1e-12, rtol=1e-15)
+    # beta = N0 <C_sca> at the first texel centre z0 = 120 km / 1024 / 2 (the defaults: an
+    # exponential of scale height 10 km sampled at (i + 1/2) T / N), where the density is 1;
+    # <C_sca> in um^2 = 1e-12 m^2.
+    peak = np.exp(-0.5 * 120e3 / 1024 / 10e3)
+    np.testing.assert_allclose(
+        constituent.beta_sca_per_m, 1e8 * peak * ref.csca_um2 * 1e-12, rtol=1e-15
+    )
     assert constituent.density.max() == 1.0
 
 
