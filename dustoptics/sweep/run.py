@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import contextlib
 import ctypes
+import fcntl
 import json
 import math
 import os
@@ -465,18 +466,80 @@ def _store_layout(layout: _Layout) -> StoreLayout:
     return StoreLayout(layout.grid, {"phase": 1, **dict.fromkeys(_PER_WAVELENGTH, 0)})
 
 
-def _new_run_token(store: Path) -> Path:
-    """A new file in the store's marker folder that only this run of the
-    client knows: workers that see it write their chunks themselves
-    (:func:`_run_chunk`).  Tokens left by runs that ended go first (this run
-    holds the store: no other run is writing it)."""
-    directory = store / MARKERS
-    directory.mkdir(exist_ok=True)
-    for old in directory.glob(_RUN_TOKEN + "*"):
-        old.unlink(missing_ok=True)
-    token = directory / f"{_RUN_TOKEN}{uuid.uuid4().hex}"
-    token.touch()
-    return token
+#: How long the end of a run waits for workers still writing a chunk of it. [s]
+_END_OF_RUN_WAIT_S = 120.0
+
+
+class _RunToken:
+    """A new file in the store's marker folder that only this run of the client
+    knows: workers that see it write their chunks themselves (:func:`_run_chunk`),
+    each holding a shared :func:`fcntl.flock` on it while it writes
+    (:func:`_writing_for`).  Tokens left by runs that ended go first (this run holds
+    the store: no other run is writing it).
+
+    :meth:`end` removes the file, then takes the exclusive lock: it returns when no
+    worker is writing for this run, and no worker starts after (the file is gone).
+    A run that fails or is interrupted cannot cancel tasks already running on the
+    cluster; without the wait such a task, having seen the token just before it was
+    removed, could write a chunk after the next run had begun (the fuzz campaign's
+    full disk on a cluster of threads, resumed at once: a chunk the resume had written
+    lost its marker's match).
+    """
+
+    def __init__(self, store: Path):
+        directory = store / MARKERS
+        directory.mkdir(exist_ok=True)
+        for old in directory.glob(_RUN_TOKEN + "*"):
+            old.unlink(missing_ok=True)
+        self.path = directory / f"{_RUN_TOKEN}{uuid.uuid4().hex}"
+        self.path.touch()
+        self.name = self.path.name
+        self._fd: int | None = os.open(self.path, os.O_RDONLY)
+
+    def end(self) -> None:
+        """Remove the token and wait (at most :data:`_END_OF_RUN_WAIT_S`) for the
+        workers writing for this run."""
+        self.path.unlink(missing_ok=True)
+        fd, self._fd = self._fd, None
+        if fd is None:
+            return
+        try:
+            deadline = time.monotonic() + _END_OF_RUN_WAIT_S
+            while True:
+                try:
+                    fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+                    break
+                except BlockingIOError:
+                    if time.monotonic() > deadline:
+                        break  # a worker stuck in a write: its marker decides, on resume
+                    time.sleep(0.02)
+        finally:
+            os.close(fd)
+
+
+@contextmanager
+def _writing_for(store: Path, run_token: str) -> Iterator[bool]:
+    """Whether this worker writes the chunk into the store for the run ``run_token``
+    (it sees the run's token, and the run has not ended): the token's shared lock is
+    held for the block (see :class:`_RunToken`)."""
+    if not _sees(store, run_token):
+        yield False
+        return
+    path = store / MARKERS / run_token
+    try:
+        fd = os.open(path, os.O_RDONLY)
+    except OSError:  # the run ended meanwhile
+        yield False
+        return
+    try:
+        fcntl.flock(fd, fcntl.LOCK_SH)
+        try:
+            live = os.stat(path).st_ino == os.fstat(fd).st_ino
+        except OSError:
+            live = False
+        yield live
+    finally:
+        os.close(fd)  # releases the lock
 
 
 def _write_chunk(store: Path, region: tuple[slice, ...], name: str, result: ChunkResult) -> None:
@@ -538,9 +601,10 @@ def _run_chunk(
         result = compute_chunk(
             pickle.loads(points), wl_start, wl_stop, shared=shared, allow_large=allow_large
         )
-        if _sees(Path(store), run_token):
-            _write_chunk(Path(store), region, name, result)
-            return None, result.seconds
+        with _writing_for(Path(store), run_token) as writes:
+            if writes:
+                _write_chunk(Path(store), region, name, result)
+                return None, result.seconds
         return result, result.seconds
     except Exception as exc:
         try:
@@ -1084,7 +1148,7 @@ def _compute(
     distributed: Any,
 ) -> None:
     """Compute the chunks ``todo`` on Dask into the store (which this run holds)."""
-    token = _new_run_token(store)
+    token = _RunToken(store)
     to_close: list[Any] = []
     futures: dict[Any, tuple[int, ...]] = {}
     try:
@@ -1138,7 +1202,7 @@ def _compute(
             bar.add(layout.size(chunk))
             fill()
     finally:
-        token.unlink(missing_ok=True)
+        token.end()
         if futures and not to_close:  # a cluster that outlives the sweep: stop its work
             with contextlib.suppress(Exception):
                 c.cancel(list(futures))
