@@ -87,8 +87,8 @@ def cie_relative_luminance(
 
     Examples
     --------
-    >>> float(cie_relative_luminance(12, view_zenith_deg=0.0, view_azimuth_deg=0.0,
-    ...                              sun_zenith_deg=30.0))
+    >>> round(float(cie_relative_luminance(12, view_zenith_deg=0.0, view_azimuth_deg=0.0,
+    ...                                    sun_zenith_deg=30.0)), 12)
     1.0
     """
     if sky_type not in CIE_CLEAR_SKIES:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 
+import numpy as np
 from _cli import config_fixture, run_build  # noqa: F401 (fixture config)
 
 from dustoptics.cli import main
@@ -54,8 +55,9 @@ def test_info_reads_every_format_and_a_build_folder(config, tmp_path, capsys):
         "== small-dust_phase_theta.json ==",
     ):
         assert title in out
-    # beta_sca = N0 <C_sca>: the CosmoScout numbers info prints are the table's.
-    c_sca_m2 = table.csca_um2 * 1e-12
+    # beta_sca = N0 <C_sca> at the first texel centre's density (the largest written sample,
+    # 1): the default exponential, scale height 10 km, sampled at (i + 1/2) 120 km / 1024.
+    c_sca_m2 = table.csca_um2 * 1e-12 * np.exp(-0.5 * 120e3 / 1024 / 10e3)
     assert f"beta_sca:        {1e8 * c_sca_m2.min():.6g} .. {1e8 * c_sca_m2.max():.6g} m^-1" in out
 
 
