@@ -218,7 +218,7 @@ def run(args: argparse.Namespace) -> int:
     for path in written:
         say(args, f"wrote {path}")
     report_preview(args, written)
-    if args.sky_command == "compare":
+    if args.sky_command == "compare" and not args.quiet:  # the rover table, read back
         from dustoptics.sky.compare import read_rover_comparison
 
         say(args, read_rover_comparison(job.out_dir / f"{job.name}.nc").to_text())
