@@ -43,7 +43,6 @@ import signal
 import sys
 import threading
 import time
-import uuid
 import warnings
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
@@ -61,6 +60,7 @@ from dustoptics.scattering import optics
 from dustoptics.scattering.optics import resolve_refractive_index
 from dustoptics.scattering.quadrature import QuadratureSettings
 from dustoptics.sweep import _fork  # noqa: F401  (Dask's pools renewed in forked children)
+from dustoptics.sweep.run_token import RunToken as _RunToken
 from dustoptics.sweep.spec import SweepSpec, _load_points, parse_points
 from dustoptics.sweep.store import (
     MARKERS,
@@ -93,8 +93,6 @@ _PER_WAVELENGTH = {
 #: points parsed, its arrays written): 24 blocks (2 of 48 wavelengths) keep
 #: both near 2 % on 2 workers.
 _WAVELENGTH_BLOCKS = 24
-
-_RUN_TOKEN = "run-"
 
 
 def _require_extra() -> tuple[Any, Any, Any]:
@@ -464,57 +462,6 @@ def _template(spec: SweepSpec, configs: list[BuildConfig], layout: _Layout, meth
 def _store_layout(layout: _Layout) -> StoreLayout:
     """Which files the chunks of ``layout`` write (``phase`` keeps its angles whole)."""
     return StoreLayout(layout.grid, {"phase": 1, **dict.fromkeys(_PER_WAVELENGTH, 0)})
-
-
-#: How long the end of a run waits for workers still writing a chunk of it. [s]
-_END_OF_RUN_WAIT_S = 120.0
-
-
-class _RunToken:
-    """A new file in the store's marker folder that only this run of the client
-    knows: workers that see it write their chunks themselves (:func:`_run_chunk`),
-    each holding a shared :func:`fcntl.flock` on it while it writes
-    (:func:`_writing_for`).  Tokens left by runs that ended go first (this run holds
-    the store: no other run is writing it).
-
-    :meth:`end` removes the file, then takes the exclusive lock: it returns when no
-    worker is writing for this run, and no worker starts after (the file is gone).
-    A run that fails or is interrupted cannot cancel tasks already running on the
-    cluster; without the wait such a task, having seen the token just before it was
-    removed, could write a chunk after the next run had begun (the fuzz campaign's
-    full disk on a cluster of threads, resumed at once: a chunk the resume had written
-    lost its marker's match).
-    """
-
-    def __init__(self, store: Path):
-        directory = store / MARKERS
-        directory.mkdir(exist_ok=True)
-        for old in directory.glob(_RUN_TOKEN + "*"):
-            old.unlink(missing_ok=True)
-        self.path = directory / f"{_RUN_TOKEN}{uuid.uuid4().hex}"
-        self.path.touch()
-        self.name = self.path.name
-        self._fd: int | None = os.open(self.path, os.O_RDONLY)
-
-    def end(self) -> None:
-        """Remove the token and wait (at most :data:`_END_OF_RUN_WAIT_S`) for the
-        workers writing for this run."""
-        self.path.unlink(missing_ok=True)
-        fd, self._fd = self._fd, None
-        if fd is None:
-            return
-        try:
-            deadline = time.monotonic() + _END_OF_RUN_WAIT_S
-            while True:
-                try:
-                    fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-                    break
-                except BlockingIOError:
-                    if time.monotonic() > deadline:
-                        break  # a worker stuck in a write: its marker decides, on resume
-                    time.sleep(0.02)
-        finally:
-            os.close(fd)
 
 
 @contextmanager
