@@ -1,53 +1,19 @@
-"""Retrieval: the dust parameters that fit observations, with their uncertainties.
+"""The fit of :func:`retrieve` and its optical observations (the package docstring says what).
 
-:func:`retrieve` fits named parameters of a dust model (a size distribution's
-``r_eff_um``, ``v_eff``, ..., the refractive index's ``n`` and ``k``, a
-mixture's ``hematite_fraction``) to observations given as labelled data, by
-weighted least squares with bounds and Gaussian priors:
-
-    minimize  sum_i ((model_i(p) - obs_i) / sigma_i)^2 + sum_j ((p_j - mu_j) / s_j)^2
-
-with :func:`scipy.optimize.least_squares` (trust-region reflective, which
-honours the bounds; a Levenberg-Marquardt-type method) and the exact Jacobian of
-:func:`dustoptics.compute_optics` (``derivatives=...``,
-:mod:`dustoptics.scattering.table_derivatives`): one table per iteration gives
-the residuals and their derivatives together.  The covariance is
-(J^T J)^-1 of the weighted residuals at the solution (the observations'
-stated uncertainties, not rescaled by the misfit), so a fit is as certain as
-its data and priors say.
-
-Observations
-------------
-An :class:`xarray.Dataset` (or one named :class:`xarray.DataArray`) whose
-variables are, by name:
-
-``ssa``
-    single-scattering albedo, dimension ``wavelength_nm`` [nm]; [-]
-``g``
-    asymmetry parameter, dimension ``wavelength_nm``; [-]
-``extinction_ratio``
-    <C_ext>(lambda) / <C_ext>(lambda_ref), dimension ``wavelength_nm``, with
-    the attribute ``reference_wavelength_nm``; for one dust population this is
-    also the ratio of optical depths tau(lambda) / tau(lambda_ref); [-]
-``phase``
-    phase-function samples, dimensions ``wavelength_nm`` and ``theta_deg``
-    [degree], normalized as the tables' (2 pi int P dmu = 1). [sr^-1]
-
-Each variable carries its one-sigma uncertainty: a variable
-``<name>_uncertainty`` of the same dimensions, or a number in the attribute
-``uncertainty`` (in the variable's unit).  NaN samples are left out.
-
-Sky quantities (radiance at given directions, chromaticity through
-:mod:`dustoptics.sky`) are not observations :func:`retrieve` takes yet.
+Optical observations (``ssa``, ``g``, ``extinction_ratio``, ``phase``) are
+predicted from one table with exact derivatives; sky observations
+(``sky_radiance``, ``sky_chromaticity``) by :mod:`dustoptics.retrieve.sky`
+from a second table on the sky's wavelengths and the default angles.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import math
+import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, TextIO
 
 import numpy as np
 
@@ -55,6 +21,13 @@ from dustoptics.models.config import BuildConfig
 from dustoptics.particles.mixing import Mixture
 from dustoptics.particles.sizedist import Monodisperse, SizeDistribution
 from dustoptics.particles.sizedist_derivatives import parameter_value, with_parameter
+from dustoptics.retrieve.sky import (
+    SKY_OBSERVABLES,
+    SkyModel,
+    SkySettings,
+    sky_progress,
+    sky_samples,
+)
 from dustoptics.scattering.optics import compute_optics
 from dustoptics.scattering.table_derivatives import (
     INDEX_PARAMETERS,
@@ -114,7 +87,10 @@ class Retrieval:
     model : Mapping[str, Any]
         The compute_optics keywords at the fitted values.
     table : Table
-        The table at the fitted values, with derivatives.
+        The table at the fitted values, with derivatives (with only sky
+        observations, the sky's table).
+    sky_solves : int
+        Skies solved (orders of scattering), residuals and Jacobians together.
     """
 
     parameters: tuple[str, ...]
@@ -131,6 +107,7 @@ class Retrieval:
     message: str
     model: Mapping[str, Any] = dataclasses.field(repr=False)
     table: Table = dataclasses.field(repr=False)
+    sky_solves: int = 0
 
     def value(self, parameter: str) -> float:
         """The fitted value of one parameter."""
@@ -235,30 +212,32 @@ class _Observation:
     reference_nm: float = math.nan
 
 
-def _observations(observations: Any) -> list[_Observation]:
+def _observations(observations: Any) -> tuple[list[_Observation], list[Any]]:
+    """The optical observations and the sky's samples (:func:`~dustoptics.retrieve.sky.sky_samples`)."""
     import xarray as xr
 
+    known = (*OBSERVABLES, *SKY_OBSERVABLES)
     if isinstance(observations, xr.DataArray):
         if observations.name is None:
-            raise ValueError(
-                f"observations: a DataArray must be named, one of {', '.join(OBSERVABLES)}"
-            )
+            raise ValueError(f"observations: a DataArray must be named, one of {', '.join(known)}")
         observations = observations.to_dataset()
     if not isinstance(observations, xr.Dataset):
         raise TypeError(
-            f"observations must be an xarray Dataset or named DataArray; got {type(observations).__name__}"
+            "observations must be an xarray Dataset or named DataArray; "
+            f"got {type(observations).__name__}"
         )
     names = [str(k) for k in observations.data_vars if not str(k).endswith("_uncertainty")]
-    unknown = [k for k in names if k not in OBSERVABLES]
+    unknown = [k for k in names if k not in known]
     if unknown or not names:
         raise ValueError(
-            f"observations: variables must be among {', '.join(OBSERVABLES)} (with "
+            f"observations: variables must be among {', '.join(known)} (with "
             f"<name>_uncertainty); got {names}"
         )
     found = []
+    sky = []
     for name in names:
         var = observations[name]
-        dims = OBSERVABLES[name]
+        dims = OBSERVABLES.get(name) or SKY_OBSERVABLES[name]
         if set(var.dims) != set(dims):
             raise ValueError(f"observations: {name!r} must have dimensions {dims}; got {var.dims}")
         var = var.transpose(*dims)
@@ -272,6 +251,9 @@ def _observations(observations: Any) -> list[_Observation]:
                 f"observations: {name!r} needs its one-sigma uncertainty: a variable "
                 f"{name + '_uncertainty'!r} or an attribute 'uncertainty'"
             )
+        if name in SKY_OBSERVABLES:
+            sky += sky_samples(var, sigma_values)
+            continue
         values = np.asarray(var.values, dtype=np.float64)
         wl = np.asarray(var["wavelength_nm"].values, dtype=np.float64)
         if values.ndim == 2:
@@ -299,9 +281,9 @@ def _observations(observations: Any) -> list[_Observation]:
                 reference,
             )
         )
-    if sum(o.value.size for o in found) == 0:
+    if sum(o.value.size for o in found) + sum(s.value.size for s in sky) == 0:
         raise ValueError("observations: no finite samples")
-    return found
+    return [o for o in found if o.value.size], sky
 
 
 def _predict(
@@ -337,6 +319,22 @@ def _labels(obs: _Observation) -> list[str]:
 # ----------------------------------------------------------------- the fit
 
 
+def _reporter(
+    progress: Callable[[int, float], None] | TextIO | None,
+) -> tuple[Callable[[int, float], None] | None, TextIO | None]:
+    """The callback and the text stream of ``progress`` (one of them, or neither)."""
+    if progress is None:
+        return None, None
+    if callable(getattr(progress, "write", None)):
+        return None, progress  # type: ignore[return-value]
+    if callable(progress):
+        return progress, None
+    raise TypeError(
+        "progress must be a callable progress(evaluations, chi_square), a text stream "
+        f"(e.g. sys.stderr) or None; got {progress!r}"
+    )
+
+
 def retrieve(
     observations: xr.Dataset | xr.DataArray,
     *,
@@ -346,15 +344,17 @@ def retrieve(
     priors: Mapping[str, tuple[float, float]] | None = None,
     max_iterations: int = 50,
     tolerance: float = 1e-6,
-    progress: Callable[[int, float], None] | None = None,
+    sky: SkySettings | None = None,
+    progress: Callable[[int, float], None] | TextIO | None = None,
+    allow_large: bool = False,
 ) -> Retrieval:
     """Fit named parameters of a dust model to observations.
 
     Parameters
     ----------
     observations : xarray.Dataset or xarray.DataArray
-        ``ssa``, ``g``, ``extinction_ratio`` and/or ``phase`` samples with their
-        uncertainties (module docstring).
+        ``ssa``, ``g``, ``extinction_ratio``, ``phase``, ``sky_radiance`` and/or
+        ``sky_chromaticity`` samples with their uncertainties (package docstring).
     model : mapping or BuildConfig
         The dust: compute_optics keywords (``refractive_index``,
         ``distribution``, and optionally ``rtol``, ``weighting``,
@@ -366,18 +366,29 @@ def retrieve(
         one constant complex number), a mixture's (``"hematite_fraction"``).
     bounds : mapping of str to (float, float)
         Lower and upper bound of every parameter (each parameter must have
-        one; the start must lie inside).
+        one; the start must lie inside).  They also set the finite-difference
+        step of the sky's Jacobian (:class:`~dustoptics.retrieve.sky.SkySettings`).
     priors : mapping of str to (float, float), optional
         Gaussian priors (mean, standard deviation) of some parameters.
     max_iterations : int
         Most evaluations of the residuals (scipy's ``max_nfev``), each one table
-        with derivatives; one more table gives the result at the solution. [-]
+        with derivatives (and one sky per scene); one more gives the result at
+        the solution. [-]
     tolerance : float
         Relative tolerance of the cost, the parameters and the gradient
         (scipy's ftol, xtol, gtol). [-]
-    progress : callable, optional
-        Called as ``progress(tables, chi_square)`` after each table computed
-        (at most ``max_iterations`` + 1); it does not change the result.
+    sky : SkySettings, optional
+        Streams, series tolerance and finite-difference step of the skies of
+        sky observations (default ``SkySettings()``).
+    progress : callable or text stream, optional
+        A callable is called as ``progress(evaluations, chi_square)`` after
+        each evaluation of the residuals; a text stream (``sys.stderr``) gets
+        the number of sky solves and their estimated time first, then one line
+        per evaluation (its number, chi-square, seconds since the start) and
+        the sky solves of each Jacobian.  It does not change the result.
+    allow_large : bool
+        Go ahead when the sky solves are estimated beyond
+        :data:`~dustoptics.retrieve.sky.MAX_SKY_SECONDS`.
 
     Returns
     -------
@@ -391,6 +402,13 @@ def retrieve(
         Bad observations, an unknown parameter (the message lists the allowed
         ones), a parameter without bounds, a start outside them, a prior with a
         standard deviation <= 0; all before any table is computed.
+    dustoptics._validation.BudgetError
+        With sky observations, the most sky solves the fit may need (``(1 +
+        n_parameters) x scenes`` per iteration, forward differences) times
+        the estimated seconds of one are beyond
+        :data:`~dustoptics.retrieve.sky.MAX_SKY_SECONDS` and ``allow_large``
+        is False: after the start's table (the estimate needs its optics),
+        before any sky is solved.
 
     Examples
     --------
@@ -410,7 +428,7 @@ def retrieve(
     from scipy import optimize
 
     keywords = _model_keywords(model)
-    obs = _observations(observations)
+    obs, sky_list = _observations(observations)
     names = check_parameters(
         parameters, keywords["distribution"], index_parameter_names(keywords["refractive_index"])
     )
@@ -445,52 +463,123 @@ def retrieve(
         prior_list.append((names.index(p), float(mean), float(sd)))
     if not (isinstance(max_iterations, int) and max_iterations >= 1):
         raise ValueError(f"max_iterations must be a positive integer; got {max_iterations!r}")
-    if progress is not None and not callable(progress):
-        raise TypeError(
-            f"progress must be a callable progress(tables, chi_square); got {progress!r}"
+    if sky is None:
+        sky = SkySettings()
+    elif not isinstance(sky, SkySettings):
+        raise TypeError(f"sky must be a SkySettings; got {type(sky).__name__}")
+    callback, stream = _reporter(progress)
+    began = time.perf_counter()
+    sky_model = SkyModel(sky_list, sky) if sky_list else None
+    sky_report = sky_progress(stream)
+    if obs:
+        wavelengths = np.unique(
+            np.concatenate(
+                [o.wavelength_nm for o in obs]
+                + [np.array([o.reference_nm]) for o in obs if math.isfinite(o.reference_nm)]
+            )
         )
-    wavelengths = np.unique(
-        np.concatenate(
-            [o.wavelength_nm for o in obs]
-            + [np.array([o.reference_nm]) for o in obs if math.isfinite(o.reference_nm)]
-        )
-    )
-    thetas = np.concatenate([o.theta_deg[np.isfinite(o.theta_deg)] for o in obs])
-    theta = np.unique(thetas) if thetas.size else np.array([0.0, 180.0])
-    labels = tuple(label for o in obs for label in _labels(o)) + tuple(
-        f"prior:{names[i]}" for i, _, _ in prior_list
-    )
-    cache: dict[bytes, tuple[np.ndarray, np.ndarray, Table]] = {}
-    computed = [0]
+        thetas = np.concatenate([o.theta_deg[np.isfinite(o.theta_deg)] for o in obs])
+        theta = np.unique(thetas) if thetas.size else np.array([0.0, 180.0])
+    steps = sky.relative_step * (upper - lower)
+    labels = tuple(label for o in obs for label in _labels(o))
+    sky_value = sky_sigma = np.zeros(0)
+    if sky_model is not None:
+        sky_value, sky_sigma, sky_labels = sky_model.order()
+        labels += tuple(sky_labels)
+    labels += tuple(f"prior:{names[i]}" for i, _, _ in prior_list)
 
-    def evaluate(x: np.ndarray) -> tuple[np.ndarray, np.ndarray, Table]:
+    # One entry per point: residuals, the exact rows of the Jacobian (the sky's
+    # rows NaN until asked for), the optical table, the sky's table and values.
+    Entry = dict[str, Any]
+    cache: dict[bytes, Entry] = {}
+    counter = {"evaluations": 0}
+
+    def evaluate(x: np.ndarray) -> Entry:
         key = np.asarray(x, dtype=np.float64).tobytes()
-        if key not in cache:
-            current = _set(keywords, dict(zip(names, x.tolist())))
+        if key in cache:
+            return cache[key]
+        current = _set(keywords, dict(zip(names, x.tolist())))
+        res, jac = [], []
+        entry: Entry = {"x": np.array(x, dtype=np.float64)}
+        if obs:
             table = compute_optics(
                 **current, wavelength_nm=wavelengths, theta_deg=theta, derivatives=names
             )
-            res, jac = [], []
+            entry["table"] = table
             for o in obs:
                 value, d = _predict(table, o, names)
                 res.append((value - o.value) / o.sigma)
                 jac.append(d / o.sigma[:, None])
-            for i, mean, sd in prior_list:
-                res.append(np.array([(x[i] - mean) / sd]))
-                row = np.zeros((1, len(names)))
-                row[0, i] = 1.0 / sd
-                jac.append(row)
-            cache.clear()
-            cache[key] = (np.concatenate(res), np.vstack(jac), table)
-            computed[0] += 1
-            if progress is not None:
-                progress(computed[0], float(cache[key][0] @ cache[key][0]))
-        return cache[key]
+        if sky_model is not None:
+            sky_table = compute_optics(
+                **current, wavelength_nm=sky_model.wavelength_nm, derivatives=names
+            )
+            entry["sky_table"] = sky_table
+            if "budget" not in counter:
+                n, seconds = sky_model.check_cost(
+                    sky_table,
+                    max_iterations=max_iterations,
+                    n_parameters=len(names),
+                    allow_large=allow_large,
+                )
+                counter["budget"] = n
+                if stream is not None:
+                    stream.write(
+                        f"retrieve: at most {n} sky solves, about {seconds:.0f} s "
+                        f"({sky_model.wavelength_nm.size} wavelengths, "
+                        f"n_streams={sky.n_streams})\n"
+                    )
+                    stream.flush()
+            entry["sky_values"] = sky_model.values(sky_table, sky_report)
+            res.append((entry["sky_values"] - sky_value) / sky_sigma)
+            jac.append(np.full((sky_value.size, len(names)), np.nan))
+        for i, mean, sd in prior_list:
+            res.append(np.array([(x[i] - mean) / sd]))
+            row = np.zeros((1, len(names)))
+            row[0, i] = 1.0 / sd
+            jac.append(row)
+        entry["residuals"] = np.concatenate(res)
+        entry["jacobian"] = np.vstack(jac)
+        if len(cache) >= 3:  # the accepted point, a trial, the next: enough for scipy
+            cache.pop(next(iter(cache)))
+        cache[key] = entry
+        counter["evaluations"] += 1
+        chi_square = float(entry["residuals"] @ entry["residuals"])
+        if callback is not None:
+            callback(counter["evaluations"], chi_square)
+        if stream is not None:
+            stream.write(
+                f"retrieve: evaluation {counter['evaluations']}: chi-square {chi_square:.6g}, "
+                f"{time.perf_counter() - began:.1f} s\n"
+            )
+            stream.flush()
+        return entry
+
+    def jacobian(x: np.ndarray) -> np.ndarray:
+        entry = evaluate(x)
+        jac = entry["jacobian"]
+        if sky_model is not None and np.isnan(jac).any():
+            rows = slice(
+                sum(o.value.size for o in obs), sum(o.value.size for o in obs) + sky_value.size
+            )
+            jac[rows] = (
+                sky_model.jacobian(
+                    entry["sky_table"], entry["sky_values"], names, steps, sky_report
+                )
+                / sky_sigma[:, None]
+            )
+            if stream is not None:
+                stream.write(
+                    f"retrieve: Jacobian at evaluation {counter['evaluations']}: "
+                    f"{sky_model.solves} sky solves so far, {time.perf_counter() - began:.1f} s\n"
+                )
+                stream.flush()
+        return np.asarray(jac)
 
     result = optimize.least_squares(
-        lambda x: evaluate(x)[0],
+        lambda x: evaluate(x)["residuals"],
         start,
-        jac=lambda x: evaluate(x)[1],
+        jac=jacobian,
         bounds=(lower, upper),
         method="trf",
         x_scale="jac",
@@ -499,7 +588,9 @@ def retrieve(
         gtol=tolerance,
         max_nfev=max_iterations,
     )
-    residuals, jac, table = evaluate(result.x)
+    final = evaluate(result.x)
+    jac = jacobian(result.x)
+    residuals = final["residuals"]
     covariance = np.linalg.pinv(jac.T @ jac)
     return Retrieval(
         parameters=names,
@@ -515,5 +606,6 @@ def retrieve(
         converged=bool(result.status > 0),
         message=str(result.message),
         model=_set(keywords, dict(zip(names, result.x.tolist()))),
-        table=table,
+        table=final["table"] if obs else final["sky_table"],
+        sky_solves=sky_model.solves if sky_model is not None else 0,
     )
