@@ -48,6 +48,7 @@ import math
 from collections.abc import Callable, Mapping, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
+from functools import lru_cache
 from typing import Any
 
 import numpy as np
@@ -60,7 +61,11 @@ from dustoptics.particles.sizedist_derivatives import (
 )
 from dustoptics.scattering import mie
 from dustoptics.scattering.expansion import greek_coefficients
-from dustoptics.scattering.mie_derivatives import _accumulate, _accumulate_symmetric
+from dustoptics.scattering.mie_derivatives import (
+    _accumulate,
+    _accumulate_blocked,
+    _series_lengths,
+)
 from dustoptics.scattering.quadrature import (
     QuadratureDiagnostics,
     _gauss_points,
@@ -240,6 +245,14 @@ def _weights(
     return np.ascontiguousarray(x[order]), np.ascontiguousarray(weights[order])
 
 
+def _read_only(a: np.ndarray) -> np.ndarray:
+    """A read-only C-contiguous float64 copy (the type ``mie.angular_table`` and
+    ``mie._legendre_project`` are compiled for)."""
+    v = np.array(a, dtype=np.float64, order="C")
+    v.flags.writeable = False
+    return v
+
+
 def _sums(
     m: complex,
     distribution: SizeDistribution,
@@ -250,10 +263,15 @@ def _sums(
     dist_parameters: Sequence[str],
     mu: np.ndarray,
     per_particle: bool,
+    n_stokes: int = 4,
 ) -> _Sums:
     """Sums at the angles ``mu`` (none: the cross-sections alone)."""
     xs, w = _weights(distribution, x, rule, k_um=k_um, dist_parameters=dist_parameters)
-    return _Sums(*_accumulate(m, xs, w, mu, per_particle, False))
+    if mu.size == 0:
+        table = np.empty((0, 0))
+    else:
+        table = mie.angular_table(_read_only(mu), int(_series_lengths(xs).max()))
+    return _Sums(*_accumulate_blocked(m, xs, w, table, int(mu.size), False, n_stokes, per_particle))
 
 
 #: Gauss grids of the angular tiers: n_half = 16, 32, 48, 64, 96, 128, ... (steps
@@ -263,6 +281,19 @@ def _tier_sizes(n_top: int) -> list[int]:
     while sizes[-1] < n_top:
         sizes.append(16 * math.ceil(sizes[-1] * 1.5 / 16))
     return sizes
+
+
+@lru_cache(maxsize=32)
+def _tier_grid(n_half: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The positive half of the 2 n_half-point Gauss rule (nodes, weights) and
+    its ``mie.angular_table`` for n_max <= n_half - 1, read-only (shared by
+    the wavelengths' threads)."""
+    mu_g, w_g = gauss_legendre(2 * n_half)
+    mu_half = _read_only(mu_g[n_half:])
+    w_half = _read_only(w_g[n_half:])
+    table = mie.angular_table(mu_half, n_half - 1)
+    table.flags.writeable = False
+    return mu_half, w_half, table
 
 
 def _legendre_sums(
@@ -275,6 +306,7 @@ def _legendre_sums(
     dist_parameters: Sequence[str],
     per_particle: bool,
     lmax: int,
+    n_stokes: int,
 ) -> _Sums:
     """Sums whose angular parts are Legendre coefficients (orders 0..lmax):
     the nodes are summed in tiers of similar n_max, each on the Gauss grid its
@@ -283,26 +315,31 @@ def _legendre_sums(
     projected on P_l and added (the projection is linear)."""
     xs, w = _weights(distribution, x, rule, k_um=k_um, dist_parameters=dist_parameters)
     n_w = w.shape[1]
-    ang = np.zeros((n_w, 4, lmax + 1))
-    dang = np.zeros((2, 4, lmax + 1))
+    ang = np.zeros((n_w, n_stokes, lmax + 1))
+    dang = np.zeros((2, n_stokes, lmax + 1))
     sums = np.zeros((n_w, 6))
     dsums = np.zeros((2, 6))
-    nmax = np.array([mie.wiscombe_nmax(float(v)) for v in xs])
+    nmax = _series_lengths(xs)
     start = 0
     for n_half in _tier_sizes(int(nmax.max()) + 1):
         stop = int(np.searchsorted(nmax, n_half - 1, side="right"))
         if stop <= start:
             continue
-        mu_g, w_g = gauss_legendre(2 * n_half)
-        mu_half = np.ascontiguousarray(mu_g[n_half:])
-        w_half = np.ascontiguousarray(w_g[n_half:])
-        a, da, s_, ds_ = _accumulate_symmetric(
-            m, xs[start:stop], np.ascontiguousarray(w[start:stop]), mu_half, per_particle
+        mu_half, w_half, table = _tier_grid(n_half)
+        a, da, s_, ds_ = _accumulate_blocked(
+            m,
+            xs[start:stop],
+            np.ascontiguousarray(w[start:stop]),
+            table,
+            n_half,
+            True,
+            n_stokes,
+            per_particle,
         )
         top = min(lmax, 2 * int(nmax[start:stop].max()))
         for src, dst in ((a, ang), (da, dang)):
             for c in range(src.shape[0]):
-                for q in range(4):
+                for q in range(n_stokes):
                     dst[c, q, : top + 1] += mie._legendre_project(
                         mu_half, w_half, np.ascontiguousarray(src[c, q]), top
                     )
@@ -512,7 +549,7 @@ def _one_wavelength(
             return np.asarray(mie._legendre_evaluate(np.ascontiguousarray(f), mu_eval))
 
         for x, rule in ((x_fine, rule_fine), (x_coarse, rule_coarse)):
-            s_ = _legendre_sums(m, distribution, x, rule, lmax=lmax, **common)  # type: ignore[arg-type]
+            s_ = _legendre_sums(m, distribution, x, rule, lmax=lmax, n_stokes=n_q, **common)  # type: ignore[arg-type]
             pair.append(
                 _angular(
                     s_,
@@ -528,7 +565,7 @@ def _one_wavelength(
     else:
         mu = np.ascontiguousarray(mu_out)
         for x, rule in ((x_fine, rule_fine), (x_coarse, rule_coarse)):
-            s_ = _sums(m, distribution, x, rule, mu=mu, **common)  # type: ignore[arg-type]
+            s_ = _sums(m, distribution, x, rule, mu=mu, n_stokes=n_q, **common)  # type: ignore[arg-type]
             pair.append(
                 _angular(
                     s_,
