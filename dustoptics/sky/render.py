@@ -103,9 +103,9 @@ PATH_STRETCH: Final = 6.0
 #: Largest work (multiply-adds) of one call without ``allow_large``: some
 #: five minutes on two cores.
 WORK_BUDGET: Final = 1e12
-#: Rows of the sky dome computed per call of the kernels (between progress
-#: reports).
-_ROWS_PER_CHUNK: Final = 16
+#: Bytes of the diffuse source's modes at the samples of the rows computed per call of the
+#: kernels (between progress reports): 32 rows of the default dome.
+_CHUNK_BYTES: Final = 32 * 2**20
 
 
 def source_table(medium: Medium, field: DiffuseField) -> np.ndarray:
@@ -184,21 +184,34 @@ def _packed_index(n_mom: int, n_modes: int) -> np.ndarray:
 def _source_coefficients(
     medium: Medium, field: DiffuseField, scatterers: np.ndarray, n_modes: int
 ) -> np.ndarray:
-    """``(1/2) (2 l + 1) chi'_{c,l} M_l^m(level)``, packed as the row kernel reads it.
+    """``(1/2) (2 l + 1) chi'_{c,l} M_l^m(level)``, packed as :func:`_source_kernel` reads it.
 
     Shape (n_level, n_scatterer, packed (m, l >= m), n_wavelength).
     """
     n_mom = 2 * medium.n_streams
     two_l = 2.0 * np.arange(n_mom) + 1.0
-    chi = 0.5 * two_l * medium.scaled_chi[scatterers]  # (c, x, l)
+    chi = np.ascontiguousarray(0.5 * two_l * medium.scaled_chi[scatterers])  # (c, x, l)
     offsets = _packed_index(n_mom, n_modes)
     n_level = field.altitude_m.size
     out = np.empty((n_level, scatterers.size, int(offsets[-1]), medium.wavelength_nm.size))
-    for m in range(n_modes):
-        mom = field.moments[m, :, :, m:]  # (x, k, l)
-        part = chi[:, None, :, m:] * mom.transpose(1, 0, 2)[None]  # (c, k, x, l)
-        out[:, :, offsets[m] : offsets[m + 1], :] = part.transpose(1, 0, 3, 2)
+    _pack_coefficients(chi, field.moments, offsets, out)
     return out
+
+
+@numba.njit(cache=True, nogil=True)
+def _pack_coefficients(
+    chi: np.ndarray, moments: np.ndarray, offsets: np.ndarray, out: np.ndarray
+) -> None:
+    # out[k, q, offsets[m] + l - m, x] = chi[q, x, l] M[m, x, k, l], l >= m.
+    n_level, n_s, _, nwl = out.shape
+    n_mom = chi.shape[2]
+    for k in range(n_level):
+        for q in range(n_s):
+            for m in range(offsets.shape[0] - 1):
+                for ell in range(m, n_mom):
+                    p = offsets[m] + ell - m
+                    for x in range(nwl):
+                        out[k, q, p, x] = chi[q, x, ell] * moments[m, x, k, ell]
 
 
 @numba.njit(cache=True, nogil=True)
@@ -254,32 +267,25 @@ def _row_kernel(
     altitude: np.ndarray,
     density: np.ndarray,
     sig_ext_scaled: np.ndarray,
-    sig_sca_scaled: np.ndarray,
     level_altitude: np.ndarray,
-    coeffs: np.ndarray,
-    scatterers: np.ndarray,
-    modes_used: np.ndarray,
-    n_mom: int,
     geo: np.ndarray,
     dens_out: np.ndarray,
     wb: np.ndarray,
-    g: np.ndarray,
+    level: np.ndarray,
     t_end: np.ndarray,
     hits: np.ndarray,
 ) -> None:
-    """Per row (one view cosine): samples, densities, path weights, diffuse source modes.
+    """Per row (one view cosine): samples, densities, path weights, the levels around each sample.
 
     ``wb[row, i, x]`` is sample i's weight in the path integral over its
-    scaled extinction (multiplies the emission); ``g[row, i, m, x]`` is that
-    weight times the diffuse emission's mode m.
+    scaled extinction (multiplies the emission); ``level[row, i]`` is the
+    upper of the two levels of the diffuse field that bracket sample i and
+    ``geo[row, i, 3]`` the sample's fraction of the way to the lower one.
     """
     n_rows = mu_rows.shape[0]
     n_c, nwl = sig_ext_scaled.shape
-    n_s = scatterers.shape[0]
-    n_modes = g.shape[2]
     n_lev = level_altitude.shape[0]
     nz = altitude.shape[0]
-    n_packed = coeffs.shape[2]
     a = stretch
     norm = math.expm1(a)
     for row in numba.prange(n_rows):
@@ -292,12 +298,9 @@ def _row_kernel(
         else:
             s_end = -b + math.sqrt(max(0.0, b * b + r_top * r_top - r0 * r0))
         hits[row] = ground
-        lv = np.empty(n_packed)
         beta = np.empty(nwl)
         beta_prev = np.empty(nwl)
         tau = np.zeros(nwl)
-        dtau_prev = np.zeros(nwl)
-        tsum = np.empty(n_s * nwl)
         for i in range(n_path + 1):
             s = s_end * math.expm1(a * i / n_path) / norm
             x_r = math.sqrt(max(r0 * r0 + s * s + 2.0 * r0 * s * mv, 0.0))
@@ -334,57 +337,94 @@ def _row_kernel(
                     wb[row, i - 1, x] = w_prev / beta_prev[x] if beta_prev[x] > 0.0 else 0.0
                     wb[row, i, x] = e0 * pb
                     tau[x] += dt
-                    dtau_prev[x] = dt
             else:
                 for x in range(nwl):
                     wb[row, i, x] = 0.0
             for x in range(nwl):
                 beta_prev[x] = beta[x]
-        # The last sample's weight over its extinction.
-        for x in range(nwl):
-            wb[row, n_path, x] = wb[row, n_path, x] / beta[x] if beta[x] > 0.0 else 0.0
-            t_end[row, x] = math.exp(-tau[x])
-        # Diffuse source modes at each sample, times the sample's weight.
-        for i in range(n_path + 1):
-            x_r = geo[row, i, 1]
-            z = x_r - r_ground
-            _normalized_legendre_packed(-geo[row, i, 2], n_mom, n_modes, lv)
+            # The diffuse field's levels (descending altitudes) around the sample.
             k = 0
             while k < n_lev - 2 and level_altitude[k + 1] > z:
                 k += 1
             fk = (level_altitude[k] - z) / (level_altitude[k] - level_altitude[k + 1])
-            fk = min(max(fk, 0.0), 1.0)
+            level[row, i] = k
+            geo[row, i, 3] = min(max(fk, 0.0), 1.0)
+        # The last sample's weight over its extinction.
+        for x in range(nwl):
+            wb[row, n_path, x] = wb[row, n_path, x] / beta[x] if beta[x] > 0.0 else 0.0
+            t_end[row, x] = math.exp(-tau[x])
+
+
+@parallel_kernel  # numba's fork-safe threading layer, one parallel kernel at a time
+@numba.njit(cache=True, nogil=True, parallel=True)
+def _source_kernel(
+    samples: np.ndarray,
+    geo: np.ndarray,
+    dens: np.ndarray,
+    wb: np.ndarray,
+    level: np.ndarray,
+    sig_sca_scaled: np.ndarray,
+    coeffs: np.ndarray,
+    scatterers: np.ndarray,
+    modes_used: np.ndarray,
+    n_mom: int,
+    g: np.ndarray,
+) -> None:
+    """The diffuse source's Fourier modes at each sample, times the sample's path weight.
+
+    ``g[row, i, m, x] = wb[row, i, x] sum_c N_c sigma'_sca,c J_c^m(z_i, mu_i)``,
+    ``J^m`` summed over ``l`` in the sample's own direction of propagation
+    (``L_l^m(-mu_loc)``) from the moments of the two levels around it (linear
+    in altitude).  ``samples`` lists the flat indices ``row * n_samples + i``
+    sorted by level, so that each thread reads one level's coefficients for
+    many samples in a row (they are tens of megabytes: read once per sample
+    they made this step memory-bound).
+    """
+    n_samples = geo.shape[1]
+    n_s = scatterers.shape[0]
+    nwl = sig_sca_scaled.shape[1]
+    n_modes = g.shape[2]
+    n_packed = coeffs.shape[2]
+    for j in numba.prange(samples.shape[0]):
+        flat = samples[j]
+        row = flat // n_samples
+        i = flat - row * n_samples
+        lv = np.empty(n_packed)
+        tsum = np.empty(nwl)
+        _normalized_legendre_packed(-geo[row, i, 2], n_mom, n_modes, lv)
+        k = level[row, i]
+        fk = geo[row, i, 3]
+        for m in range(n_modes):
+            for x in range(nwl):
+                g[row, i, m, x] = 0.0
+        for q in range(n_s):
+            c = scatterers[q]
+            d = dens[row, i, c]
+            if d == 0.0:
+                continue
+            p = 0
             for m in range(n_modes):
+                if m >= modes_used[q]:
+                    break
                 for x in range(nwl):
-                    g[row, i, m, x] = 0.0
-            for q in range(n_s):
-                c = scatterers[q]
-                d = dens_out[row, i, c]
-                if d == 0.0:
-                    continue
-                p = 0
-                for m in range(n_modes):
-                    if m >= modes_used[q]:
-                        break
-                    for j in range(n_s * nwl):
-                        tsum[j] = 0.0
-                    for _ell in range(m, n_mom):
-                        w0 = lv[p] * (1.0 - fk)
-                        w1 = lv[p] * fk
-                        for x in range(nwl):
-                            tsum[x] += w0 * coeffs[k, q, p, x] + w1 * coeffs[k + 1, q, p, x]
-                        p += 1
+                    tsum[x] = 0.0
+                for _ell in range(m, n_mom):
+                    w0 = lv[p] * (1.0 - fk)
+                    w1 = lv[p] * fk
                     for x in range(nwl):
-                        g[row, i, m, x] += d * sig_sca_scaled[c, x] * tsum[x]
-            for m in range(n_modes):
+                        tsum[x] += w0 * coeffs[k, q, p, x] + w1 * coeffs[k + 1, q, p, x]
+                    p += 1
                 for x in range(nwl):
-                    g[row, i, m, x] *= wb[row, i, x]
+                    g[row, i, m, x] += d * sig_sca_scaled[c, x] * tsum[x]
+        for m in range(n_modes):
+            for x in range(nwl):
+                g[row, i, m, x] *= wb[row, i, x]
 
 
 @parallel_kernel  # numba's fork-safe threading layer, one parallel kernel at a time
 @numba.njit(cache=True, nogil=True, parallel=True)
 def _ray_kernel(
-    ray_row: np.ndarray,
+    row_start: np.ndarray,
     mu_view: np.ndarray,
     phi_view: np.ndarray,
     mu_sun_ray: np.ndarray,
@@ -399,75 +439,96 @@ def _ray_kernel(
     geo: np.ndarray,
     dens: np.ndarray,
     wb: np.ndarray,
+    g: np.ndarray,
     t_end: np.ndarray,
     hits: np.ndarray,
     ground_albedo: np.ndarray,
     ground_diffuse: np.ndarray,
-    cosm: np.ndarray,
 ) -> np.ndarray:
-    """Single scattering and the ground per ray; ``cosm[ray, i, m]`` gets ``cos(m phi)``
-    at each sample (the diffuse part is then a product with the rows' modes)."""
-    n_rays = ray_row.shape[0]
-    n_modes = cosm.shape[2]
+    """Radiance of the rays of each row: single scattering, the ground, the diffuse source.
+
+    Rays ``row_start[row] .. row_start[row + 1]`` belong to ``row``; the diffuse
+    source at a sample is the row's modes ``g[row, i, m]`` times ``cos(m phi)``
+    at the sample's own azimuth from the Sun.  A thread takes a row and walks
+    its samples, each sample's modes used by every ray of the row while they
+    are in the cache.
+    """
+    n_rows = row_start.shape[0] - 1
+    n_modes = g.shape[2]
     n_c, nwl = sig_ext_scaled.shape
     n_samples = geo.shape[1]
     r_ground = radius_grid[0]
-    out = np.zeros((n_rays, nwl))
-    for ray in numba.prange(n_rays):
-        row = ray_row[ray]
-        mu_sun = mu_sun_ray[ray]
-        sin_sun = math.sqrt(max(0.0, 1.0 - mu_sun * mu_sun))
-        mv = mu_view[ray]
-        sv = math.sqrt(max(0.0, 1.0 - mv * mv))
-        cos_theta = mv * mu_sun + sv * sin_sun * math.cos(phi_view[ray])
-        acc = np.zeros(nwl)
+    out = np.zeros((mu_view.shape[0], nwl))
+    for row in numba.prange(n_rows):
+        first = row_start[row]
+        n_ray = row_start[row + 1] - first
+        if n_ray == 0:
+            continue
+        acc = np.zeros((n_ray, nwl))
+        diffuse = np.zeros((n_ray, nwl))
+        cos_theta = np.empty(n_ray)
         col = np.zeros(n_c)
+        cm = np.empty(max(n_modes, 2))
+        for r in range(n_ray):
+            ray = first + r
+            mu_sun = mu_sun_ray[ray]
+            sin_sun = math.sqrt(max(0.0, 1.0 - mu_sun * mu_sun))
+            mv = mu_view[ray]
+            sv = math.sqrt(max(0.0, 1.0 - mv * mv))
+            cos_theta[r] = mv * mu_sun + sv * sin_sun * math.cos(phi_view[ray])
         for i in range(n_samples):
             s = geo[row, i, 0]
             x_r = geo[row, i, 1]
             mu_loc = geo[row, i, 2]
-            mus_loc = (r0 * mu_sun + s * cos_theta) / x_r
-            # Single scattering, the Sun's beam through the shell.
-            if _interp_columns(x_r, mus_loc, radius_grid, mu_grid, columns, col):
-                for x in range(nwl):
-                    tau_sun = 0.0
-                    ss = 0.0
-                    for c in range(n_c):
-                        tau_sun += sig_ext_scaled[c, x] * col[c] * n0[c]
-                        ss += sig_sca[c, x] * dens[row, i, c] * phase_ss[ray, c, x]
-                    acc[x] += wb[row, i, x] * ss * math.exp(-tau_sun)
-            if n_modes == 0:
-                continue
-            # Diffuse source: its modes at the local azimuth from the Sun.
             sl = math.sqrt(max(0.0, 1.0 - mu_loc * mu_loc))
-            ssl = math.sqrt(max(0.0, 1.0 - mus_loc * mus_loc))
-            if sl * ssl > 1e-12:
-                cphi = (cos_theta - mu_loc * mus_loc) / (sl * ssl)
-                cphi = min(max(cphi, -1.0), 1.0)
-            else:
-                cphi = 1.0
-            cosm[ray, i, 0] = 1.0
-            if n_modes > 1:
-                cosm[ray, i, 1] = cphi
-            for m in range(2, n_modes):
-                cosm[ray, i, m] = 2.0 * cphi * cosm[ray, i, m - 1] - cosm[ray, i, m - 2]
-        if hits[row]:
-            s_end = geo[row, n_samples - 1, 0]
-            mus_g = (r0 * mu_sun + s_end * cos_theta) / r_ground
-            lit = mus_g > 0.0 and _interp_columns(
-                r_ground, mus_g, radius_grid, mu_grid, columns, col
-            )
+            for r in range(n_ray):
+                ray = first + r
+                mus_loc = (r0 * mu_sun_ray[ray] + s * cos_theta[r]) / x_r
+                # Single scattering, the Sun's beam through the shell.
+                if _interp_columns(x_r, mus_loc, radius_grid, mu_grid, columns, col):
+                    for x in range(nwl):
+                        tau_sun = 0.0
+                        ss = 0.0
+                        for c in range(n_c):
+                            tau_sun += sig_ext_scaled[c, x] * col[c] * n0[c]
+                            ss += sig_sca[c, x] * dens[row, i, c] * phase_ss[ray, c, x]
+                        acc[r, x] += wb[row, i, x] * ss * math.exp(-tau_sun)
+                if n_modes == 0:
+                    continue
+                # Diffuse source: its modes at the local azimuth from the Sun.
+                ssl = math.sqrt(max(0.0, 1.0 - mus_loc * mus_loc))
+                if sl * ssl > 1e-12:
+                    cphi = (cos_theta[r] - mu_loc * mus_loc) / (sl * ssl)
+                    cphi = min(max(cphi, -1.0), 1.0)
+                else:
+                    cphi = 1.0
+                cm[0] = 1.0
+                cm[1] = cphi
+                for m in range(2, n_modes):
+                    cm[m] = 2.0 * cphi * cm[m - 1] - cm[m - 2]
+                for m in range(n_modes):
+                    w = cm[m]
+                    for x in range(nwl):
+                        diffuse[r, x] += w * g[row, i, m, x]
+        for r in range(n_ray):
+            ray = first + r
+            if hits[row]:
+                s_end = geo[row, n_samples - 1, 0]
+                mus_g = (r0 * mu_sun_ray[ray] + s_end * cos_theta[r]) / r_ground
+                lit = mus_g > 0.0 and _interp_columns(
+                    r_ground, mus_g, radius_grid, mu_grid, columns, col
+                )
+                for x in range(nwl):
+                    direct = 0.0
+                    if lit:
+                        tau_sun = 0.0
+                        for c in range(n_c):
+                            tau_sun += sig_ext_scaled[c, x] * col[c] * n0[c]
+                        direct = mus_g * math.exp(-tau_sun)
+                    e_g = ground_albedo[x] / math.pi * (direct + ground_diffuse[x])
+                    acc[r, x] += e_g * t_end[row, x]
             for x in range(nwl):
-                direct = 0.0
-                if lit:
-                    tau_sun = 0.0
-                    for c in range(n_c):
-                        tau_sun += sig_ext_scaled[c, x] * col[c] * n0[c]
-                    direct = mus_g * math.exp(-tau_sun)
-                e_g = ground_albedo[x] / math.pi * (direct + ground_diffuse[x])
-                acc[x] += e_g * t_end[row, x]
-        for x in range(nwl):
-            out[ray, x] = acc[x]
+                out[ray, x] = acc[r, x] + diffuse[r, x]
     return out
 
 
@@ -506,7 +567,7 @@ def estimate_render_cost(medium: Medium, *, n_rays: int, n_rows: int, n_path: in
     n_s = sum(1 for t in medium.tables if _scatters(t))
     packed = n_mom * (n_mom + 1) / 2.0
     levels = 121.0
-    chunk = min(n_rows, _ROWS_PER_CHUNK)
+    chunk = _rows_per_chunk(n_rows, n_path, n_mom, nwl)
     memory = 8.0 * (
         n_rays * nwl * (3 + n_c)
         + levels * n_s * packed * nwl
@@ -743,6 +804,12 @@ def _aureole_for_observer(
     return out
 
 
+def _rows_per_chunk(n_rows: int, n_path: int, n_modes: int, nwl: int) -> int:
+    # Rows whose samples' source modes (the largest buffer) fit in _CHUNK_BYTES.
+    per_row = 8.0 * (n_path + 1) * (max(n_modes, 1) + 2) * nwl
+    return int(max(1, min(n_rows, _CHUNK_BYTES // per_row)))
+
+
 def _radiance(
     medium: Medium,
     field: DiffuseField,
@@ -786,40 +853,49 @@ def _radiance(
         1.0,
     )
     theta = np.rad2deg(np.arccos(cos_theta))
+    # Rays sorted by row: a row's rays are contiguous.
+    order = np.argsort(ray_row, kind="stable")
+    bounds = np.searchsorted(ray_row[order], np.arange(mu_rows.size + 1))
     phase = np.ascontiguousarray(
         np.stack(
             [
-                t.phase_at(theta).T
+                t.phase_at(theta[order]).T
                 if _scatters(t)
                 else np.zeros((theta.size, t.wavelength_nm.size))
                 for t in medium.tables
             ],
             axis=1,
         )
-    )  # (ray, c, x)
+    )  # (sorted ray, c, x)
+    mu_sorted = np.ascontiguousarray(mu_view[order], dtype=float)
+    phi_sorted = np.ascontiguousarray(phi_view[order], dtype=float)
+    sun_sorted = np.ascontiguousarray(mu_sun[order], dtype=float)
     density = np.ascontiguousarray(medium.density(medium.altitude_m))
     modes_used = source_modes(medium, field)
     scatterers = np.flatnonzero([_scatters(t) for t in medium.tables]).astype(np.int64)
     n_modes = int(modes_used.max()) if modes_used.size else 0
     coeffs = _source_coefficients(medium, field, scatterers, max(n_modes, 1))
+    modes_kept = modes_used[scatterers].astype(np.int64)
     ground_diffuse = field.flux_down_diffuse[:, -1]
     nwl = medium.wavelength_nm.size
     n_c = len(medium.tables)
     n_mom = 2 * medium.n_streams
     r_ground = medium.planet_radius_m
     r_top = medium.planet_radius_m + medium.top_altitude_m
-    out = np.zeros((n_rays, nwl))
-    order = np.argsort(ray_row, kind="stable")
-    bounds = np.searchsorted(ray_row[order], np.arange(mu_rows.size + 1))
+    sig_ext_scaled = medium.scaled_sigma_ext_m2
+    sig_sca_scaled = medium.scaled_sigma_sca_m2
+    out = np.empty((n_rays, nwl))
+    chunk = _rows_per_chunk(mu_rows.size, n_path, n_modes, nwl)
     done = 0
-    for start in range(0, mu_rows.size, _ROWS_PER_CHUNK):
-        stop = min(start + _ROWS_PER_CHUNK, mu_rows.size)
+    for start in range(0, mu_rows.size, chunk):
+        stop = min(start + chunk, mu_rows.size)
         rows = mu_rows[start:stop]
         nr = rows.size
-        geo = np.empty((nr, n_path + 1, 3))
+        geo = np.empty((nr, n_path + 1, 4))
         dens = np.empty((nr, n_path + 1, n_c))
         wb = np.zeros((nr, n_path + 1, nwl))
-        g = np.zeros((nr, n_path + 1, max(n_modes, 1), nwl))
+        level = np.empty((nr, n_path + 1), dtype=np.int64)
+        g = np.empty((nr, n_path + 1, n_modes, nwl))
         t_end = np.empty((nr, nwl))
         hits = np.zeros(nr, dtype=np.bool_)
         _row_kernel(
@@ -831,53 +907,52 @@ def _radiance(
             float(stretch),
             medium.altitude_m,
             density,
-            medium.scaled_sigma_ext_m2,
-            medium.scaled_sigma_sca_m2,
+            sig_ext_scaled,
             field.altitude_m,
-            coeffs,
-            scatterers,
-            modes_used[scatterers].astype(np.int64),
-            n_mom,
+            geo,
+            dens,
+            wb,
+            level,
+            t_end,
+            hits,
+        )
+        if n_modes:
+            _source_kernel(
+                np.argsort(level.ravel(), kind="stable"),
+                geo,
+                dens,
+                wb,
+                level,
+                sig_sca_scaled,
+                coeffs,
+                scatterers,
+                modes_kept,
+                n_mom,
+                g,
+            )
+        a, b = bounds[start], bounds[stop]
+        out[order[a:b]] = _ray_kernel(
+            bounds[start : stop + 1] - a,
+            mu_sorted[a:b],
+            phi_sorted[a:b],
+            sun_sorted[a:b],
+            float(radius_m),
+            medium.number_density_per_m3,
+            medium.sigma_sca_m2,
+            sig_ext_scaled,
+            phase[a:b],
+            medium.slant.radius_m,
+            medium.slant.mu,
+            medium.slant.column_m,
             geo,
             dens,
             wb,
             g,
             t_end,
             hits,
+            field.ground_albedo,
+            ground_diffuse,
         )
-        rays = order[bounds[start] : bounds[stop]]
-        if rays.size:
-            cosm = np.zeros((rays.size, n_path + 1, n_modes))
-            part = _ray_kernel(
-                (ray_row[rays] - start).astype(np.int64),
-                np.ascontiguousarray(mu_view[rays], dtype=float),
-                np.ascontiguousarray(phi_view[rays], dtype=float),
-                np.ascontiguousarray(mu_sun[rays], dtype=float),
-                float(radius_m),
-                medium.number_density_per_m3,
-                medium.sigma_sca_m2,
-                medium.scaled_sigma_ext_m2,
-                np.ascontiguousarray(phase[rays]),
-                medium.slant.radius_m,
-                medium.slant.mu,
-                medium.slant.column_m,
-                geo,
-                dens,
-                wb,
-                t_end,
-                hits,
-                field.ground_albedo,
-                ground_diffuse,
-                cosm,
-            )
-            # The diffuse part: each row's modes weighted by its rays' cos(m phi).
-            local = ray_row[rays] - start
-            edges = np.searchsorted(local, np.arange(nr + 1))
-            for j in range(nr):
-                a, b = edges[j], edges[j + 1]
-                if b > a and n_modes:
-                    part[a:b] += cosm[a:b].reshape(b - a, -1) @ g[j, :, :n_modes].reshape(-1, nwl)
-            out[rays] = part
-        done += rays.size
+        done += b - a
         report(f"lines of sight: {done} of {n_rays}", last=done == n_rays)
     return out
