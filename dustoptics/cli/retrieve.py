@@ -1,11 +1,14 @@
 """``dustoptics retrieve``: the dust parameters that fit observations in a file.
 
-Reads the observations (a netCDF file of ``ssa``, ``g``, ``extinction_ratio``
-and/or ``phase`` with their uncertainties, :mod:`dustoptics.retrieve`), takes
+Reads the observations (a netCDF file of ``ssa``, ``g``, ``extinction_ratio``,
+``phase``, ``sky_radiance`` and/or ``sky_chromaticity`` with their
+uncertainties, the sky's scene in its variables' attributes,
+:mod:`dustoptics.retrieve`), takes
 the dust model from a preset or a TOML configuration (its values are the
 start), calls :func:`dustoptics.retrieve.retrieve` and prints the fitted
 values with their standard errors and correlations; ``--out FILE.json``
-writes the whole result.
+writes the whole result.  Progress (the sky solves' estimate, then one line per
+evaluation: its number, chi-square, elapsed seconds) goes to stderr.
 """
 
 from __future__ import annotations
@@ -31,6 +34,8 @@ def add_parser(sub: Any) -> None:
             "--fit hematite_fraction=0:0.2",
             f"{PROG} retrieve obs.nc --model my-dust.toml --fit v_eff=0.02:0.45 "
             "--prior v_eff=0.2,0.05 --out fit.json",
+            f"{PROG} retrieve mer_sky.nc --model mer-start.toml --fit r_eff_um=0.5:4 "
+            "--fit v_eff=0.05:0.6 --allow-large",
         ),
     )
     p.set_defaults(run=run)
@@ -38,7 +43,9 @@ def add_parser(sub: Any) -> None:
         "observations",
         type=Path,
         metavar="OBS.nc",
-        help="netCDF file of ssa, g, extinction_ratio and/or phase with uncertainties",
+        help="netCDF file of ssa, g, extinction_ratio, phase, sky_radiance and/or "
+        "sky_chromaticity with uncertainties (the sky's optical_depth, ground_albedo as "
+        "attributes)",
     )
     p.add_argument(
         "--model",
@@ -67,6 +74,25 @@ def add_parser(sub: Any) -> None:
         default=50,
         metavar="N",
         help="most evaluations of the residuals, each one table with derivatives (default 50)",
+    )
+    p.add_argument(
+        "--sky-streams",
+        type=int,
+        default=None,
+        metavar="N",
+        help="discrete ordinates per hemisphere of the skies of sky observations (default 20)",
+    )
+    p.add_argument(
+        "--sky-tol",
+        type=float,
+        default=None,
+        metavar="TOL",
+        help="tolerance of the skies' orders of scattering (default 1e-6)",
+    )
+    p.add_argument(
+        "--allow-large",
+        action="store_true",
+        help="go ahead when the sky solves are estimated beyond five minutes",
     )
     p.add_argument("--out", type=Path, metavar="FILE.json", help="write the result as JSON")
     p.add_argument("--force", action="store_true", help="replace an existing --out file")
@@ -120,6 +146,8 @@ def _write(result: Any, path: Path, force: bool) -> None:
         "function_evaluations": result.function_evaluations,
         "converged": result.converged,
         "message": result.message,
+        "sky_solves": result.sky_solves,
+        "path_values": result.history_values.tolist(),
     }
     write_files({path: (json.dumps(record, indent=1) + "\n").encode()}, overwrite=force)
 
@@ -131,12 +159,21 @@ def run(args: argparse.Namespace) -> int:
 
     import numpy as np
 
-    from dustoptics.retrieve import retrieve
+    from dustoptics.retrieve import SkySettings, retrieve
 
     bounds = _pairs(args.fit, "--fit", ":")
     priors = _pairs(args.prior, "--prior", ",")
     if args.max_iterations < 1:
         raise UsageError(f"--max-iterations must be >= 1; got {args.max_iterations}")
+    settings = {}
+    if args.sky_streams is not None:
+        settings["n_streams"] = args.sky_streams
+    if args.sky_tol is not None:
+        settings["tol"] = args.sky_tol
+    try:
+        sky = SkySettings(**settings)
+    except ValueError as exc:
+        raise UsageError(f"--sky-streams/--sky-tol: {exc}") from None
     model = _model(args.model)
     if args.out is not None:
         from dustoptics.io._atomic import check_targets
@@ -149,9 +186,6 @@ def run(args: argparse.Namespace) -> int:
     with xr.open_dataset(args.observations) as ds:
         observations = ds.load()
 
-    def progress(tables: int, chi_square: float) -> None:
-        print(f"table {tables}: chi-square {chi_square:.6g}", file=sys.stderr, flush=True)
-
     result = retrieve(
         observations,
         model=model,
@@ -159,7 +193,9 @@ def run(args: argparse.Namespace) -> int:
         bounds=bounds,
         priors=priors or None,
         max_iterations=args.max_iterations,
-        progress=progress,
+        sky=sky,
+        progress=sys.stderr,
+        allow_large=args.allow_large,
     )
     state = "converged" if result.converged else "NOT converged"
     print(
@@ -168,6 +204,8 @@ def run(args: argparse.Namespace) -> int:
     )
     n = result.residuals.size
     print(f"  chi-square {result.chi_square:.6g} from {n} residuals")
+    if result.sky_solves:
+        print(f"  {result.sky_solves} sky solves")
     print(f"  {'parameter':>20s}  {'start':>12s}  {'fitted':>12s}  {'std. error':>12s}")
     for p, v0, v, se in zip(
         result.parameters,

@@ -91,6 +91,11 @@ class Retrieval:
         observations, the sky's table).
     sky_solves : int
         Skies solved (orders of scattering), residuals and Jacobians together.
+    history_values : numpy.ndarray
+        The parameters of every evaluation of the residuals, in order, shape
+        (function_evaluations + 1, n_parameters): the fit's path.
+    history_residuals : numpy.ndarray
+        Their weighted residuals, shape (function_evaluations + 1, n_residuals). [-]
     """
 
     parameters: tuple[str, ...]
@@ -108,6 +113,8 @@ class Retrieval:
     model: Mapping[str, Any] = dataclasses.field(repr=False)
     table: Table = dataclasses.field(repr=False)
     sky_solves: int = 0
+    history_values: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros((0, 0)))
+    history_residuals: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros((0, 0)))
 
     def value(self, parameter: str) -> float:
         """The fitted value of one parameter."""
@@ -493,6 +500,7 @@ def retrieve(
     Entry = dict[str, Any]
     cache: dict[bytes, Entry] = {}
     counter = {"evaluations": 0}
+    history: list[tuple[np.ndarray, np.ndarray]] = []
 
     def evaluate(x: np.ndarray) -> Entry:
         key = np.asarray(x, dtype=np.float64).tobytes()
@@ -543,6 +551,7 @@ def retrieve(
         if len(cache) >= 3:  # the accepted point, a trial, the next: enough for scipy
             cache.pop(next(iter(cache)))
         cache[key] = entry
+        history.append((entry["x"], entry["residuals"]))
         counter["evaluations"] += 1
         chi_square = float(entry["residuals"] @ entry["residuals"])
         if callback is not None:
@@ -608,4 +617,6 @@ def retrieve(
         model=_set(keywords, dict(zip(names, result.x.tolist()))),
         table=final["table"] if obs else final["sky_table"],
         sky_solves=sky_model.solves if sky_model is not None else 0,
+        history_values=np.array([h[0] for h in history]),
+        history_residuals=np.array([h[1] for h in history]),
     )

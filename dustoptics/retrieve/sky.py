@@ -57,7 +57,7 @@ import numpy as np
 from dustoptics._validation import BudgetError
 from dustoptics.atmosphere.sets import mars_atmosphere
 from dustoptics.sky._progress import Reporter
-from dustoptics.sky.compare import AWAY_FROM_SUN
+from dustoptics.sky.compare import AWAY_FROM_SUN, COMPARISON_WAVELENGTHS_NM
 from dustoptics.sky.medium import N_STREAMS, Medium
 from dustoptics.sky.orders import N_LAYERS, WORK_BUDGET, estimate_orders_cost, solve_orders
 from dustoptics.sky.render import line_of_sight_radiance
@@ -77,9 +77,11 @@ SKY_OBSERVABLES: Final[Mapping[str, tuple[str, ...]]] = {
     "sky_radiance": ("sun_elevation_deg", "wavelength_nm", "direction"),
     "sky_chromaticity": ("sun_elevation_deg", "chromaticity"),
 }
-#: The spectral grid of a chromaticity: 360-830 nm in 10 nm steps, the grid of
-#: :mod:`dustoptics.sky.compare` without its two radiance wavelengths. [nm]
-CHROMATICITY_WAVELENGTHS_NM: Final = tuple(float(w) for w in np.arange(360.0, 831.0, 10.0))
+#: The spectral grid of a chromaticity: 360-830 nm in 10 nm steps and the two radiance
+#: wavelengths of :mod:`dustoptics.sky.compare`, the grid its rover comparison uses. [nm]
+CHROMATICITY_WAVELENGTHS_NM: Final = tuple(
+    float(w) for w in np.unique(np.r_[np.arange(360.0, 831.0, 10.0), COMPARISON_WAVELENGTHS_NM])
+)
 #: Most estimated seconds of sky solves in a retrieval without ``allow_large``
 #: (the house's five minutes, :data:`dustoptics.sky.orders.WORK_BUDGET`). [s]
 MAX_SKY_SECONDS: Final = 300.0
@@ -360,7 +362,6 @@ class SkyModel:
             sun_zenith_deg=90.0 - scene.sun_elevation_deg,
             ground_albedo=scene.ground_albedo,
             tol=self.settings.tol,
-            progress=report,
             allow_large=True,  # counted by check_cost
         )
         radiance = line_of_sight_radiance(
@@ -372,6 +373,11 @@ class SkyModel:
             allow_large=True,
         )  # (direction, wavelength)
         self.solves += 1
+        report(
+            f"sky solve {self.solves} (Sun {scene.sun_elevation_deg:g} deg, "
+            f"{field.n_orders} orders of scattering)",
+            last=True,
+        )
         out = []
         for s in mine:
             row = [
