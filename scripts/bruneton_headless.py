@@ -3,7 +3,8 @@
 Usage::
 
     python scripts/bruneton_headless.py --bruneton-dir ~/src/precomputed_atmospheric_scattering
-    python scripts/bruneton_headless.py --set mars --sun-elevation 30 --nu 64 --json out.json
+    python scripts/bruneton_headless.py --quick --write      # the reduced run the docs show
+    python scripts/bruneton_headless.py --sun-elevations 20,40 --nu 32 --json out.json
 
 ``--bruneton-dir`` (or the environment variable ``DUSTOPTICS_BRUNETON_REPO``) names a checkout of
 https://github.com/ebruneton/precomputed_atmospheric_scattering (read at d9954923).  Nothing of
@@ -12,9 +13,9 @@ his code is stored here: this script copies the five files his ``atmosphere::Mod
 glad from that checkout into a build directory, and applies there the changes our export's
 JSON (``<name>_bruneton.json``, section ``precomputation``) asks for:
 
-- ``SCATTERING_TEXTURE_NU_SIZE`` in ``atmosphere/constants.h``;
-- the scattering-density ``SAMPLE_COUNT`` of ``ComputeScatteringDensity`` in
-  ``atmosphere/functions.glsl`` (his line 1187, 16);
+- the texture sizes of ``atmosphere/constants.h`` (NU chosen for the set, the others his);
+- the ``SAMPLE_COUNT`` of ``ComputeScatteringDensity`` (his line 1187, 16) and of
+  ``ComputeIndirectIrradiance`` (his line 1487, 32) in ``atmosphere/functions.glsl``;
 - the tabulated phase function: our snippet ``<name>_bruneton_mie_phase.glsl`` placed
   immediately above ``MiePhaseFunction`` in ``functions.glsl``, and that function replaced by
   the one-line change the snippet's header states.
@@ -24,22 +25,37 @@ written here in Python), writes a harness of our own (``harness.cc``: an EGL sur
 context on Mesa, glad loaded through ``eglGetProcAddress``, ``MakeModel()`` from our C++
 header, ``Init(K)``, then one fragment per view direction calling his ``GetSkyRadiance`` into
 an RGBA32F framebuffer), compiles it with ``g++`` against his ``model.cc`` and ``glad.cc``, runs
-it and reads the radiance back.  No window, no display, no GLUT.
+it and reads the radiance back.  No window, no display, no GLUT.  One precomputation serves
+every Sun elevation: each direction carries its own Sun.
 
-The same atmosphere is rendered by ``dustoptics.sky`` (orders of scattering to 1e-4) at his
-three wavelengths 680, 550 and 440 nm (the set is built at exactly those wavelengths, so
-neither side interpolates coefficients), and the two skies are compared direction by
-direction, per unit solar irradiance [sr^-1].  The script prints a table and exits 1 if any
-direction differs by more than ``--tolerance`` (default 5 %) beyond the angle from the Sun
-where the export says its NU slices keep 5 % (the JSON's ``precomputation`` errors; 14 deg for
-the Martian dust at NU 64, the most a 2048-texel-wide texture allows).
+The same atmosphere is rendered by ``dustoptics.sky`` (orders of scattering to 1e-4, one sky
+per Sun elevation on a grid through every compared direction) at his three wavelengths 680,
+550 and 440 nm (the set is built at exactly those wavelengths, so neither side interpolates
+coefficients), and the two skies are compared direction by direction, per unit solar
+irradiance [sr^-1]: by default 35 directions at Sun elevations 10, 30 and 60 deg, none within
+5 deg of the Sun.  The script prints a table and exits 1 if a direction differs by more than
+``--tolerance`` (default 5 %) beyond the angle from the Sun where the NU slices in use keep 5 %
+(:func:`dustoptics.io.engines.precomputation.nu_clear_angle_deg`; 14 deg for the Martian dust at
+the export's NU 64, the most a 2048-texel-wide texture allows).
 
-His precomputation is slow on llvmpipe: with his own sizes (NU 8, S 16, 4 orders) about 6
-minutes on 2 cores here; its cost grows with NU x S^2 x (orders - 1), so the Martian sizes
-(NU 64, S 48, 12 orders) take days there (far less on a GPU; the harness runs on any
-Mesa EGL driver).  ``--nu``, ``--orders`` and ``--density-samples`` override the export's
-choices (to measure what another choice costs), and ``--sizes R,MU,MU_S`` shrinks the other
-texture sizes (his 32, 128, 32) for runs that compare one choice with another.
+His texture sizes matter beyond NU.  His view-angle coordinate is linear in the distance to the
+top of the atmosphere, so the sky up to about 35 deg from the zenith lies in the first texels
+above the horizon, and a texel whose valid range of ``nu`` (the cosine of the angle from the
+Sun, bounded by the view's and the Sun's zenith angles) excludes the ``nu`` looked up is read at
+its clamped ``nu``.  With ``SCATTERING_TEXTURE_MU_SIZE`` 32 (an earlier reduced run of this
+script) the sky 30 deg from the zenith was interpolated with the zenith's texel, which holds
+only the angle from the Sun of the zenith itself: the Martian sky came out 22-36 % too bright
+83-90 deg from the Sun and 9 % too dark 30 deg from it; at his 128 (which the export keeps)
+that row agrees with the rest.  The reductions of ``--sizes`` are therefore the R and MU_S sizes,
+never MU.
+
+His precomputation is slow on llvmpipe: its cost grows with the texels (NU x MU_S x MU x R)
+times S^2 times (orders - 1), so the export's Martian sizes (NU 64, S 48, 12 orders, his
+32/128/32) take on the order of fifteen hours on 2 cores (minutes on a GPU; the harness runs
+on any Mesa EGL driver).  ``--quick`` is the reduced run of :data:`QUICK` (about 1/76 of that
+work); ``--nu``, ``--orders``, ``--density-samples`` and ``--sizes R,MU,MU_S`` override the
+export's choices one by one (to measure what another choice costs).  ``--write`` puts the
+report in ``docs/howto/generated/``.
 """
 
 from __future__ import annotations
@@ -78,6 +94,9 @@ _MIE_FUNCTION = re.compile(
 )
 _DENSITY_SAMPLES = re.compile(
     r"(RadianceDensitySpectrum ComputeScatteringDensity\(.*?const int SAMPLE_COUNT = )(\d+);", re.S
+)
+_IRRADIANCE_SAMPLES = re.compile(
+    r"(IrradianceSpectrum ComputeIndirectIrradiance\(.*?const int SAMPLE_COUNT = )(\d+);", re.S
 )
 _SIZE = "(constexpr int SCATTERING_TEXTURE_{}_SIZE = )(\\d+);"
 
@@ -305,6 +324,7 @@ def prepare_sources(
     nu_size: int,
     density_samples: int,
     sizes: tuple[int, ...] | None = None,
+    irradiance_samples: int | None = None,
 ) -> None:
     """Copy his files into ``build`` and apply the export's changes there.
 
@@ -334,6 +354,12 @@ def prepare_sources(
         raise SystemExit(
             "atmosphere/functions.glsl: ComputeScatteringDensity's SAMPLE_COUNT not found"
         )
+    if irradiance_samples is not None:
+        functions, count = _IRRADIANCE_SAMPLES.subn(rf"\g<1>{irradiance_samples};", functions)
+        if count != 1:
+            raise SystemExit(
+                "atmosphere/functions.glsl: ComputeIndirectIrradiance's SAMPLE_COUNT not found"
+            )
     change = re.search(r"^//   (vec3 MiePhaseFunction\(.*\})$", phase_glsl, re.M)
     if change is None:
         raise SystemExit("the phase snippet does not state the one-line change")
@@ -368,32 +394,37 @@ def compile_harness(build: Path, parameters_h: Path, namespace: str) -> Path:
 
 @dataclass(frozen=True)
 class Geometry:
-    """Observer, Sun and view directions (zenith angle, azimuth from the Sun) [deg]."""
+    """Observer and, per direction, the Sun's elevation and the view (zenith, azimuth from the
+    Sun) [deg]; one precomputation serves every Sun elevation."""
 
     observer_altitude_m: float
-    sun_elevation_deg: float
+    sun_elevation_deg: np.ndarray
     view_zenith_deg: np.ndarray
     view_azimuth_deg: np.ndarray
 
 
-def default_geometry(sun_elevation_deg: float) -> Geometry:
-    """A few directions: the zenith; above the Sun 7-45 deg away from it; zenith angles 30-85 deg
-    at azimuths 45-180 deg from the Sun's; 80 and 85 deg below it."""
-    sun_zenith = 90.0 - sun_elevation_deg
-    zen, az = [0.0], [0.0]
-    for gap in (7.0, 10.0, 15.0, 20.0, 30.0, 45.0):
-        if sun_zenith - gap >= 0.0:
-            zen.append(sun_zenith - gap)
-            az.append(0.0)
-    for z in (30.0, 60.0, 80.0, 85.0):
-        for a in (45.0, 90.0, 135.0, 180.0):
+#: Sun elevations of the default comparison. [deg]
+SUN_ELEVATIONS_DEG = (10.0, 30.0, 60.0)
+
+
+def default_geometry(sun_elevations_deg: tuple[float, ...] = SUN_ELEVATIONS_DEG) -> Geometry:
+    """For each Sun elevation: the zenith; above the Sun 10, 20 and 45 deg away from it (where
+    the sky allows); zenith angles 30, 60, 80 deg at azimuths 90 and 180 deg from the Sun's and
+    60 deg at 45 deg; 85 deg at 135 deg.  No direction within 5 deg of the Sun."""
+    sun, zen, az = [], [], []
+    for elevation in sun_elevations_deg:
+        rows = [(0.0, 0.0)]
+        sun_zenith = 90.0 - elevation
+        rows += [(sun_zenith - gap, 0.0) for gap in (10.0, 20.0, 45.0) if sun_zenith - gap >= 0.0]
+        rows += [(z, a) for z in (30.0, 60.0, 80.0) for a in (90.0, 180.0)]
+        rows += [(60.0, 45.0), (85.0, 135.0)]
+        for z, a in rows:
+            sun.append(elevation)
             zen.append(z)
             az.append(a)
-    for z in (80.0, 85.0):
-        if abs(z - sun_zenith) > 5.0:
-            zen.append(z)
-            az.append(0.0)
-    return Geometry(2.0, sun_elevation_deg, np.array(zen), np.array(az))
+    geometry = Geometry(2.0, np.array(sun), np.array(zen), np.array(az))
+    assert np.all(scattering_angle_deg(geometry) > 5.0)
+    return geometry
 
 
 def _unit(zenith_deg: np.ndarray, azimuth_deg: np.ndarray) -> np.ndarray:
@@ -401,11 +432,15 @@ def _unit(zenith_deg: np.ndarray, azimuth_deg: np.ndarray) -> np.ndarray:
     return np.stack([np.sin(z) * np.cos(a), np.sin(z) * np.sin(a), np.cos(z)], axis=-1)
 
 
+def _sun(geometry: Geometry) -> np.ndarray:
+    return _unit(90.0 - geometry.sun_elevation_deg, np.zeros_like(geometry.sun_elevation_deg))
+
+
 def scattering_angle_deg(geometry: Geometry) -> np.ndarray:
     """Angle between each view direction and the Sun. [deg]"""
-    sun = _unit(np.array(90.0 - geometry.sun_elevation_deg), np.array(0.0))
     view = _unit(geometry.view_zenith_deg, geometry.view_azimuth_deg)
-    return np.degrees(np.arccos(np.clip(view @ sun, -1.0, 1.0)))
+    cos = np.sum(view * _sun(geometry), axis=-1)
+    return np.degrees(np.arccos(np.clip(cos, -1.0, 1.0)))
 
 
 def run_harness(
@@ -414,44 +449,87 @@ def run_harness(
 ) -> dict[str, Any]:  # fmt: skip
     """Run the harness for the geometry; its JSON (radiance in W m^-2 sr^-1 nm^-1)."""
     camera = np.array([0.0, 0.0, (bottom_radius_m + geometry.observer_altitude_m) / length_unit_m])
-    sun = _unit(np.array(90.0 - geometry.sun_elevation_deg), np.array(0.0))
     views = _unit(geometry.view_zenith_deg, geometry.view_azimuth_deg)
-    lines = [" ".join(f"{x:.9g}" for x in (*camera, *v, *sun)) for v in views]
+    lines = [
+        " ".join(f"{x:.9g}" for x in (*camera, *v, *s))
+        for v, s in zip(views, _sun(geometry), strict=True)
+    ]
     (work / "rays.txt").write_text("\n".join(lines) + "\n")
     out = work / "radiance.json"
     subprocess.run([str(exe), str(orders), str(work / "rays.txt"), str(out)], check=True, cwd=work)
     return json.loads(out.read_text())
 
 
+#: The reduced run (``--quick``; the checkout-gated test): the export's orders, MU size and
+#: phase function, with NU 8, 36 x 72 scattering-density directions and R/MU_S 12/16, about
+#: 1/76 of the export's work (texels x S^2).  What the reductions cost by the module's own
+#: measures: R 12 (his mapping is linear in the distance to the horizon) reads an exponential
+#: of the dust's 11.1 km scale height about 1 % high along a vertical path (R 32: 0.14 %);
+#: S 36 integrates the dust's phase function to within 2.1 %
+#: (:func:`~dustoptics.io.engines.precomputation.scattering_density_error`); NU 8 moves the
+#: angle from the Sun beyond which the comparison is held to 44 deg
+#: (:func:`~dustoptics.io.engines.precomputation.nu_clear_angle_deg`).
+QUICK: dict[str, Any] = {"nu_size": 8, "density_samples": 36, "sizes": (12, 128, 16)}
+
+#: Where ``--write`` puts the report (the docs include it).
+GENERATED = REPO_ROOT / "docs" / "howto" / "generated"
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--bruneton-dir", default=os.environ.get("DUSTOPTICS_BRUNETON_REPO"))
     ap.add_argument("--set", default="mars", choices=("mars", "earth"))
-    ap.add_argument("--sun-elevation", type=float, default=30.0, help="[deg]")
+    ap.add_argument(
+        "--sun-elevations",
+        default=",".join(f"{e:g}" for e in SUN_ELEVATIONS_DEG),
+        help="Sun elevations of the compared directions, comma-separated [deg]",
+    )
     ap.add_argument("--ground-albedo", type=float, default=0.1)
+    ap.add_argument(
+        "--quick",
+        action="store_true",
+        help="the reduced run: NU 8, S 36, R/MU/MU_S 12/128/16 (see QUICK)",
+    )
     ap.add_argument("--nu", type=int, help="SCATTERING_TEXTURE_NU_SIZE (default: the export's)")
     ap.add_argument("--orders", type=int, help="Init(K) (default: the export's)")
     ap.add_argument("--density-samples", type=int, help="scattering-density SAMPLE_COUNT")
     ap.add_argument(
         "--sizes",
-        help="R,MU,MU_S texture sizes instead of his 32,128,32 (cheaper runs, for comparisons)",
+        help="R,MU,MU_S texture sizes instead of the export's (his 32,128,32): cheaper runs",
     )
     ap.add_argument("--tolerance", type=float, default=0.05)
     ap.add_argument("--work", help="build directory (default: a temporary one, removed)")
     ap.add_argument("--json", help="write the comparison here")
+    ap.add_argument(
+        "--write",
+        action="store_true",
+        help=f"also write the report to {GENERATED.relative_to(REPO_ROOT)}/bruneton_headless_SET.txt",
+    )
     args = ap.parse_args(argv)
     if not args.bruneton_dir:
         ap.error("give --bruneton-dir or set DUSTOPTICS_BRUNETON_REPO")
     sys.path.insert(0, str(REPO_ROOT))
+    elevations = tuple(float(v) for v in args.sun_elevations.split(","))
+    quick = QUICK if args.quick else {}
+    sizes = tuple(int(v) for v in args.sizes.split(",")) if args.sizes else quick.get("sizes")
     result = compare(
-        Path(args.bruneton_dir), set_name=args.set, sun_elevation_deg=args.sun_elevation,
-        ground_albedo=args.ground_albedo, nu_size=args.nu, orders=args.orders,
-        density_samples=args.density_samples, work=Path(args.work) if args.work else None,
-        sizes=tuple(int(v) for v in args.sizes.split(",")) if args.sizes else None,
+        Path(args.bruneton_dir), set_name=args.set, ground_albedo=args.ground_albedo,
+        nu_size=args.nu or quick.get("nu_size"), orders=args.orders,
+        density_samples=args.density_samples or quick.get("density_samples"),
+        work=Path(args.work) if args.work else None, sizes=sizes,
+        geometry=default_geometry(elevations),
     )  # fmt: skip
-    print(report(result, tolerance=args.tolerance))
+    text = report(result, tolerance=args.tolerance)
+    print(text)
     if args.json:
         Path(args.json).write_text(json.dumps(result, indent=2) + "\n")
+    if args.write:
+        GENERATED.mkdir(parents=True, exist_ok=True)
+        command = "python scripts/bruneton_headless.py " + " ".join(argv or sys.argv[1:])
+        command = re.sub(r"--(bruneton-dir|work|json)[ =]\S+ ?", "", command).strip()
+        (GENERATED / f"bruneton_headless_{args.set}.txt").write_text(
+            f"# written by: {command}\n{text}\n"
+        )
     return 0 if result["max_error_beyond_clear_angle"] <= args.tolerance else 1
 
 
@@ -462,11 +540,33 @@ def build_set(set_name: str) -> Any:
     return build_atmosphere(set_name, wavelength_nm=(440.0, 550.0, 680.0))
 
 
+def _our_sky(atmosphere: Any, geometry: Geometry, *, ground_albedo: float) -> np.ndarray:
+    """dustoptics.sky at the geometry's directions, channels 680, 550, 440 nm. [sr^-1]"""
+    from dustoptics.sky.medium import Medium
+    from dustoptics.sky.scene import sky_radiance
+
+    medium = Medium.from_atmosphere(atmosphere)
+    ours = np.empty((geometry.view_zenith_deg.size, 3))
+    for elevation in np.unique(geometry.sun_elevation_deg):
+        rows = geometry.sun_elevation_deg == elevation
+        zenith = np.unique(np.concatenate([[0.0, 90.0], geometry.view_zenith_deg[rows]]))
+        # A grid through every compared direction (zenith angles as given, azimuths every
+        # 5 deg): no interpolation on our side.
+        sky = sky_radiance(
+            medium, sun_elevation_deg=float(elevation), ground_albedo=ground_albedo,
+            observer_altitude_m=geometry.observer_altitude_m, view_zenith_deg=zenith,
+            azimuth_step_deg=5.0,
+        )  # fmt: skip
+        channel = [int(np.argmin(abs(sky.wavelength_nm - w))) for w in (680.0, 550.0, 440.0)]
+        values = sky.at(geometry.view_zenith_deg[rows], geometry.view_azimuth_deg[rows])
+        ours[rows] = values[:, channel]
+    return ours
+
+
 def compare(
     checkout: Path,
     *,
     set_name: str = "mars",
-    sun_elevation_deg: float = 30.0,
     ground_albedo: float = 0.1,
     nu_size: int | None = None,
     orders: int | None = None,
@@ -477,10 +577,12 @@ def compare(
 ) -> dict[str, Any]:
     """Export the set, run his precomputation headless, render ours; the comparison."""
     from dustoptics.io.engines.bruneton import write_bruneton
-    from dustoptics.sky.scene import sky_radiance
+    from dustoptics.io.engines.precomputation import nu_clear_angle_deg
 
     atmosphere = build_set(set_name)
-    geometry = geometry or default_geometry(sun_elevation_deg)
+    geometry = geometry or default_geometry()
+    if np.any(np.abs(geometry.view_azimuth_deg % 5.0) > 1e-9):
+        raise ValueError("view azimuths must be multiples of 5 deg (our sky's grid)")
     tmp = None
     if work is None:
         tmp = tempfile.TemporaryDirectory(prefix="bruneton-headless-")
@@ -492,14 +594,18 @@ def compare(
         name = atmosphere.name
         data = json.loads((export / f"{name}_bruneton.json").read_text())
         pre = data["precomputation"]
+        stated = pre["constants.h"]
         nu = nu_size or pre["scattering_texture_nu_size"]
         k = orders or pre["num_scattering_orders"]
         s = density_samples or pre["scattering_density_sample_count"]
+        if sizes is None:
+            sizes = tuple(stated[f"SCATTERING_TEXTURE_{d}_SIZE"] for d in ("R", "MU", "MU_S"))
         build = work / "build"
         prepare_sources(
             checkout, build,
             phase_glsl=(export / f"{name}_bruneton_mie_phase.glsl").read_text(),
             nu_size=nu, density_samples=s, sizes=sizes,
+            irradiance_samples=pre["indirect_irradiance_sample_count"],
         )  # fmt: skip
         namespace = re.search(
             r"^namespace (\w+) \{", (export / f"{name}_bruneton_parameters.h").read_text(), re.M
@@ -517,30 +623,36 @@ def compare(
             tmp.cleanup()
     solar = np.interp([680.0, 550.0, 440.0], data["wavelengths"], data["solar_irradiance"])
     his_per_irradiance = np.array(his["radiance"]) / solar  # [sr^-1], channels R, G, B
-    ours_sky = sky_radiance(
-        atmosphere, sun_elevation_deg=geometry.sun_elevation_deg, ground_albedo=ground_albedo,
-        observer_altitude_m=geometry.observer_altitude_m,
-    )  # fmt: skip
-    ours = ours_sky.at(geometry.view_zenith_deg, geometry.view_azimuth_deg)
-    order = [int(np.argmin(abs(ours_sky.wavelength_nm - w))) for w in (680.0, 550.0, 440.0)]
-    ours = ours[:, order]
+    ours = _our_sky(atmosphere, geometry, ground_albedo=ground_albedo)
     error = his_per_irradiance / ours - 1.0
     angle = scattering_angle_deg(geometry)
     outside = angle > 5.0
-    # The export states how far from the Sun its NU slices leave more than 5 %.
-    clear = max(5.0, pre["errors"]["nu: within the NU tolerance beyond, from the Sun [deg]"])
+    # How far from the Sun the NU slices in use leave more than 5 % (the export states it for
+    # its NU; recomputed for another).
+    clear = max(
+        5.0,
+        nu_clear_angle_deg(atmosphere, nu_size=his["nu_size"], wavelength_nm=(680.0, 550.0, 440.0)),
+    )
     beyond = angle > clear
     return {
         "set": set_name,
-        "sun_elevation_deg": geometry.sun_elevation_deg,
         "ground_albedo": ground_albedo,
         "nu_size": his["nu_size"],
         "orders": his["orders"],
         "scattering_density_sample_count": s,
-        "sizes_r_mu_mu_s": list(sizes) if sizes else [32, 128, 32],
+        "sizes_r_mu_mu_s": list(sizes),
+        "stated_sizes_r_mu_mu_s": [
+            stated[f"SCATTERING_TEXTURE_{d}_SIZE"] for d in ("R", "MU", "MU_S")
+        ],
+        "stated_nu_orders_density": [
+            pre["scattering_texture_nu_size"],
+            pre["num_scattering_orders"],
+            pre["scattering_density_sample_count"],
+        ],
         "init_seconds": his["init_seconds"],
         "run_seconds": wall,
         "renderer": his["renderer"],
+        "sun_elevation_deg": geometry.sun_elevation_deg.tolist(),
         "view_zenith_deg": geometry.view_zenith_deg.tolist(),
         "view_azimuth_deg": geometry.view_azimuth_deg.tolist(),
         "scattering_angle_deg": angle.tolist(),
@@ -558,26 +670,30 @@ def compare(
 
 def report(result: dict[str, Any], *, tolerance: float) -> str:
     """The comparison as a plain-text table."""
+    sizes = "/".join(str(v) for v in result["sizes_r_mu_mu_s"])
     rows = [
-        f"{result['set']}: Sun at {result['sun_elevation_deg']:g} deg, NU {result['nu_size']}, "
-        f"K {result['orders']}, scattering density {result['scattering_density_sample_count']}, "
-        f"his Init {result['init_seconds']:.0f} s on {result['renderer']}",
-        " zenith  azimuth  angle    his/ours - 1 at 680, 550, 440 nm",
+        f"{result['set']}: NU {result['nu_size']}, K {result['orders']}, scattering density "
+        f"{result['scattering_density_sample_count']}, R/MU/MU_S {sizes} (the export states "
+        f"NU/K/S {'/'.join(str(v) for v in result['stated_nu_orders_density'])}, R/MU/MU_S "
+        f"{'/'.join(str(v) for v in result['stated_sizes_r_mu_mu_s'])}); his Init "
+        f"{result['init_seconds']:.0f} s on {result['renderer']}",
+        "   Sun  zenith  azimuth  angle    his/ours - 1 at 680, 550, 440 nm",
     ]
-    for z, a, t, e in zip(
-        result["view_zenith_deg"], result["view_azimuth_deg"], result["scattering_angle_deg"],
-        result["relative_error"], strict=True,
+    for e, z, a, t, err in zip(
+        result["sun_elevation_deg"], result["view_zenith_deg"], result["view_azimuth_deg"],
+        result["scattering_angle_deg"], result["relative_error"], strict=True,
     ):  # fmt: skip
         rows.append(
-            f" {z:6.1f}  {a:7.1f}  {t:5.1f}   " + "  ".join(f"{100 * v:+7.2f} %" for v in e)
+            f" {e:5.1f}  {z:6.1f}  {a:7.1f}  {t:5.1f}   "
+            + "  ".join(f"{100 * v:+7.2f} %" for v in err)
         )
     worst = result["max_error_outside_5deg"]
     rows.append(f"largest difference more than 5 deg from the Sun: {100 * worst:.2f} %")
     worst = result["max_error_beyond_clear_angle"]
     verdict = "within" if worst <= tolerance else "OUTSIDE"
     rows.append(
-        f"largest difference beyond {result['nu_clear_angle_deg']:.3g} deg from the Sun (where the "
-        f"export says its NU slices keep 5 %): {100 * worst:.2f} % ({verdict} {100 * tolerance:g} %)"
+        f"largest difference beyond {result['nu_clear_angle_deg']:.3g} deg from the Sun (where "
+        f"NU {result['nu_size']} keeps 5 %): {100 * worst:.2f} % ({verdict} {100 * tolerance:g} %)"
     )
     return "\n".join(rows)
 

@@ -55,7 +55,8 @@ constants ``kScatteringTextureNuSize``, ``kNumScatteringOrders``,
 ``kScatteringDensitySampleCount``): ``SCATTERING_TEXTURE_NU_SIZE`` in
 ``atmosphere/constants.h``, ``Init(K)``, the scattering-density
 ``SAMPLE_COUNT`` of ``ComputeScatteringDensity`` in ``functions.glsl`` (16 in
-his file), ``combine_scattering_textures = false`` (his combined texture keeps
+his file) and the ``SAMPLE_COUNT`` of ``ComputeIndirectIrradiance`` at the same
+angular step (32 in his file), ``combine_scattering_textures = false`` (his combined texture keeps
 only the red channel of single Mie scattering and rebuilds green and blue
 from a Rayleigh-shaped spectrum, which a dust sky does not have) and three
 precomputed wavelengths.  The C++ header checks the NU size against
@@ -612,6 +613,9 @@ def bruneton_precomputation_dict(sampling: PrecomputationSampling) -> dict[str, 
             "ComputeScatteringDensity SAMPLE_COUNT": sampling.scattering_density_sample_count,
             "where": "const int SAMPLE_COUNT = 16; in ComputeScatteringDensity (line 1187 at "
             "d9954923): S zenith x 2S azimuth incident directions",
+            "ComputeIndirectIrradiance SAMPLE_COUNT": sampling.indirect_irradiance_sample_count,
+            "where (irradiance)": "const int SAMPLE_COUNT = 32; in ComputeIndirectIrradiance "
+            "(line 1487 at d9954923): S/2 zenith x 2S azimuth directions, the same angular step",
             "mie phase function": "paste <name>_bruneton_mie_phase.glsl immediately above "
             "'InverseSolidAngle MiePhaseFunction(Number g, Number nu) {' (line 744) and replace "
             f"that function by the line '{_ONE_LINE_CHANGE}'; or insert the snippet into the "
@@ -630,6 +634,12 @@ def bruneton_precomputation_dict(sampling: PrecomputationSampling) -> dict[str, 
             "680, 550, 440 nm, which are the precomputation's wavelengths only in this mode",
             "half_precision": "false: float32 textures (his demo's half precision also limits "
             "the Sun zenith angle to 102 deg)",
+            "SCATTERING_TEXTURE_MU_SIZE": "his 128, not less: the view zenith angles 0-35 deg "
+            "fall in the first texels above the horizon (his mapping spaces them by the distance "
+            "to the top), and a texel whose valid range of nu (the cosine of the angle from the "
+            "Sun) excludes the looked-up nu is read at its clamped nu; with 32 the sky 30 deg "
+            "from the zenith is interpolated with the zenith's texel, too bright 90 deg from "
+            "the Sun and too dark near it for the forward-scattering dust",
         },
         **sampling.to_dict(),
     }
@@ -677,7 +687,8 @@ def bruneton_cpp(params: BrunetonParameters, sampling: PrecomputationSampling | 
     ``length_unit_in_meters`` itself.  Include it after ``atmosphere/model.h``.
     With ``sampling`` (:func:`bruneton_precomputation`) it also states the
     precomputation the set needs (``kScatteringTextureNuSize``,
-    ``kNumScatteringOrders``, ``kScatteringDensitySampleCount``) and, when
+    ``kNumScatteringOrders``, ``kScatteringDensitySampleCount``,
+    ``kIndirectIrradianceSampleCount``) and, when
     ``atmosphere/constants.h`` is included before it, checks his NU size with
     a ``static_assert``.
     """
@@ -722,6 +733,9 @@ def bruneton_cpp(params: BrunetonParameters, sampling: PrecomputationSampling | 
             f"constexpr unsigned int kNumScatteringOrders = {sampling.num_scattering_orders};",
             "constexpr int kScatteringDensitySampleCount = "
             f"{sampling.scattering_density_sample_count};",
+            "// SAMPLE_COUNT of ComputeIndirectIrradiance (his 32): the same angular step.",
+            "constexpr int kIndirectIrradianceSampleCount = "
+            f"{sampling.indirect_irradiance_sample_count};",
             "#ifdef ATMOSPHERE_CONSTANTS_H_",
             f"static_assert(atmosphere::SCATTERING_TEXTURE_NU_SIZE >= {nu},",
             f'    "set SCATTERING_TEXTURE_NU_SIZE to {nu} in atmosphere/constants.h");',

@@ -89,6 +89,7 @@ __all__ = [
     "PrecomputationSampling",
     "effective_scale_height_m",
     "horizontal_column_m",
+    "nu_clear_angle_deg",
     "nu_interpolation_error",
     "precomputation_sampling",
     "scattering_density_error",
@@ -354,6 +355,23 @@ def nu_interpolation_error(
     if not scatterers:
         return 0.0
     return _nu_errors(scatterers, (int(nu_size),))[int(nu_size)][0]
+
+
+def nu_clear_angle_deg(
+    atmosphere: Atmosphere, *, nu_size: int, nu_tolerance: float = 0.05, wavelength_nm: Any = None
+) -> float:
+    """Angle from the Sun beyond which NU slices keep the estimated sky error within a tolerance.
+
+    The estimate of :func:`nu_interpolation_error`, per angle from the Sun;
+    90 if it exceeds ``nu_tolerance`` up to 90 deg, 5 if it never does. [deg]
+    """
+    if isinstance(nu_size, bool) or not isinstance(nu_size, (int, np.integer)) or nu_size < 2:
+        raise ValueError(f"nu_size must be an integer >= 2; got {nu_size!r}")
+    tol = check_open_interval("nu_tolerance", nu_tolerance, 0.0, 1.0)
+    scatterers = _scatterers(atmosphere, _wavelengths(wavelength_nm))
+    if not scatterers:
+        return _NU_ANGLES_DEG[0]
+    return _nu_errors(scatterers, (int(nu_size),), tol)[int(nu_size)][1]
 
 
 # ------------------------------------------------------------------ scattering density

@@ -15,6 +15,7 @@ from dustoptics.atmosphere.column import (
 from dustoptics.io.engines.precomputation import (
     effective_scale_height_m,
     horizontal_column_m,
+    nu_clear_angle_deg,
     nu_interpolation_error,
     precomputation_sampling,
     scattering_density_error,
@@ -83,6 +84,16 @@ def test_nu_error_decreases_and_earth_needs_his_default(earth) -> None:
     errors = [nu_interpolation_error(earth, nu_size=n) for n in (8, 16, 32, 64)]
     assert errors == sorted(errors, reverse=True)
     assert precomputation_sampling(earth).scattering_texture_nu_size == 8
+
+
+def test_nu_clear_angle_is_the_chosen_ones_and_shrinks_with_nu(earth) -> None:
+    chosen = precomputation_sampling(earth, nu_size=16)
+    assert nu_clear_angle_deg(earth, nu_size=16) == chosen.nu_clear_angle_deg
+    angles = [nu_clear_angle_deg(earth, nu_size=n, nu_tolerance=0.001) for n in (8, 16, 32, 64)]
+    assert angles == sorted(angles, reverse=True) and angles[0] > angles[-1]
+    assert all(5.0 <= a <= 90.0 for a in angles)
+    with pytest.raises(ValueError, match="nu_size must be an integer >= 2"):
+        nu_clear_angle_deg(earth, nu_size=1)
 
 
 def test_given_values_are_checked(earth) -> None:
