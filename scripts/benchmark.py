@@ -6,6 +6,7 @@ Usage::
     python scripts/benchmark.py --sweep [--quick] [--json OUT.json]
     python scripts/benchmark.py --sky [--json OUT.json]
     python scripts/benchmark.py --compile [--json OUT.json]
+    python scripts/benchmark.py --derivatives [--json OUT.json]
 
 Everything below is measured in one run on one machine, and printed as a plain
 text table (progress goes to stderr); ``--json`` writes the same figures with
@@ -139,6 +140,14 @@ the default table: best of N.
     (``dustoptics._numba_cache.compile_kernels(processes=1)`` in a fresh
     process with an empty cache: CPU and wall time per kernel, callees
     compiled before their callers); and the first build as in step 1, 3 runs.
+
+11. Derivatives (``--derivatives`` runs this section alone, about a minute on 2
+    cores): the default table (step 1's) with ``derivatives=("r_eff_um",
+    "v_eff", "n", "k")`` against the table alone, interleaved (alone, with,
+    alone, with, ...), 3 of each after one untimed call of each; the median
+    of each, wall-clock and CPU time of this process (``time.process_time``,
+    less sensitive to other load); cost ratio = with / alone.  Issue 30's
+    target: at most 2x.
 
 Timings are wall-clock (``time.perf_counter``); dustoptics runs on all cores,
 the miepython baselines on one, as their users would run them.  Other load on
@@ -1766,6 +1775,80 @@ def format_first_use(res: dict, mach: dict) -> str:
     return "\n".join(lines)
 
 
+DERIVATIVE_PARAMETERS = ("r_eff_um", "v_eff", "n", "k")
+TARGET_DERIVATIVE_RATIO = 2.0
+
+
+def measure_derivatives(repeats: int = 3) -> dict:
+    """Section 11: the default table with every derivative of DERIVATIVE_PARAMETERS
+    against the table alone, interleaved; medians of ``repeats`` (wall and CPU)."""
+    wl, theta = wavelength_grid(N_WAVELENGTHS_DEFAULT), theta_grid(N_THETA_DEFAULT)
+    material, dist = do.mars_dust(), do.ModifiedGamma(r_eff_um=R_EFF_UM, v_eff=V_EFF)
+
+    def one(derivatives: tuple[str, ...]) -> tuple[float, float]:
+        w0, c0 = time.perf_counter(), time.process_time()
+        do.compute_optics(material, dist, wl, theta, rtol=RTOL, derivatives=derivatives)
+        return time.perf_counter() - w0, time.process_time() - c0
+
+    log("derivatives: one untimed call of each (compiles or loads the kernels) ...")
+    one(())
+    one(DERIVATIVE_PARAMETERS)
+    alone, both = [], []
+    for k in range(repeats):
+        log(f"derivatives: interleaved run {k + 1}/{repeats} ...")
+        alone.append(one(()))
+        both.append(one(DERIVATIVE_PARAMETERS))
+    wall_a, cpu_a = (float(np.median([t[j] for t in alone])) for j in (0, 1))
+    wall_b, cpu_b = (float(np.median([t[j] for t in both])) for j in (0, 1))
+    return {
+        "parameters": list(DERIVATIVE_PARAMETERS),
+        "n_wavelengths": N_WAVELENGTHS_DEFAULT,
+        "n_theta": N_THETA_DEFAULT,
+        "repeats": repeats,
+        "alone_times_s": [t[0] for t in alone],
+        "with_times_s": [t[0] for t in both],
+        "alone_cpu_s": [t[1] for t in alone],
+        "with_cpu_s": [t[1] for t in both],
+        "ratio_wall": wall_b / wall_a,
+        "ratio_cpu": cpu_b / cpu_a,
+        "target_ratio": TARGET_DERIVATIVE_RATIO,
+    }
+
+
+def format_derivatives(res: dict, mach: dict) -> str:
+    lines = ["dustoptics derivatives benchmark", "=" * 32]
+
+    def row(label: str, value: str) -> None:
+        lines.append(f"  {label:<62} {value}")
+
+    row(
+        "load average at start (1, 5, 15 min)",
+        ", ".join(f"{x:.2f}" for x in mach["load_average"]) if mach["load_average"] else "n/a",
+    )
+    lines.append("")
+    lines.append("11. Derivatives: r_eff, v_eff, n, k vs table alone")
+    lines.append("-" * 50)
+    grid = f"{res['n_wavelengths']} x {res['n_theta']}"
+    for key, label in (("alone", f"table alone, {grid} (median)"), ("with", "with derivatives")):
+        wall, cpu = res[f"{key}_times_s"], res[f"{key}_cpu_s"]
+        row(
+            label,
+            f"{np.median(wall):.2f} s wall, {np.median(cpu):.2f} s CPU  "
+            f"[{', '.join(f'{t:.2f}' for t in wall)}]",
+        )
+    row(
+        "cost ratio (with / alone): wall; CPU", f"{res['ratio_wall']:.2f}x; {res['ratio_cpu']:.2f}x"
+    )
+    ok = res["ratio_wall"] <= res["target_ratio"]
+    lines.append("")
+    lines.append("Targets (issue 30)")
+    lines.append(
+        f"  {'PASS' if ok else 'FAIL'}  "
+        f"{'derivatives: r_eff, v_eff, n, k vs table alone <= 2x':<62} {res['ratio_wall']:.2f}x"
+    )
+    return "\n".join(lines)
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
         description="Benchmark dustoptics against miepython baselines (see the module docstring)."
@@ -1796,7 +1879,25 @@ def main(argv: list[str] | None = None) -> int:
         help="only the first-use rows (section 10: import, each kernel's compile time, "
         "first build from an empty cache; a few minutes on 2 cores)",
     )
+    parser.add_argument(
+        "--derivatives",
+        action="store_true",
+        help="only the derivative rows (section 11: r_eff, v_eff, n, k vs the table alone)",
+    )
     args = parser.parse_args(argv)
+    if args.derivatives:
+        t0 = time.perf_counter()
+        mach = machine_info()
+        deriv_res = measure_derivatives()
+        print(format_derivatives(deriv_res, mach))
+        print(f"(benchmark ran {time.perf_counter() - t0:.0f} s)")
+        if args.json is not None:
+            args.json.write_text(
+                json.dumps({"machine": mach, "derivatives": deriv_res}, indent=2, sort_keys=True)
+                + "\n"
+            )
+            log(f"wrote {args.json}")
+        return 0
     if args.compile:
         t0 = time.perf_counter()
         mach = machine_info()

@@ -6,7 +6,12 @@ take plain values and arrays (complex refractive index ``m``, size parameters
 ``x``, weights, direction cosines ``mu``); :func:`sphere_derivatives` is the one
 public function, which validates and converts at the boundary.  The
 polydisperse reference path, :mod:`dustoptics.scattering.derivatives`, sums the
-same kernels over a radius quadrature (:func:`_accumulate`).
+same kernels over a radius quadrature (:func:`_accumulate`);
+:mod:`dustoptics.scattering.table_derivatives` sums the table's nodes with
+:func:`_accumulate_blocked`, which takes the coefficients from the table's own
+kernel (``mie._mie_coefficients``, 16 spheres at a time) and computes S1, S2
+and dS1/dm, dS2/dm in one pass over the orders (and n, k from the one complex
+derivative).
 
 Conventions are those of :mod:`dustoptics.scattering.mie` (Bohren & Huffman
 1983, chapter 4): time dependence exp(-i w t), m = n + i k with k >= 0, van de
@@ -1038,6 +1043,78 @@ def _accumulate_blocked(
                             for i in range(n_l):
                                 row[j0 + i] += wd * (sd[i] + r * sq[i])
     return ang, dang, sums, dsums
+
+
+@njit(cache=True, nogil=True)
+def _legendre_project_rows(
+    mu_half: np.ndarray, w_half: np.ndarray, rows: np.ndarray, lmax: int
+) -> np.ndarray:
+    """``mie._legendre_project`` of every row of ``rows`` (values at +mu_half,
+    then at -mu_half) at once: beta_l = (2l+1)/2 int f P_l dmu, l = 0..lmax,
+    shape (n_rows, lmax + 1).  One recurrence for P_l serves all rows."""
+    n_rows = rows.shape[0]
+    n_half = mu_half.shape[0]
+    fe = np.empty((n_rows, n_half))
+    fo = np.empty((n_rows, n_half))
+    for r in range(n_rows):
+        for i in range(n_half):
+            fe[r, i] = w_half[i] * (rows[r, i] + rows[r, n_half + i])
+            fo[r, i] = w_half[i] * (rows[r, i] - rows[r, n_half + i])
+    p_prev = np.zeros(n_half)
+    p_cur = np.ones(n_half)
+    beta = np.empty((n_rows, lmax + 1))
+    for ell in range(lmax + 1):
+        g = fe if ell % 2 == 0 else fo
+        c = (2 * ell + 1) / 2.0
+        for r in range(n_rows):
+            # Four interleaved partial sums, in a fixed order (as mie's).
+            s0 = 0.0
+            s1 = 0.0
+            s2 = 0.0
+            s3 = 0.0
+            gr = g[r]
+            i = 0
+            while i + 4 <= n_half:
+                s0 += gr[i] * p_cur[i]
+                s1 += gr[i + 1] * p_cur[i + 1]
+                s2 += gr[i + 2] * p_cur[i + 2]
+                s3 += gr[i + 3] * p_cur[i + 3]
+                i += 4
+            while i < n_half:
+                s0 += gr[i] * p_cur[i]
+                i += 1
+            beta[r, ell] = ((s0 + s1) + (s2 + s3)) * c
+        c1 = (2 * ell + 1) / (ell + 1.0)
+        c2 = ell / (ell + 1.0)
+        for i in range(n_half):
+            p_next = c1 * mu_half[i] * p_cur[i] - c2 * p_prev[i]
+            p_prev[i] = p_cur[i]
+            p_cur[i] = p_next
+    return beta
+
+
+@njit(cache=True, nogil=True)
+def _legendre_evaluate_rows(beta: np.ndarray, mu: np.ndarray) -> np.ndarray:
+    """sum_l beta[r, l] P_l(mu) for every row r of ``beta``, shape (n_rows, len(mu)):
+    ``mie._legendre_evaluate`` of all rows with one recurrence for P_l."""
+    n_rows, n_l = beta.shape
+    n_mu = mu.shape[0]
+    out = np.zeros((n_rows, n_mu))
+    p_prev = np.zeros(n_mu)
+    p_cur = np.ones(n_mu)
+    for ell in range(n_l):
+        for r in range(n_rows):
+            b = beta[r, ell]
+            o = out[r]
+            for i in range(n_mu):
+                o[i] += b * p_cur[i]
+        c1 = (2 * ell + 1) / (ell + 1.0)
+        c2 = ell / (ell + 1.0)
+        for i in range(n_mu):
+            p_next = c1 * mu[i] * p_cur[i] - c2 * p_prev[i]
+            p_prev[i] = p_cur[i]
+            p_cur[i] = p_next
+    return out
 
 
 # ----------------------------------------------------------------------------

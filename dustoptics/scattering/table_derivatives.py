@@ -16,7 +16,9 @@ S[Y] = sum_i J_i n(r_i) Y(r_i) has the exact derivatives
   moves an end of the support (p a parameter of the size distribution, by
   name: :func:`~dustoptics.particles.sizedist_derivatives.parameter_names`);
 - dS/dm = sum_i J_i n(r_i) dY/dm(r_i), with dY/dn and dY/dk of each sphere
-  from the recurrences of :mod:`dustoptics.scattering.mie_derivatives`; a
+  from the recurrences of :mod:`dustoptics.scattering.mie_derivatives` (the
+  table's own Mie coefficients, and S1, S2 with their m derivatives in one
+  pass per sphere: ``mie_derivatives._accumulate_blocked``); a
   parameter q of the refractive index (``"n"``, ``"k"``, a mixture's volume
   fraction) moves m along dm/dq at each wavelength, so
   dS/dq = Re(dm/dq) dS/dn + Im(dm/dq) dS/dk (the chain rule);
@@ -27,6 +29,15 @@ the slower reference path, on its own uniformly refined rule).  On many
 angles the angular sums are taken at Gauss angles and projected on Legendre
 polynomials of degree <= 2 n_max, exactly as the table's phase function is
 (the derivative of a polynomial in mu of that degree is one too).
+
+Cost
+----
+``python scripts/benchmark.py --derivatives`` (section 11) measures the cost
+against the table alone.  The distribution's parameters need no Mie work
+beyond the sums' weight columns; n and k need S1, S2 and dS/dm of every node
+(twice the table's angular work a node), on the final panels' fine and
+coarse rules (the coarse rule, for the error estimate, is a third of the
+work).
 
 Error estimate
 --------------
@@ -64,6 +75,8 @@ from dustoptics.scattering.expansion import greek_coefficients
 from dustoptics.scattering.mie_derivatives import (
     _accumulate,
     _accumulate_blocked,
+    _legendre_evaluate_rows,
+    _legendre_project_rows,
     _series_lengths,
 )
 from dustoptics.scattering.quadrature import (
@@ -274,16 +287,13 @@ def _sums(
     return _Sums(*_accumulate_blocked(m, xs, w, table, int(mu.size), False, n_stokes, per_particle))
 
 
-#: Gauss grids of the angular tiers: n_half = 16, 32, 48, 64, 96, 128, ... (steps
-#: of about 1.5); a node is summed on the smallest with n_half >= n_max + 1.
-def _tier_sizes(n_top: int) -> list[int]:
-    sizes = [16, 32, 48]
-    while sizes[-1] < n_top:
-        sizes.append(16 * math.ceil(sizes[-1] * 1.5 / 16))
-    return sizes
+#: Half-grid sizes of the angular tiers: multiples of TIER_STEP; a node is summed
+#: on the smallest with n_half >= n_max + 1 (cost ~ n_max n_half a node, so the
+#: finer the steps the less is wasted; each tier costs one projection).
+TIER_STEP = 16
 
 
-@lru_cache(maxsize=32)
+@lru_cache(maxsize=64)
 def _tier_grid(n_half: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The positive half of the 2 n_half-point Gauss rule (nodes, weights) and
     its ``mie.angular_table`` for n_max <= n_half - 1, read-only (shared by
@@ -320,11 +330,11 @@ def _legendre_sums(
     sums = np.zeros((n_w, 6))
     dsums = np.zeros((2, 6))
     nmax = _series_lengths(xs)
-    start = 0
-    for n_half in _tier_sizes(int(nmax.max()) + 1):
-        stop = int(np.searchsorted(nmax, n_half - 1, side="right"))
-        if stop <= start:
-            continue
+    # The nodes come sorted by x, so by n_max: each tier is a run of them.
+    tier = -(-(nmax + 1) // TIER_STEP)
+    bounds = np.flatnonzero(np.diff(tier)) + 1
+    for start, stop in zip([0, *bounds.tolist()], [*bounds.tolist(), xs.size], strict=True):
+        n_half = TIER_STEP * int(tier[start])
         mu_half, w_half, table = _tier_grid(n_half)
         a, da, s_, ds_ = _accumulate_blocked(
             m,
@@ -337,17 +347,12 @@ def _legendre_sums(
             per_particle,
         )
         top = min(lmax, 2 * int(nmax[start:stop].max()))
-        for src, dst in ((a, ang), (da, dang)):
-            for c in range(src.shape[0]):
-                for q in range(n_stokes):
-                    dst[c, q, : top + 1] += mie._legendre_project(
-                        mu_half, w_half, np.ascontiguousarray(src[c, q]), top
-                    )
+        rows = np.concatenate([a.reshape(-1, 2 * n_half), da.reshape(-1, 2 * n_half)])
+        beta = _legendre_project_rows(mu_half, w_half, rows, top)
+        ang[:, :, : top + 1] += beta[: a.shape[0] * n_stokes].reshape(a.shape[0], n_stokes, -1)
+        dang[:, :, : top + 1] += beta[a.shape[0] * n_stokes :].reshape(2, n_stokes, -1)
         sums += s_
         dsums += ds_
-        start = stop
-        if start == xs.size:
-            break
     return _Sums(ang, dang, sums, dsums)
 
 
@@ -543,13 +548,9 @@ def _one_wavelength(
     greek_pair = []
     if 2 * n_half < mu_out.size or n_order:
         lmax = 2 * nmax
-        mu_eval = np.ascontiguousarray(mu_out)
-
-        def project(f: np.ndarray) -> np.ndarray:
-            return np.asarray(mie._legendre_evaluate(np.ascontiguousarray(f), mu_eval))
-
         for x, rule in ((x_fine, rule_fine), (x_coarse, rule_coarse)):
             s_ = _legendre_sums(m, distribution, x, rule, lmax=lmax, n_stokes=n_q, **common)  # type: ignore[arg-type]
+            # In Legendre coefficients (the derivative is linear in them).
             pair.append(
                 _angular(
                     s_,
@@ -557,11 +558,17 @@ def _one_wavelength(
                     index_directions,
                     per_particle=per_particle,
                     n_q=n_q,
-                    project=project,
+                    project=lambda f: f,
                 )
             )
             if n_order:
                 greek_pair.append(_greek(s_, n_dist, index_directions, per_particle, n_order, lmax))
+        # The fine rule's derivatives and their differences from the coarse rule's,
+        # at the output angles, all rows at once.
+        shape = pair[0].shape
+        rows = np.concatenate([pair[0], pair[0] - pair[1]]).reshape(-1, shape[-1])
+        found_at = _legendre_evaluate_rows(rows, np.ascontiguousarray(mu_out))
+        fine, diff = found_at.reshape((2, *shape[:-1], mu_out.size))
     else:
         mu = np.ascontiguousarray(mu_out)
         for x, rule in ((x_fine, rule_fine), (x_coarse, rule_coarse)):
@@ -576,10 +583,10 @@ def _one_wavelength(
                     project=lambda f: f,
                 )
             )
-    fine, coarse = pair
+        fine, diff = pair[0], pair[0] - pair[1]
     for q, key in enumerate(angular_keys):
         values[key] = fine[:, q]
-        errors[key] = np.max(np.abs(fine[:, q] - coarse[:, q]), axis=-1)
+        errors[key] = np.max(np.abs(diff[:, q]), axis=-1)
     if greek_pair:
         for j, key in enumerate(EXPANSION_KEYS):
             values[key] = greek_pair[0][:, j]
