@@ -61,6 +61,13 @@ the last; a phase file's n columns fill a texture read at
 ``u = acos(nu) / pi``, so column ``j`` stands at ``(j + 1/2) 180 / n`` deg.
 :mod:`dustoptics.io.csv.cosmoscout` writes both at those places.
 
+Checked against CosmoScout's own code: ``scripts/cosmoscout_preprocessor.py``
+compiles the preprocessor of that commit and runs it on the Mars and Earth
+sets; the transmittance it writes agrees with :func:`preprocessor_transmittance`
+to the float32 rounding of its sums and is within ``tol`` of ``exp(-tau)``
+(``tests/io/engines/test_cosmoscout_real_preprocessor.py``, where
+``COSMOSCOUT_VR_DIR`` names a checkout).
+
 References
 ----------
 .. [1] German Aerospace Center (DLR), CosmoScout VR, ``plugins/csp-atmospheres/
