@@ -117,6 +117,18 @@ def cosmoscout_dir(value: str | None = None) -> Path:
     return root
 
 
+def checkout_commit(root: Path) -> str:
+    """The commit of a git checkout, or what is known of a work tree without ``.git``."""
+    done = subprocess.run(
+        ["git", "-C", str(root), "rev-parse", "--show-toplevel", "HEAD"],
+        check=False, capture_output=True, text=True,
+    )  # fmt: skip
+    lines = done.stdout.split()
+    if done.returncode == 0 and len(lines) == 2 and Path(lines[0]).resolve() == root.resolve():
+        return lines[1]
+    return "unknown (not a git checkout; dustoptics read e59005a3bbea2426c841f30da6cb35a4d313455e)"
+
+
 def missing_tools() -> list[str]:
     """What the build and the run need and this machine lacks (empty when all is there)."""
     missing = [t for t in ("g++", "pkg-config") if shutil.which(t) is None]
@@ -469,8 +481,7 @@ def main(argv: list[str] | None = None) -> int:
     except SetupError as exc:
         print(f"cosmoscout_preprocessor: {exc}", file=sys.stderr)
         return 2
-    commit = root / ".git"
-    print(f"CosmoScout VR at {root}" + (" (a git checkout)" if commit.exists() else ""))
+    print(f"CosmoScout VR at {root}, commit {checkout_commit(root)}")
     ok = True
     for name in args.set:
         modes = ["full" if args.full else "transmittance"] + (["defaults"] * args.defaults)
