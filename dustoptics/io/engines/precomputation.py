@@ -74,7 +74,6 @@ from typing import TYPE_CHECKING, Any, Final
 
 import numpy as np
 from scipy.special import roots_legendre
-from scipy.stats import poisson
 
 from dustoptics._validation import check_open_interval
 
@@ -230,6 +229,8 @@ def _path_scatterings(scatterers: list[_Scatterer]) -> np.ndarray:
 def _orders_for(m: float, tolerance: float) -> int:
     if m <= 0.0:
         return 1
+    from scipy.stats import poisson  # here: scipy.stats costs ~0.4 s of `import dustoptics`
+
     norm = -math.expm1(-m)
     k = 1
     while poisson.sf(k, m) / norm > tolerance:
@@ -637,6 +638,8 @@ def precomputation_sampling(
                 f"its S x 2S directions would integrate the phase function to worse than {tol:g}",
             )  # fmt: skip
             dens_err = _density_errors(scatterers, (s,))[s]
+    from scipy.stats import poisson
+
     orders_err = 0.0 if m <= 0.0 else float(poisson.sf(k, m) / -math.expm1(-m))
     return PrecomputationSampling(
         tolerance=tol,
