@@ -454,7 +454,11 @@ def compute_optics(
         Also compute the expansion coefficients alpha1..alpha4, beta1, beta2
         in generalized spherical functions: ``True`` for every order the
         population needs (2 n_max + 1 of the largest sphere; the series ends
-        there), an integer N for orders 0..N.  Refines like ``polarization``.
+        there), an integer N for orders 0..N.  Refines like ``polarization``,
+        then the coefficients further, from those panels, to their own
+        tolerance ``rtol / 100`` as the cross-sections (their error estimate
+        ``expansion_error_estimate`` bounds each coefficient's error over
+        2 l + 1); the phase function and matrix stay those of ``rtol``.
     particle_density_kg_m3 : float, optional
         Density of the particle material, for the mass extinction, scattering
         and absorption coefficients (``table.mass_ext_m2_per_kg``, ...); for
@@ -600,6 +604,8 @@ def compute_optics(
     mu_out = np.cos(np.deg2rad(theta))
     per_particle = weighting == "number"
     n_stokes = mie.N_STOKES if (polarization or n_order is not None) else 1
+    # The expansion coefficients' own tolerance (issue 30): as the cross-sections'.
+    expansion_rtol = None if n_order is None else rtol / 100.0
 
     def one(i: int) -> _Result:
         solver = _WavelengthSolver(
@@ -614,7 +620,7 @@ def compute_optics(
             m_core=complex(m_core[i]),
             core_fraction=core_fraction,
         )
-        return solver.solve(rtol, cross_rtol)
+        return solver.solve(rtol, cross_rtol, expansion_rtol)
 
     def report(done: int) -> None:
         if progress is not None:
@@ -672,10 +678,13 @@ def compute_optics(
     if polarization:
         err_phase = np.maximum(err_phase, extra["matrix_error_estimate"])
     not_converged = (err_phase > rtol) | (err_cross > cross_rtol)
+    if expansion_rtol is not None:
+        not_converged |= extra["expansion_error_estimate"] > expansion_rtol
     if not_converged.any():
         bad = ", ".join(f"{w:g}" for w in wl[not_converged])
+        also = "" if expansion_rtol is None else f" / expansion rtol={expansion_rtol:g}"
         warnings.warn(
-            f"radius quadrature did not reach rtol={rtol:g} / cross_section_rtol={cross_rtol:g} "
+            f"radius quadrature did not reach rtol={rtol:g} / cross_section_rtol={cross_rtol:g}{also} "
             f"at wavelengths {bad} nm within max_level={settings.max_level}; "
             "see error_estimate",
             ConvergenceWarning,
@@ -722,6 +731,9 @@ def compute_optics(
         "n_nodes_total": int(n_nodes.sum()),
         "cross_section_n_nodes_total": int(cross_n_nodes.sum()),
     }
+    if expansion_rtol is not None:  # recorded only when used (other provenance unchanged)
+        record["expansion_rtol"] = expansion_rtol
+        record["max_expansion_error_estimate"] = float(extra["expansion_error_estimate"].max())
     sources = (
         _index_source(refractive_index, label),
         Source(name=distribution.model, role="size distribution", citation=distribution.citation),
@@ -753,6 +765,14 @@ def compute_optics(
             distribution=distribution,
             panels=tuple(r.panels_s for r in results),
             cross_section_panels=tuple(r.cross_section_panels_s for r in results),
+            expansion_panels=(
+                None
+                if expansion_rtol is None
+                else tuple(
+                    r.panels_s if r.expansion_panels_s is None else r.expansion_panels_s
+                    for r in results
+                )
+            ),
         ),
     )
     if not derivative_names:

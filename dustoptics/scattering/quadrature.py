@@ -162,12 +162,16 @@ class QuadratureDiagnostics:
         :func:`panel_nodes` on the halves reproduces the nodes. [-]
     cross_section_panels : tuple of numpy.ndarray
         The same for the cross-sections and g. [-]
+    expansion_panels : tuple of numpy.ndarray or None
+        The same for the expansion coefficients (refined to their own
+        tolerance from the phase function's panels); None without them. [-]
     """
 
     settings: QuadratureSettings
     distribution: SizeDistribution
     panels: tuple[np.ndarray, ...] = field(repr=False)
     cross_section_panels: tuple[np.ndarray, ...] = field(repr=False)
+    expansion_panels: tuple[np.ndarray, ...] | None = field(default=None, repr=False)
 
 
 @lru_cache(maxsize=64)

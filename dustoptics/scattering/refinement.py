@@ -83,6 +83,8 @@ class _Result:
     matrix: _Matrix | None = None
     # Sums of w r^2, w r^3, w r^4 [um^k] over the cross-sections' radius nodes.
     moments: tuple[float, float, float] = (float("nan"),) * 3
+    # The expansion coefficients' own final panels (None: the phase function's).
+    expansion_panels_s: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -662,11 +664,15 @@ class _Matrix:
     greek_error: float
 
 
-def _finish_matrix(solver: _WavelengthSolver, phase_run: _Run, scale: float) -> _Matrix:
+def _finish_matrix(
+    solver: _WavelengthSolver, phase_run: _Run, scale: float, greek_run: _Run | None = None
+) -> _Matrix:
     """F12, F33, F34 at the output angles and, on the Gauss grid, the
     expansion coefficients of orders 0..2 n_max (see
     :mod:`dustoptics.scattering.expansion`), from a refined run with the
-    four blocks I, Q, U, V; ``scale`` turns summed I into the phase function."""
+    four blocks I, Q, U, V; ``scale`` turns summed I into the phase function.
+    The coefficients come from ``greek_run`` if given (refined further to
+    their own tolerance, normalized with its own sums), else from ``phase_run``."""
     n_f = solver.n_f
     blocks = phase_run.block_errors
     assert blocks is not None
@@ -686,9 +692,16 @@ def _finish_matrix(solver: _WavelengthSolver, phase_run: _Run, scale: float) -> 
     greek = None
     greek_error = float("nan")
     if solver.want_greek:
+        greek_scale = scale
+        if greek_run is not None:
+            blocks = greek_run.block_errors
+            assert blocks is not None
+            values = [greek_run.total[k * n_f : (k + 1) * n_f] for k in range(mie.N_STOKES)]
+            s_w, _, s_sca = greek_run.total[solver.n_a : solver.n_a + 3]
+            greek_scale = 1.0 / s_w if solver.per_particle else 1.0 / (2.0 * np.pi * s_sca)
         mu = np.concatenate([solver.mu_half, -solver.mu_half])
         w = np.concatenate([solver.w_half, solver.w_half])
-        a1, b1, a3, b2 = (4.0 * np.pi * scale * v for v in values)
+        a1, b1, a3, b2 = (4.0 * np.pi * greek_scale * v for v in values)
         greek = greek_coefficients(
             mu=mu, weight=w, a1=a1, a3=a3, b1=b1, b2=b2, lmax=2 * solver.nmax
         )
@@ -883,6 +896,24 @@ class _WavelengthSolver:
             )[:3]
         return _phase_refinement_errors(pool, coarse, left, right, self.n_f, norm)
 
+    def _greek_errors(
+        self, pool: np.ndarray, coarse: np.ndarray, left: np.ndarray, right: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, float]:
+        """Summed row, and per panel and summed the expansion coefficients' error
+        estimate of :func:`_finish_matrix` (a bound on each coefficient's change
+        over (2 l + 1)): (1/2) int of a1's relative change summed over the
+        four blocks, weighted by a1, plus the normalization's relative change,
+        i.e. per panel sum_k sum_i w_i abs(d_k,i) / N (times 2 pi if per
+        particle) + abs(d_N) / N, with N the normalizing sum."""
+        norm = self.n_a if self.per_particle else self.n_a + 2
+        total = _halves_total(pool, left, right)
+        d = np.abs(pool[left] + pool[right] - pool[coarse])
+        w = np.concatenate([self.w_half, self.w_half])
+        c = (2.0 * np.pi if self.per_particle else 1.0) / total[norm]
+        angular = d[:, : self.n_a].reshape(d.shape[0], self.n_stokes, self.n_f).sum(axis=1)
+        panel_error = c * (angular @ w) + d[:, norm] / total[norm]
+        return total, panel_error, float(panel_error.sum())
+
     def _cross_errors(
         self, pool: np.ndarray, coarse: np.ndarray, left: np.ndarray, right: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray, float]:
@@ -902,14 +933,20 @@ class _WavelengthSolver:
         left, right = self.halves(lower, upper)
         return _Panels(lower, upper, self.evaluate(lower, upper), left, right)
 
-    def refine(self, state: _Panels, *, angles: bool, tol: float) -> tuple[_Panels, _Run]:
-        """Adaptive refinement of the phase function (``angles``) or the cross-sections to ``tol``.
+    def refine(
+        self, state: _Panels, *, angles: bool, tol: float, greek: bool = False
+    ) -> tuple[_Panels, _Run]:
+        """Adaptive refinement of the phase function (``angles``) or the cross-sections to ``tol``
+        (with ``greek``, of the expansion coefficients: :meth:`_greek_errors`).
 
         Starts from ``state`` (whose rows hold angular values only if ``angles``).
         Rows live in one growing pool, and panels refer to theirs by index, so
         a split copies only the new rows.
         """
-        errors = self._phase_errors if angles else self._cross_errors
+        if greek:
+            errors = self._greek_errors
+        else:
+            errors = self._phase_errors if angles else self._cross_errors
         lower, upper = state.lower, state.upper
         n = lower.size
         pool = np.concatenate([state.coarse, state.left, state.right])
@@ -959,7 +996,10 @@ class _WavelengthSolver:
         run = _Run(total, panels, 2 * self.settings.nodes_per_panel * lower.size, error, blocks)
         return _Panels(lower, upper, pool[coarse], pool[left], pool[right]), run
 
-    def solve(self, rtol: float, cross_rtol: float) -> _Result:
+    def solve(self, rtol: float, cross_rtol: float, expansion_rtol: float | None = None) -> _Result:
+        """Refine the phase function (and matrix) to ``rtol``, then, from its panels,
+        the expansion coefficients to ``expansion_rtol`` (if the solver computes
+        them and it is given) and the cross-sections to ``cross_rtol``."""
         if self.distribution.is_monodisperse:
             x = np.array([2.0 * np.pi * self.distribution.mean_radius_um / self.wavelength_um])
             n_mu = self.n_half if self.gauss else self.n_f
@@ -981,14 +1021,24 @@ class _WavelengthSolver:
             run = _Run(rows[0], np.empty((0, 2)), 1, 0.0, blocks)
             return self.finish(run, _Run(rows[0, self.n_a :], run.panels_s, 1, 0.0))
         state, phase_run = self.refine(self.initial_state(), angles=True, tol=rtol)
+        # The expansion coefficients continue from the phase function's panels to
+        # their own tolerance (the phase function and matrix stay the phase run's).
+        greek_run = None
+        if self.want_greek and expansion_rtol is not None:
+            _, greek_run = self.refine(state, angles=True, tol=expansion_rtol, greek=True)
         # The cross-sections continue from the phase function's panels (whose
         # sums they already hold), refining further without angles.
         sums = _Panels(state.lower, state.upper, *(rows[:, self.n_a :] for rows in state[2:]))
         _, cross_run = self.refine(sums, angles=False, tol=cross_rtol)
-        return self.finish(phase_run, cross_run)
+        return self.finish(phase_run, cross_run, greek_run=greek_run)
 
     def finish(
-        self, phase_run: _Run, cross_run: _Run, distribution: SizeDistribution | None = None
+        self,
+        phase_run: _Run,
+        cross_run: _Run,
+        distribution: SizeDistribution | None = None,
+        *,
+        greek_run: _Run | None = None,
     ) -> _Result:
         """Phase function from ``phase_run``, cross-sections and g from
         ``cross_run`` (of ``distribution``, default the solver's)."""
@@ -1004,7 +1054,7 @@ class _WavelengthSolver:
         s_w, _, s_sca = phase_run.total[self.n_a : self.n_a + 3]
         scale = 1.0 / s_w if self.per_particle else 1.0 / (2.0 * np.pi * s_sca)
         phase = f * scale
-        matrix = _finish_matrix(self, phase_run, scale) if self.matrix else None
+        matrix = _finish_matrix(self, phase_run, scale, greek_run) if self.matrix else None
         s_w, s_ext, s_sca, s_gsca, s_g, s_back = cross_run.total
         g = s_g / s_w if self.per_particle else s_gsca / s_sca
         area = (self.wavelength_um / (2.0 * np.pi)) ** 2 * np.pi  # x^2 -> pi r^2 [um^2]
@@ -1025,6 +1075,7 @@ class _WavelengthSolver:
             cross_section_panels_s=cross_run.panels_s,
             cback=area * s_back,
             matrix=matrix,
+            expansion_panels_s=None if greek_run is None else greek_run.panels_s,
             moments=self.node_moments(
                 cross_run.panels_s, self.distribution if distribution is None else distribution
             ),

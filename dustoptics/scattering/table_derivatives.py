@@ -6,7 +6,8 @@ change), then calls :func:`table_derivatives`, which sums the derivatives over
 the same radius nodes: the halves of the final panels the table records in
 its :class:`~dustoptics.scattering.quadrature.QuadratureDiagnostics` (the
 phase matrix's panels for the angular outputs, the finer cross-section panels
-for <C_ext>, <C_sca>, <C_back> and g).
+for <C_ext>, <C_sca>, <C_back> and g, the expansion coefficients' own
+panels, refined further to their tolerance, for those).
 
 At fixed nodes r_i with rule weights J_i, each polydisperse sum
 S[Y] = sum_i J_i n(r_i) Y(r_i) has the exact derivatives
@@ -546,6 +547,12 @@ def _one_wavelength(
     n_half = 16 * ((nmax + 1 + 15) // 16)
     pair = []
     greek_pair = []
+    # The expansion coefficients' own panels (refined to their own tolerance), if
+    # the table has them and they differ from the phase function's.
+    greek_panels = None if diagnostics.expansion_panels is None else diagnostics.expansion_panels[i]
+    own_greek = (
+        bool(n_order) and greek_panels is not None and not np.array_equal(greek_panels, panels)
+    )
     if 2 * n_half < mu_out.size or n_order:
         lmax = 2 * nmax
         for x, rule in ((x_fine, rule_fine), (x_coarse, rule_coarse)):
@@ -561,7 +568,15 @@ def _one_wavelength(
                     project=lambda f: f,
                 )
             )
-            if n_order:
+            if n_order and not own_greek:
+                greek_pair.append(_greek(s_, n_dist, index_directions, per_particle, n_order, lmax))
+        if own_greek:
+            assert greek_panels is not None
+            for halves in (True, False):
+                x, rule = _rule_nodes(
+                    greek_panels, wavelength_nm=wavelength_nm, settings=settings, halves=halves
+                )
+                s_ = _legendre_sums(m, distribution, x, rule, lmax=lmax, n_stokes=4, **common)  # type: ignore[arg-type]
                 greek_pair.append(_greek(s_, n_dist, index_directions, per_particle, n_order, lmax))
         # The fine rule's derivatives and their differences from the coarse rule's,
         # at the output angles, all rows at once.

@@ -162,7 +162,10 @@ def test_rayleigh_limit() -> None:
 
 def test_coefficients_reproduce_the_matrix() -> None:
     """The expansion evaluated at the table's angles gives the table's
-    F11, F12, F33, F34 (times 4 pi): the series ends at 2 n_max, so it is exact."""
+    F11, F12, F33, F34 (times 4 pi): the series ends at 2 n_max, so it is exact
+    for the same radius nodes.  The coefficients are refined further, to their
+    own tolerance (issue 30), so the two differ by the matrix's quadrature
+    error, within its estimate (relative to F11)."""
     theta = np.linspace(0.0, 180.0, 37)
     t = do.compute_optics(
         1.52 + 0.01j, do.ModifiedGamma(r_eff_um=0.8, v_eff=0.2), [500.0], theta,
@@ -170,8 +173,10 @@ def test_coefficients_reproduce_the_matrix() -> None:
     )  # fmt: skip
     el = expansion.evaluate_matrix(coefficients(t), theta)
     scale = 4 * np.pi * t.phase[0]
+    assert t.matrix_error_estimate is not None
+    tol = float(t.matrix_error_estimate[0])
     for key, ours in (("a1", t.phase), ("b1", t.f12), ("a3", t.f33), ("b2", t.f34)):
-        assert np.max(np.abs(el[key] - 4 * np.pi * ours[0]) / scale) <= 1e-10, key
+        assert np.max(np.abs(el[key] - 4 * np.pi * ours[0]) / scale) <= tol, key
     np.testing.assert_allclose(el["a2"], el["a1"], rtol=1e-10)
     np.testing.assert_allclose(el["a4"], el["a3"], atol=1e-10 * scale.max())
 
