@@ -200,13 +200,13 @@ def main(argv: list[str] | None = None) -> int:
         "#   error says how far r_eff may move before the sky leaves one sigma (the range's\n"
         "#   half-width) of the centre.\n"
         "#   Rounded to 4 decimals below.  At other Sun elevations the sky is redder (lower\n"
-        "#   Sun) or bluer (higher): docs/howto/derivatives.rst shows the curve.\n"
+        "#   Sun) or bluer (higher): the gallery example plot_mer_retrieval plots it.\n"
         "#   Reproduce (writes this file):\n"
         f"#     {COMMAND}\n"
         "#   or on the command line, with the observation file and start the script writes:\n"
         "#     dustoptics retrieve mer_sky.nc --model mer-start.toml --fit r_eff_um=0.5:4 \\\n"
         "#         --allow-large\n"
-        "#   Licence: the numbers are dustoptics's (BSD-3-Clause); the index is Wolff et\n"
+        "#   Licence: the numbers are dustoptics's (MIT licence); the index is Wolff et\n"
         "#   al.'s (see the catalogue entry marsdust-wolff2009).\n\n"
     )
     text = config_text(

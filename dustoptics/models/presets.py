@@ -21,6 +21,9 @@ sources with full citations and every choice its sources left open.  Copy one
                           g = 0.8 (phase only)
 ``cosmoscout-mars``       CosmoScout VR's two-mode Mars aerosols, computed by
                           quadrature instead of random radii
+``mer-sky-fit``           Wolff et al. 2009's Mars dust, r_eff fitted by
+                          :mod:`dustoptics.retrieve` so that the rovers' view
+                          of the sky is inside the MER colour range
 ========================  ======================================================
 
 >>> from dustoptics.models import presets

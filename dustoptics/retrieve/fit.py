@@ -92,10 +92,10 @@ class Retrieval:
     sky_solves : int
         Skies solved (orders of scattering), residuals and Jacobians together.
     history_values : numpy.ndarray
-        The parameters of every evaluation of the residuals, in order, shape
-        (function_evaluations + 1, n_parameters): the fit's path.
+        The parameters at every point where the residuals were computed, in
+        order (the start first), shape (n_points, n_parameters): the fit's path.
     history_residuals : numpy.ndarray
-        Their weighted residuals, shape (function_evaluations + 1, n_residuals). [-]
+        Their weighted residuals, shape (n_points, n_residuals). [-]
     """
 
     parameters: tuple[str, ...]
@@ -519,6 +519,7 @@ def retrieve(
                 res.append((value - o.value) / o.sigma)
                 jac.append(d / o.sigma[:, None])
         if sky_model is not None:
+            table_began = time.perf_counter()
             sky_table = compute_optics(
                 **current, wavelength_nm=sky_model.wavelength_nm, derivatives=names
             )
@@ -526,6 +527,7 @@ def retrieve(
             if "budget" not in counter:
                 n, seconds = sky_model.check_cost(
                     sky_table,
+                    table_seconds=time.perf_counter() - table_began,
                     max_iterations=max_iterations,
                     n_parameters=len(names),
                     allow_large=allow_large,
@@ -533,7 +535,7 @@ def retrieve(
                 counter["budget"] = n
                 if stream is not None:
                     stream.write(
-                        f"retrieve: at most {n} sky solves, about {seconds:.0f} s "
+                        f"retrieve: at most {n} sky solves, the fit about {seconds:.0f} s at most "
                         f"({sky_model.wavelength_nm.size} wavelengths, "
                         f"n_streams={sky.n_streams})\n"
                     )

@@ -308,32 +308,41 @@ class SkyModel:
         return len(self.scenes) * n_parameters * per
 
     def seconds_per_solve(self, table: Table) -> float:
-        """Estimated seconds of one sky solve with the dust ``table`` (its scenes' largest)."""
-        worst = 0.0
-        for scene in self.scenes:
-            medium = self._medium(table, scene)
-            cost = estimate_orders_cost(medium, n_layers=N_LAYERS, tol=self.settings.tol)
-            worst = max(worst, cost.work / _WORK_PER_SECOND)
-        return worst + _FIXED_SECONDS
+        """Estimated seconds of one sky solve with the dust ``table``: the orders of
+        scattering of the thickest scene (:func:`~dustoptics.sky.orders.estimate_orders_cost`
+        at the rate :data:`~dustoptics.sky.orders.WORK_BUDGET` is stated at) and the medium's
+        slant columns and lines of sight."""
+        thickest = max(self.scenes, key=lambda sc: sc.optical_depth)
+        medium = self._medium(table, thickest)
+        cost = estimate_orders_cost(medium, n_layers=N_LAYERS, tol=self.settings.tol)
+        return cost.work / _WORK_PER_SECOND + _FIXED_SECONDS
 
     def check_cost(
-        self, table: Table, *, max_iterations: int, n_parameters: int, allow_large: bool
+        self,
+        table: Table,
+        *,
+        table_seconds: float,
+        max_iterations: int,
+        n_parameters: int,
+        allow_large: bool,
     ) -> tuple[int, float]:
-        """The most sky solves of a retrieval and their estimated seconds; refuse beyond
-        :data:`MAX_SKY_SECONDS` unless ``allow_large``."""
+        """The most sky solves of a retrieval and the estimated seconds of the whole fit (the
+        solves and one table per evaluation, ``table_seconds`` as the start's took); refuse
+        beyond :data:`MAX_SKY_SECONDS` unless ``allow_large``."""
         n = (
             max_iterations * self.solves_per_evaluation()
             + max_iterations * (self.solves_per_jacobian(n_parameters))
             + self.solves_per_evaluation()
         )
         each = self.seconds_per_solve(table)
-        total = n * each
+        total = n * each + (max_iterations + 1) * table_seconds
         if total > MAX_SKY_SECONDS and not allow_large:
             raise BudgetError(
                 f"the retrieval would solve at most {n} skies ({max_iterations} evaluations x "
                 f"{len(self.scenes)} scenes, {n_parameters} parameters' finite differences per "
-                f"Jacobian), about {each:.3g} s each with {self.wavelength_nm.size} wavelengths "
-                f"and n_streams={self.settings.n_streams}: about {total:.3g} s, beyond the budget "
+                f"Jacobian), about {each:.2g} s each with {self.wavelength_nm.size} wavelengths "
+                f"and n_streams={self.settings.n_streams}, and a table of about "
+                f"{table_seconds:.2g} s per evaluation: about {total:.2g} s, beyond the budget "
                 f"of {MAX_SKY_SECONDS:g} s; lower max_iterations, the streams or the scenes, or "
                 "pass allow_large=True (--allow-large on the command line) to go ahead"
             )

@@ -25,6 +25,7 @@ NAMES = [
     "costa",
     "hybrid",
     "hybrid-seed",
+    "mer-sky-fit",
 ]
 
 
@@ -92,6 +93,7 @@ def test_preset_text_is_a_config_with_its_name_and_citations(name: str) -> None:
         ("costa", ("Costa", "Meyran")),
         ("collienne", ("Collienne", "Cornette", "Meyran")),
         ("cosmoscout-mars", ("CosmoScout VR", "Ehlers", "Querry")),
+        ("mer-sky-fit", ("Wolff", "Bell")),
     ],
 )
 def test_sources_cited(name: str, authors: tuple[str, ...]) -> None:
