@@ -157,7 +157,7 @@ def test_the_sky_solves_are_bounded_up_front() -> None:
     """Too many sky solves are refused after the start's table, before any sky is solved."""
     obs = _radiance(np.ones((1, 2, 5)), np.ones((1, 2, 5)))
     seen: list[Any] = []
-    with pytest.raises(BudgetError, match=r"at most 40001 skies.*allow_large=True"):
+    with pytest.raises(BudgetError, match=r"at most 40002 skies.*allow_large=True"):
         retrieve(
             obs,
             model=_model(0.03, 0.8),

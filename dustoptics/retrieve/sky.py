@@ -329,10 +329,9 @@ class SkyModel:
         """The most sky solves of a retrieval and the estimated seconds of the whole fit (the
         solves and one table per evaluation, ``table_seconds`` as the start's took); refuse
         beyond :data:`MAX_SKY_SECONDS` unless ``allow_large``."""
-        n = (
-            max_iterations * self.solves_per_evaluation()
-            + max_iterations * (self.solves_per_jacobian(n_parameters))
-            + self.solves_per_evaluation()
+        # Each evaluation and each Jacobian at most once per evaluation, and the result's.
+        n = (max_iterations + 1) * (
+            self.solves_per_evaluation() + self.solves_per_jacobian(n_parameters)
         )
         each = self.seconds_per_solve(table)
         total = n * each + (max_iterations + 1) * table_seconds
