@@ -46,7 +46,10 @@ that numba's cache does not hold, in this process and in child processes
 that write to the same cache (one per further core, at most
 :data:`MAX_PROCESSES` in all): each takes the next kernel whose callees are
 compiled, the longest chain of callers first, and the kernels compiled by a
-child are loaded from the cache at their first call.  It reports each kernel
+child are loaded from the cache at their first call.  A child imports only the
+modules that declare the kernels, with the packages above them bare (their
+``__init__`` not run: ``import dustoptics`` would cost it 1.5 s of CPU time), and
+without numba's error-message colours (see :func:`configure`).  It reports each kernel
 as it is compiled; a cache that holds them all costs a look at numba's index
 files and says nothing.  The command line calls it before a build
 (``models.build.TableBuilder``).
@@ -110,6 +113,8 @@ __all__ = [
 ]
 
 ENV = "NUMBA_CACHE_DIR"
+#: numba's switch for the colours of its error messages (read when numba is imported).
+HIGHLIGHTING = "NUMBA_DISABLE_ERROR_MESSAGE_HIGHLIGHTING"
 
 #: The groups of kernels: those of every Mie table of homogeneous spheres (the
 #: phase function, its refinement over radius and the node placement); those
@@ -152,7 +157,15 @@ def configure(version: str) -> Path | None:
     ``None`` means numba's default (``__pycache__`` beside the sources).  Call
     before the kernels' modules are imported: numba fixes a function's cache
     location when the function is defined.
+
+    It also turns numba's error-message highlighting off
+    (``NUMBA_DISABLE_ERROR_MESSAGE_HIGHLIGHTING``) unless the user chose a colour scheme
+    (``NUMBA_COLOR_SCHEME``): numba's type inference formats a message for each overload
+    it tries and rejects, and colouring them (colorama) is about a twentieth of the
+    kernels' compile time; numba reads the setting when it is imported.
     """
+    if "NUMBA_COLOR_SCHEME" not in os.environ:
+        os.environ.setdefault(HIGHLIGHTING, "1")
     if os.environ.get(ENV):
         return Path(os.environ[ENV])
     if not _installed_in_site_packages():
@@ -561,10 +574,22 @@ def _compile_here(k: Kernel) -> tuple[float, float]:
     return time.thread_time() - cpu, time.perf_counter() - wall
 
 
+#: What a child runs (``python -c``): ``dustoptics`` as a bare package (its
+#: ``__init__`` not run), then :func:`_serve`.  Arguments: the package's folder, the
+#: modules that declare the kernels.
+_CHILD_CODE = """\
+import sys, types
+package = types.ModuleType("dustoptics")
+package.__path__ = [sys.argv[1]]
+sys.modules["dustoptics"] = package
+import dustoptics._numba_cache as c
+sys.exit(c._serve(sys.argv[2:]))
+"""
+
+
 def _child_command(modules: Iterable[str]) -> list[str]:
     """A child that imports ``modules`` (which declare the kernels) and serves."""
-    code = "import sys, dustoptics._numba_cache as c; sys.exit(c._serve(sys.argv[1:]))"
-    return [sys.executable, "-c", code, *sorted(modules)]
+    return [sys.executable, "-c", _CHILD_CODE, str(_PACKAGE_DIR), *sorted(modules)]
 
 
 def _child_env() -> dict[str, str]:
@@ -572,17 +597,45 @@ def _child_env() -> dict[str, str]:
     # The child imports this very package (a checkout, an install, a test's copy).
     root = str(_PACKAGE_DIR.parent)
     env["PYTHONPATH"] = os.pathsep.join(p for p in (root, env.get("PYTHONPATH")) if p)
+    if "NUMBA_COLOR_SCHEME" not in env:  # as configure() does (the user's setting kept)
+        env.setdefault(HIGHLIGHTING, "1")
     return env
+
+
+def _import_bare(modules: list[str]) -> None:
+    """Import ``modules`` with the packages above them bare: their ``__init__`` not run.
+
+    A child needs only the modules that declare the kernels (numba, numpy and what they
+    import): ``import dustoptics`` would take a second and a half of CPU time more, on a
+    core that compiles.  Should a module need what a package's ``__init__`` defines, the
+    package is imported whole instead.
+    """
+    import importlib
+    import types
+
+    for init in sorted(_PACKAGE_DIR.glob("**/__init__.py")):
+        folder = init.parent
+        name = ".".join(("dustoptics", *folder.relative_to(_PACKAGE_DIR).parts))
+        if name not in sys.modules:
+            package = types.ModuleType(name)
+            package.__path__ = [str(folder)]
+            sys.modules[name] = package
+    try:
+        for module in modules:
+            importlib.import_module(module)
+    except ImportError:  # a package's __init__ was needed after all: import them whole
+        for name in [n for n in sys.modules if n.split(".")[0] == "dustoptics"]:
+            if name != __name__:
+                del sys.modules[name]
+        for module in modules:
+            importlib.import_module(module)
 
 
 def _serve(modules: list[str]) -> int:
     """A child's loop: import ``modules``, then compile the kernels named on stdin,
     one a line, answering ``done NAME CPU_S WALL_S`` (or ``fail NAME``) on stdout;
     ends at the end of its input."""
-    import importlib
-
-    for module in modules:
-        importlib.import_module(module)
+    _import_bare(modules)
     out = sys.stdout
     out.write("ready\n")
     out.flush()

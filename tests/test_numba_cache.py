@@ -230,6 +230,61 @@ def test_progress_names_each_kernel_k_of_n_with_the_time(monkeypatch, capsys):
         assert re.fullmatch(rf"dustoptics: compiled kernel {k}/{n}, \w+\.\w+ \(\d+\.\d s\)", line)
 
 
+def test_a_child_imports_the_kernels_modules_without_the_package():
+    """A compiling child runs no package ``__init__`` (``import dustoptics`` would cost it
+    a second and a half of a core that compiles): it imports the modules that declare the
+    kernels, and gets all of them; with numba's error-message highlighting off."""
+    modules = sorted({k.dispatcher.py_func.__module__ for k in kernels()})
+    command = _numba_cache._child_command(modules)
+    code = command[2].replace(
+        "sys.exit(c._serve(sys.argv[2:]))",
+        "c._import_bare(sys.argv[2:]); import json, os, numba.core.errors as e; "
+        "print(json.dumps([sorted(c._KERNELS), hasattr(sys.modules['dustoptics'], "
+        "'__version__'), sorted(m for m, v in sys.modules.items() if m.startswith('dustoptics.io') "
+        "and getattr(v, '__file__', None)), "
+        "os.environ['NUMBA_DISABLE_ERROR_MESSAGE_HIGHLIGHTING'], "
+        "type(e.termcolor()).__name__]))",
+    )
+    done = subprocess.run(
+        [command[0], "-c", code, *command[3:]],
+        capture_output=True,
+        text=True,
+        env=_numba_cache._child_env(),
+        timeout=300,
+    )
+    assert done.returncode == 0, done.stderr
+    names, has_version, io_modules, highlighting, scheme = json.loads(done.stdout)
+    assert set(names) >= {k.name for k in kernels()}
+    assert (has_version, io_modules, highlighting, scheme) == (False, [], "1", "NOPColorScheme")
+
+
+def test_a_child_imports_the_package_whole_when_a_module_needs_it(tmp_path):
+    """Should a module need what a package's ``__init__`` defines, the child imports the
+    package whole and still gets the kernels."""
+    (tmp_path / "needs_init.py").write_text("from dustoptics import __version__\n")
+    command = _numba_cache._child_command(["dustoptics.scattering.mie"])
+    code = command[2].replace(
+        "sys.exit(c._serve(sys.argv[2:]))",
+        "import importlib.util; "
+        "sys.meta_path.insert(0, type('Finder', (), {'find_spec': staticmethod("
+        "lambda name, path=None, target=None: importlib.util.spec_from_file_location("
+        f"name, {str(tmp_path / 'needs_init.py')!r}) if name == 'dustoptics.needs_init' "
+        "else None)})); "
+        "c._import_bare(['dustoptics.needs_init', *sys.argv[2:]]); "
+        "print(sys.modules['dustoptics'].__version__ is not None, "
+        "'mie._mie_coefficients' in c._KERNELS)",
+    )
+    done = subprocess.run(
+        [command[0], "-c", code, *command[3:]],
+        capture_output=True,
+        text=True,
+        env=_numba_cache._child_env(),
+        timeout=300,
+    )
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.split() == ["True", "True"]
+
+
 def test_with_numbas_jit_off_nothing_compiles(monkeypatch):
     """NUMBA_DISABLE_JIT=1 (the kernels run as Python, for debugging): nothing to compile,
     and a table still computes on threads."""
@@ -296,16 +351,36 @@ def test_first_build_compiles_with_progress_and_the_next_process_loads_silently(
 
 def test_import_compiles_nothing_and_imports_no_heavy_package():
     """``import dustoptics`` defines the kernels without compiling or loading any, and
-    imports neither xarray, dask, distributed, zarr nor matplotlib."""
+    imports neither xarray, dask, distributed, zarr, matplotlib nor scipy.stats (0.4 s)."""
     code = """
         import sys
         import dustoptics
         from dustoptics import _numba_cache
-        heavy = [m for m in ("xarray", "dask", "distributed", "zarr", "matplotlib")
-                 if m in sys.modules]
+        heavy = [m for m in ("xarray", "dask", "distributed", "zarr", "matplotlib",
+                             "scipy.stats") if m in sys.modules]
         loaded = [k.name for k in _numba_cache.kernels() if k.dispatcher.signatures]
         print(heavy, loaded)
     """
     done = _run(code, None)
     assert done.returncode == 0, done.stderr
     assert done.stdout.strip() == "[] []"
+
+
+@pytest.mark.parametrize("scheme", [None, "dark_bg"])
+def test_numbas_error_highlighting_is_off_unless_the_user_chose_colours(monkeypatch, scheme):
+    """``import dustoptics`` turns numba's error-message colouring off (a twentieth of the
+    compile time), unless the user chose a colour scheme."""
+    monkeypatch.delenv(_numba_cache.HIGHLIGHTING, raising=False)
+    if scheme is None:
+        monkeypatch.delenv("NUMBA_COLOR_SCHEME", raising=False)
+    else:
+        monkeypatch.setenv("NUMBA_COLOR_SCHEME", scheme)
+    code = """
+        import dustoptics
+        import numba.core.errors as errors
+        print(type(errors.termcolor()).__name__)
+    """
+    done = _run(code, None)
+    assert done.returncode == 0, done.stderr
+    expected = "NOPColorScheme" if scheme is None else "HighlightColorScheme"
+    assert done.stdout.strip() == expected
