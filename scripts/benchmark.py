@@ -135,11 +135,13 @@ the default table: best of N.
 10. First use (``--compile`` runs this section alone, a few minutes on 2
     cores): ``import dustoptics`` in 5 fresh interpreters (3 with
     ``--quick``; the import's own time, the median, and whether it imported
-    xarray, dask, distributed, matplotlib or zarr, which it must not); each
-    kernel's compile time
+    xarray, dask, distributed, matplotlib, zarr or scipy.stats, which it must
+    not); each kernel's compile time
     (``dustoptics._numba_cache.compile_kernels(processes=1)`` in a fresh
     process with an empty cache: CPU and wall time per kernel, callees
-    compiled before their callers); and the first build as in step 1, 3 runs.
+    compiled before their callers); and the first build as in step 1, 3 runs,
+    each with its wall and CPU time, the time its kernels took to compile
+    (from its last progress line) and the load.
 
 11. Derivatives (``--derivatives`` runs this section alone, about a minute on 2
     cores): the default table (step 1's) with ``derivatives=("r_eff_um",
@@ -167,6 +169,7 @@ os.environ["MIEPYTHON_USE_JIT"] = "1"
 import argparse
 import json
 import platform
+import re
 import shutil
 import subprocess
 import sys
@@ -221,7 +224,7 @@ TARGET_MEMORY_MB = 500.0
 # Issue 26: the first `dustoptics build` from an empty numba cache, on a quiet 2-core machine.
 TARGET_FIRST_BUILD_S = 10.0
 # Modules `import dustoptics` must not import (issue 26).
-HEAVY_MODULES = ("xarray", "dask", "distributed", "matplotlib", "zarr")
+HEAVY_MODULES = ("xarray", "dask", "distributed", "matplotlib", "zarr", "scipy.stats")
 
 IMPORT_SNIPPET = """\
 import json, sys, time
@@ -496,7 +499,13 @@ def measure_first_build(runs: int) -> dict:
         try:
             load = os.getloadavg()[0] if hasattr(os, "getloadavg") else None
             log(f"first `dustoptics build`, empty NUMBA_CACHE_DIR ({i + 1}/{runs}) ...")
-            first.append(cli_build(cache_dir) | {"load_1min": load})
+            build = cli_build(cache_dir)
+            # When the last kernel was compiled, after compile_kernels began (its progress).
+            ends = re.findall(
+                r"^dustoptics: compiled kernel .*\(([\d.]+) s\)$", build["stderr"], re.M
+            )
+            compiled_at = float(ends[-1]) if ends else None
+            first.append(build | {"load_1min": load, "compiled_at_s": compiled_at})
             log("  and a second build in the same cache ...")
             later.append(cli_build(cache_dir))
         finally:
@@ -1000,6 +1009,8 @@ def first_build_rows(row, f: dict) -> None:
     """The first build's rows (step 1 and section 10)."""
     runs = ", ".join(
         f"{r['wall_s']:.1f}"
+        + (f" CPU {r['cpu_s']:.1f}" if r.get("cpu_s") is not None else "")
+        + (f" kernels {r['compiled_at_s']:.1f}" if r.get("compiled_at_s") else "")
         + (f" (load {r['load_1min']:.1f})" if r["load_1min"] is not None else "")
         for r in f["runs"]
     )
