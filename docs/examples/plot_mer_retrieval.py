@@ -32,13 +32,10 @@ try:
 except NameError:  # run by sphinx-gallery in the examples' directory
     here = Path.cwd()
 run = json.loads((here / "mer_retrieval.json").read_text(encoding="utf-8"))
-config = presets.load_preset("mer-sky-fit")
+sizes = presets.load_preset("mer-sky-fit").size_distribution.build()
 for name, value, error in zip(run["parameters"], run["values"], run["standard_errors"]):
     print(f"{name} = {value:.4f} +- {error:.4f}")
-print(
-    f"preset mer-sky-fit: r_eff {config.size_distribution.r_eff_um} um, "
-    f"v_eff {config.size_distribution.v_eff} ({run['written_by']})"
-)
+print(f"preset mer-sky-fit: {sizes} ({run['written_by']})")
 
 # %%
 # Left: the fit's path in the chromaticity plane (Sun 30 degree) and both dusts'
