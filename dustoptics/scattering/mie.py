@@ -393,9 +393,14 @@ def _bh_ratio(
 def _log_derivatives_down(z: complex, n_top: int) -> np.ndarray:
     """D_n(z) = psi_n'(z) / psi_n(z), n = 0..n_top, by the downward recurrence
     D_{n-1} = n/z - 1/(D_n + n/z) (Bohren & Huffman 1983, Eq. 4.89, stable for
-    every complex z) from D_N = 0 at N = max(n_top, |z|) + 16, as in their
-    BHCOAT."""
-    start = int(max(n_top, abs(z))) + 16
+    every complex z) from D_N = 0 at N = max(n_top, |z|) + 16 + 8 |z|^(1/3).
+    The start's error decays only above the turning point n ~ |z|, in a region
+    whose width grows as |z|^(1/3): BHCOAT's N = max(n_top, |z|) + 15 left
+    D_n wrong by 2e-5 at z = 75 and 0.2 at z = 300 (real z; against a start at
+    4 |z|, which this start matches to the last bit for z = m x with x from
+    0.5 to 2e4, Re m from 1.0001 to 4 and Im m up to 0.01, as
+    ``mie_derivatives._log_derivative``)."""
+    start = int(max(n_top, abs(z)) + 16.0 + 8.0 * abs(z) ** (1.0 / 3.0))
     d = np.empty(n_top + 1, dtype=np.complex128)
     cur = 0.0 + 0.0j
     for n in range(start, 0, -1):

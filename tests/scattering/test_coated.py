@@ -38,6 +38,7 @@ CASES = [
     (2.0 + 1.0j, 1.5 + 0.001j, 20.0, 30.0),
     (1.33, 1.6 + 0.5j, 40.0, 60.0),  # strongly absorbing shell (Im m y = 30)
     (1.5 + 0.01j, 1.3, 0.01, 0.02),  # Rayleigh-small
+    (1.6, 1.5, 150.0, 200.0),  # lossless, large: D_n(m_c x)'s downward start (issue 30)
 ]
 
 
