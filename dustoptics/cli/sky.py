@@ -8,6 +8,7 @@ the image size and the files that would be replaced are checked before any work.
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -19,19 +20,23 @@ from dustoptics.cli.sky_preview import add_preview_options, approximations_from_
 
 __all__ = ["add_parser", "run"]
 
-#: Fisheye sizes ``--size`` accepts, those of :meth:`dustoptics.sky.scene.Sky.fisheye`. [pixels]
+#: Fisheye sizes ``--size`` accepts, those of :meth:`dustoptics.sky.scene.Sky.fisheye`
+#: (beyond the largest with ``--allow-large``, refused by the job before any work). [pixels]
 SIZE_RANGE_PX = (16, 8192)
 
 
 def _size(text: str) -> int:
-    """``--size``: an integer within :data:`SIZE_RANGE_PX`."""
+    """``--size``: an integer of at least ``SIZE_RANGE_PX[0]``."""
     low, high = SIZE_RANGE_PX
     try:
         value = int(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected an integer; got {text!r}") from None
-    if not low <= value <= high:
-        raise argparse.ArgumentTypeError(f"must be an integer in [{low}, {high}]; got {text!r}")
+    if value < low:
+        raise argparse.ArgumentTypeError(
+            f"must be an integer in [{low}, {high}] ({high} and beyond with --allow-large); "
+            f"got {text!r}"
+        )
     return value
 
 
@@ -92,7 +97,8 @@ def add_parser(sub: Any) -> None:
             type=_size,
             default=512,
             metavar="PX",
-            help=f"fisheye size [pixels], {SIZE_RANGE_PX[0]} .. {SIZE_RANGE_PX[1]} (default 512)",
+            help=f"fisheye size [pixels], {SIZE_RANGE_PX[0]} .. {SIZE_RANGE_PX[1]}, more with "
+            "--allow-large (default 512)",
         )
         q.add_argument(
             "--exposure",
@@ -113,7 +119,8 @@ def add_parser(sub: Any) -> None:
         )
         q.add_argument("--out", type=Path, required=True, metavar="DIR", help=_OUT_HELP)
         q.add_argument("--force", action="store_true", help="replace existing files")
-        q.add_argument("--quiet", action="store_true", help="no summary output")
+        q.add_argument("--quiet", action="store_true", help="no summary output or progress")
+        q.add_argument("--allow-large", action="store_true", help=_LARGE_HELP)
         add_preview_options(q)
         if planet == "earth":
             add_aerosol_options(q)
@@ -148,8 +155,14 @@ def add_parser(sub: Any) -> None:
     )
     q.add_argument("--out", type=Path, required=True, metavar="DIR", help=_OUT_HELP)
     q.add_argument("--force", action="store_true", help="replace existing files")
-    q.add_argument("--quiet", action="store_true", help="no summary output")
+    q.add_argument("--quiet", action="store_true", help="no summary output or progress")
+    q.add_argument("--allow-large", action="store_true", help=_LARGE_HELP)
 
+
+_LARGE_HELP = (
+    "go ahead beyond the memory and work budget of the skies and images (refused before any "
+    "work otherwise)"
+)
 
 _OUT_HELP = (
     "output directory; files go to DIR/NAME/, NAME mars-PRESET, earth or mars-comparison "
@@ -186,6 +199,8 @@ def run(args: argparse.Namespace) -> int:
             models=args.models,
             optical_depth=args.optical_depth,
             sun_elevation_deg=args.sun_elevation,
+            progress=None if args.quiet else sys.stderr,
+            allow_large=args.allow_large,
         )
     else:
         if not (-10.0 <= args.sun_elevation <= 90.0):
@@ -210,6 +225,8 @@ def run(args: argparse.Namespace) -> int:
             optical_depth=getattr(args, "optical_depth", 0.5),
             preview=approximations_from_args(args),
             earth_aerosol=aerosol_keywords(args) if args.sky_command == "earth" else {},
+            progress=None if args.quiet else sys.stderr,
+            allow_large=args.allow_large,
         )
     # The job's own folder, DIR/NAME/, checked to stay inside DIR (NAME is a preset's).
     job = replace(job, out_dir=args.out / job.name)

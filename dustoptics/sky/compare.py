@@ -503,6 +503,27 @@ def _scattering_angle(
     return np.rad2deg(np.arccos(np.clip(c, -1.0, 1.0)))
 
 
+def _check_comparison_cost(
+    medium: Medium, *, azimuth_step_deg: float, tol: float, allow_large: bool
+) -> None:
+    """The budget of each sky of :func:`compare_mars_models` (the dome, away from the Sun)."""
+    from dustoptics.sky.orders import N_LAYERS, check_orders_cost
+    from dustoptics.sky.render import N_PATH, check_render_cost
+    from dustoptics.sky.scene import default_view_zenith_deg
+
+    check_orders_cost(medium, n_layers=N_LAYERS, tol=tol, allow_large=allow_large)
+    n_zenith = default_view_zenith_deg().size
+    n_az = round(180.0 / azimuth_step_deg) + 1
+    check_render_cost(
+        medium,
+        n_rays=n_zenith * n_az,
+        n_rows=n_zenith,
+        n_path=N_PATH,
+        allow_large=allow_large,
+        what="the comparison's sky (view zenith angles x azimuth_step_deg)",
+    )
+
+
 def compare_mars_models(
     *,
     models: tuple[str, ...] = MARS_MODELS,
@@ -546,25 +567,51 @@ def compare_mars_models(
         444 and 670 nm with their scattering angles; ``relative_luminance``
         over the sky (Y / Y_zenith); ``chromaticity_x``/``_y`` looking away
         from the Sun and ``sun_transmittance`` against Sun elevation.
+
+    Raises
+    ------
+    ValueError
+        A parameter out of range, before any work.
+    dustoptics._validation.BudgetError
+        A sky beyond the memory and work budget without ``allow_large``,
+        refused before the first sky (the models share the grids).
     """
     import xarray as xr
 
     models = _check_models(models)
+    check_positive("optical_depth", optical_depth)
+    check_closed_interval("sun_elevation_deg", sun_elevation_deg, -10.0, 90.0)
+    for e in sun_elevations_deg:
+        check_closed_interval("sun_elevations_deg", e, -10.0, 90.0)
+    check_closed_interval("ground_albedo", ground_albedo, 0.0, 1.0)
+    check_closed_interval("azimuth_step_deg", azimuth_step_deg, 0.05, 45.0)
     report = reporter(progress, label="sky compare")
     grid = _grid(COMPARISON_WAVELENGTHS_NM)
     mie = _preset_table(_MIE_CROSS_SECTIONS, grid)
     sel = [grid.index(w) for w in COMPARISON_WAVELENGTHS_NM]
+    n_steps = len(models) * (1 + len(sun_elevations_deg))
     sun_zen = 90.0 - sun_elevation_deg
     almu_az = np.arange(0.0, 180.01, 1.0)
     pp_zen = np.arange(0.0, 90.01, 1.0)
     per_model: dict[str, dict[str, np.ndarray]] = {}
     sky: SkyRadiance | None = None
+    step = 0
     for k, model in enumerate(models):
-        report(f"model {k + 1} of {len(models)} ({model})")
+        report(f"model {k + 1} of {len(models)} ({model}): its optics", last=True)
         atm = mars_sky_atmosphere(
             model, optical_depth=optical_depth, wavelength_nm=grid, cross_sections=mie
         )
         medium = Medium.from_atmosphere(atm)
+        if k == 0:  # every sky's budget before the first (the models share the grids)
+            _check_comparison_cost(
+                medium, azimuth_step_deg=azimuth_step_deg, tol=tol, allow_large=allow_large
+            )
+        step += 1
+        report(
+            f"sky {step} of {n_steps}: model {k + 1} of {len(models)} ({model}), the dome at "
+            f"Sun {sun_elevation_deg:g} deg",
+            last=True,
+        )
         sky = sky_radiance(
             medium,
             sun_elevation_deg=sun_elevation_deg,
@@ -582,6 +629,12 @@ def compare_mars_models(
         chrom = []
         trans = []
         for elev in sun_elevations_deg:
+            step += 1
+            report(
+                f"sky {step} of {n_steps}: model {k + 1} of {len(models)} ({model}), away from "
+                f"the Sun at {float(elev):g} deg",
+                last=True,
+            )
             xy, t = _away_chromaticity(
                 medium,
                 float(elev),
@@ -600,6 +653,7 @@ def compare_mars_models(
             "transmittance": np.array(trans),
         }
     assert sky is not None
+    report(f"{n_steps} skies of {len(models)} models done", last=True)
     pp_signed = np.concatenate([-pp_zen[::-1], pp_zen[1:]])  # negative: toward the Sun
     pp_az = np.where(pp_signed <= 0, 0.0, 180.0)
     stack = lambda key: np.stack([per_model[m][key] for m in models])  # noqa: E731
@@ -722,8 +776,7 @@ def plot_comparison(ds: Any) -> dict[str, Any]:
         axes[1, j].set_title(f"principal plane, {w:g} nm")
         for i in range(2):
             axes[i, j].set_xlabel("scattering angle [degree]")
-    axes[0, 0].set_ylabel("radiance / solar irradiance [sr$^{-1}$]")
-    axes[1, 0].set_ylabel("radiance / solar irradiance [sr$^{-1}$]")
+            axes[i, j].set_ylabel("radiance / solar irradiance [sr$^{-1}$]")
     axes[0, 0].legend()
     fig.suptitle(f"Mars sky radiance, Sun at {ds.attrs['sun_elevation_deg']:g} degree")
     figs["radiance"] = fig
@@ -745,9 +798,18 @@ def plot_comparison(ds: Any) -> dict[str, Any]:
         pc = ax.pcolormesh(full_az, zen, full, shading="auto", norm=matplotlib.colors.LogNorm())
         ax.set_theta_zero_location("N")
         ax.set_yticks([30, 60, 90])
-        ax.set_yticklabels([])
+        ax.set_yticklabels(["30", "60", "90"], fontsize="x-small")
+        ax.tick_params(axis="x", labelsize="x-small")
+        ax.set_xlabel(
+            "azimuth from the Sun [degree] (Sun up);\nradius: view zenith angle [degree]",
+            fontsize="x-small",
+        )
         ax.set_title(m)
-    fig.colorbar(pc, ax=list(axes), label="luminance / zenith luminance")
+    fig.colorbar(pc, ax=list(axes), label="luminance / zenith luminance [1]")
+    fig.suptitle(
+        f"Mars sky luminance relative to the zenith, Sun at {ds.attrs['sun_elevation_deg']:g} "
+        "degree"
+    )
     figs["luminance"] = fig
 
     fig, ax = plt.subplots(figsize=(5, 4.5), constrained_layout=True)
@@ -765,23 +827,50 @@ def plot_comparison(ds: Any) -> dict[str, Any]:
             ax.annotate(
                 f"{e:g}", (x, y), fontsize="x-small", xytext=(3, 3), textcoords="offset points"
             )
-    ax.set_xlabel("CIE x")
-    ax.set_ylabel("CIE y")
+    ax.set_xlabel("CIE 1931 x [1]")
+    ax.set_ylabel("CIE 1931 y [1]")
     ax.set_title("sky chromaticity away from the Sun\n(labels: Sun elevation [degree])")
     ax.legend(fontsize="small")
     figs["chromaticity"] = fig
 
     fig, ax = plt.subplots(figsize=(5, 4), constrained_layout=True)
-    for m in models:
-        for w, style in zip(ds.wavelength.values, ("-", "--")):
+    styles = ("-", "--", ":", "-.")
+    for j, w in enumerate(ds.wavelength.values):
+        for k, group in enumerate(_same_curves(ds.sun_transmittance.sel(wavelength=w), models)):
             ax.plot(
                 ds.sun_elevation,
-                ds.sun_transmittance.sel(model=m, wavelength=w),
-                style,
-                label=f"{m}, {w:g} nm",
+                ds.sun_transmittance.sel(model=group[0], wavelength=w),
+                styles[j % len(styles)],
+                color=f"C{k}",
+                marker="o",
+                markersize=3,
+                label=f"{' = '.join(group)}, {w:g} nm",
             )
     ax.set_xlabel("Sun elevation [degree]")
-    ax.set_ylabel("direct transmittance [1]")
+    ax.set_ylabel("direct transmittance of the Sun [1]")
+    ax.set_title(
+        "the Sun's transmittance to the ground\n(models with the same extinction share a line)"
+    )
     ax.legend(fontsize="x-small")
     figs["transmittance"] = fig
     return figs
+
+
+def _same_curves(values: Any, models: list[str]) -> list[list[str]]:
+    """The models grouped by equal curves (to 1e-12): one line, one legend entry per group.
+
+    The dust models that share the Blue Moon's cross-sections (costa, hybrid,
+    blue-moons) have the same extinction, hence the same transmittance.
+    """
+    groups: list[list[str]] = []
+    curves: list[np.ndarray] = []
+    for m in models:
+        curve = np.asarray(values.sel(model=m), dtype=float)
+        for g, c in zip(groups, curves):
+            if np.allclose(curve, c, rtol=1e-12, atol=0.0):
+                g.append(m)
+                break
+        else:
+            groups.append([m])
+            curves.append(curve)
+    return groups

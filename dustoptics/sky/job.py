@@ -21,7 +21,7 @@ from collections.abc import Mapping
 from dataclasses import KW_ONLY, dataclass, field
 from pathlib import Path
 from types import MappingProxyType
-from typing import TYPE_CHECKING, Any, Final
+from typing import TYPE_CHECKING, Any, Final, TextIO
 
 from dustoptics._validation import check_choice
 
@@ -85,11 +85,30 @@ class SkyJob:
         compared with the exact one (:func:`~dustoptics.sky.approximations.preview_sky`):
         the differences go into ``NAME_sky.nc``, the images side by side into
         ``NAME_preview.png``.
+    progress : text stream, optional
+        Where every sky computation reports what it does (the model, the
+        orders of scattering, the lines of sight: k of n, and the time since
+        the start) once it has run two seconds (the command line passes
+        ``sys.stderr``); None is silent.
+    allow_large : bool, optional
+        Go ahead beyond the budgets (an image side beyond
+        :data:`~dustoptics.sky.scene.MAX_IMAGE_SIZE`, skies beyond the memory
+        and work budget); without it they are refused before any work.
 
     Raises
     ------
     ValueError
-        An unknown kind, or a Sun elevation or albedo out of range.
+        An unknown kind, or a Sun elevation, albedo or image size out of range.
+    dustoptics._validation.BudgetError
+        ``size_px`` beyond :data:`~dustoptics.sky.scene.MAX_IMAGE_SIZE` without
+        ``allow_large``.
+
+    Notes
+    -----
+    :meth:`write` checks before any work that PNG images can be written
+    (matplotlib, :func:`~dustoptics.sky.scene.check_png_support`), that no file
+    would be replaced, and the memory and work budget of every sky the job
+    computes (:meth:`check_budget`).
     """
 
     kind: str
@@ -106,6 +125,8 @@ class SkyJob:
     models: tuple[str, ...] | None = None
     earth_aerosol: Mapping[str, Any] = field(default_factory=dict)
     preview: Approximations | None = None
+    progress: TextIO | None = field(default=None, compare=False, repr=False)
+    allow_large: bool = False
 
     def __post_init__(self) -> None:
         check_choice("kind", self.kind, SKY_JOBS)
@@ -123,6 +144,9 @@ class SkyJob:
                 )
             if not (0.0 <= self.albedo <= 1.0):
                 raise ValueError(f"albedo must be within [0, 1]; got {self.albedo!r}")
+            from dustoptics.sky.scene import check_image_size
+
+            check_image_size("size_px", self.size_px, allow_large=self.allow_large)
         if self.earth_aerosol:
             from dustoptics.atmosphere.sets import check_earth_aerosol
 
@@ -209,13 +233,52 @@ class SkyJob:
             A target exists and ``overwrite`` is False, found before any work.
         """
         from dustoptics.io._atomic import check_targets, write_files
+        from dustoptics.sky.scene import check_png_support
 
+        check_png_support()  # every job writes PNG images: matplotlib, before any work
         targets = self.targets()
         check_targets(targets, overwrite=overwrite)  # before any work
         files = self.files()
         if sorted(files) != sorted(targets):
             raise RuntimeError(f"{self.kind} sky: computed {sorted(files)}, announced {targets}")
         return write_files(files, overwrite=overwrite)
+
+    def check_budget(self, medium: Any) -> None:
+        """Refuse, before any work, a sky of a "mars" or "earth" job beyond the budget.
+
+        The sky over the dome (its diffuse field and lines of sight; the
+        sunset skies and the preview's approximated sky take the same grid or
+        a smaller one) and, with ``space``, the limb's fields and lines of
+        sight (:func:`~dustoptics.sky.space.check_limb_cost`).
+
+        Parameters
+        ----------
+        medium : dustoptics.sky.medium.Medium
+            The job's medium (:meth:`atmosphere`'s).
+
+        Raises
+        ------
+        dustoptics._validation.BudgetError
+            Beyond the budget and ``allow_large`` is False.
+        """
+        from dustoptics.sky.orders import N_LAYERS, check_orders_cost
+        from dustoptics.sky.render import N_PATH, check_render_cost
+        from dustoptics.sky.scene import default_view_zenith_deg
+
+        n_zenith = default_view_zenith_deg().size
+        check_orders_cost(medium, n_layers=N_LAYERS, tol=1e-4, allow_large=self.allow_large)
+        check_render_cost(
+            medium,
+            n_rays=n_zenith * 91,
+            n_rows=n_zenith,
+            n_path=N_PATH,
+            allow_large=self.allow_large,
+            what="the sky over the dome",
+        )
+        if self.space:
+            from dustoptics.sky.space import check_limb_cost
+
+            check_limb_cost(medium, allow_large=self.allow_large)
 
     def _sky_files(self) -> dict[Path, bytes]:
         from dustoptics.sky import Medium
@@ -227,12 +290,15 @@ class SkyJob:
 
             check_approximations(self.preview, atm)
         medium = Medium.from_atmosphere(atm)
+        self.check_budget(medium)  # every sky's, before the first
         sun_alpha = sun_angular_radius_deg_of(atm.sun_distance_m)  # the disc in the images
         sky = sky_radiance(
             medium,
             sun_elevation_deg=self._sun_elevation,
             ground_albedo=self.albedo,
             sun_angular_radius_deg=sun_alpha,
+            progress=self.progress,
+            allow_large=self.allow_large,
         )
         exposure = self.exposure if self.exposure is not None else sky.default_exposure()
         stem = self.out_dir / atm.name
@@ -247,6 +313,8 @@ class SkyJob:
                 sun_elevation_deg=self._sun_elevation,
                 ground_albedo=self.albedo,
                 exact=sky,
+                progress=self.progress,
+                allow_large=self.allow_large,
             )
             data = pv.to_xarray()
             out[stem.with_name(f"{atm.name}_preview.png")] = pv.png(exposure=exposure)
@@ -264,6 +332,8 @@ class SkyJob:
                     sun_elevation_deg=elev,
                     ground_albedo=self.albedo,
                     sun_angular_radius_deg=sun_alpha,
+                    progress=self.progress,
+                    allow_large=self.allow_large,
                 )
                 out[stem.with_name(f"{atm.name}_sunset_{elev:+05.1f}.png")] = png_bytes(
                     s.panorama(exposure=exposure)
@@ -271,7 +341,12 @@ class SkyJob:
         if self.space:
             from dustoptics.sky.space import limb_radiance
 
-            limb = limb_radiance(medium, ground_albedo=self.albedo)
+            limb = limb_radiance(
+                medium,
+                ground_albedo=self.albedo,
+                progress=self.progress,
+                allow_large=self.allow_large,
+            )
             out[stem.with_name(f"{atm.name}_limb.png")] = limb.view_png(exposure=self.exposure)
         return out
 
@@ -282,6 +357,8 @@ class SkyJob:
             models=self.models or MARS_MODELS,
             optical_depth=self.optical_depth,
             sun_elevation_deg=self._sun_elevation,
+            progress=self.progress,
+            allow_large=self.allow_large,
         )
         out = {self.out_dir / "mars-comparison.nc": bytes(ds.to_netcdf(engine="scipy"))}
         for name, fig in plot_comparison(ds).items():

@@ -41,7 +41,7 @@ from dustoptics.sky.orders import N_LAYERS, WORK_BUDGET, estimate_orders_cost, s
 from dustoptics.sky.render import _radiance, check_render_cost
 from dustoptics.sky.scene import display_rgb, sunlit_xyz
 
-__all__ = ["LimbRadiance", "limb_radiance"]
+__all__ = ["LimbRadiance", "check_limb_cost", "limb_radiance"]
 
 #: Largest local Sun zenith angle at a tangent point (that of solve_orders). [deg]
 MAX_SUN_ZENITH_DEG: Final = 100.0
@@ -321,68 +321,20 @@ def limb_radiance(
         Beyond the budget and ``allow_large`` is False.
     """
     medium = atmosphere if isinstance(atmosphere, Medium) else Medium.from_atmosphere(atmosphere)
-    beta = check_closed_interval("sun_view_angle_deg", sun_view_angle_deg, 1.0, 179.0)
-    step = check_closed_interval("field_step_deg", field_step_deg, 1.0, 50.0)
-    top = medium.top_altitude_m
-    h = (
-        (np.arange(120) + 0.5) / 120 * top
-        if tangent_altitude_m is None
-        else np.asarray(tangent_altitude_m, dtype=float)
-    )
-    psi = (
-        np.arange(-60.0, 60.01, 2.0)
-        if limb_angle_deg is None
-        else np.asarray(limb_angle_deg, dtype=float)
-    )
-    if h.ndim != 1 or h.size < 1 or not np.all(np.isfinite(h)) or np.any((h < 0) | (h >= top)):
-        raise ValueError(
-            f"tangent_altitude_m must be a 1-D array within [0, {top:g}) m (inside the atmosphere)"
-        )
-    if psi.ndim != 1 or psi.size < 1 or not np.all(np.isfinite(psi)):
-        raise ValueError("limb_angle_deg must be a finite 1-D array [deg]")
-    if not (isinstance(n_path, int) and 16 <= n_path <= 100_000):
-        raise ValueError(f"n_path must be an integer in [16, 100000]; got {n_path!r}")
-    geo = limb_geometry(
-        planet_radius_m=medium.planet_radius_m,
-        top_radius_m=medium.planet_radius_m + top,
-        tangent_altitude_m=h,
-        limb_angle_deg=psi,
-        sun_view_angle_deg=beta,
-    )
-    sza_t = np.rad2deg(np.arccos(np.clip(geo["mu_sun_tangent"], -1.0, 1.0)))
-    if sza_t.max() > MAX_SUN_ZENITH_DEG:
-        raise ValueError(
-            f"limb_angle_deg reaches tangent points with the Sun {sza_t.max():.1f} deg from the "
-            f"zenith (sun_view_angle_deg {beta:g}); at most {MAX_SUN_ZENITH_DEG:g} deg is allowed"
-        )
-    lo = math.floor(sza_t.min() / step) * step
-    hi = min(math.ceil(sza_t.max() / step) * step, MAX_SUN_ZENITH_DEG)
-    nodes = np.unique(np.append(np.arange(lo, hi, step), hi))
-    k = np.clip(np.searchsorted(nodes, sza_t, side="right") - 1, 0, max(nodes.size - 2, 0))
-    if nodes.size == 1:
-        weight_hi = np.zeros_like(sza_t)
-    else:
-        weight_hi = (sza_t - nodes[k]) / (nodes[k + 1] - nodes[k])
-    nwl = medium.wavelength_nm.size
-    report = reporter(progress)
-    # The budget of every field and every line of sight, before any work.
-    check_render_cost(
+    h, psi, geo, sza_t, nodes, k, weight_hi = _limb_plan(
         medium,
-        n_rays=2 * sza_t.size,
-        n_rows=2 * h.size,
+        sun_view_angle_deg=sun_view_angle_deg,
+        tangent_altitude_m=tangent_altitude_m,
+        limb_angle_deg=limb_angle_deg,
+        tol=tol,
+        field_step_deg=field_step_deg,
         n_path=n_path,
         allow_large=allow_large,
-        what="tangent_altitude_m x limb_angle_deg",
     )
-    orders = estimate_orders_cost(medium, n_layers=N_LAYERS, tol=tol)
-    if not allow_large and orders.work * nodes.size > WORK_BUDGET:
-        largest = max(int(WORK_BUDGET / orders.work), 1)
-        raise BudgetError(
-            f"limb_radiance would solve {nodes.size} diffuse fields of about {orders.work:.3g} "
-            f"multiply-adds each, beyond the budget of {WORK_BUDGET:g}; field_step_deg must give "
-            f"at most {largest} fields (a larger step, or fewer wavelengths), or pass "
-            "allow_large=True (--allow-large on the command line) to go ahead"
-        )
+    beta = float(sun_view_angle_deg)
+    top = medium.top_altitude_m
+    nwl = medium.wavelength_nm.size
+    report = reporter(progress)
     radiance = np.zeros(sza_t.shape + (nwl,))
     n_orders, err = 0, 0.0
     for j, sza in enumerate(nodes):
@@ -428,4 +380,115 @@ def limb_radiance(
         error_estimate=err,
         tol=float(tol),
         planet_radius_m=float(medium.planet_radius_m),
+    )
+
+
+def _limb_plan(
+    medium: Medium,
+    *,
+    sun_view_angle_deg: float,
+    tangent_altitude_m: Any,
+    limb_angle_deg: Any,
+    tol: float,
+    field_step_deg: float,
+    n_path: int,
+    allow_large: bool,
+) -> tuple[Any, ...]:
+    """The limb's checked parameters, geometry and field nodes; its budget checked (no work)."""
+    beta = check_closed_interval("sun_view_angle_deg", sun_view_angle_deg, 1.0, 179.0)
+    step = check_closed_interval("field_step_deg", field_step_deg, 1.0, 50.0)
+    top = medium.top_altitude_m
+    h = (
+        (np.arange(120) + 0.5) / 120 * top
+        if tangent_altitude_m is None
+        else np.asarray(tangent_altitude_m, dtype=float)
+    )
+    psi = (
+        np.arange(-60.0, 60.01, 2.0)
+        if limb_angle_deg is None
+        else np.asarray(limb_angle_deg, dtype=float)
+    )
+    if h.ndim != 1 or h.size < 1 or not np.all(np.isfinite(h)) or np.any((h < 0) | (h >= top)):
+        raise ValueError(
+            f"tangent_altitude_m must be a 1-D array within [0, {top:g}) m (inside the atmosphere)"
+        )
+    if psi.ndim != 1 or psi.size < 1 or not np.all(np.isfinite(psi)):
+        raise ValueError("limb_angle_deg must be a finite 1-D array [deg]")
+    if not (isinstance(n_path, int) and 16 <= n_path <= 100_000):
+        raise ValueError(f"n_path must be an integer in [16, 100000]; got {n_path!r}")
+    geo = limb_geometry(
+        planet_radius_m=medium.planet_radius_m,
+        top_radius_m=medium.planet_radius_m + top,
+        tangent_altitude_m=h,
+        limb_angle_deg=psi,
+        sun_view_angle_deg=beta,
+    )
+    sza_t = np.rad2deg(np.arccos(np.clip(geo["mu_sun_tangent"], -1.0, 1.0)))
+    if sza_t.max() > MAX_SUN_ZENITH_DEG:
+        raise ValueError(
+            f"limb_angle_deg reaches tangent points with the Sun {sza_t.max():.1f} deg from the "
+            f"zenith (sun_view_angle_deg {beta:g}); at most {MAX_SUN_ZENITH_DEG:g} deg is allowed"
+        )
+    lo = math.floor(sza_t.min() / step) * step
+    hi = min(math.ceil(sza_t.max() / step) * step, MAX_SUN_ZENITH_DEG)
+    nodes = np.unique(np.append(np.arange(lo, hi, step), hi))
+    k = np.clip(np.searchsorted(nodes, sza_t, side="right") - 1, 0, max(nodes.size - 2, 0))
+    if nodes.size == 1:
+        weight_hi = np.zeros_like(sza_t)
+    else:
+        weight_hi = (sza_t - nodes[k]) / (nodes[k + 1] - nodes[k])
+    # The budget of every field and every line of sight, before any work.
+    check_render_cost(
+        medium,
+        n_rays=2 * sza_t.size,
+        n_rows=2 * h.size,
+        n_path=n_path,
+        allow_large=allow_large,
+        what="tangent_altitude_m x limb_angle_deg",
+    )
+    orders = estimate_orders_cost(medium, n_layers=N_LAYERS, tol=tol)
+    if not allow_large and orders.work * nodes.size > WORK_BUDGET:
+        largest = max(int(WORK_BUDGET / orders.work), 1)
+        raise BudgetError(
+            f"limb_radiance would solve {nodes.size} diffuse fields of about {orders.work:.3g} "
+            f"multiply-adds each, beyond the budget of {WORK_BUDGET:g}; field_step_deg must give "
+            f"at most {largest} fields (a larger step, or fewer wavelengths), or pass "
+            "allow_large=True (--allow-large on the command line) to go ahead"
+        )
+    return h, psi, geo, sza_t, nodes, k, weight_hi
+
+
+def check_limb_cost(
+    atmosphere: Atmosphere | Medium,
+    *,
+    sun_view_angle_deg: float = 90.0,
+    tangent_altitude_m: Any = None,
+    limb_angle_deg: Any = None,
+    tol: float = 1e-4,
+    field_step_deg: float = 10.0,
+    n_path: int = N_LIMB_PATH,
+    allow_large: bool = False,
+) -> None:
+    """Check :func:`limb_radiance`'s parameters and budget without computing anything.
+
+    The parameters are :func:`limb_radiance`'s; a caller that computes
+    other skies first (``dustoptics sky --space``) calls this before them.
+
+    Raises
+    ------
+    ValueError
+        A parameter out of range (as :func:`limb_radiance` raises it).
+    dustoptics._validation.BudgetError
+        Beyond the budget and ``allow_large`` is False.
+    """
+    medium = atmosphere if isinstance(atmosphere, Medium) else Medium.from_atmosphere(atmosphere)
+    _limb_plan(
+        medium,
+        sun_view_angle_deg=sun_view_angle_deg,
+        tangent_altitude_m=tangent_altitude_m,
+        limb_angle_deg=limb_angle_deg,
+        tol=tol,
+        field_step_deg=field_step_deg,
+        n_path=n_path,
+        allow_large=allow_large,
     )

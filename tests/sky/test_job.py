@@ -6,6 +6,8 @@ from pathlib import Path
 
 import pytest
 
+from dustoptics._validation import BudgetError
+from dustoptics.sky import scene, space
 from dustoptics.sky.job import SUNSET_ELEVATIONS_DEG, SkyJob
 
 
@@ -62,3 +64,40 @@ def test_write_gives_the_files_it_announced(tmp_path: Path) -> None:
     assert all(p.stat().st_size > 0 for p in written)
     with pytest.raises(FileExistsError):
         job.write()
+
+
+def test_an_image_beyond_the_largest_needs_allow_large(tmp_path: Path) -> None:
+    with pytest.raises(BudgetError, match=r"size_px = 8193 pixels .* allow_large=True"):
+        SkyJob("mars", out_dir=tmp_path, size_px=8193)
+    assert SkyJob("mars", out_dir=tmp_path, size_px=8193, allow_large=True).size_px == 8193
+    with pytest.raises(ValueError, match="size_px must be an integer >= 16"):
+        SkyJob("earth", out_dir=tmp_path, size_px=8)
+
+
+def test_matplotlib_is_checked_before_any_work(tmp_path: Path, monkeypatch) -> None:
+    def missing() -> None:
+        raise ImportError("writing PNG images needs matplotlib")
+
+    def no_work(self):
+        raise AssertionError("computed before matplotlib was checked")
+
+    monkeypatch.setattr(scene, "check_png_support", missing)
+    monkeypatch.setattr(SkyJob, "files", no_work)
+    for kind in ("earth", "compare"):
+        with pytest.raises(ImportError, match="matplotlib"):
+            SkyJob(kind, out_dir=tmp_path).write()
+    assert not any(tmp_path.iterdir())
+
+
+def test_the_limb_budget_is_checked_before_the_sky(tmp_path: Path, monkeypatch) -> None:
+    # A work budget below one diffuse field: the limb (--space) is refused, and the sky over
+    # the dome, computed first, is never started.
+    def no_sky(*args, **kwargs):
+        raise AssertionError("the sky was computed before the limb's budget was checked")
+
+    monkeypatch.setattr(space, "WORK_BUDGET", 1.0)
+    monkeypatch.setattr(scene, "sky_radiance", no_sky)
+    job = SkyJob("earth", out_dir=tmp_path, size_px=16, space=True)
+    with pytest.raises(BudgetError, match="limb_radiance would solve"):
+        job.write()
+    assert not any(tmp_path.iterdir())

@@ -31,6 +31,37 @@ def test_sky_earth_writes_images_and_data(tmp_path: Path) -> None:
     assert main([*argv, "--force"]) == 0
 
 
+def test_sky_reports_progress_without_quiet(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    import re
+
+    from dustoptics.sky import _progress
+
+    monkeypatch.setattr(_progress, "QUIET_SECONDS", 0.0)  # report from the start
+    argv = ["sky", "earth", "--sun-elevation", "30", "--size", "32", "--out", str(tmp_path)]
+    assert main(argv) == 0
+    err = capsys.readouterr().err
+    # What, k of n, and the time since the start, on stderr.
+    assert re.search(r"sky: orders of scattering: \d+ orders .*, [\d.]+ s", err)
+    n = 121 * 91  # the dome: default view zenith angles x 2 degree azimuths
+    assert f"sky: lines of sight: {n} of {n}, " in err
+    # --quiet: none.
+    assert main([*argv, "--force", "--quiet"]) == 0
+    assert capsys.readouterr().err == ""
+
+
+def test_sky_size_beyond_the_largest_is_refused_before_any_work(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    status = main(["sky", "earth", "--size", "9000", "--out", str(tmp_path / "x")])
+    assert status != 0
+    err = capsys.readouterr().err
+    assert "size_px = 9000 pixels is beyond the largest allowed, 8192" in err
+    assert "--allow-large" in err
+    assert not (tmp_path / "x").exists()
+
+
 def test_sky_earth_space_writes_the_limb(tmp_path: Path) -> None:
     out = tmp_path / "sky"
     argv = ["sky", "earth", "--sun-elevation", "30", "--size", "32", "--space"]
