@@ -33,6 +33,7 @@ import json
 import sys
 import tempfile
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -99,7 +100,7 @@ def config_text(
     )
 
 
-def observations() -> object:
+def observations() -> Any:
     """The centre of the rovers' range as a sky_chromaticity observation."""
     import xarray as xr
 
