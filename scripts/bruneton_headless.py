@@ -3,7 +3,6 @@
 Usage::
 
     python scripts/bruneton_headless.py --bruneton-dir ~/src/precomputed_atmospheric_scattering
-    python scripts/bruneton_headless.py --quick --write      # the reduced run the docs show
     python scripts/bruneton_headless.py --sun-elevations 20,40 --nu 32 --json out.json
 
 ``--bruneton-dir`` (or the environment variable ``DUSTOPTICS_BRUNETON_REPO``) names a checkout of
@@ -38,24 +37,35 @@ irradiance [sr^-1]: by default 35 directions at Sun elevations 10, 30 and 60 deg
 (:func:`dustoptics.io.engines.precomputation.nu_clear_angle_deg`; 14 deg for the Martian dust at
 the export's NU 64, the most a 2048-texel-wide texture allows).
 
-His texture sizes matter beyond NU.  His view-angle coordinate is linear in the distance to the
-top of the atmosphere, so the sky up to about 35 deg from the zenith lies in the first texels
-above the horizon, and a texel whose valid range of ``nu`` (the cosine of the angle from the
-Sun, bounded by the view's and the Sun's zenith angles) excludes the ``nu`` looked up is read at
-its clamped ``nu``.  With ``SCATTERING_TEXTURE_MU_SIZE`` 32 (an earlier reduced run of this
-script) the sky 30 deg from the zenith was interpolated with the zenith's texel, which holds
-only the angle from the Sun of the zenith itself: the Martian sky came out 22-36 % too bright
-83-90 deg from the Sun and 9 % too dark 30 deg from it; at his 128 (which the export keeps)
-that row agrees with the rest.  The reductions of ``--sizes`` are therefore the R and MU_S sizes,
-never MU.
+Every texture size matters, not only near the Sun:
+
+- ``SCATTERING_TEXTURE_MU_SIZE``.  His view-angle coordinate is linear in the distance to the
+  top of the atmosphere, so the sky up to about 35 deg from the zenith lies in the first
+  texels above the horizon, and a texel whose valid range of ``nu`` (the cosine of the angle
+  from the Sun, bounded by the view's and the Sun's zenith angles) excludes the ``nu`` looked
+  up is read at its clamped ``nu``.  With 32 (an earlier reduced run of this script, R/MU/MU_S
+  8/32/16) the sky 30 deg from the zenith was interpolated with the zenith's texel, which holds
+  only the zenith's own angle from the Sun: with the Sun 30 deg high the Martian sky came out
+  22-36 % too bright 83-90 deg from the Sun and 9 % too dark 30 deg from it.  Two orders alone
+  (NU 64, S 16) show it: from MU 32 to his 128 that point changes by 11-17 %, the same row
+  30-42 deg from the Sun by 6-8 %, the rows 60 deg and more from the zenith by at most 3 %.
+  Never shrink MU below his 128 (which the export keeps).
+- ``SCATTERING_TEXTURE_NU_SIZE`` and the scattering-density ``SAMPLE_COUNT``.  The orders >= 2
+  are stored on NU slices and read back linearly in ``nu`` when the next order's scattering
+  density integrates them: a forward peak narrower than a slice is spread over it, which adds
+  energy, and each further order adds it again.  With 3 orders (S 48, R/MU/MU_S 8/32/16) the
+  sky 30 deg and more from the Sun is up to 6.5 % brighter at NU 16 than at NU 128, 2.8 % at
+  NU 32, 0.9 % at NU 64; with 12 orders, NU 8 and S 36 (R/MU/MU_S 12/128/16) it came out
+  19 % too bright at the median of the directions beyond 44 deg from the Sun, up to 4 times
+  60 deg from it.  Runs that reduce NU or S measure what that choice costs; they do not check
+  the export.
 
 His precomputation is slow on llvmpipe: its cost grows with the texels (NU x MU_S x MU x R)
 times S^2 times (orders - 1), so the export's Martian sizes (NU 64, S 48, 12 orders, his
-32/128/32) take on the order of fifteen hours on 2 cores (minutes on a GPU; the harness runs
-on any Mesa EGL driver).  ``--quick`` is the reduced run of :data:`QUICK` (about 1/76 of that
-work); ``--nu``, ``--orders``, ``--density-samples`` and ``--sizes R,MU,MU_S`` override the
-export's choices one by one (to measure what another choice costs).  ``--write`` puts the
-report in ``docs/howto/generated/``.
+32/128/32) take hours on 2 cores: 76 times the work of 12 orders at NU 8, S 36 and
+R/MU/MU_S 12/128/16, which took 22 minutes and about 500 s of CPU time on a busy machine
+(minutes on a GPU; the harness runs on any Mesa EGL driver).  ``--nu``, ``--orders``, ``--density-samples`` and ``--sizes R,MU,MU_S``
+override the export's choices one by one, to measure what another choice costs.
 """
 
 from __future__ import annotations
@@ -460,21 +470,6 @@ def run_harness(
     return json.loads(out.read_text())
 
 
-#: The reduced run (``--quick``; the checkout-gated test): the export's orders, MU size and
-#: phase function, with NU 8, 36 x 72 scattering-density directions and R/MU_S 12/16, about
-#: 1/76 of the export's work (texels x S^2).  What the reductions cost by the module's own
-#: measures: R 12 (his mapping is linear in the distance to the horizon) reads an exponential
-#: of the dust's 11.1 km scale height about 1 % high along a vertical path (R 32: 0.14 %);
-#: S 36 integrates the dust's phase function to within 2.1 %
-#: (:func:`~dustoptics.io.engines.precomputation.scattering_density_error`); NU 8 moves the
-#: angle from the Sun beyond which the comparison is held to 44 deg
-#: (:func:`~dustoptics.io.engines.precomputation.nu_clear_angle_deg`).
-QUICK: dict[str, Any] = {"nu_size": 8, "density_samples": 36, "sizes": (12, 128, 16)}
-
-#: Where ``--write`` puts the report (the docs include it).
-GENERATED = REPO_ROOT / "docs" / "howto" / "generated"
-
-
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--bruneton-dir", default=os.environ.get("DUSTOPTICS_BRUNETON_REPO"))
@@ -485,11 +480,6 @@ def main(argv: list[str] | None = None) -> int:
         help="Sun elevations of the compared directions, comma-separated [deg]",
     )
     ap.add_argument("--ground-albedo", type=float, default=0.1)
-    ap.add_argument(
-        "--quick",
-        action="store_true",
-        help="the reduced run: NU 8, S 36, R/MU/MU_S 12/128/16 (see QUICK)",
-    )
     ap.add_argument("--nu", type=int, help="SCATTERING_TEXTURE_NU_SIZE (default: the export's)")
     ap.add_argument("--orders", type=int, help="Init(K) (default: the export's)")
     ap.add_argument("--density-samples", type=int, help="scattering-density SAMPLE_COUNT")
@@ -500,36 +490,21 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--tolerance", type=float, default=0.05)
     ap.add_argument("--work", help="build directory (default: a temporary one, removed)")
     ap.add_argument("--json", help="write the comparison here")
-    ap.add_argument(
-        "--write",
-        action="store_true",
-        help=f"also write the report to {GENERATED.relative_to(REPO_ROOT)}/bruneton_headless_SET.txt",
-    )
     args = ap.parse_args(argv)
     if not args.bruneton_dir:
         ap.error("give --bruneton-dir or set DUSTOPTICS_BRUNETON_REPO")
     sys.path.insert(0, str(REPO_ROOT))
     elevations = tuple(float(v) for v in args.sun_elevations.split(","))
-    quick = QUICK if args.quick else {}
-    sizes = tuple(int(v) for v in args.sizes.split(",")) if args.sizes else quick.get("sizes")
     result = compare(
         Path(args.bruneton_dir), set_name=args.set, ground_albedo=args.ground_albedo,
-        nu_size=args.nu or quick.get("nu_size"), orders=args.orders,
-        density_samples=args.density_samples or quick.get("density_samples"),
-        work=Path(args.work) if args.work else None, sizes=sizes,
+        nu_size=args.nu, orders=args.orders, density_samples=args.density_samples,
+        work=Path(args.work) if args.work else None,
+        sizes=tuple(int(v) for v in args.sizes.split(",")) if args.sizes else None,
         geometry=default_geometry(elevations),
     )  # fmt: skip
-    text = report(result, tolerance=args.tolerance)
-    print(text)
+    print(report(result, tolerance=args.tolerance))
     if args.json:
         Path(args.json).write_text(json.dumps(result, indent=2) + "\n")
-    if args.write:
-        GENERATED.mkdir(parents=True, exist_ok=True)
-        command = "python scripts/bruneton_headless.py " + " ".join(argv or sys.argv[1:])
-        command = re.sub(r"--(bruneton-dir|work|json)[ =]\S+ ?", "", command).strip()
-        (GENERATED / f"bruneton_headless_{args.set}.txt").write_text(
-            f"# written by: {command}\n{text}\n"
-        )
     return 0 if result["max_error_beyond_clear_angle"] <= args.tolerance else 1
 
 
@@ -540,12 +515,19 @@ def build_set(set_name: str) -> Any:
     return build_atmosphere(set_name, wavelength_nm=(440.0, 550.0, 680.0))
 
 
-def _our_sky(atmosphere: Any, geometry: Geometry, *, ground_albedo: float) -> np.ndarray:
-    """dustoptics.sky at the geometry's directions, channels 680, 550, 440 nm. [sr^-1]"""
+def _our_sky(
+    atmosphere: Any, geometry: Geometry, *, ground_albedo: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """dustoptics.sky at the geometry's directions [sr^-1], and the transmittance of the
+    observer's vertical [-]; channels 680, 550, 440 nm."""
     from dustoptics.sky.medium import Medium
     from dustoptics.sky.scene import sky_radiance
 
     medium = Medium.from_atmosphere(atmosphere)
+    channel = [int(np.argmin(abs(medium.wavelength_nm - w))) for w in (680.0, 550.0, 440.0)]
+    vertical = medium.transmittance(
+        np.array(medium.planet_radius_m + geometry.observer_altitude_m), np.array(1.0)
+    )[channel]
     ours = np.empty((geometry.view_zenith_deg.size, 3))
     for elevation in np.unique(geometry.sun_elevation_deg):
         rows = geometry.sun_elevation_deg == elevation
@@ -557,10 +539,9 @@ def _our_sky(atmosphere: Any, geometry: Geometry, *, ground_albedo: float) -> np
             observer_altitude_m=geometry.observer_altitude_m, view_zenith_deg=zenith,
             azimuth_step_deg=5.0,
         )  # fmt: skip
-        channel = [int(np.argmin(abs(sky.wavelength_nm - w))) for w in (680.0, 550.0, 440.0)]
         values = sky.at(geometry.view_zenith_deg[rows], geometry.view_azimuth_deg[rows])
         ours[rows] = values[:, channel]
-    return ours
+    return ours, vertical
 
 
 def compare(
@@ -623,7 +604,7 @@ def compare(
             tmp.cleanup()
     solar = np.interp([680.0, 550.0, 440.0], data["wavelengths"], data["solar_irradiance"])
     his_per_irradiance = np.array(his["radiance"]) / solar  # [sr^-1], channels R, G, B
-    ours = _our_sky(atmosphere, geometry, ground_albedo=ground_albedo)
+    ours, vertical = _our_sky(atmosphere, geometry, ground_albedo=ground_albedo)
     error = his_per_irradiance / ours - 1.0
     angle = scattering_angle_deg(geometry)
     outside = angle > 5.0
@@ -634,6 +615,7 @@ def compare(
         nu_clear_angle_deg(atmosphere, nu_size=his["nu_size"], wavelength_nm=(680.0, 550.0, 440.0)),
     )
     beyond = angle > clear
+    zenith = int(np.argmin(geometry.view_zenith_deg))
     return {
         "set": set_name,
         "ground_albedo": ground_albedo,
@@ -664,7 +646,8 @@ def compare(
         "max_error_beyond_clear_angle": float(np.max(np.abs(error[beyond])))
         if beyond.any()
         else 0.0,
-        "zenith_transmittance_bruneton": his["transmittance"][0],
+        "zenith_transmittance_bruneton": list(his["transmittance"][zenith]),
+        "zenith_transmittance_dustoptics": vertical.tolist(),
     }
 
 
@@ -687,6 +670,14 @@ def report(result: dict[str, Any], *, tolerance: float) -> str:
             f" {e:5.1f}  {z:6.1f}  {a:7.1f}  {t:5.1f}   "
             + "  ".join(f"{100 * v:+7.2f} %" for v in err)
         )
+    his_t, our_t = (
+        result["zenith_transmittance_bruneton"],
+        result["zenith_transmittance_dustoptics"],
+    )
+    rows.append(
+        "transmittance of the vertical, his / exp(-tau) of our column: "
+        + ", ".join(f"{h:.4f} / {o:.4f}" for h, o in zip(his_t, our_t, strict=True))
+    )
     worst = result["max_error_outside_5deg"]
     rows.append(f"largest difference more than 5 deg from the Sun: {100 * worst:.2f} %")
     worst = result["max_error_beyond_clear_angle"]
