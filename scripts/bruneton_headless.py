@@ -564,6 +564,8 @@ def compare(
     geometry = geometry or default_geometry()
     if np.any(np.abs(geometry.view_azimuth_deg % 5.0) > 1e-9):
         raise ValueError("view azimuths must be multiples of 5 deg (our sky's grid)")
+    # Ours first: a failure here must not come after hours of his precomputation.
+    ours, vertical = _our_sky(atmosphere, geometry, ground_albedo=ground_albedo)
     tmp = None
     if work is None:
         tmp = tempfile.TemporaryDirectory(prefix="bruneton-headless-")
@@ -604,7 +606,6 @@ def compare(
             tmp.cleanup()
     solar = np.interp([680.0, 550.0, 440.0], data["wavelengths"], data["solar_irradiance"])
     his_per_irradiance = np.array(his["radiance"]) / solar  # [sr^-1], channels R, G, B
-    ours, vertical = _our_sky(atmosphere, geometry, ground_albedo=ground_albedo)
     error = his_per_irradiance / ours - 1.0
     angle = scattering_angle_deg(geometry)
     outside = angle > 5.0
