@@ -148,7 +148,7 @@ def test_dependencies_follow_the_calls_through_inlined_helpers():
     ]
     assert "mie.wiscombe_nmax" in deps["mie._accumulate_grids"]
     assert "mie._coat" not in deps["mie._accumulate_grids"]  # another group
-    assert deps["refinement._order_by_tier"] == {"refinement._stable_argsort"}
+    assert deps["refinement._phase_refinement_errors"] == {"refinement._halves_total"}
     assert "quadrature._wright_omega" in deps["refinement._panel_cost"]  # through _n_max, inlined
     assert deps["mie._mie_coefficients"] == set()
     both = _dependencies(kernels(["optics", "coated"]))

@@ -62,6 +62,18 @@ def _n_max(x: float) -> float:
     return x + 4.05 * np.cbrt(x) + 2.0
 
 
+@kernel(F8_1D)
+def _orders_needed(x_top: np.ndarray) -> np.ndarray:
+    """int(:func:`_n_max`) + 2 of each panel's largest size parameter: the orders its
+    spheres need in an angular tier (:func:`_order_by_tier`).  Compiled, as
+    :func:`_n_max` is everywhere: numba's ``np.cbrt`` differs from numpy's in the
+    last bit for some x, and a tier must not change with it."""
+    need = np.empty(x_top.shape[0], dtype=np.int64)
+    for i in range(x_top.shape[0]):
+        need[i] = int(_n_max(x_top[i])) + 2
+    return need
+
+
 #: Refinement splits panels until the unsplit ones hold less than this
 #: fraction of the tolerance (see :meth:`_WavelengthSolver.refine`).
 _KEEP_FRACTION = 0.9
@@ -274,70 +286,6 @@ def _cross_refinement_errors(
     return total, panel_error, max(sums[0], sums[1], sums[2])
 
 
-@kernel(F8_1D)
-def _stable_argsort(keys: np.ndarray) -> np.ndarray:
-    """np.argsort(keys, kind="mergesort") for 1-d float64 keys (stable, NaN last).
-
-    A bottom-up merge sort of the indices.  Written out because numba's
-    generic merge sort compiles for about 2 s; a stable sort's order is
-    unique, so the result is the same.
-    """
-    n = keys.shape[0]
-    order = np.empty(n, dtype=np.int64)
-    for i in range(n):
-        order[i] = i
-    scratch = np.empty(n, dtype=np.int64)
-    width = 1
-    while width < n:
-        for lo in range(0, n, 2 * width):
-            mid = min(lo + width, n)
-            hi = min(lo + 2 * width, n)
-            i = lo
-            j = mid
-            k = lo
-            while i < mid and j < hi:
-                a = keys[order[i]]
-                b = keys[order[j]]
-                # b < a, with NaN after every number: take from the right only then.
-                if b < a or (a != a and b == b):
-                    scratch[k] = order[j]
-                    j += 1
-                else:
-                    scratch[k] = order[i]
-                    i += 1
-                k += 1
-            while i < mid:
-                scratch[k] = order[i]
-                i += 1
-                k += 1
-            while j < hi:
-                scratch[k] = order[j]
-                j += 1
-                k += 1
-        order, scratch = scratch, order
-        width *= 2
-    return order
-
-
-@njit(cache=True, nogil=True, inline="always")
-def _search_left(a: np.ndarray, v: float) -> int:
-    """np.searchsorted(a, v) (side "left", NaN sorted last) for increasing float64 ``a``.
-
-    Written out because numba's searchsorted compiles comparisons for every
-    numeric type, complex included (about 1 s).
-    """
-    lo = 0
-    hi = a.shape[0]
-    while lo < hi:
-        mid = (lo + hi) // 2
-        if a[mid] < v or (v != v and a[mid] == a[mid]):
-            lo = mid + 1
-        else:
-            hi = mid
-    return lo
-
-
-@kernel(F8_1D, F8_1D, F8, F8, F8_1D, F8_1D)
 def _choose_splits(
     panel_error: np.ndarray,
     cost: np.ndarray,
@@ -354,57 +302,32 @@ def _choose_splits(
     the new panels are the split panels' left halves, then their right
     halves, and each is evaluated on its own two halves (left halves of all
     new panels first).
+
+    numpy, not a compiled kernel: a few calls per wavelength on tens of panels,
+    where numba's compile time (0.7 s on a first build) is all it would cost.
+    ``np.cumsum`` adds in order, as the compiled loop did.
     """
-    # Loops, not numpy's array expressions, cumsum and flatnonzero: the same
-    # operations in the same order, without compiling each of those apart.
-    n_p = panel_error.shape[0]
-    badness = np.empty(n_p)
-    key = np.empty(n_p)
-    for i in range(n_p):
-        badness[i] = panel_error[i] / tol
-        key[i] = -badness[i] / cost[i]
-    order = _stable_argsort(key)
-    cumulative = np.empty(n_p)
-    running = 0.0
-    for i in range(n_p):
-        running += badness[order[i]]
-        cumulative[i] = running
-    n_split = min(_search_left(cumulative, cumulative[-1] - keep_fraction) + 1, order.shape[0])
-    chosen = np.empty(n_p, dtype=np.bool_)
-    chosen[:] = False
-    for i in range(n_split):
-        chosen[order[i]] = True
-    k = 0
-    for i in range(n_p):
-        k += 1 if chosen[i] else 0
-    split = np.empty(k, dtype=np.int64)  # increasing
-    k = 0
-    for i in range(n_p):
-        if chosen[i]:
-            split[k] = i
-            k += 1
-    new_lower = np.empty(2 * k)
-    new_upper = np.empty(2 * k)
-    for i in range(k):
-        lo = lower[split[i]]
-        hi = upper[split[i]]
-        mid = 0.5 * (lo + hi)
-        new_lower[i] = lo
-        new_upper[i] = mid
-        new_lower[k + i] = mid
-        new_upper[k + i] = hi
-    eval_lower = np.empty(4 * k)
-    eval_upper = np.empty(4 * k)
-    for i in range(2 * k):
-        mid = 0.5 * (new_lower[i] + new_upper[i])
-        eval_lower[i] = new_lower[i]
-        eval_upper[i] = mid
-        eval_lower[2 * k + i] = mid
-        eval_upper[2 * k + i] = new_upper[i]
-    return split, eval_lower, eval_upper
+    badness = panel_error / tol
+    order = np.argsort(-badness / cost, kind="stable")
+    cumulative = np.cumsum(badness[order])
+    n_split = min(
+        int(np.searchsorted(cumulative, cumulative[-1] - keep_fraction, side="left")) + 1,
+        order.shape[0],
+    )
+    split = np.sort(order[:n_split])  # increasing
+    lo = lower[split]
+    hi = upper[split]
+    mid = 0.5 * (lo + hi)
+    new_lower = np.concatenate((lo, mid))
+    new_upper = np.concatenate((mid, hi))
+    new_mid = 0.5 * (new_lower + new_upper)
+    return (
+        split,
+        np.concatenate((new_lower, new_mid)),
+        np.concatenate((new_mid, new_upper)),
+    )
 
 
-@kernel(F8_2D, I8, F8_2D, I8_1D, I8_1D, I8_1D, I8_1D, F8_1D, F8_1D, F8_1D, F8_1D, F8_1D, F8_1D)
 def _apply_splits(
     pool: np.ndarray,
     n_rows: int,
@@ -419,58 +342,38 @@ def _apply_splits(
     new_cost: np.ndarray,
     eval_lower: np.ndarray,
     eval_upper: np.ndarray,
-):
+) -> tuple[np.ndarray, int, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The refinement state after splitting panels ``split`` (see
     :func:`_choose_splits`): ``rows`` hold the new panels' left-half rows, then
     their right-half rows; each new panel's coarse row is its parent's half.
     Kept panels stay in order, the new ones follow.  Rows are appended to
     ``pool`` (grown by doubling when full); returns the pool, its row count,
     and the panels' coarse, left and right row indices, edges and costs.
+
+    numpy, not a compiled kernel (copies and indexing; see :func:`_choose_splits`).
     """
     k2 = rows.shape[0] // 2  # new panels
-    width = pool.shape[1]
     if n_rows + 2 * k2 > pool.shape[0]:
-        grown = np.empty((2 * (n_rows + 2 * k2), width))
-        for r in range(n_rows):
-            for c in range(width):
-                grown[r, c] = pool[r, c]
+        grown = np.empty((2 * (n_rows + 2 * k2), pool.shape[1]))
+        grown[:n_rows] = pool[:n_rows]
         pool = grown
-    for r in range(2 * k2):
-        for c in range(width):
-            pool[n_rows + r, c] = rows[r, c]
-    keep = np.empty(lower.shape[0], dtype=np.bool_)
-    keep[:] = True
-    for p in split:
-        keep[p] = False
-    n_keep = lower.shape[0] - split.shape[0]
-    size = n_keep + k2
-    new_coarse = np.empty(size, dtype=np.int64)
-    new_left = np.empty(size, dtype=np.int64)
-    new_right = np.empty(size, dtype=np.int64)
-    new_lower = np.empty(size)
-    new_upper = np.empty(size)
-    new_costs = np.empty(size)
-    i = 0
-    for p in range(lower.shape[0]):
-        if keep[p]:
-            new_coarse[i] = coarse[p]
-            new_left[i] = left[p]
-            new_right[i] = right[p]
-            new_lower[i] = lower[p]
-            new_upper[i] = upper[p]
-            new_costs[i] = cost[p]
-            i += 1
+    pool[n_rows : n_rows + 2 * k2] = rows[: 2 * k2]
+    keep = np.ones(lower.shape[0], dtype=np.bool_)
+    keep[split] = False
     k = split.shape[0]
-    for h in range(k2):
-        parent = split[h % k]
-        new_coarse[i] = left[parent] if h < k else right[parent]
-        new_left[i] = n_rows + h
-        new_right[i] = n_rows + k2 + h
-        new_lower[i] = eval_lower[h]
-        new_upper[i] = eval_upper[k2 + h]
-        new_costs[i] = new_cost[h]
-        i += 1
-    return pool, n_rows + 2 * k2, new_coarse, new_left, new_right, new_lower, new_upper, new_costs
+    h = np.arange(k2, dtype=np.int64)
+    parent = split[h % k] if k2 else h
+    new_coarse = np.where(h < k, left[parent], right[parent]).astype(np.int64)
+    return (
+        pool,
+        n_rows + 2 * k2,
+        np.concatenate((coarse[keep], new_coarse)),
+        np.concatenate((left[keep], n_rows + h)),
+        np.concatenate((right[keep], n_rows + k2 + h)),
+        np.concatenate((lower[keep], eval_lower[:k2])),
+        np.concatenate((upper[keep], eval_upper[k2 : 2 * k2])),
+        np.concatenate((cost[keep], new_cost[:k2])),
+    )
 
 
 @kernel(F8_1D, F8, B1)
@@ -508,8 +411,8 @@ def _accumulate_by_tier(
     cube root can never pick a tier one order short: the kernel reads the
     tables without bounds checks).  The nodes go to the kernel by tier, then
     by size, so that its batches hold spheres of similar n_max
-    (:func:`_order_by_tier`).  Two compiled calls from Python rather than one
-    calling the other: a compiled caller is compiled again with the kernel
+    (:func:`_order_by_tier`, numpy).  Called from Python rather than from a
+    compiled caller: a compiled caller is compiled again with the kernel
     inlined, seconds of a first build's compile time for a microsecond a call.
     """
     x_sorted, w_sorted, panel_sorted, node_tier, n_panels = _order_by_tier(
@@ -535,57 +438,32 @@ def _accumulate_by_tier(
     )
 
 
-@kernel(F8_1D, F8_1D, I8_1D, I8, I8_1D)
 def _order_by_tier(
     x: np.ndarray, w: np.ndarray, node_panel: np.ndarray, nodes_per_panel: int, tiers: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, int]:
     """The nodes of :func:`_accumulate_by_tier` (given panel after panel)
     ordered by tier, then by size: their size parameters, weights, panels and
-    tiers, and the number of panels."""
+    tiers, and the number of panels.
+
+    numpy, not a compiled kernel: once per evaluation of new panels, on their
+    nodes, where numba's compile time (1.4 s on a first build with the sort it
+    used) is all it would cost.
+    """
     n_panels = x.shape[0] // nodes_per_panel
-    n_tiers = tiers.shape[0]
-    panel_tier = np.empty(n_panels, dtype=np.int64)
-    x_first = np.empty(n_panels)
-    count = np.empty(n_tiers + 1, dtype=np.int64)
-    count[:] = 0
-    for p in range(n_panels):
-        x_top = x[p * nodes_per_panel]
-        for j in range(p * nodes_per_panel, (p + 1) * nodes_per_panel):
-            x_top = max(x_top, x[j])
-        # The first tier that holds n_max + 2 orders (np.searchsorted, side "left").
-        need = int(_n_max(x_top)) + 2
-        t = 0
-        while t < n_tiers and tiers[t] < need:
-            t += 1
-        panel_tier[p] = t
-        if panel_tier[p] == n_tiers:
-            raise ValueError(
-                "a panel's spheres need more orders than the largest angular tier holds"
-            )
-        x_first[p] = x[p * nodes_per_panel]
-        count[panel_tier[p] + 1] += 1
+    by_panel = x[: n_panels * nodes_per_panel].reshape(n_panels, nodes_per_panel)
+    # The first tier that holds n_max + 2 orders of the panel's largest sphere.
+    need = _orders_needed(np.ascontiguousarray(by_panel.max(axis=1)))
+    panel_tier = np.searchsorted(tiers, need, side="left")
+    if np.any(panel_tier == tiers.shape[0]):
+        raise ValueError("a panel's spheres need more orders than the largest angular tier holds")
     # Panels are disjoint, and x grows along each panel's nodes, so ordering
     # the panels by tier, then by their first node, orders the nodes by tier,
-    # then by x: a stable sort by x, then a counting sort by tier.
-    for t in range(n_tiers):
-        count[t + 1] += count[t]
-    by_tier = np.empty(n_panels, dtype=np.int64)
-    for p in _stable_argsort(x_first):
-        by_tier[count[panel_tier[p]]] = p
-        count[panel_tier[p]] += 1
-    x_sorted = np.empty(x.shape[0])
-    w_sorted = np.empty(x.shape[0])
-    panel_sorted = np.empty(x.shape[0], dtype=np.int64)
-    node_tier = np.empty(x.shape[0], dtype=np.int64)
-    for k in range(n_panels):
-        p = by_tier[k]
-        for i in range(nodes_per_panel):
-            j = p * nodes_per_panel + i
-            x_sorted[k * nodes_per_panel + i] = x[j]
-            w_sorted[k * nodes_per_panel + i] = w[j]
-            panel_sorted[k * nodes_per_panel + i] = node_panel[j]
-            node_tier[k * nodes_per_panel + i] = panel_tier[p]
-    return x_sorted, w_sorted, panel_sorted, node_tier, n_panels
+    # then by x.
+    by_x = np.argsort(by_panel[:, 0], kind="stable")
+    by_tier = by_x[np.argsort(panel_tier[by_x], kind="stable")]
+    nodes = (by_tier[:, None] * nodes_per_panel + np.arange(nodes_per_panel)).ravel()
+    node_tier = np.repeat(panel_tier[by_tier], nodes_per_panel).astype(np.int64)
+    return x[nodes], w[nodes], node_panel[nodes], node_tier, int(n_panels)
 
 
 # ----------------------------------------------------------------------------

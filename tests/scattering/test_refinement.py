@@ -246,20 +246,36 @@ def test_accumulate_by_tier_rejects_spheres_beyond_the_largest_tier():
         )
 
 
-def test_compiled_sort_and_search_equal_numpys():
-    """The kernels' stable argsort and left search (written out to compile faster) give
-    numpy's results, ties, NaN and empty arrays included: the identity they replace."""
-    from dustoptics.scattering.refinement import _search_left, _stable_argsort
+def test_nodes_go_to_the_smallest_tier_that_holds_them_by_tier_then_size():
+    """_order_by_tier: each panel's nodes go, together and in order, to the smallest tier
+    with n_max + 2 orders of its largest sphere (n_max = x + 4.05 x^(1/3) + 2, Wiscombe's
+    rule before rounding); the nodes come ordered by tier, then by size parameter."""
+    from dustoptics.scattering.refinement import _order_by_tier
 
-    rng = np.random.default_rng(1)
-    for n in (0, 1, 2, 3, 7, 16, 33, 1000):
-        for trial in range(6):
-            keys = rng.integers(0, 5, n).astype(float)  # many ties: stability matters
-            if trial % 3 == 0 and n:
-                keys[rng.integers(0, n, max(1, n // 5))] = np.nan
-            if trial % 3 == 1:
-                keys = rng.normal(size=n)
-            np.testing.assert_array_equal(_stable_argsort(keys), np.argsort(keys, kind="stable"))
-            grid = np.sort(rng.normal(size=n))
-            for v in (-10.0, 0.0, 0.3, 10.0, np.nan, *grid[:3]):
-                assert _search_left(grid, v) == np.searchsorted(grid, v)
+    rng = np.random.default_rng(5)
+    npp, n_panels = 4, 40
+    edges = np.sort(10 ** rng.uniform(-1.0, 2.5, n_panels + 1))  # disjoint panels
+    inside = np.sort(rng.uniform(0.0, 1.0, (n_panels, npp)), axis=1)
+    x = (edges[:-1, None] + np.diff(edges)[:, None] * inside)[rng.permutation(n_panels)].ravel()
+    w = rng.uniform(size=x.size)
+    node_panel = np.repeat(np.arange(n_panels), npp)
+    tiers = np.array([32, 48, 64, 96, 128, 192, 400, 640])
+    xs, ws, panels, node_tier, n = _order_by_tier(x, w, node_panel, npp, tiers)
+    assert n == n_panels
+    np.testing.assert_array_equal(np.sort(xs), np.sort(x))
+    for j in range(x.size):  # each node keeps its weight and panel
+        i = int(np.flatnonzero(x == xs[j])[0])
+        assert (ws[j], panels[j]) == (w[i], node_panel[i])
+    for p in range(n_panels):
+        mine = panels == p
+        np.testing.assert_array_equal(xs[mine], x[p * npp : (p + 1) * npp])
+        top = x[(p + 1) * npp - 1]
+        need = top + 4.05 * np.cbrt(top) + 2.0 + 2.0  # rounded down (to the last bit)
+        t = node_tier[mine][0]
+        assert np.all(node_tier[mine] == t)
+        assert tiers[t] >= np.floor(need * (1.0 - 1e-12))  # holds the orders
+        assert t == 0 or tiers[t - 1] < np.floor(need * (1.0 + 1e-12))  # the smallest that does
+    key = node_tier * 1e6 + xs
+    assert np.all(np.diff(key) > 0)
+    with pytest.raises(ValueError, match="more orders than the largest angular tier"):
+        _order_by_tier(x, w, node_panel, npp, tiers[:3])
