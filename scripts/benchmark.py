@@ -1824,7 +1824,7 @@ def first_use_rows(lines: list[str], res: dict) -> None:
         f"{imp['import_s']:.2f} s  [{', '.join(f'{t:.2f}' for t in imp['times_s'])}]",
     )
     row(
-        "  xarray, dask, distributed, matplotlib, zarr imported",
+        f"  {', '.join(HEAVY_MODULES)} imported",
         ", ".join(imp["heavy_modules_imported"]) or "none",
     )
     ker = res["kernels"]
