@@ -37,7 +37,7 @@ __all__ = [
 ]
 
 #: About how long the first build's kernels take to compile on two idle cores: half of
-#: the 15-17 s of CPU time they took in one process on the benchmark's 2-core machine
+#: the 13 s of CPU time they took in one process on the benchmark's 2-core machine
 #: while it was busy (``scripts/benchmark.py --compile``); longer on a busy machine.
 #: Not printed: the build names each kernel as it is compiled. [s]
 COMPILE_ESTIMATE_S = "5-10"
