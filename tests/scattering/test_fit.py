@@ -332,3 +332,64 @@ def test_analytic_derivatives_equal_finite_differences() -> None:
             step[j] = 1e-6 * (high[j] - low[j])
             num = (spec.evaluate(mu, p + step) - spec.evaluate(mu, p - step)) / (2 * step[j])
             np.testing.assert_allclose(jac[..., j], num, rtol=1e-6, atol=1e-9 * np.abs(num).max())
+
+
+def test_path_walks_taken_together_equal_walks_one_row_at_a_time() -> None:
+    """The continuous path fits every anchor's walks as one batch a step.
+
+    Reference: the same walks taken one anchor and one row at a time (each row
+    from its neighbour's solution, the path of least total loss kept), written
+    out here.  Batched, a row's sums are rounded differently (a matrix-vector
+    product against a dot product), so the two agree to round-off, not to the bit.
+    """
+    from dustoptics.scattering.fit import (
+        _MODELS,
+        _POLISH_ITERATIONS,
+        _continuous_path,
+        _levenberg_marquardt,
+        _to_p,
+        _to_u,
+    )
+
+    table = read_hdf5(TABLES / "blue-moons" / "blue-moons.nc")
+    spec = _MODELS["dhg-costa2021"]
+    theta = np.asarray(table.theta_deg)[::8]
+    theta = np.append(theta, 180.0) if theta[-1] != 180.0 else theta
+    phase = np.asarray(table.phase)[:, np.searchsorted(table.theta_deg, theta)]
+    mu = np.cos(np.deg2rad(theta))
+    w = tp._linear_theta_weights(theta)
+    sqrt_w = np.sqrt(w / w.sum())
+    n = phase.shape[0]
+    # Each row's own start: the moment start, fitted alone (as fit_phase screens it).
+    moments = (phase * (2 * np.pi * w)) @ np.stack(
+        [mu**0, mu, 1.5 * mu**2 - 0.5, 2.5 * mu**3 - 1.5 * mu]
+    ).T
+    with np.errstate(all="ignore"):
+        best_u, own = _levenberg_marquardt(
+            spec, mu, w, sqrt_w, phase, _to_u(spec, spec.starts(moments)[0]), 150
+        )
+        order = np.argsort(np.asarray(table.wavelength_nm)[::-1], kind="stable")  # not 0..n-1
+        got_u, got_cost = _continuous_path(spec, mu, w, sqrt_w, phase, order, best_u)
+        best = None
+        for a in sorted({0, n - 1, int(np.argmin(own[order]))}):
+            u, cost = best_u.copy(), own.copy()
+            for path in (range(a + 1, n), range(a - 1, -1, -1)):
+                prev = order[a]
+                for pos in path:
+                    i = order[pos]
+                    ui, ci = _levenberg_marquardt(
+                        spec,
+                        mu,
+                        w,
+                        sqrt_w,
+                        phase[i : i + 1],
+                        u[prev : prev + 1],
+                        _POLISH_ITERATIONS,
+                    )
+                    u[i], cost[i] = ui[0], ci[0]
+                    prev = i
+            if best is None or cost.sum() < best[1].sum():
+                best = (u, cost)
+    assert best is not None
+    np.testing.assert_allclose(_to_p(spec, got_u), _to_p(spec, best[0]), rtol=0, atol=1e-12)
+    np.testing.assert_allclose(got_cost, best[1], rtol=1e-9, atol=1e-18)
