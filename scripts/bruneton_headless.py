@@ -50,6 +50,13 @@ Every texture size matters, not only near the Sun:
   (NU 64, S 16) show it: from MU 32 to his 128 that point changes by 11-17 %, the same row
   30-42 deg from the Sun by 6-8 %, the rows 60 deg and more from the zenith by at most 3 %.
   Never shrink MU below his 128 (which the export keeps).
+- ``SCATTERING_TEXTURE_MU_S_SIZE``.  The same clamping along the Sun's zenith angle: the last
+  texel holds a Sun at the zenith, where ``nu`` equals the view's ``mu`` (the zenith view looks
+  into the Sun).  With 16 the Sun 60 deg high is interpolated half and half between Suns 48.5
+  and 90 deg high: his sky came out 1.1 to 16 times ours (12 orders, NU 64, S 48, R/MU/MU_S
+  8/32/16), bluer, as the dust's forward peak is at 440 nm.  At his 32 (the export's) the
+  last texel but one holds a Sun 59.9 deg high, so Suns higher than that are interpolated
+  with the zenith Sun's texel; not measured here.
 - ``SCATTERING_TEXTURE_NU_SIZE`` and the scattering-density ``SAMPLE_COUNT``.  The orders >= 2
   are stored on NU slices and read back linearly in ``nu`` when the next order's scattering
   density integrates them: a forward peak narrower than a slice is spread over it, which adds
