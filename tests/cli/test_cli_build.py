@@ -385,7 +385,11 @@ def test_disort_and_libradtran_from_a_configuration_that_asks_for_the_expansion(
     table = do.open_table(folder / "small-dust.nc")
     assert table.provenance.inputs["optics"]["expansion"] is True
     np.testing.assert_allclose(table.alpha1[:, 0], 1.0)
-    np.testing.assert_allclose(table.alpha1[:, 1], 3 * table.g, rtol=1e-6)
+    # alpha1_1 = 3 g, each side within its own error estimate: g converges at rtol, the
+    # coefficients at rtol/100 (alpha1_l / (2 l + 1) bounded by expansion_error_estimate).
+    bound = 3 * (table.cross_section_error_estimate + table.expansion_error_estimate)
+    assert np.all(np.abs(table.alpha1[:, 1] - 3 * table.g) <= bound)
+    assert np.all(bound < 1e-4)
 
 
 @pytest.mark.parametrize(
