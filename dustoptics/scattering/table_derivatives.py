@@ -19,7 +19,7 @@ S[Y] = sum_i J_i n(r_i) Y(r_i) has the exact derivatives
 - dS/dm = sum_i J_i n(r_i) dY/dm(r_i), with dY/dn and dY/dk of each sphere
   from the recurrences of :mod:`dustoptics.scattering.mie_derivatives` (the
   table's own Mie coefficients, and S1, S2 with their m derivatives in one
-  pass per sphere: ``mie_derivatives._accumulate_blocked``); a
+  pass per sphere: ``mie_derivatives_blocked._accumulate_blocked``); a
   parameter q of the refractive index (``"n"``, ``"k"``, a mixture's volume
   fraction) moves m along dm/dq at each wavelength, so
   dS/dq = Re(dm/dq) dS/dn + Im(dm/dq) dS/dk (the chain rule);
@@ -73,12 +73,11 @@ from dustoptics.particles.sizedist_derivatives import (
 )
 from dustoptics.scattering import mie
 from dustoptics.scattering.expansion import greek_coefficients
-from dustoptics.scattering.mie_derivatives import (
-    _accumulate,
+from dustoptics.scattering.mie_derivatives import _accumulate, _series_lengths
+from dustoptics.scattering.mie_derivatives_blocked import (
     _accumulate_blocked,
     _legendre_evaluate_rows,
     _legendre_project_rows,
-    _series_lengths,
 )
 from dustoptics.scattering.quadrature import (
     QuadratureDiagnostics,
