@@ -370,6 +370,9 @@ def test_import_compiles_nothing_and_imports_no_heavy_package():
 def test_numbas_error_highlighting_is_off_unless_the_user_chose_colours(monkeypatch, scheme):
     """``import dustoptics`` turns numba's error-message colouring off (a twentieth of the
     compile time), unless the user chose a colour scheme."""
+    if scheme is not None:
+        # numba colours its messages only with colorama; without it every scheme is NOP.
+        pytest.importorskip("colorama")
     monkeypatch.delenv(_numba_cache.HIGHLIGHTING, raising=False)
     if scheme is None:
         monkeypatch.delenv("NUMBA_COLOR_SCHEME", raising=False)
