@@ -893,7 +893,7 @@ def measure_fits(table, repeats: int) -> dict:
 # --------------------------------------------------------------------------- report
 
 
-def measure_rt(dust: DustOptics, repeats: int, quick: bool) -> dict:
+def measure_rt(dust: DustOptics, repeats: int, quick: bool, *, with_scatrs: bool = True) -> dict:
     """Step 7: the default table with the whole scattering matrix and every
     expansion coefficient against the phase function alone (interleaved warm
     calls, best of each), and scatrs computing the same (Greek coefficients
@@ -903,7 +903,7 @@ def measure_rt(dust: DustOptics, repeats: int, quick: bool) -> dict:
     three wavelengths; scatrs with ``refine_backscatter=True``, at rtol 1e-5
     and 1e-6 (1e-6 alone with ``quick``); the speed-up at matched accuracy
     against its fastest run at least as accurate as dustoptics (else its most
-    accurate)."""
+    accurate). ``with_scatrs=False`` (``--rt`` alone): the first part only."""
     wl, theta = wavelength_grid(N_WAVELENGTHS_DEFAULT), theta_grid(N_THETA_DEFAULT)
     n = max(repeats, 2)
     plain_t, full_t = [], []
@@ -923,6 +923,8 @@ def measure_rt(dust: DustOptics, repeats: int, quick: bool) -> dict:
         "n_order_max": int(full.alpha1.shape[1]),
         "max_matrix_error_estimate": float(full.matrix_error_estimate.max()),
     }
+    if not with_scatrs:
+        return out
     try:
         import scatrs
     except ImportError:
@@ -1943,6 +1945,53 @@ def format_derivatives(res: dict, mach: dict) -> str:
     return "\n".join(lines)
 
 
+TARGET_RT_RATIO = 1.5
+
+
+def format_rt(res: dict, mach: dict) -> str:
+    """Section 7 alone (``--rt``): the first part, and scatrs with ``--scatrs``."""
+    lines = ["dustoptics radiative-transfer optics benchmark", "=" * 46]
+
+    def row(label: str, value: str) -> None:
+        lines.append(f"  {label:<62} {value}")
+
+    row(
+        "load average at start (1, 5, 15 min)",
+        ", ".join(f"{x:.2f}" for x in mach["load_average"]) if mach["load_average"] else "n/a",
+    )
+    lines.append("")
+    lines.append("7. Radiative-transfer optics: matrix + expansion vs phase only (interleaved)")
+    lines.append("-" * 50)
+    for key, label in (
+        ("phase_only_times_s", "phase function only"),
+        (
+            "matrix_expansion_times_s",
+            f"F11..F34 + all expansion coefficients ({res['n_order_max']} orders)",
+        ),
+    ):
+        times = res[key]
+        row(label, f"best {min(times):.3f} s  [{', '.join(f'{t:.3f}' for t in times)}]")
+    if res.get("scatrs"):
+        row(
+            "dustoptics default: max error vs rtol-1e-7 reference", f"{res['dustoptics_error']:.1e}"
+        )
+        for e in res["scatrs"]:
+            row(
+                f"scatrs {res['scatrs_version']} rtol {e['rtol']:g}",
+                f"{e['time_s']:.3f} s  error {e['error']:.1e}",
+            )
+        mt = res["scatrs_matched"]
+        row("speed-up vs scatrs at matched accuracy (target >= 10x)", f"{mt['speedup']:.1f}x")
+    lines.append("")
+    lines.append("Targets (issues 17, 30)")
+    ok = res["ratio"] <= TARGET_RT_RATIO
+    lines.append(
+        f"  {'PASS' if ok else 'FAIL'}  "
+        f"{'matrix + expansion vs phase only <= 1.5x (best of each)':<62} {res['ratio']:.2f}x"
+    )
+    return "\n".join(lines)
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
         description="Benchmark dustoptics against miepython baselines (see the module docstring)."
@@ -1978,7 +2027,29 @@ def main(argv: list[str] | None = None) -> int:
         action="store_true",
         help="only the derivative rows (section 11: r_eff, v_eff, n, k vs the table alone)",
     )
+    parser.add_argument(
+        "--rt",
+        action="store_true",
+        help="only section 7's first part (matrix + expansion vs phase only, interleaved); "
+        "with --scatrs also scatrs (~15 min)",
+    )
+    parser.add_argument("--scatrs", action="store_true", help="with --rt: also time scatrs")
     args = parser.parse_args(argv)
+    if args.scatrs and not args.rt:
+        parser.error("--scatrs goes with --rt")
+    if args.rt:
+        t0 = time.perf_counter()
+        mach = machine_info()
+        repeats = args.repeats if args.repeats is not None else 5
+        rt_res = measure_rt(DustOptics(), repeats, args.quick, with_scatrs=args.scatrs)
+        print(format_rt(rt_res, mach))
+        print(f"(benchmark ran {time.perf_counter() - t0:.0f} s)")
+        if args.json is not None:
+            args.json.write_text(
+                json.dumps({"machine": mach, "rt_optics": rt_res}, indent=2, sort_keys=True) + "\n"
+            )
+            log(f"wrote {args.json}")
+        return 0
     if args.derivatives:
         t0 = time.perf_counter()
         mach = machine_info()
