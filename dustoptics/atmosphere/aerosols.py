@@ -246,102 +246,63 @@ class AerosolType:
         return ExponentialProfile(scale_height_m=z * -math.expm1(-h / z))
 
 
-def _type(
-    name: str,
-    description: str,
-    densities: dict[str, float],
-    scale_height_km: float,
-    table5: tuple[float, float, float],
-    mixing_height_km: float = 2.0,
-) -> AerosolType:
-    return AerosolType(
-        name=name,
-        description=description,
-        number_density_per_cm3=MappingProxyType(densities),
-        scale_height_m=scale_height_km * 1e3,
-        mixing_height_m=mixing_height_km * 1e3,
-        table5_optical_depth=table5[0],
-        table5_angstrom=(table5[1], table5[2]),
-    )
+#: What each OPAC aerosol type stands for (Hess et al. 1998, Table 4).
+_DESCRIPTIONS: Final = {
+    "continental-clean": "remote continental areas, low anthropogenic influence",
+    "continental-average": "continental areas with anthropogenic influence",
+    "continental-polluted": "areas strongly polluted by man-made activities",
+    "urban": "strong pollution in urban areas",
+    "desert": "desert aerosol, without distinguishing the source regions",
+    "maritime-clean": "undisturbed remote maritime conditions",
+    "maritime-polluted": "maritime with anthropogenic influence",
+    "maritime-tropical": "tropical oceans, low wind speeds",
+    "arctic": "Arctic aerosol (Arctic haze excluded)",
+    "antarctic": "Antarctic aerosol",
+}
 
+#: Hess et al. (1998), Table 4: the components' number densities at the ground [cm^-3],
+#: the scale height ``Z`` [km] and the top of the mixing layer ``H`` [km] of each type.
+_TABLE4: Final = {
+    "continental-clean": ({"waso": 2600.0, "inso": 0.15}, 8.0, 2.0),
+    "continental-average": ({"waso": 7000.0, "inso": 0.4, "soot": 8300.0}, 8.0, 2.0),
+    "continental-polluted": ({"waso": 15700.0, "inso": 0.6, "soot": 34300.0}, 8.0, 2.0),
+    "urban": ({"waso": 28000.0, "inso": 1.5, "soot": 130000.0}, 8.0, 2.0),
+    "desert": ({"waso": 2000.0, "minm": 269.5, "miam": 30.5, "micm": 0.142}, 2.0, 6.0),
+    "maritime-clean": ({"waso": 1500.0, "ssam": 20.0, "sscm": 3.2e-3}, 1.0, 2.0),
+    "maritime-polluted": ({"waso": 3800.0, "ssam": 20.0, "sscm": 3.2e-3, "soot": 5180.0}, 1.0, 2.0),
+    "maritime-tropical": ({"waso": 590.0, "ssam": 10.0, "sscm": 1.3e-3}, 1.0, 2.0),
+    "arctic": ({"waso": 1300.0, "inso": 0.01, "ssam": 1.9, "soot": 5300.0}, 99.0, 2.0),
+    "antarctic": ({"suso": 42.9, "ssam": 0.047, "mitr": 0.0053}, 8.0, 2.0),
+}
+
+#: Hess et al. (1998), Table 5, at 80 % humidity: the optical depth at 550 nm and the
+#: Angstrom exponents between 350 and 500 nm and between 500 and 800 nm of each type. [-]
+_TABLE5: Final = {
+    "continental-clean": (0.064, 1.10, 1.42),
+    "continental-average": (0.151, 1.11, 1.42),
+    "continental-polluted": (0.327, 1.13, 1.45),
+    "urban": (0.643, 1.14, 1.43),
+    "desert": (0.286, 0.20, 0.17),
+    "maritime-clean": (0.096, 0.12, 0.08),
+    "maritime-polluted": (0.117, 0.41, 0.35),
+    "maritime-tropical": (0.056, 0.07, 0.04),
+    "arctic": (0.063, 0.85, 0.89),
+    "antarctic": (0.072, 0.34, 0.73),
+}
 
 #: OPAC's ten aerosol types (Hess et al. 1998, Tables 4 and 5).
 AEROSOL_TYPES: Final = MappingProxyType(
     {
-        t.name: t
-        for t in (
-            _type(
-                "continental-clean",
-                "remote continental areas, low anthropogenic influence",
-                {"waso": 2600.0, "inso": 0.15},
-                8.0,
-                (0.064, 1.10, 1.42),
-            ),
-            _type(
-                "continental-average",
-                "continental areas with anthropogenic influence",
-                {"waso": 7000.0, "inso": 0.4, "soot": 8300.0},
-                8.0,
-                (0.151, 1.11, 1.42),
-            ),
-            _type(
-                "continental-polluted",
-                "areas strongly polluted by man-made activities",
-                {"waso": 15700.0, "inso": 0.6, "soot": 34300.0},
-                8.0,
-                (0.327, 1.13, 1.45),
-            ),
-            _type(
-                "urban",
-                "strong pollution in urban areas",
-                {"waso": 28000.0, "inso": 1.5, "soot": 130000.0},
-                8.0,
-                (0.643, 1.14, 1.43),
-            ),
-            _type(
-                "desert",
-                "desert aerosol, without distinguishing the source regions",
-                {"waso": 2000.0, "minm": 269.5, "miam": 30.5, "micm": 0.142},
-                2.0,
-                (0.286, 0.20, 0.17),
-                mixing_height_km=6.0,
-            ),
-            _type(
-                "maritime-clean",
-                "undisturbed remote maritime conditions",
-                {"waso": 1500.0, "ssam": 20.0, "sscm": 3.2e-3},
-                1.0,
-                (0.096, 0.12, 0.08),
-            ),
-            _type(
-                "maritime-polluted",
-                "maritime with anthropogenic influence",
-                {"waso": 3800.0, "ssam": 20.0, "sscm": 3.2e-3, "soot": 5180.0},
-                1.0,
-                (0.117, 0.41, 0.35),
-            ),
-            _type(
-                "maritime-tropical",
-                "tropical oceans, low wind speeds",
-                {"waso": 590.0, "ssam": 10.0, "sscm": 1.3e-3},
-                1.0,
-                (0.056, 0.07, 0.04),
-            ),
-            _type(
-                "arctic",
-                "Arctic aerosol (Arctic haze excluded)",
-                {"waso": 1300.0, "inso": 0.01, "ssam": 1.9, "soot": 5300.0},
-                99.0,
-                (0.063, 0.85, 0.89),
-            ),
-            _type(
-                "antarctic",
-                "Antarctic aerosol",
-                {"suso": 42.9, "ssam": 0.047, "mitr": 0.0053},
-                8.0,
-                (0.072, 0.34, 0.73),
-            ),
+        name: AerosolType(
+            name=name,
+            description=description,
+            number_density_per_cm3=MappingProxyType(dict(_TABLE4[name][0])),
+            scale_height_m=_TABLE4[name][1] * 1e3,
+            mixing_height_m=_TABLE4[name][2] * 1e3,
+            table5_optical_depth=_TABLE5[name][0],
+            table5_angstrom=(_TABLE5[name][1], _TABLE5[name][2]),
         )
+        for name, description in _DESCRIPTIONS.items()
     }
 )
 
