@@ -19,13 +19,12 @@ from pathlib import Path
 from typing import Any
 
 from dustoptics.io import register_format
-from dustoptics.io._atomic import safe_stem, write_files
 from dustoptics.io.textures.phase_texture import (
     DEFAULT_MAX_DIMENSION,
     PhaseTexture,
     check_dimensions,
     metadata_json,
-    phase_texture,
+    write_container,
 )
 from dustoptics.io.textures.raw import DEFAULT_N_ANGLES
 
@@ -115,8 +114,12 @@ def write_exr(
     FileExistsError
         The file exists and ``overwrite`` is False.
     """
-    texture = phase_texture(
+    return write_container(
         table,
+        out_dir_or_path,
+        suffix=".exr",
+        encode=lambda texture, target: {target: _writer(texture)},
+        overwrite=overwrite,
         layout=layout,
         sampling=sampling,
         n_angles=n_angles,
@@ -126,11 +129,6 @@ def write_exr(
         min_band_coverage=min_band_coverage,
         max_dimension=max_dimension,
     )
-    write = _writer(texture)
-    out = Path(out_dir_or_path)
-    name = f"{safe_stem(table.name)}_phase_{layout}_{sampling}_{precision}.exr"
-    target = out if out.suffix == ".exr" else out / name
-    return write_files({target: write}, overwrite=overwrite)
 
 
 register_format("exr", write_exr)

@@ -37,13 +37,12 @@ from typing import Any
 import numpy as np
 
 from dustoptics.io import register_format
-from dustoptics.io._atomic import safe_stem, write_files
 from dustoptics.io.textures.phase_texture import (
     DEFAULT_MAX_DIMENSION,
     PhaseTexture,
     check_dimensions,
     metadata_json,
-    phase_texture,
+    write_container,
 )
 from dustoptics.io.textures.raw import DEFAULT_N_ANGLES
 
@@ -207,8 +206,12 @@ def write_ktx2(
     FileExistsError
         The file exists and ``overwrite`` is False.
     """
-    texture = phase_texture(
+    return write_container(
         table,
+        out_dir_or_path,
+        suffix=".ktx2",
+        encode=lambda texture, target: {target: ktx2_bytes(texture)},
+        overwrite=overwrite,
         layout=layout,
         sampling=sampling,
         n_angles=n_angles,
@@ -218,11 +221,6 @@ def write_ktx2(
         min_band_coverage=min_band_coverage,
         max_dimension=max_dimension,
     )
-    data = ktx2_bytes(texture)
-    out = Path(out_dir_or_path)
-    name = f"{safe_stem(table.name)}_phase_{layout}_{sampling}_{precision}.ktx2"
-    target = out if out.suffix == ".ktx2" else out / name
-    return write_files({target: data}, overwrite=overwrite)
 
 
 register_format("ktx2", write_ktx2)

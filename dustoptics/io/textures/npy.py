@@ -21,11 +21,35 @@ from typing import Any
 import numpy as np
 
 from dustoptics.io import register_format
-from dustoptics.io._atomic import safe_stem, write_files
-from dustoptics.io.textures.phase_texture import DEFAULT_MAX_DIMENSION, phase_texture
+from dustoptics.io._atomic import Content
+from dustoptics.io.textures.phase_texture import (
+    DEFAULT_MAX_DIMENSION,
+    PhaseTexture,
+    write_container,
+)
 from dustoptics.io.textures.raw import DEFAULT_N_ANGLES
 
 __all__ = ["write_npy"]
+
+
+def _files(texture: PhaseTexture, npy_path: Path) -> dict[Path, Content]:
+    """The ``.npy`` file of ``texture`` at ``npy_path`` and its ``.json`` sidecar beside it."""
+    buffer = io.BytesIO()
+    np.save(buffer, texture.pixels, allow_pickle=False)
+    array_bytes = buffer.getvalue()
+    sidecar = dict(texture.metadata)
+    sidecar.update(
+        {
+            "file": npy_path.name,
+            "sha256": hashlib.sha256(array_bytes).hexdigest(),
+            "dtype": texture.pixels.dtype.str,
+            "shape": list(texture.pixels.shape),
+            "order": "C: (row, angle column, channel), channel fastest",
+            "channel_names": list(texture.channel_names),
+        }
+    )
+    text = json.dumps(sidecar, indent=2, sort_keys=True, allow_nan=False, ensure_ascii=True) + "\n"
+    return {npy_path: array_bytes, npy_path.with_suffix(".json"): text.encode("ascii")}
 
 
 def write_npy(
@@ -61,8 +85,13 @@ def write_npy(
     list of pathlib.Path
         ``[<stem>.npy, <stem>.json]``.
     """
-    texture = phase_texture(
+    return write_container(
         table,
+        out_dir,
+        suffix=".npy",
+        encode=_files,
+        overwrite=overwrite,
+        accept_file_path=False,
         layout=layout,
         sampling=sampling,
         n_angles=n_angles,
@@ -71,27 +100,6 @@ def write_npy(
         colour=colour,
         min_band_coverage=min_band_coverage,
         max_dimension=max_dimension,
-    )
-    buffer = io.BytesIO()
-    np.save(buffer, texture.pixels, allow_pickle=False)
-    array_bytes = buffer.getvalue()
-    stem = safe_stem(f"{table.name}_phase_{layout}_{sampling}_{precision}")
-    root = Path(out_dir)
-    npy_path, json_path = root / f"{stem}.npy", root / f"{stem}.json"
-    sidecar = dict(texture.metadata)
-    sidecar.update(
-        {
-            "file": npy_path.name,
-            "sha256": hashlib.sha256(array_bytes).hexdigest(),
-            "dtype": texture.pixels.dtype.str,
-            "shape": list(texture.pixels.shape),
-            "order": "C: (row, angle column, channel), channel fastest",
-            "channel_names": list(texture.channel_names),
-        }
-    )
-    text = json.dumps(sidecar, indent=2, sort_keys=True, allow_nan=False, ensure_ascii=True) + "\n"
-    return write_files(
-        {npy_path: array_bytes, json_path: text.encode("ascii")}, overwrite=overwrite
     )
 
 

@@ -2,7 +2,9 @@
 
 :func:`phase_texture` turns a table into an image and the metadata that says
 how to read it; the container modules write it (:mod:`~dustoptics.io.textures.ktx2`,
-:mod:`~dustoptics.io.textures.exr`, :mod:`~dustoptics.io.textures.npy`).
+:mod:`~dustoptics.io.textures.exr`, :mod:`~dustoptics.io.textures.npy`), each
+through :func:`write_container` (the texture, the file's name, one atomic write)
+with its own encoder.
 
 Layouts
 -------
@@ -49,13 +51,17 @@ Everything is checked before anything is written.
 from __future__ import annotations
 
 import json
+import os
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from dustoptics._validation import check_choice
 from dustoptics.colour import channel_phase
+from dustoptics.io._atomic import Content, safe_stem, write_files
 from dustoptics.io.shaders.common import choose_channels
 from dustoptics.io.textures.raw import (
     DEFAULT_N_ANGLES,
@@ -74,6 +80,7 @@ __all__ = [
     "check_dimensions",
     "metadata_json",
     "phase_texture",
+    "write_container",
 ]
 
 #: Image layouts :func:`phase_texture` makes.
@@ -345,3 +352,61 @@ def phase_texture(
 def metadata_json(texture: PhaseTexture) -> str:
     """The metadata as canonical JSON text (sorted keys, ASCII, no NaN)."""
     return json.dumps(texture.metadata, sort_keys=True, allow_nan=False, ensure_ascii=True)
+
+
+def write_container(
+    table: Any,
+    out_dir_or_path: str | os.PathLike[str],
+    *,
+    suffix: str,
+    encode: Callable[[PhaseTexture, Path], Mapping[Path, Content]],
+    overwrite: bool,
+    accept_file_path: bool = True,
+    **options: Any,
+) -> list[Path]:
+    """Write a table's phase texture into a container's files, atomically.
+
+    What every container writer does (:func:`~dustoptics.io.textures.ktx2.write_ktx2`,
+    :func:`~dustoptics.io.textures.exr.write_exr`, :func:`~dustoptics.io.textures.npy.write_npy`):
+    make the texture with :func:`phase_texture` (so its errors come before anything is
+    written), name the file ``<table name>_phase_<layout>_<sampling>_<precision><suffix>``,
+    let the container encode it, and write every file in one atomic step
+    (:func:`dustoptics.io._atomic.write_files`).
+
+    Parameters
+    ----------
+    table : dustoptics.table.Table
+        The table.
+    out_dir_or_path : path-like
+        Directory (created if missing) that receives the named file; with
+        ``accept_file_path``, a path ending in ``suffix`` is the file itself.
+    suffix : str
+        The container's file-name suffix, with its dot (``".ktx2"``).
+    encode : callable
+        ``encode(texture, path) -> {path: content}``: the container's files, given the
+        texture and the main file's path; a content is the file's bytes or a callable
+        that writes the file at the path it is given.
+    overwrite : bool
+        Replace existing files.
+    accept_file_path : bool, default True
+        Whether ``out_dir_or_path`` may name the file itself.
+    **options
+        The keyword arguments of :func:`phase_texture` (``layout``, ``sampling``, ...).
+
+    Returns
+    -------
+    list of pathlib.Path
+        The written files, in the order ``encode`` gives them.
+
+    Raises
+    ------
+    ValueError
+        As :func:`phase_texture` (before anything is written).
+    FileExistsError
+        A file exists and ``overwrite`` is False (nothing is written).
+    """
+    texture = phase_texture(table, **options)
+    out = Path(out_dir_or_path)
+    name = f"{safe_stem(table.name)}_phase_{texture.layout}_{texture.sampling}_{texture.precision}"
+    target = out if accept_file_path and out.suffix == suffix else out / f"{name}{suffix}"
+    return write_files(encode(texture, target), overwrite=overwrite)

@@ -295,6 +295,24 @@ def test_same_bytes_and_no_overwrite(tmp_path) -> None:
             writer(TABLE, tmp_path / "a", layout="wavelength", sampling="cos")
 
 
+def test_file_names_and_targets(tmp_path) -> None:
+    """One naming rule for every container; a path with the container's suffix is the file
+    itself (KTX2, OpenEXR), while the .npy writer always takes a directory (two files)."""
+    stem = "mars_dust_1_phase_wavelength_cos_float16"
+    table = TABLE.replace(name="mars dust/1")
+    options = {"layout": "wavelength", "sampling": "cos", "precision": "float16"}
+    for container, writer in WRITERS.items():
+        paths = writer(table, tmp_path / container, **options)
+        assert paths[0] == tmp_path / container / f"{stem}.{container}"
+    assert write_ktx2(TABLE, tmp_path / "t.ktx2") == [tmp_path / "t.ktx2"]
+    assert write_exr(TABLE, tmp_path / "t.exr") == [tmp_path / "t.exr"]
+    root = tmp_path / "t.npy"
+    assert write_npy(TABLE, root) == [
+        root / "hg_phase_rgb_theta_float32.npy",
+        root / "hg_phase_rgb_theta_float32.json",
+    ]
+
+
 def test_registry_and_npy_sidecar(tmp_path) -> None:
     assert {"ktx2", "exr", "npy"} <= set(FORMATS)
     paths = write(
