@@ -749,6 +749,16 @@ def draine2003_asymmetry(*, g: ArrayLike, alpha: ArrayLike) -> FloatOrArray:
     return float_or_array(_draine_mean(gg, a))
 
 
+def _hg_draine_parameters(g_hg: Any, g_d: Any, alpha: Any, w_d: Any) -> dict[str, Any]:
+    """The blend's four parameters, each checked, by name (for :func:`_broadcast`)."""
+    return {
+        "g_hg": _g("g_hg", g_hg),
+        "g_d": _g("g_d", g_d),
+        "alpha": _draine_alpha(alpha),
+        "w_d": mixing_weight("w_d", w_d),
+    }
+
+
 def hg_draine_jendersie_deon2023(
     mu: ArrayLike,
     *,
@@ -790,13 +800,7 @@ def hg_draine_jendersie_deon2023(
        doi:10.1145/3587421.3595409.
     """
     m = _mu(mu)
-    m, gh, gd, a, w = _broadcast(
-        mu=m,
-        g_hg=_g("g_hg", g_hg),
-        g_d=_g("g_d", g_d),
-        alpha=_draine_alpha(alpha),
-        w_d=mixing_weight("w_d", w_d),
-    )
+    m, gh, gd, a, w = _broadcast(mu=m, **_hg_draine_parameters(g_hg, g_d, alpha, w_d))
     return float_or_array((1.0 - w) * _hg(m, gh) + w * _draine(m, gd, a))
 
 
@@ -808,12 +812,7 @@ def hg_draine_jendersie_deon2023_asymmetry(
     ``<mu> = (1 - w_D) g_HG + w_D <mu>_Draine(g_D, alpha)``, with the Draine
     mean cosine of :func:`draine2003_asymmetry`. [-]
     """
-    gh, gd, a, w = _broadcast(
-        g_hg=_g("g_hg", g_hg),
-        g_d=_g("g_d", g_d),
-        alpha=_draine_alpha(alpha),
-        w_d=mixing_weight("w_d", w_d),
-    )
+    gh, gd, a, w = _broadcast(**_hg_draine_parameters(g_hg, g_d, alpha, w_d))
     return float_or_array((1.0 - w) * gh + w * _draine_mean(gd, a))
 
 
