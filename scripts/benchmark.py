@@ -5,6 +5,7 @@ Usage::
     python scripts/benchmark.py [--quick] [--json OUT.json] [--repeats N]
     python scripts/benchmark.py --sweep [--quick] [--json OUT.json]
     python scripts/benchmark.py --sky [--json OUT.json]
+    python scripts/benchmark.py --preview [--json OUT.json]
     python scripts/benchmark.py --compile [--json OUT.json]
     python scripts/benchmark.py --derivatives [--json OUT.json]
 
@@ -134,7 +135,8 @@ the default table: best of N.
    * the engine preview's cost (issue 27 item 3): the CPU time of this
      process for ``preview_sky`` (the exact sky and the approximated one,
      ``--phase fit:dhg`` and ``--rgb``) over that of one ``sky_radiance``
-     (orders and lines of sight, Sun at 30 deg), interleaved, the median of 3.
+     (orders and lines of sight, Sun at 30 deg), interleaved, the median of 3;
+     ``--preview`` runs these rows alone (about a minute).
 
 10. First use (``--compile`` runs this section alone, a few minutes on 2
     cores): ``import dustoptics`` in 5 fresh interpreters (3 with
@@ -1641,6 +1643,46 @@ def measure_preview_cost(medium: object, elevation: float, repeats: int = 3) -> 
     }
 
 
+def measure_preview_only() -> dict:
+    """Section 9's engine-preview rows alone (``--preview``: about a minute)."""
+    from dustoptics.sky import Medium
+    from dustoptics.sky.compare import mars_sky_atmosphere
+
+    log("sky: building the hybrid Mars dust table and its medium (not timed)")
+    medium = Medium.from_atmosphere(mars_sky_atmosphere("hybrid", optical_depth=0.5))
+    return measure_preview_cost(medium, 30.0)
+
+
+def format_preview(res: dict, mach: dict) -> str:
+    lines = [
+        "dustoptics engine preview cost (section 9 rows; hybrid Mars dust, tau 0.5, Sun at 30 deg)",
+        "  load average at start (1, 5, 15 min): "
+        + (", ".join(f"{x:.2f}" for x in mach["load_average"]) if mach["load_average"] else "n/a"),
+    ]
+    lines += preview_rows(res)
+    return "\n".join(lines)
+
+
+def preview_rows(pv: dict) -> list[str]:
+    """Section 9's engine-preview rows and their target."""
+    lines = ["", "Engine preview cost (issue 27 item 3; process CPU, median of 3, interleaved)"]
+    lines.append(
+        f"  {'one sky render: sky_radiance (orders + lines of sight)':<62} "
+        f"{pv['sky_render_cpu_s']:.2f} s"
+    )
+    for k, n in pv["preview_renders"].items():
+        lines.append(
+            f"  {f'preview_sky, {k} (exact + approximated sky)':<62} "
+            f"{pv['preview_cpu_s'][k]:.2f} s = {n:.2f} renders"
+        )
+    for k, n in pv["preview_renders"].items():
+        lines.append(
+            f"  {'PASS' if n <= SKY_TARGET_PREVIEW_RENDERS else 'FAIL'}  "
+            f"{f'preview {k} <= {SKY_TARGET_PREVIEW_RENDERS:g} sky renders':<62} {n:.2f}"
+        )
+    return lines
+
+
 def measure_sky(repeats: int = 2) -> dict:
     """Section 9: one atmosphere's precomputation, then a 512 x 512 fisheye (warm)."""
     from dustoptics.sky import Medium, solve_orders
@@ -1780,24 +1822,8 @@ def format_sky(res: dict, mach: dict) -> str:
     )
     for label, ok, value in checks:
         lines.append(f"  {'PASS' if ok else 'FAIL'}  {label:<62} {value}")
-    pv = res.get("preview")
-    if pv:
-        lines.append("")
-        lines.append("Engine preview cost (issue 27 item 3; process CPU, median of 3, interleaved)")
-        row(
-            "one sky render: sky_radiance (orders + lines of sight)",
-            f"{pv['sky_render_cpu_s']:.2f} s",
-        )
-        for k, n in pv["preview_renders"].items():
-            row(
-                f"preview_sky, {k} (exact + approximated sky)",
-                f"{pv['preview_cpu_s'][k]:.2f} s = {n:.2f} renders",
-            )
-        for k, n in pv["preview_renders"].items():
-            lines.append(
-                f"  {'PASS' if n <= SKY_TARGET_PREVIEW_RENDERS else 'FAIL'}  "
-                f"{f'preview {k} <= {SKY_TARGET_PREVIEW_RENDERS:g} sky renders':<62} {n:.2f}"
-            )
+    if res.get("preview"):
+        lines += preview_rows(res["preview"])
     return "\n".join(lines)
 
 
@@ -2017,6 +2043,11 @@ def main(argv: list[str] | None = None) -> int:
         help="only the sky rows (section 9, a few minutes on 2 cores)",
     )
     parser.add_argument(
+        "--preview",
+        action="store_true",
+        help="only section 9's engine-preview cost rows (about a minute on 2 cores)",
+    )
+    parser.add_argument(
         "--compile",
         action="store_true",
         help="only the first-use rows (section 10: import, each kernel's compile time, "
@@ -2072,6 +2103,19 @@ def main(argv: list[str] | None = None) -> int:
         if args.json is not None:
             args.json.write_text(
                 json.dumps({"machine": mach, "first_use": first_use}, indent=2, sort_keys=True)
+                + "\n"
+            )
+            log(f"wrote {args.json}")
+        return 0
+    if args.preview:
+        t0 = time.perf_counter()
+        mach = machine_info()
+        preview_res = measure_preview_only()
+        print(format_preview(preview_res, mach))
+        print(f"(benchmark ran {time.perf_counter() - t0:.0f} s)")
+        if args.json is not None:
+            args.json.write_text(
+                json.dumps({"machine": mach, "preview": preview_res}, indent=2, sort_keys=True)
                 + "\n"
             )
             log(f"wrote {args.json}")
