@@ -97,6 +97,7 @@ from numpy.typing import ArrayLike
 
 from dustoptics._validation import as_float_array, check_budget, check_choice
 from dustoptics.scattering.mie import (
+    _pi_tau_table,
     check_sphere_inputs,
     wiscombe_nmax,
 )
@@ -254,26 +255,6 @@ def _coefficient_derivatives(
             dax[n - 1] = ga * dta + ((t_a * dp1 - dp0) - an * (t_a * dxi1 - dxi0)) * ra
             dbx[n - 1] = gb * dtb + ((t_b * dp1 - dp0) - bn * (t_b * dxi1 - dxi0)) * rb
     return a, b, da, db, dax, dbx
-
-
-@njit(cache=True, nogil=True)
-def _pi_tau(mu: np.ndarray, nmax: int) -> tuple[np.ndarray, np.ndarray]:
-    """pi_n(mu), tau_n(mu), n = 1..nmax, shape (len(mu), nmax), by the upward
-    recurrences of BH Eq. 4.47 (stable for abs(mu) <= 1)."""
-    n_mu = mu.shape[0]
-    pi_t = np.empty((n_mu, nmax))
-    tau_t = np.empty((n_mu, nmax))
-    for i in range(n_mu):
-        u = mu[i]
-        p_prev = 0.0
-        p_cur = 1.0
-        for n in range(1, nmax + 1):
-            pi_t[i, n - 1] = p_cur
-            tau_t[i, n - 1] = n * u * p_cur - (n + 1) * p_prev
-            p_next = ((2 * n + 1) * u * p_cur - (n + 1) * p_prev) / n
-            p_prev = p_cur
-            p_cur = p_next
-    return pi_t, tau_t
 
 
 @njit(cache=True, nogil=True)
@@ -440,7 +421,7 @@ def _single(
     :func:`_amplitude_sums`, and the sums of :func:`_sums` (values, derivatives)."""
     nmax = wiscombe_nmax(x)
     a, b, da, db, dax, dbx = _coefficient_derivatives(m, x, nmax, True)
-    pi_t, tau_t = _pi_tau(mu, nmax)
+    pi_t, tau_t = _pi_tau_table(mu, nmax)
     amp = _amplitude_sums(nmax, a, b, da, db, dax, dbx, pi_t, tau_t, True)
     val, der = _sums(nmax, a, b, da, db, dax, dbx)
     return a, b, da, db, dax, dbx, amp, val, der
@@ -486,7 +467,7 @@ def _accumulate(
     x_top = x_nodes[0]
     for j in range(n_nodes):
         x_top = max(x_top, x_nodes[j])
-    pi_t, tau_t = _pi_tau(mu, wiscombe_nmax(x_top))
+    pi_t, tau_t = _pi_tau_table(mu, wiscombe_nmax(x_top))
     for j in range(n_nodes):
         x = x_nodes[j]
         nmax = wiscombe_nmax(x)

@@ -38,7 +38,14 @@ against the table alone.  The distribution's parameters need no Mie work
 beyond the sums' weight columns; n and k need S1, S2 and dS/dm of every node
 (twice the table's angular work a node), on the final panels' fine and
 coarse rules (the coarse rule, for the error estimate, is a third of the
-work).
+work).  The cross-sections' panels continue from the phase function's, so
+their rules are summed again only on the panels that differ (a tenth to a
+fifth of them for the default table); the rest come from the angular sums.
+Measured on the default table (48 x 1,801, one thread): the fine rule's
+angular sums with dS/dm 0.39 s of CPU and its Mie coefficients with their m
+derivatives 0.10 s, the coarse rule's 0.24 s, against 0.5-0.6 s for the table
+alone: the fine rule by itself, without an error estimate, is 0.8-1.0 times
+the table's cost.
 
 Error estimate
 --------------
@@ -236,16 +243,18 @@ def _weights(
     *,
     k_um: float,
     dist_parameters: Sequence[str],
+    boundary: bool = True,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Nodes sorted by size and their weight columns: n J, then dn/dp J per
-    distribution parameter, with the point-mass nodes of moving support ends."""
+    distribution parameter, with the point-mass nodes of moving support ends
+    (unless ``boundary`` is false: a part of a rule whose whole has them)."""
     r = x / k_um
     columns = [np.asarray(distribution.pdf(r), dtype=np.float64) * rule]
     columns += [number_density_derivative(distribution, r, p) * rule for p in dist_parameters]
     weights = np.column_stack(columns)
     extra_x: list[float] = []
     extra_w: list[np.ndarray] = []
-    for j, p in enumerate(dist_parameters):
+    for j, p in enumerate(dist_parameters if boundary else ()):
         for r_b, c_b in boundary_terms(distribution, p):
             row = np.zeros(weights.shape[1])
             row[1 + j] = c_b
@@ -277,9 +286,13 @@ def _sums(
     mu: np.ndarray,
     per_particle: bool,
     n_stokes: int = 4,
+    boundary: bool = True,
 ) -> _Sums:
-    """Sums at the angles ``mu`` (none: the cross-sections alone)."""
-    xs, w = _weights(distribution, x, rule, k_um=k_um, dist_parameters=dist_parameters)
+    """Sums at the angles ``mu`` (none: the cross-sections alone); ``boundary``
+    as :func:`_weights`."""
+    xs, w = _weights(
+        distribution, x, rule, k_um=k_um, dist_parameters=dist_parameters, boundary=boundary
+    )
     if mu.size == 0:
         table = np.empty((0, 0))
     else:
@@ -368,6 +381,14 @@ def _directions(
         d_ang.append(dm.real * s.dang[0] + dm.imag * s.dang[1])
         d_sums.append(dm.real * s.dsums[0] + dm.imag * s.dsums[1])
     return d_ang, d_sums
+
+
+def _panels_not_in(panels: np.ndarray, others: np.ndarray) -> np.ndarray:
+    """The rows of ``panels`` ([lower, upper] in s) that are not rows of ``others``
+    (the same floats: split panels keep their ends), shape (n, 2)."""
+    known = set(map(tuple, others.tolist()))
+    keep = [p for p in panels.tolist() if tuple(p) not in known]
+    return np.array(keep, dtype=np.float64).reshape(-1, 2)
 
 
 @dataclass(frozen=True)
@@ -546,6 +567,8 @@ def _one_wavelength(
     n_half = 16 * ((nmax + 1 + 15) // 16)
     pair = []
     greek_pair = []
+    # Sums and their m derivatives of the fine and the coarse rule (for the cross-sections).
+    phase_sums: list[tuple[np.ndarray, np.ndarray]] = []
     # The expansion coefficients' own panels (refined to their own tolerance), if
     # the table has them and they differ from the phase function's.
     greek_panels = None if diagnostics.expansion_panels is None else diagnostics.expansion_panels[i]
@@ -556,6 +579,7 @@ def _one_wavelength(
         lmax = 2 * nmax
         for x, rule in ((x_fine, rule_fine), (x_coarse, rule_coarse)):
             s_ = _legendre_sums(m, distribution, x, rule, lmax=lmax, n_stokes=n_q, **common)  # type: ignore[arg-type]
+            phase_sums.append((s_.sums, s_.dsums))
             # In Legendre coefficients (the derivative is linear in them).
             pair.append(
                 _angular(
@@ -587,6 +611,7 @@ def _one_wavelength(
         mu = np.ascontiguousarray(mu_out)
         for x, rule in ((x_fine, rule_fine), (x_coarse, rule_coarse)):
             s_ = _sums(m, distribution, x, rule, mu=mu, n_stokes=n_q, **common)  # type: ignore[arg-type]
+            phase_sums.append((s_.sums, s_.dsums))
             pair.append(
                 _angular(
                     s_,
@@ -606,14 +631,26 @@ def _one_wavelength(
             values[key] = greek_pair[0][:, j]
             errors[key] = np.max(np.abs(greek_pair[0][:, j] - greek_pair[1][:, j]), axis=-1)
 
-    no_angles = np.empty(0)
+    # The cross-section panels continue from the phase function's: most are the
+    # same panels, whose rules the angular sums above have summed already. Only
+    # the panels that differ are summed again (their sums without angles).
     cross_panels = diagnostics.cross_section_panels[i]
+    only_phase = _panels_not_in(panels, cross_panels)
+    only_cross = _panels_not_in(cross_panels, panels)
     found = []
-    for halves in (True, False):
-        x, rule = _rule_nodes(
-            cross_panels, wavelength_nm=wavelength_nm, settings=settings, halves=halves
-        )
-        s = _sums(m, distribution, x, rule, mu=no_angles, **common)  # type: ignore[arg-type]
+    for rule_sums, halves in zip(phase_sums, (True, False), strict=True):
+        sums, dsums = rule_sums
+        for part, sign in ((only_phase, -1.0), (only_cross, 1.0)):
+            if part.size == 0:
+                continue
+            x, rule = _rule_nodes(
+                part, wavelength_nm=wavelength_nm, settings=settings, halves=halves
+            )
+            s = _sums(m, distribution, x, rule, mu=np.empty(0), boundary=False, **common)  # type: ignore[arg-type]
+            sums = sums + sign * s.sums
+            dsums = dsums + sign * s.dsums
+        n_w = sums.shape[0]
+        s = _Sums(np.zeros((n_w, 1, 0)), np.zeros((2, 1, 0)), sums, dsums)
         found.append(
             _cross(
                 s,
