@@ -908,7 +908,7 @@ def measure_rt(dust: DustOptics, repeats: int, quick: bool, *, with_scatrs: bool
     accurate). ``with_scatrs=False`` (``--rt`` alone): the first part only."""
     wl, theta = wavelength_grid(N_WAVELENGTHS_DEFAULT), theta_grid(N_THETA_DEFAULT)
     n = max(repeats, 2)
-    plain_t, full_t = [], []
+    plain_t, full_t, matrix_t = [], [], []
     log(f"RT optics: phase only vs matrix + expansion, {n} interleaved warm calls each ...")
     dust.table(R_EFF_UM, V_EFF, wl[:1], theta, polarization=True, expansion=True)  # compile
     for _ in range(n):
@@ -918,9 +918,15 @@ def measure_rt(dust: DustOptics, repeats: int, quick: bool, *, with_scatrs: bool
         t0 = time.perf_counter()
         full, _ = dust.table(R_EFF_UM, V_EFF, wl, theta, polarization=True, expansion=True)
         full_t.append(time.perf_counter() - t0)
+        # The matrix alone: what the coefficients add beyond it (issue 30).
+        t0 = time.perf_counter()
+        dust.table(R_EFF_UM, V_EFF, wl, theta, polarization=True)
+        matrix_t.append(time.perf_counter() - t0)
     out: dict = {
         "phase_only_times_s": plain_t,
         "matrix_expansion_times_s": full_t,
+        "matrix_only_times_s": matrix_t,
+        "matrix_ratio": min(matrix_t) / min(plain_t),
         "ratio": min(full_t) / min(plain_t),
         "n_order_max": int(full.alpha1.shape[1]),
         "max_matrix_error_estimate": float(full.matrix_error_estimate.max()),
@@ -1994,9 +2000,11 @@ def format_rt(res: dict, mach: dict) -> str:
             "matrix_expansion_times_s",
             f"F11..F34 + all expansion coefficients ({res['n_order_max']} orders)",
         ),
+        ("matrix_only_times_s", "F11..F34 alone (no coefficients)"),
     ):
         times = res[key]
         row(label, f"best {min(times):.3f} s  [{', '.join(f'{t:.3f}' for t in times)}]")
+    row("ratio of the matrix alone to the phase only (best of each)", f"{res['matrix_ratio']:.2f}x")
     if res.get("scatrs"):
         row(
             "dustoptics default: max error vs rtol-1e-7 reference", f"{res['dustoptics_error']:.1e}"
