@@ -56,8 +56,13 @@ The approximated sky is rendered with the same medium geometry (the slant
 columns are reused), the same Sun, ground, observer, tolerance and directions
 as the exact one; the moments the multiple scattering needs are projected
 again from the approximated phase functions exactly as
-:meth:`~dustoptics.sky.medium.Medium.from_atmosphere` projects them.  The cost
-is one more sky render (a cheaper one with three channels), plus the fit.
+:meth:`~dustoptics.sky.medium.Medium.from_atmosphere` projects them.  The two
+renders share the work that depends only on the geometry
+(:func:`dustoptics.sky._shared.shared_geometry`: the discrete ordinates'
+Legendre functions, the aureole's Legendre polynomials, and at each sample of
+each line of sight the Sun's slant columns and its azimuth), which the second
+takes from the first, bit for bit.  The cost is less than one more sky render
+(a much cheaper one with three channels), plus the fit.
 
 Differences (:class:`PreviewSummary`), over the dome (every computed direction,
 means weighted by solid angle) and near the Sun (directions within
@@ -91,6 +96,7 @@ from dustoptics._validation import check_closed_interval
 from dustoptics.atmosphere.sets import Atmosphere
 from dustoptics.scattering.fit import FIT_MODEL_ALIASES, FIT_MODELS, FitResult
 from dustoptics.scattering.tabulated_phase import mean_cosine, sphere_integral
+from dustoptics.sky._shared import shared_geometry
 from dustoptics.sky.medium import Medium, legendre_moments
 from dustoptics.sky.scene import SkyRadiance, display_rgb, sky_radiance, sunlit_xyz
 from dustoptics.table import Table
@@ -560,8 +566,9 @@ def approximate_medium(
         if fitted:
             assert model is not None
             phase, fit = _fitted_phase(t, model, a.fit_at_nm)
-            t = _replace_phase(t, theta, phase)
         if a.angles is not None:
+            if fitted:  # the engine's samples are the fitted function's
+                t = _replace_phase(t, theta, phase)
             sampling, n = _parse_angles(a.angles)
             s_theta, values, _, mu = _engine_grid(t, sampling, n)
             if a.float16:
@@ -972,6 +979,22 @@ def preview_sky(
     if not isinstance(a, Approximations):
         raise TypeError(f"approximations must be Approximations; got {type(a).__name__}")
     approx_medium, fit = approximate_medium(medium, a)  # checked before any rendering
+    with shared_geometry():  # the second render takes the first's geometry
+        return _preview(
+            medium, approx_medium, fit, a, sun_elevation_deg, ground_albedo, exact, sky_options
+        )
+
+
+def _preview(
+    medium: Medium,
+    approx_medium: Medium,
+    fit: FitResult | None,
+    a: Approximations,
+    sun_elevation_deg: float,
+    ground_albedo: float,
+    exact: SkyRadiance | None,
+    sky_options: dict[str, Any],
+) -> SkyPreview:
     if exact is None:
         exact = sky_radiance(
             medium, sun_elevation_deg=sun_elevation_deg, ground_albedo=ground_albedo, **sky_options

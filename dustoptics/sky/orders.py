@@ -71,6 +71,7 @@ from scipy.special import gammaln, lpmv
 
 from dustoptics._validation import BudgetError, check_budget, check_choice, check_closed_interval
 from dustoptics.sky._progress import Reporter, reporter
+from dustoptics.sky._shared import geometry_memo
 from dustoptics.sky.medium import Medium
 
 __all__ = [
@@ -322,6 +323,21 @@ def _sweep_kernel(
                 out[i, k, d] = up[d]
 
 
+def _ordinates(n: int, n_mom: int) -> tuple[np.ndarray, ...]:
+    # A double-Gauss quadrature's upward cosines, its ordinates (upward first), weights,
+    # L_l^m at the ordinates and the projection on them (geometry only: shared by the
+    # renders of one scene, dustoptics.sky._shared).
+    x, w = _double_gauss(n)
+    mu = np.concatenate([x, -x])
+    weights = np.concatenate([w, w])
+    basis = normalized_legendre(n_mom, mu)
+    project = np.ascontiguousarray((basis * weights).transpose(0, 2, 1))
+    out = (x, mu, weights, basis, project)
+    for v in out:
+        v.setflags(write=False)
+    return out
+
+
 @dataclass(frozen=True)
 class _Grid:
     """A double-Gauss quadrature and what an order on it needs."""
@@ -336,11 +352,9 @@ class _Grid:
 
     @classmethod
     def make(cls, n: int, n_mom: int, dtau: np.ndarray, t_sun: np.ndarray) -> _Grid:
-        x, w = _double_gauss(n)
-        mu = np.concatenate([x, -x])
-        weights = np.concatenate([w, w])
-        basis = normalized_legendre(n_mom, mu)
-        project = np.ascontiguousarray((basis * weights).transpose(0, 2, 1))
+        x, mu, weights, basis, project = geometry_memo(
+            ("double-gauss", n, n_mom), lambda: _ordinates(n, n_mom)
+        )
         e, a, b = _exit_weights(dtau, x)
         linear = tuple(np.ascontiguousarray(v) for v in (e, a, b, a, b))
         beam = (e,) + tuple(np.ascontiguousarray(v) for v in _beam_weights(dtau, x, t_sun, e, a, b))
@@ -533,7 +547,9 @@ def solve_orders(
     n = medium.n_streams
     n_mom = 2 * n
     mu0 = math.cos(math.radians(sza))
-    lam0 = normalized_legendre(n_mom, np.array([-mu0]))[:, :, 0]  # (m, l)
+    lam0 = geometry_memo(
+        ("sun-legendre", n_mom, mu0), lambda: normalized_legendre(n_mom, np.array([-mu0]))[:, :, 0]
+    )  # (m, l)
 
     z = _level_altitudes(medium.top_altitude_m, n_layers)
     amount = _layer_amounts(medium, z)  # (c, k)

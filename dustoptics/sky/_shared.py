@@ -1,0 +1,52 @@
+"""Work that depends only on the geometry, shared between the renders of one scene.
+
+Two skies of one scene (the same dome, Sun, observer and medium geometry, other
+optics: the exact sky and the sky an engine draws,
+:func:`dustoptics.sky.approximations.preview_sky`) need the same angular bases
+and line-of-sight geometry.  Inside :func:`shared_geometry` the renderer keeps
+what :func:`geometry_memo` computes, keyed by what it depends on, and the
+second render takes it from there; outside any such scope nothing is kept and
+every render computes all it needs, as before.  Either way the values are the
+same arrays of the same bits: only who computes them changes.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Hashable, Iterator
+from contextlib import contextmanager
+from contextvars import ContextVar
+from typing import Any, TypeVar
+
+__all__ = ["geometry_memo", "shared_geometry", "sharing"]
+
+_T = TypeVar("_T")
+
+_MEMO: ContextVar[dict[Hashable, Any] | None] = ContextVar("_MEMO", default=None)
+
+
+@contextmanager
+def shared_geometry() -> Iterator[None]:
+    """A scope whose renders share their geometry (a scope within one keeps the outer's)."""
+    memo = _MEMO.get()
+    token = _MEMO.set({} if memo is None else memo)
+    try:
+        yield
+    finally:
+        _MEMO.reset(token)
+
+
+def geometry_memo(key: Hashable, compute: Callable[[], _T]) -> _T:
+    """``compute()``, kept under ``key`` within :func:`shared_geometry` (the caller must not
+    change what it returns)."""
+    memo = _MEMO.get()
+    if memo is None:
+        return compute()
+    if key not in memo:
+        memo[key] = compute()
+    value: _T = memo[key]
+    return value
+
+
+def sharing() -> bool:
+    """True within :func:`shared_geometry`."""
+    return _MEMO.get() is not None
