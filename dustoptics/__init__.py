@@ -33,6 +33,12 @@ from dustoptics import _numba_cache
 
 _numba_cache.configure(__version__)
 
+# The command `dustoptics build` on an empty numba cache: the kernels start compiling
+# on the other cores now, while this process imports (cli._prestart; nothing otherwise).
+from dustoptics.cli import _prestart
+
+_prestart.start()
+
 from dustoptics import atmosphere, colour, compare, io, models, particles, scattering, sky, table
 from dustoptics.atmosphere import column, gases, parametric
 from dustoptics.compare import compare_tables

@@ -55,6 +55,13 @@ as it is compiled; a cache that holds them all costs a look at numba's index
 files and says nothing.  The command line calls it before a build
 (``models.build.TableBuilder``).
 
+The command ``dustoptics build`` on an empty cache does not wait for its own
+imports (numpy, scipy, numba, h5py and the package: most of a second) to start
+the children: :func:`prestart`, called while the package is imported
+(:mod:`dustoptics.cli._prestart`), starts them at once, each imports the kernels'
+modules on another core while this process imports, and :func:`compile_kernels`
+then hands them kernels.
+
 Threads and fork
 ----------------
 The sky's kernels run in parallel (``parallel=True``, numba's threading layer);
@@ -80,8 +87,10 @@ should choose ``tbb`` or ``omp`` itself.
 
 from __future__ import annotations
 
+import atexit
 import contextlib
 import functools
+import hashlib
 import os
 import subprocess
 import sys
@@ -102,6 +111,7 @@ __all__ = [
     "I8",
     "I8_1D",
     "NONE",
+    "OPTICS_MODULES",
     "CompileReport",
     "cache_dir",
     "compile_kernels",
@@ -109,6 +119,7 @@ __all__ = [
     "kernel",
     "kernels_cached",
     "parallel_kernel",
+    "prestart",
     "select_threading_layer",
     "variant",
 ]
@@ -126,6 +137,18 @@ GROUPS = ("optics", "matrix", "sphere", "coated")
 
 #: Processes that compile at once, this one included.
 MAX_PROCESSES = 4
+
+#: The modules that declare the "optics" kernels (those of every Mie table), known
+#: before they are imported: what :func:`prestart`'s children import (the tests
+#: check it against the kernels declared).
+OPTICS_MODULES = (
+    "dustoptics.scattering.mie",
+    "dustoptics.scattering.quadrature",
+    "dustoptics.scattering.refinement",
+)
+#: A kernel of :data:`OPTICS_MODULES` whose index file in numba's cache says the
+#: cache is not empty (:func:`prestart`).
+_MARKER = "mie._accumulate_grids"
 
 _PACKAGE_DIR = Path(__file__).resolve().parent
 
@@ -634,15 +657,18 @@ def _import_bare(modules: list[str]) -> None:
 
 def _serve(modules: list[str]) -> int:
     """A child's loop: import ``modules``, then compile the kernels named on stdin,
-    one a line, answering ``done NAME CPU_S WALL_S`` (or ``fail NAME``) on stdout;
-    ends at the end of its input."""
+    one a line (``NAME MODULE``: the module that declares it, imported if need be),
+    answering ``done NAME CPU_S WALL_S`` (or ``fail NAME``) on stdout; ends at the end
+    of its input."""
     _import_bare(modules)
     out = sys.stdout
     out.write("ready\n")
     out.flush()
     for line in sys.stdin:
-        name = line.strip()
+        name, _, module = line.strip().partition(" ")
         try:
+            if name not in _KERNELS and module:
+                _import_bare([module])
             cpu, wall = _compile_here(_KERNELS[name])
         except Exception:
             out.write(f"fail {name}\n")
@@ -660,7 +686,7 @@ def _feed(child: subprocess.Popen[str], process: int, schedule: _Schedule) -> No
         return
     while (k := schedule.take()) is not None:
         try:
-            stdin.write(k.name + "\n")
+            stdin.write(f"{k.name} {k.dispatcher.py_func.__module__}\n")
             stdin.flush()
             answer = stdout.readline().split()
         except OSError:
@@ -670,6 +696,95 @@ def _feed(child: subprocess.Popen[str], process: int, schedule: _Schedule) -> No
         else:
             schedule.give_back(k.name)
             return
+
+
+#: Children started by :func:`prestart` and not yet handed kernels.
+_prestarted: list[subprocess.Popen[str]] = []
+
+
+def _spawn(modules: Iterable[str]) -> subprocess.Popen[str]:
+    return subprocess.Popen(
+        _child_command(modules),
+        stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.DEVNULL,
+        text=True,
+        env=_child_env(),
+    )
+
+
+def _optics_index_folder() -> Path:
+    """Where numba keeps the index files of :data:`OPTICS_MODULES`' kernels, by numba's
+    rules, without importing numba: with ``NUMBA_CACHE_DIR``,
+    ``DIR/scattering_<sha1 of the sources' folder>`` (its ``_UserProvidedCacheLocator``),
+    else ``__pycache__`` beside the sources (its ``_InTreeCacheLocator``)."""
+    folder = os.path.join(os.path.dirname(os.path.abspath(__file__)), "scattering")
+    root = os.environ.get(ENV)
+    if root:
+        sha1 = hashlib.sha1(folder.encode()).hexdigest()
+        return Path(root) / f"{os.path.basename(folder)}_{sha1}"
+    return Path(folder) / "__pycache__"
+
+
+def _cache_is_empty() -> bool:
+    """Whether numba's cache holds no index file of the Mie kernels (so a build compiles
+    them all): a look at one folder.  A stale index (sources changed) counts as not
+    empty: then the children start when the build asks for them."""
+    return not any(_optics_index_folder().glob(f"{_MARKER}-*.nbi"))
+
+
+def prestart(*, processes: int | None = None) -> int:
+    """Start the children that will compile the kernels of a Mie table now, when
+    numba's cache holds none of them; returns how many started.
+
+    For the command line, before it imports the package (:mod:`dustoptics.cli._prestart`):
+    each child imports :data:`OPTICS_MODULES` while this process imports, and
+    :func:`compile_kernels` hands them kernels.  Children it does not take are ended
+    when it returns, or at exit.
+
+    Parameters
+    ----------
+    processes : int, optional
+        Processes that will compile, this one included (default one per core, at
+        most :data:`MAX_PROCESSES`): that many less one children.
+    """
+    jit_off = os.environ.get("NUMBA_DISABLE_JIT", "0").strip() not in ("", "0")
+    if _prestarted or jit_off or not sys.executable or getattr(sys, "frozen", False):
+        return 0
+    n = (min(_cores(), MAX_PROCESSES) if processes is None else int(processes)) - 1
+    if n < 1 or not _cache_is_empty():
+        return 0
+    for _ in range(n):
+        try:
+            _prestarted.append(_spawn(OPTICS_MODULES))
+        except OSError:
+            break
+    if _prestarted:
+        atexit.register(_end_prestarted)
+    return len(_prestarted)
+
+
+def _end_prestarted() -> None:
+    """End the children :func:`prestart` started that no kernel was handed to."""
+    while _prestarted:
+        child = _prestarted.pop()
+        with contextlib.suppress(OSError):
+            child.kill()
+        child.wait()
+        for pipe in (child.stdin, child.stdout):
+            if pipe is not None:
+                with contextlib.suppress(OSError):
+                    pipe.close()
+
+
+def _take_prestarted() -> subprocess.Popen[str] | None:
+    """A child :func:`prestart` started that still runs (it imports what else a kernel
+    needs when handed it)."""
+    while _prestarted:
+        child = _prestarted.pop(0)
+        if child.poll() is None:
+            return child
+    return None
 
 
 def compile_kernels(
@@ -706,6 +821,7 @@ def compile_kernels(
     """
     todo = [k for k in kernels(groups) if not _in_cache(k)]
     if not todo:
+        _end_prestarted()
         return None
     if processes is None:
         processes = min(_cores(), MAX_PROCESSES)
@@ -723,19 +839,15 @@ def compile_kernels(
     schedule = _Schedule(todo, progress, start)
     children: list[subprocess.Popen[str]] = []
     feeders: list[threading.Thread] = []
+    modules = {k.dispatcher.py_func.__module__ for k in todo}
     try:
         for i in range(1, processes):
-            try:
-                child = subprocess.Popen(
-                    _child_command({k.dispatcher.py_func.__module__ for k in todo}),
-                    stdin=subprocess.PIPE,
-                    stdout=subprocess.PIPE,
-                    stderr=subprocess.DEVNULL,
-                    text=True,
-                    env=_child_env(),
-                )
-            except OSError:
-                break  # no child: this process compiles what it would have
+            child = _take_prestarted()
+            if child is None:
+                try:
+                    child = _spawn(modules)
+                except OSError:
+                    break  # no child: this process compiles what it would have
             children.append(child)
             feeder = threading.Thread(target=_feed, args=(child, i, schedule), daemon=True)
             feeder.start()
@@ -751,6 +863,7 @@ def compile_kernels(
             child.kill()
         raise
     finally:
+        _end_prestarted()  # those not needed
         for child in children:
             with contextlib.suppress(OSError):
                 if child.stdin is not None:

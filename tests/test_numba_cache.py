@@ -164,7 +164,7 @@ print("ready", flush=True)
 for n, line in enumerate(sys.stdin):
     if {stop_after} is not None and n >= {stop_after}:
         sys.exit(1)
-    print("done", line.strip(), 0.5, 0.5, flush=True)
+    print("done", line.split()[0], 0.5, 0.5, flush=True)
 """
 
 
@@ -228,6 +228,101 @@ def test_progress_names_each_kernel_k_of_n_with_the_time(monkeypatch, capsys):
     assert len(lines) == n + 1
     for k, line in enumerate(lines[1:], start=1):
         assert re.fullmatch(rf"dustoptics: compiled kernel {k}/{n}, \w+\.\w+ \(\d+\.\d s\)", line)
+
+
+# ----------------------------------------------------------------------------- prestart
+
+
+def test_optics_modules_are_those_that_declare_the_optics_kernels():
+    """What a prestarted child imports, known before the kernels are declared."""
+    declared = {k.dispatcher.py_func.__module__ for k in kernels(["optics"])}
+    assert set(_numba_cache.OPTICS_MODULES) == declared
+
+
+@pytest.mark.parametrize("user_dir", [False, True])
+def test_the_index_folder_is_where_numba_puts_the_kernels(monkeypatch, tmp_path, user_dir):
+    """The folder :func:`prestart` looks at is numba's own choice for the Mie kernels:
+    its locator for a user's ``NUMBA_CACHE_DIR`` or for the sources' ``__pycache__``."""
+    import inspect
+
+    from numba.core import caching, config
+
+    from dustoptics.scattering import mie
+
+    def numbas(name: str):  # public in numba 0.68, with a leading underscore in older ones
+        return getattr(caching, name, None) or getattr(caching, f"_{name}")
+
+    func = mie._accumulate_grids.py_func
+    if user_dir:
+        monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
+        monkeypatch.setattr(config, "CACHE_DIR", str(tmp_path))
+        locator = numbas("UserProvidedCacheLocator").from_function(func, inspect.getfile(func))
+    else:
+        monkeypatch.delenv("NUMBA_CACHE_DIR", raising=False)
+        locator = numbas("InTreeCacheLocator").from_function(func, inspect.getfile(func))
+    assert locator is not None
+    assert Path(locator.get_cache_path()) == _numba_cache._optics_index_folder()
+    assert _numba_cache._MARKER == "mie._accumulate_grids"
+
+
+def test_prestart_on_an_empty_cache_hands_its_children_the_kernels(monkeypatch):
+    """``dustoptics build`` on an empty cache: the children start before the package is
+    imported, and compile_kernels hands them kernels instead of starting others."""
+    here = _fake_compile(monkeypatch)
+    monkeypatch.setattr(_numba_cache, "_cache_is_empty", lambda: True)
+    monkeypatch.setattr(_numba_cache, "_prestarted", [])
+    assert _numba_cache.prestart(processes=2) == 1
+    assert _numba_cache.prestart(processes=2) == 0  # once
+
+    def no_more(modules):
+        raise AssertionError("a prestarted child was there to take")
+
+    monkeypatch.setattr(_numba_cache, "_spawn", no_more)
+    report = compile_kernels(["optics", "matrix"], processes=2)
+    assert report is not None and report.processes == 2
+    _check_order(report)
+    by_child = [k.name for k in report.kernels if k.process == 1]
+    assert sorted(here + by_child) == sorted(k.name for k in report.kernels)
+    assert _numba_cache._prestarted == []
+
+
+def test_prestart_does_nothing_on_a_cache_that_holds_kernels(monkeypatch):
+    monkeypatch.setattr(_numba_cache, "_cache_is_empty", lambda: False)
+    monkeypatch.setattr(_numba_cache, "_prestarted", [])
+    assert _numba_cache.prestart(processes=2) == 0
+    monkeypatch.setattr(_numba_cache, "_cache_is_empty", lambda: True)
+    assert _numba_cache.prestart(processes=1) == 0  # no other core
+    assert _numba_cache._prestarted == []
+
+
+def test_prestarted_children_that_get_no_kernel_end(monkeypatch):
+    """Nothing to compile after all (or fewer kernels than children): they are ended."""
+    _fake_compile(monkeypatch)
+    monkeypatch.setattr(_numba_cache, "_cache_is_empty", lambda: True)
+    monkeypatch.setattr(_numba_cache, "_prestarted", [])
+    assert _numba_cache.prestart(processes=2) == 1
+    child = _numba_cache._prestarted[0]
+    monkeypatch.setattr(_numba_cache, "_in_cache", lambda k: True)
+    assert compile_kernels(["optics"]) is None
+    assert _numba_cache._prestarted == [] and child.poll() is not None
+
+
+@pytest.mark.parametrize(
+    ("argv", "command"),
+    [
+        (["build"], "build"),
+        (["build", "mars", "--out", "x"], "build"),
+        (["build", "--help"], None),
+        (["--version"], None),
+        (["info", "f.nc"], "info"),
+        ([], None),
+    ],
+)
+def test_prestart_is_for_the_build_command(argv, command):
+    from dustoptics.cli import _prestart
+
+    assert _prestart._command(argv) == command
+    assert _prestart.start(["build"]) == 0  # this process is not the command
 
 
 def test_a_child_imports_the_kernels_modules_without_the_package():
@@ -319,10 +414,12 @@ def test_first_build_compiles_with_progress_and_the_next_process_loads_silently(
     config = tmp_path / "small.toml"
     config.write_text(SMALL, encoding="utf-8")
     cache = tmp_path / "cache"
+    # As a user runs it (python -m dustoptics.cli): the children start while it imports.
     build = f"""
-        import sys
-        from dustoptics.cli import main
-        sys.exit(main(["build", {str(config)!r}, "--out", sys.argv[1], "--format", "hdf5"]))
+        import runpy, sys
+        sys.argv = ["dustoptics", "build", {str(config)!r}, "--out", sys.argv[1],
+                    "--format", "hdf5"]
+        runpy.run_module("dustoptics.cli", run_name="__main__", alter_sys=True)
     """
     cached = """
         import dustoptics

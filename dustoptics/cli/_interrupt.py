@@ -34,13 +34,13 @@ from types import FrameType
 
 from dustoptics.cli.errors import EXIT_INTERRUPTED, PROG
 
-__all__ = ["handling"]
+__all__ = ["handling", "is_the_command"]
 
 #: Packages whose frames mean "numba is compiling or loading a kernel".
 _COMPILER_PACKAGES = (f"{os.sep}numba{os.sep}", f"{os.sep}llvmlite{os.sep}")
 
 
-def _is_the_command() -> bool:
+def is_the_command() -> bool:
     """Whether this process runs the ``dustoptics`` command (the script or ``-m``)."""
     script = os.path.basename(sys.argv[0]) if sys.argv else ""
     if os.path.splitext(script)[0] in ("dustoptics", "dustoptics-script"):
@@ -96,7 +96,7 @@ def handling() -> Iterator[None]:
 
 
 def _install() -> None:
-    if not _is_the_command() or threading.current_thread() is not threading.main_thread():
+    if not is_the_command() or threading.current_thread() is not threading.main_thread():
         return
     if signal.getsignal(signal.SIGINT) is signal.default_int_handler:
         signal.signal(signal.SIGINT, _while_importing)
