@@ -42,7 +42,14 @@ from dustoptics._numba_cache import parallel_kernel
 from dustoptics.atmosphere.sets import Atmosphere
 from dustoptics.table import Table
 
-__all__ = ["AUREOLE_MOMENTS", "N_STREAMS", "Medium", "SlantColumns", "legendre_moments"]
+__all__ = [
+    "AUREOLE_MOMENTS",
+    "N_STREAMS",
+    "Medium",
+    "MediumOptics",
+    "SlantColumns",
+    "legendre_moments",
+]
 
 _UM2_TO_M2: Final = 1e-12
 #: Gauss-Legendre nodes used to project a tabulated phase function on P_l.
@@ -273,47 +280,25 @@ class Medium:
         for key, n in (("n_radii", n_radii), ("n_mu", n_mu)):  # interpolated: 2 at least
             if not (type(n) is int and 2 <= n <= 2048):
                 raise ValueError(f"{key} must be an integer in [2, 2048]; got {n!r}")
-        top = float(atmosphere.thickness_m)
-        radius = float(atmosphere.planet_radius_m)
-        n_mom = max(2 * n_streams + 1, AUREOLE_MOMENTS)
-        roles, tables, n0, ext, sca, chi = [], [], [], [], [], []
-        for c in atmosphere.constituents:
-            t = c.table
-            assert t.cext_um2 is not None and t.csca_um2 is not None
-            assert t.number_density_per_m3 is not None
-            roles.append(c.role)
-            tables.append(t)
-            n0.append(t.number_density_per_m3)
-            ext.append(t.cext_um2 * _UM2_TO_M2)
-            sca.append(t.csca_um2 * _UM2_TO_M2)
-            chi.append(
-                legendre_moments(t, n_mom)
-                if np.any(t.csca_um2 > 0)
-                else np.zeros((t.wavelength_nm.size, n_mom))
-            )
-        chi_arr = np.array(chi)
-        # The projected chi_0 is 1 to the table's accuracy; make it exact so
-        # that scattering conserves energy in the solver.
-        scatters = np.array([_scatters(t) for t in tables])
-        chi_arr[scatters] /= chi_arr[scatters, :, :1]
-        f = np.clip(chi_arr[:, :, 2 * n_streams], 0.0, 1.0 - 1e-9)
-        altitude = _altitude_grid(top, _N_DENSITY_SAMPLES)
-        rho = np.array([c.profile.relative_density(altitude) for c in atmosphere.constituents])
-        slant = _slant_columns(altitude, rho, radius, top, n_radii=n_radii, n_mu=n_mu)
+        o = MediumOptics.from_atmosphere(atmosphere, n_streams=n_streams)
+        slant = _slant_columns(
+            o.altitude_m, o.relative_density, o.planet_radius_m, o.top_altitude_m,
+            n_radii=n_radii, n_mu=n_mu,
+        )  # fmt: skip
         return cls(
-            name=atmosphere.name,
-            wavelength_nm=np.array(atmosphere.wavelength_nm, dtype=float),
-            planet_radius_m=radius,
-            top_altitude_m=top,
-            roles=tuple(roles),
-            tables=tuple(tables),
-            number_density_per_m3=np.array(n0, dtype=float),
-            sigma_ext_m2=np.array(ext),
-            sigma_sca_m2=np.array(sca),
-            chi=chi_arr,
-            truncation=f,
-            altitude_m=altitude,
-            relative_density=rho,
+            name=o.name,
+            wavelength_nm=o.wavelength_nm,
+            planet_radius_m=o.planet_radius_m,
+            top_altitude_m=o.top_altitude_m,
+            roles=o.roles,
+            tables=o.tables,
+            number_density_per_m3=o.number_density_per_m3,
+            sigma_ext_m2=o.sigma_ext_m2,
+            sigma_sca_m2=o.sigma_sca_m2,
+            chi=o.chi,
+            truncation=o.truncation,
+            altitude_m=o.altitude_m,
+            relative_density=o.relative_density,
             slant=slant,
             n_streams=n_streams,
         )
@@ -363,6 +348,87 @@ class Medium:
         finite = np.isfinite(amount).all(axis=0)
         tau = np.einsum("cl,c...->l...", sigma, np.where(np.isfinite(amount), amount, 0.0))
         return np.where(finite, np.exp(-tau), 0.0)
+
+
+@dataclass(frozen=True)
+class MediumOptics:
+    """A medium's optics without its slant columns: what the budgets read, before any work.
+
+    The estimates of :func:`~dustoptics.sky.orders.estimate_orders_cost` and
+    :func:`~dustoptics.sky.render.estimate_render_cost` read the sizes, the
+    cross-sections, the vertical optical depths and the delta-M truncation;
+    :meth:`from_atmosphere` computes them as :meth:`Medium.from_atmosphere` does
+    (the same code: the same numbers) without tabulating the slant columns, the
+    bulk of a medium's work, so that a request can be refused before the medium is
+    built (:func:`dustoptics.sky.space.check_limb_cost`).  The attributes are
+    :class:`Medium`'s of the same names.
+    """
+
+    name: str
+    wavelength_nm: np.ndarray
+    planet_radius_m: float
+    top_altitude_m: float
+    roles: tuple[str, ...]
+    tables: tuple[Table, ...]
+    number_density_per_m3: np.ndarray
+    sigma_ext_m2: np.ndarray
+    sigma_sca_m2: np.ndarray
+    chi: np.ndarray
+    truncation: np.ndarray
+    altitude_m: np.ndarray
+    relative_density: np.ndarray
+    n_streams: int
+
+    @classmethod
+    def from_atmosphere(cls, atmosphere: Atmosphere, *, n_streams: int = N_STREAMS) -> MediumOptics:
+        """The optics of :meth:`Medium.from_atmosphere` (its parameters checked there)."""
+        top = float(atmosphere.thickness_m)
+        radius = float(atmosphere.planet_radius_m)
+        n_mom = max(2 * n_streams + 1, AUREOLE_MOMENTS)
+        roles, tables, n0, ext, sca, chi = [], [], [], [], [], []
+        for c in atmosphere.constituents:
+            t = c.table
+            assert t.cext_um2 is not None and t.csca_um2 is not None
+            assert t.number_density_per_m3 is not None
+            roles.append(c.role)
+            tables.append(t)
+            n0.append(t.number_density_per_m3)
+            ext.append(t.cext_um2 * _UM2_TO_M2)
+            sca.append(t.csca_um2 * _UM2_TO_M2)
+            chi.append(
+                legendre_moments(t, n_mom)
+                if np.any(t.csca_um2 > 0)
+                else np.zeros((t.wavelength_nm.size, n_mom))
+            )
+        chi_arr = np.array(chi)
+        # The projected chi_0 is 1 to the table's accuracy; make it exact so
+        # that scattering conserves energy in the solver.
+        scatters = np.array([_scatters(t) for t in tables])
+        chi_arr[scatters] /= chi_arr[scatters, :, :1]
+        f = np.clip(chi_arr[:, :, 2 * n_streams], 0.0, 1.0 - 1e-9)
+        altitude = _altitude_grid(top, _N_DENSITY_SAMPLES)
+        rho = np.array([c.profile.relative_density(altitude) for c in atmosphere.constituents])
+        return cls(
+            name=atmosphere.name,
+            wavelength_nm=np.array(atmosphere.wavelength_nm, dtype=float),
+            planet_radius_m=radius,
+            top_altitude_m=top,
+            roles=tuple(roles),
+            tables=tuple(tables),
+            number_density_per_m3=np.array(n0, dtype=float),
+            sigma_ext_m2=np.array(ext),
+            sigma_sca_m2=np.array(sca),
+            chi=chi_arr,
+            truncation=f,
+            altitude_m=altitude,
+            relative_density=rho,
+            n_streams=n_streams,
+        )
+
+    def vertical_optical_depth(self) -> np.ndarray:
+        """As :meth:`Medium.vertical_optical_depth`. [-]"""
+        col = np.trapezoid(self.relative_density, self.altitude_m, axis=1)
+        return self.sigma_ext_m2 * (self.number_density_per_m3 * col)[:, None]
 
 
 def _scatters(table: Table) -> bool:

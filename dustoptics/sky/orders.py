@@ -72,7 +72,7 @@ from scipy.special import gammaln, lpmv
 from dustoptics._validation import BudgetError, check_budget, check_choice, check_closed_interval
 from dustoptics.sky._progress import Reporter, reporter
 from dustoptics.sky._shared import geometry_memo
-from dustoptics.sky.medium import Medium
+from dustoptics.sky.medium import Medium, MediumOptics
 
 __all__ = [
     "FINE_FACTOR",
@@ -380,7 +380,7 @@ class OrdersCost:
         self.orders = orders
 
 
-def _expected_orders(medium: Medium, tol: float) -> int:
+def _expected_orders(medium: Medium | MediumOptics, tol: float) -> int:
     # The ratio of successive orders is about omega (1 - escape), the escape
     # of a column of scaled optical depth tau about exp(-tau) (the diffuse
     # light's mean path is about one optical depth); a geometric series with
@@ -401,7 +401,7 @@ def _expected_orders(medium: Medium, tol: float) -> int:
     )
 
 
-def estimate_orders_cost(medium: Medium, *, n_layers: int, tol: float) -> OrdersCost:
+def estimate_orders_cost(medium: Medium | MediumOptics, *, n_layers: int, tol: float) -> OrdersCost:
     """Estimate the memory and work of :func:`solve_orders` before any is done.
 
     Memory: the moments and the radiance at the ordinates of every mode (kept
@@ -414,7 +414,7 @@ def estimate_orders_cost(medium: Medium, *, n_layers: int, tol: float) -> Orders
 
     Parameters
     ----------
-    medium : Medium
+    medium : Medium or MediumOptics
         The atmosphere's optics.
     n_layers : int
         Layers of the column.
@@ -446,7 +446,7 @@ def estimate_orders_cost(medium: Medium, *, n_layers: int, tol: float) -> Orders
 
 
 def check_orders_cost(
-    medium: Medium, *, n_layers: int, tol: float, allow_large: bool
+    medium: Medium | MediumOptics, *, n_layers: int, tol: float, allow_large: bool
 ) -> OrdersCost:
     """:func:`estimate_orders_cost`, then refuse a request beyond the budget.
 

@@ -79,7 +79,7 @@ from dustoptics._numba_cache import parallel_kernel
 from dustoptics._validation import MEMORY_BUDGET_BYTES, BudgetError, check_budget
 from dustoptics.sky._progress import Reporter, reporter
 from dustoptics.sky._shared import geometry_memo, sharing
-from dustoptics.sky.medium import Medium, SlantColumns, _interp_columns, _scatters
+from dustoptics.sky.medium import Medium, MediumOptics, SlantColumns, _interp_columns, _scatters
 from dustoptics.sky.orders import DiffuseField, normalized_legendre
 
 __all__ = [
@@ -559,7 +559,9 @@ class RenderCost(NamedTuple):
     work: float
 
 
-def estimate_render_cost(medium: Medium, *, n_rays: int, n_rows: int, n_path: int) -> RenderCost:
+def estimate_render_cost(
+    medium: Medium | MediumOptics, *, n_rays: int, n_rows: int, n_path: int
+) -> RenderCost:
     """Estimate the memory and work of the line-of-sight integration.
 
     Memory: the radiances and single-scattering phases of every ray, the
@@ -570,7 +572,7 @@ def estimate_render_cost(medium: Medium, *, n_rays: int, n_rows: int, n_path: in
 
     Parameters
     ----------
-    medium : Medium
+    medium : Medium or MediumOptics
         The atmosphere's optics.
     n_rays, n_rows : int
         Lines of sight, and distinct view cosines among them.
@@ -601,7 +603,13 @@ def estimate_render_cost(medium: Medium, *, n_rays: int, n_rows: int, n_path: in
 
 
 def check_render_cost(
-    medium: Medium, *, n_rays: int, n_rows: int, n_path: int, allow_large: bool, what: str
+    medium: Medium | MediumOptics,
+    *,
+    n_rays: int,
+    n_rows: int,
+    n_path: int,
+    allow_large: bool,
+    what: str,
 ) -> RenderCost:
     """:func:`estimate_render_cost`, then refuse a request beyond the budget.
 

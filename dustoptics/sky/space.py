@@ -36,7 +36,7 @@ import numpy as np
 from dustoptics._validation import BudgetError, check_closed_interval, check_positive
 from dustoptics.atmosphere.sets import Atmosphere
 from dustoptics.sky._progress import Reporter, reporter
-from dustoptics.sky.medium import Medium
+from dustoptics.sky.medium import Medium, MediumOptics
 from dustoptics.sky.orders import N_LAYERS, WORK_BUDGET, estimate_orders_cost, solve_orders
 from dustoptics.sky.render import _radiance, check_render_cost
 from dustoptics.sky.scene import display_rgb, sunlit_xyz
@@ -320,9 +320,9 @@ def limb_radiance(
     dustoptics._validation.BudgetError
         Beyond the budget and ``allow_large`` is False.
     """
-    medium = atmosphere if isinstance(atmosphere, Medium) else Medium.from_atmosphere(atmosphere)
+    # Checked before any work: an atmosphere's budget from its optics, before its medium.
     h, psi, geo, sza_t, nodes, k, weight_hi = _limb_plan(
-        medium,
+        _optics(atmosphere),
         sun_view_angle_deg=sun_view_angle_deg,
         tangent_altitude_m=tangent_altitude_m,
         limb_angle_deg=limb_angle_deg,
@@ -331,6 +331,7 @@ def limb_radiance(
         n_path=n_path,
         allow_large=allow_large,
     )
+    medium = atmosphere if isinstance(atmosphere, Medium) else Medium.from_atmosphere(atmosphere)
     beta = float(sun_view_angle_deg)
     top = medium.top_altitude_m
     nwl = medium.wavelength_nm.size
@@ -383,8 +384,19 @@ def limb_radiance(
     )
 
 
+def _optics(atmosphere: Atmosphere | Medium) -> Medium | MediumOptics:
+    # What the budget reads: a medium as it is, an atmosphere's optics without the medium's work.
+    if isinstance(atmosphere, Medium):
+        return atmosphere
+    if not isinstance(atmosphere, Atmosphere):
+        raise TypeError(
+            f"atmosphere must be an Atmosphere or a Medium; got {type(atmosphere).__name__}"
+        )
+    return MediumOptics.from_atmosphere(atmosphere)
+
+
 def _limb_plan(
-    medium: Medium,
+    medium: Medium | MediumOptics,
     *,
     sun_view_angle_deg: float,
     tangent_altitude_m: Any,
@@ -473,6 +485,9 @@ def check_limb_cost(
 
     The parameters are :func:`limb_radiance`'s; a caller that computes
     other skies first (``dustoptics sky --space``) calls this before them.
+    An atmosphere's budget is estimated from its optics
+    (:class:`~dustoptics.sky.medium.MediumOptics`: its cross-sections, optical
+    depths and delta-M truncation) without building its medium.
 
     Raises
     ------
@@ -481,9 +496,8 @@ def check_limb_cost(
     dustoptics._validation.BudgetError
         Beyond the budget and ``allow_large`` is False.
     """
-    medium = atmosphere if isinstance(atmosphere, Medium) else Medium.from_atmosphere(atmosphere)
     _limb_plan(
-        medium,
+        _optics(atmosphere),
         sun_view_angle_deg=sun_view_angle_deg,
         tangent_altitude_m=tangent_altitude_m,
         limb_angle_deg=limb_angle_deg,

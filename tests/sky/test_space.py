@@ -162,3 +162,36 @@ def test_the_limb_exposure_clips_nothing() -> None:
     unknown = dataclasses.replace(limb, planet_radius_m=0.0)
     with pytest.raises(ValueError, match="planet_radius_m"):
         unknown.view_xyz()
+
+
+def test_limb_budget_refused_before_the_medium_is_built(
+    dust: do.Table, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from dustoptics._validation import BudgetError
+    from dustoptics.sky import orders
+    from dustoptics.sky.medium import MediumOptics
+    from dustoptics.sky.space import check_limb_cost
+
+    atm = sets.mars_atmosphere(dust_table=dust, optical_depth=0.5)
+    medium = Medium.from_atmosphere(atm)
+    optics = MediumOptics.from_atmosphere(atm)
+    # The same numbers the budget reads, so the same estimates as the medium's.
+    for name in ("sigma_ext_m2", "sigma_sca_m2", "truncation", "number_density_per_m3"):
+        assert np.array_equal(getattr(optics, name), getattr(medium, name))
+    assert np.array_equal(optics.vertical_optical_depth(), medium.vertical_optical_depth())
+    ref = orders.estimate_orders_cost(medium, n_layers=orders.N_LAYERS, tol=1e-4)
+    cost = orders.estimate_orders_cost(optics, n_layers=orders.N_LAYERS, tol=1e-4)
+    assert (cost.work, cost.memory_bytes, cost.orders) == (ref.work, ref.memory_bytes, ref.orders)
+
+    def no_medium(*args: object, **kwargs: object) -> Medium:
+        raise AssertionError("the medium was built before the budget was checked")
+
+    monkeypatch.setattr(Medium, "from_atmosphere", no_medium)
+    check_limb_cost(atm)  # within the budget
+    many = np.linspace(0.0, 90e3, 2000)
+    with pytest.raises(BudgetError, match="lines of sight"):
+        check_limb_cost(atm, tangent_altitude_m=many, n_path=100_000)
+    with pytest.raises(BudgetError, match="lines of sight"):
+        limb_radiance(atm, tangent_altitude_m=many, n_path=100_000)
+    with pytest.raises(AssertionError, match="before the budget"):
+        limb_radiance(atm, tangent_altitude_m=np.array([10e3]), limb_angle_deg=np.array([0.0]))
