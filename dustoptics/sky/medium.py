@@ -358,10 +358,11 @@ class MediumOptics:
     :func:`~dustoptics.sky.render.estimate_render_cost` read the sizes, the
     cross-sections, the vertical optical depths and the delta-M truncation;
     :meth:`from_atmosphere` computes them as :meth:`Medium.from_atmosphere` does
-    (the same code: the same numbers) without tabulating the slant columns, the
-    bulk of a medium's work, so that a request can be refused before the medium is
-    built (:func:`dustoptics.sky.space.check_limb_cost`).  The attributes are
-    :class:`Medium`'s of the same names.
+    (the same code) without tabulating the slant columns, the bulk of a medium's
+    work, and for a budget without the moments beyond the truncation's, so that a
+    request can be refused before the medium is built
+    (:func:`dustoptics.sky.space.check_limb_cost`).  The attributes are
+    :class:`Medium`'s of the same names (``chi`` to ``2 n_streams`` for a budget).
     """
 
     name: str
@@ -380,11 +381,17 @@ class MediumOptics:
     n_streams: int
 
     @classmethod
-    def from_atmosphere(cls, atmosphere: Atmosphere, *, n_streams: int = N_STREAMS) -> MediumOptics:
-        """The optics of :meth:`Medium.from_atmosphere` (its parameters checked there)."""
+    def from_atmosphere(
+        cls, atmosphere: Atmosphere, *, n_streams: int = N_STREAMS, budget_only: bool = False
+    ) -> MediumOptics:
+        """The optics of :meth:`Medium.from_atmosphere` (its parameters checked there).
+
+        With ``budget_only`` the moments stop at ``2 n_streams`` (the truncation's),
+        a tenth of the work, and the truncation is the medium's to rounding.
+        """
         top = float(atmosphere.thickness_m)
         radius = float(atmosphere.planet_radius_m)
-        n_mom = max(2 * n_streams + 1, AUREOLE_MOMENTS)
+        n_mom = 2 * n_streams + 1 if budget_only else max(2 * n_streams + 1, AUREOLE_MOMENTS)
         roles, tables, n0, ext, sca, chi = [], [], [], [], [], []
         for c in atmosphere.constituents:
             t = c.table

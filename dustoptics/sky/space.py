@@ -392,7 +392,7 @@ def _optics(atmosphere: Atmosphere | Medium) -> Medium | MediumOptics:
         raise TypeError(
             f"atmosphere must be an Atmosphere or a Medium; got {type(atmosphere).__name__}"
         )
-    return MediumOptics.from_atmosphere(atmosphere)
+    return MediumOptics.from_atmosphere(atmosphere, budget_only=True)
 
 
 def _limb_plan(

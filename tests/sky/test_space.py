@@ -174,10 +174,14 @@ def test_limb_budget_refused_before_the_medium_is_built(
 
     atm = sets.mars_atmosphere(dust_table=dust, optical_depth=0.5)
     medium = Medium.from_atmosphere(atm)
-    optics = MediumOptics.from_atmosphere(atm)
-    # The same numbers the budget reads, so the same estimates as the medium's.
-    for name in ("sigma_ext_m2", "sigma_sca_m2", "truncation", "number_density_per_m3"):
+    optics = MediumOptics.from_atmosphere(atm, budget_only=True)
+    # The numbers the budget reads (the truncation to rounding: fewer moments
+    # projected), so the same estimates as the medium's.
+    for name in ("sigma_ext_m2", "sigma_sca_m2", "number_density_per_m3"):
         assert np.array_equal(getattr(optics, name), getattr(medium, name))
+    np.testing.assert_allclose(optics.truncation, medium.truncation, rtol=1e-12, atol=0)
+    full = MediumOptics.from_atmosphere(atm)
+    assert np.array_equal(full.chi, medium.chi)  # the medium's own code
     assert np.array_equal(optics.vertical_optical_depth(), medium.vertical_optical_depth())
     ref = orders.estimate_orders_cost(medium, n_layers=orders.N_LAYERS, tol=1e-4)
     cost = orders.estimate_orders_cost(optics, n_layers=orders.N_LAYERS, tol=1e-4)
