@@ -160,6 +160,58 @@ def test_no_derivatives_gives_the_same_table_bit_for_bit() -> None:
     assert with_d.provenance.inputs["derivatives"] == ["k"]
 
 
+def test_cross_sections_from_shared_panels_equal_their_own_rules() -> None:
+    """The cross-section derivatives reuse the phase function's rule sums on the
+    panels both quadratures share: summed again directly on the cross-section
+    panels' fine and coarse rules (as before that reuse), the same to rounding."""
+    import math
+
+    from dustoptics.scattering import table_derivatives as td
+
+    dist = ModifiedGamma(r_eff_um=1.6, v_eff=0.2)
+    names = ("r_eff_um", "v_eff", "n", "k")
+    m = 1.52 + 0.004j
+    t = do.compute_optics(m, dist, WL, THETA, rtol=1e-4, workers=1, derivatives=names)
+    diag = t.diagnostics
+    assert diag is not None
+    shared, apart = 0, 0
+    for i, wl in enumerate(WL):
+        panels, cross = diag.panels[i], diag.cross_section_panels[i]
+        own, theirs = set(map(tuple, panels.tolist())), set(map(tuple, cross.tolist()))
+        shared += len(own & theirs)
+        apart += len(own ^ theirs)
+        k_um = 2.0 * math.pi / (wl * 1e-3)
+        found = []
+        for halves in (True, False):
+            x, rule = td._rule_nodes(cross, wavelength_nm=wl, settings=diag.settings, halves=halves)
+            s = td._sums(
+                m,
+                dist,
+                x,
+                rule,
+                k_um=k_um,
+                dist_parameters=["r_eff_um", "v_eff"],
+                mu=np.empty(0),
+                per_particle=False,
+            )
+            directions = [1.0 + 0j, 1j]
+            found.append(
+                td._cross(
+                    s, 2, directions, per_particle=False, area=math.pi / k_um**2, lossless=False
+                )
+            )
+        for key, direct in found[0].items():
+            for j, p in enumerate(names):
+                ours = t.derivative(key, p)[i]
+                assert ours == pytest.approx(direct[j], rel=1e-11, abs=1e-14), (key, p, wl)
+                error = abs(direct[j] - found[1][key][j])
+                assert t.derivative_error_estimate(key, p)[i] == pytest.approx(
+                    error, rel=1e-6, abs=1e-12 * abs(direct[j]) + 1e-16
+                ), (key, p, wl)
+    # Both parts are exercised: most panels are shared, and some are not.
+    assert shared > apart > 0
+
+
 def test_unknown_parameter_is_refused_before_any_work() -> None:
     calls: list[int] = []
     with pytest.raises(
