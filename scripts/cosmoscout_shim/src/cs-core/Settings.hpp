@@ -156,47 +156,29 @@ class Settings {
 
   template <typename T>
   static void deserialize(nlohmann::json const& j, std::string const& property, T& target) {
-    try {
-      j.at(property).get_to(target);
-    } catch (DeserializationException const& e) {
-      throw DeserializationException(e.mProperty + " in '" + property + "'", e.mJSONError);
-    } catch (std::exception const& e) {
-      throw DeserializationException("'" + property + "'", e.what());
-    }
+    naming(property, [&] { j.at(property).get_to(target); });
   }
 
   template <typename T>
   static void deserialize(
       nlohmann::json const& j, std::string const& property, std::optional<T>& target) {
     auto iter = j.find(property);
-    if (iter != j.end()) {
-      try {
-        target = iter->template get<T>();
-      } catch (DeserializationException const& e) {
-        throw DeserializationException(e.mProperty + " in '" + property + "'", e.mJSONError);
-      } catch (std::exception const& e) {
-        throw DeserializationException("'" + property + "'", e.what());
-      }
-    } else {
+    if (iter == j.end()) {
       target = std::nullopt;
+      return;
     }
+    naming(property, [&] { target = iter->template get<T>(); });
   }
 
   template <typename T>
   static void deserialize(
       nlohmann::json const& j, std::string const& property, utils::DefaultProperty<T>& target) {
     auto iter = j.find(property);
-    if (iter != j.end()) {
-      try {
-        target = iter->template get<T>();
-      } catch (DeserializationException const& e) {
-        throw DeserializationException(e.mProperty + " in '" + property + "'", e.mJSONError);
-      } catch (std::exception const& e) {
-        throw DeserializationException("'" + property + "'", e.what());
-      }
-    } else {
+    if (iter == j.end()) {
       target.reset();
+      return;
     }
+    naming(property, [&] { target = iter->template get<T>(); });
   }
 
   template <typename T>
@@ -217,6 +199,21 @@ class Settings {
       nlohmann::json& j, std::string const& property, utils::DefaultProperty<T> const& target) {
     if (!target.isDefault()) {
       j[property] = target.get();
+    }
+  }
+
+ private:
+  /// Runs read(), rethrowing what it throws as a DeserializationException that names the
+  /// property, as each of CosmoScout's deserialize overloads does (an inner property's
+  /// failure reads "'inner' in 'outer'").
+  template <typename Read>
+  static void naming(std::string const& property, Read&& read) {
+    try {
+      read();
+    } catch (DeserializationException const& e) {
+      throw DeserializationException(e.mProperty + " in '" + property + "'", e.mJSONError);
+    } catch (std::exception const& e) {
+      throw DeserializationException("'" + property + "'", e.what());
     }
   }
 };
