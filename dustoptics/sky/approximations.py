@@ -1018,16 +1018,19 @@ def _preview(
         channels, _, order = _channel_weights(medium, a.channels_nm)
         albedo = channels.weights @ albedo
     n_az = exact.view_azimuth_deg.size
-    approximated = sky_radiance(
-        approx_medium,
-        sun_elevation_deg=sun_elevation_deg,
-        ground_albedo=albedo,
-        observer_altitude_m=exact.observer_altitude_m,
-        tol=exact.tol,
-        view_zenith_deg=exact.view_zenith_deg,
-        azimuth_step_deg=180.0 / (n_az - 1),
-        **sky_options,
-    )
+    if approx_medium is medium:  # nothing the sky reads differs: the exact sky, not rendered again
+        approximated = exact
+    else:
+        approximated = sky_radiance(
+            approx_medium,
+            sun_elevation_deg=sun_elevation_deg,
+            ground_albedo=albedo,
+            observer_altitude_m=exact.observer_altitude_m,
+            tol=exact.tol,
+            view_zenith_deg=exact.view_zenith_deg,
+            azimuth_step_deg=180.0 / (n_az - 1),
+            **sky_options,
+        )
     xyz_e = exact.xyz()
     if order is None:
         xyz_a = sunlit_xyz(approximated.wavelength_nm, approximated.radiance)

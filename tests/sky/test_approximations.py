@@ -58,6 +58,7 @@ def _preview(medium, exact, **kw):  # type: ignore[no-untyped-def]
 
 def test_exact_against_exact_differs_by_nothing(medium, exact) -> None:  # type: ignore[no-untyped-def]
     pv = _preview(medium, exact)
+    assert pv.approximated is exact  # nothing differs: not rendered again
     assert np.array_equal(pv.approximated.radiance, exact.radiance)
     assert np.all(pv.delta_xy == 0.0)
     assert np.all(pv.luminance_ratio == 1.0)
