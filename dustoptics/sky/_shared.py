@@ -1,13 +1,15 @@
 """Work that depends only on the geometry, shared between the renders of one scene.
 
-Two skies of one scene (the same dome, Sun, observer and medium geometry, other
-optics: the exact sky and the sky an engine draws,
-:func:`dustoptics.sky.approximations.preview_sky`) need the same angular bases
-and line-of-sight geometry.  Inside :func:`shared_geometry` the renderer keeps
-what :func:`geometry_memo` computes, keyed by what it depends on, and the
-second render takes it from there; outside any such scope nothing is kept and
-every render computes all it needs, as before.  Either way the values are the
-same arrays of the same bits: only who computes them changes.
+Two skies of one scene (the same Sun and streams, other optics: the exact sky
+and the sky an engine draws, :func:`dustoptics.sky.approximations.preview_sky`)
+need the same angular bases: the normalized associated Legendre functions at
+the discrete ordinates and at the Sun (:func:`dustoptics.sky.orders.normalized_legendre`,
+some 2,500 calls of scipy's ``lpmv`` per render) and the aureole's Legendre
+polynomials.  Inside :func:`shared_geometry` the renderer keeps what
+:func:`geometry_memo` computes, keyed by what it depends on, and the second
+render takes it from there; outside any such scope nothing is kept and every
+render computes all it needs, as before.  Either way the values are the same
+arrays of the same bits: only who computes them changes.
 """
 
 from __future__ import annotations
@@ -17,7 +19,7 @@ from contextlib import contextmanager
 from contextvars import ContextVar
 from typing import Any, TypeVar
 
-__all__ = ["geometry_memo", "shared_geometry", "sharing"]
+__all__ = ["geometry_memo", "shared_geometry"]
 
 _T = TypeVar("_T")
 
@@ -45,8 +47,3 @@ def geometry_memo(key: Hashable, compute: Callable[[], _T]) -> _T:
         memo[key] = compute()
     value: _T = memo[key]
     return value
-
-
-def sharing() -> bool:
-    """True within :func:`shared_geometry`."""
-    return _MEMO.get() is not None

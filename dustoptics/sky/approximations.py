@@ -58,11 +58,10 @@ as the exact one; the moments the multiple scattering needs are projected
 again from the approximated phase functions exactly as
 :meth:`~dustoptics.sky.medium.Medium.from_atmosphere` projects them.  The two
 renders share the work that depends only on the geometry
-(:func:`dustoptics.sky._shared.shared_geometry`: the discrete ordinates'
-Legendre functions, the aureole's Legendre polynomials, and at each sample of
-each line of sight the Sun's slant columns and its azimuth), which the second
-takes from the first, bit for bit.  The cost is less than one more sky render
-(a much cheaper one with three channels), plus the fit.
+(:func:`dustoptics.sky._shared.shared_geometry`: the Legendre functions at the
+discrete ordinates and at the Sun, the aureole's Legendre polynomials), which
+the second takes from the first, bit for bit.  The cost is less than one more
+sky render (a much cheaper one with three channels), plus the fit.
 
 Differences (:class:`PreviewSummary`), over the dome (every computed direction,
 means weighted by solid angle) and near the Sun (directions within

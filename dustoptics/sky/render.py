@@ -69,7 +69,6 @@ References
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from typing import Final, NamedTuple, TextIO
 
 import numba
@@ -78,8 +77,8 @@ import numpy as np
 from dustoptics._numba_cache import parallel_kernel
 from dustoptics._validation import MEMORY_BUDGET_BYTES, BudgetError, check_budget
 from dustoptics.sky._progress import Reporter, reporter
-from dustoptics.sky._shared import geometry_memo, sharing
-from dustoptics.sky.medium import Medium, MediumOptics, SlantColumns, _interp_columns, _scatters
+from dustoptics.sky._shared import geometry_memo
+from dustoptics.sky.medium import Medium, MediumOptics, _interp_columns, _scatters
 from dustoptics.sky.orders import DiffuseField, normalized_legendre
 
 __all__ = [
@@ -446,8 +445,6 @@ def _ray_kernel(
     hits: np.ndarray,
     ground_albedo: np.ndarray,
     ground_diffuse: np.ndarray,
-    ray_geo: np.ndarray,
-    geo_mode: int,
 ) -> np.ndarray:
     """Radiance of the rays of each row: single scattering, the ground, the diffuse source.
 
@@ -455,10 +452,7 @@ def _ray_kernel(
     source at a sample is the row's modes ``g[row, i, m]`` times ``cos(m phi)``
     at the sample's own azimuth from the Sun.  A thread takes a row and walks
     its samples, each sample's modes used by every ray of the row while they
-    are in the cache.  ``ray_geo[ray, i]``: the Sun's slant columns from the
-    sample (``n_c``), the cosine of its azimuth from the Sun and 1 where the Sun
-    reaches it (else 0), written with ``geo_mode`` 1, read instead of computed
-    with 2 (another render of the same geometry), unused with 0.
+    are in the cache.
     """
     n_rows = row_start.shape[0] - 1
     n_modes = g.shape[2]
@@ -490,28 +484,9 @@ def _ray_kernel(
             sl = math.sqrt(max(0.0, 1.0 - mu_loc * mu_loc))
             for r in range(n_ray):
                 ray = first + r
-                if geo_mode == 2:
-                    for c in range(n_c):
-                        col[c] = ray_geo[ray, i, c]
-                    cphi = ray_geo[ray, i, n_c]
-                    lit = ray_geo[ray, i, n_c + 1] > 0.0
-                else:
-                    mus_loc = (r0 * mu_sun_ray[ray] + s * cos_theta[r]) / x_r
-                    lit = _interp_columns(x_r, mus_loc, radius_grid, mu_grid, columns, col)
-                    # The local azimuth from the Sun, for the diffuse source's modes.
-                    cphi = 1.0
-                    if n_modes > 0 or geo_mode == 1:
-                        ssl = math.sqrt(max(0.0, 1.0 - mus_loc * mus_loc))
-                        if sl * ssl > 1e-12:
-                            cphi = (cos_theta[r] - mu_loc * mus_loc) / (sl * ssl)
-                            cphi = min(max(cphi, -1.0), 1.0)
-                    if geo_mode == 1:
-                        for c in range(n_c):
-                            ray_geo[ray, i, c] = col[c] if lit else 0.0
-                        ray_geo[ray, i, n_c] = cphi
-                        ray_geo[ray, i, n_c + 1] = 1.0 if lit else 0.0
+                mus_loc = (r0 * mu_sun_ray[ray] + s * cos_theta[r]) / x_r
                 # Single scattering, the Sun's beam through the shell.
-                if lit:
+                if _interp_columns(x_r, mus_loc, radius_grid, mu_grid, columns, col):
                     for x in range(nwl):
                         tau_sun = 0.0
                         ss = 0.0
@@ -522,6 +497,12 @@ def _ray_kernel(
                 if n_modes == 0:
                     continue
                 # Diffuse source: its modes at the local azimuth from the Sun.
+                ssl = math.sqrt(max(0.0, 1.0 - mus_loc * mus_loc))
+                if sl * ssl > 1e-12:
+                    cphi = (cos_theta[r] - mu_loc * mus_loc) / (sl * ssl)
+                    cphi = min(max(cphi, -1.0), 1.0)
+                else:
+                    cphi = 1.0
                 cm[0] = 1.0
                 cm[1] = cphi
                 for m in range(2, n_modes):
@@ -921,11 +902,6 @@ def _radiance(
     r_top = medium.planet_radius_m + medium.top_altitude_m
     sig_ext_scaled = medium.scaled_sigma_ext_m2
     sig_sca_scaled = medium.scaled_sigma_sca_m2
-    shared = _shared_ray_geometry(
-        medium, mu_sorted, phi_sorted, sun_sorted, radius_m, n_path, stretch
-    )
-    ray_geo = shared.values if shared is not None else np.empty((0, 0, 0))
-    geo_mode = 0 if shared is None else 2 if shared.filled else 1
     out = np.empty((n_rays, nwl))
     chunk = _rows_per_chunk(mu_rows.size, n_path, n_modes, nwl)
     done = 0
@@ -994,54 +970,7 @@ def _radiance(
             hits,
             field.ground_albedo,
             ground_diffuse,
-            ray_geo[a:b] if geo_mode else ray_geo,
-            geo_mode,
         )
         done += b - a
         report(f"lines of sight: {done} of {n_rays}", last=done == n_rays)
-    if shared is not None:
-        shared.filled = True
     return out
-
-
-#: Largest per-sample geometry of the lines of sight that two renders of one scene
-#: share (:func:`dustoptics.sky._shared.shared_geometry`; 17 MB for the default dome). [bytes]
-_SHARED_RAY_BYTES: Final = 256 * 2**20
-
-
-@dataclass
-class _RayGeometry:
-    # The Sun's slant columns, azimuth cosine and whether it is lit at each sample of
-    # each line of sight (sorted by row), for the renders of one scene; filled by the first.
-    slant: SlantColumns
-    values: np.ndarray
-    filled: bool = False
-
-
-def _shared_ray_geometry(
-    medium: Medium,
-    mu_view: np.ndarray,
-    phi_view: np.ndarray,
-    mu_sun: np.ndarray,
-    radius_m: float,
-    n_path: int,
-    stretch: float,
-) -> _RayGeometry | None:
-    """The lines of sight's geometry kept for the renders of one scene, or None (not kept)."""
-    n_c = medium.slant.column_m.shape[0]
-    shape = (mu_view.size, n_path + 1, n_c + 2)
-    if not sharing() or 8.0 * math.prod(shape) > _SHARED_RAY_BYTES:
-        return None
-    key = (
-        "lines-of-sight",
-        id(medium.slant),
-        float(radius_m),
-        n_path,
-        float(stretch),
-        mu_view.tobytes(),
-        phi_view.tobytes(),
-        mu_sun.tobytes(),
-    )
-    shared = geometry_memo(key, lambda: _RayGeometry(medium.slant, np.empty(shape)))
-    # The same columns (an id is unique only while its object lives: the memo keeps it).
-    return shared if shared.slant is medium.slant else None

@@ -285,10 +285,9 @@ def test_a_sky_grey_in_wavelength_keeps_its_colour_in_three_channels(exact) -> N
 
 
 def test_renders_sharing_their_geometry_are_bit_for_bit_those_alone(medium, exact) -> None:  # type: ignore[no-untyped-def]
-    # The preview's second render takes the first's geometry (angular bases, the
-    # lines of sight's Sun columns and azimuths): the same bits as rendered alone.
+    # The preview's second render takes the first's angular bases (the Legendre
+    # functions at the ordinates and the Sun, the aureole's): the same bits as alone.
     from dustoptics.sky import _shared
-    from dustoptics.sky.render import _RayGeometry
 
     approx, _ = approximate_medium(medium, Approximations(phase="fit:dhg"))
     alone = sky_radiance(approx, sun_elevation_deg=SUN_DEG, ground_albedo=ALBEDO, **SKY)
@@ -296,11 +295,12 @@ def test_renders_sharing_their_geometry_are_bit_for_bit_those_alone(medium, exac
         first = sky_radiance(medium, sun_elevation_deg=SUN_DEG, ground_albedo=ALBEDO, **SKY)
         memo = _shared._MEMO.get()
         assert memo is not None
-        rays = [v for v in memo.values() if isinstance(v, _RayGeometry)]
-        assert len(rays) == 1 and rays[0].filled  # kept by the first render
+        kept = dict(memo)
+        assert {k[0] for k in kept} == {"double-gauss", "sun-legendre", "aureole-legendre"}
         second = sky_radiance(approx, sun_elevation_deg=SUN_DEG, ground_albedo=ALBEDO, **SKY)
-        assert len([v for v in memo.values() if isinstance(v, _RayGeometry)]) == 1  # reused
-    assert not _shared.sharing()  # nothing is kept outside the scope
+        assert memo.keys() == kept.keys()  # nothing computed again
+        assert all(memo[k] is v for k, v in kept.items())
+    assert _shared._MEMO.get() is None  # nothing is kept outside the scope
     assert np.array_equal(first.radiance, exact.radiance)
     assert np.array_equal(second.radiance, alone.radiance)
     assert not np.array_equal(second.radiance, first.radiance)
