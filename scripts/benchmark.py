@@ -182,6 +182,7 @@ import sys
 import tempfile
 import time
 import warnings
+from collections.abc import Callable
 from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 
@@ -2026,6 +2027,29 @@ def format_rt(res: dict, mach: dict) -> str:
     return "\n".join(lines)
 
 
+def _write_json(path: Path | None, data: dict) -> None:
+    """Write ``data`` as JSON (sorted keys) to ``path`` (``--json``), if one is given."""
+    if path is not None:
+        path.write_text(json.dumps(data, indent=2, sort_keys=True) + "\n")
+        log(f"wrote {path}")
+
+
+def _run_section(
+    json_path: Path | None,
+    key: str,
+    measure: Callable[[], dict],
+    report: Callable[[dict, dict], str],
+) -> int:
+    """Run one section alone: measure it, print its report and the time taken, write its JSON."""
+    t0 = time.perf_counter()
+    mach = machine_info()
+    res = measure()
+    print(report(res, mach))
+    print(f"(benchmark ran {time.perf_counter() - t0:.0f} s)")
+    _write_json(json_path, {"machine": mach, key: res})
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
         description="Benchmark dustoptics against miepython baselines (see the module docstring)."
@@ -2076,82 +2100,34 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     if args.scatrs and not args.rt:
         parser.error("--scatrs goes with --rt")
-    if args.rt:
-        t0 = time.perf_counter()
-        mach = machine_info()
-        repeats = args.repeats if args.repeats is not None else 5
-        rt_res = measure_rt(DustOptics(), repeats, args.quick, with_scatrs=args.scatrs)
-        print(format_rt(rt_res, mach))
-        print(f"(benchmark ran {time.perf_counter() - t0:.0f} s)")
-        if args.json is not None:
-            args.json.write_text(
-                json.dumps({"machine": mach, "rt_optics": rt_res}, indent=2, sort_keys=True) + "\n"
-            )
-            log(f"wrote {args.json}")
-        return 0
-    if args.derivatives:
-        t0 = time.perf_counter()
-        mach = machine_info()
-        deriv_res = measure_derivatives()
-        print(format_derivatives(deriv_res, mach))
-        print(f"(benchmark ran {time.perf_counter() - t0:.0f} s)")
-        if args.json is not None:
-            args.json.write_text(
-                json.dumps({"machine": mach, "derivatives": deriv_res}, indent=2, sort_keys=True)
-                + "\n"
-            )
-            log(f"wrote {args.json}")
-        return 0
-    if args.compile:
-        t0 = time.perf_counter()
-        mach = machine_info()
-        first_use = measure_first_use(args.quick)
-        print(format_first_use(first_use, mach))
-        print(f"(benchmark ran {time.perf_counter() - t0:.0f} s)")
-        if args.json is not None:
-            args.json.write_text(
-                json.dumps({"machine": mach, "first_use": first_use}, indent=2, sort_keys=True)
-                + "\n"
-            )
-            log(f"wrote {args.json}")
-        return 0
-    if args.preview:
-        t0 = time.perf_counter()
-        mach = machine_info()
-        preview_res = measure_preview_only()
-        print(format_preview(preview_res, mach))
-        print(f"(benchmark ran {time.perf_counter() - t0:.0f} s)")
-        if args.json is not None:
-            args.json.write_text(
-                json.dumps({"machine": mach, "preview": preview_res}, indent=2, sort_keys=True)
-                + "\n"
-            )
-            log(f"wrote {args.json}")
-        return 0
-    if args.sky:
-        t0 = time.perf_counter()
-        mach = machine_info()
-        sky_res = measure_sky()
-        print(format_sky(sky_res, mach))
-        print(f"(benchmark ran {time.perf_counter() - t0:.0f} s)")
-        if args.json is not None:
-            args.json.write_text(
-                json.dumps({"machine": mach, "sky": sky_res}, indent=2, sort_keys=True) + "\n"
-            )
-            log(f"wrote {args.json}")
-        return 0
-    if args.sweep:
-        t0 = time.perf_counter()
-        mach = machine_info()
-        sweep_res = measure_sweep(args.quick)
-        print(format_sweep(sweep_res, args.quick, mach))
-        print(f"(benchmark ran {time.perf_counter() - t0:.0f} s)")
-        if args.json is not None:
-            args.json.write_text(
-                json.dumps({"machine": mach, "sweep": sweep_res}, indent=2, sort_keys=True) + "\n"
-            )
-            log(f"wrote {args.json}")
-        return 0
+    # The sections a flag runs alone, in the order they take precedence:
+    # (flag, key of the JSON output, measure(), report(result, machine)).
+    sections = (
+        (
+            "rt",
+            "rt_optics",
+            lambda: measure_rt(
+                DustOptics(),
+                args.repeats if args.repeats is not None else 5,
+                args.quick,
+                with_scatrs=args.scatrs,
+            ),
+            format_rt,
+        ),
+        ("derivatives", "derivatives", measure_derivatives, format_derivatives),
+        ("compile", "first_use", lambda: measure_first_use(args.quick), format_first_use),
+        ("preview", "preview", measure_preview_only, format_preview),
+        ("sky", "sky", measure_sky, format_sky),
+        (
+            "sweep",
+            "sweep",
+            lambda: measure_sweep(args.quick),
+            lambda res, mach: format_sweep(res, args.quick, mach),
+        ),
+    )
+    for flag, key, measure, report in sections:
+        if getattr(args, flag):
+            return _run_section(args.json, key, measure, report)
     repeats = args.repeats if args.repeats is not None else (1 if args.quick else 3)
     if repeats < 1:
         parser.error("--repeats must be >= 1")
@@ -2161,9 +2137,7 @@ def main(argv: list[str] | None = None) -> int:
     res["total_benchmark_time_s"] = time.perf_counter() - t0
     print(format_report(res))
     print(f"(benchmark ran {res['total_benchmark_time_s']:.0f} s)")
-    if args.json is not None:
-        args.json.write_text(json.dumps(res, indent=2, sort_keys=True) + "\n")
-        log(f"wrote {args.json}")
+    _write_json(args.json, res)
     return 0
 
 
