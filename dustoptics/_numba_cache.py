@@ -599,16 +599,24 @@ def _compile_here(k: Kernel) -> tuple[float, float]:
 
 
 #: What a child runs (``python -c``): ``dustoptics`` as a bare package (its
-#: ``__init__`` not run), then :func:`_serve`.  Arguments: the package's folder, the
-#: modules that declare the kernels.
+#: ``__init__`` not run), then :func:`_serve`, then :func:`_end`.  Arguments: the
+#: package's folder, the modules that declare the kernels.
 _CHILD_CODE = """\
 import sys, types
 package = types.ModuleType("dustoptics")
 package.__path__ = [sys.argv[1]]
 sys.modules["dustoptics"] = package
 import dustoptics._numba_cache as c
-sys.exit(c._serve(sys.argv[2:]))
+c._end(c._serve(sys.argv[2:]))
 """
+
+
+def _end(status: int) -> None:
+    """A child's exit, at once: the interpreter's teardown (numba's and LLVM's objects)
+    takes most of a second, which the build would wait for; numba has written each
+    kernel's cache files when it compiled it, and the answers are flushed."""
+    sys.stdout.flush()
+    os._exit(status)
 
 
 def _child_command(modules: Iterable[str]) -> list[str]:

@@ -332,7 +332,7 @@ def test_a_child_imports_the_kernels_modules_without_the_package():
     modules = sorted({k.dispatcher.py_func.__module__ for k in kernels()})
     command = _numba_cache._child_command(modules)
     code = command[2].replace(
-        "sys.exit(c._serve(sys.argv[2:]))",
+        "c._end(c._serve(sys.argv[2:]))",
         "c._import_bare(sys.argv[2:]); import json, os, numba.core.errors as e; "
         "print(json.dumps([sorted(c._KERNELS), hasattr(sys.modules['dustoptics'], "
         "'__version__'), sorted(m for m, v in sys.modules.items() if m.startswith('dustoptics.io') "
@@ -359,7 +359,7 @@ def test_a_child_imports_the_package_whole_when_a_module_needs_it(tmp_path):
     (tmp_path / "needs_init.py").write_text("from dustoptics import __version__\n")
     command = _numba_cache._child_command(["dustoptics.scattering.mie"])
     code = command[2].replace(
-        "sys.exit(c._serve(sys.argv[2:]))",
+        "c._end(c._serve(sys.argv[2:]))",
         "import importlib.util; "
         "sys.meta_path.insert(0, type('Finder', (), {'find_spec': staticmethod("
         "lambda name, path=None, target=None: importlib.util.spec_from_file_location("

@@ -53,6 +53,7 @@ and :func:`dustoptics.models.build.prepare_export` (build),
 from __future__ import annotations
 
 import argparse
+import gc
 import warnings
 from typing import Any
 
@@ -86,7 +87,14 @@ def main(argv: list[str] | None = None) -> int:
         return status
 
     with _interrupt.handling():  # Ctrl-C: one line and 130, wherever it lands
-        return errors.exit_status(command)
+        status = errors.exit_status(command)
+    if _interrupt.is_the_command():
+        # The process ends with this command: Python's last garbage collection at exit
+        # would finalize every object (numba's and LLVM's, xarray's: 0.6 s after a
+        # build); frozen, they are left to the operating system.  atexit handlers still
+        # run, and every file is closed by now.  Not in a program that calls main().
+        gc.freeze()
+    return status
 
 
 def _parser() -> argparse.ArgumentParser:
