@@ -39,9 +39,9 @@ on their own.
 Compiling
 ---------
 A kernel compiles on its first call (numba's lazy compilation), one after the
-other: 13 s of CPU time for the 19 kernels of a Mie table on the
-benchmark's 2-core machine (``scripts/benchmark.py --compile``, busy; 17 s for
-22 before the refinement's bookkeeping went to numpy).
+other: 10.5 s of CPU time for the 19 kernels of a Mie table on the
+benchmark's 2-core machine (``scripts/benchmark.py --compile``, quiet; 17 s for
+22, busy, before the refinement's bookkeeping went to numpy).
 :func:`compile_kernels` compiles in advance those of the kernels asked for
 that numba's cache does not hold, in this process and in child processes
 that write to the same cache (one per further core, at most
