@@ -30,7 +30,7 @@ from __future__ import annotations
 
 import functools
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from typing import Final
 
 import numba
@@ -200,41 +200,9 @@ def _interp_columns(
 
 
 @dataclass(frozen=True)
-class Medium:
-    """Optics and geometry of an atmosphere at its wavelengths.
-
-    Build it with :meth:`from_atmosphere`.
-
-    Attributes
-    ----------
-    name : str
-        The atmosphere's name.
-    wavelength_nm : numpy.ndarray, shape (n_wavelength,)
-        Wavelengths. [nm]
-    planet_radius_m, top_altitude_m : float
-        Ground radius and atmosphere thickness. [m]
-    roles : tuple of str
-        Constituent roles (``molecules``, ``aerosols``, ``ozone``).
-    tables : tuple of Table
-        The constituents' tables (phase functions for single scattering).
-    number_density_per_m3 : numpy.ndarray, shape (n_constituent,)
-        N0 of each constituent. [m^-3]
-    sigma_ext_m2, sigma_sca_m2 : numpy.ndarray, shape (n_constituent, n_wavelength)
-        Cross-sections per particle. [m^2]
-    chi : numpy.ndarray, shape (n_constituent, n_wavelength, n_moments)
-        Legendre moments of the phase functions (zeros for ozone),
-        ``n_moments = max(2 n_streams + 1, AUREOLE_MOMENTS)``. [-]
-    truncation : numpy.ndarray, shape (n_constituent, n_wavelength)
-        Delta-M forward-peak fraction f. [-]
-    altitude_m : numpy.ndarray, shape (n_z,)
-        Fine altitude grid of the relative densities. [m]
-    relative_density : numpy.ndarray, shape (n_constituent, n_z)
-        rho_c on ``altitude_m``. [-]
-    slant : SlantColumns
-        Column amounts along rays.
-    n_streams : int
-        Discrete ordinates per hemisphere of the multiple-scattering solver.
-    """
+class _ColumnOptics:
+    """What :class:`Medium` and :class:`MediumOptics` hold alike (their attributes but
+    the slant columns), and what is derived from it."""
 
     name: str
     wavelength_nm: np.ndarray
@@ -249,61 +217,7 @@ class Medium:
     truncation: np.ndarray
     altitude_m: np.ndarray
     relative_density: np.ndarray
-    slant: SlantColumns
     n_streams: int
-
-    @classmethod
-    def from_atmosphere(
-        cls,
-        atmosphere: Atmosphere,
-        *,
-        n_streams: int = N_STREAMS,
-        n_radii: int = 96,
-        n_mu: int = 512,
-    ) -> Medium:
-        """The medium of an atmosphere set.
-
-        Parameters
-        ----------
-        atmosphere : Atmosphere
-            Constituents with cross-sections, number densities and profiles.
-        n_streams : int
-            Discrete ordinates per hemisphere (moments resolved by the
-            multiple scattering: ``2 n_streams``); default :data:`N_STREAMS`.
-        n_radii, n_mu : int
-            Grid of the slant-column table (radius, zenith cosine), each in [2, 2048].
-        """
-        if not isinstance(atmosphere, Atmosphere):
-            raise TypeError(f"atmosphere must be an Atmosphere; got {type(atmosphere).__name__}")
-        if not (isinstance(n_streams, int) and 2 <= n_streams <= 32):
-            raise ValueError(f"n_streams must be an integer in [2, 32]; got {n_streams!r}")
-        for key, n in (("n_radii", n_radii), ("n_mu", n_mu)):  # interpolated: 2 at least
-            if not (type(n) is int and 2 <= n <= 2048):
-                raise ValueError(f"{key} must be an integer in [2, 2048]; got {n!r}")
-        o = MediumOptics.from_atmosphere(atmosphere, n_streams=n_streams)
-        slant = _slant_columns(
-            o.altitude_m, o.relative_density, o.planet_radius_m, o.top_altitude_m,
-            n_radii=n_radii, n_mu=n_mu,
-        )  # fmt: skip
-        return cls(
-            name=o.name,
-            wavelength_nm=o.wavelength_nm,
-            planet_radius_m=o.planet_radius_m,
-            top_altitude_m=o.top_altitude_m,
-            roles=o.roles,
-            tables=o.tables,
-            number_density_per_m3=o.number_density_per_m3,
-            sigma_ext_m2=o.sigma_ext_m2,
-            sigma_sca_m2=o.sigma_sca_m2,
-            chi=o.chi,
-            truncation=o.truncation,
-            altitude_m=o.altitude_m,
-            relative_density=o.relative_density,
-            slant=slant,
-            n_streams=n_streams,
-        )
-
-    # ------------------------------------------------------------ derived
 
     @property
     def scaled_sigma_ext_m2(self) -> np.ndarray:
@@ -334,24 +248,9 @@ class Medium:
         col = np.trapezoid(self.relative_density, self.altitude_m, axis=1)
         return self.sigma_ext_m2 * (self.number_density_per_m3 * col)[:, None]
 
-    def transmittance(
-        self, radius_m: np.ndarray, mu: np.ndarray, *, scaled: bool = False
-    ) -> np.ndarray:
-        """Transmittance to the top of the atmosphere along rays.
-
-        Returns shape ``(n_wavelength,) + radius_m.shape``; 0 for rays that
-        meet the ground.
-        """
-        col = self.slant.columns(np.asarray(radius_m, float), np.asarray(mu, float))
-        sigma = self.scaled_sigma_ext_m2 if scaled else self.sigma_ext_m2
-        amount = col * self.number_density_per_m3.reshape((-1,) + (1,) * (col.ndim - 1))
-        finite = np.isfinite(amount).all(axis=0)
-        tau = np.einsum("cl,c...->l...", sigma, np.where(np.isfinite(amount), amount, 0.0))
-        return np.where(finite, np.exp(-tau), 0.0)
-
 
 @dataclass(frozen=True)
-class MediumOptics:
+class MediumOptics(_ColumnOptics):
     """A medium's optics without its slant columns: what the budgets read, before any work.
 
     The estimates of :func:`~dustoptics.sky.orders.estimate_orders_cost` and
@@ -364,21 +263,6 @@ class MediumOptics:
     (:func:`dustoptics.sky.space.check_limb_cost`).  The attributes are
     :class:`Medium`'s of the same names (``chi`` to ``2 n_streams`` for a budget).
     """
-
-    name: str
-    wavelength_nm: np.ndarray
-    planet_radius_m: float
-    top_altitude_m: float
-    roles: tuple[str, ...]
-    tables: tuple[Table, ...]
-    number_density_per_m3: np.ndarray
-    sigma_ext_m2: np.ndarray
-    sigma_sca_m2: np.ndarray
-    chi: np.ndarray
-    truncation: np.ndarray
-    altitude_m: np.ndarray
-    relative_density: np.ndarray
-    n_streams: int
 
     @classmethod
     def from_atmosphere(
@@ -432,10 +316,95 @@ class MediumOptics:
             n_streams=n_streams,
         )
 
-    def vertical_optical_depth(self) -> np.ndarray:
-        """As :meth:`Medium.vertical_optical_depth`. [-]"""
-        col = np.trapezoid(self.relative_density, self.altitude_m, axis=1)
-        return self.sigma_ext_m2 * (self.number_density_per_m3 * col)[:, None]
+
+@dataclass(frozen=True)
+class Medium(_ColumnOptics):
+    """Optics and geometry of an atmosphere at its wavelengths.
+
+    Build it with :meth:`from_atmosphere`.
+
+    Attributes
+    ----------
+    name : str
+        The atmosphere's name.
+    wavelength_nm : numpy.ndarray, shape (n_wavelength,)
+        Wavelengths. [nm]
+    planet_radius_m, top_altitude_m : float
+        Ground radius and atmosphere thickness. [m]
+    roles : tuple of str
+        Constituent roles (``molecules``, ``aerosols``, ``ozone``).
+    tables : tuple of Table
+        The constituents' tables (phase functions for single scattering).
+    number_density_per_m3 : numpy.ndarray, shape (n_constituent,)
+        N0 of each constituent. [m^-3]
+    sigma_ext_m2, sigma_sca_m2 : numpy.ndarray, shape (n_constituent, n_wavelength)
+        Cross-sections per particle. [m^2]
+    chi : numpy.ndarray, shape (n_constituent, n_wavelength, n_moments)
+        Legendre moments of the phase functions (zeros for ozone),
+        ``n_moments = max(2 n_streams + 1, AUREOLE_MOMENTS)``. [-]
+    truncation : numpy.ndarray, shape (n_constituent, n_wavelength)
+        Delta-M forward-peak fraction f. [-]
+    altitude_m : numpy.ndarray, shape (n_z,)
+        Fine altitude grid of the relative densities. [m]
+    relative_density : numpy.ndarray, shape (n_constituent, n_z)
+        rho_c on ``altitude_m``. [-]
+    slant : SlantColumns
+        Column amounts along rays.
+    n_streams : int
+        Discrete ordinates per hemisphere of the multiple-scattering solver.
+    """
+
+    slant: SlantColumns
+
+    @classmethod
+    def from_atmosphere(
+        cls,
+        atmosphere: Atmosphere,
+        *,
+        n_streams: int = N_STREAMS,
+        n_radii: int = 96,
+        n_mu: int = 512,
+    ) -> Medium:
+        """The medium of an atmosphere set.
+
+        Parameters
+        ----------
+        atmosphere : Atmosphere
+            Constituents with cross-sections, number densities and profiles.
+        n_streams : int
+            Discrete ordinates per hemisphere (moments resolved by the
+            multiple scattering: ``2 n_streams``); default :data:`N_STREAMS`.
+        n_radii, n_mu : int
+            Grid of the slant-column table (radius, zenith cosine), each in [2, 2048].
+        """
+        if not isinstance(atmosphere, Atmosphere):
+            raise TypeError(f"atmosphere must be an Atmosphere; got {type(atmosphere).__name__}")
+        if not (isinstance(n_streams, int) and 2 <= n_streams <= 32):
+            raise ValueError(f"n_streams must be an integer in [2, 32]; got {n_streams!r}")
+        for key, n in (("n_radii", n_radii), ("n_mu", n_mu)):  # interpolated: 2 at least
+            if not (type(n) is int and 2 <= n <= 2048):
+                raise ValueError(f"{key} must be an integer in [2, 2048]; got {n!r}")
+        o = MediumOptics.from_atmosphere(atmosphere, n_streams=n_streams)
+        slant = _slant_columns(
+            o.altitude_m, o.relative_density, o.planet_radius_m, o.top_altitude_m,
+            n_radii=n_radii, n_mu=n_mu,
+        )  # fmt: skip
+        return cls(**{f.name: getattr(o, f.name) for f in fields(o)}, slant=slant)
+
+    def transmittance(
+        self, radius_m: np.ndarray, mu: np.ndarray, *, scaled: bool = False
+    ) -> np.ndarray:
+        """Transmittance to the top of the atmosphere along rays.
+
+        Returns shape ``(n_wavelength,) + radius_m.shape``; 0 for rays that
+        meet the ground.
+        """
+        col = self.slant.columns(np.asarray(radius_m, float), np.asarray(mu, float))
+        sigma = self.scaled_sigma_ext_m2 if scaled else self.sigma_ext_m2
+        amount = col * self.number_density_per_m3.reshape((-1,) + (1,) * (col.ndim - 1))
+        finite = np.isfinite(amount).all(axis=0)
+        tau = np.einsum("cl,c...->l...", sigma, np.where(np.isfinite(amount), amount, 0.0))
+        return np.where(finite, np.exp(-tau), 0.0)
 
 
 def _scatters(table: Table) -> bool:
