@@ -140,6 +140,51 @@ def test_boundary_checks_come_before_any_work() -> None:
         )
 
 
+@pytest.mark.parametrize(
+    ("bounds", "match"),
+    [
+        ({"r_eff_um": (-1.0, 3.0)}, r"lower bound r_eff_um = -1.0 is outside the model's domain"),
+        ({"v_eff": (0.02, 5.0)}, r"upper bound v_eff = 5.0 is outside the model's domain"),
+        ({"k": (-0.01, 0.05)}, r"lower bound of 'k' must be >= 0"),
+        ({"n": (0.0, 2.0)}, r"lower bound of 'n' must be > 0"),
+        ({"r_eff_um": (0.1, float("inf"))}, r"bounds must be finite"),
+        ({"k": (float("nan"), 0.05)}, r"bounds must be finite"),
+    ],
+)
+def test_bounds_where_the_model_cannot_go_are_refused(bounds: Any, match: str) -> None:
+    """The fit may step onto its bounds: one the model cannot take is refused up front."""
+    obs, _ = _observations(seed=1)
+    model = {**START, "refractive_index": 1.5 + 0.01j}
+    with pytest.raises(ValueError, match=match):
+        retrieve(obs, model=model, parameters=tuple(bounds), bounds=bounds)
+
+
+def test_a_table_beyond_the_budget_at_the_upper_bounds_is_refused_before_any(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """r_eff_um up to 3 mm: the table there is beyond compute_optics' budget, refused
+    before the start's table is computed (compute_optics is not called); allow_large
+    lets it through to the fit."""
+    from dustoptics._validation import BudgetError
+    from dustoptics.retrieve import fit as fit_module
+
+    calls = []
+
+    def no_tables(*args: Any, **kwargs: Any) -> None:
+        calls.append(kwargs)
+        raise RuntimeError("no table may be computed")
+
+    monkeypatch.setattr(fit_module, "compute_optics", no_tables)
+    obs, _ = _observations(seed=1)
+    bounds = {"r_eff_um": (0.1, 3000.0)}
+    with pytest.raises(BudgetError, match=r"at the upper bounds \{'r_eff_um': 3000.0\}"):
+        retrieve(obs, model=START, parameters=("r_eff_um",), bounds=bounds)
+    assert calls == []
+    with pytest.raises(RuntimeError, match="no table may be computed"):
+        retrieve(obs, model=START, parameters=("r_eff_um",), bounds=bounds, allow_large=True)
+    assert calls[0]["allow_large"] is True
+
+
 def test_hematite_fraction_of_mars_dust_through_the_mixing_rule() -> None:
     """The hematite fraction of Mars dust (Maxwell Garnett in n = 1.5) from its
     single-scattering albedo spectrum, 1e-3 noise, started from the default 3 %."""
@@ -217,4 +262,7 @@ def test_command_line_fits_the_observations_in_a_file(
     assert "already exist" in capsys.readouterr().err
     assert main(["retrieve", str(path), "--model", str(config), "--fit", "k=0"]) == 2
     assert "--fit must be PARAM=LO:HI" in capsys.readouterr().err
+    twice = ["--fit", "k=0:1", "--fit", "k=0:0.5"]
+    assert main(["retrieve", str(path), "--model", str(config), *twice]) == 2
+    assert "--fit k is given twice" in capsys.readouterr().err
     assert main(["retrieve", str(path), "--model", "no-such-preset", "--fit", "k=0:1"]) == 2

@@ -92,7 +92,8 @@ def add_parser(sub: Any) -> None:
     p.add_argument(
         "--allow-large",
         action="store_true",
-        help="go ahead when the sky solves are estimated beyond five minutes",
+        help="go ahead when the sky solves are estimated beyond five minutes, or a table the "
+        "fit may compute (at the size bounds) beyond the budget of one",
     )
     p.add_argument("--out", type=Path, metavar="FILE.json", help="write the result as JSON")
     p.add_argument("--force", action="store_true", help="replace an existing --out file")
@@ -107,10 +108,13 @@ def _pairs(options: list[str], flag: str, sep: str) -> dict[str, tuple[float, fl
         try:
             if not (eq and name and len(parts) == 2):
                 raise ValueError
-            out[name.strip()] = (float(parts[0]), float(parts[1]))
+            pair = (float(parts[0]), float(parts[1]))
         except ValueError:
             form = "PARAM=LO:HI" if sep == ":" else "PARAM=MEAN,SD"
             raise UsageError(f"{flag} must be {form}; got {text!r}") from None
+        if name.strip() in out:
+            raise UsageError(f"{flag} {name.strip()} is given twice; give each parameter once")
+        out[name.strip()] = pair
     return out
 
 

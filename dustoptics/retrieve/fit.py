@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import os
 import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
@@ -17,6 +18,7 @@ from typing import TYPE_CHECKING, Any, TextIO
 
 import numpy as np
 
+from dustoptics._validation import BudgetError
 from dustoptics.models.config import BuildConfig
 from dustoptics.particles.mixing import Mixture
 from dustoptics.particles.sizedist import Monodisperse, SizeDistribution
@@ -28,7 +30,8 @@ from dustoptics.retrieve.sky import (
     sky_progress,
     sky_samples,
 )
-from dustoptics.scattering.optics import compute_optics
+from dustoptics.scattering.optics import check_cost, compute_optics, default_theta_deg
+from dustoptics.scattering.quadrature import QuadratureSettings
 from dustoptics.scattering.table_derivatives import (
     INDEX_PARAMETERS,
     check_parameters,
@@ -167,6 +170,8 @@ def _model_keywords(model: Any) -> dict[str, Any]:
             raise ValueError(
                 f"model must not give {key!r}: retrieve chooses it from the observations"
             )
+    if "allow_large" in out:
+        raise ValueError("model must not give 'allow_large': pass it to retrieve itself")
     if not isinstance(out["distribution"], SizeDistribution):
         raise ValueError(
             f"model's distribution must be a SizeDistribution; got {out['distribution']!r}"
@@ -204,6 +209,62 @@ def _set(model: Mapping[str, Any], values: Mapping[str, float]) -> dict[str, Any
         else:
             out["distribution"] = with_parameter(dist, parameter, v)
     return out
+
+
+def _check_bound(model: Mapping[str, Any], parameter: str, value: float, which: str) -> None:
+    """Refuse a bound where the model cannot go (the fit may step onto its bounds):
+    m = n + i k with n > 0 and k >= 0, and whatever the distribution's or the
+    mixture's constructor refuses."""
+    if parameter == "n" and not value > 0.0:
+        raise ValueError(f"bounds: the {which} bound of 'n' must be > 0; got {value!r}")
+    if parameter == "k" and not value >= 0.0:
+        raise ValueError(
+            f"bounds: the {which} bound of 'k' must be >= 0 (m = n + i k, k >= 0); got {value!r}"
+        )
+    try:
+        _set(model, {parameter: value})
+    except (ValueError, TypeError) as exc:
+        raise ValueError(
+            f"bounds: the {which} bound {parameter} = {value!r} is outside the model's domain: {exc}"
+        ) from None
+
+
+def _check_corner_cost(
+    model: Mapping[str, Any],
+    names: Sequence[str],
+    upper: np.ndarray,
+    wavelength_nm: np.ndarray,
+    n_theta: int,
+    allow_large: bool,
+) -> None:
+    """The table at the distribution's upper bounds must be within compute_optics'
+    budget (unless ``allow_large``): the fit may step there, and each step computes
+    one (checked before any)."""
+    size = {p: float(u) for p, u in zip(names, upper.tolist(), strict=True)}
+    size = {p: v for p, v in size.items() if p not in INDEX_PARAMETERS}
+    size = {p: v for p, v in size.items() if not _fraction_name(model["refractive_index"], p)}
+    if not size:
+        return
+    try:
+        corner = _set(model, size)
+    except (ValueError, TypeError):
+        return  # each bound alone is valid (_check_bound); their corner is not a model
+    settings = model.get("quadrature") or QuadratureSettings()
+    workers = model.get("workers") or os.cpu_count() or 1
+    try:
+        check_cost(
+            corner["distribution"],
+            wavelength_nm,
+            n_theta,
+            settings=settings,
+            weighting=model.get("weighting", "scattering"),
+            workers=workers,
+            allow_large=allow_large,
+        )
+    except (ValueError, BudgetError) as exc:
+        raise type(exc)(
+            f"bounds: at the upper bounds {size} the fit's table would be refused: {exc}"
+        ) from None
 
 
 # ----------------------------------------------------------------- observations
@@ -395,7 +456,8 @@ def retrieve(
         the sky solves of each Jacobian.  It does not change the result.
     allow_large : bool
         Go ahead when the sky solves are estimated beyond
-        :data:`~dustoptics.retrieve.sky.MAX_SKY_SECONDS`.
+        :data:`~dustoptics.retrieve.sky.MAX_SKY_SECONDS`, or a table the fit
+        may compute beyond compute_optics' budget.
 
     Returns
     -------
@@ -407,9 +469,14 @@ def retrieve(
     ------
     ValueError
         Bad observations, an unknown parameter (the message lists the allowed
-        ones), a parameter without bounds, a start outside them, a prior with a
-        standard deviation <= 0; all before any table is computed.
+        ones), a parameter without bounds, bounds that are not finite or where
+        the model cannot go (r_eff_um <= 0, k < 0, a fraction outside [0, 1],
+        ...), a start outside them, a prior with a standard deviation <= 0;
+        all before any table is computed.
     dustoptics._validation.BudgetError
+        The table at the size distribution's upper bounds is beyond
+        compute_optics' budget (:func:`~dustoptics.scattering.optics.check_cost`)
+        and ``allow_large`` is False, before any table is computed; or
         With sky observations, the most sky solves the fit may need (``(1 +
         n_parameters) x scenes`` per iteration, forward differences) times
         the estimated seconds of one are beyond
@@ -456,11 +523,19 @@ def retrieve(
     start = np.array([_get(keywords, p) for p in names])
     lower = np.array([float(bounds[p][0]) for p in names])
     upper = np.array([float(bounds[p][1]) for p in names])
+    if not np.all(np.isfinite(lower) & np.isfinite(upper)):
+        raise ValueError(
+            f"bounds must be finite numbers (they also set the sky's finite-difference step); "
+            f"got {dict(bounds)!r}"
+        )
     if not np.all((lower < upper) & (lower <= start) & (start <= upper)):
         raise ValueError(
             f"bounds {dict(bounds)!r} must satisfy lower < upper and hold the model's values "
             f"{dict(zip(names, start.tolist()))}"
         )
+    for p, lo, hi in zip(names, lower.tolist(), upper.tolist(), strict=True):
+        _check_bound(keywords, p, lo, "lower")
+        _check_bound(keywords, p, hi, "upper")
     prior_list = []
     for p, (mean, sd) in (priors or {}).items():
         if p not in names:
@@ -487,6 +562,11 @@ def retrieve(
         )
         thetas = np.concatenate([o.theta_deg[np.isfinite(o.theta_deg)] for o in obs])
         theta = np.unique(thetas) if thetas.size else np.array([0.0, 180.0])
+        _check_corner_cost(keywords, names, upper, wavelengths, theta.size, allow_large)
+    if sky_model is not None:  # the sky's table: its wavelengths, the default angles
+        _check_corner_cost(
+            keywords, names, upper, sky_model.wavelength_nm, default_theta_deg().size, allow_large
+        )
     steps = sky.relative_step * (upper - lower)
     labels = tuple(label for o in obs for label in _labels(o))
     sky_value = sky_sigma = np.zeros(0)
@@ -511,7 +591,11 @@ def retrieve(
         entry: Entry = {"x": np.array(x, dtype=np.float64)}
         if obs:
             table = compute_optics(
-                **current, wavelength_nm=wavelengths, theta_deg=theta, derivatives=names
+                **current,
+                wavelength_nm=wavelengths,
+                theta_deg=theta,
+                derivatives=names,
+                allow_large=allow_large,
             )
             entry["table"] = table
             for o in obs:
@@ -521,7 +605,10 @@ def retrieve(
         if sky_model is not None:
             table_began = time.perf_counter()
             sky_table = compute_optics(
-                **current, wavelength_nm=sky_model.wavelength_nm, derivatives=names
+                **current,
+                wavelength_nm=sky_model.wavelength_nm,
+                derivatives=names,
+                allow_large=allow_large,
             )
             entry["sky_table"] = sky_table
             if "budget" not in counter:
