@@ -265,4 +265,33 @@ def test_command_line_fits_the_observations_in_a_file(
     twice = ["--fit", "k=0:1", "--fit", "k=0:0.5"]
     assert main(["retrieve", str(path), "--model", str(config), *twice]) == 2
     assert "--fit k is given twice" in capsys.readouterr().err
+
+
+def test_command_line_refuses_files_that_are_not_observations(
+    tmp_path: Any, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A directory, a FIFO, text and a damaged HDF5 header: one line each, exit 1,
+    before any table (the FIFO is never opened, so nothing blocks)."""
+    import os
+
+    from dustoptics.cli import main
+
+    text = tmp_path / "text.nc"
+    text.write_text("not netCDF\n", encoding="utf-8")
+    damaged = tmp_path / "damaged.nc"
+    damaged.write_bytes(b"\x89HDF\r\n\x1a\n" + bytes(100))
+    fifo = tmp_path / "fifo.nc"
+    os.mkfifo(fifo)
+    expected = {
+        tmp_path: "not a regular file",
+        fifo: "not a regular file",
+        text: "not a netCDF file of observations",
+        damaged: "not a netCDF file of observations",
+        tmp_path / "missing.nc": "no such file",
+    }
+    for path, message in expected.items():
+        argv = ["retrieve", str(path), "--model", "hybrid", "--fit", "r_eff_um=0.5:3"]
+        assert main(argv) == 1
+        err = capsys.readouterr().err
+        assert message in err and len(err.strip().splitlines()) == 1, err
     assert main(["retrieve", str(path), "--model", "no-such-preset", "--fit", "k=0:1"]) == 2

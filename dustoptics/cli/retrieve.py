@@ -118,6 +118,41 @@ def _pairs(options: list[str], flag: str, sep: str) -> dict[str, tuple[float, fl
     return out
 
 
+#: Largest observations file the command reads (it loads it whole): 256 MiB. [bytes]
+MAX_OBSERVATIONS_BYTES = 256 * 1024**2
+
+
+def _read_observations(path: Path) -> Any:
+    """The observations file as an xarray Dataset, loaded; a missing file, one that is
+    not a regular file (FIFO, device, directory), a larger one than
+    :data:`MAX_OBSERVATIONS_BYTES` or one xarray cannot read is refused in one line."""
+    import stat
+
+    import xarray as xr
+
+    from dustoptics._files import FormatError
+
+    try:
+        info = path.stat()
+    except FileNotFoundError:
+        raise FileNotFoundError(f"{path}: no such file") from None
+    if not stat.S_ISREG(info.st_mode):
+        raise FormatError(f"{path}: not a regular file (a FIFO, device, socket or directory)")
+    if info.st_size > MAX_OBSERVATIONS_BYTES:
+        raise FormatError(
+            f"{path}: {info.st_size} bytes, larger than the {MAX_OBSERVATIONS_BYTES}-byte "
+            "limit of the observations"
+        )
+    try:
+        with xr.open_dataset(path) as ds:
+            return ds.load()
+    except (OSError, ValueError, KeyError, TypeError) as exc:
+        raise FormatError(
+            f"{path}: not a netCDF file of observations that xarray can read "
+            f"({type(exc).__name__}: {exc})"
+        ) from None
+
+
 def _model(name: str) -> Any:
     from dustoptics.models.build import is_config_path
     from dustoptics.models.files import load_config
@@ -183,12 +218,7 @@ def run(args: argparse.Namespace) -> int:
         from dustoptics.io._atomic import check_targets
 
         check_targets([args.out], overwrite=args.force)
-    if not args.observations.is_file():
-        raise FileNotFoundError(f"{args.observations}: no such file")
-    import xarray as xr
-
-    with xr.open_dataset(args.observations) as ds:
-        observations = ds.load()
+    observations = _read_observations(args.observations)
 
     result = retrieve(
         observations,
