@@ -171,14 +171,17 @@ def _attr(var: Any, key: str, default: float | None, low: float, high: float) ->
         if default is None:
             raise ValueError(f"observations: {var.name!r} needs the attribute {key!r} (its scene)")
         return default
+    raw = var.attrs[key]
     try:
-        value = float(var.attrs[key])
+        value = float(raw)
     except (TypeError, ValueError):
         value = math.nan
     if not low <= value <= high:
+        # A number as the number (a numpy scalar's repr names its type), anything else as given.
+        shown = f"{value:g}" if isinstance(raw, (int, float, np.number)) else repr(raw)
         raise ValueError(
             f"observations: {var.name!r} attribute {key} must be within [{low:g}, {high:g}]; "
-            f"got {var.attrs[key]!r}"
+            f"got {shown}"
         )
     return value
 
