@@ -297,7 +297,7 @@ def _add_four_orders(a: np.ndarray, e0: int, t: np.ndarray, i0: int, nb: int, c:
 
 @njit(cache=True, nogil=True)
 def _amplitudes_and_derivatives(
-    coef: np.ndarray, s: int, nmax: int, table: np.ndarray, acc: np.ndarray
+    coef: np.ndarray, s: int, nmax: int, table: np.ndarray, acc: np.ndarray, with_m: bool
 ) -> None:
     """S1, S2 and dS1/dm, dS2/dm of one sphere at the angles of ``table``
     (``mie.angular_table``'s blocked layout), split by parity as the table's
@@ -306,7 +306,9 @@ def _amplitudes_and_derivatives(
     S2 (rows 0-7, the table's layout) and of dS1, dS2 (rows 8-15).  One pass
     over the orders for the values and the derivative: the angular functions
     are read once, four orders at a time, angles innermost in real
-    arithmetic (the compiler vectorizes it)."""
+    arithmetic (the compiler vectorizes it).  Without ``with_m`` (no
+    parameter of the refractive index asked for) rows 8-15 stay zero: the
+    amplitudes alone cost half."""
     acc[:] = 0.0
     n_pass = (nmax + 3) // 4
     n_blocks = acc.shape[0] // (16 * BLOCK)
@@ -333,7 +335,8 @@ def _amplitudes_and_derivatives(
             d = blk * 16 * BLOCK
             # S1, S2 (rows 0-7), then dS1/dm, dS2/dm (rows 8-15): one loop each.
             _add_four_orders(a, d, t, o, nb, val)
-            _add_four_orders(a, d + 8 * BLOCK, t, o, nb, der)
+            if with_m:
+                _add_four_orders(a, d + 8 * BLOCK, t, o, nb, der)
 
 
 @njit(cache=True, nogil=True, inline="always")
@@ -408,6 +411,7 @@ def _accumulate_blocked(
     symmetric: bool,
     n_stokes: int,
     per_particle: bool,
+    with_m: bool,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """:func:`_accumulate` (without the x direction) on the table's own kernels.
 
@@ -421,7 +425,9 @@ def _accumulate_blocked(
     derivative: dS/dk = i dS/dn.  Returns ``ang`` (n_w, n_stokes, n_f),
     ``dang`` (2, n_stokes, n_f), ``sums`` (n_w, N_SUMS), ``dsums``
     (2, N_SUMS), as :func:`_accumulate`, n_f = 2 n_mu if ``symmetric`` else
-    n_mu; ``n_mu`` = 0 gives the sums alone.
+    n_mu; ``n_mu`` = 0 gives the sums alone.  Without ``with_m`` the
+    angular m derivatives are not summed (``dang`` stays zero): the
+    distribution's parameters alone need the amplitudes only.
     """
     n_nodes = x_nodes.shape[0]
     n_w = weights.shape[1]
@@ -472,7 +478,7 @@ def _accumulate_blocked(
                 rel[d] = -per[s, o + 1] / qs if per_particle else 0.0
             if n_mu == 0:
                 continue
-            _amplitudes_and_derivatives(coef, s, nmax_b[s], table, acc)
+            _amplitudes_and_derivatives(coef, s, nmax_b[s], table, acc, with_m)
             scale = 1.0 / (2.0 * np.pi * qs) if per_particle else 1.0
             for blk in range(n_blocks):
                 i0 = blk * BLOCK
@@ -486,7 +492,7 @@ def _accumulate_blocked(
                             row = ang[c, q]
                             for i in range(n_l):
                                 row[j0 + i] += wc * st[q, i]
-                    for d in range(2):
+                    for d in range(2 if with_m else 0):
                         wd = w0 * scale
                         r = rel[d]
                         for q in range(n_stokes):

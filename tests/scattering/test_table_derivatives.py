@@ -193,6 +193,7 @@ def test_cross_sections_from_shared_panels_equal_their_own_rules() -> None:
                 dist_parameters=["r_eff_um", "v_eff"],
                 mu=np.empty(0),
                 per_particle=False,
+                with_m=True,
             )
             directions = [1.0 + 0j, 1j]
             found.append(
@@ -366,3 +367,25 @@ def test_bimodal_mixture_and_threads() -> None:
     two = do.compute_optics(1.5 + 0.005j, dist, WL, THETA, workers=2, derivatives=names)
     assert one.equals(two)
     assert one.derivatives is not None and one.derivatives.parameter_units == ("1", "1")
+
+
+def test_size_derivatives_do_not_depend_on_the_index_ones_asked_with_them() -> None:
+    """Without a parameter of the refractive index the angular m derivatives are not
+    summed (half a sphere's work); the distribution's derivatives and their error
+    estimates are the same, bit for bit, as when n and k are asked for too."""
+    dist = ModifiedGamma(r_eff_um=1.6, v_eff=0.2)
+    kw = {"rtol": 1e-4, "workers": 1, "polarization": True, "expansion": 16}
+    size = do.compute_optics(
+        1.52 + 0.004j, dist, WL, THETA, derivatives=("r_eff_um", "v_eff"), **kw
+    )
+    both = do.compute_optics(
+        1.52 + 0.004j, dist, WL, THETA, derivatives=("n", "r_eff_um", "k", "v_eff"), **kw
+    )
+    assert size.derivatives is not None and both.derivatives is not None
+    for q, v in size.derivatives.values.items():
+        for j, p in enumerate(("r_eff_um", "v_eff")):
+            np.testing.assert_array_equal(v[j], both.derivative(q, p), err_msg=f"d{q}/d{p}")
+            np.testing.assert_array_equal(
+                size.derivatives.error_estimates[q][j],
+                both.derivatives.error_estimates[q][both.derivatives.parameters.index(p)],
+            )
