@@ -477,15 +477,16 @@ def children_cpu_s() -> float | None:
     return usage.ru_utime + usage.ru_stime
 
 
-def cli_build(cache_dir: str) -> dict:
-    """`dustoptics build` (default preset) in a fresh process: wall and CPU time, stderr."""
-    out_dir = tempfile.mkdtemp(prefix="dustoptics-build-")
+def cli_command(args: list[str], env: dict[str, str]) -> dict:
+    """`dustoptics ARGS --out TMP` in a fresh process: wall and CPU time, stderr
+    (the output folder removed after)."""
+    out_dir = tempfile.mkdtemp(prefix="dustoptics-bench-")
     try:
         cpu0 = children_cpu_s()
         t0 = time.perf_counter()
         proc = subprocess.run(
-            [sys.executable, "-m", "dustoptics.cli", "build", "--out", out_dir],
-            env=subprocess_env(NUMBA_CACHE_DIR=cache_dir),
+            [sys.executable, "-m", "dustoptics.cli", *args, "--out", out_dir],
+            env=env,
             capture_output=True,
             text=True,
             check=False,
@@ -495,12 +496,18 @@ def cli_build(cache_dir: str) -> dict:
     finally:
         shutil.rmtree(out_dir, ignore_errors=True)
     if proc.returncode != 0:
-        raise RuntimeError(f"dustoptics build failed:\n{proc.stderr}")
+        raise RuntimeError(f"dustoptics {' '.join(args)} failed:\n{proc.stderr}")
     return {
         "wall_s": wall,
         "cpu_s": None if cpu0 is None or cpu1 is None else cpu1 - cpu0,
         "stderr": proc.stderr,
     }
+
+
+def cli_build(cache_dir: str) -> dict:
+    """`dustoptics build` (default preset) in a fresh process with numba's cache in
+    ``cache_dir``: wall and CPU time, stderr."""
+    return cli_command(["build"], subprocess_env(NUMBA_CACHE_DIR=cache_dir))
 
 
 def measure_first_build(runs: int) -> dict:
@@ -1662,24 +1669,7 @@ PREVIEW_COMMANDS = {"fit:dhg": ["--phase", "fit:dhg"], "rgb": ["--rgb"]}
 
 def cli_sky(extra: list[str]) -> dict:
     """`dustoptics sky mars [EXTRA]` in a fresh process (warm numba cache): wall and CPU time."""
-    out_dir = tempfile.mkdtemp(prefix="dustoptics-sky-")
-    try:
-        cpu0 = children_cpu_s()
-        t0 = time.perf_counter()
-        proc = subprocess.run(
-            [sys.executable, "-m", "dustoptics.cli", "sky", "mars", *extra, "--out", out_dir],
-            env=subprocess_env(),
-            capture_output=True,
-            text=True,
-            check=False,
-        )
-        wall = time.perf_counter() - t0
-        cpu1 = children_cpu_s()
-    finally:
-        shutil.rmtree(out_dir, ignore_errors=True)
-    if proc.returncode != 0:
-        raise RuntimeError(f"dustoptics sky mars {' '.join(extra)} failed:\n{proc.stderr}")
-    return {"wall_s": wall, "cpu_s": None if cpu0 is None or cpu1 is None else cpu1 - cpu0}
+    return cli_command(["sky", "mars", *extra], subprocess_env())
 
 
 def measure_preview_commands(repeats: int = 3) -> dict:
