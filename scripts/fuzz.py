@@ -14,8 +14,10 @@ spelled several ways, huge and refused sizes, by the API and the command line),
 on a full disk, then checked and resumed), ``kills`` (a table's set killed with SIGKILL at
 any step of the writer, then ``info`` and a later write), ``bounds`` (crafted table files,
 devices, FIFOs and oversized files given to every reader), ``inputs`` (arguments, TOML,
-provenance and texture sidecars that raised tracebacks) and ``digests`` (seed-CSV sets
-without their checksums, and a process that forks after rendering a sky).
+provenance and texture sidecars that raised tracebacks), ``digests`` (seed-CSV sets
+without their checksums, and a process that forks after rendering a sky) and ``retrieve``
+(``dustoptics retrieve`` with bounds, priors and options at and beyond their edges, on
+observation files good, incomplete, damaged or of another kind).
 
 Every case runs in a forked process with an address-space limit
 (``resource.setrlimit(RLIMIT_AS)``) and a timeout, and with the package's
@@ -83,6 +85,7 @@ KINDS = (
     "bounds",
     "inputs",
     "digests",
+    "retrieve",
 )
 
 
@@ -1334,6 +1337,117 @@ def _sky_fork(workdir: Path) -> str:
     return "the forked child rendered the same sky"
 
 
+#: Options of ``dustoptics retrieve``: the fitted parameter first (one is always given).
+RETRIEVE_FITS: tuple[str, ...] = (
+    "r_eff_um=0.1:3",
+    "r_eff_um=0.1:3",
+    "k=0:0.05",
+    "r_eff_um=-1:3",
+    "r_eff_um=0.1:inf",
+    "r_eff_um=nan:3",
+    "r_eff_um=0.1:3000",
+    "v_eff=0.01:0.9",
+    "k=-1:0.05",
+    "bogus=0:1",
+    "r_eff_um",
+    "r_eff_um=3:0.1",
+)
+RETRIEVE_ARGUMENTS: tuple[tuple[str, ...], ...] = (
+    ("--fit", "v_eff=0.02:0.4"),
+    ("--fit", "r_eff_um=0.2:2"),
+    ("--prior", "r_eff_um=0.5,0.1"),
+    ("--prior", "r_eff_um=0.5,-1"),
+    ("--prior", "k=nan,1"),
+    ("--prior", "v_eff=0.1,0.05"),
+    ("--max-iterations", "0"),
+    ("--max-iterations", "3"),
+    ("--max-iterations", "99999999999999999999"),
+    ("--sky-streams", "1"),
+    ("--sky-tol", "0"),
+    ("--allow-large",),
+    ("--force",),
+)
+#: Observation files: what each holds.
+RETRIEVE_FILES: tuple[str, ...] = (
+    "ssa",
+    "ssa",
+    "ratio",
+    "phase",
+    "ssa_nan",
+    "ssa_without_uncertainty",
+    "empty",
+    "sky_bad_scene",
+    "wrong_dimension",
+    "text",
+    "damaged",
+    "missing",
+)
+
+
+def _observation_file(path: Path, kind: str) -> None:
+    """Write an observations file of ``kind`` (:data:`RETRIEVE_FILES`) for the small dust."""
+    import numpy as np
+    import xarray as xr
+
+    wl = np.array([440.0, 550.0, 680.0])
+    if kind in ("text", "damaged"):
+        path.write_bytes(b"not netCDF\n" if kind == "text" else b"\x89HDF\r\n\x1a\n" + bytes(64))
+        return
+    if kind == "missing":
+        return
+    if kind == "empty":
+        ds = xr.Dataset()
+    elif kind == "ratio":
+        ratio = xr.DataArray([1.1, 1.0, 0.9], coords={"wavelength_nm": wl}, dims="wavelength_nm")
+        ds = xr.Dataset({"extinction_ratio": ratio, "extinction_ratio_uncertainty": ratio * 0.01})
+        ds["extinction_ratio"].attrs["reference_wavelength_nm"] = 550.0
+    elif kind == "phase":
+        theta = np.array([10.0, 90.0, 170.0])
+        phase = xr.DataArray(
+            np.full((3, 3), 0.1), coords={"wavelength_nm": wl, "theta_deg": theta},
+            dims=("wavelength_nm", "theta_deg"), attrs={"uncertainty": 0.01},
+        )  # fmt: skip
+        ds = xr.Dataset({"phase": phase})
+    elif kind == "sky_bad_scene":
+        xy = xr.DataArray(
+            [[0.4, 0.38]], coords={"sun_elevation_deg": [30.0], "chromaticity": ["x", "y"]},
+            dims=("sun_elevation_deg", "chromaticity"),
+            attrs={"optical_depth": -1.0, "uncertainty": 0.003},
+        )  # fmt: skip
+        ds = xr.Dataset({"sky_chromaticity": xy})
+    elif kind == "wrong_dimension":
+        ssa = xr.DataArray([0.9, 0.95], dims="x", attrs={"uncertainty": 0.01})
+        ds = xr.Dataset({"ssa": ssa})
+    else:
+        values = [0.93, float("nan") if kind == "ssa_nan" else 0.95, 0.96]
+        attrs = {} if kind == "ssa_without_uncertainty" else {"uncertainty": 0.01}
+        ssa = xr.DataArray(values, coords={"wavelength_nm": wl}, dims="wavelength_nm", attrs=attrs)
+        ds = xr.Dataset({"ssa": ssa})
+    ds.to_netcdf(path)
+
+
+def retrieve_cases(rng: random.Random, n: int) -> list[Case]:
+    """``dustoptics retrieve``: bounds, priors and options at and beyond their edges, on
+    observation files good, incomplete, damaged or of another kind; the small dust's TOML
+    as the model."""
+    cases = []
+    for _ in range(n):
+        fit = rng.choice(RETRIEVE_FITS)
+        extra = [
+            a for option in rng.sample(RETRIEVE_ARGUMENTS, rng.choice((0, 1, 2))) for a in option
+        ]
+        kind = rng.choice(RETRIEVE_FILES)
+
+        def run(workdir: Path, fit: str = fit, extra: list[str] = extra, kind: str = kind) -> str:
+            (workdir / "fuzz.toml").write_text(SMALL_CONFIG, encoding="utf-8")
+            _observation_file(workdir / "obs.nc", kind)
+            argv = ["retrieve", "obs.nc", "--model", "fuzz.toml", "--fit", fit, *extra]
+            return run_cli(workdir, [*argv, "--out", "out/fit.json"])
+
+        cases.append(Case("retrieve", f"retrieve {kind} --fit {fit} {' '.join(extra)}", run))
+    return cases
+
+
 GENERATORS = {
     "api": api_cases,
     "config": config_cases,
@@ -1345,6 +1459,7 @@ GENERATORS = {
     "bounds": bounds_cases,
     "inputs": inputs_cases,
     "digests": digests_cases,
+    "retrieve": retrieve_cases,
 }
 
 

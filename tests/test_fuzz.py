@@ -3,7 +3,7 @@
 CI runs seed 0 with 5 cases of each kind (API calls, TOML configurations,
 command lines, damaged files, sweep specifications, sweep stores damaged or
 contended, sets killed while written, files beyond the readers' bounds, inputs
-that raised tracebacks, seed-CSV sets without checksums), each forked with an address-space limit and a timeout.  ``pytest --hypothesis-profile=explore`` runs 60 cases of each kind
+that raised tracebacks, seed-CSV sets without checksums, retrieve command lines), each forked with an address-space limit and a timeout.  ``pytest --hypothesis-profile=explore`` runs 60 cases of each kind
 from a seed taken from the clock (printed, to reproduce a failure with
 ``python scripts/fuzz.py --seed SEED --cases 60``).
 """
