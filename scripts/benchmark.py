@@ -179,6 +179,7 @@ import os
 os.environ["MIEPYTHON_USE_JIT"] = "1"
 
 import argparse
+import functools
 import json
 import platform
 import re
@@ -313,6 +314,21 @@ def spread(grid: np.ndarray, k: int) -> np.ndarray:
 
 def theta_grid(n: int) -> np.ndarray:
     return np.linspace(0.0, 180.0, n)
+
+
+def report_row(lines: list[str], label: str, value: str) -> None:
+    """One row of a report: the label in 62 columns, then the value."""
+    lines.append(f"  {label:<62} {value}")
+
+
+def machine_rows(lines: list[str], mach: dict) -> None:
+    """The report's rows of the machine: its cores and the load average at the start."""
+    report_row(lines, "cores (os.cpu_count)", str(mach["cpu_count"]))
+    report_row(
+        lines,
+        "load average at start (1, 5, 15 min)",
+        ", ".join(f"{x:.2f}" for x in mach["load_average"]) if mach["load_average"] else "n/a",
+    )
 
 
 def subprocess_env(**extra: str) -> dict[str, str]:
@@ -1082,17 +1098,12 @@ def format_report(res: dict) -> str:
         lines.append(title)
         lines.append("-" * len(title))
 
-    def row(label: str, value: str) -> None:
-        lines.append(f"  {label:<62} {value}")
+    row = functools.partial(report_row, lines)
 
     mach = res["machine"]
     lines.append("dustoptics benchmark" + ("  (--quick)" if res["settings"]["quick"] else ""))
     lines.append("=" * 20)
-    row("cores (os.cpu_count)", str(mach["cpu_count"]))
-    row(
-        "load average at start (1, 5, 15 min)",
-        ", ".join(f"{x:.2f}" for x in mach["load_average"]) if mach["load_average"] else "n/a",
-    )
+    machine_rows(lines, mach)
     row("platform", mach["platform"])
     for name in ("python", "numpy", "numba", "miepython", "dustoptics"):
         row(name, mach[name])
@@ -1536,14 +1547,9 @@ def measure_sweep(quick: bool) -> dict:
 def format_sweep(res: dict, quick: bool, mach: dict) -> str:
     lines = ["dustoptics sweep benchmark" + ("  (--quick)" if quick else ""), "=" * 26]
 
-    def row(label: str, value: str) -> None:
-        lines.append(f"  {label:<62} {value}")
+    row = functools.partial(report_row, lines)
 
-    row("cores (os.cpu_count)", str(mach["cpu_count"]))
-    row(
-        "load average at start (1, 5, 15 min)",
-        ", ".join(f"{x:.2f}" for x in mach["load_average"]) if mach["load_average"] else "n/a",
-    )
+    machine_rows(lines, mach)
     lines.append("")
     lines.append(
         f"8. Sweep: {res['points']} points ({' x '.join(res['axes'])}), "
@@ -1858,14 +1864,9 @@ def measure_sky(repeats: int = 2) -> dict:
 def format_sky(res: dict, mach: dict) -> str:
     lines = ["dustoptics sky benchmark", "=" * 24]
 
-    def row(label: str, value: str) -> None:
-        lines.append(f"  {label:<62} {value}")
+    row = functools.partial(report_row, lines)
 
-    row("cores (os.cpu_count)", str(mach["cpu_count"]))
-    row(
-        "load average at start (1, 5, 15 min)",
-        ", ".join(f"{x:.2f}" for x in mach["load_average"]) if mach["load_average"] else "n/a",
-    )
+    machine_rows(lines, mach)
     lines.append("")
     lines.append(
         f"9. Sky: {res['atmosphere']}, tau {res['optical_depth']:g}, {res['wavelengths']} "
@@ -1925,8 +1926,7 @@ def measure_first_use(quick: bool) -> dict:
 def first_use_rows(lines: list[str], res: dict) -> None:
     """Section 10's rows and targets."""
 
-    def row(label: str, value: str) -> None:
-        lines.append(f"  {label:<62} {value}")
+    row = functools.partial(report_row, lines)
 
     lines.append("")
     lines.append("10. First use: import, compile, first build")
@@ -1968,14 +1968,9 @@ def first_use_rows(lines: list[str], res: dict) -> None:
 def format_first_use(res: dict, mach: dict) -> str:
     lines = ["dustoptics first-use benchmark", "=" * 30]
 
-    def row(label: str, value: str) -> None:
-        lines.append(f"  {label:<62} {value}")
+    row = functools.partial(report_row, lines)
 
-    row("cores (os.cpu_count)", str(mach["cpu_count"]))
-    row(
-        "load average at start (1, 5, 15 min)",
-        ", ".join(f"{x:.2f}" for x in mach["load_average"]) if mach["load_average"] else "n/a",
-    )
+    machine_rows(lines, mach)
     for name in ("python", "numpy", "numba", "dustoptics"):
         row(name, mach[name])
     first_use_rows(lines, res)
@@ -2034,13 +2029,9 @@ def measure_derivatives(repeats: int = 3) -> dict:
 def format_derivatives(res: dict, mach: dict) -> str:
     lines = ["dustoptics derivatives benchmark", "=" * 32]
 
-    def row(label: str, value: str) -> None:
-        lines.append(f"  {label:<62} {value}")
+    row = functools.partial(report_row, lines)
 
-    row(
-        "load average at start (1, 5, 15 min)",
-        ", ".join(f"{x:.2f}" for x in mach["load_average"]) if mach["load_average"] else "n/a",
-    )
+    machine_rows(lines, mach)
     lines.append("")
     lines.append("11. Derivatives: r_eff, v_eff, n, k vs table alone")
     lines.append("-" * 50)
@@ -2083,13 +2074,9 @@ def format_rt(res: dict, mach: dict) -> str:
     """Section 7 alone (``--rt``): the first part, and scatrs with ``--scatrs``."""
     lines = ["dustoptics radiative-transfer optics benchmark", "=" * 46]
 
-    def row(label: str, value: str) -> None:
-        lines.append(f"  {label:<62} {value}")
+    row = functools.partial(report_row, lines)
 
-    row(
-        "load average at start (1, 5, 15 min)",
-        ", ".join(f"{x:.2f}" for x in mach["load_average"]) if mach["load_average"] else "n/a",
-    )
+    machine_rows(lines, mach)
     lines.append("")
     lines.append("7. Radiative-transfer optics: matrix + expansion vs phase only (interleaved)")
     lines.append("-" * 50)
