@@ -47,7 +47,8 @@ derivatives 0.10 s, the coarse rule's 0.24 s, against 0.5-0.6 s for the table
 alone: the fine rule by itself, without an error estimate, is 0.8-1.0 times
 the table's cost.  Without a parameter of the refractive index the angular m
 derivatives are not summed (the amplitudes' pass without dS/dm): r_eff and
-v_eff alone cost 1.98-2.02 times the table against 2.3-2.4 for all four.
+v_eff alone cost 1.86-2.38 times the table against 2.13-2.58 for all four
+(seven runs of section 11 on 2 cores, load 0.5-1.2; the ratio moves with the load).
 
 Error estimate
 --------------
