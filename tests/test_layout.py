@@ -19,7 +19,6 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     (
         "dustoptics._validation",
         "dustoptics._numba_cache",
-        "dustoptics._deprecated",
         "dustoptics._files",
     ),
     ("dustoptics.table", "dustoptics.colour", "dustoptics.compare"),

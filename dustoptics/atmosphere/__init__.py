@@ -13,9 +13,6 @@
   from a preset, and their provenance record (``dustoptics build mars``).
 """
 
-from typing import Any
-
-from dustoptics._deprecated import moved_attribute
 from dustoptics.atmosphere import aerosols, build, column, gases, parametric, sets
 from dustoptics.atmosphere.build import ATMOSPHERES, build_atmosphere
 from dustoptics.atmosphere.sets import (
@@ -39,10 +36,3 @@ __all__ = [
     "parametric",
     "sets",
 ]
-
-#: Names that moved to :mod:`dustoptics.io.csv.cosmoscout` (the CosmoScout format lives in io).
-_MOVED = {"write_atmosphere": "dustoptics.io.csv.cosmoscout"}
-
-
-def __getattr__(name: str) -> Any:
-    return moved_attribute(__name__, name, _MOVED)

@@ -56,12 +56,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any, Final
+from typing import Final
 
 import numpy as np
 from numpy.typing import ArrayLike
 
-from dustoptics._deprecated import moved_attribute
 from dustoptics._validation import as_increasing_grid, check_choice, check_positive
 from dustoptics.atmosphere import aerosols as _aerosols
 from dustoptics.atmosphere import gases
@@ -885,14 +884,3 @@ def earth_atmosphere_kobe2026(*, name: str = "earth-kobe2026") -> Atmosphere:
         ),
         name=name,
     )
-
-
-#: Names that moved to :mod:`dustoptics.io.csv.cosmoscout` (the CosmoScout format lives in io).
-_MOVED = {
-    "settings_json": "dustoptics.io.csv.cosmoscout",
-    "write_atmosphere": "dustoptics.io.csv.cosmoscout",
-}
-
-
-def __getattr__(name: str) -> Any:
-    return moved_attribute(__name__, name, _MOVED)

@@ -54,8 +54,6 @@ from __future__ import annotations
 
 import argparse
 import gc
-import warnings
-from typing import Any
 
 from dustoptics.cli import errors
 
@@ -102,44 +100,3 @@ def _parser() -> argparse.ArgumentParser:
     from dustoptics.cli.parser import build_parser
 
     return build_parser()
-
-
-#: Names that lived here before the command line became a package, and the module each
-#: moved to: importing them from here warns, for one release.
-_MOVED = {
-    "ATMOSPHERES": "dustoptics.atmosphere.build",
-    "SET_PROVENANCE_SUFFIX": "dustoptics.atmosphere.build",
-    "build_atmosphere": "dustoptics.atmosphere.build",
-    "set_inputs": "dustoptics.atmosphere.build",
-    "set_provenance": "dustoptics.atmosphere.build",
-    "COMPILE_ESTIMATE_S": "dustoptics.models.build",
-    "FormatOptions": "dustoptics.models.build",
-    "TableBuilder": "dustoptics.models.build",
-    "Placement": "dustoptics.io.outputs",
-    "place_outputs": "dustoptics.io.outputs",
-    "read_table": "dustoptics.io.outputs",
-    "with_inputs": "dustoptics.io.outputs",
-    "write_formats": "dustoptics.io.outputs",
-    "describe_path": "dustoptics.io.describe",
-    "SkyJob": "dustoptics.sky.job",
-    "DEFAULT_FORMATS": "dustoptics.cli.build",
-    "PROG": "dustoptics.cli.errors",
-    "UsageError": "dustoptics.cli.errors",
-}
-
-
-def __getattr__(name: str) -> Any:
-    """The moved names, with a DeprecationWarning naming their new place."""
-    from dustoptics._deprecated import REMOVED_IN, moved_attribute
-
-    if name == "describe":  # renamed as it moved
-        warnings.warn(
-            f"{__name__}.describe moved to dustoptics.io.describe.describe_table; the old path "
-            f"is removed in {REMOVED_IN}",
-            DeprecationWarning,
-            stacklevel=2,
-        )
-        from dustoptics.io.describe import describe_table
-
-        return describe_table
-    return moved_attribute(__name__, name, _MOVED)

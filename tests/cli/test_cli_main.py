@@ -111,33 +111,3 @@ def test_main_and_the_parser_import_without_a_warning():
         warnings.simplefilter("error")
         module = importlib.import_module("dustoptics.cli")
         assert callable(module.main) and callable(module._parser)
-
-
-@pytest.mark.parametrize(
-    ("old", "module", "new"),
-    [
-        ("TableBuilder", "dustoptics.models.build", "TableBuilder"),
-        ("FormatOptions", "dustoptics.models.build", "FormatOptions"),
-        ("describe_path", "dustoptics.io.describe", "describe_path"),
-        ("describe", "dustoptics.io.describe", "describe_table"),
-        ("place_outputs", "dustoptics.io.outputs", "place_outputs"),
-        ("read_table", "dustoptics.io.outputs", "read_table"),
-        ("SkyJob", "dustoptics.sky.job", "SkyJob"),
-        ("build_atmosphere", "dustoptics.atmosphere.build", "build_atmosphere"),
-        ("SET_PROVENANCE_SUFFIX", "dustoptics.atmosphere.build", "SET_PROVENANCE_SUFFIX"),
-        ("UsageError", "dustoptics.cli.errors", "UsageError"),
-    ],
-)
-def test_old_import_paths_warn_and_give_the_moved_object(old, module, new):
-    cli = importlib.import_module("dustoptics.cli")
-    message = f"dustoptics.cli.{old} moved to {module}.{new}; the old path is removed in 0.3"
-    with pytest.warns(DeprecationWarning, match=message.replace(".", r"\.")) as caught:
-        moved = getattr(cli, old)
-    assert moved is getattr(importlib.import_module(module), new)
-    assert caught[0].filename == __file__  # the warning points at the line that asked
-
-
-def test_an_unknown_name_is_an_attribute_error():
-    cli = importlib.import_module("dustoptics.cli")
-    with pytest.raises(AttributeError, match="has no attribute 'nope'"):
-        cli.nope  # noqa: B018

@@ -214,18 +214,6 @@ def test_module_exports_exist() -> None:
         assert hasattr(tabulated_phase, name), name
 
 
-@pytest.mark.parametrize("name", tabulated_phase.__all__)
-def test_old_names_in_phase_warn_and_give_the_moved_function(name: str) -> None:
-    assert name not in phase.__all__
-    with pytest.warns(
-        DeprecationWarning, match=rf"phase\.{name} moved to .*tabulated_phase\.{name}"
-    ):
-        old = getattr(phase, name)
-    assert old is getattr(tabulated_phase, name)
-    with pytest.warns(DeprecationWarning, match="removed in 0.3"):
-        exec(f"from dustoptics.scattering.phase import {name}", {})
-
-
 def test_package_names_do_not_warn() -> None:
     with warnings.catch_warnings():
         warnings.simplefilter("error")
