@@ -1801,8 +1801,8 @@ def measure_sky(repeats: int = 2) -> dict:
     def cdisort(medium: object, sky: object, threads: int) -> float:
         # The same column (the renderer's layers and streams) and the dome's directions
         # below the horizon, by CDISORT's batch solver over the wavelengths.
-        from dustoptics.sky.disort import disort_radiance
         from dustoptics.sky.orders import N_LAYERS
+        from tests.reference.disort import disort_radiance
 
         zen = sky.view_zenith_deg[sky.view_zenith_deg < 90.0]
         zz, aa = np.meshgrid(zen, sky.view_azimuth_deg, indexing="ij")

@@ -5,13 +5,13 @@ Usage::
     python scripts/sky_vs_disort.py [--streams N] [--reference-streams M] [--cases LIST]
                                     [--json OUT.json] [--no-horizon]
 
-For each validation case of :mod:`dustoptics.sky.disort` (Rayleigh scattering,
+For each validation case of ``tests/reference/disort.py`` (Rayleigh scattering,
 an Earth aerosol at optical depth 0.1 and 0.4, Mars dust at 0.5, 1 and 2; 440,
 550 and 670 nm; the Sun at 20, 45 and 70 deg elevation) the renderer's
 radiance at its defaults (``--streams`` overrides the number of streams) is
 compared with converged CDISORT (``NSTR = 2 x --reference-streams``) on a
 plane-parallel planet, in the directions a plane-parallel model can judge
-(:func:`~dustoptics.sky.disort.validation_directions`: view zenith 0-10 deg in
+(``validation_directions``: view zenith 0-10 deg in
 1 deg steps, a grid to 75 deg, a ring 3-15 deg around the Sun).  The table
 gives the largest relative error, where it is (view zenith, azimuth from the
 Sun, scattering angle, wavelength), the largest with the view within 10 deg
@@ -39,10 +39,10 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 import numpy as np
 
 from dustoptics.atmosphere import sets
-from dustoptics.sky import disort as ref
 from dustoptics.sky.medium import Medium
 from dustoptics.sky.orders import solve_orders
 from dustoptics.sky.render import line_of_sight_radiance
+from tests.reference import disort as ref
 
 
 def log(text: str) -> None:

@@ -11,7 +11,7 @@ fixed quadrature (J_i the rule's weight in r),
     <C> = int n C dr ~ sum_i J_i n(r_i) C(r_i),
     d<C>/dp ~ sum_i J_i (dn/dp)(r_i) C(r_i) = sum_i w_i [(dn/dp) / n](r_i) C(r_i)
 
-(:mod:`dustoptics.scattering.derivatives` writes the rest of the chain).
+(``tests/reference/derivatives.py`` writes the rest of the chain).
 
 Where p moves an end of the support (:class:`~dustoptics.particles.sizedist.PowerLaw`'s
 ``r_min_um`` and ``r_max_um``, :class:`~dustoptics.particles.sizedist.Truncated`'s

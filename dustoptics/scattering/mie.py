@@ -503,15 +503,6 @@ def _coat(
         ws[_GQ + s] = gq * 2.0 * f
 
 
-def _coefficients(ws: np.ndarray, n_top: int, n_sph: int) -> tuple[np.ndarray, np.ndarray]:
-    """a_n, b_n (n = 1..n_top) of the spheres of workspace ``ws`` after
-    :func:`_mie_coefficients`, as complex arrays of shape (n_top, n_sph)."""
-    blocks = ws[_LANE : _LANE + n_top * _BLK].reshape(n_top, _N_PLANES, LANES)[:, :, :n_sph]
-    a = blocks[:, _AR // LANES] + 1j * blocks[:, _AI // LANES]
-    b = blocks[:, _BR // LANES] + 1j * blocks[:, _BI // LANES]
-    return a, b
-
-
 @njit(cache=True, nogil=True, inline="always")
 def _pi_tau_table(mu: np.ndarray, nmax: int) -> tuple[np.ndarray, np.ndarray]:
     """Angular functions pi_n(mu), tau_n(mu) for n = 1..nmax, shape (len(mu), nmax).
@@ -1113,58 +1104,6 @@ def _table_width(n_mu: int) -> int:
     return 8 * BLOCK * ((n_mu + BLOCK - 1) // BLOCK)
 
 
-def _accumulate_tiers(
-    m: complex,
-    x_nodes: np.ndarray,
-    w_nodes: np.ndarray,
-    node_panel: np.ndarray,
-    node_tier: np.ndarray,
-    n_panels: int,
-    per_particle: bool,
-    tier_size: np.ndarray,
-    tables: np.ndarray,
-    table_start: np.ndarray,
-    maps: np.ndarray,
-    map_start: np.ndarray,
-    n_stokes: int,
-    m_core: complex,
-    core_fraction: float,
-) -> np.ndarray:
-    """:func:`_accumulate` on tiers of symmetric Gauss grids, moved to the largest.
-
-    Node j is summed on tier ``node_tier[j]``: the grid of tier_size[t]
-    half-grid angles, whose :func:`angular_table` is ``tables[table_start[t]:
-    table_start[t + 1]]`` (flattened).  Each panel's nodes must share one tier,
-    and the nodes come sorted by tier, then by x.  Rows of tiers below the
-    last are moved to the last tier's grid by the maps of
-    :func:`_interpolation_maps` (R_even then R_odd, flattened, at
-    ``maps[map_start[t]:]``).  Returns rows of shape
-    (n_panels, 2 n_stokes tier_size[-1] + N_SUMS), as :func:`_accumulate`
-    would on the largest grid (to the rounding of the interpolation; every
-    block I, Q, U, V of the scattering matrix is a polynomial in mu of degree
-    2 n_max, as the intensity is).  :func:`_accumulate_grids` with
-    ``symmetric`` true.
-    """
-    return _accumulate_grids(
-        m,
-        x_nodes,
-        w_nodes,
-        node_panel,
-        node_tier,
-        n_panels,
-        per_particle,
-        tier_size,
-        tables,
-        table_start,
-        maps,
-        map_start,
-        True,
-        n_stokes,
-        _core_index(m_core, core_fraction),
-        core_fraction,
-    )
-
-
 #: :func:`_accumulate_grids`' argument types but the last two (m_core, core_fraction).
 _GRIDS_ARGS = (C16, F8_1D, F8_1D, I8_1D, I8_1D, I8, B1, I8_1D, F8_1D, I8_1D, F8_1D, I8_1D, B1, I8)
 
@@ -1188,8 +1127,8 @@ def _accumulate_grids(
     m_core: complex | None,
     core_fraction: float,
 ) -> np.ndarray:
-    """The sums of :func:`_accumulate` and :func:`_accumulate_tiers`: the one
-    compiled loop over spheres that both run.
+    """The sums of :func:`_accumulate` and of the tiered angular grids of
+    :mod:`dustoptics.scattering.refinement`: the one compiled loop over spheres that both run.
 
     Node j is summed on grid ``node_tier[j]``, of tier_size[t] angles (half-grid
     angles if ``symmetric``) whose :func:`angular_table` is
@@ -1197,7 +1136,7 @@ def _accumulate_grids(
     angles sums the cross-sections alone.  The nodes come sorted by grid, then
     by x, and each panel's nodes share one grid.  Rows of grids below the last
     (symmetric Gauss grids only) are moved to the last one by the maps of
-    :func:`_interpolation_maps` (R_even then R_odd, flattened, at
+    :func:`_interpolation_maps_into` (R_even then R_odd, flattened, at
     ``maps[map_start[t]:]``).  Returns rows of shape (n_panels, n_stokes n_f
     + N_SUMS), n_f = 2 tier_size[-1] if ``symmetric`` else tier_size[-1].
 
@@ -1365,17 +1304,6 @@ def _legendre_project(
     return beta
 
 
-def _interpolation_maps(
-    mu_half: np.ndarray, w_half: np.ndarray, mu_half_out: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
-    """(R_even, R_odd) of :func:`_interpolation_maps_into`, in new arrays of
-    shape (len(mu_half), len(mu_half_out))."""
-    r_even = np.empty((mu_half.shape[0], mu_half_out.shape[0]))
-    r_odd = np.empty((mu_half.shape[0], mu_half_out.shape[0]))
-    _interpolation_maps_into(mu_half, w_half, mu_half_out, r_even, r_odd)
-    return r_even, r_odd
-
-
 @kernel(
     F8_1D_RO, F8_1D_RO, F8_1D_RO, F8_2D, F8_2D, error_model="numpy"
 )  # y at a node: inf, then replaced
@@ -1443,7 +1371,7 @@ def _interpolation_maps_into(
 def _legendre_regrid(rows: np.ndarray, r_even: np.ndarray, r_odd: np.ndarray) -> np.ndarray:
     """Each row's values (+mu_half, then -mu_half) moved to the output grid
     (+mu_half_out, then -mu_half_out) by the maps of
-    :func:`_interpolation_maps`."""
+    :func:`_interpolation_maps_into`."""
     n_rows = rows.shape[0]
     n_in, n_out = r_even.shape
     out = np.empty((n_rows, 2 * n_out))

@@ -5,7 +5,7 @@ numba kernels (``cache=True``, no ``fastmath``, as :mod:`dustoptics.scattering.m
 take plain values and arrays (complex refractive index ``m``, size parameters
 ``x``, weights, direction cosines ``mu``); :func:`sphere_derivatives` is the one
 public function, which validates and converts at the boundary.  The
-polydisperse reference path, :mod:`dustoptics.scattering.derivatives`, sums the
+polydisperse reference path, ``tests/reference/derivatives.py``, sums the
 same kernels over a radius quadrature (:func:`_accumulate`);
 :mod:`dustoptics.scattering.table_derivatives` sums the table's nodes with
 ``mie_derivatives_blocked._accumulate_blocked``, which takes the coefficients from the table's own

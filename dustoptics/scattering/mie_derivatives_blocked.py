@@ -2,7 +2,7 @@
 
 :mod:`dustoptics.scattering.mie_derivatives` derives and checks the exact
 derivatives of one sphere's results with respect to m (its single-sphere
-kernels and the reference sums of :mod:`dustoptics.scattering.derivatives`).
+kernels and the reference sums of ``tests/reference/derivatives.py``).
 This module is the same mathematics laid out for speed, as
 :mod:`dustoptics.scattering.table_derivatives` uses it: the coefficients come
 from the table's own kernel (``mie._mie_coefficients``, ``LANES`` spheres at a

@@ -148,12 +148,12 @@ def _gauss_angles(n_half: int) -> tuple[np.ndarray, ...]:
 @lru_cache(maxsize=8)
 def _angular_tiers(n_half: int) -> tuple[np.ndarray, ...]:
     """Angular tiers below the grid of n_half half-grid angles, flattened for
-    :func:`mie._accumulate_tiers`: tier sizes, their angular tables and start
+    :func:`mie._accumulate_grids`: tier sizes, their angular tables and start
     offsets, the interpolation maps to the full grid and their offsets.
 
     A panel whose spheres need fewer orders is summed on a smaller Gauss grid
     (cost ~ n_max x n_angles per sphere) and moved to the full grid by exact
-    polynomial interpolation (:func:`mie._interpolation_maps`).  Tier sizes
+    polynomial interpolation (:func:`mie._interpolation_maps_into`).  Tier sizes
     fall by 2^(1/4), in multiples of 16, down to 32 half-grid angles.  Cached
     (neighbouring wavelengths share n_half, and a table over 360-830 nm
     spans about 8 values; ~2 MB each at n_half ~ 200, ~20 MB at 500).
@@ -178,7 +178,7 @@ def _angular_tiers(n_half: int) -> tuple[np.ndarray, ...]:
 
 def _stacked_interpolation_maps(sizes: np.ndarray, n_half: int) -> tuple[np.ndarray, np.ndarray]:
     """Interpolation maps from the Gauss grids of ``sizes`` half-grid angles
-    to the grid of ``n_half`` (:func:`mie._interpolation_maps`), stacked in
+    to the grid of ``n_half`` (:func:`mie._interpolation_maps_into`), stacked in
     one flat array: for each size, R_even then R_odd.  Returns the array and
     the start of each size's maps (one more, the end).  The maps are written
     in place: at n_half ~ 1,000 they take ~100 MB, and building each apart
@@ -404,7 +404,7 @@ def _accumulate_by_tier(
     m_core: complex,
     core_fraction: float,
 ) -> np.ndarray:
-    """Rows of :func:`mie._accumulate_tiers` for nodes given panel after panel.
+    """Rows of :func:`mie._accumulate_grids` for nodes given panel after panel.
 
     Each panel is summed on the smallest tier that holds n_max + 2 orders of
     its largest sphere (wiscombe_nmax + 1, plus 1 so that the rounding of the

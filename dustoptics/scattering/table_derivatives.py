@@ -25,7 +25,7 @@ S[Y] = sum_i J_i n(r_i) Y(r_i) has the exact derivatives
   dS/dq = Re(dm/dq) dS/dn + Im(dm/dq) dS/dk (the chain rule);
 
 and the outputs are quotients of such sums, differentiated by the quotient
-rule (:mod:`dustoptics.scattering.derivatives` writes them out; that module is
+rule (``tests/reference/derivatives.py`` writes them out; that module is
 the slower reference path, on its own uniformly refined rule).  On many
 angles the angular sums are taken at Gauss angles and projected on Legendre
 polynomials of degree <= 2 n_max, exactly as the table's phase function is

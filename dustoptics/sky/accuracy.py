@@ -16,12 +16,12 @@ reasons, each bounded here:
   :data:`FLOOR` (1e-3).
 
 The model is fitted to the largest errors against converged CDISORT
-(:mod:`dustoptics.sky.disort`, ``scripts/sky_vs_disort.py``) over the
+(``tests/reference/disort.py``, ``scripts/sky_vs_disort.py``) over the
 validation cases (Rayleigh scattering, an Earth aerosol at optical depth
 0.1-0.4, Mars dust at 0.5-2; 440, 550 and 670 nm; with 8, 12, 16 and 24
 streams) in the directions a plane-parallel model can judge: Sun elevation
 >= 20 deg, view zenith <= 75 deg, 3 deg or more from the Sun.  There it
-bounds the measured error (``tests/sky/test_disort.py`` checks that it does).
+bounds the measured error (``tests/sky/test_sky_vs_cdisort.py`` checks that it does).
 Outside that domain (a lower Sun, the horizon, the Sun's disc) the spherical
 shell and the plane-parallel references differ for physical reasons and the
 model is not validated.

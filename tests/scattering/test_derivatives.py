@@ -1,4 +1,4 @@
-"""The reference derivatives path (dustoptics.scattering.derivatives) against
+"""The reference derivatives path (tests/reference/derivatives.py) against
 compute_optics tables and their central finite differences, and against scatrs.
 
 Values: against :func:`compute_optics` at its default tolerances (rtol 1e-4 for
@@ -31,6 +31,7 @@ import math
 
 import numpy as np
 import pytest
+from reference.derivatives import ANGULAR, optics_derivatives
 
 from dustoptics.particles.custom_sizedist import MultiModal
 from dustoptics.particles.sizedist import (
@@ -43,7 +44,6 @@ from dustoptics.particles.sizedist import (
     Truncated,
 )
 from dustoptics.particles.sizedist_derivatives import parameter_value, with_parameter
-from dustoptics.scattering.derivatives import ANGULAR, optics_derivatives
 from dustoptics.scattering.optics import compute_optics
 from dustoptics.table import Table
 

@@ -265,9 +265,9 @@ def test_table_derivative_and_xarray_and_file_round_trip(tmp_path: Path) -> None
 def test_against_the_reference_path_on_its_own_uniform_rule() -> None:
     """The backscatter has no error estimate of its own in the table (the refinement
     watches cext, csca and g), so its derivatives are checked against the reference
-    path of dustoptics.scattering.derivatives, an independent quadrature refined to
+    path of tests/reference/derivatives.py, an independent quadrature refined to
     rtol 1e-7 (cross-sections 1e-9)."""
-    from dustoptics.scattering.derivatives import optics_derivatives
+    from reference.derivatives import optics_derivatives
 
     dist = LogNormal(median_radius_um=0.15, sigma=0.4)
     names = ("median_radius_um", "sigma", "n", "k")

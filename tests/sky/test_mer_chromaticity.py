@@ -89,7 +89,7 @@ def test_chromaticity_against_cdisort(model: str, rovers: cmp.RoverComparison) -
         "nanodisort",
         reason="the CDISORT reference needs nanodisort: pip install 'dustoptics[test]'",
     )
-    from dustoptics.sky.disort import disort_radiance
+    from reference.disort import disort_radiance
 
     (row,) = [r for r in rovers.rows if r.model == model]
     medium = Medium.from_atmosphere(cmp.mars_sky_atmosphere(model, optical_depth=0.5))

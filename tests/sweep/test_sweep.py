@@ -19,6 +19,7 @@ import pytest
 from _sweeps import WAVELENGTHS, small_toml, store_bytes
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from reference import mie as reference_mie
 
 import dustoptics as do
 from dustoptics.models.compute import build_table
@@ -168,7 +169,7 @@ def test_cell_rows_on_a_smaller_grid_are_moved_as_the_kernel_moves_them():
     m = 1.55 + 0.003j
     mu_s, w_s, table_s = _gauss_angles(small)
     mu_l, _, table_l = _gauss_angles(large)
-    r_even, r_odd = mie._interpolation_maps(mu_s, w_s, mu_l)
+    r_even, r_odd = reference_mie.interpolation_maps(mu_s, w_s, mu_l)
     intens, (qext, qsca, gq, back) = one_grid_intensities(m, x, table_s, small, True)
     maps = np.concatenate([r_even.ravel(), r_odd.ravel()])
     for per_particle in (False, True):

@@ -27,8 +27,9 @@ validation cases (:data:`VALIDATION_CASES`): Rayleigh scattering, an Earth
 aerosol and Mars dust, at :data:`VALIDATION_WAVELENGTHS_NM`, in the
 directions a plane-parallel model can judge (Sun elevation >= 20 deg, view
 zenith <= 75 deg, 3 deg or more from the Sun).  ``scripts/sky_vs_disort.py``
-prints the table of its maximum errors; ``tests/sky/test_disort.py`` runs a
-subset.
+prints the table of its maximum errors; ``tests/sky/test_sky_vs_cdisort.py`` runs a
+subset; both import it from here (with the tests, not in the
+package: it checks the product and is no part of it).
 
 References
 ----------

@@ -9,7 +9,8 @@ and imaginary parts of the refractive index, ``"n"`` and ``"k"``.  It is a
 reference: its own fixed quadrature, simple and checked, not the adaptive
 one.  ``compute_optics(derivatives=...)`` sums the same derivatives on the
 table's converged nodes instead (:mod:`dustoptics.scattering.table_derivatives`,
-tested against this module).
+tested against this module).  It lives with the tests, not in the package: it
+checks the product and is no part of it.
 
 How the parts combine
 ---------------------
