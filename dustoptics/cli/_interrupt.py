@@ -46,7 +46,10 @@ def is_the_command() -> bool:
     if os.path.splitext(script)[0] in ("dustoptics", "dustoptics-script"):
         return True
     argv = list(getattr(sys, "orig_argv", ()))
-    return any(pair == ("-m", "dustoptics.cli") for pair in itertools.pairwise(argv))
+    return any(
+        pair in (("-m", "dustoptics"), ("-m", "dustoptics.cli"))
+        for pair in itertools.pairwise(argv)
+    )
 
 
 def _exit_now() -> None:

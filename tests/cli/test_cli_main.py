@@ -1,4 +1,4 @@
-"""``main``, its exit status and the old import paths of :mod:`dustoptics.cli`."""
+"""``main``, its exit status and the module entry points (``python -m dustoptics``)."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ import warnings
 import pytest
 
 import dustoptics as do
-from dustoptics.cli import errors, main
+from dustoptics.cli import _interrupt, errors, main
 
 
 def test_version(capsys):
@@ -39,9 +39,10 @@ def test_broken_pipe_is_not_an_error(monkeypatch, argv):
     assert main(argv) == 0
 
 
-def test_module_entry_point_runs():
+@pytest.mark.parametrize("module", ["dustoptics", "dustoptics.cli"])
+def test_module_entry_points_run_and_exit_with_the_status(module):
     done = subprocess.run(
-        [sys.executable, "-m", "dustoptics.cli", "--version"],
+        [sys.executable, "-m", module, "--version"],
         capture_output=True,
         text=True,
         timeout=120,
@@ -49,6 +50,30 @@ def test_module_entry_point_runs():
     )
     assert done.returncode == 0
     assert done.stdout.strip() == f"dustoptics {do.__version__}"
+    usage = subprocess.run(
+        [sys.executable, "-m", module, "no-such-command"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        check=False,
+    )
+    assert usage.returncode == 2
+    assert "invalid choice: 'no-such-command'" in usage.stderr
+
+
+@pytest.mark.parametrize(
+    ("orig_argv", "expected"),
+    [
+        (["python", "-m", "dustoptics", "build"], True),
+        (["python", "-m", "dustoptics.cli", "build"], True),
+        (["python", "-m", "pytest", "dustoptics"], False),
+        (["python", "-c", "import dustoptics"], False),
+    ],
+)
+def test_python_m_dustoptics_is_the_command(monkeypatch, orig_argv, expected):
+    monkeypatch.setattr(sys, "argv", ["/site-packages/package/__main__.py", orig_argv[-1]])
+    monkeypatch.setattr(sys, "orig_argv", orig_argv)
+    assert _interrupt.is_the_command() is expected
 
 
 @pytest.mark.parametrize(
