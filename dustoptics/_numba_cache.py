@@ -831,11 +831,7 @@ def compile_kernels(
     if not todo:
         _end_prestarted()
         return None
-    if processes is None:
-        processes = min(_cores(), MAX_PROCESSES)
-    processes = max(1, min(int(processes), len(todo)))
-    if not _shares_the_cache(todo[0]) or not sys.executable or getattr(sys, "frozen", False):
-        processes = 1  # nothing to share, or no interpreter to start
+    processes = _process_count(todo, processes)
     start = time.perf_counter()
     if progress is not None:
         where = f"{processes} processes, " if processes > 1 else ""
@@ -847,19 +843,14 @@ def compile_kernels(
     schedule = _Schedule(todo, progress, start)
     children: list[subprocess.Popen[str]] = []
     feeders: list[threading.Thread] = []
-    modules = {k.dispatcher.py_func.__module__ for k in todo}
     try:
-        for i in range(1, processes):
-            child = _take_prestarted()
-            if child is None:
-                try:
-                    child = _spawn(modules)
-                except OSError:
-                    break  # no child: this process compiles what it would have
-            children.append(child)
-            feeder = threading.Thread(target=_feed, args=(child, i, schedule), daemon=True)
-            feeder.start()
-            feeders.append(feeder)
+        _start_children(
+            processes - 1,
+            {k.dispatcher.py_func.__module__ for k in todo},
+            schedule,
+            children,
+            feeders,
+        )
         for _ in range(2):  # then what a failed child gave back
             while (k := schedule.take()) is not None:
                 cpu, wall = _compile_here(k)
@@ -872,19 +863,59 @@ def compile_kernels(
         raise
     finally:
         _end_prestarted()  # those not needed
-        for child in children:
-            with contextlib.suppress(OSError):
-                if child.stdin is not None:
-                    child.stdin.close()  # the child ends at the end of its input
-        for child in children:
-            try:
-                child.wait(timeout=10)
-            except subprocess.TimeoutExpired:
-                child.kill()
-                child.wait()
-        for feeder in feeders:
-            feeder.join(timeout=5)
-        for child in children:
-            if child.stdout is not None:
-                child.stdout.close()
+        _end_children(children, feeders)
     return CompileReport(tuple(schedule.done), 1 + len(children), time.perf_counter() - start)
+
+
+def _process_count(todo: list[Kernel], processes: int | None) -> int:
+    """The processes that compile ``todo``, this one included (:func:`compile_kernels`)."""
+    if processes is None:
+        processes = min(_cores(), MAX_PROCESSES)
+    processes = max(1, min(int(processes), len(todo)))
+    if not _shares_the_cache(todo[0]) or not sys.executable or getattr(sys, "frozen", False):
+        processes = 1  # nothing to share, or no interpreter to start
+    return processes
+
+
+def _start_children(
+    n: int,
+    modules: set[str],
+    schedule: _Schedule,
+    children: list[subprocess.Popen[str]],
+    feeders: list[threading.Thread],
+) -> None:
+    """Up to ``n`` children that compile ``modules``' kernels, each fed by a thread.
+
+    Appends to ``children`` and ``feeders`` as they start (the caller ends those
+    started if this is interrupted); a prestarted child is taken first.
+    """
+    for i in range(1, n + 1):
+        child = _take_prestarted()
+        if child is None:
+            try:
+                child = _spawn(modules)
+            except OSError:
+                return  # no child: this process compiles what it would have
+        children.append(child)
+        feeder = threading.Thread(target=_feed, args=(child, i, schedule), daemon=True)
+        feeder.start()
+        feeders.append(feeder)
+
+
+def _end_children(children: list[subprocess.Popen[str]], feeders: list[threading.Thread]) -> None:
+    """Close the children's input (each ends at its end), wait for them and their feeders."""
+    for child in children:
+        with contextlib.suppress(OSError):
+            if child.stdin is not None:
+                child.stdin.close()  # the child ends at the end of its input
+    for child in children:
+        try:
+            child.wait(timeout=10)
+        except subprocess.TimeoutExpired:
+            child.kill()
+            child.wait()
+    for feeder in feeders:
+        feeder.join(timeout=5)
+    for child in children:
+        if child.stdout is not None:
+            child.stdout.close()

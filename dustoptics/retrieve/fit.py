@@ -17,6 +17,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, TextIO
 
 import numpy as np
+from scipy import optimize
 
 from dustoptics._validation import BudgetError
 from dustoptics.models.config import BuildConfig
@@ -499,10 +500,82 @@ def retrieve(
     >>> fit.converged, round(fit.value("k"), 5)
     (True, 0.004)
     """
-    from scipy import optimize
-
     keywords = _model_keywords(model)
     obs, sky_list = _observations(observations)
+    names = _checked_parameters(keywords, parameters)
+    start, lower, upper = _checked_bounds(keywords, names, bounds)
+    prior_list = _checked_priors(names, priors)
+    if not (isinstance(max_iterations, int) and max_iterations >= 1):
+        raise ValueError(f"max_iterations must be a positive integer; got {max_iterations!r}")
+    if sky is None:
+        sky = SkySettings()
+    elif not isinstance(sky, SkySettings):
+        raise TypeError(f"sky must be a SkySettings; got {type(sky).__name__}")
+    callback, stream = _reporter(progress)
+    began = time.perf_counter()
+    sky_model = SkyModel(sky_list, sky) if sky_list else None
+    wavelengths, theta = _optical_grid(obs)
+    if obs:
+        _check_corner_cost(keywords, names, upper, wavelengths, theta.size, allow_large)
+    if sky_model is not None:  # the sky's table: its wavelengths, the default angles
+        _check_corner_cost(
+            keywords, names, upper, sky_model.wavelength_nm, default_theta_deg().size, allow_large
+        )
+    problem = _Problem(
+        keywords=keywords,
+        names=names,
+        obs=obs,
+        sky_model=sky_model,
+        prior_list=prior_list,
+        wavelengths=wavelengths,
+        theta=theta,
+        steps=sky.relative_step * (upper - lower),
+        n_streams=sky.n_streams,
+        max_iterations=max_iterations,
+        allow_large=allow_large,
+        callback=callback,
+        stream=stream,
+        began=began,
+    )
+    result = optimize.least_squares(
+        problem.residuals,
+        start,
+        jac=problem.jacobian,
+        bounds=(lower, upper),
+        method="trf",
+        x_scale="jac",
+        ftol=tolerance,
+        xtol=tolerance,
+        gtol=tolerance,
+        max_nfev=max_iterations,
+    )
+    final = problem.evaluate(result.x)
+    jac = problem.jacobian(result.x)
+    residuals = final["residuals"]
+    covariance = np.linalg.pinv(jac.T @ jac)
+    return Retrieval(
+        parameters=names,
+        values=np.array(result.x),
+        covariance=covariance,
+        standard_errors=np.sqrt(np.diag(covariance)),
+        initial_values=start,
+        residuals=residuals,
+        labels=problem.labels,
+        chi_square=float(residuals @ residuals),
+        iterations=int(result.njev or 0),
+        function_evaluations=int(result.nfev),
+        converged=bool(result.status > 0),
+        message=str(result.message),
+        model=_set(keywords, dict(zip(names, result.x.tolist()))),
+        table=final["table"] if obs else final["sky_table"],
+        sky_solves=sky_model.solves if sky_model is not None else 0,
+        history_values=np.array([h[0] for h in problem.history]),
+        history_residuals=np.array([h[1] for h in problem.history]),
+    )
+
+
+def _checked_parameters(keywords: dict[str, Any], parameters: Sequence[str]) -> tuple[str, ...]:
+    """The parameters to fit, checked against the model (:func:`retrieve`)."""
     names = check_parameters(
         parameters, keywords["distribution"], index_parameter_names(keywords["refractive_index"])
     )
@@ -516,6 +589,13 @@ def retrieve(
                 "parameters 'n' and 'k' fit one constant refractive index: the model's "
                 f"refractive_index must be a number; got {keywords['refractive_index']!r}"
             ) from None
+    return names
+
+
+def _checked_bounds(
+    keywords: dict[str, Any], names: Sequence[str], bounds: Any
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The start, lower and upper bounds of ``names`` (:func:`retrieve`)."""
     if not isinstance(bounds, Mapping) or set(names) - set(bounds):
         raise ValueError(
             f"bounds must give (lower, upper) for every parameter {list(names)}; got {bounds!r}"
@@ -536,176 +616,202 @@ def retrieve(
     for p, lo, hi in zip(names, lower.tolist(), upper.tolist(), strict=True):
         _check_bound(keywords, p, lo, "lower")
         _check_bound(keywords, p, hi, "upper")
+    return start, lower, upper
+
+
+def _checked_priors(
+    names: Sequence[str], priors: Mapping[str, tuple[float, float]] | None
+) -> list[tuple[int, float, float]]:
+    """(parameter index, mean, standard deviation) of each prior (:func:`retrieve`)."""
     prior_list = []
     for p, (mean, sd) in (priors or {}).items():
         if p not in names:
             raise ValueError(f"priors: {p!r} is not a fitted parameter ({list(names)})")
         if not (math.isfinite(mean) and math.isfinite(sd) and sd > 0):
             raise ValueError(f"priors: {p!r} needs a finite mean and a standard deviation > 0")
-        prior_list.append((names.index(p), float(mean), float(sd)))
-    if not (isinstance(max_iterations, int) and max_iterations >= 1):
-        raise ValueError(f"max_iterations must be a positive integer; got {max_iterations!r}")
-    if sky is None:
-        sky = SkySettings()
-    elif not isinstance(sky, SkySettings):
-        raise TypeError(f"sky must be a SkySettings; got {type(sky).__name__}")
-    callback, stream = _reporter(progress)
-    began = time.perf_counter()
-    sky_model = SkyModel(sky_list, sky) if sky_list else None
-    sky_report = sky_progress(stream)
-    if obs:
-        wavelengths = np.unique(
-            np.concatenate(
-                [o.wavelength_nm for o in obs]
-                + [np.array([o.reference_nm]) for o in obs if math.isfinite(o.reference_nm)]
-            )
-        )
-        thetas = np.concatenate([o.theta_deg[np.isfinite(o.theta_deg)] for o in obs])
-        theta = np.unique(thetas) if thetas.size else np.array([0.0, 180.0])
-        _check_corner_cost(keywords, names, upper, wavelengths, theta.size, allow_large)
-    if sky_model is not None:  # the sky's table: its wavelengths, the default angles
-        _check_corner_cost(
-            keywords, names, upper, sky_model.wavelength_nm, default_theta_deg().size, allow_large
-        )
-    steps = sky.relative_step * (upper - lower)
-    labels = tuple(label for o in obs for label in _labels(o))
-    sky_value = sky_sigma = np.zeros(0)
-    if sky_model is not None:
-        sky_value, sky_sigma, sky_labels = sky_model.order()
-        labels += tuple(sky_labels)
-    labels += tuple(f"prior:{names[i]}" for i, _, _ in prior_list)
+        prior_list.append((list(names).index(p), float(mean), float(sd)))
+    return prior_list
 
-    # One entry per point: residuals, the exact rows of the Jacobian (the sky's
-    # rows NaN until asked for), the optical table, the sky's table and values.
-    Entry = dict[str, Any]
-    cache: dict[bytes, Entry] = {}
-    counter = {"evaluations": 0}
-    history: list[tuple[np.ndarray, np.ndarray]] = []
 
-    def evaluate(x: np.ndarray) -> Entry:
+def _optical_grid(obs: Sequence[_Observation]) -> tuple[np.ndarray, np.ndarray]:
+    """The wavelengths [nm] and angles [deg] of the table the optical observations need
+    (empty without optical observations)."""
+    if not obs:
+        return np.zeros(0), np.zeros(0)
+    wavelengths = np.unique(
+        np.concatenate(
+            [o.wavelength_nm for o in obs]
+            + [np.array([o.reference_nm]) for o in obs if math.isfinite(o.reference_nm)]
+        )
+    )
+    thetas = np.concatenate([o.theta_deg[np.isfinite(o.theta_deg)] for o in obs])
+    theta = np.unique(thetas) if thetas.size else np.array([0.0, 180.0])
+    return wavelengths, theta
+
+
+#: One point of the fit: residuals, the exact rows of the Jacobian (the sky's rows NaN
+#: until asked for), the optical table, the sky's table and values.
+_Entry = dict[str, Any]
+
+
+class _Problem:
+    """The residuals of :func:`retrieve` and their Jacobian, with the last points kept.
+
+    Each evaluation computes the optical table (and the sky's) with their exact
+    derivatives; the sky's rows of the Jacobian are filled by finite differences only
+    when the optimizer asks for the Jacobian.  Reports each evaluation to the callback
+    or the text stream.
+    """
+
+    def __init__(
+        self,
+        *,
+        keywords: dict[str, Any],
+        names: tuple[str, ...],
+        obs: list[_Observation],
+        sky_model: SkyModel | None,
+        prior_list: list[tuple[int, float, float]],
+        wavelengths: np.ndarray,
+        theta: np.ndarray,
+        steps: np.ndarray,
+        n_streams: int,
+        max_iterations: int,
+        allow_large: bool,
+        callback: Callable[[int, float], None] | None,
+        stream: TextIO | None,
+        began: float,
+    ) -> None:
+        self.keywords = keywords
+        self.names = names
+        self.obs = obs
+        self.sky_model = sky_model
+        self.prior_list = prior_list
+        self.wavelengths = wavelengths
+        self.theta = theta
+        self.steps = steps
+        self.n_streams = n_streams
+        self.max_iterations = max_iterations
+        self.allow_large = allow_large
+        self.callback = callback
+        self.stream = stream
+        self.began = began
+        self.sky_report = sky_progress(stream)
+        self.labels = tuple(label for o in obs for label in _labels(o))
+        self.sky_value = self.sky_sigma = np.zeros(0)
+        if sky_model is not None:
+            self.sky_value, self.sky_sigma, sky_labels = sky_model.order()
+            self.labels += tuple(sky_labels)
+        self.labels += tuple(f"prior:{names[i]}" for i, _, _ in prior_list)
+        self.cache: dict[bytes, _Entry] = {}
+        self.evaluations = 0
+        self.sky_budget: int | None = None
+        self.history: list[tuple[np.ndarray, np.ndarray]] = []
+
+    def residuals(self, x: np.ndarray) -> np.ndarray:
+        """The residuals at ``x`` (what the optimizer minimizes)."""
+        return np.asarray(self.evaluate(x)["residuals"])
+
+    def evaluate(self, x: np.ndarray) -> _Entry:
+        """The point ``x``: from the cache, or computed, kept and reported."""
         key = np.asarray(x, dtype=np.float64).tobytes()
-        if key in cache:
-            return cache[key]
-        current = _set(keywords, dict(zip(names, x.tolist())))
+        if key in self.cache:
+            return self.cache[key]
+        current = _set(self.keywords, dict(zip(self.names, x.tolist())))
         res, jac = [], []
-        entry: Entry = {"x": np.array(x, dtype=np.float64)}
-        if obs:
+        entry: _Entry = {"x": np.array(x, dtype=np.float64)}
+        if self.obs:
             table = compute_optics(
                 **current,
-                wavelength_nm=wavelengths,
-                theta_deg=theta,
-                derivatives=names,
-                allow_large=allow_large,
+                wavelength_nm=self.wavelengths,
+                theta_deg=self.theta,
+                derivatives=self.names,
+                allow_large=self.allow_large,
             )
             entry["table"] = table
-            for o in obs:
-                value, d = _predict(table, o, names)
+            for o in self.obs:
+                value, d = _predict(table, o, self.names)
                 res.append((value - o.value) / o.sigma)
                 jac.append(d / o.sigma[:, None])
-        if sky_model is not None:
-            table_began = time.perf_counter()
-            sky_table = compute_optics(
-                **current,
-                wavelength_nm=sky_model.wavelength_nm,
-                derivatives=names,
-                allow_large=allow_large,
-            )
-            entry["sky_table"] = sky_table
-            if "budget" not in counter:
-                n, seconds = sky_model.check_cost(
-                    sky_table,
-                    table_seconds=time.perf_counter() - table_began,
-                    max_iterations=max_iterations,
-                    n_parameters=len(names),
-                    allow_large=allow_large,
-                )
-                counter["budget"] = n
-                if stream is not None:
-                    stream.write(
-                        f"retrieve: at most {n} sky solves, the fit about {seconds:.0f} s at most "
-                        f"({sky_model.wavelength_nm.size} wavelengths, "
-                        f"n_streams={sky.n_streams})\n"
-                    )
-                    stream.flush()
-            entry["sky_values"] = sky_model.values(sky_table, sky_report)
-            res.append((entry["sky_values"] - sky_value) / sky_sigma)
-            jac.append(np.full((sky_value.size, len(names)), np.nan))
-        for i, mean, sd in prior_list:
+        if self.sky_model is not None:
+            self._evaluate_sky(current, entry, res, jac)
+        for i, mean, sd in self.prior_list:
             res.append(np.array([(x[i] - mean) / sd]))
-            row = np.zeros((1, len(names)))
+            row = np.zeros((1, len(self.names)))
             row[0, i] = 1.0 / sd
             jac.append(row)
         entry["residuals"] = np.concatenate(res)
         entry["jacobian"] = np.vstack(jac)
-        if len(cache) >= 3:  # the accepted point, a trial, the next: enough for scipy
-            cache.pop(next(iter(cache)))
-        cache[key] = entry
-        history.append((entry["x"], entry["residuals"]))
-        counter["evaluations"] += 1
+        if len(self.cache) >= 3:  # the accepted point, a trial, the next: enough for scipy
+            self.cache.pop(next(iter(self.cache)))
+        self.cache[key] = entry
+        self.history.append((entry["x"], entry["residuals"]))
+        self.evaluations += 1
         chi_square = float(entry["residuals"] @ entry["residuals"])
-        if callback is not None:
-            callback(counter["evaluations"], chi_square)
-        if stream is not None:
-            stream.write(
-                f"retrieve: evaluation {counter['evaluations']}: chi-square {chi_square:.6g}, "
-                f"{time.perf_counter() - began:.1f} s\n"
-            )
-            stream.flush()
+        if self.callback is not None:
+            self.callback(self.evaluations, chi_square)
+        self._say(
+            f"retrieve: evaluation {self.evaluations}: chi-square {chi_square:.6g}, "
+            f"{time.perf_counter() - self.began:.1f} s\n"
+        )
         return entry
 
-    def jacobian(x: np.ndarray) -> np.ndarray:
-        entry = evaluate(x)
+    def _evaluate_sky(
+        self, current: dict[str, Any], entry: _Entry, res: list[Any], jac: list[Any]
+    ) -> None:
+        """The sky's table and values at the point, and their rows (Jacobian's NaN)."""
+        assert self.sky_model is not None
+        sky_model = self.sky_model
+        table_began = time.perf_counter()
+        sky_table = compute_optics(
+            **current,
+            wavelength_nm=sky_model.wavelength_nm,
+            derivatives=self.names,
+            allow_large=self.allow_large,
+        )
+        entry["sky_table"] = sky_table
+        if self.sky_budget is None:
+            n, seconds = sky_model.check_cost(
+                sky_table,
+                table_seconds=time.perf_counter() - table_began,
+                max_iterations=self.max_iterations,
+                n_parameters=len(self.names),
+                allow_large=self.allow_large,
+            )
+            self.sky_budget = n
+            self._say(
+                f"retrieve: at most {n} sky solves, the fit about {seconds:.0f} s at most "
+                f"({sky_model.wavelength_nm.size} wavelengths, "
+                f"n_streams={self.n_streams})\n"
+            )
+        entry["sky_values"] = sky_model.values(sky_table, self.sky_report)
+        res.append((entry["sky_values"] - self.sky_value) / self.sky_sigma)
+        jac.append(np.full((self.sky_value.size, len(self.names)), np.nan))
+
+    def jacobian(self, x: np.ndarray) -> np.ndarray:
+        """The Jacobian at ``x``, the sky's rows by finite differences once asked for."""
+        entry = self.evaluate(x)
         jac = entry["jacobian"]
-        if sky_model is not None and np.isnan(jac).any():
-            rows = slice(
-                sum(o.value.size for o in obs), sum(o.value.size for o in obs) + sky_value.size
-            )
+        if self.sky_model is not None and np.isnan(jac).any():
+            n_obs = sum(o.value.size for o in self.obs)
+            rows = slice(n_obs, n_obs + self.sky_value.size)
             jac[rows] = (
-                sky_model.jacobian(
-                    entry["sky_table"], entry["sky_values"], names, steps, sky_report
+                self.sky_model.jacobian(
+                    entry["sky_table"],
+                    entry["sky_values"],
+                    self.names,
+                    self.steps,
+                    self.sky_report,
                 )
-                / sky_sigma[:, None]
+                / self.sky_sigma[:, None]
             )
-            if stream is not None:
-                stream.write(
-                    f"retrieve: Jacobian at evaluation {counter['evaluations']}: "
-                    f"{sky_model.solves} sky solves so far, {time.perf_counter() - began:.1f} s\n"
-                )
-                stream.flush()
+            self._say(
+                f"retrieve: Jacobian at evaluation {self.evaluations}: "
+                f"{self.sky_model.solves} sky solves so far, "
+                f"{time.perf_counter() - self.began:.1f} s\n"
+            )
         return np.asarray(jac)
 
-    result = optimize.least_squares(
-        lambda x: evaluate(x)["residuals"],
-        start,
-        jac=jacobian,
-        bounds=(lower, upper),
-        method="trf",
-        x_scale="jac",
-        ftol=tolerance,
-        xtol=tolerance,
-        gtol=tolerance,
-        max_nfev=max_iterations,
-    )
-    final = evaluate(result.x)
-    jac = jacobian(result.x)
-    residuals = final["residuals"]
-    covariance = np.linalg.pinv(jac.T @ jac)
-    return Retrieval(
-        parameters=names,
-        values=np.array(result.x),
-        covariance=covariance,
-        standard_errors=np.sqrt(np.diag(covariance)),
-        initial_values=start,
-        residuals=residuals,
-        labels=labels,
-        chi_square=float(residuals @ residuals),
-        iterations=int(result.njev or 0),
-        function_evaluations=int(result.nfev),
-        converged=bool(result.status > 0),
-        message=str(result.message),
-        model=_set(keywords, dict(zip(names, result.x.tolist()))),
-        table=final["table"] if obs else final["sky_table"],
-        sky_solves=sky_model.solves if sky_model is not None else 0,
-        history_values=np.array([h[0] for h in history]),
-        history_residuals=np.array([h[1] for h in history]),
-    )
+    def _say(self, line: str) -> None:
+        if self.stream is not None:
+            self.stream.write(line)
+            self.stream.flush()

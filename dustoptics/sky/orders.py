@@ -528,6 +528,79 @@ def solve_orders(
     dustoptics._validation.BudgetError
         The estimate is beyond the budget and ``allow_large`` is False.
     """
+    sza, tol, albedo = _checked_request(
+        medium,
+        sun_zenith_deg=sun_zenith_deg,
+        ground_albedo=ground_albedo,
+        n_layers=n_layers,
+        tol=tol,
+        geometry=geometry,
+    )
+    report = reporter(progress)
+    cost = check_orders_cost(medium, n_layers=n_layers, tol=tol, allow_large=bool(allow_large))
+
+    n = medium.n_streams
+    n_mom = 2 * n
+    mu0 = math.cos(math.radians(sza))
+    z = _level_altitudes(medium.top_altitude_m, n_layers)
+    dtau, coef = _layer_optics(medium, z, n_mom)
+    t_sun = _sun_transmittance(medium, z, mu0, dtau, geometry)
+    regular = _Grid.make(n, n_mom, dtau, t_sun)
+    fine = _Grid.make(FINE_FACTOR * n, n_mom, dtau, t_sun) if FINE_FACTOR > 1 else regular
+    series = _Series(coef, t_sun, albedo, mu0)
+
+    n_orders = 0
+    for order in range(1, _MAX_ORDERS + 1):
+        if not series.active.any():
+            break
+        n_orders = order
+        series.add_order(order, fine if order <= FINE_ORDERS else regular, regular)
+        series.converge(order, tol)
+        left = int(series.active.any(axis=1).sum())
+        if left:
+            report(
+                f"orders of scattering: order {order}, {left} of {n_mom} Fourier modes still converging"
+            )
+    else:
+        with np.errstate(invalid="ignore", divide="ignore"):
+            est = float(
+                np.max(series.remainder.sum(axis=0) / np.abs(series.total).max(axis=(0, 2, 3)))
+            )
+        warnings.warn(
+            f"orders of scattering did not reach tol={tol:g} in {_MAX_ORDERS} orders "
+            f"(estimate {est:.2g})",
+            SkyConvergenceWarning,
+            stacklevel=2,
+        )
+    report(f"orders of scattering: {n_orders} orders (expected about {cost.orders})", last=True)
+    return DiffuseField(
+        mu0=mu0,
+        altitude_m=z,
+        mu=regular.mu,
+        weights=regular.weights,
+        radiance=series.total,
+        moments=series.moments,
+        sun_transmittance=t_sun,
+        ground_albedo=albedo,
+        n_orders=n_orders,
+        error_estimate=series.error_estimate(),
+        geometry=geometry,
+        diffuse_flux_up=series.flux_up,
+        diffuse_flux_down=series.flux_down,
+    )
+
+
+def _checked_request(
+    medium: Medium,
+    *,
+    sun_zenith_deg: float,
+    ground_albedo: float | np.ndarray,
+    n_layers: int,
+    tol: float,
+    geometry: str,
+) -> tuple[float, float, np.ndarray]:
+    """:func:`solve_orders`' arguments checked: the Sun's zenith angle [deg], the
+    tolerance and the albedo per wavelength (a new array)."""
     check_choice("geometry", geometry, GEOMETRIES)
     sza = check_closed_interval("sun_zenith_deg", sun_zenith_deg, 0.0, 100.0)
     if geometry == "plane-parallel" and sza >= 90.0:
@@ -541,17 +614,12 @@ def solve_orders(
         raise ValueError(f"ground_albedo must be within [0, 1]; got {ground_albedo!r}")
     if not (isinstance(n_layers, int) and 4 <= n_layers <= 100_000):
         raise ValueError(f"n_layers must be an integer in [4, 100000]; got {n_layers!r}")
-    report = reporter(progress)
-    cost = check_orders_cost(medium, n_layers=n_layers, tol=tol, allow_large=bool(allow_large))
+    return sza, tol, albedo
 
-    n = medium.n_streams
-    n_mom = 2 * n
-    mu0 = math.cos(math.radians(sza))
-    lam0 = geometry_memo(
-        ("sun-legendre", n_mom, mu0), lambda: normalized_legendre(n_mom, np.array([-mu0]))[:, :, 0]
-    )  # (m, l)
 
-    z = _level_altitudes(medium.top_altitude_m, n_layers)
+def _layer_optics(medium: Medium, z: np.ndarray, n_mom: int) -> tuple[np.ndarray, np.ndarray]:
+    """Each layer's scaled optical depth (x, k) and its phase function's Legendre
+    coefficients times omega (2 l + 1) / 2, (x, k, l), for the levels ``z`` [m]."""
     amount = _layer_amounts(medium, z)  # (c, k)
     sig_e = medium.scaled_sigma_ext_m2  # (c, x)
     sig_s = medium.scaled_sigma_sca_m2
@@ -562,146 +630,148 @@ def solve_orders(
         chi = np.einsum("cx,ck,cxl->xkl", sig_s, amount, medium.scaled_chi)
         chi = np.where(sca[..., None] > 0, chi / np.where(sca > 0, sca, 1.0)[..., None], 0.0)
     two_l = 2.0 * np.arange(n_mom) + 1.0
-    coef = np.ascontiguousarray(0.5 * omega[..., None] * two_l * chi)  # (x, k, l)
+    return dtau, np.ascontiguousarray(0.5 * omega[..., None] * two_l * chi)  # (x, k, l)
 
-    radius = medium.planet_radius_m + z
+
+def _sun_transmittance(
+    medium: Medium, z: np.ndarray, mu0: float, dtau: np.ndarray, geometry: str
+) -> np.ndarray:
+    """The Sun's scaled transmittance down to each level ``z`` [m], (x, level)."""
     if geometry == "pseudo-spherical":
-        t_sun = medium.transmittance(radius, np.full(z.shape, mu0), scaled=True)  # (x, level)
-    else:
-        tau_cum = np.concatenate([np.zeros((nwl, 1)), np.cumsum(dtau, axis=1)], axis=1)
-        t_sun = np.exp(-tau_cum / mu0)
+        radius = medium.planet_radius_m + z
+        return medium.transmittance(radius, np.full(z.shape, mu0), scaled=True)
+    tau_cum = np.concatenate([np.zeros((dtau.shape[0], 1)), np.cumsum(dtau, axis=1)], axis=1)
+    return np.exp(-tau_cum / mu0)
 
-    regular = _Grid.make(n, n_mom, dtau, t_sun)
-    fine = _Grid.make(FINE_FACTOR * n, n_mom, dtau, t_sun) if FINE_FACTOR > 1 else regular
-    n_levels = z.size
-    total = np.zeros((n_mom, nwl, n_levels, 2 * n))
-    moments = np.zeros((n_mom, nwl, n_levels, n_mom))
-    flux_up = np.zeros((nwl, n_levels))
-    flux_down = np.zeros((nwl, n_levels))
-    prev_moments: list[np.ndarray | None] = [None] * n_mom  # (x, level, l >= m)
-    prev_norm = np.zeros((n_mom, nwl))
-    remainder = np.full((n_mom, nwl), np.inf)
-    active = np.ones((n_mom, nwl), dtype=bool)
-    orders_done = np.zeros(n_mom, dtype=int)
-    ground_flux = max(mu0, 0.0) * t_sun[:, -1]  # direct beam at the ground
-    dm0 = np.where(np.arange(n_mom) == 0, 1.0, 2.0)
-    all_x = np.arange(nwl)
 
-    def sources(grid: _Grid, m: int, xs: np.ndarray, mom: np.ndarray | None) -> tuple:
-        # Sources at each layer's top and bottom level, (x, k, 2n).
+class _Series:
+    """The series of orders of scattering as :func:`solve_orders` sums it.
+
+    Per Fourier mode m and wavelength: the radiance and moments summed so far, the
+    last order's moments (the next order's source), the size of the last order and
+    an estimate of the remainder of the series; a (mode, wavelength) stops when its
+    remainder is below the tolerance.
+    """
+
+    def __init__(self, coef: np.ndarray, t_sun: np.ndarray, albedo: np.ndarray, mu0: float) -> None:
+        nwl, n_layers, n_mom = coef.shape
+        self.coef = coef
+        self.t_sun = t_sun
+        self.albedo = albedo
+        self.nwl = nwl
+        self.n_levels = n_layers + 1
+        self.n_mom = n_mom
+        self.lam0 = geometry_memo(
+            ("sun-legendre", n_mom, mu0),
+            lambda: normalized_legendre(n_mom, np.array([-mu0]))[:, :, 0],
+        )  # (m, l)
+        self.total = np.zeros((n_mom, nwl, self.n_levels, n_mom))
+        self.moments = np.zeros((n_mom, nwl, self.n_levels, n_mom))
+        self.flux_up = np.zeros((nwl, self.n_levels))
+        self.flux_down = np.zeros((nwl, self.n_levels))
+        self.prev_moments: list[np.ndarray | None] = [None] * n_mom  # (x, level, l >= m)
+        self.prev_norm = np.zeros((n_mom, nwl))
+        self.norm = np.zeros((n_mom, nwl))
+        self.remainder = np.full((n_mom, nwl), np.inf)
+        self.active = np.ones((n_mom, nwl), dtype=bool)
+        self.ground_flux = max(mu0, 0.0) * t_sun[:, -1]  # direct beam at the ground
+        self.dm0 = np.where(np.arange(n_mom) == 0, 1.0, 2.0)
+        self.all_x = np.arange(nwl)
+
+    def sources(
+        self, grid: _Grid, m: int, xs: np.ndarray, mom: np.ndarray | None
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Sources at each layer's top and bottom level, (x, k, 2n)."""
         basis = grid.basis[m, m:]  # (l, d)
-        cm = coef[xs, :, m:] if xs.size < nwl else coef[:, :, m:]
+        cm = self.coef[xs, :, m:] if xs.size < self.nwl else self.coef[:, :, m:]
         if mom is None:  # the beam
-            beam = (cm * (lam0[m, m:] * dm0[m] / (2.0 * np.pi))) @ basis  # (x, k, d)
-            ts = t_sun[xs]
+            beam = (cm * (self.lam0[m, m:] * self.dm0[m] / (2.0 * np.pi))) @ basis  # (x, k, d)
+            ts = self.t_sun[xs]
             return beam * ts[:, :-1, None], beam * ts[:, 1:, None]
         return (cm * mom[:, :-1]) @ basis, (cm * mom[:, 1:]) @ basis
 
-    def sweep(grid: _Grid, j: tuple, xs: np.ndarray, ground: np.ndarray, beam: bool) -> np.ndarray:
-        out = np.empty((xs.size, n_levels, 2 * grid.n))
+    def sweep(
+        self, grid: _Grid, j: tuple, xs: np.ndarray, ground: np.ndarray, beam: bool
+    ) -> np.ndarray:
+        """The radiance of one order at every level, (x, level, 2n), from its sources."""
+        out = np.empty((xs.size, self.n_levels, 2 * grid.n))
         weights = grid.beam if beam else grid.linear
         _sweep_kernel(
             np.ascontiguousarray(j[0]), np.ascontiguousarray(j[1]), *weights, ground, xs, out
         )
         return out
 
-    n_orders = 0
-    for order in range(1, _MAX_ORDERS + 1):
-        modes = np.flatnonzero(active.any(axis=1))
-        if modes.size == 0:
-            break
-        n_orders = order
-        grid = fine if order <= FINE_ORDERS else regular
-        next_ground = np.zeros(nwl)
-        norm = np.zeros((n_mom, nwl))
-        for m in modes.tolist():
-            xs = all_x[active[m]]
-            prev = prev_moments[m]
-            mom_in = (
-                None
-                if order == 1
-                else (prev if xs.size == nwl or prev is None else prev[active[m]])
-            )
-            if order > 1 and mom_in is None:
-                continue
-            ground = (albedo[xs] * ground_flux[xs] / np.pi) if m == 0 else np.zeros(xs.size)
-            j = sources(grid, m, xs, mom_in)
-            field = sweep(grid, j, xs, ground, beam=order == 1)
-            if grid is regular:
-                field_r = field
-            else:
-                j_r = sources(regular, m, xs, mom_in)
-                field_r = sweep(regular, j_r, xs, ground, beam=order == 1)
-            mom = field.reshape(-1, 2 * grid.n) @ grid.project[m][:, m:]
-            mom = mom.reshape(xs.size, n_levels, n_mom - m)
-            if xs.size == nwl:
-                total[m] += field_r
-                moments[m, :, :, m:] += mom
-            else:
-                total[m, xs] += field_r
-                moments[m, xs, :, m:] += mom
-            if xs.size == nwl:
-                prev_moments[m] = mom
-            else:
-                full = np.zeros((nwl, n_levels, n_mom - m)) if prev is None else prev
-                full[xs] = mom
-                prev_moments[m] = full
-            norm[m, xs] = np.abs(field_r).max(axis=(1, 2))
-            orders_done[m] = order
-            if m == 0:
-                g = grid.n
-                wmu = grid.weights[:g] * grid.mu[:g]
-                flux_up[xs] += 2.0 * np.pi * field[:, :, :g] @ wmu
-                down = 2.0 * np.pi * field[:, :, g:] @ wmu
-                flux_down[xs] += down
-                next_ground[xs] = down[:, -1]
-        ground_flux = next_ground
-        # Convergence of each (mode, wavelength): the geometric remainder.
-        ref = np.abs(total[0]).max(axis=(1, 2))  # (x,)
+    def add_order(self, order: int, grid: _Grid, regular: _Grid) -> None:
+        """Add order ``order``, computed on ``grid`` and kept at ``regular``'s ordinates."""
+        next_ground = np.zeros(self.nwl)
+        self.norm = np.zeros((self.n_mom, self.nwl))
+        for m in np.flatnonzero(self.active.any(axis=1)).tolist():
+            self._add_mode(order, m, grid, regular, next_ground)
+        self.ground_flux = next_ground
+
+    def _add_mode(
+        self, order: int, m: int, grid: _Grid, regular: _Grid, next_ground: np.ndarray
+    ) -> None:
+        n_levels, n_mom, nwl = self.n_levels, self.n_mom, self.nwl
+        xs = self.all_x[self.active[m]]
+        prev = self.prev_moments[m]
+        mom_in = (
+            None
+            if order == 1
+            else (prev if xs.size == nwl or prev is None else prev[self.active[m]])
+        )
+        if order > 1 and mom_in is None:
+            return
+        ground = (self.albedo[xs] * self.ground_flux[xs] / np.pi) if m == 0 else np.zeros(xs.size)
+        j = self.sources(grid, m, xs, mom_in)
+        field = self.sweep(grid, j, xs, ground, beam=order == 1)
+        if grid is regular:
+            field_r = field
+        else:
+            j_r = self.sources(regular, m, xs, mom_in)
+            field_r = self.sweep(regular, j_r, xs, ground, beam=order == 1)
+        mom = field.reshape(-1, 2 * grid.n) @ grid.project[m][:, m:]
+        mom = mom.reshape(xs.size, n_levels, n_mom - m)
+        if xs.size == nwl:
+            self.total[m] += field_r
+            self.moments[m, :, :, m:] += mom
+            self.prev_moments[m] = mom
+        else:
+            self.total[m, xs] += field_r
+            self.moments[m, xs, :, m:] += mom
+            full = np.zeros((nwl, n_levels, n_mom - m)) if prev is None else prev
+            full[xs] = mom
+            self.prev_moments[m] = full
+        self.norm[m, xs] = np.abs(field_r).max(axis=(1, 2))
+        if m == 0:
+            g = grid.n
+            wmu = grid.weights[:g] * grid.mu[:g]
+            self.flux_up[xs] += 2.0 * np.pi * field[:, :, :g] @ wmu
+            down = 2.0 * np.pi * field[:, :, g:] @ wmu
+            self.flux_down[xs] += down
+            next_ground[xs] = down[:, -1]
+
+    def converge(self, order: int, tol: float) -> None:
+        """Stop each (mode, wavelength) whose geometric remainder is below ``tol``."""
+        ref = np.abs(self.total[0]).max(axis=(1, 2))  # (x,)
+        norm, prev_norm = self.norm, self.prev_norm
         if order >= 3:
             with np.errstate(invalid="ignore", divide="ignore"):
                 r = np.where(prev_norm > 0, norm / np.where(prev_norm > 0, prev_norm, 1.0), 0.0)
                 rem = np.where(r < 1.0, norm * r / (1.0 - np.minimum(r, 1.0 - 1e-12)), np.inf)
             rem = np.where(norm > 0, rem, 0.0)
-            remainder = np.where(active, rem, remainder)
-            limit = tol * ref / n_mom
-            active &= ~(remainder <= limit[None, :])
-        prev_norm = np.where(active | (norm > 0), norm, prev_norm)
-        left = int(active.any(axis=1).sum())
-        if left:
-            report(
-                f"orders of scattering: order {order}, {left} of {n_mom} Fourier modes still converging"
-            )
-    else:
+            self.remainder = np.where(self.active, rem, self.remainder)
+            limit = tol * ref / self.n_mom
+            self.active &= ~(self.remainder <= limit[None, :])
+        self.prev_norm = np.where(self.active | (norm > 0), norm, prev_norm)
+
+    def error_estimate(self) -> np.ndarray:
+        """The remainder of the series relative to the largest radiance, per wavelength."""
+        ref = np.abs(self.total).max(axis=(0, 2, 3))
         with np.errstate(invalid="ignore", divide="ignore"):
-            est = float(np.max(remainder.sum(axis=0) / np.abs(total).max(axis=(0, 2, 3))))
-        warnings.warn(
-            f"orders of scattering did not reach tol={tol:g} in {_MAX_ORDERS} orders "
-            f"(estimate {est:.2g})",
-            SkyConvergenceWarning,
-            stacklevel=2,
-        )
-    ref = np.abs(total).max(axis=(0, 2, 3))
-    with np.errstate(invalid="ignore", divide="ignore"):
-        err = np.where(
-            ref > 0,
-            np.where(np.isfinite(remainder), remainder, 0.0).sum(axis=0)
-            / np.where(ref > 0, ref, 1.0),
-            0.0,
-        )
-    report(f"orders of scattering: {n_orders} orders (expected about {cost.orders})", last=True)
-    return DiffuseField(
-        mu0=mu0,
-        altitude_m=z,
-        mu=regular.mu,
-        weights=regular.weights,
-        radiance=total,
-        moments=moments,
-        sun_transmittance=t_sun,
-        ground_albedo=albedo,
-        n_orders=n_orders,
-        error_estimate=err,
-        geometry=geometry,
-        diffuse_flux_up=flux_up,
-        diffuse_flux_down=flux_down,
-    )
+            return np.where(
+                ref > 0,
+                np.where(np.isfinite(self.remainder), self.remainder, 0.0).sum(axis=0)
+                / np.where(ref > 0, ref, 1.0),
+                0.0,
+            )
