@@ -91,11 +91,13 @@ import atexit
 import contextlib
 import functools
 import hashlib
+import importlib
 import os
 import subprocess
 import sys
 import threading
 import time
+import types
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -266,7 +268,7 @@ def kernel(*arg_types: str, group: str = "optics", **options: Any) -> Callable[[
     signature = "(" + "".join(f"{t}, " for t in arg_types) + ")"
 
     def decorate(func: Any) -> Any:
-        from numba import njit
+        from numba import njit  # after configure(): numba reads NUMBA_* on import
         from numba.core.sigutils import normalize_signature
 
         dispatcher = njit(cache=True, nogil=True, **options)(func)
@@ -287,7 +289,9 @@ def variant(dispatcher: Any, *arg_types: str, group: str) -> None:
     """
     if group not in GROUPS:
         raise ValueError(f"group must be one of {GROUPS}; got {group!r}")
-    from numba.core.sigutils import normalize_signature
+    from numba.core.sigutils import (
+        normalize_signature,
+    )  # after configure(): numba reads NUMBA_* on import
 
     base = next(k for k in _KERNELS.values() if k.dispatcher is dispatcher)
     args, _ = normalize_signature("(" + "".join(f"{t}, " for t in arg_types) + ")")
@@ -310,7 +314,7 @@ _forked_after_launch = False
 
 def _launched_layer() -> str | None:
     """The threading layer running in this process (or its parent), None before any."""
-    import numba
+    import numba  # after configure(): numba reads NUMBA_* on import
 
     try:
         return str(numba.threading_layer())
@@ -321,7 +325,7 @@ def _launched_layer() -> str | None:
 def select_threading_layer() -> str | None:
     """Select :data:`THREADING_LAYER` unless a layer is chosen or running; returns the one
     running (None: none yet, the next parallel kernel starts the one configured)."""
-    import numba
+    import numba  # after configure(): numba reads NUMBA_* on import
 
     layer = _launched_layer()
     chosen = "NUMBA_THREADING_LAYER" in os.environ or numba.config.THREADING_LAYER != "default"
@@ -331,8 +335,6 @@ def select_threading_layer() -> str | None:
 
 
 def _gnu_openmp() -> bool:
-    import importlib
-
     try:
         omppool = importlib.import_module("numba.np.ufunc.omppool")
     except ImportError:  # pragma: no cover - numba built without OpenMP
@@ -642,9 +644,6 @@ def _import_bare(modules: list[str]) -> None:
     core that compiles.  Should a module need what a package's ``__init__`` defines, the
     package is imported whole instead.
     """
-    import importlib
-    import types
-
     for init in sorted(_PACKAGE_DIR.glob("**/__init__.py")):
         folder = init.parent
         name = ".".join(("dustoptics", *folder.relative_to(_PACKAGE_DIR).parts))

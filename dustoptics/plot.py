@@ -34,6 +34,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from dustoptics._validation import as_float_array
+from dustoptics.io._atomic import write_files
 from dustoptics.table import Table
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
@@ -514,7 +515,6 @@ def save(figure: Figure, path: str | os.PathLike[str], *, overwrite: bool = Fals
     if not isinstance(figure, mpl.figure.Figure):
         raise TypeError(f"figure must be a matplotlib.figure.Figure; got {type(figure).__name__}")
     # Imported here: dustoptics.io loads every format's writer, which plotting does not need.
-    from dustoptics.io._atomic import write_files
 
     write_files({target: _render(figure, fmt)}, overwrite=bool(overwrite))
     return target

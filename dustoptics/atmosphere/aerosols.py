@@ -87,6 +87,7 @@ from dustoptics._validation import as_increasing_grid, check_choice, check_posit
 from dustoptics.atmosphere.column import ExponentialProfile
 from dustoptics.particles.materials import TabulatedIndex
 from dustoptics.particles.sizedist import LogNormal, SizeDistribution
+from dustoptics.scattering.optics import compute_optics
 from dustoptics.table import Provenance, Source, Table
 
 __all__ = [
@@ -411,8 +412,6 @@ def aerosol_theta_deg() -> np.ndarray:
 def _component_table(
     name: str, rh: int, wavelength_nm: tuple[float, ...], theta_deg: tuple[float, ...]
 ) -> Table:
-    from dustoptics.scattering.optics import compute_optics
-
     comp = aerosol_component(name, relative_humidity_percent=rh)
     return compute_optics(
         comp.refractive_index,

@@ -21,6 +21,10 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, TextIO
 
 from dustoptics._validation import check_choice
+from dustoptics.atmosphere import gases, sets
+from dustoptics.atmosphere.sets import check_earth_aerosol
+from dustoptics.models.build import TableBuilder
+from dustoptics.table import canonical_json
 
 if TYPE_CHECKING:
     from dustoptics.atmosphere.sets import Atmosphere
@@ -119,9 +123,6 @@ def build_atmosphere(
         An unknown set or dust preset, a dust without cross-sections, or
         ``wavelength_nm`` for "earth-kobe2026".
     """
-    from dustoptics.atmosphere import gases, sets
-    from dustoptics.models.build import TableBuilder
-
     check_choice("name", name, ATMOSPHERES)
     _check_earth_aerosol(name, earth_aerosol)
     grid_nm = sets.COSMOSCOUT_WAVELENGTHS_NM if wavelength_nm is None else wavelength_nm
@@ -165,8 +166,6 @@ def build_atmosphere(
 
 def _check_earth_aerosol(name: str, earth_aerosol: Mapping[str, Any]) -> None:
     """The aerosol keywords: known, for "earth" only, and in range (before any work)."""
-    from dustoptics.atmosphere.sets import check_earth_aerosol
-
     unknown = sorted(set(earth_aerosol) - set(EARTH_AEROSOL_KEYWORDS))
     if unknown:
         raise TypeError(
@@ -228,8 +227,6 @@ def set_inputs(
             reference_wavelength_nm=reference_wavelength_nm,
         )
     if name == "earth":
-        from dustoptics.atmosphere.sets import check_earth_aerosol
-
         _check_earth_aerosol(name, earth_aerosol)
         aerosol, tau = check_earth_aerosol(**earth_aerosol)
         inputs["aerosol"] = {
@@ -265,8 +262,6 @@ def set_provenance(atmosphere: Atmosphere, inputs: Mapping[str, Any]) -> str:
         (SHA-256) over the inputs, the constituents' input hashes and their
         number densities.
     """
-    from dustoptics.table import canonical_json
-
     constituents: dict[str, dict[str, Any]] = {
         c.role: {
             "table": c.table.name,

@@ -55,7 +55,7 @@ from __future__ import annotations
 import argparse
 import gc
 
-from dustoptics.cli import errors
+from dustoptics.cli import _interrupt, errors
 
 __all__ = ["main"]
 
@@ -73,7 +73,8 @@ def main(argv: list[str] | None = None) -> int:
     int
         The exit status (:mod:`dustoptics.cli.errors`).
     """
-    from dustoptics.cli import _interrupt
+    # Here, not at the top: this package is imported first by ``import dustoptics`` (Ctrl-C
+    # handling starts before numpy, the package and numba's cache directory are set up).
     from dustoptics.cli.parser import build_parser
 
     def command() -> int:
@@ -97,6 +98,6 @@ def main(argv: list[str] | None = None) -> int:
 
 def _parser() -> argparse.ArgumentParser:
     """The argument parser (for the documentation's command reference)."""
-    from dustoptics.cli.parser import build_parser
+    from dustoptics.cli.parser import build_parser  # not at the top: as in main
 
     return build_parser()

@@ -18,6 +18,7 @@ from __future__ import annotations
 import sys
 from collections.abc import Sequence
 
+from dustoptics import _numba_cache
 from dustoptics.cli._interrupt import is_the_command
 
 __all__ = ["start"]
@@ -45,6 +46,5 @@ def start(argv: Sequence[str] | None = None) -> int:
         return 0
     if _command(sys.argv[1:] if argv is None else argv) not in COMMANDS:
         return 0
-    from dustoptics import _numba_cache
 
     return _numba_cache.prestart()

@@ -55,6 +55,7 @@ def _silence_stdout() -> None:
 
 def _one_line(exc: BaseException) -> str:
     """An error message on one line (h5py's span several), control characters escaped."""
+    # Here, not at the top: this module is imported before numba's cache is set up (cli).
     from dustoptics.io._text import printable
 
     return printable(" ".join(str(exc).split()))
@@ -77,7 +78,7 @@ def exit_status(command: Callable[[], int]) -> int:
         :class:`ImportError` of an optional dependency); 130 on an interrupt
         (:class:`KeyboardInterrupt`).
     """
-    from dustoptics.models.config import ConfigError
+    from dustoptics.models.config import ConfigError  # not at the top: as in _one_line
 
     try:
         return command()

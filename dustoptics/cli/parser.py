@@ -9,12 +9,15 @@ reference is generated from this parser (``docs/_ext/argparse_reference.py``).
 from __future__ import annotations
 
 import argparse
+import importlib
 from collections.abc import Sequence
 from typing import Any, NoReturn
 
 import numpy as np
 
+from dustoptics import __version__
 from dustoptics.cli.errors import PROG
+from dustoptics.io._text import printable
 
 __all__ = ["add_command", "build_parser"]
 
@@ -36,8 +39,6 @@ class _Parser(argparse.ArgumentParser):
     """argparse with usage errors on one line: ``dustoptics: error: <message>``."""
 
     def error(self, message: str) -> NoReturn:
-        from dustoptics.io._text import printable
-
         self.exit(2, f"{PROG}: error: {printable(message)} (see '{self.prog} --help')\n")
 
 
@@ -127,9 +128,6 @@ def build_parser() -> argparse.ArgumentParser:
         Parsed arguments carry ``command`` (the subcommand's name) and ``run``,
         the function that runs it: ``args.run(args) -> exit status``.
     """
-    import importlib
-
-    from dustoptics import __version__
 
     parser = _Parser(
         prog=PROG,

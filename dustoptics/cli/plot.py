@@ -6,8 +6,11 @@ import argparse
 from pathlib import Path
 from typing import Any
 
+from dustoptics import plot
 from dustoptics.cli.errors import PROG, UsageError
 from dustoptics.cli.parser import _float_list, add_command
+from dustoptics.io._atomic import check_targets
+from dustoptics.io.outputs import read_table
 
 __all__ = ["add_parser", "run"]
 
@@ -44,10 +47,6 @@ def add_parser(sub: Any) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run ``plot``; returns the exit status."""
-    from dustoptics import plot
-    from dustoptics.io._atomic import check_targets
-    from dustoptics.io.outputs import read_table
-
     # What would fail when the figure is saved, refused before any work.
     if args.out.suffix.lower() not in plot.SAVE_FORMATS:
         raise UsageError(

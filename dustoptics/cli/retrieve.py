@@ -14,11 +14,21 @@ evaluation: its number, chi-square, elapsed seconds) goes to stderr.
 from __future__ import annotations
 
 import argparse
+import json
+import stat
+import sys
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
+from dustoptics._files import FormatError
 from dustoptics.cli.errors import PROG, UsageError
 from dustoptics.cli.parser import add_command
+from dustoptics.io._atomic import check_targets, write_files
+from dustoptics.models.build import is_config_path
+from dustoptics.models.files import load_config
+from dustoptics.models.presets import load_preset
 
 __all__ = ["add_parser", "run"]
 
@@ -126,11 +136,7 @@ def _read_observations(path: Path) -> Any:
     """The observations file as an xarray Dataset, loaded; a missing file, one that is
     not a regular file (FIFO, device, directory), a larger one than
     :data:`MAX_OBSERVATIONS_BYTES` or one xarray cannot read is refused in one line."""
-    import stat
-
-    import xarray as xr
-
-    from dustoptics._files import FormatError
+    import xarray as xr  # lazy: xarray adds 0.7-1 s to every command's start-up (-X importtime)
 
     try:
         info = path.stat()
@@ -154,10 +160,6 @@ def _read_observations(path: Path) -> Any:
 
 
 def _model(name: str) -> Any:
-    from dustoptics.models.build import is_config_path
-    from dustoptics.models.files import load_config
-    from dustoptics.models.presets import load_preset
-
     if is_config_path(name):
         return load_config(name)
     try:
@@ -167,9 +169,6 @@ def _model(name: str) -> Any:
 
 
 def _write(result: Any, path: Path, force: bool) -> None:
-    import json
-
-    from dustoptics.io._atomic import check_targets, write_files
 
     check_targets([path], overwrite=force)
     record = {
@@ -194,10 +193,8 @@ def _write(result: Any, path: Path, force: bool) -> None:
 def run(args: argparse.Namespace) -> int:
     """Run ``retrieve``; returns the exit status.  The options, the model and the
     output file are checked before the observations are read or any table computed."""
-    import sys
 
-    import numpy as np
-
+    # lazy: dustoptics.retrieve (scipy.optimize, xarray) adds 0.8-1 s to every command's start-up
     from dustoptics.retrieve import SkySettings, retrieve
 
     bounds = _pairs(args.fit, "--fit", ":")
@@ -215,8 +212,6 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError(f"--sky-streams/--sky-tol: {exc}") from None
     model = _model(args.model)
     if args.out is not None:
-        from dustoptics.io._atomic import check_targets
-
         check_targets([args.out], overwrite=args.force)
     observations = _read_observations(args.observations)
 

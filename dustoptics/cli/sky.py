@@ -9,14 +9,18 @@ from __future__ import annotations
 
 import argparse
 import sys
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
+from dustoptics._validation import check_inside
 from dustoptics.cli.aerosol_options import add_aerosol_options, aerosol_keywords
 from dustoptics.cli.errors import PROG, UsageError
 from dustoptics.cli.parser import _positive_float, add_command
 from dustoptics.cli.report import say
 from dustoptics.cli.sky_preview import add_preview_options, approximations_from_args, report_preview
+from dustoptics.models.presets import list_presets
+from dustoptics.sky.job import SkyJob
 
 __all__ = ["add_parser", "run"]
 
@@ -172,8 +176,6 @@ _OUT_HELP = (
 
 def _check_presets(option: str, names: tuple[str, ...]) -> None:
     """Each name a preset (it names the files, too): a usage error before any work."""
-    from dustoptics.models.presets import list_presets
-
     known = list_presets()
     unknown = [n for n in names if n not in known]
     if unknown:
@@ -185,10 +187,6 @@ def _check_presets(option: str, names: tuple[str, ...]) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run ``sky``: the job's files, known and checked before any work; returns the exit status."""
-    from dataclasses import replace
-
-    from dustoptics._validation import check_inside
-    from dustoptics.sky.job import SkyJob
 
     if args.sky_command == "compare":
         if args.models is not None:
@@ -236,6 +234,7 @@ def run(args: argparse.Namespace) -> int:
         say(args, f"wrote {path}")
     report_preview(args, written)
     if args.sky_command == "compare" and not args.quiet:  # the rover table, read back
+        # lazy: sky.compare adds 20-30 ms to every command's start-up (-X importtime)
         from dustoptics.sky.compare import read_rover_comparison
 
         say(args, read_rover_comparison(job.out_dir / f"{job.name}.nc").to_text())

@@ -170,7 +170,7 @@ def report_preview(args: argparse.Namespace, written: list[Path]) -> None:
     """Print the preview's table, read back from the ``*_sky.nc`` just written (if one was asked)."""
     if not hasattr(args, "phase") or approximations_from_args(args) is None:
         return
-    import xarray as xr
+    import xarray as xr  # lazy: xarray adds 0.7-1 s to every command's start-up (-X importtime)
 
     for path in written:
         if path.name.endswith("_sky.nc"):

@@ -93,7 +93,8 @@ import numpy as np
 from dustoptics import colour
 from dustoptics._validation import check_closed_interval
 from dustoptics.atmosphere.sets import Atmosphere
-from dustoptics.scattering.fit import FIT_MODEL_ALIASES, FIT_MODELS, FitResult
+from dustoptics.scattering.fit import FIT_MODEL_ALIASES, FIT_MODELS, FitResult, fit_table
+from dustoptics.scattering.phase import ANALYTIC_MODELS, dhg_costa2021
 from dustoptics.scattering.tabulated_phase import mean_cosine, sphere_integral
 from dustoptics.sky._shared import shared_geometry
 from dustoptics.sky.medium import Medium, legendre_moments
@@ -464,9 +465,6 @@ def _fitted_phase(
     One fit per row, or with ``at_nm`` one fit of the row read there (as
     :func:`~dustoptics.scattering.fit.fit_table` reads a channel) for every row.
     """
-    from dustoptics.scattering.fit import fit_table
-    from dustoptics.scattering.phase import ANALYTIC_MODELS, dhg_costa2021
-
     if at_nm is None:
         fit = fit_table(table, model=model)
         rows = fit.parameters

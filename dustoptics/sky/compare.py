@@ -64,10 +64,13 @@ import numpy as np
 
 from dustoptics._validation import check_closed_interval, check_positive
 from dustoptics.atmosphere.sets import Atmosphere, Constituent, mars_atmosphere
+from dustoptics.models import compute, presets
 from dustoptics.scattering import phase as _phase
 from dustoptics.sky._progress import Reporter, reporter
 from dustoptics.sky.medium import Medium
-from dustoptics.sky.scene import SkyRadiance, sky_radiance
+from dustoptics.sky.orders import N_LAYERS, check_orders_cost
+from dustoptics.sky.render import N_PATH, check_render_cost
+from dustoptics.sky.scene import SkyRadiance, default_view_zenith_deg, sky_radiance
 from dustoptics.table import Provenance, Source, Table
 
 __all__ = [
@@ -121,8 +124,6 @@ def _grid(extra_nm: tuple[float, ...]) -> tuple[float, ...]:
 
 
 def _preset_table(name: str, wavelength_nm: tuple[float, ...]) -> Table:
-    from dustoptics.models import compute, presets
-
     cfg = presets.load_preset(name)
     cfg = replace(cfg, optics=replace(cfg.optics, wavelengths_nm=wavelength_nm))
     return compute.build_table(cfg)
@@ -387,7 +388,7 @@ def rover_comparison(ds: Any) -> RoverComparison:
 
 def read_rover_comparison(path: str | Path) -> RoverComparison:
     """:func:`rover_comparison` of a ``mars-comparison.nc`` written by ``sky compare``."""
-    import xarray as xr
+    import xarray as xr  # lazy: xarray adds 0.7-1 s to start-up (-X importtime)
 
     with xr.open_dataset(Path(path)) as ds:
         return rover_comparison(ds.load())
@@ -507,10 +508,6 @@ def _check_comparison_cost(
     medium: Medium, *, azimuth_step_deg: float, tol: float, allow_large: bool
 ) -> None:
     """The budget of each sky of :func:`compare_mars_models` (the dome, away from the Sun)."""
-    from dustoptics.sky.orders import N_LAYERS, check_orders_cost
-    from dustoptics.sky.render import N_PATH, check_render_cost
-    from dustoptics.sky.scene import default_view_zenith_deg
-
     check_orders_cost(medium, n_layers=N_LAYERS, tol=tol, allow_large=allow_large)
     n_zenith = default_view_zenith_deg().size
     n_az = round(180.0 / azimuth_step_deg) + 1
@@ -576,7 +573,7 @@ def compare_mars_models(
         A sky beyond the memory and work budget without ``allow_large``,
         refused before the first sky (the models share the grids).
     """
-    import xarray as xr
+    import xarray as xr  # lazy: xarray adds 0.7-1 s to start-up (-X importtime)
 
     models = _check_models(models)
     check_positive("optical_depth", optical_depth)

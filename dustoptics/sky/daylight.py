@@ -33,6 +33,10 @@ from typing import Final
 import numpy as np
 from numpy.typing import ArrayLike
 
+from dustoptics.atmosphere.sets import DEFAULT_EARTH_AEROSOL_OPTICAL_DEPTH, earth_atmosphere
+from dustoptics.sky.medium import Medium
+from dustoptics.sky.scene import sky_radiance
+
 __all__ = [
     "CIE_CLEAR_SKIES",
     "HORIZON_VIEW_ELEVATION_DEG",
@@ -184,10 +188,6 @@ def horizon_to_zenith_table(
     str
         A text table, one row per Sun elevation and azimuth.
     """
-    from dustoptics.atmosphere.sets import DEFAULT_EARTH_AEROSOL_OPTICAL_DEPTH, earth_atmosphere
-    from dustoptics.sky.medium import Medium
-    from dustoptics.sky.scene import sky_radiance
-
     medium = Medium.from_atmosphere(earth_atmosphere())
     turbidity = preetham_turbidity(DEFAULT_EARTH_AEROSOL_OPTICAL_DEPTH)
     zen = 90.0 - HORIZON_VIEW_ELEVATION_DEG

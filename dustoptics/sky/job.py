@@ -24,6 +24,13 @@ from types import MappingProxyType
 from typing import TYPE_CHECKING, Any, Final, TextIO
 
 from dustoptics._validation import check_choice
+from dustoptics.atmosphere import sets
+from dustoptics.atmosphere.sets import check_earth_aerosol
+from dustoptics.io._atomic import check_targets, write_files
+from dustoptics.sky import scene, space
+from dustoptics.sky.medium import Medium
+from dustoptics.sky.orders import N_LAYERS, check_orders_cost
+from dustoptics.sky.render import N_PATH, check_render_cost
 
 if TYPE_CHECKING:
     from dustoptics.atmosphere.sets import Atmosphere
@@ -144,12 +151,9 @@ class SkyJob:
                 )
             if not (0.0 <= self.albedo <= 1.0):
                 raise ValueError(f"albedo must be within [0, 1]; got {self.albedo!r}")
-            from dustoptics.sky.scene import check_image_size
 
-            check_image_size("size_px", self.size_px, allow_large=self.allow_large)
+            scene.check_image_size("size_px", self.size_px, allow_large=self.allow_large)
         if self.earth_aerosol:
-            from dustoptics.atmosphere.sets import check_earth_aerosol
-
             if self.kind != "earth":
                 raise ValueError(
                     f"earth_aerosol sets an 'earth' job's aerosols; got kind {self.kind!r}"
@@ -196,7 +200,7 @@ class SkyJob:
         -------
         Atmosphere
         """
-        from dustoptics.atmosphere import sets
+        # lazy: sky.compare adds 20-30 ms to import dustoptics (-X importtime)
         from dustoptics.sky.compare import mars_sky_atmosphere
 
         if self.kind == "mars":
@@ -232,10 +236,7 @@ class SkyJob:
         FileExistsError
             A target exists and ``overwrite`` is False, found before any work.
         """
-        from dustoptics.io._atomic import check_targets, write_files
-        from dustoptics.sky.scene import check_png_support
-
-        check_png_support()  # every job writes PNG images: matplotlib, before any work
+        scene.check_png_support()  # every job writes PNG images: matplotlib, before any work
         targets = self.targets()
         check_targets(targets, overwrite=overwrite)  # before any work
         files = self.files()
@@ -261,11 +262,7 @@ class SkyJob:
         dustoptics._validation.BudgetError
             Beyond the budget and ``allow_large`` is False.
         """
-        from dustoptics.sky.orders import N_LAYERS, check_orders_cost
-        from dustoptics.sky.render import N_PATH, check_render_cost
-        from dustoptics.sky.scene import default_view_zenith_deg
-
-        n_zenith = default_view_zenith_deg().size
+        n_zenith = scene.default_view_zenith_deg().size
         check_orders_cost(medium, n_layers=N_LAYERS, tol=1e-4, allow_large=self.allow_large)
         check_render_cost(
             medium,
@@ -276,23 +273,19 @@ class SkyJob:
             what="the sky over the dome",
         )
         if self.space:
-            from dustoptics.sky.space import check_limb_cost
-
-            check_limb_cost(medium, allow_large=self.allow_large)
+            space.check_limb_cost(medium, allow_large=self.allow_large)
 
     def _sky_files(self) -> dict[Path, bytes]:
-        from dustoptics.sky import Medium
-        from dustoptics.sky.scene import png_bytes, sky_radiance, sun_angular_radius_deg_of
-
         atm = self.atmosphere()
         if self.preview is not None:  # refused before the medium and the sky
+            # lazy: sky.approximations adds 25-35 ms to import dustoptics (-X importtime)
             from dustoptics.sky.approximations import check_approximations
 
             check_approximations(self.preview, atm)
         medium = Medium.from_atmosphere(atm)
         self.check_budget(medium)  # every sky's, before the first
-        sun_alpha = sun_angular_radius_deg_of(atm.sun_distance_m)  # the disc in the images
-        sky = sky_radiance(
+        sun_alpha = scene.sun_angular_radius_deg_of(atm.sun_distance_m)  # the disc in the images
+        sky = scene.sky_radiance(
             medium,
             sun_elevation_deg=self._sun_elevation,
             ground_albedo=self.albedo,
@@ -305,7 +298,7 @@ class SkyJob:
         data = sky.to_xarray()
         out: dict[Path, bytes] = {}
         if self.preview is not None:
-            from dustoptics.sky.approximations import preview_sky
+            from dustoptics.sky.approximations import preview_sky  # lazy: as above
 
             pv = preview_sky(
                 medium,
@@ -320,14 +313,16 @@ class SkyJob:
             out[stem.with_name(f"{atm.name}_preview.png")] = pv.png(exposure=exposure)
         out |= {
             stem.with_name(f"{atm.name}_sky.nc"): bytes(data.to_netcdf(engine="scipy")),
-            stem.with_name(f"{atm.name}_fisheye.png"): png_bytes(
+            stem.with_name(f"{atm.name}_fisheye.png"): scene.png_bytes(
                 sky.fisheye(size=self.size_px, exposure=exposure)
             ),
-            stem.with_name(f"{atm.name}_panorama.png"): png_bytes(sky.panorama(exposure=exposure)),
+            stem.with_name(f"{atm.name}_panorama.png"): scene.png_bytes(
+                sky.panorama(exposure=exposure)
+            ),
         }
         if self.sunset:
             for elev in SUNSET_ELEVATIONS_DEG:
-                s = sky_radiance(
+                s = scene.sky_radiance(
                     medium,
                     sun_elevation_deg=elev,
                     ground_albedo=self.albedo,
@@ -335,13 +330,11 @@ class SkyJob:
                     progress=self.progress,
                     allow_large=self.allow_large,
                 )
-                out[stem.with_name(f"{atm.name}_sunset_{elev:+05.1f}.png")] = png_bytes(
+                out[stem.with_name(f"{atm.name}_sunset_{elev:+05.1f}.png")] = scene.png_bytes(
                     s.panorama(exposure=exposure)
                 )
         if self.space:
-            from dustoptics.sky.space import limb_radiance
-
-            limb = limb_radiance(
+            limb = space.limb_radiance(
                 medium,
                 ground_albedo=self.albedo,
                 progress=self.progress,
@@ -351,6 +344,7 @@ class SkyJob:
         return out
 
     def _comparison_files(self) -> dict[Path, bytes]:
+        # lazy: sky.compare adds 20-30 ms to import dustoptics (-X importtime)
         from dustoptics.sky.compare import MARS_MODELS, compare_mars_models, plot_comparison
 
         ds = compare_mars_models(

@@ -43,6 +43,9 @@ from typing import Final, TextIO
 
 from dustoptics._validation import BudgetError, check_closed_interval, check_positive
 from dustoptics.atmosphere.sets import mars_atmosphere
+from dustoptics.particles.mixing import mars_dust
+from dustoptics.particles.sizedist import ModifiedGamma
+from dustoptics.scattering.optics import compute_optics
 from dustoptics.sky._progress import Reporter, reporter
 from dustoptics.sky.compare import (
     COMPARISON_WAVELENGTHS_NM,
@@ -104,10 +107,6 @@ class MerDust:
 
     def table(self, wavelength_nm: tuple[float, ...]) -> Table:
         """Its Mie optics (cross-section weighted) on ``wavelength_nm``."""
-        from dustoptics.particles.mixing import mars_dust
-        from dustoptics.particles.sizedist import ModifiedGamma
-        from dustoptics.scattering.optics import compute_optics
-
         index = mars_dust(hematite_fraction=self.hematite_fraction, host_index=self.host_index)
         return compute_optics(
             index,

@@ -69,7 +69,13 @@ import numpy as np
 from numpy.polynomial import legendre
 from scipy.special import gammaln, lpmv
 
-from dustoptics._validation import BudgetError, check_budget, check_choice, check_closed_interval
+from dustoptics import _validation
+from dustoptics._validation import (
+    BudgetError,
+    check_budget,
+    check_choice,
+    check_closed_interval,
+)
 from dustoptics.sky._progress import Reporter, reporter
 from dustoptics.sky._shared import geometry_memo
 from dustoptics.sky.medium import Medium, MediumOptics
@@ -461,11 +467,12 @@ def check_orders_cost(
     cost = estimate_orders_cost(medium, n_layers=n_layers, tol=tol)
     if allow_large:
         return cost
-    from dustoptics._validation import MEMORY_BUDGET_BYTES
 
     per_layer_mem = cost.memory_bytes / (n_layers + 1)
     per_layer_work = cost.work / (n_layers + 1)
-    largest = int(min(MEMORY_BUDGET_BYTES / per_layer_mem, WORK_BUDGET / per_layer_work)) - 1
+    largest = (
+        int(min(_validation.MEMORY_BUDGET_BYTES / per_layer_mem, WORK_BUDGET / per_layer_work)) - 1
+    )
     what = (
         f"{medium.wavelength_nm.size} wavelengths x n_streams={medium.n_streams} x "
         f"n_layers={n_layers} (about {cost.orders} orders of scattering)"

@@ -21,6 +21,7 @@ text stream when it takes longer than two seconds (``progress=``).
 
 from __future__ import annotations
 
+import io as _io
 import math
 from dataclasses import dataclass
 from dataclasses import field as dataclass_field
@@ -369,7 +370,7 @@ class SkyRadiance:
 
     def to_xarray(self) -> Any:
         """The sky as an ``xarray.Dataset`` (radiance, XYZ, chromaticity)."""
-        import xarray as xr
+        import xarray as xr  # lazy: xarray adds 0.7-1 s to start-up (-X importtime)
 
         xyz = self.xyz()
         dims = ("view_zenith_angle", "view_azimuth_angle")
@@ -677,8 +678,6 @@ def png_bytes(rgb: np.ndarray) -> bytes:
 
     Needs the ``plot`` extra (matplotlib).
     """
-    import io as _io
-
     check_png_support()
     import matplotlib.image
 

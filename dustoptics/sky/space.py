@@ -27,19 +27,21 @@ approximation's weakest place.
 
 from __future__ import annotations
 
+import io
 import math
 from dataclasses import dataclass
 from typing import Any, Final, TextIO
 
 import numpy as np
 
+from dustoptics import colour
 from dustoptics._validation import BudgetError, check_closed_interval, check_positive
 from dustoptics.atmosphere.sets import Atmosphere
 from dustoptics.sky._progress import Reporter, reporter
 from dustoptics.sky.medium import Medium, MediumOptics
 from dustoptics.sky.orders import N_LAYERS, WORK_BUDGET, estimate_orders_cost, solve_orders
 from dustoptics.sky.render import _radiance, check_render_cost
-from dustoptics.sky.scene import display_rgb, sunlit_xyz
+from dustoptics.sky.scene import check_image_size, check_png_support, display_rgb, sunlit_xyz
 
 __all__ = ["LimbRadiance", "check_limb_cost", "limb_radiance"]
 
@@ -104,8 +106,6 @@ class LimbRadiance:
         The largest linear sRGB channel of the computed lines of sight is put
         at 1: no part of the limb clips (the dense low layers keep their colour).
         """
-        from dustoptics import colour
-
         brightest = float(np.max(colour.xyz_to_linear_srgb(self.xyz()), initial=0.0))
         return 1.0 / brightest if brightest > 0.0 else 1.0
 
@@ -149,8 +149,6 @@ class LimbRadiance:
         extent_km : tuple of float
             (left, right, bottom, top) of the image in km, for a plot's axes.
         """
-        from dustoptics.sky.scene import check_image_size
-
         width = check_image_size("width", width)
         height = check_image_size("height", height)
         if not self.planet_radius_m > 0.0:
@@ -200,9 +198,6 @@ class LimbRadiance:
         The exposure puts the brightest of the limb at white
         (:meth:`default_exposure`).  Needs matplotlib (the ``plot`` extra).
         """
-        import io
-
-        from dustoptics.sky.scene import check_png_support
 
         check_png_support()
         import matplotlib
