@@ -14,10 +14,9 @@ import os
 import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any, TextIO
+from typing import TYPE_CHECKING, Any, TextIO
 
 import numpy as np
-import xarray as xr
 from scipy import optimize
 
 from dustoptics._validation import BudgetError
@@ -40,6 +39,9 @@ from dustoptics.scattering.table_derivatives import (
     index_parameter_names,
 )
 from dustoptics.table import Table
+
+if TYPE_CHECKING:
+    import xarray as xr
 
 __all__ = ["OBSERVABLES", "Retrieval", "retrieve"]
 
@@ -281,6 +283,9 @@ class _Observation:
 
 def _observations(observations: Any) -> tuple[list[_Observation], list[Any]]:
     """The optical observations and the sky's samples (:func:`~dustoptics.retrieve.sky.sky_samples`)."""
+    # lazy: the package imports without xarray (tests/test_packaging.py); it adds 0.7-1 s
+    import xarray as xr
+
     known = (*OBSERVABLES, *SKY_OBSERVABLES)
     if isinstance(observations, xr.DataArray):
         if observations.name is None:
