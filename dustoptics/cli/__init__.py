@@ -14,6 +14,8 @@ Usage::
     dustoptics sky mars|earth|compare --out DIR [--force]
     dustoptics --version
 
+``python -m dustoptics`` (or ``python -m dustoptics.cli``) runs the same command line.
+
 ``build`` computes a preset (``dustoptics presets``) or a TOML configuration
 file (:mod:`dustoptics.models.config`; copy a preset with ``presets --show NAME``)
 and writes it into ``DIR/NAME/`` in each format of :data:`dustoptics.io.FORMATS`
