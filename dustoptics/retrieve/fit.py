@@ -283,19 +283,8 @@ class _Observation:
 
 def _observations(observations: Any) -> tuple[list[_Observation], list[Any]]:
     """The optical observations and the sky's samples (:func:`~dustoptics.retrieve.sky.sky_samples`)."""
-    # lazy: the package imports without xarray (tests/test_packaging.py); it adds 0.7-1 s
-    import xarray as xr
-
+    observations = _as_dataset(observations)
     known = (*OBSERVABLES, *SKY_OBSERVABLES)
-    if isinstance(observations, xr.DataArray):
-        if observations.name is None:
-            raise ValueError(f"observations: a DataArray must be named, one of {', '.join(known)}")
-        observations = observations.to_dataset()
-    if not isinstance(observations, xr.Dataset):
-        raise TypeError(
-            "observations must be an xarray Dataset or named DataArray; "
-            f"got {type(observations).__name__}"
-        )
     names = [str(k) for k in observations.data_vars if not str(k).endswith("_uncertainty")]
     unknown = [k for k in names if k not in known]
     if unknown or not names:
@@ -306,54 +295,79 @@ def _observations(observations: Any) -> tuple[list[_Observation], list[Any]]:
     found = []
     sky = []
     for name in names:
-        var = observations[name]
-        dims = OBSERVABLES.get(name) or SKY_OBSERVABLES[name]
-        if set(var.dims) != set(dims):
-            raise ValueError(f"observations: {name!r} must have dimensions {dims}; got {var.dims}")
-        var = var.transpose(*dims)
-        if f"{name}_uncertainty" in observations:
-            sigma = observations[f"{name}_uncertainty"].transpose(*dims).broadcast_like(var)
-            sigma_values = np.asarray(sigma.values, dtype=np.float64)
-        elif "uncertainty" in var.attrs:
-            sigma_values = np.full(var.shape, float(var.attrs["uncertainty"]))
-        else:
-            raise ValueError(
-                f"observations: {name!r} needs its one-sigma uncertainty: a variable "
-                f"{name + '_uncertainty'!r} or an attribute 'uncertainty'"
-            )
+        var, sigma_values = _variable_and_sigma(observations, name)
         if name in SKY_OBSERVABLES:
             sky += sky_samples(var, sigma_values)
-            continue
-        values = np.asarray(var.values, dtype=np.float64)
-        wl = np.asarray(var["wavelength_nm"].values, dtype=np.float64)
-        if values.ndim == 2:
-            theta = np.asarray(var["theta_deg"].values, dtype=np.float64)
-            wl_s, theta_s = np.meshgrid(wl, theta, indexing="ij")
         else:
-            wl_s, theta_s = wl, np.full(wl.shape, np.nan)
-        keep = np.isfinite(values)
-        if not np.all(np.isfinite(sigma_values[keep]) & (sigma_values[keep] > 0)):
-            raise ValueError(f"observations: {name!r} uncertainties must be finite and > 0")
-        reference = math.nan
-        if name == "extinction_ratio":
-            if "reference_wavelength_nm" not in var.attrs:
-                raise ValueError(
-                    "observations: 'extinction_ratio' needs the attribute reference_wavelength_nm"
-                )
-            reference = float(var.attrs["reference_wavelength_nm"])
-        found.append(
-            _Observation(
-                name,
-                wl_s[keep].ravel(),
-                theta_s[keep].ravel(),
-                values[keep].ravel(),
-                sigma_values[keep].ravel(),
-                reference,
-            )
-        )
+            found.append(_optical_observation(name, var, sigma_values))
     if sum(o.value.size for o in found) + sum(s.value.size for s in sky) == 0:
         raise ValueError("observations: no finite samples")
     return [o for o in found if o.value.size], sky
+
+
+def _as_dataset(observations: Any) -> Any:
+    """``observations`` as an xarray Dataset (a named DataArray becomes one)."""
+    # lazy: the package imports without xarray (tests/test_packaging.py); it adds 0.7-1 s
+    import xarray as xr
+
+    if isinstance(observations, xr.DataArray):
+        if observations.name is None:
+            known = (*OBSERVABLES, *SKY_OBSERVABLES)
+            raise ValueError(f"observations: a DataArray must be named, one of {', '.join(known)}")
+        observations = observations.to_dataset()
+    if not isinstance(observations, xr.Dataset):
+        raise TypeError(
+            "observations must be an xarray Dataset or named DataArray; "
+            f"got {type(observations).__name__}"
+        )
+    return observations
+
+
+def _variable_and_sigma(observations: Any, name: str) -> tuple[Any, np.ndarray]:
+    """The variable ``name`` in its dimensions' order, and its one-sigma uncertainties."""
+    var = observations[name]
+    dims = OBSERVABLES.get(name) or SKY_OBSERVABLES[name]
+    if set(var.dims) != set(dims):
+        raise ValueError(f"observations: {name!r} must have dimensions {dims}; got {var.dims}")
+    var = var.transpose(*dims)
+    if f"{name}_uncertainty" in observations:
+        sigma = observations[f"{name}_uncertainty"].transpose(*dims).broadcast_like(var)
+        return var, np.asarray(sigma.values, dtype=np.float64)
+    if "uncertainty" in var.attrs:
+        return var, np.full(var.shape, float(var.attrs["uncertainty"]))
+    raise ValueError(
+        f"observations: {name!r} needs its one-sigma uncertainty: a variable "
+        f"{name + '_uncertainty'!r} or an attribute 'uncertainty'"
+    )
+
+
+def _optical_observation(name: str, var: Any, sigma_values: np.ndarray) -> _Observation:
+    """The finite samples of an optical observable (not the sky's)."""
+    values = np.asarray(var.values, dtype=np.float64)
+    wl = np.asarray(var["wavelength_nm"].values, dtype=np.float64)
+    if values.ndim == 2:
+        theta = np.asarray(var["theta_deg"].values, dtype=np.float64)
+        wl_s, theta_s = np.meshgrid(wl, theta, indexing="ij")
+    else:
+        wl_s, theta_s = wl, np.full(wl.shape, np.nan)
+    keep = np.isfinite(values)
+    if not np.all(np.isfinite(sigma_values[keep]) & (sigma_values[keep] > 0)):
+        raise ValueError(f"observations: {name!r} uncertainties must be finite and > 0")
+    reference = math.nan
+    if name == "extinction_ratio":
+        if "reference_wavelength_nm" not in var.attrs:
+            raise ValueError(
+                "observations: 'extinction_ratio' needs the attribute reference_wavelength_nm"
+            )
+        reference = float(var.attrs["reference_wavelength_nm"])
+    return _Observation(
+        name,
+        wl_s[keep].ravel(),
+        theta_s[keep].ravel(),
+        values[keep].ravel(),
+        sigma_values[keep].ravel(),
+        reference,
+    )
 
 
 def _predict(
