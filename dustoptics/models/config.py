@@ -87,7 +87,6 @@ from typing import Any, Final
 
 import numpy as np
 
-from dustoptics._deprecated import moved_attribute
 from dustoptics._validation import (
     MAX_GRID_POINTS,
     check_file_name,
@@ -119,25 +118,6 @@ __all__ = [
     "SizeDistributionConfig",
     "parse_config",
 ]
-
-#: Names that moved out of this module (building a table, reading a user's file and
-#: checking it against the presets); the old path warns (:func:`__getattr__`) until it is
-#: removed in 0.3.
-_MOVED: Final = MappingProxyType(
-    {
-        "build_table": "dustoptics.models.compute",
-        "load_config": "dustoptics.models.files",
-        "preset_copy_problems": "dustoptics.models.files",
-        "PresetCopyWarning": "dustoptics.models.files",
-    }
-)
-
-
-def __getattr__(name: str) -> Any:
-    """The names that moved to :mod:`dustoptics.models.compute` and
-    :mod:`dustoptics.models.files` (deprecated)."""
-    return moved_attribute(__name__, name, _MOVED)
-
 
 #: Schema identifier recorded in every table's inputs.
 SCHEMA: Final = "dustoptics-config-1"

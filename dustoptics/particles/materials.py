@@ -46,13 +46,11 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from decimal import Decimal, InvalidOperation
 from pathlib import Path
-from types import MappingProxyType
 from typing import TYPE_CHECKING, Any, Final, cast
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from dustoptics._deprecated import moved_attribute
 from dustoptics._validation import (
     _show,
     as_float_array,
@@ -72,28 +70,6 @@ __all__ = [
     "read_index_csv",
     "write_index_csv",
 ]
-
-#: Names that moved to :mod:`dustoptics.particles.catalogue`; the old path warns
-#: (:func:`__getattr__`) until it is removed in 0.3.
-_MOVED: Final = MappingProxyType(
-    dict.fromkeys(
-        (
-            "CATALOGUE_FILE",
-            "CATALOGUE_KINDS",
-            "CATALOGUE_PACKAGE",
-            "as_refractive_index",
-            "get_material",
-            "list_materials",
-        ),
-        "dustoptics.particles.catalogue",
-    )
-)
-
-
-def __getattr__(name: str) -> Any:
-    """The names that moved to :mod:`dustoptics.particles.catalogue` (deprecated)."""
-    return moved_attribute(__name__, name, _MOVED)
-
 
 FloatArray = NDArray[np.float64]
 ComplexArray = NDArray[np.complex128]

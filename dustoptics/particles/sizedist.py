@@ -59,14 +59,12 @@ import math
 import warnings
 from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
-from types import MappingProxyType
-from typing import Any, ClassVar, Final
+from typing import Any, ClassVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy import special
 
-from dustoptics._deprecated import moved_attribute
 from dustoptics._validation import (
     check_open_interval,
     check_positive,
@@ -89,21 +87,6 @@ __all__ = [
     "SizeDistribution",
     "Truncated",
 ]
-
-#: Names that moved to :mod:`dustoptics.particles.custom_sizedist`; the old path warns
-#: (:func:`__getattr__`) until it is removed in 0.3.
-_MOVED: Final = MappingProxyType(
-    dict.fromkeys(
-        ("DensityDistribution", "MultiModal", "TabulatedDistribution", "from_dict"),
-        "dustoptics.particles.custom_sizedist",
-    )
-)
-
-
-def __getattr__(name: str) -> Any:
-    """The names that moved to :mod:`dustoptics.particles.custom_sizedist` (deprecated)."""
-    return moved_attribute(__name__, name, _MOVED)
-
 
 FloatOrArray = float | NDArray[np.float64]
 

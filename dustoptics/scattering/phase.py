@@ -60,9 +60,7 @@ Phase functions sampled on a grid of angles, and what is done to them
 (:func:`~dustoptics.scattering.tabulated_phase.sphere_integral`,
 :func:`~dustoptics.scattering.tabulated_phase.renormalize`, Meyran's
 :func:`~dustoptics.scattering.tabulated_phase.hybrid`, ...), are in
-:mod:`dustoptics.scattering.tabulated_phase`.  Their old names here
-(``phase.hybrid`` and so on) still work until release 0.3, with a
-:class:`DeprecationWarning`.
+:mod:`dustoptics.scattering.tabulated_phase`.
 
 References
 ----------
@@ -103,7 +101,6 @@ from typing import Any, ClassVar, Final
 import numpy as np
 from numpy.typing import ArrayLike
 
-from dustoptics._deprecated import REMOVED_IN
 from dustoptics._validation import (
     _show,
     as_float_array,
@@ -1271,31 +1268,3 @@ class Collienne2013:
 
 #: Collienne et al. 2013 Mars preset (see :class:`Collienne2013`).
 COLLIENNE2013_MARS: Final = Collienne2013()
-
-
-# ------------------------------------------------------------- moved names
-
-#: Tabulated-phase functions that lived here until 0.2; the old names warn until 0.3.
-_MOVED_TO_TABULATED_PHASE: Final = (
-    "flatten",
-    "hybrid",
-    "mean_cosine",
-    "renormalize",
-    "sphere_integral",
-    "tabulate",
-)
-
-
-def __getattr__(name: str) -> Any:
-    """``phase.hybrid`` and the other moved names, with a DeprecationWarning."""
-    if name in _MOVED_TO_TABULATED_PHASE:
-        from dustoptics.scattering import tabulated_phase
-
-        warnings.warn(
-            f"{__name__}.{name} moved to {tabulated_phase.__name__}.{name}; "
-            f"the old path is removed in {REMOVED_IN}",
-            DeprecationWarning,
-            stacklevel=2,
-        )
-        return getattr(tabulated_phase, name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

