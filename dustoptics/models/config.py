@@ -96,12 +96,10 @@ from dustoptics.particles.catalogue import get_material, list_materials
 from dustoptics.particles.custom_sizedist import MultiModal
 from dustoptics.particles.mixing import MARS_DUST_HEMATITE, MIXING_RULES, mars_dust
 from dustoptics.particles.sizedist import (
-    Gamma,
-    LogNormal,
-    ModifiedGamma,
-    ModifiedLogNormal,
-    Monodisperse,
+    SIZE_DISTRIBUTION_ALIASES,
+    SIZE_DISTRIBUTIONS,
     SizeDistribution,
+    SizeParameter,
 )
 from dustoptics.scattering import phase as _phase
 from dustoptics.scattering.optics import WEIGHTINGS
@@ -137,15 +135,20 @@ _MATERIAL_KEYS: Final[Mapping[str, tuple[str, ...]]] = {
     "constant": ("model", "n", "k"),
 }
 
-# Size-distribution models: class, parameters and their allowed ranges
-# ("positive": > 0; (low, high): open interval).
-_DISTRIBUTIONS: Final[Mapping[str, tuple[type[SizeDistribution], tuple[tuple[str, Any], ...]]]] = {
-    "modified_gamma": (ModifiedGamma, (("r_eff_um", "positive"), ("v_eff", (0.0, 0.5)))),
-    "modified_log_normal": (ModifiedLogNormal, (("r_eff_um", "positive"), ("v_eff", "positive"))),
-    "gamma": (Gamma, (("shape", "positive"), ("scale_um", "positive"))),
-    "log_normal": (LogNormal, (("median_radius_um", "positive"), ("sigma", "positive"))),
-    "monodisperse": (Monodisperse, (("radius_um", "positive"),)),
-}
+#: Size-distribution models a TOML file cannot name: a Python function is no TOML value.
+_NOT_IN_TOML: Final = ("density_function",)
+_MULTIMODAL: Final = "multimodal"
+
+
+def _size_models(*, in_mixture: bool) -> tuple[str, ...]:
+    """The size-distribution models (and aliases) ``model =`` accepts: the registry's.
+
+    A mode of a mixture (or the parent of a truncation) is any model but a mixture;
+    ``multimodal`` itself is written with ``[[size_distribution.modes]]``.
+    """
+    names = tuple(n for n in SIZE_DISTRIBUTIONS if n not in (*_NOT_IN_TOML, _MULTIMODAL))
+    aliases = tuple(a for a, n in SIZE_DISTRIBUTION_ALIASES.items() if n in names)
+    return (*names, *aliases) if in_mixture else (*names, _MULTIMODAL, *aliases)
 
 
 # --------------------------------------------------------------------- errors
@@ -492,6 +495,15 @@ class MaterialConfig:
         }
 
 
+def _input_value(value: Any) -> Any:
+    """A mode's parameter as plain data (a nested mode as its dict, numbers as a list)."""
+    if isinstance(value, ModeConfig):
+        return value.to_inputs()
+    if isinstance(value, tuple):
+        return list(value)
+    return value
+
+
 @dataclass(frozen=True)
 class ModeConfig:
     """One size mode: a distribution model and its parameters.
@@ -499,25 +511,35 @@ class ModeConfig:
     Attributes
     ----------
     model : str
-        A key of the size-distribution models (``"modified_gamma"``, ...).
+        A key of :data:`~dustoptics.particles.sizedist.SIZE_DISTRIBUTIONS`
+        (``"modified_gamma"``, ...).
     parameters : Mapping
-        Its parameters (radii in [um], the rest dimensionless).
+        Its parameters (radii in [um], the rest dimensionless): numbers, tuples
+        of numbers, or a nested :class:`ModeConfig` (a truncation's parent).
     relative_number_density : float or None
         Weight in a multimodal distribution (only ratios matter); None for a
         single distribution. [-]
     """
 
     model: str
-    parameters: Mapping[str, float]
+    parameters: Mapping[str, Any]
     relative_number_density: float | None = None
 
     def build(self) -> SizeDistribution:
         """The :class:`~dustoptics.particles.sizedist.SizeDistribution`."""
-        cls = _DISTRIBUTIONS[self.model][0]
-        return cls(**self.parameters)
+        cls = SIZE_DISTRIBUTIONS[self.model]
+        return cls(
+            **{
+                k: (v.build() if isinstance(v, ModeConfig) else v)
+                for k, v in self.parameters.items()
+            }
+        )
 
     def to_inputs(self) -> dict[str, Any]:
-        out: dict[str, Any] = {"model": self.model, **self.parameters}
+        out: dict[str, Any] = {
+            "model": self.model,
+            **{k: _input_value(v) for k, v in self.parameters.items()},
+        }
         if self.relative_number_density is not None:
             out["relative_number_density"] = self.relative_number_density
         return out
@@ -800,26 +822,48 @@ def _parse_material(ctx: _Context, value: Any) -> MaterialConfig:
     )
 
 
+def _parameter_value(ctx: _Context, key: str, raw: Any, param: SizeParameter) -> Any:
+    """One size-distribution parameter from TOML, checked against its registry record."""
+    if param.kind == "distribution":
+        return _parse_mode(ctx, key, _table(ctx, key, raw), in_mixture=True, weighted=False)
+    if param.kind == "numbers":
+        return tuple(_number(ctx, f"{key}[{i}]", v) for i, v in enumerate(_array(ctx, key, raw)))
+    if param.low == 0.0 and param.high == math.inf:
+        return _positive(ctx, key, raw, "um" if param.name.endswith("_um") else "")
+    if param.low == -math.inf and param.high == math.inf:
+        return _number(ctx, key, raw)
+    return _open(ctx, key, raw, param.low, param.high)
+
+
 def _parse_mode(
-    ctx: _Context, prefix: str, sec: Mapping[str, Any], *, in_mixture: bool
+    ctx: _Context,
+    prefix: str,
+    sec: Mapping[str, Any],
+    *,
+    in_mixture: bool,
+    weighted: bool | None = None,
 ) -> ModeConfig:
-    models = tuple(_DISTRIBUTIONS) if in_mixture else (*_DISTRIBUTIONS, "multimodal")
-    model = _choice(ctx, f"{prefix}.model", _required(ctx, prefix, sec, "model"), models)
-    params = _DISTRIBUTIONS[model][1]
-    allowed = ("model", *(p for p, _ in params)) + (
-        ("relative_number_density",) if in_mixture else ()
+    """One distribution from ``sec``: its model, its registry parameters (and a mixture's weight)."""
+    weighted = in_mixture if weighted is None else weighted
+    given = _choice(
+        ctx,
+        f"{prefix}.model",
+        _required(ctx, prefix, sec, "model"),
+        _size_models(in_mixture=in_mixture),
     )
-    _known_keys(ctx, prefix, sec, allowed, f"for {prefix}.model = {model!r}")
-    values: dict[str, float] = {}
-    for param, rule in params:
-        key = f"{prefix}.{param}"
-        raw = _required(ctx, prefix, sec, param)
-        if rule == "positive":
-            values[param] = _positive(ctx, key, raw, "um" if param.endswith("_um") else "")
-        else:
-            values[param] = _open(ctx, key, raw, *rule)
+    model = SIZE_DISTRIBUTION_ALIASES.get(given, given)
+    params = SIZE_DISTRIBUTIONS[model].parameters
+    allowed = ("model", *(p.name for p in params)) + (
+        ("relative_number_density",) if weighted else ()
+    )
+    _known_keys(ctx, prefix, sec, allowed, f"for {prefix}.model = {given!r}")
+    values = {
+        p.name: _parameter_value(ctx, f"{prefix}.{p.name}", _required(ctx, prefix, sec, p.name), p)
+        for p in params
+        if p.required or p.name in sec
+    }
     density = None
-    if in_mixture:
+    if weighted:
         density = _positive(
             ctx,
             f"{prefix}.relative_number_density",
@@ -839,9 +883,9 @@ def _parse_size_distribution(ctx: _Context, value: Any) -> SizeDistributionConfi
         ctx,
         "size_distribution.model",
         _required(ctx, "size_distribution", sec, "model"),
-        (*_DISTRIBUTIONS, "multimodal"),
+        _size_models(in_mixture=False),
     )
-    if model != "multimodal":
+    if model != _MULTIMODAL:
         return SizeDistributionConfig(
             model, (_parse_mode(ctx, "size_distribution", sec, in_mixture=False),)
         )

@@ -38,16 +38,10 @@ from numpy.typing import ArrayLike, NDArray
 from dustoptics._validation import as_float_array, check_positive, check_real
 from dustoptics.particles.sizedist import (
     COSMOSCOUT_VR,
-    DeirmendjianGamma,
+    SIZE_DISTRIBUTIONS,
     FloatOrArray,
-    Gamma,
-    LogNormal,
-    ModifiedGamma,
-    ModifiedLogNormal,
-    Monodisperse,
-    PowerLaw,
     SizeDistribution,
-    Truncated,
+    SizeParameter,
     _as_radius,
     _numeric_bounds,
     _scalar_or_array,
@@ -105,6 +99,10 @@ class MultiModal(SizeDistribution):
 
     model: ClassVar[str] = "multimodal"
     citation: ClassVar[str] = COSMOSCOUT_VR
+    parameters: ClassVar[tuple[SizeParameter, ...]] = (
+        SizeParameter("modes", kind="distributions"),
+        SizeParameter("relative_number_densities", kind="numbers"),
+    )
 
     modes: Sequence[SizeDistribution]  # stored as a tuple
     relative_number_densities: Sequence[float]  # stored as a tuple of float
@@ -257,6 +255,11 @@ class TabulatedDistribution(SizeDistribution):
     """
 
     model: ClassVar[str] = "tabulated"
+    parameters: ClassVar[tuple[SizeParameter, ...]] = (
+        SizeParameter("radius_um", kind="numbers"),
+        SizeParameter("dn_dr", kind="numbers", required=False),
+        SizeParameter("dn_dlnr", kind="numbers", required=False),
+    )
     citation: ClassVar[str] = "measured or user-supplied table (piecewise linear n(r))"
 
     radius_um: np.ndarray
@@ -557,30 +560,17 @@ def from_dict(data: Mapping[str, Any]) -> SizeDistribution:
 
     Examples
     --------
+    >>> from dustoptics.particles.sizedist import ModifiedGamma
     >>> from_dict(ModifiedGamma(r_eff_um=1.6, v_eff=0.2).to_dict())
     ModifiedGamma(r_eff_um=1.6, v_eff=0.2)
     """
-    models: dict[str, type[SizeDistribution]] = {
-        cls.model: cls
-        for cls in (
-            ModifiedGamma,
-            Gamma,
-            LogNormal,
-            ModifiedLogNormal,
-            Monodisperse,
-            MultiModal,
-            DeirmendjianGamma,
-            PowerLaw,
-            TabulatedDistribution,
-            Truncated,
-        )
-    }
     model = data.get("model") if isinstance(data, Mapping) else None
     if model == DensityDistribution.model:
         raise ValueError(
             "a density_function size distribution cannot be rebuilt from its record "
             "(its density is a Python callable); construct it again"
         )
+    models = [name for name in SIZE_DISTRIBUTIONS if name != DensityDistribution.model]
     if model not in models:
         raise ValueError(
             f"size distribution model must be one of {', '.join(map(repr, models))}; got {model!r}"
@@ -590,6 +580,7 @@ def from_dict(data: Mapping[str, Any]) -> SizeDistribution:
         raise ValueError(
             f"size distribution record needs a 'parameters' mapping; got {parameters!r}"
         )
+    cls = SIZE_DISTRIBUTIONS[model]
     try:
         if model == MultiModal.model:
             modes = data.get("modes")
@@ -599,13 +590,13 @@ def from_dict(data: Mapping[str, Any]) -> SizeDistribution:
                 modes=tuple(from_dict(mode) for mode in modes),
                 relative_number_densities=parameters["relative_number_densities"],
             )
-        if model == Truncated.model:
-            return Truncated(
-                parent=from_dict(parameters["parent"]),
-                r_min_um=parameters["r_min_um"],
-                r_max_um=parameters["r_max_um"],
-            )
-        return models[model](**parameters)
+        nested = {p.name for p in cls.parameters if p.kind == "distribution"}
+        return cls(
+            **{
+                name: from_dict(value) if name in nested else value
+                for name, value in parameters.items()
+            }
+        )
     except (KeyError, TypeError) as exc:
         raise ValueError(
             f"size distribution record for {model!r} has wrong parameters: {exc}"
