@@ -27,14 +27,18 @@ References
 
 from __future__ import annotations
 
+import csv
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any, ClassVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+from scipy.integrate import quad
 
+from dustoptics._files import FormatError, read_checked
 from dustoptics._validation import as_float_array, check_positive, check_real
 from dustoptics.particles.sizedist import (
     COSMOSCOUT_VR,
@@ -326,10 +330,6 @@ class TabulatedDistribution(SizeDistribution):
         ValueError
             Missing columns, or a value that is not a number.
         """
-        import csv
-        from pathlib import Path
-
-        from dustoptics._files import FormatError, read_checked
 
         p = Path(path)
         try:
@@ -481,7 +481,6 @@ class DensityDistribution(SizeDistribution):
 
     def _integral(self, k: float, a: float, b: float) -> float:
         """int_a^b r^k n(r) dr / _norm, in ln r."""
-        from scipy.integrate import quad
 
         if b <= a:
             return 0.0

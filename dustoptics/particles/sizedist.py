@@ -66,6 +66,7 @@ from typing import Any, ClassVar, Final
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy import special
+from scipy.optimize import brentq
 
 from dustoptics._validation import (
     check_open_interval,
@@ -1094,7 +1095,6 @@ def _numeric_bounds(
     in ln r (Brent's method) within its finite ``support``: F_lower^<(r_lo)
     = eps and F_upper^>(r_hi) = eps, or the support's ends when their tails
     are already below eps."""
-    from scipy.optimize import brentq
 
     lo, hi = support
 

@@ -73,7 +73,7 @@ from functools import lru_cache, singledispatch
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy import special
+from scipy import integrate, special
 
 from dustoptics.particles.custom_sizedist import MultiModal
 from dustoptics.particles.sizedist import (
@@ -510,7 +510,6 @@ def _integral(f: Callable[[Array], Array], lo: float, hi: float) -> float:
         return 0.0
     # Imported here: scipy.integrate costs 0.17 s of every ``import dustoptics`` and
     # only truncated distributions' derivatives need it.
-    from scipy import integrate
 
     def g(u: float) -> float:
         r = math.exp(u)

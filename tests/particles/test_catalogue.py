@@ -405,3 +405,22 @@ def test_the_public_names_do_not_warn() -> None:
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         assert (do.get_material, do.list_materials) == (get_material, list_materials)
+
+
+# ---------------------------------------------------------------------------
+# The refractive-index sources: one registry
+# ---------------------------------------------------------------------------
+
+
+def test_every_catalogue_kind_is_a_registered_source_and_builds_its_entries() -> None:
+    """The kinds the catalogue accepts are the registry's; each entry builds through its source."""
+    assert catalogue.CATALOGUE_KINDS == tuple(catalogue.INDEX_SOURCES)
+    entries = catalogue._catalogue().entries
+    used = {entry["kind"] for entry in entries.values()}
+    assert used == set(catalogue.INDEX_SOURCES)  # every source is used by some entry
+    for kind, source in catalogue.INDEX_SOURCES.items():
+        assert source.kind == kind and source.summary
+        name = next(n for n, e in entries.items() if e["kind"] == kind)
+        material = get_material(name)
+        low, high = (float(x) for x in entries[name]["wavelength_range_nm"])
+        assert material.wavelength_range_nm == (low, high), name
