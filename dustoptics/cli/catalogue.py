@@ -44,10 +44,9 @@ def run_presets(args: argparse.Namespace) -> int:
             raise UsageError(str(exc)) from None
         sys.stdout.write(text)
         return 0
-    for name in presets.list_presets():
-        description = (presets.load_preset(name).description.splitlines() or [""])[0]
-        marker = " (default)" if name == presets.DEFAULT_PRESET else ""
-        print(f"{name:18s} {description}{marker}")
+    for preset in presets.preset_registry().values():
+        marker = " (default)" if preset.default else ""
+        print(f"{preset.name:18s} {preset.summary}{marker}")
     return 0
 
 
