@@ -89,7 +89,7 @@ __all__ = [
 FloatArray = np.ndarray
 
 
-#: Models :func:`fit_phase` fits (registry names, author and year).
+#: The package's own models that :func:`fit_phase` fits (registry names, author and year).
 FIT_MODELS: tuple[str, ...] = tuple(name for name, m in ANALYTIC_MODELS.items() if m.fittable)
 
 #: Other spellings accepted for :data:`FIT_MODELS` (hyphenated, short), to the registry name.
@@ -231,9 +231,16 @@ class FitResult:
 
 
 def resolve_model(model: str) -> str:
-    """Full model name of ``model`` (a name of :data:`FIT_MODELS` or an alias)."""
-    name = FIT_MODEL_ALIASES.get(model, model)
-    check_choice("model", name, FIT_MODELS + tuple(FIT_MODEL_ALIASES))
+    """Registry name of ``model``: a fittable model of the phase registry, or an alias.
+
+    Read from :data:`~dustoptics.scattering.phase.ANALYTIC_MODELS` when called,
+    so a model registered after import (:func:`~dustoptics.scattering.phase.
+    register_analytic_model`) is fitted like the package's own.
+    """
+    fittable = tuple(n for n, m in ANALYTIC_MODELS.items() if m.fittable)
+    aliases = tuple(a for a, n in ANALYTIC_MODEL_ALIASES.items() if n in fittable)
+    name = ANALYTIC_MODEL_ALIASES.get(model, model)
+    check_choice("model", model, fittable + aliases)
     return name
 
 

@@ -161,6 +161,7 @@ __all__ = [
     "rayleigh_depolarized_asymmetry",
     "rayleigh_penndorf1957",
     "rayleigh_penndorf1957_asymmetry",
+    "register_analytic_model",
     "two_term_hg_hapke2012",
     "two_term_hg_hapke2012_asymmetry",
 ]
@@ -1230,135 +1231,176 @@ class AnalyticModel:
 
 _G: Final = (-1.0, 1.0)
 
-ANALYTIC_MODELS: Final[Mapping[str, AnalyticModel]] = MappingProxyType(
-    {
-        m.name: m
-        for m in (
-            AnalyticModel(
-                "rayleigh",
-                rayleigh,
-                rayleigh_asymmetry,
-                (),
-                CHANDRASEKHAR_1950,
-                formula="3 (1 + mu^2) / (16 pi)",
-            ),
-            AnalyticModel(
-                "rayleigh_depolarized",
-                rayleigh_depolarized,
-                rayleigh_depolarized_asymmetry,
-                ("depolarization",),
-                f"{CHANDRASEKHAR_1950}; {BUCHOLTZ_1995}",
-                formula="3 ((1 + 3 gamma) + (1 - gamma) mu^2) / (16 pi (1 + 2 gamma)), "
-                "gamma = delta / (2 - delta), delta the depolarization factor",
-                aliases=("rayleigh-depolarized",),
-            ),
-            AnalyticModel(
-                "rayleigh_penndorf1957",
-                rayleigh_penndorf1957,
-                rayleigh_penndorf1957_asymmetry,
-                (),
-                f"{PENNDORF_1957}; as printed in {COSTA_2021}",
-                formula="0.7629 (1 + 0.932 mu^2) / (4 pi)",
-                aliases=("rayleigh-penndorf1957",),
-            ),
-            AnalyticModel(
-                "henyey_greenstein",
-                henyey_greenstein,
-                henyey_greenstein_asymmetry,
-                ("g",),
-                HENYEY_GREENSTEIN_1941,
-                formula="HG(g) = (1 - g^2) / (4 pi (1 + g^2 - 2 g mu)^(3/2))",
-                aliases=("henyey-greenstein", "hg"),
-                kernel=_hg,
-                bounds=(_G,),
-                starts=_hg_starts,
-                gradient=_hg_gradient,
-            ),
-            AnalyticModel(
-                "dhg_costa2021",
-                dhg_costa2021,
-                dhg_costa2021_asymmetry,
-                ("g1", "g2", "alpha"),
-                COSTA_2021,
-                formula="alpha HG(g1) + (1 - alpha) HG(g2)",
-                aliases=("dhg-costa2021", "dhg"),
-                kernel=_dhg_costa,
-                bounds=(_G, _G, (0.0, 1.0)),
-                starts=_dhg_costa_starts,
-                gradient=_dhg_costa_gradient,
-                canonical=_forward_lobe_first,
-            ),
-            AnalyticModel(
-                "dhg_kobe2026",
-                dhg_kobe2026,
-                dhg_kobe2026_asymmetry,
-                ("g1", "g2", "f"),
-                KOBE_2026,
-                formula="(1 - f) HG(g1) + f HG(g2), g1 >= 0 >= g2",
-                aliases=("dhg-kobe2026", "dhg-kobe"),
-                kernel=_dhg_kobe,
-                bounds=((0.0, 1.0), (-1.0, 0.0), (0.0, 1.0)),
-                starts=_dhg_kobe_starts,
-                gradient=_dhg_kobe_gradient,
-            ),
-            AnalyticModel(
-                "cornette_shanks1992",
-                cornette_shanks1992,
-                cornette_shanks1992_asymmetry,
-                ("g",),
-                CORNETTE_SHANKS_1992,
-                formula="3 (1 - g^2) (1 + mu^2) / (8 pi (2 + g^2) (1 + g^2 - 2 g mu)^(3/2))",
-                aliases=("cornette-shanks1992", "cs"),
-                kernel=_cornette_shanks,
-                bounds=(_G,),
-                starts=_cs_starts,
-                gradient=_cs_gradient,
-            ),
-            AnalyticModel(
-                "draine2003",
-                draine2003,
-                draine2003_asymmetry,
-                ("g", "alpha"),
-                DRAINE_2003,
-                formula="Draine(g, alpha) = HG(g) (1 + alpha mu^2) / (1 + alpha (1 + 2 g^2) / 3)",
-                kernel=_draine,
-            ),
-            AnalyticModel(
-                "hg_draine_jendersie_deon2023",
-                hg_draine_jendersie_deon2023,
-                hg_draine_jendersie_deon2023_asymmetry,
-                ("g_hg", "g_d", "alpha", "w_d"),
-                JENDERSIE_DEON_2023,
-                formula="(1 - w_d) HG(g_hg) + w_d Draine(g_d, alpha), "
-                "Draine(g, a) = HG(g) (1 + a mu^2) / (1 + a (1 + 2 g^2) / 3)",
-                aliases=("hg-draine-jendersie-deon2023", "hg-draine"),
-                kernel=_hg_draine,
-                bounds=(_G, _G, (-1.0, 200.0), (0.0, 1.0)),
-                starts=_hg_draine_starts,
-                gradient=_hg_draine_gradient,
-            ),
-            AnalyticModel(
-                "two_term_hg_hapke2012",
-                two_term_hg_hapke2012,
-                two_term_hg_hapke2012_asymmetry,
-                ("b", "c"),
-                HAPKE_2012,
-                formula="(1 - c)/2 HG(b) + (1 + c)/2 HG(-b) (scattering angle; Hapke's phase "
-                "angle is 180 deg - theta)",
-                aliases=("two-term-hg-hapke2012", "tthg"),
-                kernel=_two_term_hg,
-                bounds=((0.0, 1.0), (-1.0, 1.0)),
-                starts=_two_term_hg_starts,
-                gradient=_two_term_hg_gradient,
-            ),
+
+def register_analytic_model(model: AnalyticModel) -> AnalyticModel:
+    """Add a phase model to :data:`ANALYTIC_MODELS` (its aliases to :data:`ANALYTIC_MODEL_ALIASES`).
+
+    The package's own models are registered this way when this module is
+    imported; a model registered later is read like them by the TOML
+    configuration and, with ``bounds``, ``starts`` and ``gradient``, by
+    :func:`~dustoptics.scattering.fit.fit_phase`.
+
+    Parameters
+    ----------
+    model : AnalyticModel
+        The record.
+
+    Returns
+    -------
+    AnalyticModel
+        ``model`` itself.
+
+    Raises
+    ------
+    ValueError
+        A name or alias already taken; ``bounds`` that do not give one range
+        per parameter; a fittable model without ``kernel``.
+    """
+    for label in (model.name, *model.aliases):
+        if label in _REGISTRY or label in _ALIASES:
+            raise ValueError(f"phase model name or alias {label!r} is already registered")
+    if model.bounds and len(model.bounds) != len(model.parameters):
+        raise ValueError(
+            f"bounds of {model.name!r} must give one (low, high) per parameter "
+            f"{model.parameters}; got {len(model.bounds)}"
         )
-    }
-)
+    if model.fittable and model.kernel is None:
+        raise ValueError(f"fittable phase model {model.name!r} needs a kernel")
+    _REGISTRY[model.name] = model
+    for alias in model.aliases:
+        _ALIASES[alias] = model.name
+    return model
+
+
+_REGISTRY: dict[str, AnalyticModel] = {}
+_ALIASES: dict[str, str] = {}
+
+#: Every analytic phase model, by name (a read-only view of the registry).
+ANALYTIC_MODELS: Final[Mapping[str, AnalyticModel]] = MappingProxyType(_REGISTRY)
 
 #: Other spellings of the models' names (hyphenated, short), each to its registry name.
-ANALYTIC_MODEL_ALIASES: Final[Mapping[str, str]] = MappingProxyType(
-    {alias: m.name for m in ANALYTIC_MODELS.values() for alias in m.aliases}
-)
+ANALYTIC_MODEL_ALIASES: Final[Mapping[str, str]] = MappingProxyType(_ALIASES)
+
+for _model in (
+    AnalyticModel(
+        "rayleigh",
+        rayleigh,
+        rayleigh_asymmetry,
+        (),
+        CHANDRASEKHAR_1950,
+        formula="3 (1 + mu^2) / (16 pi)",
+    ),
+    AnalyticModel(
+        "rayleigh_depolarized",
+        rayleigh_depolarized,
+        rayleigh_depolarized_asymmetry,
+        ("depolarization",),
+        f"{CHANDRASEKHAR_1950}; {BUCHOLTZ_1995}",
+        formula="3 ((1 + 3 gamma) + (1 - gamma) mu^2) / (16 pi (1 + 2 gamma)), "
+        "gamma = delta / (2 - delta), delta the depolarization factor",
+        aliases=("rayleigh-depolarized",),
+    ),
+    AnalyticModel(
+        "rayleigh_penndorf1957",
+        rayleigh_penndorf1957,
+        rayleigh_penndorf1957_asymmetry,
+        (),
+        f"{PENNDORF_1957}; as printed in {COSTA_2021}",
+        formula="0.7629 (1 + 0.932 mu^2) / (4 pi)",
+        aliases=("rayleigh-penndorf1957",),
+    ),
+    AnalyticModel(
+        "henyey_greenstein",
+        henyey_greenstein,
+        henyey_greenstein_asymmetry,
+        ("g",),
+        HENYEY_GREENSTEIN_1941,
+        formula="HG(g) = (1 - g^2) / (4 pi (1 + g^2 - 2 g mu)^(3/2))",
+        aliases=("henyey-greenstein", "hg"),
+        kernel=_hg,
+        bounds=(_G,),
+        starts=_hg_starts,
+        gradient=_hg_gradient,
+    ),
+    AnalyticModel(
+        "dhg_costa2021",
+        dhg_costa2021,
+        dhg_costa2021_asymmetry,
+        ("g1", "g2", "alpha"),
+        COSTA_2021,
+        formula="alpha HG(g1) + (1 - alpha) HG(g2)",
+        aliases=("dhg-costa2021", "dhg"),
+        kernel=_dhg_costa,
+        bounds=(_G, _G, (0.0, 1.0)),
+        starts=_dhg_costa_starts,
+        gradient=_dhg_costa_gradient,
+        canonical=_forward_lobe_first,
+    ),
+    AnalyticModel(
+        "dhg_kobe2026",
+        dhg_kobe2026,
+        dhg_kobe2026_asymmetry,
+        ("g1", "g2", "f"),
+        KOBE_2026,
+        formula="(1 - f) HG(g1) + f HG(g2), g1 >= 0 >= g2",
+        aliases=("dhg-kobe2026", "dhg-kobe"),
+        kernel=_dhg_kobe,
+        bounds=((0.0, 1.0), (-1.0, 0.0), (0.0, 1.0)),
+        starts=_dhg_kobe_starts,
+        gradient=_dhg_kobe_gradient,
+    ),
+    AnalyticModel(
+        "cornette_shanks1992",
+        cornette_shanks1992,
+        cornette_shanks1992_asymmetry,
+        ("g",),
+        CORNETTE_SHANKS_1992,
+        formula="3 (1 - g^2) (1 + mu^2) / (8 pi (2 + g^2) (1 + g^2 - 2 g mu)^(3/2))",
+        aliases=("cornette-shanks1992", "cs"),
+        kernel=_cornette_shanks,
+        bounds=(_G,),
+        starts=_cs_starts,
+        gradient=_cs_gradient,
+    ),
+    AnalyticModel(
+        "draine2003",
+        draine2003,
+        draine2003_asymmetry,
+        ("g", "alpha"),
+        DRAINE_2003,
+        formula="Draine(g, alpha) = HG(g) (1 + alpha mu^2) / (1 + alpha (1 + 2 g^2) / 3)",
+        kernel=_draine,
+    ),
+    AnalyticModel(
+        "hg_draine_jendersie_deon2023",
+        hg_draine_jendersie_deon2023,
+        hg_draine_jendersie_deon2023_asymmetry,
+        ("g_hg", "g_d", "alpha", "w_d"),
+        JENDERSIE_DEON_2023,
+        formula="(1 - w_d) HG(g_hg) + w_d Draine(g_d, alpha), "
+        "Draine(g, a) = HG(g) (1 + a mu^2) / (1 + a (1 + 2 g^2) / 3)",
+        aliases=("hg-draine-jendersie-deon2023", "hg-draine"),
+        kernel=_hg_draine,
+        bounds=(_G, _G, (-1.0, 200.0), (0.0, 1.0)),
+        starts=_hg_draine_starts,
+        gradient=_hg_draine_gradient,
+    ),
+    AnalyticModel(
+        "two_term_hg_hapke2012",
+        two_term_hg_hapke2012,
+        two_term_hg_hapke2012_asymmetry,
+        ("b", "c"),
+        HAPKE_2012,
+        formula="(1 - c)/2 HG(b) + (1 + c)/2 HG(-b) (scattering angle; Hapke's phase "
+        "angle is 180 deg - theta)",
+        aliases=("two-term-hg-hapke2012", "tthg"),
+        kernel=_two_term_hg,
+        bounds=((0.0, 1.0), (-1.0, 1.0)),
+        starts=_two_term_hg_starts,
+        gradient=_two_term_hg_gradient,
+    ),
+):
+    register_analytic_model(_model)
 
 
 def get_analytic_model(name: str) -> AnalyticModel:
