@@ -26,6 +26,26 @@ Models
 - :class:`Truncated`: any distribution cut to a radius range and renormalized
   (made by :meth:`SizeDistribution.truncated`, so it lives beside the interface).
 
+Registry
+--------
+Each family registers itself when its class is defined (a class that sets
+``model``): :data:`SIZE_DISTRIBUTIONS` maps the model name to the class, whose
+``parameters`` (:class:`SizeParameter`) give the constructor's keys and their
+ranges.  The TOML configuration, :func:`~dustoptics.particles.custom_sizedist.from_dict`
+and :mod:`~dustoptics.particles.sizedist_derivatives` read it, so a new family
+is one class.  :func:`get_size_distribution` looks a family up by name or by
+an alias (:data:`SIZE_DISTRIBUTION_ALIASES`), among them the names other codes
+use for the same distribution:
+
+===================== ================================================ ===================================
+here                  elsewhere                                        alias
+===================== ================================================ ===================================
+``ModifiedGamma``     Hansen & Travis's (1974) gamma; scatrs ``Gamma``  ``hansen_travis1974_gamma``
+``DeirmendjianGamma`` Deirmendjian's (1969) modified gamma; scatrs      ``deirmendjian1969_modified_gamma``
+                      ``ModifiedGamma``
+``PowerLaw``          Junge's (1963) distribution                      ``junge1963``
+===================== ================================================ ===================================
+
 Distributions the user puts together (a mixture of modes, a measured table, a
 density function) and :func:`~dustoptics.particles.custom_sizedist.from_dict`
 are in :mod:`dustoptics.particles.custom_sizedist`.

@@ -414,7 +414,7 @@ def test_the_public_names_do_not_warn() -> None:
 
 def test_every_catalogue_kind_is_a_registered_source_and_builds_its_entries() -> None:
     """The kinds the catalogue accepts are the registry's; each entry builds through its source."""
-    assert catalogue.CATALOGUE_KINDS == tuple(catalogue.INDEX_SOURCES)
+    assert tuple(catalogue.INDEX_SOURCES) == catalogue.CATALOGUE_KINDS
     entries = catalogue._catalogue().entries
     used = {entry["kind"] for entry in entries.values()}
     assert used == set(catalogue.INDEX_SOURCES)  # every source is used by some entry

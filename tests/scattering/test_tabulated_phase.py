@@ -215,14 +215,11 @@ def test_module_exports_exist() -> None:
 
 
 @pytest.mark.parametrize("name", tabulated_phase.__all__)
-def test_old_names_in_phase_warn_and_give_the_moved_function(name: str) -> None:
+def test_tabulated_phase_names_live_in_their_own_module_only(name: str) -> None:
+    """The old ``phase.<name>`` path (never released) is gone."""
     assert name not in phase.__all__
-    with pytest.warns(
-        DeprecationWarning, match=rf"phase\.{name} moved to .*tabulated_phase\.{name}"
-    ):
-        old = getattr(phase, name)
-    assert old is getattr(tabulated_phase, name)
-    with pytest.warns(DeprecationWarning, match="removed in 0.3"):
+    assert not hasattr(phase, name)
+    with pytest.raises(ImportError):
         exec(f"from dustoptics.scattering.phase import {name}", {})
 
 
