@@ -1229,7 +1229,14 @@ class AnalyticModel:
         return self.gradient is not None and self.starts is not None and bool(self.bounds)
 
 
-_G: Final = (-1.0, 1.0)
+_REGISTRY: dict[str, AnalyticModel] = {}
+_ALIASES: dict[str, str] = {}
+
+#: Every analytic phase model, by name (a read-only view of the registry).
+ANALYTIC_MODELS: Final[Mapping[str, AnalyticModel]] = MappingProxyType(_REGISTRY)
+
+#: Other spellings of the models' names (hyphenated, short), each to its registry name.
+ANALYTIC_MODEL_ALIASES: Final[Mapping[str, str]] = MappingProxyType(_ALIASES)
 
 
 def register_analytic_model(model: AnalyticModel) -> AnalyticModel:
@@ -1272,15 +1279,9 @@ def register_analytic_model(model: AnalyticModel) -> AnalyticModel:
     return model
 
 
-_REGISTRY: dict[str, AnalyticModel] = {}
-_ALIASES: dict[str, str] = {}
+_G: Final = (-1.0, 1.0)  # the open range of an asymmetry parameter g
 
-#: Every analytic phase model, by name (a read-only view of the registry).
-ANALYTIC_MODELS: Final[Mapping[str, AnalyticModel]] = MappingProxyType(_REGISTRY)
-
-#: Other spellings of the models' names (hyphenated, short), each to its registry name.
-ANALYTIC_MODEL_ALIASES: Final[Mapping[str, str]] = MappingProxyType(_ALIASES)
-
+# The package's own models, in the order of the module docstring.
 for _model in (
     AnalyticModel(
         "rayleigh",

@@ -11,6 +11,7 @@ test_tabulated_phase.
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 import math
 import warnings
@@ -52,6 +53,7 @@ from dustoptics.scattering.phase import (
     rayleigh,
     rayleigh_depolarized,
     rayleigh_penndorf1957,
+    register_analytic_model,
     two_term_hg_hapke2012,
     two_term_hg_hapke2012_asymmetry,
 )
@@ -523,3 +525,16 @@ def test_collienne_dataset() -> None:
 def test_module_exports_exist() -> None:
     for name in phase.__all__:
         assert hasattr(phase, name), name
+
+
+def test_registering_a_taken_name_or_wrong_bounds_is_refused() -> None:
+    hg = ANALYTIC_MODELS["henyey_greenstein"]
+    with pytest.raises(ValueError, match="'henyey_greenstein' is already registered"):
+        register_analytic_model(hg)
+    with pytest.raises(ValueError, match="'henyey-greenstein' is already registered"):
+        register_analytic_model(dataclasses.replace(hg, name="hg_copy"))
+    with pytest.raises(ValueError, match="must give one"):
+        register_analytic_model(
+            dataclasses.replace(hg, name="hg_copy", aliases=(), bounds=((-1.0, 1.0),) * 2)
+        )
+    assert "hg_copy" not in ANALYTIC_MODELS
