@@ -41,6 +41,7 @@ import platform
 import shutil
 import signal
 import sys
+import tempfile
 import threading
 import time
 import warnings
@@ -54,13 +55,12 @@ import numpy as np
 
 from dustoptics._validation import BudgetError, check_budget
 from dustoptics.io._atomic import write_files
-from dustoptics.models.compute import build_table
+from dustoptics.models.compute import build_table, mie_request
 from dustoptics.models.config import BuildConfig
 from dustoptics.scattering import optics
-from dustoptics.scattering.optics import resolve_refractive_index
-from dustoptics.scattering.quadrature import QuadratureSettings
 from dustoptics.sweep import _fork  # noqa: F401  (Dask's pools renewed in forked children)
 from dustoptics.sweep.run_token import RunToken as _RunToken
+from dustoptics.sweep.shared import solve_shared
 from dustoptics.sweep.spec import SweepSpec, _load_points, parse_points
 from dustoptics.sweep.store import (
     MARKERS,
@@ -239,68 +239,87 @@ def _compute_arrays(
 ) -> tuple[dict[str, np.ndarray], int, int]:
     """The arrays of :func:`compute_chunk`, and the spheres computed and weighted."""
     configs = parse_points(points)
-    wl_all = configs[0].wavelengths_nm
-    wl = wl_all[wl_start:wl_stop]
+    wl = configs[0].wavelengths_nm[wl_start:wl_stop]
     theta = configs[0].theta_deg
     n_p, n_w = len(configs), wl.size
     arrays = {"phase": np.empty((n_p, n_w, theta.size))}
     arrays.update({k: np.full((n_p, n_w), np.nan) for k in _PER_WAVELENGTH})
-    computed = weighted = 0
     if shared and all(_shareable(c) for c in configs):
-        from dustoptics.sweep.shared import solve_shared
-
-        first = configs[0]
-        assert first.material is not None
-        assert first.optics.rtol is not None and first.optics.cross_section_rtol is not None
-        m, _ = resolve_refractive_index(first.material.build(), wl)
-        mu = np.cos(np.deg2rad(theta))
-        dists = [c.size_distribution.build() for c in configs]  # type: ignore[union-attr]
-        buffers: dict[bool, np.ndarray] = {}
-        for w in range(n_w):
-            results, stats = solve_shared(
-                m=complex(m[w]),
-                wavelength_nm=float(wl[w]),
-                mu_out=mu,
-                distributions=dists,
-                per_particle=first.optics.weighting == "number",
-                settings=QuadratureSettings(),
-                rtol=first.optics.rtol,
-                cross_rtol=first.optics.cross_section_rtol,
-                buffers=buffers,
-            )
-            computed += stats.spheres_computed
-            weighted += stats.spheres_weighted
-            for p, r in enumerate(results):
-                if not (np.all(np.isfinite(r.phase)) and np.all(r.phase > 0)):
-                    raise FloatingPointError(
-                        "phase function is not finite and positive; please report this input"
-                    )
-                arrays["phase"][p, w] = r.phase
-                arrays["cext_um2"][p, w] = r.cext
-                arrays["csca_um2"][p, w] = r.csca
-                arrays["g"][p, w] = r.g
-                arrays["error_estimate"][p, w] = r.err_phase
-                arrays["cross_section_error_estimate"][p, w] = r.err_cross
-                arrays["n_nodes"][p, w] = r.n_nodes
+        computed, weighted = _shared_arrays(configs, wl, arrays)
     else:
-        for p, config in enumerate(configs):
-            part = replace(
-                config, optics=replace(config.optics, wavelengths_nm=tuple(float(x) for x in wl))
-            )
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore")
-                table = build_table(part, workers=1, allow_large=allow_large)
-            arrays["phase"][p] = table.phase
-            arrays["g"][p] = table.g
-            for name in ("cext_um2", "csca_um2", "error_estimate", "cross_section_error_estimate"):
-                value = getattr(table, name)
-                if value is not None:
-                    arrays[name][p] = value
-            if table.n_nodes is not None:
-                arrays["n_nodes"][p] = table.n_nodes
-                computed += int(np.sum(table.n_nodes))
-                weighted += int(np.sum(table.n_nodes))
+        computed, weighted = _independent_arrays(configs, wl, arrays, allow_large)
     return arrays, computed, weighted
+
+
+def _shared_arrays(
+    configs: Sequence[BuildConfig], wavelength_nm: np.ndarray, arrays: dict[str, np.ndarray]
+) -> tuple[int, int]:
+    """Fill ``arrays`` with points that share their spheres (one request's index,
+    grids and tolerances: the first point's at these wavelengths); returns the
+    spheres computed and weighted."""
+    request = mie_request(configs[0], wavelength_nm=wavelength_nm)
+    mu = request.mu_out
+    dists = [c.size_distribution.build() for c in configs]  # type: ignore[union-attr]
+    buffers: dict[bool, np.ndarray] = {}
+    computed = weighted = 0
+    for w in range(wavelength_nm.size):
+        results, stats = solve_shared(
+            m=complex(request.m[w]),
+            wavelength_nm=float(wavelength_nm[w]),
+            mu_out=mu,
+            distributions=dists,
+            per_particle=request.per_particle,
+            settings=request.quadrature,
+            rtol=request.rtol,
+            cross_rtol=request.cross_section_rtol,
+            buffers=buffers,
+        )
+        computed += stats.spheres_computed
+        weighted += stats.spheres_weighted
+        for p, r in enumerate(results):
+            if not (np.all(np.isfinite(r.phase)) and np.all(r.phase > 0)):
+                raise FloatingPointError(
+                    "phase function is not finite and positive; please report this input"
+                )
+            arrays["phase"][p, w] = r.phase
+            arrays["cext_um2"][p, w] = r.cext
+            arrays["csca_um2"][p, w] = r.csca
+            arrays["g"][p, w] = r.g
+            arrays["error_estimate"][p, w] = r.err_phase
+            arrays["cross_section_error_estimate"][p, w] = r.err_cross
+            arrays["n_nodes"][p, w] = r.n_nodes
+    return computed, weighted
+
+
+def _independent_arrays(
+    configs: Sequence[BuildConfig],
+    wavelength_nm: np.ndarray,
+    arrays: dict[str, np.ndarray],
+    allow_large: bool,
+) -> tuple[int, int]:
+    """Fill ``arrays`` with each point built on its own at these wavelengths
+    (:func:`~dustoptics.models.compute.build_table`); returns the spheres computed
+    and weighted."""
+    computed = weighted = 0
+    for p, config in enumerate(configs):
+        part = replace(
+            config,
+            optics=replace(config.optics, wavelengths_nm=tuple(float(x) for x in wavelength_nm)),
+        )
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            table = build_table(part, workers=1, allow_large=allow_large)
+        arrays["phase"][p] = table.phase
+        arrays["g"][p] = table.g
+        for name in ("cext_um2", "csca_um2", "error_estimate", "cross_section_error_estimate"):
+            value = getattr(table, name)
+            if value is not None:
+                arrays[name][p] = value
+        if table.n_nodes is not None:
+            arrays["n_nodes"][p] = table.n_nodes
+            computed += int(np.sum(table.n_nodes))
+            weighted += int(np.sum(table.n_nodes))
+    return computed, weighted
 
 
 # ---------------------------------------------------------------------- layout
@@ -989,20 +1008,7 @@ def sweep(
         Without the ``sweep`` extra.
     """
     xr, _, distributed = _require_extra()
-    if not isinstance(max_points, int) or isinstance(max_points, bool) or max_points < 1:
-        raise ValueError(f"max_points must be a positive integer; got {max_points!r}")
-    if chunk_wavelengths is not None and (
-        not isinstance(chunk_wavelengths, int)
-        or isinstance(chunk_wavelengths, bool)
-        or chunk_wavelengths < 1
-    ):
-        raise ValueError(f"chunk_wavelengths must be a positive integer; got {chunk_wavelengths!r}")
-    if workers is not None and (
-        not isinstance(workers, int) or isinstance(workers, bool) or workers < 1
-    ):
-        raise ValueError(f"workers must be a positive integer; got {workers!r}")
-    if not isinstance(allow_large, bool):
-        raise TypeError(f"allow_large must be True or False; got {allow_large!r}")
+    _check_options(max_points, chunk_wavelengths, workers, allow_large)
     spec, data, configs, costs = _load(config, over, allow_large)
     layout = _layout(spec, configs[0].wavelengths_nm.size, chunk_wavelengths, max_points)
     method = "shared" if shared and all(_shareable(c) for c in configs) else "independent"
@@ -1016,10 +1022,8 @@ def sweep(
         }
     )
     netcdf = out is not None and str(out).endswith(".nc")
-    temporary = None
+    temporary: str | None = None
     if out is None:
-        import tempfile
-
         temporary = tempfile.mkdtemp(prefix="dustoptics-sweep-")
         store = Path(temporary) / "sweep.zarr"
     else:
@@ -1042,15 +1046,9 @@ def sweep(
         with held_store(
             store, identity=identity, layout=_store_layout(layout), create=create
         ) as new:
-            if new:
-                done: set[str] = set()
-            else:
-                done = done_chunks(store, read_layout(store), repair=True)
-            todo = [c for c in layout.chunks() if layout.name(c) not in done]
-            stream: Any = progress if progress is not None and hasattr(progress, "write") else None
-            callback: Any = progress if callable(progress) and stream is None else None
+            todo = _todo(store, layout, new=new)
             total = spec.n_points * layout.n_wl
-            bar = _Progress(stream, callback, total, total - sum(layout.size(c) for c in todo))
+            bar = _progress_bar(progress, total, total - sum(layout.size(c) for c in todo))
             if todo:
                 _compute(
                     data,
@@ -1064,21 +1062,64 @@ def sweep(
                     allow_large=allow_large,
                     distributed=distributed,
                 )
-            if netcdf:
-                assert out is not None
-                ds = xr.open_zarr(store, consolidated=True).load()
-                write_files(
-                    {Path(out): lambda path: ds.to_netcdf(path, engine="h5netcdf")},
-                    overwrite=True,
-                )
-                shutil.rmtree(store)  # still held: no other run is using it
-                return xr.open_dataset(out, engine="h5netcdf")
-            if temporary is not None:
-                return xr.open_zarr(store, consolidated=True).load()
-            return xr.open_zarr(store, consolidated=True)
+            return _result(xr, store, out=out, netcdf=netcdf, in_memory=temporary is not None)
     finally:
         if temporary is not None:
             shutil.rmtree(temporary, ignore_errors=True)
+
+
+def _check_options(max_points: Any, chunk_wavelengths: Any, workers: Any, allow_large: Any) -> None:
+    """Refuse :func:`sweep`'s options outside their ranges, before any work."""
+    for key, value in (
+        ("max_points", max_points),
+        ("chunk_wavelengths", chunk_wavelengths),
+        ("workers", workers),
+    ):
+        if key != "max_points" and value is None:
+            continue
+        if not isinstance(value, int) or isinstance(value, bool) or value < 1:
+            raise ValueError(f"{key} must be a positive integer; got {value!r}")
+    if not isinstance(allow_large, bool):
+        raise TypeError(f"allow_large must be True or False; got {allow_large!r}")
+
+
+def _todo(store: Path, layout: _Layout, *, new: bool) -> list[tuple[int, ...]]:
+    """The chunks a held store does not hold yet (all of a new one)."""
+    done: set[str] = set() if new else done_chunks(store, read_layout(store), repair=True)
+    return [c for c in layout.chunks() if layout.name(c) not in done]
+
+
+def _progress_bar(
+    progress: TextIO | Callable[[int, int], None] | None, total: int, done: int
+) -> _Progress:
+    """A progress bar on a stream, a callback, or neither."""
+    stream: Any = progress if progress is not None and hasattr(progress, "write") else None
+    callback: Any = progress if callable(progress) and stream is None else None
+    return _Progress(stream, callback, total, done)
+
+
+def _result(
+    xr: Any,
+    store: Path,
+    *,
+    out: str | os.PathLike[str] | None,
+    netcdf: bool,
+    in_memory: bool,
+) -> Any:
+    """The finished sweep: from a netCDF file written from the store (which is
+    removed), loaded from a temporary store, or opened lazily from the store."""
+    if netcdf:
+        assert out is not None
+        ds = xr.open_zarr(store, consolidated=True).load()
+        write_files(
+            {Path(out): lambda path: ds.to_netcdf(path, engine="h5netcdf")},
+            overwrite=True,
+        )
+        shutil.rmtree(store)  # still held: no other run is using it
+        return xr.open_dataset(out, engine="h5netcdf")
+    if in_memory:
+        return xr.open_zarr(store, consolidated=True).load()
+    return xr.open_zarr(store, consolidated=True)
 
 
 def _compute(
