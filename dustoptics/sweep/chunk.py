@@ -142,13 +142,13 @@ def _allocations_reused() -> Iterator[None]:
 
 def compute_chunk(
     points: Sequence[Mapping[str, Any]],
-    wl_start: int,
-    wl_stop: int,
+    wavelength_start: int,
+    wavelength_stop: int,
     *,
     shared: bool = True,
     allow_large: bool = False,
 ) -> ChunkResult:
-    """Compute one chunk: points (TOML data) at wavelengths ``[wl_start, wl_stop)``.
+    """Compute one chunk: its points at a block of their wavelengths.
 
     With ``shared`` (and a polydisperse Mie model), the points, which differ
     only in their size distribution, share their spheres
@@ -156,10 +156,28 @@ def compute_chunk(
     :func:`dustoptics.models.compute.build_table` at those wavelengths, equal
     to the bit to the same wavelengths of a single build, which refuses a
     point beyond its budget unless ``allow_large``.
+
+    Parameters
+    ----------
+    points : sequence of mapping
+        The points' TOML data (:func:`dustoptics.sweep.spec.parse_points`).
+    wavelength_start, wavelength_stop : int
+        The block ``[wavelength_start, wavelength_stop)`` of indices into the
+        points' wavelengths. [-]
+    shared : bool
+        Share the spheres where the model allows it.
+    allow_large : bool
+        Go ahead beyond a single build's budget.
+
+    Returns
+    -------
+    ChunkResult
     """
     start, cpu = time.perf_counter(), time.thread_time()
     with _allocations_reused():
-        arrays, computed, weighted = _compute_arrays(points, wl_start, wl_stop, shared, allow_large)
+        arrays, computed, weighted = _compute_arrays(
+            points, wavelength_start, wavelength_stop, shared, allow_large
+        )
     return ChunkResult(
         arrays, computed, weighted, time.perf_counter() - start, time.thread_time() - cpu
     )
@@ -167,14 +185,14 @@ def compute_chunk(
 
 def _compute_arrays(
     points: Sequence[Mapping[str, Any]],
-    wl_start: int,
-    wl_stop: int,
+    wavelength_start: int,
+    wavelength_stop: int,
     shared: bool,
     allow_large: bool = False,
 ) -> tuple[dict[str, np.ndarray], int, int]:
     """The arrays of :func:`compute_chunk`, and the spheres computed and weighted."""
     configs = parse_points(points)
-    wl = configs[0].wavelengths_nm[wl_start:wl_stop]
+    wl = configs[0].wavelengths_nm[wavelength_start:wavelength_stop]
     theta = configs[0].theta_deg
     n_p, n_w = len(configs), wl.size
     arrays = {"phase": np.empty((n_p, n_w, theta.size))}
