@@ -448,8 +448,8 @@ def optics_request(
     return OpticsRequest(
         refractive_index=refractive_index,
         distribution=distribution,
-        wavelength_nm=wl,
-        theta_deg=theta,
+        wavelength_nm=_read_only(wl),
+        theta_deg=_read_only(theta),
         rtol=rtol,
         weighting=weighting,
         cross_section_rtol=cross_rtol,
@@ -458,11 +458,18 @@ def optics_request(
         expansion_order=n_order,
         particle_density_kg_m3=density,
         derivatives=derivative_names,
-        m=m,
+        m=_read_only(m),
         index_label=label,
-        m_core=m_core,
+        m_core=_read_only(m_core),
         core_fraction=core_fraction,
     )
+
+
+def _read_only(values: np.ndarray) -> np.ndarray:
+    """A read-only copy: the request's arrays cannot change after validation."""
+    out = np.array(values, copy=True)
+    out.setflags(write=False)
+    return out
 
 
 def _check_distribution(distribution: Any) -> None:

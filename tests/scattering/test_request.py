@@ -38,6 +38,8 @@ def test_the_request_is_frozen_and_holds_the_defaults_filled_in() -> None:
     np.testing.assert_array_equal(request.m, np.full(2, 1.5 + 0.01j))
     with pytest.raises(dataclasses.FrozenInstanceError):
         request.rtol = 1e-2  # type: ignore[misc]
+    with pytest.raises(ValueError, match="read-only"):
+        request.m[0] = 2.0
 
 
 def test_compute_optics_is_its_request_computed() -> None:
