@@ -16,8 +16,14 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from dustoptics._files import load_json
+from dustoptics._validation import check_file_name, check_inside
+from dustoptics.atmosphere.build import SET_PROVENANCE_SUFFIX, set_inputs
 from dustoptics.cli.errors import PROG, UsageError
+from dustoptics.io import FORMATS, FormatError, read_hdf5
+from dustoptics.io.registry import formats_needing
 from dustoptics.models.build import is_config_path
+from dustoptics.table import canonical_json
 
 if TYPE_CHECKING:
     from dustoptics.models.config import BuildConfig
@@ -38,18 +44,8 @@ NEEDS_DENSITY = (
 )
 
 
-#: Formats whose files are named by the table's name as it is, which their writers
-#: require to be letters, digits, '.', '_' and '-', starting with a letter or digit.
-_PLAIN_NAME_FORMATS = ("cosmoscout", "hdf5", "netcdf")
+#: What a name that names files must look like (formats whose records say ``plain_name``).
 _PLAIN_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]*")
-
-
-#: Formats that need the table's cross-sections, and those that need a number density too
-#: (their coefficients are N C [m^-1]).
-_NEEDS_CROSS_SECTIONS = ("bruneton", "cosmoscout", "disort", "libradtran", "libradtran-nc")
-_NEEDS_NUMBER_DENSITY = ("bruneton", "cosmoscout", "libradtran", "libradtran-nc")
-#: Formats that need the expansion coefficients.
-_NEEDS_EXPANSION = ("disort", "libradtran", "libradtran-nc")
 
 
 def check_needs(
@@ -60,7 +56,7 @@ def check_needs(
     density: bool,
     no_expansion: str | None = None,
 ) -> None:
-    """What the formats need of the table, checked before any work.
+    """What the formats need of the table (their records' ``needs``), checked before any work.
 
     Parameters
     ----------
@@ -73,27 +69,29 @@ def check_needs(
     density : bool
         Whether it has (will have) a number density.
     no_expansion : str, optional
-        Why the table has (will have) no expansion coefficients, for the
-        ``disort``, ``libradtran`` and ``libradtran-nc`` formats' message; None: it has them.
+        Why the table has (will have) no expansion coefficients, for the message of the
+        formats that need them; None: it has them.
 
     Raises
     ------
     UsageError
         A format needs what the table lacks; the message says what to give.
     """
-    lacking = sorted(set(formats) & set(_NEEDS_CROSS_SECTIONS))
+    lacking = formats_needing("cross_sections", formats)
     if lacking and not cross_sections:
         raise UsageError(
             f"--format {','.join(lacking)} needs cross-sections, which {name!r} does not have "
             "(a phase function only): build a Mie or hybrid model"
         )
-    lacking = sorted(set(formats) & set(_NEEDS_EXPANSION))
+    lacking = sorted(
+        set(formats_needing("expansion", formats)) | set(formats_needing("matrix", formats))
+    )
     if lacking and no_expansion is not None:
         raise UsageError(
             f"--format {','.join(lacking)} needs the phase function's expansion coefficients, "
             f"{no_expansion}"
         )
-    lacking = sorted(set(formats) & set(_NEEDS_NUMBER_DENSITY))
+    lacking = formats_needing("number_density", formats)
     if lacking and not density:
         if lacking == ["cosmoscout"]:
             raise UsageError(NEEDS_DENSITY)
@@ -105,9 +103,6 @@ def check_needs(
 
 def _recorded_inputs(path: Path) -> Mapping[str, Any] | None:
     """The provenance inputs a table file or seed-CSV summary records; None if unreadable."""
-    from dustoptics._files import load_json
-    from dustoptics.io import FormatError, read_hdf5
-
     try:
         if path.suffix == ".json":
             inputs = load_json(path)["provenance"]["inputs"]
@@ -152,17 +147,14 @@ def check_outputs(
         ``name`` is not a plain file name, leads outside ``out``, or is not usable
         by a format that names its files by it.
     FileExistsError
-        Without ``force``: ``DIR/NAME/NAME.nc`` or ``.h5`` or the seed CSVs'
-        ``table_summary.json`` exists for a format asked for and records other
-        inputs (or cannot be read), so the files could not be placed.
+        Without ``force``: the file that records the table's inputs (a record's
+        ``inputs_file``: ``NAME.nc``, ``NAME.h5``, the seed CSVs' ``table_summary.json``)
+        exists for a format asked for and records other inputs (or cannot be read), so
+        the files could not be placed.
     """
-    from dustoptics._validation import check_file_name, check_inside
-    from dustoptics.io.csv.seed import SUMMARY_FILENAME
-    from dustoptics.table import canonical_json
-
     folder = out / check_file_name("name", name)
     check_inside(out, folder)
-    strict = sorted(set(formats) & set(_PLAIN_NAME_FORMATS))
+    strict = sorted(n for n in set(formats) if FORMATS[n].plain_name)
     if strict and not _PLAIN_NAME.fullmatch(name):
         raise ValueError(
             f"{what} {name!r} is not usable as a file name by --format {','.join(strict)}: "
@@ -170,9 +162,11 @@ def check_outputs(
         )
     if force:
         return
-    recorded = [folder / f"{name}.nc"] if "netcdf" in formats else []
-    recorded += [folder / f"{name}.h5"] if "hdf5" in formats else []
-    recorded += [folder / SUMMARY_FILENAME] if "csv" in formats else []
+    recorded = [
+        folder / inputs_file(name)
+        for fmt in formats
+        if (inputs_file := FORMATS[fmt].inputs_file) is not None
+    ]
     expected = {key: canonical_json(value) for key, value in inputs.items()}
     other = []
     for path in recorded:
@@ -193,11 +187,6 @@ def check_outputs(
 def check_set_outputs(args: argparse.Namespace, *, dust: str, optical_depth: float) -> None:
     """A set's record that exists in ``DIR/NAME/`` with other inputs: refused before any
     work without ``--force`` (the files could not be placed)."""
-    from dustoptics._files import load_json
-    from dustoptics.atmosphere.build import SET_PROVENANCE_SUFFIX, set_inputs
-    from dustoptics.io import FormatError
-    from dustoptics.table import canonical_json
-
     record = args.out / args.name / f"{args.name}{SET_PROVENANCE_SUFFIX}"
     if args.force or not record.is_file():
         return

@@ -100,13 +100,14 @@ from dustoptics.atmosphere.column import (
     FixedFractionProfile,
     PiecewiseLinearProfile,
 )
-from dustoptics.io import register_format
 from dustoptics.io._atomic import write_files
+from dustoptics.io.describe_formats import describe_bruneton, is_bruneton
 from dustoptics.io.engines.precomputation import (
     BRUNETON_DEFAULTS,
     PrecomputationSampling,
     precomputation_sampling,
 )
+from dustoptics.io.registry import Format, register
 from dustoptics.io.shaders.glsl import glsl_snippet
 
 __all__ = [
@@ -866,4 +867,14 @@ def _write_bruneton_table(
     return write_files(files, overwrite=overwrite)
 
 
-register_format("bruneton", _write_bruneton_table)
+FORMAT = register(
+    Format(
+        name="bruneton",
+        summary="Bruneton's (2017) aerosol: NAME_bruneton_mie.json, .glsl (needs N0)",
+        write=_write_bruneton_table,
+        suffixes=(".json", ".glsl"),
+        needs=frozenset({"cross_sections", "number_density"}),
+        recognise=is_bruneton,
+        describe=describe_bruneton,
+    )
+)

@@ -89,9 +89,9 @@ from typing import Any
 import numpy as np
 
 from dustoptics._validation import check_real
-from dustoptics.io import register_format
 from dustoptics.io._atomic import FormatError, safe_stem, write_files
 from dustoptics.io._text import number
+from dustoptics.io.registry import Format, register
 from dustoptics.io.rt.disort import bound_text, header_lines
 
 __all__ = [
@@ -398,4 +398,14 @@ def describe_libradtran_netcdf(path: Path, full: bool = True) -> str:
     return "\n".join(lines)
 
 
-register_format("libradtran-nc", write_libradtran_netcdf)
+FORMAT = register(
+    Format(
+        name="libradtran-nc",
+        summary="NAME.mie.cdf: libRadtran's P11, P12, P33, P34 (needs the expansion, N0)",
+        write=write_libradtran_netcdf,
+        suffixes=(".cdf",),
+        needs=frozenset({"cross_sections", "number_density", "expansion", "matrix"}),
+        recognise=lambda path: path.suffix.lower() == ".cdf" and is_libradtran_netcdf(path),
+        describe=describe_libradtran_netcdf,
+    )
+)

@@ -75,8 +75,8 @@ from typing import Any
 
 import numpy as np
 
-from dustoptics.io import register_format
 from dustoptics.io._atomic import FormatError, write_files
+from dustoptics.io.registry import Format, register
 from dustoptics.table import (
     ANGLE_DIM,
     DERIVATIVE_FIELDS,
@@ -363,8 +363,26 @@ def _directory_writer(suffix: str) -> Callable[..., list[Path]]:
     return write
 
 
-register_format("netcdf", _directory_writer(".nc"))
-register_format("hdf5", _directory_writer(".h5"))
+NETCDF = register(
+    Format(
+        name="netcdf",
+        summary="NAME.nc: the table and its provenance, CF netCDF-4",
+        write=_directory_writer(".nc"),
+        suffixes=(".nc",),
+        plain_name=True,
+        inputs_file=lambda name: f"{name}.nc",
+    )
+)
+HDF5 = register(
+    Format(
+        name="hdf5",
+        summary="NAME.h5: the same file as netcdf, named .h5",
+        write=_directory_writer(".h5"),
+        suffixes=(".h5",),
+        plain_name=True,
+        inputs_file=lambda name: f"{name}.h5",
+    )
+)
 register_table_writer(SUFFIXES, save_table)  # Table.save
 
 
