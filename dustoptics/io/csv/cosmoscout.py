@@ -503,7 +503,7 @@ class ProfileOptions:
         )
 
 
-FORMAT = register(
+RECORD = register(
     Format(
         name="cosmoscout",
         summary="CosmoScout VR's NAME_phase.csv, _scattering, ... (needs N0)",

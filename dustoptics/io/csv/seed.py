@@ -330,7 +330,7 @@ def write_seed_csv(
     return write_files({path: payload[path.name] for path in paths}, overwrite=overwrite)
 
 
-FORMAT = register(
+RECORD = register(
     Format(
         name="csv",
         summary="the seed's Mie*Spectrum.csv files and table_summary.json",

@@ -867,7 +867,7 @@ def _write_bruneton_table(
     return write_files(files, overwrite=overwrite)
 
 
-FORMAT = register(
+RECORD = register(
     Format(
         name="bruneton",
         summary="Bruneton's (2017) aerosol: NAME_bruneton_mie.json, .glsl (needs N0)",

@@ -148,7 +148,7 @@ def write_disort(
     return write_files({path: text.encode("utf-8")}, overwrite=overwrite)
 
 
-FORMAT = register(
+RECORD = register(
     Format(
         name="disort",
         summary="NAME_disort.txt: DISORT's moments (needs the expansion)",

@@ -163,7 +163,7 @@ def write_libradtran(
     )
 
 
-FORMAT = register(
+RECORD = register(
     Format(
         name="libradtran",
         summary="NAME_aerosol_*.dat: libRadtran's (needs the expansion, N0)",

@@ -398,7 +398,7 @@ def describe_libradtran_netcdf(path: Path, full: bool = True) -> str:
     return "\n".join(lines)
 
 
-FORMAT = register(
+RECORD = register(
     Format(
         name="libradtran-nc",
         summary="NAME.mie.cdf: libRadtran's P11, P12, P33, P34 (needs the expansion, N0)",

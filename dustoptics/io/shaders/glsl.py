@@ -474,7 +474,7 @@ class GLSLOptions(ShaderOptions):
     language version (None: ``"130"``)."""
 
     glsl_version: str | None = option(
-        help="glsl: 130 = GLSL 1.30+ and ES 3.00+ (default); 100 = GLSL ES 1.00 (WebGL 1)",
+        help="130 = GLSL 1.30+ and ES 3.00+ (default); 100 = GLSL ES 1.00 (WebGL 1)",
         choices=list(GLSL_VERSIONS),
     )
 
@@ -486,7 +486,7 @@ class GLSLOptions(ShaderOptions):
         return out
 
 
-FORMAT = register(
+RECORD = register(
     shader_format(
         "glsl",
         summary="NAME_phase.glsl: MiePhaseFunction(nu), GLSL 1.30+ or ES 1.00",

@@ -233,7 +233,7 @@ def write_hlsl(
     return write_shader(table, out_dir_or_path, language="hlsl", overwrite=overwrite, **options)
 
 
-FORMAT = register(
+RECORD = register(
     shader_format(
         "hlsl",
         summary="NAME_phase.hlsl: the same lookup in HLSL",

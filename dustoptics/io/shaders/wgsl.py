@@ -264,7 +264,7 @@ def write_wgsl(
     return write_shader(table, out_dir_or_path, language="wgsl", overwrite=overwrite, **options)
 
 
-FORMAT = register(
+RECORD = register(
     shader_format(
         "wgsl",
         summary="NAME_phase.wgsl: the same lookup in WGSL (WebGPU)",

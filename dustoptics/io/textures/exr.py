@@ -149,7 +149,7 @@ def read_exr_metadata(path: str | os.PathLike[str]) -> dict[str, Any]:
     return meta
 
 
-FORMAT = register(
+RECORD = register(
     Format(
         name="exr",
         summary="NAME_phase_*.exr: the phase texture as OpenEXR",

@@ -252,7 +252,7 @@ def read_ktx2_metadata(path: str | os.PathLike[str]) -> dict[str, Any]:
     return meta
 
 
-FORMAT = register(
+RECORD = register(
     Format(
         name="ktx2",
         summary="NAME_phase_*.ktx2: the phase texture as KTX2",

@@ -89,7 +89,7 @@ def write_npy(
     )
 
 
-FORMAT = register(
+RECORD = register(
     Format(
         name="npy",
         summary="NAME_phase_*.npy: the phase texture as NumPy .npy, JSON sidecar",

@@ -378,11 +378,11 @@ class TextureOptions(SamplingOptions, ChannelOptions):
     """
 
     layout: str | None = option(
-        help="ktx2, exr, npy: angle x RGB (default) or angle x wavelength",
+        help="angle x RGB (default) or angle x wavelength",
         choices=["rgb", "wavelength"],
     )
     precision: str | None = option(
-        help="ktx2, exr, npy: sample type (default float32)", choices=["float32", "float16"]
+        help="sample type (default float32)", choices=["float32", "float16"]
     )
     min_band_coverage: float | None = None
     max_dimension: int | None = None

@@ -594,7 +594,7 @@ class SamplingOptions:
     )
 
 
-FORMAT = register(
+RECORD = register(
     Format(
         name="texture",
         summary="NAME_phase_theta.raw: float32 texture, JSON sidecar",
