@@ -75,8 +75,22 @@ def test_the_example_is_in_build_help(example, capsys):
 
 def test_build_writes_the_example_with_its_option_recorded(example, config, tmp_path):
     out = tmp_path / "tables"
-    assert main(["build", str(config), "--out", str(out), "--quiet", "--format", "g-table",
-                 "--g-digits", "4"]) == 0
+    assert (
+        main(
+            [
+                "build",
+                str(config),
+                "--out",
+                str(out),
+                "--quiet",
+                "--format",
+                "g-table",
+                "--g-digits",
+                "4",
+            ]
+        )
+        == 0
+    )
     path = out / "small-dust" / "small-dust_g.txt"
     rows = [line.split() for line in path.read_text().splitlines() if not line.startswith("#")]
     assert [r[0] for r in rows] == ["440", "550", "680"]
