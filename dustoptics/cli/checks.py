@@ -19,10 +19,9 @@ from typing import TYPE_CHECKING, Any
 from dustoptics._files import load_json
 from dustoptics._validation import check_file_name, check_inside
 from dustoptics.atmosphere.build import SET_PROVENANCE_SUFFIX, set_inputs
-from dustoptics.cli.errors import PROG, UsageError
+from dustoptics.cli.errors import UsageError
 from dustoptics.io import FORMATS, FormatError, read_hdf5
 from dustoptics.io.registry import formats_needing
-from dustoptics.models.build import is_config_path
 from dustoptics.table import canonical_json
 
 if TYPE_CHECKING:
@@ -211,20 +210,10 @@ def check_set_outputs(args: argparse.Namespace, *, dust: str, optical_depth: flo
 
 
 def no_expansion(name: str, config: BuildConfig) -> str:
-    """Why ``config`` (given as ``name``: a preset or a file) has no expansion coefficients,
-    and what to change, for :func:`check_needs`."""
-    model = config.phase.model
-    if model != "mie":
-        return (
-            f"which only a Mie model has (phase.model = 'mie' with optics.expansion = true); "
-            f"{config.name!r} has phase.model = {model!r}"
-        )
-    where = (
-        f"under [optics] in {name}"
-        if is_config_path(name)
-        else f"under [optics] in a copy of the preset ('{PROG} presets --show {name} > "
-        f"my-{name}.toml', then give it a name of its own and build my-{name}.toml)"
-    )
+    """Why ``config`` (given as ``name``: a preset or a file) cannot have expansion coefficients,
+    for :func:`check_needs` (``build`` asks a Mie model for them,
+    :meth:`~dustoptics.models.build.TableBuilder.ask_for_expansion`)."""
     return (
-        f"which {config.name!r} does not ask for: set 'expansion = true' (optics.expansion) {where}"
+        f"which only a Mie model has (phase.model = 'mie' with optics.expansion = true); "
+        f"{config.name!r} has phase.model = {config.phase.model!r}"
     )
