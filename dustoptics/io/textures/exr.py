@@ -149,6 +149,11 @@ def read_exr_metadata(path: str | os.PathLike[str]) -> dict[str, Any]:
     return meta
 
 
+def describe_exr(path: Path, full: bool = True) -> str:
+    """What an OpenEXR phase texture holds, from its metadata (``dustoptics info``)."""
+    return describe_texture(path, read_exr_metadata(path), "OpenEXR", full)
+
+
 RECORD = register(
     Format(
         name="exr",
@@ -157,8 +162,6 @@ RECORD = register(
         suffixes=(".exr",),
         options=TextureOptions,
         recognise=lambda path: path.suffix.lower() == ".exr",
-        describe=lambda path, full=True: describe_texture(
-            path, read_exr_metadata(path), "OpenEXR", full
-        ),
+        describe=describe_exr,
     )
 )

@@ -252,6 +252,11 @@ def read_ktx2_metadata(path: str | os.PathLike[str]) -> dict[str, Any]:
     return meta
 
 
+def describe_ktx2(path: Path, full: bool = True) -> str:
+    """What an KTX2 phase texture holds, from its metadata (``dustoptics info``)."""
+    return describe_texture(path, read_ktx2_metadata(path), "KTX2", full)
+
+
 RECORD = register(
     Format(
         name="ktx2",
@@ -260,8 +265,6 @@ RECORD = register(
         suffixes=(".ktx2",),
         options=TextureOptions,
         recognise=lambda path: path.suffix.lower() == ".ktx2",
-        describe=lambda path, full=True: describe_texture(
-            path, read_ktx2_metadata(path), "KTX2", full
-        ),
+        describe=describe_ktx2,
     )
 )
