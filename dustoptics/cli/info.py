@@ -13,6 +13,7 @@ from typing import Any
 
 from dustoptics.cli.errors import PROG
 from dustoptics.cli.parser import add_command
+from dustoptics.io.describe import describe_path
 
 __all__ = ["add_parser", "run"]
 
@@ -48,8 +49,6 @@ def add_parser(sub: Any) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run ``info``; returns the exit status."""
-    from dustoptics.io.describe import describe_path
-
     # What a file says is shown, never obeyed: describe_path escapes control characters.
     print(describe_path(args.file, full=args.full))
     return 0

@@ -71,7 +71,7 @@ import re
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Final
+from typing import Any, Final
 
 import numpy as np
 
@@ -79,13 +79,11 @@ from dustoptics._validation import as_float_array
 from dustoptics.atmosphere.column import ExponentialProfile, sample_profile
 from dustoptics.atmosphere.sets import Atmosphere
 from dustoptics.io._atomic import FormatError, check_targets, file_set, write_files
-from dustoptics.io._text import floats, number, parse, read_rows
+from dustoptics.io._text import floats, number, parse, read_checked, read_rows
+from dustoptics.io.engines.cosmoscout_preprocessor import CosmoScoutSampling, cosmoscout_sampling
 from dustoptics.io.registry import Format, option, register
 from dustoptics.scattering.tabulated_phase import sphere_integral
 from dustoptics.table import Table
-
-if TYPE_CHECKING:
-    from dustoptics.io.engines.cosmoscout_preprocessor import CosmoScoutSampling
 
 __all__ = [
     "COSMOSCOUT_KINDS",
@@ -651,8 +649,6 @@ def read_cosmoscout_constituent(
 def _reader_wavelengths_nm(path: Path) -> list[float]:
     """CosmoScout's reading of a file's first column: skip a line, float32(lambda) * 1e9."""
     out = []
-    from dustoptics.io._text import read_checked
-
     try:
         text = read_checked(path).decode("ascii")
     except UnicodeDecodeError as exc:
@@ -794,11 +790,6 @@ def settings_json(
         [rad]), and ``dustoptics``: why each was chosen and the errors they
         leave (the preprocessor ignores keys it does not read).
     """
-    from dustoptics.io.engines.cosmoscout_preprocessor import (
-        CosmoScoutSampling,
-        cosmoscout_sampling,
-    )
-
     if not isinstance(atmosphere, Atmosphere):
         raise TypeError(f"atmosphere must be an Atmosphere; got {type(atmosphere).__name__}")
     if sampling is None:
@@ -1011,8 +1002,6 @@ def write_atmosphere(
         A target exists and ``overwrite`` is False (checked before anything
         is written).
     """
-    from dustoptics.io.engines.cosmoscout_preprocessor import cosmoscout_sampling
-
     root = Path(directory)
     settings_path = root / f"{atmosphere.name}_settings.json"
     check_targets([settings_path], overwrite=overwrite)

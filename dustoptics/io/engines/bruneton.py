@@ -100,6 +100,7 @@ from dustoptics.atmosphere.column import (
     FixedFractionProfile,
     PiecewiseLinearProfile,
 )
+from dustoptics.colour import solar_irradiance_astm_g173
 from dustoptics.io._atomic import write_files
 from dustoptics.io.describe_formats import describe_bruneton, is_bruneton
 from dustoptics.io.engines.precomputation import (
@@ -109,6 +110,7 @@ from dustoptics.io.engines.precomputation import (
 )
 from dustoptics.io.registry import Format, register
 from dustoptics.io.shaders.glsl import glsl_snippet
+from dustoptics.scattering.fit import fit_table
 
 __all__ = [
     "ASTRONOMICAL_UNIT_M",
@@ -395,8 +397,6 @@ def _check_channels(table: Any) -> None:
 
 
 def _mie_g_fit(table: Any) -> tuple[float, dict[str, Any]]:
-    from dustoptics.scattering.fit import fit_table
-
     fit = fit_table(
         table,
         model="cornette-shanks1992",
@@ -473,8 +473,6 @@ def bruneton_parameters(
         without cross-sections or not covering 440-680 nm, or wavelengths
         outside the solar spectrum's 360-840 nm.
     """
-    from dustoptics.colour import solar_irradiance_astm_g173
-
     albedo = check_closed_interval("ground_albedo", ground_albedo, 0.0, 1.0)
     zenith = check_positive("max_sun_zenith_angle_deg", max_sun_zenith_angle_deg, unit="deg")
     if not 90.0 < zenith <= 180.0:

@@ -39,6 +39,7 @@ from dustoptics.io._atomic import safe_stem, write_files
 from dustoptics.io._text import floats, number
 from dustoptics.io.describe_formats import describe_rt_text, is_rt_text
 from dustoptics.io.registry import Format, register
+from dustoptics.table import _installed_version
 
 __all__ = [
     "DISORT_SUFFIX",
@@ -72,8 +73,6 @@ def disort_moments(table: Any, fmt: str) -> tuple[np.ndarray, np.ndarray, np.nda
 
 def header_lines(table: Any, title: str) -> list[str]:
     """The first lines of a file: its title, the table's name and input hash, the version."""
-    from dustoptics.table import _installed_version
-
     return [
         f"# {title}",
         f"# table: {table.name}",

@@ -18,6 +18,7 @@ import os
 from pathlib import Path
 from typing import Any
 
+from dustoptics.io._atomic import FormatError
 from dustoptics.io.describe_formats import describe_texture
 from dustoptics.io.registry import Format, register
 from dustoptics.io.textures.phase_texture import (
@@ -129,8 +130,6 @@ def read_exr_metadata(path: str | os.PathLike[str]) -> dict[str, Any]:
     dustoptics.io.FormatError
         Not an OpenEXR file, or one without dustoptics' metadata.
     """
-    from dustoptics.io import FormatError
-
     openexr = _openexr()
     p = Path(path)
     try:

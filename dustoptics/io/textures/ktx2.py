@@ -36,6 +36,7 @@ from typing import Any
 
 import numpy as np
 
+from dustoptics.io._atomic import FormatError
 from dustoptics.io.describe_formats import describe_texture
 from dustoptics.io.registry import Format, register
 from dustoptics.io.textures.phase_texture import (
@@ -221,8 +222,6 @@ def read_ktx2_metadata(path: str | os.PathLike[str]) -> dict[str, Any]:
     dustoptics.io.FormatError
         Not a KTX2 file, a damaged one, or one without dustoptics' metadata.
     """
-    from dustoptics.io import FormatError
-
     p = Path(path)
     size = p.stat().st_size
     with open(p, "rb") as f:

@@ -39,6 +39,7 @@ replaced unless ``overwrite=True``, and a failed call leaves nothing partial.
 from __future__ import annotations
 
 import hashlib
+import io
 import json
 import math
 import os
@@ -514,8 +515,6 @@ _NPY_HEADER_MAX = 4096
 
 def _read_npy(path: Path, meta: dict[str, Any]) -> TextureData:
     """A :data:`~dustoptics.io.textures.raw.PHASE_TEXTURE_FORMAT` sidecar and its ``.npy``."""
-    import io
-
     dtype, sampling, layout = meta["dtype"], meta["sampling"], meta["layout"]
     if (
         dtype not in ("<f4", "<f2")
