@@ -2,7 +2,7 @@
 
 The table's files go into ``--out DIR`` / the table's name
 (:func:`~dustoptics.io.outputs.place_table`), with the format options given
-(:func:`~dustoptics.models.build.prepare_export`); files that already hold the
+(:func:`~dustoptics.io.outputs.prepare_export`); files that already hold the
 same table are left untouched.  Before any work, :func:`check_outputs` refuses
 a table name that a format cannot write and the table files (``NAME.nc``,
 ``NAME.h5``, the seed CSVs' summary) that exist and record other inputs, unless
