@@ -112,6 +112,26 @@ def _recorded_inputs(path: Path) -> Mapping[str, Any] | None:
     return inputs if isinstance(inputs, Mapping) else None
 
 
+def _files_of_other_tables(
+    folder: Path, name: str, formats: Sequence[str], inputs: Mapping[str, Any]
+) -> list[Path]:
+    """The files in ``folder`` that record a table's inputs (each format record's
+    ``inputs_file``) and record other ``inputs`` than these, or cannot be read."""
+    expected = {key: canonical_json(value) for key, value in inputs.items()}
+    other = []
+    for fmt in formats:
+        inputs_file = FORMATS[fmt].inputs_file
+        path = folder / inputs_file(name) if inputs_file is not None else None
+        if path is None or not path.is_file():
+            continue
+        found = _recorded_inputs(path)
+        if found is None or any(
+            key not in found or canonical_json(found[key]) != text for key, text in expected.items()
+        ):
+            other.append(path)
+    return other
+
+
 def check_outputs(
     out: Path,
     name: str,
@@ -161,21 +181,7 @@ def check_outputs(
         )
     if force:
         return
-    recorded = [
-        folder / inputs_file(name)
-        for fmt in formats
-        if (inputs_file := FORMATS[fmt].inputs_file) is not None
-    ]
-    expected = {key: canonical_json(value) for key, value in inputs.items()}
-    other = []
-    for path in recorded:
-        if not path.is_file():
-            continue
-        found = _recorded_inputs(path)
-        if found is None or any(
-            key not in found or canonical_json(found[key]) != text for key, text in expected.items()
-        ):
-            other.append(path)
+    other = _files_of_other_tables(folder, name, formats, inputs)
     if other:
         raise FileExistsError(
             "these files exist and hold another table (other inputs, or unreadable); use --force "

@@ -365,10 +365,10 @@ def format_table() -> str:
         fmt = FORMATS[name]
         cells = [
             f"``{name}``",
-            ", ".join(f"``{s}``" for s in fmt.suffixes) or "-",
+            ", ".join(f"``{s}``" for s in fmt.suffixes) or "none",
             fmt.summary,
-            ", ".join(NEEDS[n].what for n in sorted(fmt.needs)) or "-",
-            ", ".join(f"``--{f.name.replace('_', '-')}``" for f in cli_fields(fmt)) or "-",
+            ", ".join(NEEDS[n].what for n in sorted(fmt.needs)) or "none",
+            ", ".join(f"``--{f.name.replace('_', '-')}``" for f in cli_fields(fmt)) or "none",
         ]
         lines.append(f"   * - {cells[0]}")
         lines += [f"     - {cell}" for cell in cells[1:]]
