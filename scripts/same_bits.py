@@ -16,7 +16,8 @@ registered format of four tables (the default table, the one with the expansion,
 with each format's defaults and once with its options given (``OPTIONS`` in the child's script).  A format
 that cannot write a table (a phase-function-only table for cross-section formats, a table
 without the expansion for DISORT) is skipped on both sides alike: the exit status is
-recorded in ``exports.txt``, compared like the files.  ``--against``
+recorded in ``exports.txt``, compared like the files.  Last, the sampling options CosmoScout
+VR's preprocessor is given for a Mars and an Earth set of three wavelengths, as JSON.  ``--against``
 checks REF out into a temporary git worktree, writes both sets of outputs in child processes
 (the other commit's package first on ``sys.path``; both report the version installed here, so
 the provenance's software versions agree) and compares them file by file, byte for byte.
@@ -98,6 +99,17 @@ for label, path in tables.items():
                 status = exc.code
             log.append(f"{label} {fmt} {variant}: exit {status}")
 (out / "exports.txt").write_text("\n".join(log) + "\n")
+
+# The sampling CosmoScout VR's preprocessor is given for a Mars set (its settings' numbers).
+import json
+
+from dustoptics.atmosphere.build import build_atmosphere
+from dustoptics.io.engines.cosmoscout_preprocessor import cosmoscout_sampling
+
+for name in ("mars", "earth"):
+    atm = build_atmosphere(name, wavelength_nm=[450.0, 550.0, 650.0])
+    record = cosmoscout_sampling(atm).to_dict()
+    (out / f"{name}-sampling.json").write_text(json.dumps(record, sort_keys=True, default=repr))
 
 with local_cluster(1, processes=False) as cluster, Client(cluster) as client:
     sweep(
