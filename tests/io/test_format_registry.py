@@ -71,6 +71,8 @@ def test_the_example_is_in_build_help(example, capsys):
     out = capsys.readouterr().out
     assert "g-table" in out and "g and ssa per wavelength" in out
     assert "--g-digits N" in out and "significant digits of g and ssa" in out
+    assert main(["info", "--help"]) == 0
+    assert "g-table" in " ".join(capsys.readouterr().out.split())
 
 
 def test_build_writes_the_example_with_its_option_recorded(example, config, tmp_path):
