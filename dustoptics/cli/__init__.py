@@ -42,7 +42,7 @@ Each command is a module of this package that parses its options, calls the
 library and reports (:mod:`~dustoptics.cli.parser` holds the options they
 share, :mod:`~dustoptics.cli.errors` the exit status).  The work is the
 library's, for Python users too: :class:`dustoptics.models.build.TableBuilder`
-and :func:`dustoptics.models.build.prepare_export` (build),
+and :func:`dustoptics.io.outputs.prepare_export` (build),
 :func:`dustoptics.io.outputs.place_table` (build, export),
 :func:`dustoptics.atmosphere.build.build_atmosphere` (build mars|earth),
 :func:`dustoptics.io.describe.describe_path` (info),
@@ -113,7 +113,7 @@ _MOVED = {
     "set_inputs": "dustoptics.atmosphere.build",
     "set_provenance": "dustoptics.atmosphere.build",
     "COMPILE_ESTIMATE_S": "dustoptics.models.build",
-    "FormatOptions": "dustoptics.models.build",
+    "FormatOptions": "dustoptics.io",
     "TableBuilder": "dustoptics.models.build",
     "Placement": "dustoptics.io.outputs",
     "place_outputs": "dustoptics.io.outputs",

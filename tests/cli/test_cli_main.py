@@ -117,7 +117,7 @@ def test_main_and_the_parser_import_without_a_warning():
     ("old", "module", "new"),
     [
         ("TableBuilder", "dustoptics.models.build", "TableBuilder"),
-        ("FormatOptions", "dustoptics.models.build", "FormatOptions"),
+        ("FormatOptions", "dustoptics.io", "FormatOptions"),
         ("describe_path", "dustoptics.io.describe", "describe_path"),
         ("describe", "dustoptics.io.describe", "describe_table"),
         ("place_outputs", "dustoptics.io.outputs", "place_outputs"),

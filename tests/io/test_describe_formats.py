@@ -13,11 +13,10 @@ import pytest
 
 import dustoptics as do
 from dustoptics.cli import main
-from dustoptics.io import FORMATS, FormatError
+from dustoptics.io import FORMATS, FormatError, FormatOptions
 from dustoptics.io.describe import describe_path
-from dustoptics.io.describe_formats import kind_of
-from dustoptics.io.outputs import write_formats
-from dustoptics.models.build import FormatOptions, prepare_export
+from dustoptics.io.describe_formats import describer_of
+from dustoptics.io.outputs import prepare_export, write_formats
 
 #: What every file's description starts with, by the file's ending.
 FIRST_WORDS = {
@@ -176,4 +175,4 @@ def test_what_is_not_ours_is_refused(tmp_path: Path) -> None:
     (tmp_path / "d.txt").write_text("# dustoptics DISORT moments file, format version 1\nx y\n")
     with pytest.raises(FormatError, match="does not start with a number"):
         describe_path(tmp_path / "d.txt")
-    assert kind_of(tmp_path / "notes.md") is None
+    assert describer_of(tmp_path / "notes.md") is None
