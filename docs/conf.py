@@ -41,6 +41,7 @@ extensions = [
     "numpydoc",
     "sphinx_gallery.gen_gallery",
     "argparse_reference",
+    "format_table",
     "run_examples",
 ]
 

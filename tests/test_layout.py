@@ -57,20 +57,9 @@ MAX_COMPLEXITY = 20
 
 #: Public functions allowed above MAX_COMPLEXITY ("module:qualified name"), with the reason.
 COMPLEX_FUNCTIONS: dict[str, str] = {
-    "dustoptics.scattering.optics:compute_optics": "being split in issue 37 (branch compute)",
-    "dustoptics.scattering.optics:resolve_refractive_index": (
-        "being split in issue 37 (branch compute)"
-    ),
-    "dustoptics.sweep.run:sweep": "being split in issue 37 (branch compute)",
     "dustoptics.table:Table.__post_init__": "being split in issue 37 (branch table)",
     "dustoptics.table:Table.from_xarray": "being split in issue 37 (branch table)",
     "dustoptics.table:TableDerivatives.__post_init__": "being split in issue 37 (branch table)",
-    "dustoptics.scattering.fit:fit_phase": "being split in issue 37 (branch registries)",
-    "dustoptics.particles.materials:read_index_csv": "being split in issue 37 (branch registries)",
-    "dustoptics.io.describe_formats:kind_of": "being split in issue 37 (branch formats)",
-    "dustoptics.io.engines.cosmoscout_preprocessor:cosmoscout_sampling": (
-        "being split in issue 37 (branch formats)"
-    ),
 }
 
 

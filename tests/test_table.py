@@ -152,18 +152,8 @@ def test_argument_and_attribute_names_agree() -> None:
         1.5 + 0.01j, do.Monodisperse(radius_um=0.5), wavelength_nm=[550.0], theta_deg=[0.0, 180.0]
     )
     np.testing.assert_array_equal(t.wavelength_nm, [550.0])
-    with pytest.warns(
-        DeprecationWarning, match=r"wavelengths_nm=\.\.\.\) is deprecated; use wavelength_nm="
-    ):
-        old = do.compute_optics(
-            1.5 + 0.01j,
-            do.Monodisperse(radius_um=0.5),
-            wavelengths_nm=[550.0],
-            theta_deg=[0.0, 180.0],
-        )
-    assert old.equals(t)
-    with pytest.raises(TypeError, match="not both"):
-        do.compute_optics(1.5, do.Monodisperse(radius_um=0.5), [550.0], wavelengths_nm=[550.0])
+    with pytest.raises(TypeError, match="wavelengths_nm"):
+        do.compute_optics(1.5, do.Monodisperse(radius_um=0.5), wavelengths_nm=[550.0])
 
 
 def test_progress_reports_every_wavelength_in_order() -> None:

@@ -44,7 +44,7 @@ Each command is a module of this package that parses its options, calls the
 library and reports (:mod:`~dustoptics.cli.parser` holds the options they
 share, :mod:`~dustoptics.cli.errors` the exit status).  The work is the
 library's, for Python users too: :class:`dustoptics.models.build.TableBuilder`
-and :func:`dustoptics.models.build.prepare_export` (build),
+and :func:`dustoptics.io.outputs.prepare_export` (build),
 :func:`dustoptics.io.outputs.place_table` (build, export),
 :func:`dustoptics.atmosphere.build.build_atmosphere` (build mars|earth),
 :func:`dustoptics.io.describe.describe_path` (info),

@@ -12,6 +12,12 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
+from dustoptics.atmosphere.aerosols import RELATIVE_HUMIDITIES_PERCENT, TURBIDITY_RANGE
+from dustoptics.atmosphere.sets import (
+    EARTH_AEROSOL_OPTICAL_DEPTH_RANGE,
+    EARTH_AEROSOLS,
+    check_earth_aerosol,
+)
 from dustoptics.cli.errors import UsageError
 
 __all__ = ["AEROSOL_OPTIONS", "add_aerosol_options", "aerosol_keywords"]
@@ -21,7 +27,6 @@ AEROSOL_OPTIONS = ("aerosol", "aerosol_optical_depth", "turbidity", "relative_hu
 
 
 def _names() -> tuple[str, ...]:
-    from dustoptics.atmosphere.sets import EARTH_AEROSOLS
 
     return tuple(EARTH_AEROSOLS)
 
@@ -37,7 +42,6 @@ def _aerosol(text: str) -> str:
 
 def _optical_depth(text: str) -> tuple[float, float]:
     """``--aerosol-optical-depth TAU[@NM]``: (tau, wavelength [nm]), 550 nm unless given."""
-    from dustoptics.atmosphere.sets import EARTH_AEROSOL_OPTICAL_DEPTH_RANGE
 
     tau_text, _, nm_text = text.partition("@")
     try:
@@ -57,7 +61,6 @@ def _optical_depth(text: str) -> tuple[float, float]:
 
 def _turbidity(text: str) -> float:
     """``--turbidity T``: Preetham's turbidity within its range."""
-    from dustoptics.atmosphere.aerosols import TURBIDITY_RANGE
 
     low, high = TURBIDITY_RANGE
     try:
@@ -71,7 +74,6 @@ def _turbidity(text: str) -> float:
 
 def _humidity(text: str) -> int:
     """``--relative-humidity PCT``: one of OPAC's humidities."""
-    from dustoptics.atmosphere.aerosols import RELATIVE_HUMIDITIES_PERCENT
 
     allowed = RELATIVE_HUMIDITIES_PERCENT
     if text not in {str(h) for h in allowed}:
@@ -128,7 +130,6 @@ def aerosol_keywords(args: argparse.Namespace) -> dict[str, Any]:
         Both ``--aerosol-optical-depth`` and ``--turbidity``, or an option that
         changes nothing (a humidity for Kobe's aerosols).
     """
-    from dustoptics.atmosphere.sets import check_earth_aerosol
 
     out: dict[str, Any] = {}
     if getattr(args, "aerosol", None) is not None:

@@ -18,41 +18,37 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any, TextIO
 
-from dustoptics.atmosphere.build import ATMOSPHERES, DEFAULT_DUST
+from dustoptics.atmosphere.build import (
+    ATMOSPHERES,
+    DEFAULT_DUST,
+    build_atmosphere,
+    set_inputs,
+)
 from dustoptics.cli.aerosol_options import AEROSOL_OPTIONS, add_aerosol_options, aerosol_keywords
 from dustoptics.cli.checks import check_needs, check_outputs, check_set_outputs, no_expansion
 from dustoptics.cli.errors import PROG, UsageError
-from dustoptics.cli.export import same_table, write_table
-from dustoptics.cli.formats import add_format_options
+from dustoptics.cli.export import format_options, same_table, write_table
+from dustoptics.cli.formats import add_format_options, format_option_names
 from dustoptics.cli.parser import _float_list, _positive_float, add_command
 from dustoptics.cli.report import report_placement
+from dustoptics.io.outputs import place_outputs, with_inputs, write_atmosphere_set
+from dustoptics.io.registry import formats_needing
 from dustoptics.models.build import TableBuilder, is_config_path
+from dustoptics.models.files import PresetCopyWarning
+from dustoptics.models.presets import DEFAULT_PRESET
 
 __all__ = ["DEFAULT_FORMATS", "add_parser", "run", "table_builder"]
 
 #: Formats written by ``build`` when ``--format`` is not given: ``NAME.nc`` and the seed CSVs.
 DEFAULT_FORMATS = ("netcdf", "csv")
 
-#: Options of ``build`` that only a table's formats use, and those only a set uses.
-_TABLE_OPTIONS = (
-    "channels_nm",
-    "colour",
-    "resolution_deg",
-    "sampling",
-    "n_angles",
-    "number_density_per_m3",
-    "prefix",
-    "glsl_version",
-    "layout",
-    "precision",
-)
+#: Options of ``build`` that only a set uses (those only a table's formats use: the format
+#: records' options, :func:`_table_options`).
 _SET_OPTIONS = ("dust", "ozone_csv", "wavelengths_nm")
 
 
 def add_parser(sub: Any) -> None:
     """Add the ``build`` subcommand to the subparsers ``sub``."""
-    from dustoptics.models.presets import DEFAULT_PRESET
-
     p = add_command(
         sub,
         "build",
@@ -132,6 +128,12 @@ def table_builder(
         raise UsageError(str(exc)) from None
 
 
+def _table_options() -> list[str]:
+    """The options only a table's formats use: the format records' options that are None
+    unless given, and the number density."""
+    return [*format_option_names(defaults=False), "number_density_per_m3"]
+
+
 def _refuse_unused_options(args: argparse.Namespace) -> None:
     """An option given where it changes nothing is a usage error, never silently ignored."""
 
@@ -140,7 +142,7 @@ def _refuse_unused_options(args: argparse.Namespace) -> None:
 
     unused_aerosol = given(AEROSOL_OPTIONS) if args.name != "earth" else []
     if args.name in ATMOSPHERES:
-        unused = given(_TABLE_OPTIONS) + unused_aerosol
+        unused = given(_table_options()) + unused_aerosol
         unused += given(("dust", "optical_depth") if args.name == "earth" else ("ozone_csv",))
         where = f"'build {args.name}' (an atmosphere set)"
     else:
@@ -154,9 +156,6 @@ def _refuse_unused_options(args: argparse.Namespace) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run ``build``; returns the exit status."""
-    from dustoptics.io.outputs import with_inputs
-    from dustoptics.models.files import PresetCopyWarning
-
     _refuse_unused_options(args)
     if args.name in ATMOSPHERES:
         return _run_set(args)
@@ -190,6 +189,7 @@ def _check_build_request(args: argparse.Namespace, builder: TableBuilder) -> Non
             f"--number-density-per-m3 changes nothing in 'build {args.name}': "
             f"{builder.name!r} is a phase function without cross-sections; remove it"
         )
+    _ask_for_needs(args.name, builder, formats)
     check_needs(
         formats,
         name=builder.name,
@@ -198,27 +198,11 @@ def _check_build_request(args: argparse.Namespace, builder: TableBuilder) -> Non
         or config.number_density_per_m3 is not None
         or (getattr(args, "optical_depth", None) is not None and "cosmoscout" in formats),
         no_expansion=None
-        if config.optics.expansion is not None
+        if builder.config.optics.expansion is not None
         else no_expansion(args.name, builder.config),
     )
-    if "cosmoscout" in formats:
-        # The density profile write_table samples, checked before the table is computed.
-        from dustoptics.atmosphere.column import ExponentialProfile, sample_profile
-
-        sample_profile(
-            ExponentialProfile(scale_height_m=args.scale_height_m),
-            top_altitude_m=args.top_altitude_m,
-            n_altitudes=args.n_altitudes,
-        )
-    if {"glsl", "hlsl", "wgsl"} & set(formats):
-        from dustoptics.io.shaders.common import DEFAULT_RESOLUTION_DEG, check_shader_options
-
-        check_shader_options(
-            builder.config.wavelengths_nm,
-            channels_nm=args.channels_nm,
-            colour=args.colour,
-            resolution_deg=args.resolution_deg or DEFAULT_RESOLUTION_DEG,
-        )
+    # Each format's own check of its options (a shader's channels, cosmoscout's profile).
+    format_options(args).check(formats, wavelength_nm=builder.config.wavelengths_nm)
     # Where the files go, and what they would replace, is checked before any work, too.
     check_outputs(
         args.out,
@@ -230,11 +214,19 @@ def _check_build_request(args: argparse.Namespace, builder: TableBuilder) -> Non
     )
 
 
+def _ask_for_needs(name: str, builder: TableBuilder, formats: Sequence[str]) -> None:
+    """What the formats need that the computation can supply is asked of it (the expansion
+    coefficients, and with them the scattering matrix's), for a Mie model; what it cannot
+    supply is left to :func:`check_needs` to refuse."""
+    needing = sorted(
+        set(formats_needing("expansion", formats)) | set(formats_needing("matrix", formats))
+    )
+    if needing and builder.config.phase.model == "mie":
+        builder.ask_for_expansion(f"--format {','.join(needing)}")
+
+
 def _run_set(args: argparse.Namespace) -> int:
     """``build mars|earth|earth-kobe2026``: the set's files in ``DIR/NAME/``."""
-    from dustoptics.atmosphere.build import build_atmosphere, set_inputs
-    from dustoptics.io.outputs import place_outputs, write_atmosphere_set
-
     if args.format is not None and not set(args.format) <= {"cosmoscout", "bruneton"}:
         raise UsageError(
             f"'build {args.name}' writes CosmoScout VR's atmosphere set (format cosmoscout), and "

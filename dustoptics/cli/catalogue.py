@@ -8,6 +8,8 @@ from typing import Any
 
 from dustoptics.cli.errors import PROG, UsageError
 from dustoptics.cli.parser import add_command
+from dustoptics.models import presets
+from dustoptics.particles.catalogue import get_material, list_materials
 
 __all__ = ["add_parser", "run_materials", "run_presets"]
 
@@ -34,7 +36,6 @@ def add_parser(sub: Any) -> None:
 
 def run_presets(args: argparse.Namespace) -> int:
     """Run ``presets``: one line per preset, or ``--show NAME``'s TOML."""
-    from dustoptics.models import presets
 
     if args.show is not None:
         try:
@@ -43,16 +44,14 @@ def run_presets(args: argparse.Namespace) -> int:
             raise UsageError(str(exc)) from None
         sys.stdout.write(text)
         return 0
-    for name in presets.list_presets():
-        description = (presets.load_preset(name).description.splitlines() or [""])[0]
-        marker = " (default)" if name == presets.DEFAULT_PRESET else ""
-        print(f"{name:18s} {description}{marker}")
+    for preset in presets.preset_registry().values():
+        marker = " (default)" if preset.default else ""
+        print(f"{preset.name:18s} {preset.summary}{marker}")
     return 0
 
 
 def run_materials(args: argparse.Namespace) -> int:
     """Run ``materials``: one line per material, its wavelength range and source."""
-    from dustoptics.particles.catalogue import get_material, list_materials
 
     for name in list_materials():
         material = get_material(name)

@@ -16,8 +16,13 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from dustoptics.cli.errors import PROG, UsageError
-from dustoptics.models.build import is_config_path
+from dustoptics._files import load_json
+from dustoptics._validation import check_file_name, check_inside
+from dustoptics.atmosphere.build import SET_PROVENANCE_SUFFIX, set_inputs
+from dustoptics.cli.errors import UsageError
+from dustoptics.io import FORMATS, FormatError, read_hdf5
+from dustoptics.io.registry import formats_needing
+from dustoptics.table import canonical_json
 
 if TYPE_CHECKING:
     from dustoptics.models.config import BuildConfig
@@ -38,18 +43,8 @@ NEEDS_DENSITY = (
 )
 
 
-#: Formats whose files are named by the table's name as it is, which their writers
-#: require to be letters, digits, '.', '_' and '-', starting with a letter or digit.
-_PLAIN_NAME_FORMATS = ("cosmoscout", "hdf5", "netcdf")
+#: What a name that names files must look like (formats whose records say ``plain_name``).
 _PLAIN_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]*")
-
-
-#: Formats that need the table's cross-sections, and those that need a number density too
-#: (their coefficients are N C [m^-1]).
-_NEEDS_CROSS_SECTIONS = ("bruneton", "cosmoscout", "disort", "libradtran", "libradtran-nc")
-_NEEDS_NUMBER_DENSITY = ("bruneton", "cosmoscout", "libradtran", "libradtran-nc")
-#: Formats that need the expansion coefficients.
-_NEEDS_EXPANSION = ("disort", "libradtran", "libradtran-nc")
 
 
 def check_needs(
@@ -60,7 +55,7 @@ def check_needs(
     density: bool,
     no_expansion: str | None = None,
 ) -> None:
-    """What the formats need of the table, checked before any work.
+    """What the formats need of the table (their records' ``needs``), checked before any work.
 
     Parameters
     ----------
@@ -73,27 +68,29 @@ def check_needs(
     density : bool
         Whether it has (will have) a number density.
     no_expansion : str, optional
-        Why the table has (will have) no expansion coefficients, for the
-        ``disort``, ``libradtran`` and ``libradtran-nc`` formats' message; None: it has them.
+        Why the table has (will have) no expansion coefficients, for the message of the
+        formats that need them; None: it has them.
 
     Raises
     ------
     UsageError
         A format needs what the table lacks; the message says what to give.
     """
-    lacking = sorted(set(formats) & set(_NEEDS_CROSS_SECTIONS))
+    lacking = formats_needing("cross_sections", formats)
     if lacking and not cross_sections:
         raise UsageError(
             f"--format {','.join(lacking)} needs cross-sections, which {name!r} does not have "
             "(a phase function only): build a Mie or hybrid model"
         )
-    lacking = sorted(set(formats) & set(_NEEDS_EXPANSION))
+    lacking = sorted(
+        set(formats_needing("expansion", formats)) | set(formats_needing("matrix", formats))
+    )
     if lacking and no_expansion is not None:
         raise UsageError(
             f"--format {','.join(lacking)} needs the phase function's expansion coefficients, "
             f"{no_expansion}"
         )
-    lacking = sorted(set(formats) & set(_NEEDS_NUMBER_DENSITY))
+    lacking = formats_needing("number_density", formats)
     if lacking and not density:
         if lacking == ["cosmoscout"]:
             raise UsageError(NEEDS_DENSITY)
@@ -105,9 +102,6 @@ def check_needs(
 
 def _recorded_inputs(path: Path) -> Mapping[str, Any] | None:
     """The provenance inputs a table file or seed-CSV summary records; None if unreadable."""
-    from dustoptics._files import load_json
-    from dustoptics.io import FormatError, read_hdf5
-
     try:
         if path.suffix == ".json":
             inputs = load_json(path)["provenance"]["inputs"]
@@ -116,6 +110,26 @@ def _recorded_inputs(path: Path) -> Mapping[str, Any] | None:
     except (FormatError, OSError, ValueError, KeyError, TypeError, RecursionError):
         return None
     return inputs if isinstance(inputs, Mapping) else None
+
+
+def _files_of_other_tables(
+    folder: Path, name: str, formats: Sequence[str], inputs: Mapping[str, Any]
+) -> list[Path]:
+    """The files in ``folder`` that record a table's inputs (each format record's
+    ``inputs_file``) and record other ``inputs`` than these, or cannot be read."""
+    expected = {key: canonical_json(value) for key, value in inputs.items()}
+    other = []
+    for fmt in formats:
+        inputs_file = FORMATS[fmt].inputs_file
+        path = folder / inputs_file(name) if inputs_file is not None else None
+        if path is None or not path.is_file():
+            continue
+        found = _recorded_inputs(path)
+        if found is None or any(
+            key not in found or canonical_json(found[key]) != text for key, text in expected.items()
+        ):
+            other.append(path)
+    return other
 
 
 def check_outputs(
@@ -152,17 +166,14 @@ def check_outputs(
         ``name`` is not a plain file name, leads outside ``out``, or is not usable
         by a format that names its files by it.
     FileExistsError
-        Without ``force``: ``DIR/NAME/NAME.nc`` or ``.h5`` or the seed CSVs'
-        ``table_summary.json`` exists for a format asked for and records other
-        inputs (or cannot be read), so the files could not be placed.
+        Without ``force``: the file that records the table's inputs (a record's
+        ``inputs_file``: ``NAME.nc``, ``NAME.h5``, the seed CSVs' ``table_summary.json``)
+        exists for a format asked for and records other inputs (or cannot be read), so
+        the files could not be placed.
     """
-    from dustoptics._validation import check_file_name, check_inside
-    from dustoptics.io.csv.seed import SUMMARY_FILENAME
-    from dustoptics.table import canonical_json
-
     folder = out / check_file_name("name", name)
     check_inside(out, folder)
-    strict = sorted(set(formats) & set(_PLAIN_NAME_FORMATS))
+    strict = sorted(n for n in set(formats) if FORMATS[n].plain_name)
     if strict and not _PLAIN_NAME.fullmatch(name):
         raise ValueError(
             f"{what} {name!r} is not usable as a file name by --format {','.join(strict)}: "
@@ -170,19 +181,7 @@ def check_outputs(
         )
     if force:
         return
-    recorded = [folder / f"{name}.nc"] if "netcdf" in formats else []
-    recorded += [folder / f"{name}.h5"] if "hdf5" in formats else []
-    recorded += [folder / SUMMARY_FILENAME] if "csv" in formats else []
-    expected = {key: canonical_json(value) for key, value in inputs.items()}
-    other = []
-    for path in recorded:
-        if not path.is_file():
-            continue
-        found = _recorded_inputs(path)
-        if found is None or any(
-            key not in found or canonical_json(found[key]) != text for key, text in expected.items()
-        ):
-            other.append(path)
+    other = _files_of_other_tables(folder, name, formats, inputs)
     if other:
         raise FileExistsError(
             "these files exist and hold another table (other inputs, or unreadable); use --force "
@@ -193,11 +192,6 @@ def check_outputs(
 def check_set_outputs(args: argparse.Namespace, *, dust: str, optical_depth: float) -> None:
     """A set's record that exists in ``DIR/NAME/`` with other inputs: refused before any
     work without ``--force`` (the files could not be placed)."""
-    from dustoptics._files import load_json
-    from dustoptics.atmosphere.build import SET_PROVENANCE_SUFFIX, set_inputs
-    from dustoptics.io import FormatError
-    from dustoptics.table import canonical_json
-
     record = args.out / args.name / f"{args.name}{SET_PROVENANCE_SUFFIX}"
     if args.force or not record.is_file():
         return
@@ -222,20 +216,10 @@ def check_set_outputs(args: argparse.Namespace, *, dust: str, optical_depth: flo
 
 
 def no_expansion(name: str, config: BuildConfig) -> str:
-    """Why ``config`` (given as ``name``: a preset or a file) has no expansion coefficients,
-    and what to change, for :func:`check_needs`."""
-    model = config.phase.model
-    if model != "mie":
-        return (
-            f"which only a Mie model has (phase.model = 'mie' with optics.expansion = true); "
-            f"{config.name!r} has phase.model = {model!r}"
-        )
-    where = (
-        f"under [optics] in {name}"
-        if is_config_path(name)
-        else f"under [optics] in a copy of the preset ('{PROG} presets --show {name} > "
-        f"my-{name}.toml', then give it a name of its own and build my-{name}.toml)"
-    )
+    """Why ``config`` (given as ``name``: a preset or a file) cannot have expansion coefficients,
+    for :func:`check_needs` (``build`` asks a Mie model for them,
+    :meth:`~dustoptics.models.build.TableBuilder.ask_for_expansion`)."""
     return (
-        f"which {config.name!r} does not ask for: set 'expansion = true' (optics.expansion) {where}"
+        f"which only a Mie model has (phase.model = 'mie' with optics.expansion = true); "
+        f"{config.name!r} has phase.model = {config.phase.model!r}"
     )

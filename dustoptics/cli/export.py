@@ -2,7 +2,7 @@
 
 The table's files go into ``--out DIR`` / the table's name
 (:func:`~dustoptics.io.outputs.place_table`), with the format options given
-(:func:`~dustoptics.models.build.prepare_export`); files that already hold the
+(:func:`~dustoptics.io.outputs.prepare_export`); files that already hold the
 same table are left untouched.  Before any work, :func:`check_outputs` refuses
 a table name that a format cannot write and the table files (``NAME.nc``,
 ``NAME.h5``, the seed CSVs' summary) that exist and record other inputs, unless
@@ -18,20 +18,25 @@ from typing import Any
 
 from dustoptics.cli.checks import NEEDS_DENSITY, check_needs, check_outputs
 from dustoptics.cli.errors import PROG, UsageError
-from dustoptics.cli.formats import add_format_options
+from dustoptics.cli.formats import add_format_options, format_option_names
 from dustoptics.cli.parser import add_command
 from dustoptics.cli.report import report_placement
+from dustoptics.compare import table_differences
+from dustoptics.io import FormatError, FormatOptions, read_hdf5
+from dustoptics.io.outputs import (
+    TABLE_SUFFIXES,
+    place_table,
+    prepare_export,
+    read_table,
+    with_inputs,
+)
 
-__all__ = ["NEEDS_DENSITY", "add_parser", "run", "same_table", "write_table"]
+__all__ = ["NEEDS_DENSITY", "add_parser", "format_options", "run", "same_table", "write_table"]
 
 
 def same_table(existing: Path, new: Path) -> bool:
     """Both files are HDF5 files that hold the same table
     (:func:`dustoptics.compare.table_differences`): the existing one is up to date."""
-    from dustoptics.compare import table_differences
-    from dustoptics.io import FormatError, read_hdf5
-    from dustoptics.io.outputs import TABLE_SUFFIXES
-
     if existing.suffix.lower() not in TABLE_SUFFIXES:
         return False
     try:
@@ -70,8 +75,6 @@ def add_parser(sub: Any) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run ``export``; returns the exit status."""
-    from dustoptics.io.outputs import read_table, with_inputs
-
     table = read_table(args.file)
     if args.number_density_per_m3 is not None:
         table = with_inputs(
@@ -94,11 +97,13 @@ def run(args: argparse.Namespace) -> int:
     return write_table(args, table, args.format)
 
 
+def format_options(args: argparse.Namespace) -> FormatOptions:
+    """The format options given on the command line (every format record's options)."""
+    return FormatOptions(**{name: getattr(args, name) for name in format_option_names()})
+
+
 def write_table(args: argparse.Namespace, table: Any, formats: Sequence[str]) -> int:
     """``build`` and ``export``: the table's files go into ``--out DIR`` / the table's name."""
-    from dustoptics.io.outputs import place_table
-    from dustoptics.models.build import FormatOptions, prepare_export
-
     optical_depth = getattr(args, "optical_depth", None)
     if "cosmoscout" in formats:
         if optical_depth is not None and args.number_density_per_m3 is not None:
@@ -108,22 +113,9 @@ def write_table(args: argparse.Namespace, table: Any, formats: Sequence[str]) ->
     table, options = prepare_export(
         table,
         formats,
-        options=FormatOptions(
-            channels_nm=args.channels_nm,
-            colour=args.colour,
-            resolution_deg=args.resolution_deg,
-            sampling=args.sampling,
-            n_angles=args.n_angles,
-            prefix=args.prefix,
-            glsl_version=args.glsl_version,
-            layout=args.layout,
-            precision=args.precision,
-        ),
+        options=format_options(args),
         optical_depth=optical_depth,
         reference_wavelength_nm=getattr(args, "reference_wavelength_nm", 550.0),
-        scale_height_m=args.scale_height_m,
-        top_altitude_m=args.top_altitude_m,
-        n_altitudes=args.n_altitudes,
     )
     placed = place_table(
         table, args.out, formats, options=options, force=args.force, same=same_table

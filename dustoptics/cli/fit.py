@@ -11,14 +11,21 @@ import argparse
 from pathlib import Path
 from typing import Any
 
+from dustoptics._validation import check_file_name, check_inside
+from dustoptics.cli.build import table_builder
 from dustoptics.cli.errors import PROG, UsageError
 from dustoptics.cli.parser import _float_list, add_command
+from dustoptics.io._atomic import check_targets, safe_stem
+from dustoptics.io.engines.fit import _IDENTIFIER, FIT_LANGUAGES, write_fit
+from dustoptics.io.outputs import read_table
+from dustoptics.io.shaders.common import shader_syntax
+from dustoptics.scattering.fit import FIT_MODELS, fit_table, resolve_model
+from dustoptics.scattering.phase import ANALYTIC_MODELS
 
 __all__ = ["add_parser", "fit_targets", "run"]
 
-_FIT_MODEL_HELP = (
-    "henyey-greenstein (hg), dhg-costa2021 (dhg), dhg-kobe2026 (dhg-kobe), cornette-shanks1992 (cs), "
-    "hg-draine-jendersie-deon2023 (hg-draine), two-term-hg-hapke2012 (tthg)"
+_FIT_MODEL_HELP = ", ".join(
+    f"{name} ({', '.join(ANALYTIC_MODELS[name].aliases)})" for name in FIT_MODELS
 )
 
 
@@ -69,10 +76,6 @@ def add_parser(sub: Any) -> None:
 def fit_targets(out: Path, name: str, model: str) -> list[Path]:
     """The files ``fit --out DIR`` writes for table ``name`` and model ``model``
     (:func:`dustoptics.io.engines.fit.write_fit`), in ``DIR/NAME/``."""
-    from dustoptics._validation import check_file_name, check_inside
-    from dustoptics.io._atomic import safe_stem
-    from dustoptics.io.engines.fit import FIT_LANGUAGES
-    from dustoptics.io.shaders.common import shader_syntax
 
     folder = out / check_file_name("name", name)
     check_inside(out, folder)
@@ -84,11 +87,6 @@ def fit_targets(out: Path, name: str, model: str) -> list[Path]:
 def run(args: argparse.Namespace) -> int:
     """Run ``fit``; returns the exit status.  The model, the prefix and where the files go
     are checked before the table is computed or fitted."""
-    from dustoptics.cli.build import table_builder
-    from dustoptics.io._atomic import check_targets
-    from dustoptics.io.engines.fit import _IDENTIFIER, write_fit
-    from dustoptics.io.outputs import read_table
-    from dustoptics.scattering.fit import fit_table, resolve_model
 
     try:
         model = resolve_model(args.model)

@@ -13,6 +13,8 @@ from typing import Any
 
 from dustoptics.cli.errors import PROG
 from dustoptics.cli.parser import add_command
+from dustoptics.io import FORMATS
+from dustoptics.io.describe import describe_path
 
 __all__ = ["add_parser", "run"]
 
@@ -34,10 +36,9 @@ def add_parser(sub: Any) -> None:
         "file",
         type=Path,
         metavar="FILE",
-        help="any file or folder dustoptics writes: a table (.nc, .h5, seed CSV), a shader "
-        "(GLSL, HLSL, WGSL), a texture (.raw, .npy, .exr, .ktx2, sidecar), DISORT or libRadtran "
-        "file, Bruneton or CosmoScout VR files, an atmosphere set, a fit, a sky (.nc, .png), a "
-        "sweep (store or .nc), or a folder of them",
+        help="any file or folder dustoptics writes: a table (.nc, .h5, seed CSV), the files of "
+        f"the formats ({', '.join(sorted(FORMATS))}), an atmosphere set, a fit, a sky (.nc, "
+        ".png), a sweep (store or .nc), or a folder of them",
     )
     p.add_argument(
         "--full",
@@ -48,8 +49,6 @@ def add_parser(sub: Any) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run ``info``; returns the exit status."""
-    from dustoptics.io.describe import describe_path
-
     # What a file says is shown, never obeyed: describe_path escapes control characters.
     print(describe_path(args.file, full=args.full))
     return 0

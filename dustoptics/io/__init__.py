@@ -37,48 +37,13 @@ Formats, grouped by what they are for (each subpackage lists its modules):
   beside what is there; :func:`read_table` of any table file) and
   :mod:`~dustoptics.io.describe` (what any file dustoptics writes holds).
 
-:data:`FORMATS` maps a format name (the command line's ``--format``) to a
-writer ``writer(table, out_dir, *, overwrite=False, **options) -> list[Path]``
-that writes one table into a directory.  Each format module registers its
-writer here when imported; this package imports them all.
+:data:`FORMATS` maps a format name (the command line's ``--format``) to its record
+(:class:`~dustoptics.io.registry.Format`): writer, options, needs, and how ``info``
+reads its files.  Each format module registers its record when imported; the
+imports below are the registration (adding a format: its module and one line here).
 """
 
 from __future__ import annotations
-
-from collections.abc import Callable
-from pathlib import Path
-from typing import Any
-
-from dustoptics.io._atomic import FormatError
-
-#: A writer of one table into a directory: ``(table, out_dir, *, overwrite, **options) -> paths``.
-Writer = Callable[..., list[Path]]
-
-#: Format name -> writer; filled by each format module when it is imported.
-FORMATS: dict[str, Writer] = {}
-
-
-def register_format(name: str, writer: Writer) -> None:
-    """Register ``writer`` under ``name`` in :data:`FORMATS` (names are unique)."""
-    if name in FORMATS and FORMATS[name] is not writer:
-        raise ValueError(f"format {name!r} is already registered (to {FORMATS[name].__qualname__})")
-    FORMATS[name] = writer
-
-
-def write(
-    table: Any, out_dir: Any, *, format: str, overwrite: bool = False, **options: Any
-) -> list[Path]:
-    """Write ``table`` into ``out_dir`` in the named format (see :data:`FORMATS`).
-
-    Raises
-    ------
-    ValueError
-        Unknown format (the message lists the valid names).
-    """
-    if format not in FORMATS:
-        raise ValueError(f"format must be one of {', '.join(map(repr, FORMATS))}; got {format!r}")
-    return FORMATS[format](table, out_dir, overwrite=overwrite, **options)
-
 
 from dustoptics.io import (
     csv,
@@ -90,6 +55,7 @@ from dustoptics.io import (
     tables,
     textures,
 )
+from dustoptics.io._atomic import FormatError
 from dustoptics.io.csv import (
     check_cosmoscout_set,
     read_cosmoscout_constituent,
@@ -109,6 +75,7 @@ from dustoptics.io.outputs import (
     write_atmosphere_set,
     write_formats,
 )
+from dustoptics.io.registry import FORMATS, Format, FormatOptions, Writer, register, write
 from dustoptics.io.shaders import glsl_snippet, shader_source, write_glsl, write_shader
 from dustoptics.io.tables import open_table, read_hdf5, read_netcdf, write_hdf5, write_netcdf
 from dustoptics.io.textures import (
@@ -122,7 +89,9 @@ from dustoptics.io.textures import (
 __all__ = [
     "FORMATS",
     "CosmoScoutConstituent",
+    "Format",
     "FormatError",
+    "FormatOptions",
     "Placement",
     "Writer",
     "check_cosmoscout_set",
@@ -142,7 +111,7 @@ __all__ = [
     "read_seed_csv",
     "read_table",
     "read_texture",
-    "register_format",
+    "register",
     "rt",
     "shader_source",
     "shaders",

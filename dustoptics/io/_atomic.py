@@ -66,6 +66,7 @@ import os
 import re
 import shutil
 import tempfile
+import time
 from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -312,8 +313,6 @@ def whole_set(
         the message names the files not yet moved and the staging directory;
         or a writer held a directory longer than ``timeout_s``.
     """
-    import time
-
     target = Path(os.path.abspath(path))
     start = target if target.is_dir() else target.parent
     with contextlib.ExitStack() as stack:

@@ -24,6 +24,16 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from dustoptics._files import load_json
+from dustoptics.atmosphere.build import SET_PROVENANCE_SUFFIX
+from dustoptics.io._atomic import FormatError, whole_set
+from dustoptics.io._text import printable
+from dustoptics.io.csv.cosmoscout import check_cosmoscout_set, read_cosmoscout_constituent
+from dustoptics.io.csv.seed import EXTINCTION_FILENAME, PHASE_FILENAME, SUMMARY_FILENAME
+from dustoptics.io.describe_formats import describer_of
+from dustoptics.io.outputs import TABLE_SUFFIXES, read_table
+from dustoptics.io.textures.raw import read_texture
+
 if TYPE_CHECKING:
     from dustoptics.table import Table
 
@@ -51,7 +61,6 @@ _FULL = "(full=True; dustoptics info --full)"
 
 
 def _printable_lines(text: str) -> str:
-    from dustoptics.io._text import printable
 
     return "\n".join(printable(line) for line in text.split("\n"))
 
@@ -225,15 +234,12 @@ def describe_path(path: str | os.PathLike[str], *, full: bool = True) -> str:
         A damaged file, nothing dustoptics writes, or a set that a killed
         write left incomplete (:func:`dustoptics.io._atomic.whole_set`).
     """
-    from dustoptics.io._atomic import whole_set
-    from dustoptics.io.describe_formats import kind_of
-
     p = Path(path)
     if not p.exists():
         raise FileNotFoundError(f"no such file or directory: {str(p)!r}")
     with whole_set(p):  # a set a killed write left incomplete is refused, not described
-        if p.is_dir() and kind_of(p) is not None:  # a sweep's store
-            text = kind_of(p)(p, full)  # type: ignore[misc]
+        if p.is_dir() and (describer := describer_of(p)) is not None:  # a sweep's store
+            text = describer(p, full)
         elif p.is_dir():
             text = _describe_directory(p, full)
         else:
@@ -243,14 +249,8 @@ def describe_path(path: str | os.PathLike[str], *, full: bool = True) -> str:
 
 def _describe_file(p: Path, full: bool = True) -> str:
     """One file, by its name (and for JSON and netCDF its contents): the describer of its format."""
-    from dustoptics.atmosphere.build import SET_PROVENANCE_SUFFIX
-    from dustoptics.io import FormatError
-    from dustoptics.io.csv.seed import EXTINCTION_FILENAME, PHASE_FILENAME, SUMMARY_FILENAME
-    from dustoptics.io.describe_formats import kind_of
-    from dustoptics.io.outputs import TABLE_SUFFIXES, read_table
-
     name, suffix = p.name, p.suffix.lower()
-    describer = kind_of(p)
+    describer = describer_of(p)
     if describer is not None:
         return describer(p, full)
     if suffix in TABLE_SUFFIXES or name in (SUMMARY_FILENAME, PHASE_FILENAME, EXTINCTION_FILENAME):
@@ -269,7 +269,6 @@ def _describe_file(p: Path, full: bool = True) -> str:
 
 
 def _is_texture_sidecar(path: Path) -> bool:
-    from dustoptics._files import load_json
 
     try:
         data = load_json(path)  # bounded in size and depth
@@ -280,12 +279,6 @@ def _is_texture_sidecar(path: Path) -> bool:
 
 def _describe_directory(root: Path, full: bool = True) -> str:
     """Every output found in ``root``, one section each."""
-    from dustoptics.atmosphere.build import SET_PROVENANCE_SUFFIX
-    from dustoptics.io import FormatError
-    from dustoptics.io.csv.seed import SUMMARY_FILENAME
-    from dustoptics.io.describe_formats import kind_of
-    from dustoptics.io.outputs import TABLE_SUFFIXES, read_table
-
     sections: list[tuple[str, str]] = []
     files = sorted(q for q in root.iterdir() if q.is_file())
     set_names = [
@@ -303,13 +296,13 @@ def _describe_directory(root: Path, full: bool = True) -> str:
         if not any(name.startswith(f"{s}_") for s in in_sets):
             sections.append((f"{name} (CosmoScout VR)", _describe_constituent(root, name)))
     for q in files:
-        if q.suffix.lower() in TABLE_SUFFIXES and kind_of(q) is None:
+        if q.suffix.lower() in TABLE_SUFFIXES and describer_of(q) is None:
             sections.append((q.name, describe_table(read_table(q), full=full)))
     if (root / SUMMARY_FILENAME).is_file():
         table = read_table(root)
         sections.append((f"{SUMMARY_FILENAME} (seed CSV)", describe_table(table, full=full)))
     for q in files:
-        describer = kind_of(q)
+        describer = describer_of(q)
         if describer is not None:
             sections.append((q.name, describer(q, full)))
         elif q.suffix.lower() == ".json" and _is_texture_sidecar(q):
@@ -328,7 +321,6 @@ def _range(values: Any, unit: str) -> str:
 
 def _describe_constituent(root: Path, name: str) -> str:
     """A CosmoScout VR constituent: its four CSV files in ``root``."""
-    from dustoptics.io import read_cosmoscout_constituent
 
     c = read_cosmoscout_constituent(root, name)
     wl_nm = c.wavelength_m * 1e9
@@ -349,7 +341,6 @@ def _describe_constituent(root: Path, name: str) -> str:
 
 def _describe_set(root: Path, name: str, full: bool = True) -> str:
     """An atmosphere set: its settings, provenance record and constituents."""
-    from dustoptics.io import FormatError
 
     try:
         return _set_text(root, name, full)
@@ -363,9 +354,6 @@ def _describe_set(root: Path, name: str, full: bool = True) -> str:
 
 
 def _set_text(root: Path, name: str, full: bool) -> str:
-    from dustoptics._files import load_json
-    from dustoptics.atmosphere.build import SET_PROVENANCE_SUFFIX
-    from dustoptics.io import check_cosmoscout_set
 
     lines = [f"atmosphere set:  {name} (CosmoScout VR, in {root})"]
     settings = root / f"{name}{_SETTINGS_SUFFIX}"
@@ -407,7 +395,6 @@ def _set_text(root: Path, name: str, full: bool) -> str:
 
 def _describe_texture(sidecar: Path, full: bool = True) -> str:
     """A texture, from its JSON sidecar (the raw file it names is read and checked too)."""
-    from dustoptics.io import read_texture
 
     t = read_texture(sidecar)
     meta = t.metadata

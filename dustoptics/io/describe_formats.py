@@ -4,7 +4,8 @@ textures in containers, fits, skies and images (``dustoptics info``, one concept
 Each ``describe_*`` function reads one kind of file dustoptics writes and returns lines of text:
 what it holds, units, how it was made (the input hash of the table it came from), and, for
 shaders and textures, the sampling rule.  :mod:`dustoptics.io.describe` chooses the describer by
-the file's name and contents (:func:`kind_of`) and escapes what it prints.
+the file's name and contents (:func:`describer_of`: the format records' ``recognise``, then
+:data:`KINDS`) and escapes what it prints.
 
 Every read is bounded (:func:`dustoptics._files.read_checked`, :func:`~dustoptics._files.load_json`)
 and a file that is not what its name says is refused with :class:`dustoptics.io.FormatError`.
@@ -20,7 +21,12 @@ from typing import Any
 
 import numpy as np
 
+from dustoptics._files import load_json, read_checked
+from dustoptics.io._atomic import FormatError
+from dustoptics.io.registry import FORMATS, Describer
+
 __all__ = [
+    "KINDS",
     "SHADER_LANGUAGES",
     "describe_bruneton",
     "describe_fit",
@@ -29,8 +35,11 @@ __all__ = [
     "describe_shader",
     "describe_sky",
     "describe_sweep",
-    "describe_texture_container",
-    "kind_of",
+    "describe_texture",
+    "describer_of",
+    "is_bruneton",
+    "is_rt_text",
+    "is_shader",
 ]
 
 #: Shading languages by file suffix.
@@ -72,14 +81,10 @@ _PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 
 
 def _format_error(path: Path, what: str) -> Exception:
-    from dustoptics.io import FormatError
-
     return FormatError(f"{str(path)!r}: {what}")
 
 
 def _text(path: Path) -> str:
-    from dustoptics._files import read_checked
-
     try:
         return read_checked(path).decode("utf-8")
     except UnicodeDecodeError:
@@ -99,39 +104,50 @@ def _range(values: Any, unit: str = "") -> str:
 # --- What a file is ---------------------------------------------------------------------------
 
 
-def kind_of(path: Path) -> Callable[[Path, bool], str] | None:
-    """The describer of ``path`` among this module's, or None when none applies.
-
-    Chosen by suffix, and for JSON and netCDF by contents (a quick, bounded look).
-    """
-    suffix = path.suffix.lower()
-    if suffix in SHADER_LANGUAGES:
-        return describe_shader
-    if suffix in (".txt", ".dat") and _first_line(path) in _RT_FIRST_LINES:
-        return describe_rt_text
-    if suffix == ".cdf":
-        from dustoptics.io.rt import libradtran_netcdf as lrt
-
-        return lrt.describe_libradtran_netcdf if lrt.is_libradtran_netcdf(path) else None
-    if suffix in (".exr", ".ktx2"):
-        return describe_texture_container
-    if suffix == ".png":
-        return describe_image
-    if suffix == ".h" and path.name.endswith("_bruneton_parameters.h"):
-        return describe_bruneton
-    if suffix == ".json":
-        data = _json_or_none(path)
-        if isinstance(data, dict) and str(data.get("model", "")).startswith(_BRUNETON_MODEL):
-            return describe_bruneton
-        if isinstance(data, dict) and {"model", "formula", "rows"} <= data.keys():
-            return describe_fit
-    if suffix == ".nc" and _is_sky(path):
-        return describe_sky
-    if path.is_dir() and (path / _SWEEP_IDENTITY).is_file():
-        return describe_sweep
-    if suffix == ".nc" and _is_sweep_file(path):
-        return describe_sweep
+def describer_of(path: Path) -> Describer | None:
+    """The describer of ``path``: the first format record (:data:`dustoptics.io.FORMATS`) or
+    other kind of file (:data:`KINDS`) that recognises it; None when none does."""
+    for fmt in FORMATS.values():
+        if fmt.recognise is not None and fmt.describe is not None and fmt.recognise(path):
+            return fmt.describe
+    for recognise, describe in KINDS:
+        if recognise(path):
+            return describe
     return None
+
+
+def is_shader(path: Path, extension: str) -> bool:
+    """Whether ``path`` is named as a shader file of the language with file ``extension``."""
+    return path.suffix.lower() == extension
+
+
+def is_rt_text(path: Path) -> bool:
+    """Whether ``path`` is a DISORT or libRadtran text file dustoptics wrote (its first line)."""
+    return path.suffix.lower() in (".txt", ".dat") and _first_line(path) in _RT_FIRST_LINES
+
+
+def is_bruneton(path: Path) -> bool:
+    """Whether ``path`` is one of Bruneton's (2017) files: a C++ header or a JSON file."""
+    suffix = path.suffix.lower()
+    if suffix == ".h":
+        return path.name.endswith("_bruneton_parameters.h")
+    if suffix != ".json":
+        return False
+    data = _json_or_none(path)
+    return isinstance(data, dict) and str(data.get("model", "")).startswith(_BRUNETON_MODEL)
+
+
+def _is_fit(path: Path) -> bool:
+    if path.suffix.lower() != ".json":
+        return False
+    data = _json_or_none(path)
+    return isinstance(data, dict) and {"model", "formula", "rows"} <= data.keys()
+
+
+def _is_sweep(path: Path) -> bool:
+    if path.is_dir():
+        return (path / _SWEEP_IDENTITY).is_file()
+    return path.suffix.lower() == ".nc" and _is_sweep_file(path)
 
 
 def _first_line(path: Path) -> str:
@@ -144,8 +160,6 @@ def _first_line(path: Path) -> str:
 
 
 def _json_or_none(path: Path) -> Any:
-    from dustoptics._files import load_json
-
     try:
         return load_json(path)
     except (OSError, ValueError):
@@ -153,7 +167,7 @@ def _json_or_none(path: Path) -> Any:
 
 
 def _is_sweep_file(path: Path) -> bool:
-    import h5py
+    import h5py  # here: h5py adds ~0.06 s to `import dustoptics` (python -X importtime)
 
     try:
         with h5py.File(path, "r") as f:
@@ -166,6 +180,8 @@ def _is_sweep_file(path: Path) -> bool:
 
 def _is_sky(path: Path) -> bool:
     # The sky writes netCDF-3 (classic or 64-bit offset); tables are netCDF-4 (HDF5).
+    if path.suffix.lower() != ".nc":
+        return False
     try:
         with open(path, "rb") as f:
             return f.read(4) in (b"CDF\x01", b"CDF\x02")
@@ -245,8 +261,6 @@ def describe_rt_text(path: Path, full: bool = True) -> str:
 def describe_bruneton(path: Path, full: bool = True) -> str:
     """Bruneton's (2017) files: a table's ``NAME_bruneton_mie.json`` or a set's
     ``NAME_bruneton.json`` and ``NAME_bruneton_parameters.h``."""
-    from dustoptics._files import load_json
-
     if path.suffix.lower() == ".h":
         json_path = path.with_name(path.name.replace("_parameters.h", ".json"))
         header = [line[2:].strip() for line in _text(path).splitlines() if line.startswith("//")][
@@ -310,16 +324,9 @@ def _bruneton_lines(path: Path, data: dict[str, Any], full: bool) -> list[str]:
 # --- Textures in containers -------------------------------------------------------------------
 
 
-def describe_texture_container(path: Path, full: bool = True) -> str:
-    """An OpenEXR or KTX2 phase texture, from the metadata inside it (key ``dustoptics``)."""
-    if path.suffix.lower() == ".ktx2":
-        from dustoptics.io.textures.ktx2 import read_ktx2_metadata
-
-        meta, container = read_ktx2_metadata(path), "KTX2"
-    else:
-        from dustoptics.io.textures.exr import read_exr_metadata
-
-        meta, container = read_exr_metadata(path), "OpenEXR"
+def describe_texture(path: Path, meta: dict[str, Any], container: str, full: bool = True) -> str:
+    """An OpenEXR or KTX2 phase texture, from the metadata inside it (key ``dustoptics``, read
+    by the container's module)."""
     try:
         return "\n".join(_texture_lines(path, meta, container, full))
     except (KeyError, TypeError, ValueError) as exc:
@@ -354,8 +361,6 @@ def _texture_lines(path: Path, meta: dict[str, Any], container: str, full: bool)
 def describe_fit(path: Path, full: bool = True) -> str:
     """A fit's JSON (``dustoptics fit``): the model, its formula and citation, each row's
     parameters and errors."""
-    from dustoptics._files import load_json
-
     data = load_json(path)
     try:
         lines = [
@@ -385,7 +390,7 @@ def describe_fit(path: Path, full: bool = True) -> str:
 def describe_sky(path: Path, full: bool = True) -> str:
     """The sky's netCDF (``dustoptics sky``: ``NAME_sky.nc``, ``mars-comparison.nc``): its
     grids, what it holds with units, its accuracy and how it was made (the global attributes)."""
-    import xarray as xr
+    import xarray as xr  # here: xarray adds ~0.7 s to `import dustoptics` (-X importtime)
 
     try:
         ds = xr.open_dataset(path, engine="scipy", decode_times=False, cache=False)
@@ -423,7 +428,7 @@ def describe_sweep(path: Path, full: bool = True) -> str:
     Reads the metadata and the small variables only (the phase functions stay on disk).  The
     chunks' digests are checked by :func:`dustoptics.sweep.verify_store`, not here.
     """
-    import xarray as xr
+    import xarray as xr  # here: xarray adds ~0.7 s to `import dustoptics` (-X importtime)
 
     store = path.is_dir()
     try:
@@ -496,3 +501,13 @@ def _png_header(path: Path) -> tuple[int, int, int, int]:
         raise _format_error(path, "not a PNG image")
     width, height, depth, colour = struct.unpack(">IIBB", head[16:26])
     return width, height, depth, colour
+
+
+#: The files ``info`` reads that no format writes, as ``(recognise, describe)``: a fit's JSON,
+#: the sky's netCDF and images, a sweep's store or file.
+KINDS: tuple[tuple[Callable[[Path], bool], Describer], ...] = (
+    (lambda path: path.suffix.lower() == ".png", describe_image),
+    (_is_fit, describe_fit),
+    (_is_sky, describe_sky),
+    (_is_sweep, describe_sweep),
+)

@@ -12,6 +12,8 @@ users too:
   beside the files already there: the same ones are left untouched, different
   ones are replaced only with ``force``;
 - :func:`place_table`: both, into ``OUT/NAME/`` (``NAME`` the table's name);
+- :func:`prepare_export`: the table and options for a set of formats: a number
+  density from an optical depth (cosmoscout);
 - :func:`with_inputs`: a table whose provenance records inputs given outside
   its configuration (a number density, an optical depth);
 - :func:`write_atmosphere_set`: an atmosphere set's files (CosmoScout VR's,
@@ -28,9 +30,18 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from dustoptics._validation import check_file_name, check_inside
+from dustoptics.atmosphere.build import SET_PROVENANCE_SUFFIX, set_provenance
+from dustoptics.atmosphere.sets import with_optical_depth
+from dustoptics.io._atomic import FormatError, _commit, file_set, write_files
+from dustoptics.io.csv.cosmoscout import ProfileOptions, write_atmosphere
+from dustoptics.io.csv.seed import SUMMARY_FILENAME, read_seed_csv
+from dustoptics.io.engines.bruneton import write_bruneton
+from dustoptics.io.registry import FormatOptions, write
+from dustoptics.io.tables.netcdf import read_hdf5
+
 if TYPE_CHECKING:
     from dustoptics.atmosphere.sets import Atmosphere
-    from dustoptics.models.build import FormatOptions
     from dustoptics.table import Table
 
 __all__ = [
@@ -38,6 +49,7 @@ __all__ = [
     "Placement",
     "place_outputs",
     "place_table",
+    "prepare_export",
     "read_table",
     "with_inputs",
     "write_atmosphere_set",
@@ -68,9 +80,6 @@ def read_table(path: str | os.PathLike[str]) -> Table:
     dustoptics.io.FormatError
         A damaged or unrecognized file.
     """
-    from dustoptics.io import FormatError, read_hdf5, read_seed_csv
-    from dustoptics.io.csv.seed import SUMMARY_FILENAME
-
     p = Path(path)
     if not p.exists():
         raise FileNotFoundError(f"no such file or directory: {str(p)!r}")
@@ -108,6 +117,82 @@ def with_inputs(table: Table, *, note: str | None = None, **inputs: Any) -> Tabl
     return table.replace(provenance=replace(prov, inputs={**prov.inputs, **inputs}, notes=notes))
 
 
+def prepare_export(
+    table: Table,
+    formats: Sequence[str],
+    *,
+    options: FormatOptions | None = None,
+    optical_depth: float | None = None,
+    reference_wavelength_nm: float = 550.0,
+    scale_height_m: float | None = None,
+    top_altitude_m: float | None = None,
+    n_altitudes: int | None = None,
+) -> tuple[Table, FormatOptions]:
+    """The table and format options for writing ``table`` in ``formats``.
+
+    With ``"cosmoscout"`` among the formats, the constituent's density is an
+    exponential profile (:class:`~dustoptics.io.csv.cosmoscout.ProfileOptions`,
+    recorded in the CosmoScout files' provenance); an ``optical_depth`` sets the
+    table's number density (:func:`~dustoptics.atmosphere.sets.with_optical_depth`,
+    recorded in its provenance).  Without it, the profile parameters and optical
+    depth are not used.
+
+    Parameters
+    ----------
+    table : Table
+    formats : sequence of str
+        Names of :data:`dustoptics.io.FORMATS`.
+    options : FormatOptions, optional
+        The formats' options (default none).
+    optical_depth : float, optional
+        cosmoscout: vertical optical depth at ``reference_wavelength_nm`` that
+        sets the number density, > 0. [-]
+    reference_wavelength_nm : float, optional
+        Wavelength of ``optical_depth``, within the table's.  Default 550. [nm]
+    scale_height_m, top_altitude_m, n_altitudes : optional
+        cosmoscout: the profile (:class:`~dustoptics.io.csv.cosmoscout.ProfileOptions`;
+        None: the value in ``options``, or the default). [m], [m], [-]
+
+    Returns
+    -------
+    table : Table
+        The table, with its number density set when ``optical_depth`` is given.
+    options : FormatOptions
+        ``options`` with the profile's parameters for cosmoscout.
+
+    Raises
+    ------
+    ValueError
+        cosmoscout without a number density (neither the table's nor an
+        ``optical_depth``), or profile parameters out of range.
+    """
+    options = FormatOptions() if options is None else options
+    if "cosmoscout" not in formats:
+        return table, options
+    given = {
+        "scale_height_m": scale_height_m,
+        "top_altitude_m": top_altitude_m,
+        "n_altitudes": n_altitudes,
+    }
+    options = options.replace(**{k: v for k, v in given.items() if v is not None})
+    profile = ProfileOptions(**{k: v for k, v in options.values.items() if k in given})
+    if optical_depth is not None:
+        table = with_optical_depth(
+            table,
+            optical_depth=optical_depth,
+            reference_wavelength_nm=reference_wavelength_nm,
+            profile=profile.profile,
+            top_altitude_m=profile.top_altitude_m,
+        )
+    if table.number_density_per_m3 is None:
+        raise ValueError(
+            "the cosmoscout format needs a number density for beta [m^-1]: give optical_depth "
+            "or a table with number_density_per_m3"
+        )
+    profile.check(table.wavelength_nm)
+    return table, options
+
+
 def write_formats(
     table: Table,
     out_dir: str | os.PathLike[str],
@@ -120,7 +205,7 @@ def write_formats(
     """Write a table into a directory in several formats, as one set.
 
     The options that change a format's numbers
-    (:meth:`~dustoptics.models.build.FormatOptions.recorded`) are added to
+    (:meth:`~dustoptics.io.registry.FormatOptions.recorded`) are added to
     the provenance inputs of the table that format's writer gets, under
     ``"export"``: the files record them, and their input hash changes with
     them.  The set is written whole or not at all
@@ -152,10 +237,6 @@ def write_formats(
     FileExistsError
         A file exists and ``overwrite`` is False (nothing is written).
     """
-    from dustoptics.io import write
-    from dustoptics.io._atomic import file_set
-    from dustoptics.models.build import FormatOptions
-
     if options is None:
         options = FormatOptions()
     out = Path(out_dir)
@@ -243,8 +324,6 @@ def place_outputs(
     FileExistsError
         Files exist and differ, and ``force`` is False (nothing is written).
     """
-    from dustoptics.io._atomic import _commit
-
     out = Path(out_dir)
     unchanged: list[Path] = []
 
@@ -305,7 +384,7 @@ def place_table(
     formats : sequence of str
         Names of :data:`dustoptics.io.FORMATS`.
     options : FormatOptions, optional
-        The formats' options (:func:`dustoptics.models.build.prepare_export`).
+        The formats' options (:func:`prepare_export`).
     force : bool, optional
         Replace existing files that differ.  Default False.
     same : callable, optional
@@ -323,8 +402,6 @@ def place_table(
     FileExistsError
         Files exist and differ, and ``force`` is False (nothing is written).
     """
-    from dustoptics._validation import check_file_name, check_inside
-
     # The name may come from a file: it must not choose where files go.
     out_dir = Path(out) / check_file_name("name", table.name)
     check_inside(out, out_dir)
@@ -378,10 +455,6 @@ def write_atmosphere_set(
     FileExistsError
         A file exists and ``overwrite`` is False.
     """
-    from dustoptics.atmosphere.build import SET_PROVENANCE_SUFFIX, set_provenance
-    from dustoptics.io._atomic import write_files
-    from dustoptics.io.csv.cosmoscout import write_atmosphere
-
     record = set_provenance(atmosphere, inputs)
     # The settings name the CSV files where they will stand, not in a staging folder.
     final = Path(final_directory if final_directory is not None else directory).resolve()
@@ -389,8 +462,6 @@ def write_atmosphere_set(
         atmosphere, directory, overwrite=overwrite, path_prefix=f"{final.as_posix()}/"
     )
     if bruneton:
-        from dustoptics.io.engines.bruneton import write_bruneton
-
         written += write_bruneton(atmosphere, directory, overwrite=overwrite)
     path = Path(directory) / f"{atmosphere.name}{SET_PROVENANCE_SUFFIX}"
     return written + write_files({path: record.encode("utf-8")}, overwrite=overwrite)

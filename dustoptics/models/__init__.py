@@ -9,19 +9,17 @@
 - :mod:`~dustoptics.models.files`: configuration files users write
   (:func:`~dustoptics.models.files.load_config`), checked against the presets;
 - :mod:`~dustoptics.models.build`: a configuration's table computed with
-  progress (:class:`TableBuilder`) and the options of its output formats.
+  progress (:class:`TableBuilder`).
 """
 
 from dustoptics.models import build, compute, config, files, presets
-from dustoptics.models.build import FormatOptions, TableBuilder, prepare_export
+from dustoptics.models.build import TableBuilder
 
 __all__ = [
-    "FormatOptions",
     "TableBuilder",
     "build",
     "compute",
     "config",
     "files",
-    "prepare_export",
     "presets",
 ]

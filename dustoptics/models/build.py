@@ -6,23 +6,23 @@ What ``dustoptics build`` and ``dustoptics export`` do before any file is writte
   configuration (:func:`dustoptics.models.compute.build_table`), reporting
   progress per wavelength and, on the first build of an install, that the Mie
   kernels are compiling;
-- :class:`FormatOptions`: the options of the individual output formats,
-  each writer getting its own (:meth:`FormatOptions.for_format`) and each
-  file recording those that change its numbers (:meth:`FormatOptions.recorded`);
-- :func:`prepare_export`: the table and options for a set of formats: the
-  CosmoScout VR density profile and a number density from an optical depth.
+- :func:`is_config_path`: whether a name is a configuration file or a preset.
+
+The formats' options live with the formats (:class:`dustoptics.io.FormatOptions`,
+:func:`dustoptics.io.outputs.prepare_export`).
 """
 
 from __future__ import annotations
 
 import os
 import time
-from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, TextIO
+from typing import TYPE_CHECKING, TextIO
 
-import numpy as np
+from dustoptics import _numba_cache
+from dustoptics.models import files, presets
+from dustoptics.models.compute import build_table
 
 if TYPE_CHECKING:
     from dustoptics.models.config import BuildConfig
@@ -30,10 +30,8 @@ if TYPE_CHECKING:
 
 __all__ = [
     "COMPILE_ESTIMATE_S",
-    "FormatOptions",
     "TableBuilder",
     "is_config_path",
-    "prepare_export",
 ]
 
 #: About how long the first build's kernels take to compile on two idle cores: half of
@@ -94,6 +92,8 @@ class TableBuilder:
         self.config = config
         self.progress = progress
         self.allow_large = allow_large
+        #: Why the build asks for more than the configuration does, recorded in the provenance.
+        self.notes: list[str] = []
 
     @classmethod
     def from_name(
@@ -124,8 +124,6 @@ class TableBuilder:
         OSError
             A configuration file that cannot be read.
         """
-        from dustoptics.models import files, presets
-
         if is_config_path(name_or_config):
             cfg = files.load_config(name_or_config)
         else:
@@ -137,6 +135,39 @@ class TableBuilder:
         """The configuration's name (the table's)."""
         return self.config.name
 
+    def ask_for_expansion(self, reason: str) -> None:
+        """Compute the expansion coefficients (``optics.expansion = true``) for ``reason``.
+
+        What a format needs that the computation can supply is asked for, not refused: the
+        configuration is changed (its inputs, hence the table's input hash, record
+        ``expansion``), the change is reported on ``progress`` and noted in the provenance.
+
+        Parameters
+        ----------
+        reason : str
+            Who needs them (``"--format disort"``), for the report and the note.
+
+        Raises
+        ------
+        ValueError
+            The configuration's phase model is not Mie: only Mie computes them.
+        """
+        if self.config.optics.expansion is not None:
+            return
+        if self.config.phase.model != "mie":
+            raise ValueError(
+                f"{reason} needs the phase function's expansion coefficients, which only a Mie "
+                f"model has; {self.name!r} has phase.model = {self.config.phase.model!r}"
+            )
+        self.config = replace(self.config, optics=replace(self.config.optics, expansion=True))
+        note = (
+            f"{reason} needs the phase function's expansion coefficients: computed "
+            "(optics.expansion = true)"
+        )
+        self.notes.append(note)
+        if self.progress is not None:
+            print(f"{_PROG}: {note}", file=self.progress)
+
     def build(self) -> Table:
         """Compute the table (:func:`dustoptics.models.compute.build_table`).
 
@@ -144,9 +175,6 @@ class TableBuilder:
         -------
         Table
         """
-        from dustoptics import _numba_cache
-        from dustoptics.models.compute import build_table
-
         start = time.perf_counter()
         progress = self.progress
         tty = progress is not None and progress.isatty()
@@ -170,6 +198,9 @@ class TableBuilder:
                 progress.flush()
 
         table = build_table(self.config, progress=report, allow_large=self.allow_large)
+        if self.notes:
+            prov = table.provenance
+            table = table.replace(provenance=replace(prov, notes=(*prov.notes, *self.notes)))
         if compiled is not None and progress is not None:
             print(
                 f"{_PROG}: this first build took {time.perf_counter() - start:.1f} s; later "
@@ -177,222 +208,3 @@ class TableBuilder:
                 file=progress,
             )
         return table
-
-
-@dataclass(frozen=True)
-class FormatOptions:
-    """Options of the individual formats (the command line's format options).
-
-    None leaves a writer's default.  Each writer gets the options it takes
-    (:meth:`for_format`).
-
-    Attributes
-    ----------
-    channels_nm : tuple of float, optional
-        glsl, hlsl, wgsl, ktx2, exr, npy: the three channels' wavelengths. [nm]
-    colour : str, optional
-        Same formats: colour channels instead of wavelengths
-        (``"cie1931-xyz"``, ``"linear-srgb-astmg173"``).
-    resolution_deg : float, optional
-        glsl, hlsl, wgsl: angular step of the constant array. [deg]
-    sampling : str, optional
-        texture, ktx2, exr, npy: ``"theta"`` or ``"cos"``.
-    n_angles : int, optional
-        texture, ktx2, exr, npy: samples along the angle axis.
-    density : numpy.ndarray, optional
-        cosmoscout: density relative to the ground at the texel centres (i + 1/2) T / N.
-    prefix : str, optional
-        glsl, hlsl, wgsl: prefix of every identifier.
-    glsl_version : str, optional
-        glsl: ``"130"`` or ``"100"``.
-    layout : str, optional
-        ktx2, exr, npy: ``"rgb"`` or ``"wavelength"``.
-    precision : str, optional
-        ktx2, exr, npy: ``"float32"`` or ``"float16"``.
-    profile : dict, optional
-        cosmoscout: the density profile's parameters, recorded in provenance.
-    """
-
-    channels_nm: tuple[float, ...] | None = None
-    colour: str | None = None
-    resolution_deg: float | None = None
-    sampling: str | None = None
-    n_angles: int | None = None
-    density: np.ndarray | None = None
-    prefix: str | None = None
-    glsl_version: str | None = None
-    layout: str | None = None
-    precision: str | None = None
-    #: The density profile's parameters (cosmoscout), as recorded in provenance.
-    profile: dict[str, Any] | None = None
-
-    def recorded(self, name: str) -> dict[str, Any]:
-        """The options given for format ``name`` that change the numbers it writes.
-
-        :func:`dustoptics.io.outputs.write_formats` adds them to the table's
-        provenance inputs (key ``"export"``), so that the input hash a file
-        records changes with them.  Writers' defaults are stated in the files
-        themselves and not repeated.
-
-        Parameters
-        ----------
-        name : str
-            A format name (:data:`dustoptics.io.FORMATS`).
-
-        Returns
-        -------
-        dict
-            JSON-serializable (tuples as lists).
-
-        Examples
-        --------
-        >>> FormatOptions(n_angles=181).recorded("texture")
-        {'n_angles': 181}
-        """
-        if name == "cosmoscout":
-            return dict(self.profile or {})
-        return {
-            key: list(value) if isinstance(value, tuple) else value
-            for key, value in self.for_format(name).items()
-            if value is not None
-        }
-
-    def for_format(self, name: str) -> dict[str, Any]:
-        """Keyword options for the writer of format ``name``.
-
-        Parameters
-        ----------
-        name : str
-            A format name (:data:`dustoptics.io.FORMATS`).
-
-        Returns
-        -------
-        dict
-            The keywords that writer takes; empty for formats without options.
-        """
-        if name in ("glsl", "hlsl", "wgsl"):
-            out: dict[str, Any] = {"channels_nm": self.channels_nm, "colour": self.colour}
-            if self.resolution_deg is not None:
-                out["resolution_deg"] = self.resolution_deg
-            if self.prefix is not None:
-                # Every identifier prefixed, the lookup too (MIE keeps the seed's names).
-                out["prefix"] = self.prefix
-                if self.prefix != "MIE":
-                    out["function_name"] = f"{self.prefix}_MiePhaseFunction"
-            if name == "glsl" and self.glsl_version is not None:
-                out["version"] = self.glsl_version
-            return out
-        if name in ("ktx2", "exr", "npy"):
-            out = {"channels_nm": self.channels_nm, "colour": self.colour}
-            for key in ("layout", "sampling", "n_angles", "precision"):
-                if getattr(self, key) is not None:
-                    out[key] = getattr(self, key)
-            return out
-        if name == "texture":
-            out = {}
-            if self.sampling is not None:
-                out["sampling"] = self.sampling
-            if self.n_angles is not None:
-                out["n_angles"] = self.n_angles
-            return out
-        if name == "cosmoscout":
-            return {"density": self.density}
-        return {}
-
-
-def prepare_export(
-    table: Table,
-    formats: Sequence[str],
-    *,
-    options: FormatOptions | None = None,
-    optical_depth: float | None = None,
-    reference_wavelength_nm: float = 550.0,
-    scale_height_m: float = 10_000.0,
-    top_altitude_m: float = 120_000.0,
-    n_altitudes: int = 1024,
-) -> tuple[Table, FormatOptions]:
-    """The table and format options for writing ``table`` in ``formats``.
-
-    With ``"cosmoscout"`` among the formats, the constituent's density is an
-    exponential profile (:class:`~dustoptics.atmosphere.column.ExponentialProfile`)
-    sampled up to ``top_altitude_m``; its parameters are recorded in the
-    CosmoScout files' provenance; an ``optical_depth`` sets the table's number
-    density (:func:`~dustoptics.atmosphere.sets.with_optical_depth`, recorded in
-    its provenance).  Without it, the profile parameters and optical depth are
-    not used.
-
-    Parameters
-    ----------
-    table : Table
-    formats : sequence of str
-        Names of :data:`dustoptics.io.FORMATS`.
-    options : FormatOptions, optional
-        The other formats' options (default none).
-    optical_depth : float, optional
-        cosmoscout: vertical optical depth at ``reference_wavelength_nm`` that
-        sets the number density, > 0. [-]
-    reference_wavelength_nm : float, optional
-        Wavelength of ``optical_depth``, within the table's.  Default 550. [nm]
-    scale_height_m : float, optional
-        cosmoscout: the profile's scale height.  Default 10000 (the seeds'
-        Mars dust). [m]
-    top_altitude_m : float, optional
-        cosmoscout: atmosphere top above the surface.  Default 120000 (Mars,
-        3510 - 3390 km). [m]
-    n_altitudes : int, optional
-        cosmoscout: density samples.  Default 1024.
-
-    Returns
-    -------
-    table : Table
-        The table, with its number density set when ``optical_depth`` is given.
-    options : FormatOptions
-        ``options`` with the density profile for cosmoscout.
-
-    Raises
-    ------
-    ValueError
-        cosmoscout without a number density (neither the table's nor an
-        ``optical_depth``), or profile parameters out of range.
-    """
-    options = FormatOptions() if options is None else options
-    if "cosmoscout" not in formats:
-        return table, options
-    from dustoptics.atmosphere.column import ExponentialProfile, sample_profile
-
-    profile = ExponentialProfile(scale_height_m=scale_height_m)
-    if optical_depth is not None:
-        from dustoptics.atmosphere.sets import with_optical_depth
-
-        table = with_optical_depth(
-            table,
-            optical_depth=optical_depth,
-            reference_wavelength_nm=reference_wavelength_nm,
-            profile=profile,
-            top_altitude_m=top_altitude_m,
-        )
-    if table.number_density_per_m3 is None:
-        raise ValueError(
-            "the cosmoscout format needs a number density for beta [m^-1]: give optical_depth "
-            "or a table with number_density_per_m3"
-        )
-    # At the texel centres (i + 1/2) T / N, where CosmoScout VR's preprocessor reads the values
-    # (dustoptics.io.csv.cosmoscout), as the atmosphere sets do.  The profile's own values (the
-    # first below 1): the table keeps its ground number density for every format, and beta
-    # times the written density is the coefficient at every sampled altitude.
-    half_texel = 0.5 * top_altitude_m / n_altitudes
-    samples = sample_profile(
-        profile,
-        bottom_altitude_m=half_texel,
-        top_altitude_m=top_altitude_m - half_texel,
-        n_altitudes=n_altitudes,
-    )
-    density = np.asarray(samples.relative_density) * samples.peak
-    recorded = {
-        "density_profile": "exponential",
-        "scale_height_m": scale_height_m,
-        "top_altitude_m": top_altitude_m,
-        "n_altitudes": n_altitudes,
-        "density_sampling": "texel centres (i + 1/2) top_altitude_m / n_altitudes",
-    }
-    return table, replace(options, density=density, profile=recorded)

@@ -35,23 +35,28 @@ from dustoptics._validation import check_budget
 from dustoptics.models.config import _COSTA_SPECTRUM, BuildConfig
 from dustoptics.scattering import phase as _phase
 from dustoptics.scattering import tabulated_phase as _tabulated
-from dustoptics.scattering.optics import ConvergenceWarning, compute_optics
+from dustoptics.scattering.optics import (
+    ConvergenceWarning,
+    OpticsRequest,
+    compute_request,
+    optics_request,
+)
 from dustoptics.table import Provenance, Source, Table
 
-__all__ = ["build_table"]
+__all__ = ["build_table", "mie_request"]
 
 
 def _analytic_table(
     config: BuildConfig,
     name: str,
     params: Mapping[str, Any],
-    wavelengths: np.ndarray,
+    wavelength_nm: np.ndarray,
     theta: np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray, Source]:
     """(renormalized table, analytic mean cosine per wavelength, its source)."""
-    n = wavelengths.size
+    n = wavelength_nm.size
     if name == _COSTA_SPECTRUM:
-        spectrum = _phase.costa2021_mars_dhg(wavelengths, outside=params["outside"])
+        spectrum = _phase.costa2021_mars_dhg(wavelength_nm, outside=params["outside"])
         raw = _tabulated.tabulate(
             _phase.dhg_costa2021,
             theta_deg=theta,
@@ -70,26 +75,38 @@ def _analytic_table(
     return _tabulated.renormalize(raw, theta_deg=theta), exact, source
 
 
-def _compute_mie(
-    config: BuildConfig,
-    workers: int | None,
-    progress: Callable[[int, int], None] | None,
-    allow_large: bool = False,
-) -> Table:
-    assert config.material is not None and config.size_distribution is not None
+def mie_request(config: BuildConfig, *, wavelength_nm: np.ndarray | None = None) -> OpticsRequest:
+    """The Mie computation a configuration describes, validated once.
+
+    Parameters
+    ----------
+    config : BuildConfig
+        A validated configuration whose phase function uses Mie theory
+        (``config.phase.uses_mie``).
+    wavelength_nm : numpy.ndarray, optional
+        Some of its wavelengths instead of all (a sweep's chunk): each is
+        computed on its own, so they equal the same wavelengths of the whole. [nm]
+
+    Returns
+    -------
+    OpticsRequest
+        For :func:`~dustoptics.scattering.optics.compute_request` (and
+        :func:`~dustoptics.scattering.optics.check_cost`).
+    """
+    if config.material is None or config.size_distribution is None:
+        raise ValueError(
+            f"configuration {config.name!r} has no material and size distribution: "
+            "its phase function is analytic, not a Mie computation"
+        )
     assert config.optics.rtol is not None and config.optics.weighting is not None
-    return compute_optics(
+    return optics_request(
         config.material.build(),
         config.size_distribution.build(),
-        config.wavelengths_nm,
+        config.wavelengths_nm if wavelength_nm is None else wavelength_nm,
         config.theta_deg,
-        config.optics.rtol,
-        config.optics.weighting,
+        rtol=config.optics.rtol,
+        weighting=config.optics.weighting,
         cross_section_rtol=config.optics.cross_section_rtol,
-        workers=workers,
-        name=config.name,
-        progress=progress,
-        allow_large=allow_large,
         expansion=False if config.optics.expansion is None else config.optics.expansion,
     )
 
@@ -165,7 +182,13 @@ def build_table(
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         if ph.uses_mie:
-            table = _compute_mie(config, workers, progress, allow_large)
+            table = compute_request(
+                mie_request(config),
+                workers=workers,
+                name=config.name,
+                progress=progress,
+                allow_large=allow_large,
+            )
             _add_sources(sources, *table.provenance.sources)
             if ph.model == "hybrid":
                 assert ph.analytic is not None and ph.weight is not None

@@ -37,14 +37,23 @@ Top level (before any ``[section]``)::
 - ``"catalogue"``: ``name``, a catalogue material (:func:`dustoptics.list_materials`);
 - ``"constant"``: ``n`` > 0 and ``k`` >= 0 (default 0).
 
-``[size_distribution]`` (Mie and hybrid models only), ``model`` one of
+``[size_distribution]`` (Mie and hybrid models only), ``model`` any family of
+:data:`dustoptics.particles.sizedist.SIZE_DISTRIBUTIONS` (or one of its aliases,
+recorded under the family's name) with its constructor's parameters as keys, each
+checked against the range its class declares (:attr:`SizeDistribution.parameters
+<dustoptics.particles.sizedist.SizeDistribution.parameters>`) and then by the class:
 ``"modified_gamma"`` (``r_eff_um`` > 0, ``v_eff`` in (0, 0.5)),
 ``"modified_log_normal"`` (``r_eff_um`` > 0, ``v_eff`` > 0), ``"gamma"``
 (``shape`` > 0, ``scale_um`` > 0), ``"log_normal"`` (``median_radius_um`` > 0,
-``sigma`` > 0), ``"monodisperse"`` (``radius_um`` > 0), or ``"multimodal"``
-with one ``[[size_distribution.modes]]`` table per mode, each a model above
-plus ``relative_number_density`` > 0
-(:class:`dustoptics.particles.custom_sizedist.MultiModal`).
+``sigma`` > 0), ``"monodisperse"`` (``radius_um`` > 0), ``"deirmendjian_gamma"``
+(``alpha`` > -1, ``b`` > 0, ``gamma`` > 0), ``"power_law"`` (``exponent``,
+``r_min_um``, ``r_max_um``), ``"tabulated"`` (``radius_um`` and ``dn_dr`` or
+``dn_dlnr``, arrays), ``"truncated"`` (``r_min_um``, ``r_max_um`` and ``parent``,
+an inline table describing another distribution), or ``"multimodal"`` with one
+``[[size_distribution.modes]]`` table per mode, each a model above plus
+``relative_number_density`` > 0
+(:class:`dustoptics.particles.custom_sizedist.MultiModal`).  Only
+``"density_function"`` (a Python callable) cannot be written in TOML.
 
 ``[optics]``: ``wavelengths_nm`` (a list, or ``{start = 360, stop = 830, step
 = 10}``, the default), angles as ``n_theta`` evenly spaced from 0 to 180 deg
@@ -87,7 +96,6 @@ from typing import Any, Final
 
 import numpy as np
 
-from dustoptics._deprecated import moved_attribute
 from dustoptics._validation import (
     MAX_GRID_POINTS,
     check_file_name,
@@ -97,12 +105,10 @@ from dustoptics.particles.catalogue import get_material, list_materials
 from dustoptics.particles.custom_sizedist import MultiModal
 from dustoptics.particles.mixing import MARS_DUST_HEMATITE, MIXING_RULES, mars_dust
 from dustoptics.particles.sizedist import (
-    Gamma,
-    LogNormal,
-    ModifiedGamma,
-    ModifiedLogNormal,
-    Monodisperse,
+    SIZE_DISTRIBUTION_ALIASES,
+    SIZE_DISTRIBUTIONS,
     SizeDistribution,
+    SizeParameter,
 )
 from dustoptics.scattering import phase as _phase
 from dustoptics.scattering.optics import WEIGHTINGS
@@ -119,25 +125,6 @@ __all__ = [
     "SizeDistributionConfig",
     "parse_config",
 ]
-
-#: Names that moved out of this module (building a table, reading a user's file and
-#: checking it against the presets); the old path warns (:func:`__getattr__`) until it is
-#: removed in 0.3.
-_MOVED: Final = MappingProxyType(
-    {
-        "build_table": "dustoptics.models.compute",
-        "load_config": "dustoptics.models.files",
-        "preset_copy_problems": "dustoptics.models.files",
-        "PresetCopyWarning": "dustoptics.models.files",
-    }
-)
-
-
-def __getattr__(name: str) -> Any:
-    """The names that moved to :mod:`dustoptics.models.compute` and
-    :mod:`dustoptics.models.files` (deprecated)."""
-    return moved_attribute(__name__, name, _MOVED)
-
 
 #: Schema identifier recorded in every table's inputs.
 SCHEMA: Final = "dustoptics-config-1"
@@ -157,15 +144,20 @@ _MATERIAL_KEYS: Final[Mapping[str, tuple[str, ...]]] = {
     "constant": ("model", "n", "k"),
 }
 
-# Size-distribution models: class, parameters and their allowed ranges
-# ("positive": > 0; (low, high): open interval).
-_DISTRIBUTIONS: Final[Mapping[str, tuple[type[SizeDistribution], tuple[tuple[str, Any], ...]]]] = {
-    "modified_gamma": (ModifiedGamma, (("r_eff_um", "positive"), ("v_eff", (0.0, 0.5)))),
-    "modified_log_normal": (ModifiedLogNormal, (("r_eff_um", "positive"), ("v_eff", "positive"))),
-    "gamma": (Gamma, (("shape", "positive"), ("scale_um", "positive"))),
-    "log_normal": (LogNormal, (("median_radius_um", "positive"), ("sigma", "positive"))),
-    "monodisperse": (Monodisperse, (("radius_um", "positive"),)),
-}
+#: Size-distribution models a TOML file cannot name: a Python function is no TOML value.
+_NOT_IN_TOML: Final = ("density_function",)
+_MULTIMODAL: Final = "multimodal"
+
+
+def _size_models(*, in_mixture: bool) -> tuple[str, ...]:
+    """The size-distribution models (and aliases) ``model =`` accepts: the registry's.
+
+    A mode of a mixture (or the parent of a truncation) is any model but a mixture;
+    ``multimodal`` itself is written with ``[[size_distribution.modes]]``.
+    """
+    names = tuple(n for n in SIZE_DISTRIBUTIONS if n not in (*_NOT_IN_TOML, _MULTIMODAL))
+    aliases = tuple(a for a, n in SIZE_DISTRIBUTION_ALIASES.items() if n in names)
+    return (*names, *aliases) if in_mixture else (*names, _MULTIMODAL, *aliases)
 
 
 # --------------------------------------------------------------------- errors
@@ -512,6 +504,15 @@ class MaterialConfig:
         }
 
 
+def _input_value(value: Any) -> Any:
+    """A mode's parameter as plain data (a nested mode as its dict, numbers as a list)."""
+    if isinstance(value, ModeConfig):
+        return value.to_inputs()
+    if isinstance(value, tuple):
+        return list(value)
+    return value
+
+
 @dataclass(frozen=True)
 class ModeConfig:
     """One size mode: a distribution model and its parameters.
@@ -519,25 +520,35 @@ class ModeConfig:
     Attributes
     ----------
     model : str
-        A key of the size-distribution models (``"modified_gamma"``, ...).
+        A key of :data:`~dustoptics.particles.sizedist.SIZE_DISTRIBUTIONS`
+        (``"modified_gamma"``, ...).
     parameters : Mapping
-        Its parameters (radii in [um], the rest dimensionless).
+        Its parameters (radii in [um], the rest dimensionless): numbers, tuples
+        of numbers, or a nested :class:`ModeConfig` (a truncation's parent).
     relative_number_density : float or None
         Weight in a multimodal distribution (only ratios matter); None for a
         single distribution. [-]
     """
 
     model: str
-    parameters: Mapping[str, float]
+    parameters: Mapping[str, Any]
     relative_number_density: float | None = None
 
     def build(self) -> SizeDistribution:
         """The :class:`~dustoptics.particles.sizedist.SizeDistribution`."""
-        cls = _DISTRIBUTIONS[self.model][0]
-        return cls(**self.parameters)
+        cls = SIZE_DISTRIBUTIONS[self.model]
+        return cls(
+            **{
+                k: (v.build() if isinstance(v, ModeConfig) else v)
+                for k, v in self.parameters.items()
+            }
+        )
 
     def to_inputs(self) -> dict[str, Any]:
-        out: dict[str, Any] = {"model": self.model, **self.parameters}
+        out: dict[str, Any] = {
+            "model": self.model,
+            **{k: _input_value(v) for k, v in self.parameters.items()},
+        }
         if self.relative_number_density is not None:
             out["relative_number_density"] = self.relative_number_density
         return out
@@ -820,26 +831,48 @@ def _parse_material(ctx: _Context, value: Any) -> MaterialConfig:
     )
 
 
+def _parameter_value(ctx: _Context, key: str, raw: Any, param: SizeParameter) -> Any:
+    """One size-distribution parameter from TOML, checked against its registry record."""
+    if param.kind == "distribution":
+        return _parse_mode(ctx, key, _table(ctx, key, raw), in_mixture=True, weighted=False)
+    if param.kind == "numbers":
+        return tuple(_number(ctx, f"{key}[{i}]", v) for i, v in enumerate(_array(ctx, key, raw)))
+    if param.low == 0.0 and param.high == math.inf:
+        return _positive(ctx, key, raw, "um" if param.name.endswith("_um") else "")
+    if param.low == -math.inf and param.high == math.inf:
+        return _number(ctx, key, raw)
+    return _open(ctx, key, raw, param.low, param.high)
+
+
 def _parse_mode(
-    ctx: _Context, prefix: str, sec: Mapping[str, Any], *, in_mixture: bool
+    ctx: _Context,
+    prefix: str,
+    sec: Mapping[str, Any],
+    *,
+    in_mixture: bool,
+    weighted: bool | None = None,
 ) -> ModeConfig:
-    models = tuple(_DISTRIBUTIONS) if in_mixture else (*_DISTRIBUTIONS, "multimodal")
-    model = _choice(ctx, f"{prefix}.model", _required(ctx, prefix, sec, "model"), models)
-    params = _DISTRIBUTIONS[model][1]
-    allowed = ("model", *(p for p, _ in params)) + (
-        ("relative_number_density",) if in_mixture else ()
+    """One distribution from ``sec``: its model, its registry parameters (and a mixture's weight)."""
+    weighted = in_mixture if weighted is None else weighted
+    given = _choice(
+        ctx,
+        f"{prefix}.model",
+        _required(ctx, prefix, sec, "model"),
+        _size_models(in_mixture=in_mixture),
     )
-    _known_keys(ctx, prefix, sec, allowed, f"for {prefix}.model = {model!r}")
-    values: dict[str, float] = {}
-    for param, rule in params:
-        key = f"{prefix}.{param}"
-        raw = _required(ctx, prefix, sec, param)
-        if rule == "positive":
-            values[param] = _positive(ctx, key, raw, "um" if param.endswith("_um") else "")
-        else:
-            values[param] = _open(ctx, key, raw, *rule)
+    model = SIZE_DISTRIBUTION_ALIASES.get(given, given)
+    params = SIZE_DISTRIBUTIONS[model].parameters
+    allowed = ("model", *(p.name for p in params)) + (
+        ("relative_number_density",) if weighted else ()
+    )
+    _known_keys(ctx, prefix, sec, allowed, f"for {prefix}.model = {given!r}")
+    values = {
+        p.name: _parameter_value(ctx, f"{prefix}.{p.name}", _required(ctx, prefix, sec, p.name), p)
+        for p in params
+        if p.required or p.name in sec
+    }
     density = None
-    if in_mixture:
+    if weighted:
         density = _positive(
             ctx,
             f"{prefix}.relative_number_density",
@@ -859,9 +892,9 @@ def _parse_size_distribution(ctx: _Context, value: Any) -> SizeDistributionConfi
         ctx,
         "size_distribution.model",
         _required(ctx, "size_distribution", sec, "model"),
-        (*_DISTRIBUTIONS, "multimodal"),
+        _size_models(in_mixture=False),
     )
-    if model != "multimodal":
+    if model != _MULTIMODAL:
         return SizeDistributionConfig(
             model, (_parse_mode(ctx, "size_distribution", sec, in_mixture=False),)
         )

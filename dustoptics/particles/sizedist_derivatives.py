@@ -73,10 +73,11 @@ from functools import lru_cache, singledispatch
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy import special
+from scipy import integrate, special
 
 from dustoptics.particles.custom_sizedist import MultiModal
 from dustoptics.particles.sizedist import (
+    SIZE_DISTRIBUTIONS,
     DeirmendjianGamma,
     Gamma,
     LogNormal,
@@ -99,17 +100,20 @@ __all__ = [
 
 Array = NDArray[np.float64]
 
-#: Each family's own parameters, in the order of its fields.
-_OWN: dict[type, tuple[str, ...]] = {
-    Gamma: ("shape", "scale_um"),
-    ModifiedGamma: ("r_eff_um", "v_eff"),
-    LogNormal: ("median_radius_um", "sigma"),
-    ModifiedLogNormal: ("r_eff_um", "v_eff"),
-    DeirmendjianGamma: ("alpha", "b", "gamma"),
-    PowerLaw: ("exponent", "r_min_um", "r_max_um"),
-    Truncated: ("r_min_um", "r_max_um"),
-    Monodisperse: ("radius_um",),
-}
+
+def _own(cls: type[SizeDistribution]) -> tuple[str, ...]:
+    """A family's own numeric parameters, from its registry record (in the order of its fields)."""
+    return tuple(p.name for p in cls.parameters if p.kind == "number")
+
+
+def _differentiable() -> tuple[type[SizeDistribution], ...]:
+    """The registered families given by numbers alone (a table or a function has none)."""
+    return tuple(
+        cls
+        for cls in SIZE_DISTRIBUTIONS.values()
+        if cls.parameters and all(p.kind in ("number", "distribution") for p in cls.parameters)
+    )
+
 
 _INDEXED = re.compile(r"^(modes|relative_number_densities)\[(\d+)\]$")
 
@@ -154,17 +158,17 @@ def parameter_names(distribution: SizeDistribution) -> tuple[str, ...]:
         own = tuple(
             name
             for name, bound in zip(
-                _OWN[Truncated], (distribution.r_min_um, distribution.r_max_um), strict=True
+                _own(Truncated), (distribution.r_min_um, distribution.r_max_um), strict=True
             )
             if 0.0 < bound < math.inf
         )
         return tuple(f"parent.{p}" for p in parameter_names(distribution.parent)) + own
-    for cls, own in _OWN.items():
-        if type(distribution) is cls:
-            return own
+    families = _differentiable()
+    if type(distribution) in families:
+        return _own(type(distribution))
     raise ValueError(
         f"distribution {distribution!r} has no named parameters to differentiate; allowed: "
-        f"{', '.join(c.__name__ for c in _OWN)}, MultiModal (and their nesting)"
+        f"{', '.join(c.__name__ for c in families)}, MultiModal (and their nesting)"
     )
 
 
@@ -179,7 +183,7 @@ def _unknown(distribution: SizeDistribution, parameter: object) -> ValueError:
         allowed = ", ".join(map(repr, parameter_names(distribution)))
     except ValueError as exc:
         return exc
-    if isinstance(distribution, Truncated) and parameter in _OWN[Truncated]:
+    if isinstance(distribution, Truncated) and parameter in _own(Truncated):
         return ValueError(
             f"the derivative with respect to {parameter} = {getattr(distribution, parameter)!r} "
             f"of {distribution!r} is one-sided (a bound at 0 or infinity is the end of the "
@@ -506,7 +510,6 @@ def _integral(f: Callable[[Array], Array], lo: float, hi: float) -> float:
         return 0.0
     # Imported here: scipy.integrate costs 0.17 s of every ``import dustoptics`` and
     # only truncated distributions' derivatives need it.
-    from scipy import integrate
 
     def g(u: float) -> float:
         r = math.exp(u)

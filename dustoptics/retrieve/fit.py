@@ -31,7 +31,12 @@ from dustoptics.retrieve.sky import (
     sky_progress,
     sky_samples,
 )
-from dustoptics.scattering.optics import check_cost, compute_optics, default_theta_deg
+from dustoptics.scattering.optics import (
+    check_cost,
+    compute_optics,
+    default_theta_deg,
+    optics_request,
+)
 from dustoptics.scattering.quadrature import QuadratureSettings
 from dustoptics.scattering.table_derivatives import (
     INDEX_PARAMETERS,
@@ -235,7 +240,7 @@ def _check_corner_cost(
     names: Sequence[str],
     upper: np.ndarray,
     wavelength_nm: np.ndarray,
-    n_theta: int,
+    theta_deg: np.ndarray,
     allow_large: bool,
 ) -> None:
     """The table at the distribution's upper bounds must be within compute_optics'
@@ -253,15 +258,15 @@ def _check_corner_cost(
     settings = model.get("quadrature") or QuadratureSettings()
     workers = model.get("workers") or os.cpu_count() or 1
     try:
-        check_cost(
+        request = optics_request(
+            corner["refractive_index"],
             corner["distribution"],
             wavelength_nm,
-            n_theta,
-            settings=settings,
+            theta_deg,
+            quadrature=settings,
             weighting=model.get("weighting", "scattering"),
-            workers=workers,
-            allow_large=allow_large,
         )
+        check_cost(request, workers=workers, allow_large=allow_large)
     except (ValueError, BudgetError) as exc:
         raise type(exc)(
             f"bounds: at the upper bounds {size} the fit's table would be refused: {exc}"
@@ -531,10 +536,10 @@ def retrieve(
     sky_model = SkyModel(sky_list, sky) if sky_list else None
     wavelengths, theta = _optical_grid(obs)
     if obs:
-        _check_corner_cost(keywords, names, upper, wavelengths, theta.size, allow_large)
+        _check_corner_cost(keywords, names, upper, wavelengths, theta, allow_large)
     if sky_model is not None:  # the sky's table: its wavelengths, the default angles
         _check_corner_cost(
-            keywords, names, upper, sky_model.wavelength_nm, default_theta_deg().size, allow_large
+            keywords, names, upper, sky_model.wavelength_nm, default_theta_deg(), allow_large
         )
     problem = _Problem(
         keywords=keywords,

@@ -5,7 +5,10 @@
 - :mod:`~dustoptics.scattering.quadrature`: deterministic radius nodes
   (Gauss-Legendre panels in a stretched size-parameter variable);
 - :mod:`~dustoptics.scattering.optics`: :func:`compute_optics`, the adaptive
-  polydisperse average that returns a :class:`~dustoptics.table.Table`;
+  polydisperse average that returns a :class:`~dustoptics.table.Table`, as
+  request (validated once) -> solve -> assemble;
+- :mod:`~dustoptics.scattering.solve`: the solve step (threads over
+  wavelengths, progress) and the assemble step (checks, warnings, provenance);
 - :mod:`~dustoptics.scattering.refinement`: the adaptive refinement of the
   radius quadrature at one wavelength, behind :func:`compute_optics`;
 - :mod:`~dustoptics.scattering.phase`: analytic phase functions and the seed

@@ -7,28 +7,17 @@ match each row of a tabulated phase function; :func:`fit_table` does it for a
 :class:`~dustoptics.table.Table` per wavelength or per output channel
 (:func:`dustoptics.colour.channel_weights`).
 
-Models (:data:`FIT_MODELS`; parameters, valid range)
-----------------------------------------------------
-::
-
-    "henyey-greenstein"          HG(g); g in (-1, 1).
-    "dhg-costa2021"              alpha HG(g1) + (1 - alpha) HG(g2), as OpenSpace and
-                                 CosmoScout VR evaluate it; g1, g2 in (-1, 1),
-                                 alpha in (0, 1); reported with g1 >= g2 (the
-                                 forward lobe first; the function is symmetric
-                                 under swapping the lobes with alpha -> 1 - alpha).
-    "dhg-kobe2026"               (1 - f) HG(g1) + f HG(g2), g1 in [0, 1), g2 in
-                                 (-1, 0], f in (0, 1) (Kobe's convention: a
-                                 forward lobe and a backward one).
-    "cornette-shanks1992"        Cornette-Shanks(g); g in (-1, 1).
-    "hg-draine-jendersie-deon2023"
-                                 (1 - w_D) HG(g_HG) + w_D Draine(g_D, alpha);
-                                 g_HG, g_D in (-1, 1), alpha in (-1, 200), w_D in
-                                 (0, 1).
-    "two-term-hg-hapke2012"      Hapke's two-term HG in scattering angle:
-                                 (1 - c)/2 HG(b) + (1 + c)/2 HG(-b); b in [0, 1),
-                                 c in (-1, 1) (c > 0: backward lobe dominates, as
-                                 Hapke's phase-angle form states it).
+Models (:data:`FIT_MODELS`)
+---------------------------
+Every model of :data:`dustoptics.scattering.phase.ANALYTIC_MODELS` whose
+record carries the ranges a fit searches, starting values and analytic
+derivatives (:attr:`~dustoptics.scattering.phase.AnalyticModel.fittable`):
+``henyey_greenstein``, ``dhg_costa2021`` (reported with g1 >= g2, the forward
+lobe first), ``dhg_kobe2026`` (g1 >= 0 >= g2), ``cornette_shanks1992``,
+``hg_draine_jendersie_deon2023`` and ``two_term_hg_hapke2012``.  Their
+formulas, ranges and citations are in the records; the hyphenated spellings
+(``dhg-costa2021``) and short names (``hg``, ``dhg``, ``dhg-kobe``, ``cs``,
+``hg-draine``, ``tthg``) are aliases (:data:`FIT_MODEL_ALIASES`).
 
 Loss
 ----
@@ -78,14 +67,15 @@ rows' own best fits.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from dustoptics._validation import as_float_array, check_choice, check_closed_interval
-from dustoptics.scattering.phase import _draine, _draine_mean, _hg
+from dustoptics.colour import channel_phase, channel_weights
+from dustoptics.scattering.phase import ANALYTIC_MODEL_ALIASES, ANALYTIC_MODELS, AnalyticModel
 from dustoptics.scattering.tabulated_phase import _linear_theta_weights
 
 __all__ = [
@@ -99,301 +89,12 @@ __all__ = [
 FloatArray = np.ndarray
 
 
-@dataclass(frozen=True)
-class _Parameter:
-    name: str
-    low: float
-    high: float
+#: The package's own models that :func:`fit_phase` fits (registry names, author and year).
+FIT_MODELS: tuple[str, ...] = tuple(name for name, m in ANALYTIC_MODELS.items() if m.fittable)
 
-
-@dataclass(frozen=True)
-class _Model:
-    name: str
-    formula: str
-    citation: str
-    parameters: tuple[_Parameter, ...]
-    evaluate: Callable[[FloatArray, FloatArray], FloatArray]  # (mu (m,), p (n, k)) -> (n, m)
-    asymmetry: Callable[[FloatArray], FloatArray]  # p (n, k) -> (n,)
-    starts: Callable[[FloatArray], list[FloatArray]]  # moments (n, 4) -> starts (n, k)
-    # (mu, p) -> (f (n, m), df/dp (n, m, k)): the analytic derivatives
-    gradient: Callable[[FloatArray, FloatArray], tuple[FloatArray, FloatArray]]
-    canonical: Callable[[FloatArray], FloatArray] = lambda p: p
-
-
-def _col(p: FloatArray, i: int) -> FloatArray:
-    return p[:, i : i + 1]
-
-
-def _gauss_two_node(m: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
-    """Nodes x1 >= x2 and weight of x1 of the two-node rule with moments m1..m3 (m0 = 1).
-
-    Falls back to (m1 + s, m1 - s, 1/2), s = sqrt(max(m2 - m1^2, 0)), where the
-    moments are not those of two nodes.
-    """
-    m1, m2, m3 = m[:, 1], m[:, 2], m[:, 3]
-    var = m2 - m1 * m1
-    det = np.where(np.abs(var) > 1e-12, var, 1e-12)
-    a = (m3 - m1 * m2) / det  # x^2 = a x + b for both nodes
-    b = (m2 * m2 - m1 * m3) / det
-    disc = a * a + 4.0 * b
-    ok = (disc > 0) & (var > 1e-12)
-    root = np.sqrt(np.where(ok, disc, 0.0))
-    x1 = np.where(ok, 0.5 * (a + root), m1 + np.sqrt(np.maximum(var, 0.0)))
-    x2 = np.where(ok, 0.5 * (a - root), m1 - np.sqrt(np.maximum(var, 0.0)))
-    span = np.where(np.abs(x1 - x2) > 1e-12, x1 - x2, 1.0)
-    w1 = np.where(ok, (m1 - x2) / span, 0.5)
-    return x1, x2, w1
-
-
-def _clip_g(x: FloatArray) -> FloatArray:
-    return np.clip(x, -0.98, 0.98)
-
-
-def _const(n: int, *values: float) -> FloatArray:
-    return np.tile(np.array(values, dtype=np.float64), (n, 1))
-
-
-def _hg_starts(m: FloatArray) -> list[FloatArray]:
-    n = m.shape[0]
-    return [_clip_g(m[:, 1:2]), _const(n, 0.5), _const(n, -0.3)]
-
-
-def _cs_asymmetry(p: FloatArray) -> FloatArray:
-    g = p[:, 0]
-    return 3.0 * g * (4.0 + g * g) / (5.0 * (2.0 + g * g))
-
-
-def _cs_evaluate(mu: FloatArray, p: FloatArray) -> FloatArray:
-    g = _col(p, 0)
-    return 1.5 * (1.0 + mu * mu) / (2.0 + g * g) * _hg(mu, g)
-
-
-def _cs_starts(m: FloatArray) -> list[FloatArray]:
-    n = m.shape[0]
-    # Invert the CS mean cosine on a fine grid (monotonic in g): start at the table's g.
-    grid = np.linspace(-0.98, 0.98, 197)
-    gcs = _cs_asymmetry(grid[:, None])
-    start = np.interp(np.clip(m[:, 1], gcs[0], gcs[-1]), gcs, grid)[:, None]
-    return [start, _const(n, 0.5), _const(n, -0.3)]
-
-
-def _dhg_costa_evaluate(mu: FloatArray, p: FloatArray) -> FloatArray:
-    a = _col(p, 2)
-    return a * _hg(mu, _col(p, 0)) + (1.0 - a) * _hg(mu, _col(p, 1))
-
-
-def _dhg_costa_canonical(p: FloatArray) -> FloatArray:
-    out = p.copy()
-    swap = p[:, 0] < p[:, 1]
-    out[swap, 0], out[swap, 1], out[swap, 2] = p[swap, 1], p[swap, 0], 1.0 - p[swap, 2]
-    return out
-
-
-def _dhg_starts(m: FloatArray) -> list[FloatArray]:
-    n = m.shape[0]
-    x1, x2, w1 = _gauss_two_node(m)
-    moment = np.stack([_clip_g(x1), _clip_g(x2), np.clip(w1, 0.02, 0.98)], axis=1)
-    g = _clip_g(m[:, 1])
-    return [
-        moment,
-        np.stack([np.clip(g + 0.2, -0.9, 0.95), np.clip(g - 0.4, -0.9, 0.9), np.full(n, 0.7)], 1),
-        _const(n, 0.8, -0.2, 0.9),
-        _const(n, 0.6, 0.1, 0.5),
-    ]
-
-
-def _dhg_kobe_evaluate(mu: FloatArray, p: FloatArray) -> FloatArray:
-    f = _col(p, 2)
-    return (1.0 - f) * _hg(mu, _col(p, 0)) + f * _hg(mu, _col(p, 1))
-
-
-def _dhg_kobe_starts(m: FloatArray) -> list[FloatArray]:
-    n = m.shape[0]
-    x1, x2, w1 = _gauss_two_node(m)
-    moment = np.stack(
-        [np.clip(x1, 0.02, 0.98), np.clip(x2, -0.98, -0.02), np.clip(1.0 - w1, 0.02, 0.98)], 1
-    )
-    g = np.clip(m[:, 1], 0.05, 0.95)
-    return [moment, np.stack([g, np.full(n, -0.3), np.full(n, 0.1)], 1), _const(n, 0.8, -0.5, 0.3)]
-
-
-def _hgd_evaluate(mu: FloatArray, p: FloatArray) -> FloatArray:
-    w = _col(p, 3)
-    return (1.0 - w) * _hg(mu, _col(p, 0)) + w * _draine(mu, _col(p, 1), _col(p, 2))
-
-
-def _hgd_asymmetry(p: FloatArray) -> FloatArray:
-    w = p[:, 3]
-    return (1.0 - w) * p[:, 0] + w * _draine_mean(p[:, 1], p[:, 2])
-
-
-def _hgd_starts(m: FloatArray) -> list[FloatArray]:
-    n = m.shape[0]
-    x1, x2, w1 = _gauss_two_node(m)
-    moment = np.stack(
-        [_clip_g(x1), _clip_g(x2), np.full(n, 1.0), np.clip(1.0 - w1, 0.02, 0.98)], axis=1
-    )
-    return [moment, _const(n, 0.9, 0.5, 10.0, 0.5), _const(n, 0.6, -0.2, 1.0, 0.3)]
-
-
-def _tthg_evaluate(mu: FloatArray, p: FloatArray) -> FloatArray:
-    b, c = _col(p, 0), _col(p, 1)
-    return 0.5 * (1.0 - c) * _hg(mu, b) + 0.5 * (1.0 + c) * _hg(mu, -b)
-
-
-def _tthg_starts(m: FloatArray) -> list[FloatArray]:
-    n = m.shape[0]
-    # <P_1> = -c b, <P_2> = b^2: b from the second moment, c from the first.
-    b = np.clip(np.sqrt(np.clip(m[:, 2], 0.0, None)), 0.02, 0.98)
-    c = np.clip(-m[:, 1] / b, -0.98, 0.98)
-    return [np.stack([b, c], 1), _const(n, 0.5, -0.5), _const(n, 0.9, -0.9)]
-
-
-def _hg_dlog(mu: FloatArray, g: FloatArray) -> tuple[FloatArray, FloatArray]:
-    """HG(g) and d ln HG / dg = -2 g / (1 - g^2) - 3 (g - mu) / (1 + g^2 - 2 g mu)."""
-    d = (1.0 - g) ** 2 + 2.0 * g * (1.0 - mu)
-    value = (1.0 - g) * (1.0 + g) / (d * np.sqrt(d)) / (4.0 * math.pi)
-    return value, -2.0 * g / ((1.0 - g) * (1.0 + g)) - 3.0 * (g - mu) / d
-
-
-def _hg_gradient(mu: FloatArray, p: FloatArray) -> tuple[FloatArray, FloatArray]:
-    h, dl = _hg_dlog(mu, _col(p, 0))
-    return h, (h * dl)[:, :, None]
-
-
-def _cs_gradient(mu: FloatArray, p: FloatArray) -> tuple[FloatArray, FloatArray]:
-    g = _col(p, 0)
-    h, dl = _hg_dlog(mu, g)
-    f = 1.5 * (1.0 + mu * mu) / (2.0 + g * g) * h
-    return f, (f * (dl - 2.0 * g / (2.0 + g * g)))[:, :, None]
-
-
-def _dhg_costa_gradient(mu: FloatArray, p: FloatArray) -> tuple[FloatArray, FloatArray]:
-    a = _col(p, 2)
-    h1, dl1 = _hg_dlog(mu, _col(p, 0))
-    h2, dl2 = _hg_dlog(mu, _col(p, 1))
-    jac = np.stack([a * h1 * dl1, (1.0 - a) * h2 * dl2, h1 - h2], axis=-1)
-    return a * h1 + (1.0 - a) * h2, jac
-
-
-def _dhg_kobe_gradient(mu: FloatArray, p: FloatArray) -> tuple[FloatArray, FloatArray]:
-    f = _col(p, 2)
-    h1, dl1 = _hg_dlog(mu, _col(p, 0))
-    h2, dl2 = _hg_dlog(mu, _col(p, 1))
-    jac = np.stack([(1.0 - f) * h1 * dl1, f * h2 * dl2, h2 - h1], axis=-1)
-    return (1.0 - f) * h1 + f * h2, jac
-
-
-def _hgd_gradient(mu: FloatArray, p: FloatArray) -> tuple[FloatArray, FloatArray]:
-    gh, gd, a, w = (_col(p, i) for i in range(4))
-    h, dlh = _hg_dlog(mu, gh)
-    hd, dld = _hg_dlog(mu, gd)
-    norm = 1.0 + a * (1.0 + 2.0 * gd * gd) / 3.0
-    shape = 1.0 + a * mu * mu
-    draine = hd * shape / norm
-    d_gd = draine * (dld - (4.0 * a * gd / 3.0) / norm)
-    d_a = draine * (mu * mu / shape - ((1.0 + 2.0 * gd * gd) / 3.0) / norm)
-    jac = np.stack([(1.0 - w) * h * dlh, w * d_gd, w * d_a, draine - h], axis=-1)
-    return (1.0 - w) * h + w * draine, jac
-
-
-def _tthg_gradient(mu: FloatArray, p: FloatArray) -> tuple[FloatArray, FloatArray]:
-    b, c = _col(p, 0), _col(p, 1)
-    hf, dlf = _hg_dlog(mu, b)
-    hb, dlb = _hg_dlog(mu, -b)
-    d_b = 0.5 * (1.0 - c) * hf * dlf - 0.5 * (1.0 + c) * hb * dlb
-    jac = np.stack([d_b, 0.5 * (hb - hf)], axis=-1)
-    return 0.5 * (1.0 - c) * hf + 0.5 * (1.0 + c) * hb, jac
-
-
-_G = (-1.0, 1.0)
-_MODELS: dict[str, _Model] = {
-    m.name: m
-    for m in (
-        _Model(
-            "henyey-greenstein",
-            "HG(g) = (1 - g^2) / (4 pi (1 + g^2 - 2 g mu)^(3/2))",
-            "L. G. Henyey and J. L. Greenstein, Astrophys. J. 93, 70-83 (1941), doi:10.1086/144246",
-            (_Parameter("g", *_G),),
-            lambda mu, p: _hg(mu, _col(p, 0)),
-            lambda p: p[:, 0],
-            _hg_starts,
-            _hg_gradient,
-        ),
-        _Model(
-            "dhg-costa2021",
-            "alpha HG(g1) + (1 - alpha) HG(g2)",
-            "J. Costa et al., IEEE TVCG 27(2), 785-795 (2021), doi:10.1109/TVCG.2020.3030333",
-            (_Parameter("g1", *_G), _Parameter("g2", *_G), _Parameter("alpha", 0.0, 1.0)),
-            _dhg_costa_evaluate,
-            lambda p: p[:, 2] * p[:, 0] + (1.0 - p[:, 2]) * p[:, 1],
-            _dhg_starts,
-            _dhg_costa_gradient,
-            _dhg_costa_canonical,
-        ),
-        _Model(
-            "dhg-kobe2026",
-            "(1 - f) HG(g1) + f HG(g2), g1 >= 0 >= g2",
-            "Kobe (2026), master's thesis (the seed's third source)",
-            (_Parameter("g1", 0.0, 1.0), _Parameter("g2", -1.0, 0.0), _Parameter("f", 0.0, 1.0)),
-            _dhg_kobe_evaluate,
-            lambda p: (1.0 - p[:, 2]) * p[:, 0] + p[:, 2] * p[:, 1],
-            _dhg_kobe_starts,
-            _dhg_kobe_gradient,
-        ),
-        _Model(
-            "cornette-shanks1992",
-            "3 (1 - g^2) (1 + mu^2) / (8 pi (2 + g^2) (1 + g^2 - 2 g mu)^(3/2))",
-            "W. M. Cornette and J. G. Shanks, Appl. Opt. 31(16), 3152-3160 (1992), "
-            "doi:10.1364/AO.31.003152",
-            (_Parameter("g", *_G),),
-            _cs_evaluate,
-            _cs_asymmetry,
-            _cs_starts,
-            _cs_gradient,
-        ),
-        _Model(
-            "hg-draine-jendersie-deon2023",
-            "(1 - w_d) HG(g_hg) + w_d Draine(g_d, alpha), "
-            "Draine(g, a) = HG(g) (1 + a mu^2) / (1 + a (1 + 2 g^2) / 3)",
-            "J. Jendersie and E. d'Eon, ACM SIGGRAPH 2023 Talks, doi:10.1145/3587421.3595409",
-            (
-                _Parameter("g_hg", *_G),
-                _Parameter("g_d", *_G),
-                _Parameter("alpha", -1.0, 200.0),
-                _Parameter("w_d", 0.0, 1.0),
-            ),
-            _hgd_evaluate,
-            _hgd_asymmetry,
-            _hgd_starts,
-            _hgd_gradient,
-        ),
-        _Model(
-            "two-term-hg-hapke2012",
-            "(1 - c)/2 HG(b) + (1 + c)/2 HG(-b) (scattering angle; Hapke's phase angle is "
-            "180 deg - theta)",
-            "B. Hapke, Theory of Reflectance and Emittance Spectroscopy, 2nd ed., Cambridge "
-            "University Press (2012), doi:10.1017/CBO9781139025683, section 6.4.2",
-            (_Parameter("b", 0.0, 1.0), _Parameter("c", -1.0, 1.0)),
-            _tthg_evaluate,
-            lambda p: -p[:, 1] * p[:, 0],
-            _tthg_starts,
-            _tthg_gradient,
-        ),
-    )
-}
-
-#: Models :func:`fit_phase` fits, named by author and year.
-FIT_MODELS = tuple(_MODELS)
-
-#: Short names accepted for :data:`FIT_MODELS`.
-FIT_MODEL_ALIASES = {
-    "hg": "henyey-greenstein",
-    "dhg": "dhg-costa2021",
-    "dhg-kobe": "dhg-kobe2026",
-    "cs": "cornette-shanks1992",
-    "hg-draine": "hg-draine-jendersie-deon2023",
-    "tthg": "two-term-hg-hapke2012",
+#: Other spellings accepted for :data:`FIT_MODELS` (hyphenated, short), to the registry name.
+FIT_MODEL_ALIASES: dict[str, str] = {
+    alias: name for alias, name in ANALYTIC_MODEL_ALIASES.items() if name in FIT_MODELS
 }
 
 _SCREEN_ITERATIONS = 10  # from every start, on every _SCREEN_STRIDE-th angle
@@ -530,18 +231,25 @@ class FitResult:
 
 
 def resolve_model(model: str) -> str:
-    """Full model name of ``model`` (a name of :data:`FIT_MODELS` or an alias)."""
-    name = FIT_MODEL_ALIASES.get(model, model)
-    check_choice("model", name, FIT_MODELS + tuple(FIT_MODEL_ALIASES))
+    """Registry name of ``model``: a fittable model of the phase registry, or an alias.
+
+    Read from :data:`~dustoptics.scattering.phase.ANALYTIC_MODELS` when called,
+    so a model registered after import (:func:`~dustoptics.scattering.phase.
+    register_analytic_model`) is fitted like the package's own.
+    """
+    fittable = tuple(n for n, m in ANALYTIC_MODELS.items() if m.fittable)
+    aliases = tuple(a for a, n in ANALYTIC_MODEL_ALIASES.items() if n in fittable)
+    name = ANALYTIC_MODEL_ALIASES.get(model, model)
+    check_choice("model", model, fittable + aliases)
     return name
 
 
-def _bounds(model: _Model) -> tuple[FloatArray, FloatArray]:
+def _bounds(model: AnalyticModel) -> tuple[FloatArray, FloatArray]:
     """The lower and upper bounds of the model's parameters, shape (k,) each."""
     low_high = _BOUNDS.get(model.name)
     if low_high is None:
-        low = np.array([q.low for q in model.parameters])
-        high = np.array([q.high for q in model.parameters])
+        low = np.array([low for low, _ in model.bounds])
+        high = np.array([high for _, high in model.bounds])
         low.setflags(write=False)
         high.setflags(write=False)
         low_high = _BOUNDS[model.name] = (low, high)
@@ -551,19 +259,31 @@ def _bounds(model: _Model) -> tuple[FloatArray, FloatArray]:
 _BOUNDS: dict[str, tuple[FloatArray, FloatArray]] = {}
 
 
-def _to_u(model: _Model, p: FloatArray) -> FloatArray:
+def _to_u(model: AnalyticModel, p: FloatArray) -> FloatArray:
     low, high = _bounds(model)
     s = np.clip(2.0 * (p - low) / (high - low) - 1.0, -math.tanh(_U_MAX), math.tanh(_U_MAX))
     return np.arctanh(s)
 
 
-def _to_p(model: _Model, u: FloatArray) -> FloatArray:
+def _to_p(model: AnalyticModel, u: FloatArray) -> FloatArray:
     low, high = _bounds(model)
     return low + (high - low) * 0.5 * (np.tanh(np.clip(u, -_U_MAX, _U_MAX)) + 1.0)
 
 
+def _evaluate(model: AnalyticModel, mu: FloatArray, p: FloatArray) -> FloatArray:
+    """The model's formula (its record's kernel) at ``mu`` (m,) for parameter rows ``p`` (n, k)."""
+    assert model.kernel is not None  # every fittable model has one (tests/scattering/test_fit.py)
+    return np.asarray(model.kernel(mu, *(p[:, i : i + 1] for i in range(p.shape[1]))))
+
+
+def _asymmetry(model: AnalyticModel, p: FloatArray) -> FloatArray:
+    """The model's mean cosine for parameter rows ``p`` (n, k), shape (n,). [-]"""
+    values = model.asymmetry(**{name: p[:, k] for k, name in enumerate(model.parameters)})
+    return np.asarray(values, dtype=np.float64).reshape(p.shape[0])
+
+
 def _tabulated(
-    model: _Model,
+    model: AnalyticModel,
     mu: FloatArray,
     w: FloatArray,
     p: FloatArray,
@@ -574,12 +294,12 @@ def _tabulated(
     Both integrals use the same weights ``w`` (linear in angle), so a table
     that is the model, renormalized or not, is matched exactly.
     """
-    f = model.evaluate(mu, p)
+    f = _evaluate(model, mu, p)
     return f * ((table @ w) / (f @ w))[:, None]
 
 
 def _residuals(
-    model: _Model,
+    model: AnalyticModel,
     mu: FloatArray,
     w: FloatArray,
     sqrt_w: FloatArray,
@@ -590,7 +310,7 @@ def _residuals(
 
 
 def _jacobian(
-    model: _Model,
+    model: AnalyticModel,
     mu: FloatArray,
     w: FloatArray,
     sqrt_w: FloatArray,
@@ -604,6 +324,7 @@ def _jacobian(
     """
     low, high = _bounds(model)
     t = np.tanh(np.clip(u, -_U_MAX, _U_MAX))
+    assert model.gradient is not None
     f, df = model.gradient(mu, low + (high - low) * 0.5 * (t + 1.0))  # _to_p(model, u)
     s_f = f @ w
     s_df = np.matmul(w, df)  # (n, k); matmul, not einsum: BLAS, several times faster
@@ -614,7 +335,7 @@ def _jacobian(
 
 
 def _levenberg_marquardt(
-    model: _Model,
+    model: AnalyticModel,
     mu: FloatArray,
     w: FloatArray,
     sqrt_w: FloatArray,
@@ -679,7 +400,7 @@ def _moments(theta_deg: FloatArray, phase: FloatArray) -> FloatArray:
 
 
 def _continuous_path(
-    spec: _Model,
+    spec: AnalyticModel,
     mu: FloatArray,
     w: FloatArray,
     sqrt_w: FloatArray,
@@ -787,8 +508,32 @@ def fit_phase(
     >>> bool(abs(r.parameters[0, 0] - 0.6) < 1e-12 and r.max_relative_error[0] < 1e-12)
     True
     """
-    name = resolve_model(model)
-    spec = _MODELS[name]
+    spec = ANALYTIC_MODELS[resolve_model(model)]
+    theta, table, cutoff = _checked_table(theta_deg, phase, forward_cutoff_deg)
+    n = table.shape[0]
+    row_labels = tuple(labels) if labels is not None else tuple(f"row {i}" for i in range(n))
+    if len(row_labels) != n:
+        raise ValueError(f"labels must name the {n} rows; got {len(row_labels)}")
+    lam = (
+        np.full(n, np.nan)
+        if wavelength_nm is None
+        else as_float_array("wavelength_nm", wavelength_nm, ndim=1)
+    )
+    if lam.shape != (n,):
+        raise ValueError(f"wavelength_nm must have {n} values; got {lam.shape}")
+    along = continuous and n > 1 and bool(np.all(np.isfinite(lam))) and np.unique(lam).size == n
+    best_u, best_cost, independent_cost = _search(
+        spec, theta, table, cutoff, np.argsort(lam, kind="stable") if along else None
+    )
+    return _result(
+        spec, theta, table, cutoff, best_u, best_cost, independent_cost, row_labels, lam, along
+    )
+
+
+def _checked_table(
+    theta_deg: Any, phase: Any, forward_cutoff_deg: float
+) -> tuple[FloatArray, FloatArray, float]:
+    """The angles [deg], the rows (n, m) [sr^-1] and the cutoff [deg] of :func:`fit_phase`, checked."""
     theta = as_float_array("theta_deg", theta_deg, ndim=1)
     if theta.size < 3 or theta[0] != 0.0 or theta[-1] != 180.0 or np.any(np.diff(theta) <= 0):
         raise ValueError(
@@ -808,64 +553,77 @@ def fit_phase(
             f"{table.min():g} sr^-1"
         )
     cutoff = check_closed_interval("forward_cutoff_deg", forward_cutoff_deg, 0.0, 89.999)
-    n = table.shape[0]
-    row_labels = tuple(labels) if labels is not None else tuple(f"row {i}" for i in range(n))
-    if len(row_labels) != n:
-        raise ValueError(f"labels must name the {n} rows; got {len(row_labels)}")
-    lam = (
-        np.full(n, np.nan)
-        if wavelength_nm is None
-        else as_float_array("wavelength_nm", wavelength_nm, ndim=1)
-    )
-    if lam.shape != (n,):
-        raise ValueError(f"wavelength_nm must have {n} values; got {lam.shape}")
+    return theta, table, cutoff
 
-    mu = np.cos(np.deg2rad(theta))
+
+def _loss_weights(theta: FloatArray, cutoff: float) -> tuple[FloatArray, FloatArray]:
+    """The linear-in-angle weights of ``theta`` and the square roots of the loss's weights."""
     w = _linear_theta_weights(theta)
     w_loss = np.where(theta >= cutoff, w, 0.0) if cutoff > 0 else w
-    sqrt_w = np.sqrt(w_loss / w_loss.sum())
+    return w, np.sqrt(w_loss / w_loss.sum())
+
+
+def _search(
+    spec: AnalyticModel,
+    theta: FloatArray,
+    table: FloatArray,
+    cutoff: float,
+    order: np.ndarray | None,
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """Best variables per row, their loss, and each row's loss fitted on its own.
+
+    Starts are screened on every few angles (the table's own subgrid, with its
+    own weights), then the best is polished on all angles; with ``order`` (rows
+    by wavelength) the rows are then followed as one continuous path.
+    """
+    n = table.shape[0]
+    mu = np.cos(np.deg2rad(theta))
+    w, sqrt_w = _loss_weights(theta, cutoff)
     best_u = np.zeros((n, len(spec.parameters)))
     best_cost = np.full(n, np.inf)
-    # Starts are screened on every few angles (the table's own subgrid, with
-    # its own weights), then the best is polished on all angles.
     sub = np.unique(np.concatenate([np.arange(0, theta.size, _SCREEN_STRIDE), [theta.size - 1]]))
-    w_sub = _linear_theta_weights(theta[sub])
-    w_sub_loss = np.where(theta[sub] >= cutoff, w_sub, 0.0) if cutoff > 0 else w_sub
-    sqrt_w_sub = np.sqrt(w_sub_loss / w_sub_loss.sum())
+    w_sub, sqrt_w_sub = _loss_weights(theta[sub], cutoff)
+    on_sub = (spec, mu[sub], w_sub, sqrt_w_sub, table[:, sub])
+    assert spec.starts is not None
     with np.errstate(all="ignore"):  # trial steps that leave the valid range are rejected
         for start in spec.starts(_moments(theta, table)):
-            u, cost = _levenberg_marquardt(
-                spec,
-                mu[sub],
-                w_sub,
-                sqrt_w_sub,
-                table[:, sub],
-                _to_u(spec, start),
-                _SCREEN_ITERATIONS,
-            )
+            u, cost = _levenberg_marquardt(*on_sub, _to_u(spec, start), _SCREEN_ITERATIONS)
             better = cost < best_cost
             best_u = np.where(better[:, None], u, best_u)
             best_cost = np.where(better, cost, best_cost)
-        best_u, _ = _levenberg_marquardt(
-            spec, mu[sub], w_sub, sqrt_w_sub, table[:, sub], best_u, _ITERATIONS
-        )
+        best_u, _ = _levenberg_marquardt(*on_sub, best_u, _ITERATIONS)
         best_u, best_cost = _levenberg_marquardt(
             spec, mu, w, sqrt_w, table, best_u, _POLISH_ITERATIONS
         )
         independent_cost = best_cost
-        along = continuous and n > 1 and bool(np.all(np.isfinite(lam)))
-        along = along and np.unique(lam).size == n
-        if along:
+        if order is not None:
             # The path is followed on the screening angles, then polished on all of them
             # at once (from a neighbour's solution a row stays in its basin).
-            order = np.argsort(lam, kind="stable")
-            path_u, _ = _continuous_path(
-                spec, mu[sub], w_sub, sqrt_w_sub, table[:, sub], order, best_u
-            )
+            path_u, _ = _continuous_path(*on_sub, order, best_u)
             best_u, best_cost = _levenberg_marquardt(
                 spec, mu, w, sqrt_w, table, path_u, _POLISH_ITERATIONS
             )
-    params = spec.canonical(_to_p(spec, best_u))
+    return best_u, best_cost, independent_cost
+
+
+def _result(
+    spec: AnalyticModel,
+    theta: FloatArray,
+    table: FloatArray,
+    cutoff: float,
+    best_u: FloatArray,
+    best_cost: FloatArray,
+    independent_cost: FloatArray,
+    row_labels: tuple[str, ...],
+    lam: FloatArray,
+    along: bool,
+) -> FitResult:
+    """The :class:`FitResult` of the best variables: parameters, errors, the loss in words."""
+    mu = np.cos(np.deg2rad(theta))
+    w, sqrt_w = _loss_weights(theta, cutoff)
+    params = _to_p(spec, best_u)
+    if spec.canonical is not None:
+        params = spec.canonical(params)
     model_tab = _tabulated(spec, mu, w, params, table)
     rel = np.abs(model_tab / table - 1.0)
     g_table = 0.5 * math.pi * (table @ _linear_theta_weights(2.0 * theta))
@@ -878,10 +636,10 @@ def fit_phase(
         + (f"; angles below {cutoff:g} deg left out" if cutoff > 0 else "; all angles")
     )
     return FitResult(
-        model=name,
+        model=spec.name,
         formula=spec.formula,
         citation=spec.citation,
-        parameter_names=tuple(q.name for q in spec.parameters),
+        parameter_names=spec.parameters,
         parameters=params,
         labels=row_labels,
         wavelength_nm=lam,
@@ -890,7 +648,7 @@ def fit_phase(
         rms_relative_error=np.sqrt(
             np.einsum("ij,ij->i", rel * rel, np.broadcast_to(sqrt_w**2, rel.shape))
         ),
-        g_model=spec.asymmetry(params),
+        g_model=_asymmetry(spec, params),
         g_error=g_model_tab - g_table,
         loss=loss,
         forward_cutoff_deg=cutoff,
@@ -931,8 +689,6 @@ def fit_table(
     FitResult
         One row per wavelength, or per channel.
     """
-    from dustoptics.colour import channel_phase, channel_weights
-
     theta = np.asarray(table.theta_deg, dtype=np.float64)
     lam = np.asarray(table.wavelength_nm, dtype=np.float64)
     if colour is None:

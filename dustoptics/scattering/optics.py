@@ -21,10 +21,16 @@ errors; e.g. 1.1e-6 at rtol 1e-3 for r_eff 0.5 um, v_eff 0.125, m 2 + 0.0156i,
 639 nm), and g is the more accurate of the two.  Efficiencies are area
 weighted: Q = <C> / (pi <r^2>).
 
-This module checks the request (:func:`estimate_cost`, :func:`check_cost`),
-resolves the refractive index, runs the wavelengths (each refined on its own
-by :mod:`dustoptics.scattering.refinement`) and assembles the table with its
-provenance; :func:`recompute` runs a recorded call again.
+:func:`compute_optics` is request -> solve -> assemble.  :func:`optics_request`
+validates the call once, before any work, into a frozen :class:`OpticsRequest`
+(the refractive index resolved at the wavelengths: :func:`resolve_refractive_index`),
+which the cost check (:func:`estimate_cost`, :func:`check_cost`), the
+derivatives, :func:`dustoptics.models.compute.build_table` and the sweep's
+chunks take and the provenance records; :func:`compute_request` checks its
+cost, solves its wavelengths (each refined on its own by
+:mod:`dustoptics.scattering.refinement`, on threads) and assembles the table
+(:mod:`dustoptics.scattering.solve`); :func:`recompute` runs a recorded
+request again.
 
 ``weighting="number"`` is the seed thesis's model (Meyran 2022): an unweighted
 average of normalized phase functions, there computed from random radii.  It is
@@ -45,9 +51,8 @@ from __future__ import annotations
 import math
 import numbers
 import os
-import warnings
-from collections.abc import Callable, Sequence
-from concurrent.futures import ThreadPoolExecutor
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
 from typing import Any, NamedTuple, cast
 
 import numpy as np
@@ -73,24 +78,27 @@ from dustoptics.scattering.quadrature import (
     QuadratureSettings,
     _stretch,
 )
-from dustoptics.scattering.refinement import _Result, _WavelengthSolver, kernels_loaded
+from dustoptics.scattering.solve import ConvergenceWarning, assemble_table, solve_wavelengths
 from dustoptics.scattering.table_derivatives import (
     check_parameters,
-    index_directions,
     index_parameter_names,
     table_derivatives,
 )
-from dustoptics.table import DEFAULT_NAME, Provenance, Source, Table, plain
+from dustoptics.table import DEFAULT_NAME, Provenance, Source, Table
 
 __all__ = [
     "WORK_BUDGET",
     "ConvergenceWarning",
+    "OpticsRequest",
     "QuadratureDiagnostics",
+    "RequestCost",
     "check_cost",
     "compute_optics",
+    "compute_request",
     "default_theta_deg",
     "default_wavelengths_nm",
     "estimate_cost",
+    "optics_request",
     "recompute",
     "resolve_refractive_index",
 ]
@@ -98,10 +106,6 @@ __all__ = [
 WEIGHTINGS = ("scattering", "number")
 
 RefractiveIndexLike = complex | float | Sequence[complex] | Callable[[Any], Any] | str
-
-
-class ConvergenceWarning(UserWarning):
-    """The radius quadrature reached its panel limit before the tolerance."""
 
 
 def default_wavelengths_nm() -> np.ndarray:
@@ -156,72 +160,94 @@ def resolve_refractive_index(
         m = np.asarray(refractive_index(wavelength_nm), dtype=np.complex128)
         label = _describe(refractive_index)
     elif callable(refractive_index):
-        # Any other callable is asked one wavelength at a time.
-        values = []
-        for w in wavelength_nm:
-            value = refractive_index(float(w))
-            if isinstance(value, (str, bytes, bool, np.bool_)) or not isinstance(
-                value, numbers.Number
-            ):
-                raise TypeError(
-                    f"refractive_index callable {_describe(refractive_index)} must return a complex "
-                    f"number (m = n + i k); got {value!r} ({type(value).__name__}) at {float(w)!r} nm"
-                )
-            values.append(complex(cast(complex, value)))
-        m = np.array(values, dtype=np.complex128)
+        m = _index_from_callable(refractive_index, wavelength_nm)
         label = _describe(refractive_index)
     elif np.ndim(refractive_index) == 0:
-        if isinstance(refractive_index, (bytes, bool, np.bool_)):
-            raise TypeError(f"refractive_index must be a complex number; got {refractive_index!r}")
-        try:
-            m = np.full(
-                wavelength_nm.shape, complex(cast(complex, refractive_index)), dtype=np.complex128
-            )
-        except (TypeError, ValueError):
-            raise ValueError(
-                "refractive_index must be a complex number, a sequence of complex numbers, "
-                f"a catalogue name or a callable wavelength_nm -> complex; got {refractive_index!r}"
-            ) from None
-        label = f"constant m = {complex(cast(complex, refractive_index))}"
+        m, label = _index_from_constant(refractive_index, wavelength_nm)
     else:
-        probe = np.asarray(refractive_index)
-        if probe.dtype.kind in "bUSVO" and not all(
-            isinstance(v, numbers.Number) and not isinstance(v, (bool, np.bool_))
-            for v in probe.ravel()
-        ):
-            raise TypeError(
-                f"refractive_index given as a sequence must hold complex numbers; got {refractive_index!r}"
-            )
-        try:
-            m = np.array(refractive_index, dtype=np.complex128)
-        except (TypeError, ValueError):
-            raise ValueError(
-                f"refractive_index must be a sequence of complex numbers; got {refractive_index!r}"
-            ) from None
-        if m.shape != wavelength_nm.shape:
-            raise ValueError(
-                "refractive_index given as a sequence must have one value per wavelength "
-                f"({wavelength_nm.size}); got shape {m.shape}"
-            )
+        m = _index_from_sequence(refractive_index, wavelength_nm)
         label = "per-wavelength values given by the caller"
-    bad = ~(np.isfinite(m.real) & np.isfinite(m.imag))
-    if bad.any():
-        i = int(np.argmax(bad))
-        raise ValueError(f"refractive_index must be finite; got {m[i]} at {wavelength_nm[i]} nm")
-    if np.any(m.imag < 0):
-        i = int(np.argmax(m.imag < 0))
+    _check_index_values(m, wavelength_nm)
+    return m, label
+
+
+def _index_from_callable(function: Callable[[Any], Any], wavelength_nm: np.ndarray) -> np.ndarray:
+    """Any callable other than a material, asked one wavelength at a time."""
+    values = []
+    for w in wavelength_nm:
+        value = function(float(w))
+        if isinstance(value, (str, bytes, bool, np.bool_)) or not isinstance(value, numbers.Number):
+            raise TypeError(
+                f"refractive_index callable {_describe(function)} must return a complex "
+                f"number (m = n + i k); got {value!r} ({type(value).__name__}) at {float(w)!r} nm"
+            )
+        values.append(complex(cast(complex, value)))
+    return np.array(values, dtype=np.complex128)
+
+
+def _index_from_constant(value: Any, wavelength_nm: np.ndarray) -> tuple[np.ndarray, str]:
+    """One value for every wavelength, and its description."""
+    if isinstance(value, (bytes, bool, np.bool_)):
+        raise TypeError(f"refractive_index must be a complex number; got {value!r}")
+    try:
+        m = np.full(wavelength_nm.shape, complex(cast(complex, value)), dtype=np.complex128)
+    except (TypeError, ValueError):
         raise ValueError(
-            f"refractive_index must have k >= 0 (m = n + i k, absorption k >= 0); "
-            f"got {m[i]} at {wavelength_nm[i]} nm"
+            "refractive_index must be a complex number, a sequence of complex numbers, "
+            f"a catalogue name or a callable wavelength_nm -> complex; got {value!r}"
+        ) from None
+    return m, f"constant m = {complex(cast(complex, value))}"
+
+
+def _index_from_sequence(values: Any, wavelength_nm: np.ndarray) -> np.ndarray:
+    """One value per wavelength."""
+    probe = np.asarray(values)
+    if probe.dtype.kind in "bUSVO" and not all(
+        isinstance(v, numbers.Number) and not isinstance(v, (bool, np.bool_)) for v in probe.ravel()
+    ):
+        raise TypeError(
+            f"refractive_index given as a sequence must hold complex numbers; got {values!r}"
         )
-    if np.any(m.real <= 0):
-        i = int(np.argmax(m.real <= 0))
-        raise ValueError(f"refractive_index must have n > 0; got {m[i]} at {wavelength_nm[i]} nm")
-    if np.any(np.abs(m) > mie.MAX_INDEX):
-        i = int(np.argmax(np.abs(m) > mie.MAX_INDEX))
+    try:
+        m = np.array(values, dtype=np.complex128)
+    except (TypeError, ValueError):
         raise ValueError(
-            f"refractive_index must have |m| <= {mie.MAX_INDEX:g}; got {m[i]} at {wavelength_nm[i]} nm"
+            f"refractive_index must be a sequence of complex numbers; got {values!r}"
+        ) from None
+    if m.shape != wavelength_nm.shape:
+        raise ValueError(
+            "refractive_index given as a sequence must have one value per wavelength "
+            f"({wavelength_nm.size}); got shape {m.shape}"
         )
+    return m
+
+
+#: The refractive index's domain, in the order checked: (where m is outside it, the
+#: message before " at LAMBDA nm" with ``{m}`` for the value).
+_INDEX_DOMAIN: tuple[tuple[Callable[[np.ndarray], np.ndarray], str], ...] = (
+    (
+        lambda m: ~(np.isfinite(m.real) & np.isfinite(m.imag)),
+        "refractive_index must be finite; got {m}",
+    ),
+    (
+        lambda m: m.imag < 0,
+        "refractive_index must have k >= 0 (m = n + i k, absorption k >= 0); got {m}",
+    ),
+    (lambda m: m.real <= 0, "refractive_index must have n > 0; got {m}"),
+    (
+        lambda m: np.abs(m) > mie.MAX_INDEX,
+        f"refractive_index must have |m| <= {mie.MAX_INDEX:g}; got {{m}}",
+    ),
+)
+
+
+def _check_index_values(m: np.ndarray, wavelength_nm: np.ndarray) -> None:
+    """Refuse values of m outside the kernel's domain, naming the first wavelength."""
+    for outside, message in _INDEX_DOMAIN:
+        bad = outside(m)
+        if np.any(bad):
+            i = int(np.argmax(bad))
+            raise ValueError(message.format(m=m[i]) + f" at {wavelength_nm[i]} nm")
     contrast = np.abs(m - 1.0) < mie.MIN_INDEX_CONTRAST
     if np.any(contrast):
         i = int(np.argmax(contrast))
@@ -230,7 +256,313 @@ def resolve_refractive_index(
             "of 1: it scatters nothing (or next to nothing) and no phase function is defined; "
             f"|m - 1| must be >= {mie.MIN_INDEX_CONTRAST:g}"
         )
-    return m, label
+
+
+@dataclass(frozen=True, eq=False)
+class OpticsRequest:
+    """One :func:`compute_optics` call's physics, validated once, before any work.
+
+    Made by :func:`optics_request` (never directly): the grids, tolerances,
+    weighting and options of the call with the defaults filled in, and the
+    refractive index resolved at the wavelengths.  The cost check
+    (:func:`check_cost`), the computation (:func:`compute_request`), the
+    derivatives, :func:`dustoptics.models.compute.build_table` and the
+    sweep's chunks take it, and :meth:`inputs` is what the table's
+    provenance records.  It holds no run options (threads, progress, name):
+    those do not change the result.
+
+    Attributes
+    ----------
+    refractive_index : complex, sequence, str, callable or CoatedSphere
+        As given (its citation and, for derivatives, its parameters).
+    distribution : SizeDistribution
+        The number size distribution.
+    wavelength_nm : numpy.ndarray
+        Strictly increasing wavelengths. [nm]
+    theta_deg : numpy.ndarray
+        Strictly increasing scattering angles in [0, 180]. [degree]
+    rtol : float
+        The phase function's (and matrix's) tolerance. [-]
+    weighting : {"scattering", "number"}
+        How the spheres' phase functions are averaged.
+    cross_section_rtol : float
+        The cross-sections' tolerance (relative; absolute for g). [-]
+    quadrature : QuadratureSettings
+        Radius node placement.
+    polarization : bool
+        Whether the scattering matrix is computed.
+    expansion_order : int or None
+        None: no expansion coefficients; -1: every order the population needs;
+        N: orders 0..N.
+    particle_density_kg_m3 : float or None
+        Density of the particle material. [kg m^-3]
+    derivatives : tuple of str
+        Checked parameter names to differentiate with respect to.
+    m : numpy.ndarray
+        Refractive index (of the shell, for a coated sphere) per wavelength. [-]
+    index_label : str
+        Its description.
+    m_core : numpy.ndarray
+        A coated sphere's core index per wavelength (zeros without a core). [-]
+    core_fraction : float
+        Core radius over particle radius (0 without a core). [-]
+    """
+
+    refractive_index: RefractiveIndexLike
+    distribution: SizeDistribution
+    wavelength_nm: np.ndarray
+    theta_deg: np.ndarray
+    rtol: float
+    weighting: str
+    cross_section_rtol: float
+    quadrature: QuadratureSettings
+    polarization: bool
+    expansion_order: int | None
+    particle_density_kg_m3: float | None
+    derivatives: tuple[str, ...]
+    m: np.ndarray
+    index_label: str
+    m_core: np.ndarray
+    core_fraction: float
+
+    @property
+    def per_particle(self) -> bool:
+        """Phase functions averaged by number (``weighting="number"``)."""
+        return self.weighting == "number"
+
+    @property
+    def n_stokes(self) -> int:
+        """Stokes elements each sphere contributes: 4 with the matrix or expansion, else 1."""
+        return mie.N_STOKES if (self.polarization or self.expansion_order is not None) else 1
+
+    @property
+    def expansion_rtol(self) -> float | None:
+        """The expansion coefficients' own tolerance (issue 30): as the cross-sections'. [-]"""
+        return None if self.expansion_order is None else self.rtol / 100.0
+
+    @property
+    def mu_out(self) -> np.ndarray:
+        """Cosines of the output angles. [-]"""
+        return np.cos(np.deg2rad(self.theta_deg))
+
+    @property
+    def coated(self) -> bool:
+        """The particle is a :class:`~dustoptics.particles.coated.CoatedSphere`."""
+        return isinstance(self.refractive_index, CoatedSphere)
+
+    def inputs(self) -> dict[str, Any]:
+        """The provenance's inputs: everything needed to compute the table again."""
+        m = self.m
+        inputs: dict[str, Any] = {
+            "refractive_index": {"description": self.index_label, "n": m.real, "k": m.imag},
+            "size_distribution": self.distribution.to_dict(),
+            "wavelength_nm": self.wavelength_nm,
+            "theta_deg": self.theta_deg,
+            "weighting": self.weighting,
+            "rtol": self.rtol,
+            "cross_section_rtol": self.cross_section_rtol,
+            "quadrature": self.quadrature,
+        }
+        # Recorded only when used, so that other tables' provenance is unchanged.
+        if self.polarization:
+            inputs["polarization"] = True
+        if self.expansion_order is not None:
+            inputs["expansion"] = True if self.expansion_order < 0 else self.expansion_order
+        if self.particle_density_kg_m3 is not None:
+            inputs["particle_density_kg_m3"] = self.particle_density_kg_m3
+        if self.derivatives:
+            inputs["derivatives"] = list(self.derivatives)
+        if self.core_fraction > 0.0 or self.coated:
+            inputs["core"] = {
+                "n": self.m_core.real,
+                "k": self.m_core.imag,
+                "core_radius_fraction": self.core_fraction,
+            }
+        return inputs
+
+    def sources(self) -> tuple[Source, Source]:
+        """The refractive index's and the size distribution's sources, with citations."""
+        return (
+            _index_source(self.refractive_index, self.index_label),
+            Source(
+                name=self.distribution.model,
+                role="size distribution",
+                citation=self.distribution.citation,
+            ),
+        )
+
+
+def optics_request(
+    refractive_index: RefractiveIndexLike,
+    distribution: SizeDistribution,
+    wavelength_nm: Sequence[float] | np.ndarray | None = None,
+    theta_deg: Sequence[float] | np.ndarray | None = None,
+    *,
+    rtol: float = 1e-4,
+    weighting: str = "scattering",
+    cross_section_rtol: float | None = None,
+    quadrature: QuadratureSettings | None = None,
+    polarization: bool = False,
+    expansion: bool | int = False,
+    particle_density_kg_m3: float | None = None,
+    derivatives: Sequence[str] = (),
+) -> OpticsRequest:
+    """Validate a :func:`compute_optics` call's physics once: its :class:`OpticsRequest`.
+
+    The parameters are :func:`compute_optics`'s (which see); the refractive
+    index is resolved at the wavelengths (:func:`resolve_refractive_index`).
+    Nothing is computed; the cost is checked by :func:`check_cost`.
+
+    Raises
+    ------
+    ValueError
+        Bad input: the message names the parameter, the value and what is allowed.
+    TypeError
+        A string or boolean given as a number, ``weighting`` not a string, a
+        refractive-index callable that returns no number.
+    """
+    _check_distribution(distribution)
+    wl, theta = _grids(wavelength_nm, theta_deg)
+    rtol = check_open_interval("rtol", rtol, 0.0, 0.1)
+    cross_rtol = (
+        rtol / 100.0
+        if cross_section_rtol is None
+        else check_open_interval("cross_section_rtol", cross_section_rtol, 0.0, 0.1)
+    )
+    if not isinstance(weighting, str):
+        raise TypeError(f"weighting must be a str, one of {WEIGHTINGS}; got {weighting!r}")
+    check_choice("weighting", weighting, WEIGHTINGS)
+    settings = QuadratureSettings() if quadrature is None else quadrature
+    if not isinstance(settings, QuadratureSettings):
+        raise ValueError(f"quadrature must be a QuadratureSettings; got {quadrature!r}")
+    if not isinstance(polarization, (bool, np.bool_)):
+        raise ValueError(f"polarization must be True or False; got {polarization!r}")
+    n_order = _check_expansion(expansion)
+    derivative_names = _check_derivatives(derivatives, refractive_index, distribution)
+    density = (
+        None
+        if particle_density_kg_m3 is None
+        else check_positive("particle_density_kg_m3", particle_density_kg_m3, unit="kg m-3")
+    )
+    m, label, m_core, core_fraction = _resolve_particle(refractive_index, wl)
+    return OpticsRequest(
+        refractive_index=refractive_index,
+        distribution=distribution,
+        wavelength_nm=_read_only(wl),
+        theta_deg=_read_only(theta),
+        rtol=rtol,
+        weighting=weighting,
+        cross_section_rtol=cross_rtol,
+        quadrature=settings,
+        polarization=bool(polarization),
+        expansion_order=n_order,
+        particle_density_kg_m3=density,
+        derivatives=derivative_names,
+        m=_read_only(m),
+        index_label=label,
+        m_core=_read_only(m_core),
+        core_fraction=core_fraction,
+    )
+
+
+def _read_only(values: np.ndarray) -> np.ndarray:
+    """A read-only copy: the request's arrays cannot change after validation."""
+    out = np.array(values, copy=True)
+    out.setflags(write=False)
+    return out
+
+
+def _check_distribution(distribution: Any) -> None:
+    if not isinstance(distribution, SizeDistribution):
+        raise ValueError(
+            f"distribution must be a dustoptics SizeDistribution (e.g. ModifiedGamma); got {distribution!r}"
+        )
+    if not (distribution.has_density or distribution.is_monodisperse):
+        raise ValueError(
+            "distribution mixes Monodisperse and continuous modes, which the radius "
+            f"quadrature does not support; got {distribution!r}"
+        )
+
+
+def _grids(
+    wavelength_nm: Sequence[float] | np.ndarray | None,
+    theta_deg: Sequence[float] | np.ndarray | None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The wavelengths [nm] and angles [degree], checked, or their defaults."""
+    wl = (
+        default_wavelengths_nm()
+        if wavelength_nm is None
+        else as_increasing_grid("wavelength_nm", wavelength_nm, unit="nm")
+    )
+    if wl[0] <= 0:
+        raise ValueError(f"wavelength_nm must be > 0 nm; got minimum {wl[0]!r}")
+    check_wavelength_unit("wavelength_nm", wl)
+    theta = (
+        default_theta_deg()
+        if theta_deg is None
+        else as_increasing_grid("theta_deg", theta_deg, low=0.0, high=180.0, unit="degree")
+    )
+    return wl, theta
+
+
+def _check_derivatives(
+    derivatives: Sequence[str],
+    refractive_index: RefractiveIndexLike,
+    distribution: SizeDistribution,
+) -> tuple[str, ...]:
+    names = check_parameters(derivatives, distribution, index_parameter_names(refractive_index))
+    if names and isinstance(refractive_index, CoatedSphere):
+        raise ValueError(
+            "derivatives are not available for coated spheres (CoatedSphere); got "
+            f"derivatives={names!r}"
+        )
+    return names
+
+
+def _resolve_particle(
+    refractive_index: RefractiveIndexLike, wavelength_nm: np.ndarray
+) -> tuple[np.ndarray, str, np.ndarray, float]:
+    """(m of the particle or shell, its description, m of the core, core radius fraction)."""
+    if isinstance(refractive_index, CoatedSphere):
+        m, shell_label = resolve_refractive_index(refractive_index.shell, wavelength_nm)
+        m_core, core_label = resolve_refractive_index(refractive_index.core, wavelength_nm)
+        label = refractive_index.describe(core_label, shell_label)
+        return m, label, m_core, refractive_index.radius_fraction
+    m, label = resolve_refractive_index(refractive_index, wavelength_nm)
+    return m, label, np.zeros_like(m), 0.0
+
+
+def _request_from_inputs(inputs: Mapping[str, Any]) -> OpticsRequest:
+    """The request that recorded these provenance inputs (:func:`recompute`)."""
+    index = inputs["refractive_index"]
+    m = np.asarray(index["n"], dtype=np.float64) + 1j * np.asarray(index["k"], dtype=np.float64)
+    particle: Any = m.tolist()
+    if "core" in inputs:
+        core = inputs["core"]
+        m_core = np.asarray(core["n"], dtype=np.float64) + 1j * np.asarray(
+            core["k"], dtype=np.float64
+        )
+        particle = CoatedSphere(
+            core=m_core.tolist(),
+            shell=m.tolist(),
+            core_radius_fraction=core["core_radius_fraction"],
+        )
+    # Derivatives again, as recorded; a mixture's parameters (hematite_fraction, ...)
+    # are refused before any work: the recorded index values do not hold the mixture.
+    return optics_request(
+        particle,
+        _distribution_from_dict(inputs["size_distribution"]),
+        inputs["wavelength_nm"],
+        inputs["theta_deg"],
+        rtol=inputs["rtol"],
+        weighting=inputs["weighting"],
+        cross_section_rtol=inputs["cross_section_rtol"],
+        quadrature=QuadratureSettings(**inputs["quadrature"]),
+        polarization=bool(inputs.get("polarization", False)),
+        expansion=inputs.get("expansion", False),
+        particle_density_kg_m3=inputs.get("particle_density_kg_m3"),
+        derivatives=tuple(inputs.get("derivatives", ())),
+    )
 
 
 #: Largest estimated work of one :func:`compute_optics` call without
@@ -253,16 +585,8 @@ class RequestCost(NamedTuple):
     initial_panels: float
 
 
-def estimate_cost(
-    distribution: SizeDistribution,
-    wavelength_nm: np.ndarray,
-    n_theta: int,
-    *,
-    settings: QuadratureSettings,
-    weighting: str,
-    workers: int,
-) -> RequestCost:
-    """Estimate the memory and work of :func:`compute_optics` before any is done.
+def estimate_cost(request: OpticsRequest, *, workers: int) -> RequestCost:
+    """Estimate the memory and work of a request's computation before any is done.
 
     From the truncated radius range (the distribution's analytic tail
     bounds, as the quadrature places them), the smallest and largest
@@ -275,12 +599,21 @@ def estimate_cost(
     for every wavelength.  Nothing is allocated in proportion to the
     estimate.
 
+    Parameters
+    ----------
+    request : OpticsRequest
+        The validated call (:func:`optics_request`).
+    workers : int
+        Threads over wavelengths (each holds its own tables).
+
     Raises
     ------
     ValueError
         The distribution's radii overflow, or its size parameters leave the
         kernel's domain (below :data:`dustoptics.scattering.mie.MIN_SIZE_PARAMETER`).
     """
+    distribution, wavelength_nm = request.distribution, request.wavelength_nm
+    settings, n_theta = request.quadrature, int(request.theta_deg.size)
     k_max = 2.0 * math.pi / (float(wavelength_nm[0]) * 1e-3)
     k_min = 2.0 * math.pi / (float(wavelength_nm[-1]) * 1e-3)
     try:
@@ -290,7 +623,7 @@ def estimate_cost(
             else:
                 r_lo, r_hi = distribution.radius_bounds_um(
                     tail_fraction=settings.tail_fraction,
-                    lower_moment=0 if weighting == "number" else 2,
+                    lower_moment=0 if request.per_particle else 2,
                     upper_moment=_UPPER_MOMENT,
                 )
             float(distribution.mean_cross_section_um2)
@@ -334,17 +667,17 @@ def estimate_cost(
     return RequestCost(memory, work, x_lo, x_hi, panels)
 
 
-def check_cost(
-    distribution: SizeDistribution,
-    wl: np.ndarray,
-    n_theta: int,
-    *,
-    settings: QuadratureSettings,
-    weighting: str,
-    workers: int,
-    allow_large: bool,
-) -> RequestCost:
+def check_cost(request: OpticsRequest, *, workers: int, allow_large: bool) -> RequestCost:
     """:func:`estimate_cost`, then refuse a request beyond the budget.
+
+    Parameters
+    ----------
+    request : OpticsRequest
+        The validated call (:func:`optics_request`).
+    workers : int
+        Threads over wavelengths.
+    allow_large : bool
+        Go ahead beyond the budget.
 
     Raises
     ------
@@ -353,9 +686,8 @@ def check_cost(
         or work above :data:`WORK_BUDGET`, and ``allow_large`` is False; the
         message says what drives the estimate and what to change.
     """
-    cost = estimate_cost(
-        distribution, wl, n_theta, settings=settings, weighting=weighting, workers=workers
-    )
+    cost = estimate_cost(request, workers=workers)
+    wl, n_theta = request.wavelength_nm, request.theta_deg.size
     check_budget(
         "compute_optics",
         cost.memory_bytes,
@@ -384,15 +716,14 @@ def compute_optics(
     distribution: SizeDistribution,
     wavelength_nm: Sequence[float] | np.ndarray | None = None,
     theta_deg: Sequence[float] | np.ndarray | None = None,
+    *,
     rtol: float = 1e-4,
     weighting: str = "scattering",
-    *,
     cross_section_rtol: float | None = None,
     quadrature: QuadratureSettings | None = None,
     workers: int | None = None,
     name: str = DEFAULT_NAME,
     progress: Callable[[int, int], None] | None = None,
-    wavelengths_nm: Sequence[float] | np.ndarray | None = None,
     allow_large: bool = False,
     polarization: bool = False,
     expansion: bool | int = False,
@@ -436,8 +767,6 @@ def compute_optics(
         Called as ``progress(done, total)`` with the number of wavelengths
         done, first with 0 and last with ``total``.  It does not change the
         result.
-    wavelengths_nm : array_like, optional
-        Deprecated spelling of ``wavelength_nm``.
     allow_large : bool
         Go ahead even when the estimated memory exceeds
         :data:`dustoptics._validation.MEMORY_BUDGET_BYTES` (2 GiB) or the
@@ -478,6 +807,7 @@ def compute_optics(
         :meth:`Table.derivative`.  Default ``()``: none, and the table is the
         same to the bit as without the argument.
 
+    Returns
     -------
     Table
         Phase function, cross-sections, g, error estimates, node counts and
@@ -505,6 +835,14 @@ def compute_optics(
         A wavelength did not reach the tolerances at ``quadrature.max_level``;
         its ``error_estimate`` says how far it got.
 
+    Notes
+    -----
+    Three steps: :func:`optics_request` validates the call once (an
+    :class:`OpticsRequest`, which the provenance records), and
+    :func:`compute_request` checks its cost, solves it (threads over
+    wavelengths, progress) and assembles the table (checks, warnings,
+    provenance).
+
     Examples
     --------
     >>> import dustoptics as do
@@ -512,53 +850,80 @@ def compute_optics(
     >>> round(float(t.qext[0]), 6)
     3.092896
     """
-    if wavelengths_nm is not None:
-        if wavelength_nm is not None:
-            raise TypeError(
-                "give wavelength_nm only (wavelengths_nm is its deprecated spelling), not both"
-            )
-        warnings.warn(
-            "compute_optics(wavelengths_nm=...) is deprecated; use wavelength_nm=",
-            DeprecationWarning,
-            stacklevel=2,
-        )
-        wavelength_nm = wavelengths_nm
-    if not isinstance(distribution, SizeDistribution):
-        raise ValueError(
-            f"distribution must be a dustoptics SizeDistribution (e.g. ModifiedGamma); got {distribution!r}"
-        )
-    if not (distribution.has_density or distribution.is_monodisperse):
-        raise ValueError(
-            "distribution mixes Monodisperse and continuous modes, which the radius "
-            f"quadrature does not support; got {distribution!r}"
-        )
-    wl = (
-        default_wavelengths_nm()
-        if wavelength_nm is None
-        else as_increasing_grid("wavelength_nm", wavelength_nm, unit="nm")
+    request = optics_request(
+        refractive_index,
+        distribution,
+        wavelength_nm,
+        theta_deg,
+        rtol=rtol,
+        weighting=weighting,
+        cross_section_rtol=cross_section_rtol,
+        quadrature=quadrature,
+        polarization=polarization,
+        expansion=expansion,
+        particle_density_kg_m3=particle_density_kg_m3,
+        derivatives=derivatives,
     )
-    if wl[0] <= 0:
-        raise ValueError(f"wavelength_nm must be > 0 nm; got minimum {wl[0]!r}")
-    check_wavelength_unit("wavelength_nm", wl)
-    theta = (
-        default_theta_deg()
-        if theta_deg is None
-        else as_increasing_grid("theta_deg", theta_deg, low=0.0, high=180.0, unit="degree")
-    )
-    rtol = check_open_interval("rtol", rtol, 0.0, 0.1)
-    cross_rtol = (
-        rtol / 100.0
-        if cross_section_rtol is None
-        else check_open_interval("cross_section_rtol", cross_section_rtol, 0.0, 0.1)
-    )
-    if not isinstance(weighting, str):
-        raise TypeError(f"weighting must be a str, one of {WEIGHTINGS}; got {weighting!r}")
-    check_choice("weighting", weighting, WEIGHTINGS)
+    return _run(request, workers=workers, name=name, progress=progress, allow_large=allow_large)
+
+
+def compute_request(
+    request: OpticsRequest,
+    *,
+    workers: int | None = None,
+    name: str = DEFAULT_NAME,
+    progress: Callable[[int, int], None] | None = None,
+    allow_large: bool = False,
+) -> Table:
+    """Compute the table of a validated request: cost check, solve, assemble.
+
+    Parameters
+    ----------
+    request : OpticsRequest
+        From :func:`optics_request`.
+    workers, name, progress, allow_large
+        As :func:`compute_optics`'s.
+
+    Returns
+    -------
+    Table
+        The table :func:`compute_optics` returns for the same arguments, to the bit.
+    """
+    return _run(request, workers=workers, name=name, progress=progress, allow_large=allow_large)
+
+
+def _run(
+    request: OpticsRequest,
+    *,
+    workers: int | None,
+    name: str,
+    progress: Callable[[int, int], None] | None,
+    allow_large: bool,
+) -> Table:
+    """request -> cost check -> solve -> assemble (-> derivatives); each public
+    entry calls this directly, so that warnings point at its caller."""
+    if not isinstance(request, OpticsRequest):
+        raise TypeError(
+            f"request must be an OpticsRequest (see optics_request); got {type(request).__name__}"
+        )
+    threads = _check_run_options(workers, name, progress, allow_large)
+    cost = check_cost(request, workers=threads, allow_large=allow_large)
+    results = solve_wavelengths(request, workers=threads, progress=progress)
+    table = assemble_table(request, results, cost=cost, name=name)
+    if not request.derivatives:
+        return table
+    return table.replace(derivatives=table_derivatives(table, request, workers=threads))
+
+
+def _check_run_options(
+    workers: int | None,
+    name: str,
+    progress: Callable[[int, int], None] | None,
+    allow_large: bool,
+) -> int:
+    """The options that do not change the result, checked; returns the thread count."""
     if not isinstance(allow_large, bool):
         raise TypeError(f"allow_large must be True or False; got {allow_large!r}")
-    settings = QuadratureSettings() if quadrature is None else quadrature
-    if not isinstance(settings, QuadratureSettings):
-        raise ValueError(f"quadrature must be a QuadratureSettings; got {quadrature!r}")
     if workers is None:
         workers = os.cpu_count() or 1
     elif not (isinstance(workers, int) and workers >= 1):
@@ -567,225 +932,10 @@ def compute_optics(
         raise ValueError(f"name must be a non-empty string; got {name!r}")
     if progress is not None and not callable(progress):
         raise TypeError(f"progress must be a callable progress(done, total); got {progress!r}")
-    cost = check_cost(
-        distribution,
-        wl,
-        theta.size,
-        settings=settings,
-        weighting=weighting,
-        workers=workers,
-        allow_large=allow_large,
-    )
-    if not isinstance(polarization, (bool, np.bool_)):
-        raise ValueError(f"polarization must be True or False; got {polarization!r}")
-    n_order = _check_expansion(expansion)
-    derivative_names = check_parameters(
-        derivatives, distribution, index_parameter_names(refractive_index)
-    )
-    if derivative_names and isinstance(refractive_index, CoatedSphere):
-        raise ValueError(
-            "derivatives are not available for coated spheres (CoatedSphere); got "
-            f"derivatives={derivative_names!r}"
-        )
-    density = (
-        None
-        if particle_density_kg_m3 is None
-        else check_positive("particle_density_kg_m3", particle_density_kg_m3, unit="kg m-3")
-    )
-    if isinstance(refractive_index, CoatedSphere):
-        m, shell_label = resolve_refractive_index(refractive_index.shell, wl)
-        m_core, core_label = resolve_refractive_index(refractive_index.core, wl)
-        core_fraction = refractive_index.radius_fraction
-        label = refractive_index.describe(core_label, shell_label)
-    else:
-        m, label = resolve_refractive_index(refractive_index, wl)
-        m_core, core_fraction = np.zeros_like(m), 0.0
+    return workers
 
-    mu_out = np.cos(np.deg2rad(theta))
-    per_particle = weighting == "number"
-    n_stokes = mie.N_STOKES if (polarization or n_order is not None) else 1
-    # The expansion coefficients' own tolerance (issue 30): as the cross-sections'.
-    expansion_rtol = None if n_order is None else rtol / 100.0
 
-    def one(i: int) -> _Result:
-        solver = _WavelengthSolver(
-            m=complex(m[i]),
-            wavelength_nm=float(wl[i]),
-            mu_out=mu_out,
-            distribution=distribution,
-            per_particle=per_particle,
-            settings=settings,
-            n_stokes=n_stokes,
-            expansion=n_order is not None,
-            m_core=complex(m_core[i]),
-            core_fraction=core_fraction,
-        )
-        return solver.solve(rtol, cross_rtol, expansion_rtol)
-
-    def report(done: int) -> None:
-        if progress is not None:
-            progress(done, wl.size)
-
-    report(0)
-    results: list[_Result] = []
-    n_threads = min(workers, wl.size)
-    if n_threads > 1:
-        # In a process that has not computed a table yet, the first wavelength
-        # alone compiles (or loads from numba's cache) the kernels before
-        # threads share them; after that, it is the costliest wavelength to
-        # leave to one thread.  Each wavelength's result is the same either way.
-        if not kernels_loaded():
-            results.append(one(0))
-            report(1)
-        with ThreadPoolExecutor(max_workers=n_threads) as pool:
-            for result in pool.map(one, range(len(results), wl.size)):
-                results.append(result)
-                report(len(results))
-    else:
-        for i in range(wl.size):
-            results.append(one(i))
-            report(i + 1)
-
-    err_phase = np.array([r.err_phase for r in results])
-    err_cross = np.array([r.err_cross for r in results])
-    phase = np.vstack([r.phase for r in results])
-    cext = np.array([r.cext for r in results])
-    csca = np.array([r.csca for r in results])
-    finite = np.all(np.isfinite(phase)) and np.all(np.isfinite(cext)) and np.all(np.isfinite(csca))
-    if not (finite and np.all(phase > 0) and np.all(csca > 0)):
-        raise ValueError(
-            f"compute_optics: refractive_index {label} with distribution {distribution!r} at "
-            f"{wl[0]:g} .. {wl[-1]:g} nm gives a phase function or cross-section that is not finite "
-            "and positive: the input lies outside the kernel's tested domain "
-            f"(size parameters {cost.min_size_parameter:.3g} .. {cost.max_size_parameter:.3g})"
-        )
-    # Absorption: <C_abs> = <C_ext> - <C_sca> >= 0.  With k = 0 it is exactly 0
-    # (no absorption, an identity of the physics); with k > 0 the difference
-    # is kept unless it is negative beyond round-off (1e-12 of <C_ext>), which
-    # would be a wrong number and raises.
-    # (A coated sphere absorbs if its shell or its core does.)
-    lossless = (m.imag == 0.0) & ((m_core.imag == 0.0) | (core_fraction == 0.0))
-    cabs = np.where(lossless, 0.0, cext - csca)
-    cext = np.where(lossless, csca, cext)
-    if np.any(cabs < -1e-12 * cext):
-        i = int(np.argmax(cabs < -1e-12 * cext))
-        raise ValueError(
-            f"compute_optics: <C_abs> = {cabs[i]!r} um^2 < 0 at {wl[i]:g} nm for refractive_index "
-            f"{label} with distribution {distribution!r}: the input lies outside the kernel's tested domain"
-        )
-    csca = np.minimum(csca, cext)
-    extra = _matrix_fields(results, polarization=bool(polarization), n_order=n_order)
-    if polarization:
-        err_phase = np.maximum(err_phase, extra["matrix_error_estimate"])
-    not_converged = (err_phase > rtol) | (err_cross > cross_rtol)
-    if expansion_rtol is not None:
-        not_converged |= extra["expansion_error_estimate"] > expansion_rtol
-    if not_converged.any():
-        bad = ", ".join(f"{w:g}" for w in wl[not_converged])
-        also = "" if expansion_rtol is None else f" / expansion rtol={expansion_rtol:g}"
-        warnings.warn(
-            f"radius quadrature did not reach rtol={rtol:g} / cross_section_rtol={cross_rtol:g}{also} "
-            f"at wavelengths {bad} nm within max_level={settings.max_level}; "
-            "see error_estimate",
-            ConvergenceWarning,
-            stacklevel=2,
-        )
-    n_nodes = np.array([r.n_nodes for r in results], dtype=np.int64)
-    cross_n_nodes = np.array([r.cross_section_n_nodes for r in results], dtype=np.int64)
-    inputs = {
-        "refractive_index": {"description": label, "n": m.real, "k": m.imag},
-        "size_distribution": distribution.to_dict(),
-        "wavelength_nm": wl,
-        "theta_deg": theta,
-        "weighting": weighting,
-        "rtol": rtol,
-        "cross_section_rtol": cross_rtol,
-        "quadrature": settings,
-    }
-    # Recorded only when used, so that other tables' provenance is unchanged.
-    if polarization:
-        inputs["polarization"] = True
-    if n_order is not None:
-        inputs["expansion"] = True if n_order < 0 else n_order
-    if density is not None:
-        inputs["particle_density_kg_m3"] = density
-    if derivative_names:
-        inputs["derivatives"] = list(derivative_names)
-    if core_fraction > 0.0 or isinstance(refractive_index, CoatedSphere):
-        inputs["core"] = {
-            "n": m_core.real,
-            "k": m_core.imag,
-            "core_radius_fraction": core_fraction,
-        }
-    moments = np.array([r.moments for r in results])
-    record = {
-        "method": "adaptive Gauss-Legendre panels over radius (dustoptics.scattering.quadrature), "
-        "error = summed differences of each panel's rule and the rules on its halves",
-        "weighting": weighting,
-        "rtol": rtol,
-        "cross_section_rtol": cross_rtol,
-        "settings": settings,
-        "converged": not bool(not_converged.any()),
-        "max_error_estimate": float(err_phase.max()),
-        "max_cross_section_error_estimate": float(err_cross.max()),
-        "n_nodes_total": int(n_nodes.sum()),
-        "cross_section_n_nodes_total": int(cross_n_nodes.sum()),
-    }
-    if expansion_rtol is not None:  # recorded only when used (other provenance unchanged)
-        record["expansion_rtol"] = expansion_rtol
-        record["max_expansion_error_estimate"] = float(extra["expansion_error_estimate"].max())
-    sources = (
-        _index_source(refractive_index, label),
-        Source(name=distribution.model, role="size distribution", citation=distribution.citation),
-    )
-    table = Table(
-        name=name,
-        wavelength_nm=wl,
-        theta_deg=theta,
-        phase=phase,
-        g=np.array([r.g for r in results]),
-        cext_um2=cext,
-        csca_um2=csca,
-        error_estimate=err_phase,
-        cross_section_error_estimate=err_cross,
-        n_nodes=n_nodes,
-        cross_section_n_nodes=cross_n_nodes,
-        refractive_index=m,
-        mean_geometric_cross_section_um2=float(distribution.mean_cross_section_um2),
-        cback_um2=np.array([r.cback for r in results]),
-        r_eff_quadrature_um=moments[:, 1] / moments[:, 0],
-        v_eff_quadrature=moments[:, 2] * moments[:, 0] / moments[:, 1] ** 2 - 1.0,
-        mean_volume_quadrature_um3=4.0 / 3.0 * np.pi * moments[:, 1],
-        mean_volume_um3=float(distribution.mean_volume_um3),
-        particle_density_kg_m3=density,
-        **extra,
-        provenance=Provenance(inputs=plain(inputs), sources=sources, quadrature=plain(record)),
-        diagnostics=QuadratureDiagnostics(
-            settings=settings,
-            distribution=distribution,
-            panels=tuple(r.panels_s for r in results),
-            cross_section_panels=tuple(r.cross_section_panels_s for r in results),
-            expansion_panels=(
-                None
-                if expansion_rtol is None
-                else tuple(
-                    r.panels_s if r.expansion_panels_s is None else r.expansion_panels_s
-                    for r in results
-                )
-            ),
-        ),
-    )
-    if not derivative_names:
-        return table
-    return table.replace(
-        derivatives=table_derivatives(
-            table,
-            parameters=derivative_names,
-            index_directions=index_directions(refractive_index, derivative_names, wl),
-            weighting=weighting,
-            workers=workers,
-        )
-    )
+# ---------------------------------------------------------------------- recompute
 
 
 def recompute(
@@ -842,38 +992,7 @@ def recompute(
             f"provenance inputs lack {', '.join(missing)}: it was not recorded by compute_optics "
             "(a configuration's table is rebuilt with build_table)"
         )
-    index = inputs["refractive_index"]
-    m = np.asarray(index["n"], dtype=np.float64) + 1j * np.asarray(index["k"], dtype=np.float64)
-    particle: Any = m.tolist()
-    # Derivatives again, as recorded; a mixture's parameters (hematite_fraction, ...)
-    # are refused before any work: the recorded index values do not hold the mixture.
-    derivatives = tuple(inputs.get("derivatives", ()))
-    if "core" in inputs:
-        core = inputs["core"]
-        m_core = np.asarray(core["n"], dtype=np.float64) + 1j * np.asarray(
-            core["k"], dtype=np.float64
-        )
-        particle = CoatedSphere(
-            core=m_core.tolist(),
-            shell=m.tolist(),
-            core_radius_fraction=core["core_radius_fraction"],
-        )
-    table = compute_optics(
-        particle,
-        _distribution_from_dict(inputs["size_distribution"]),
-        inputs["wavelength_nm"],
-        inputs["theta_deg"],
-        inputs["rtol"],
-        inputs["weighting"],
-        cross_section_rtol=inputs["cross_section_rtol"],
-        quadrature=QuadratureSettings(**inputs["quadrature"]),
-        workers=workers,
-        name=name,
-        polarization=bool(inputs.get("polarization", False)),
-        expansion=inputs.get("expansion", False),
-        particle_density_kg_m3=inputs.get("particle_density_kg_m3"),
-        derivatives=derivatives,
-    )
+    table = compute_request(_request_from_inputs(inputs), workers=workers, name=name)
     # The same values of m; only the caller's description of them is restored.
     return table.replace(
         provenance=Provenance(
@@ -899,31 +1018,3 @@ def _check_expansion(expansion: Any) -> int | None:
     raise ValueError(
         f"expansion must be True, False or an order N >= 0 (an integer); got {expansion!r}"
     )
-
-
-def _matrix_fields(
-    results: Sequence[_Result], *, polarization: bool, n_order: int | None
-) -> dict[str, Any]:
-    """The optional matrix and expansion fields of a table from the
-    wavelengths' results (coefficients zero-padded to one order count)."""
-    out: dict[str, Any] = {}
-    if not (polarization or n_order is not None):
-        return out
-    matrices = [r.matrix for r in results if r.matrix is not None]
-    assert len(matrices) == len(results)
-    if polarization:
-        for key in ("f12", "f33", "f34"):
-            out[key] = np.vstack([getattr(mx, key) for mx in matrices])
-        out["matrix_error_estimate"] = np.array([mx.error for mx in matrices])
-    if n_order is not None:
-        greek = [mx.greek for mx in matrices if mx.greek is not None]
-        assert len(greek) == len(results)
-        size = max(g.shape[1] for g in greek) if n_order < 0 else n_order + 1
-        coefficients = np.zeros((6, len(results), size))
-        for i, g in enumerate(greek):
-            k = min(size, g.shape[1])
-            coefficients[:, i, :k] = g[:, :k]
-        for j, key in enumerate(("alpha1", "alpha2", "alpha3", "alpha4", "beta1", "beta2")):
-            out[key] = coefficients[j]
-        out["expansion_error_estimate"] = np.array([mx.greek_error for mx in matrices])
-    return out

@@ -43,7 +43,15 @@ Models
 - :func:`cornette_shanks1992`, :func:`draine2003` and the HG + Draine blend
   :func:`hg_draine_jendersie_deon2023` with the droplet-diameter fit
   :func:`jendersie_deon2023_parameters` (5 to 50 um).
-- :func:`get_analytic_model` looks any of these up by name.
+- :func:`two_term_hg_hapke2012` (Hapke 2012), in scattering angle.
+- :data:`ANALYTIC_MODELS`, the one registry of these models: each record
+  (:class:`AnalyticModel`) holds the formula, its parameters, their ranges
+  and starting values for a fit, the analytic derivatives and the citation.
+  :func:`~dustoptics.scattering.fit.fit_phase`, the TOML configuration and
+  the sky's fitted approximations read it.  :func:`get_analytic_model` looks
+  a model up by name or alias (:data:`ANALYTIC_MODEL_ALIASES`: the hyphenated
+  spellings ``henyey-greenstein``, ``dhg-costa2021``, ... and short names
+  ``hg``, ``dhg``, ``cs``, ...).
 
 Datasets
 --------
@@ -60,9 +68,7 @@ Phase functions sampled on a grid of angles, and what is done to them
 (:func:`~dustoptics.scattering.tabulated_phase.sphere_integral`,
 :func:`~dustoptics.scattering.tabulated_phase.renormalize`, Meyran's
 :func:`~dustoptics.scattering.tabulated_phase.hybrid`, ...), are in
-:mod:`dustoptics.scattering.tabulated_phase`.  Their old names here
-(``phase.hybrid`` and so on) still work until release 0.3, with a
-:class:`DeprecationWarning`.
+:mod:`dustoptics.scattering.tabulated_phase`.
 
 References
 ----------
@@ -118,6 +124,7 @@ from dustoptics.scattering._parameters import (
 
 __all__ = [
     "ANALYTIC_MODELS",
+    "ANALYTIC_MODEL_ALIASES",
     "COLLIENNE2013_MARS",
     "COSTA2021_MARS_DHG_CODE",
     "COSTA2021_MARS_DHG_PAPER",
@@ -154,6 +161,9 @@ __all__ = [
     "rayleigh_depolarized_asymmetry",
     "rayleigh_penndorf1957",
     "rayleigh_penndorf1957_asymmetry",
+    "register_analytic_model",
+    "two_term_hg_hapke2012",
+    "two_term_hg_hapke2012_asymmetry",
 ]
 
 
@@ -202,6 +212,10 @@ COSTA_2021: Final = (
 MEYRAN_2022: Final = (
     'T. Meyran, "Physically based real-time rendering of the Martian atmosphere," '
     "M.Sc. thesis, Hochschule Hannover, Nov. 2022"
+)
+HAPKE_2012: Final = (
+    "B. Hapke, Theory of Reflectance and Emittance Spectroscopy, 2nd ed. Cambridge: "
+    "Cambridge University Press, 2012, doi:10.1017/CBO9781139025683, section 6.4.2"
 )
 KOBE_2026: Final = (
     'D. Kobe, "Ozone absorption in single atmospheric scattering," graduation work, '
@@ -270,6 +284,36 @@ def _draine(mu: FloatArray, g: Any, alpha: Any) -> FloatArray:
     g = np.asarray(g, dtype=np.float64)
     alpha = np.asarray(alpha, dtype=np.float64)
     return _hg(mu, g) * (1.0 + alpha * mu * mu) / (1.0 + alpha * (1.0 + 2.0 * g * g) / 3.0)
+
+
+def _dhg_costa(mu: FloatArray, g1: Any, g2: Any, alpha: Any) -> FloatArray:
+    """``alpha HG(g1) + (1 - alpha) HG(g2)`` on validated input."""
+    return alpha * _hg(mu, g1) + (1.0 - alpha) * _hg(mu, g2)
+
+
+def _dhg_kobe(mu: FloatArray, g1: Any, g2: Any, f: Any) -> FloatArray:
+    """``(1 - f) HG(g1) + f HG(g2)`` on validated input."""
+    return (1.0 - f) * _hg(mu, g1) + f * _hg(mu, g2)
+
+
+def _cornette_shanks(mu: FloatArray, g: Any) -> FloatArray:
+    """Cornette-Shanks on validated input."""
+    return 1.5 / (2.0 + g * g) * (1.0 + mu * mu) * _hg(mu, g)
+
+
+def _hg_draine(mu: FloatArray, g_hg: Any, g_d: Any, alpha: Any, w_d: Any) -> FloatArray:
+    """``(1 - w_d) HG(g_hg) + w_d Draine(g_d, alpha)`` on validated input."""
+    return (1.0 - w_d) * _hg(mu, g_hg) + w_d * _draine(mu, g_d, alpha)
+
+
+def _two_term_hg(mu: FloatArray, b: Any, c: Any) -> FloatArray:
+    """Hapke's two-term HG in scattering angle on validated input.
+
+    Written as the Costa double HG with ``g1 = b``, ``g2 = -b``,
+    ``alpha = (1 - c) / 2``.
+    """
+    alpha = 0.5 * (1.0 - c)
+    return _dhg_costa(mu, b, -b, alpha)
 
 
 def _draine_mean(g: Any, alpha: Any) -> FloatArray:
@@ -499,7 +543,7 @@ def dhg_costa2021(mu: ArrayLike, *, g1: ArrayLike, g2: ArrayLike, alpha: ArrayLi
     m = _mu(mu)
     a = mixing_weight("alpha", alpha)
     m, g1a, g2a, a = _broadcast(mu=m, g1=_g("g1", g1), g2=_g("g2", g2), alpha=a)
-    return float_or_array(a * _hg(m, g1a) + (1.0 - a) * _hg(m, g2a))
+    return float_or_array(_dhg_costa(m, g1a, g2a, a))
 
 
 def dhg_costa2021_asymmetry(*, g1: ArrayLike, g2: ArrayLike, alpha: ArrayLike) -> FloatOrArray:
@@ -544,7 +588,7 @@ def dhg_kobe2026(mu: ArrayLike, *, g1: ArrayLike, g2: ArrayLike, f: ArrayLike) -
     m = _mu(mu)
     w = mixing_weight("f", f)
     m, g1a, g2a, w = _broadcast(mu=m, g1=_g("g1", g1), g2=_g("g2", g2), f=w)
-    return float_or_array((1.0 - w) * _hg(m, g1a) + w * _hg(m, g2a))
+    return float_or_array(_dhg_kobe(m, g1a, g2a, w))
 
 
 def dhg_kobe2026_asymmetry(*, g1: ArrayLike, g2: ArrayLike, f: ArrayLike) -> FloatOrArray:
@@ -670,7 +714,7 @@ def cornette_shanks1992(mu: ArrayLike, *, g: ArrayLike) -> FloatOrArray:
     """
     m = _mu(mu)
     m, gg = _broadcast(mu=m, g=_g("g", g))
-    return float_or_array(1.5 / (2.0 + gg * gg) * (1.0 + m * m) * _hg(m, gg))
+    return float_or_array(_cornette_shanks(m, gg))
 
 
 def cornette_shanks1992_asymmetry(*, g: ArrayLike) -> FloatOrArray:
@@ -800,7 +844,7 @@ def hg_draine_jendersie_deon2023(
     """
     m = _mu(mu)
     m, gh, gd, a, w = _broadcast(mu=m, **_hg_draine_parameters(g_hg, g_d, alpha, w_d))
-    return float_or_array((1.0 - w) * _hg(m, gh) + w * _draine(m, gd, a))
+    return float_or_array(_hg_draine(m, gh, gd, a, w))
 
 
 def hg_draine_jendersie_deon2023_asymmetry(
@@ -912,25 +956,258 @@ def jendersie_deon2023_parameters(*, diameter_um: ArrayLike) -> HGDraineParamete
     return HGDraineParameters(diameter_um=d, g_hg=g_hg, g_d=g_d, alpha=alpha, w_d=w_d)
 
 
+# ------------------------------------------------------------ Hapke two-term
+
+
+def two_term_hg_hapke2012(mu: ArrayLike, *, b: ArrayLike, c: ArrayLike) -> FloatOrArray:
+    """Hapke's two-term Henyey-Greenstein function, in scattering angle.
+
+    .. math:: P(\\mu) = \\frac{1 - c}{2} HG(\\mu; b) + \\frac{1 + c}{2} HG(\\mu; -b)
+
+    Parameters
+    ----------
+    mu : array_like
+        Cosine of the scattering angle, in [-1, 1]. [-]
+    b : array_like
+        Lobe width, ``|b| < 1`` (Hapke uses ``0 <= b < 1``). [-]
+    c : array_like
+        Lobe balance, in [-1, 1]; ``c > 0`` puts more light in the backward
+        lobe, as Hapke's phase-angle form states it.  All arguments broadcast
+        together. [-]
+
+    Returns
+    -------
+    float or numpy.ndarray
+        Phase function, normalized to 1 over the sphere. [sr^-1]
+
+    Notes
+    -----
+    Hapke writes the function of the phase angle ``g = 180 deg - theta``;
+    in the scattering angle the two lobes swap.  It is the Costa double HG
+    (:func:`dhg_costa2021`) with ``g1 = b``, ``g2 = -b`` and
+    ``alpha = (1 - c) / 2``.
+
+    References
+    ----------
+    .. [1] B. Hapke, Theory of Reflectance and Emittance Spectroscopy, 2nd ed.
+       Cambridge: Cambridge University Press, 2012,
+       doi:10.1017/CBO9781139025683, section 6.4.2.
+    """
+    m = _mu(mu)
+    m, bb, cc = _broadcast(mu=m, b=_g("b", b), c=in_interval("c", c, -1.0, 1.0, closed=True))
+    return float_or_array(_two_term_hg(m, bb, cc))
+
+
+def two_term_hg_hapke2012_asymmetry(*, b: ArrayLike, c: ArrayLike) -> FloatOrArray:
+    """Mean cosine of :func:`two_term_hg_hapke2012`: ``-c b``. [-]"""
+    bb, cc = _broadcast(b=_g("b", b), c=in_interval("c", c, -1.0, 1.0, closed=True))
+    return float_or_array(-cc * bb)
+
+
+# ------------------------------------------------- derivatives and fit starts
+#
+# What a fit (:mod:`dustoptics.scattering.fit`) reads from a model's record beside its
+# formula: the analytic derivatives with respect to the parameters, and starting points
+# from a table's Legendre moments <P_0..P_3>.  Parameters come as the columns of an
+# array p of shape (n, k) (n rows, k parameters), mu has shape (m,).
+
+
+def _col(p: FloatArray, i: int) -> FloatArray:
+    return p[:, i : i + 1]
+
+
+def _hg_dlog(mu: FloatArray, g: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """HG(g) and d ln HG / dg = -2 g / (1 - g^2) - 3 (g - mu) / (1 + g^2 - 2 g mu)."""
+    d = (1.0 - g) ** 2 + 2.0 * g * (1.0 - mu)
+    value = (1.0 - g) * (1.0 + g) / (d * np.sqrt(d)) / _FOUR_PI
+    return value, -2.0 * g / ((1.0 - g) * (1.0 + g)) - 3.0 * (g - mu) / d
+
+
+def _hg_gradient(mu: FloatArray, p: FloatArray) -> tuple[FloatArray, FloatArray]:
+    h, dl = _hg_dlog(mu, _col(p, 0))
+    return h, (h * dl)[:, :, None]
+
+
+def _cs_gradient(mu: FloatArray, p: FloatArray) -> tuple[FloatArray, FloatArray]:
+    g = _col(p, 0)
+    h, dl = _hg_dlog(mu, g)
+    f = 1.5 * (1.0 + mu * mu) / (2.0 + g * g) * h
+    return f, (f * (dl - 2.0 * g / (2.0 + g * g)))[:, :, None]
+
+
+def _dhg_costa_gradient(mu: FloatArray, p: FloatArray) -> tuple[FloatArray, FloatArray]:
+    a = _col(p, 2)
+    h1, dl1 = _hg_dlog(mu, _col(p, 0))
+    h2, dl2 = _hg_dlog(mu, _col(p, 1))
+    jac = np.stack([a * h1 * dl1, (1.0 - a) * h2 * dl2, h1 - h2], axis=-1)
+    return a * h1 + (1.0 - a) * h2, jac
+
+
+def _dhg_kobe_gradient(mu: FloatArray, p: FloatArray) -> tuple[FloatArray, FloatArray]:
+    f = _col(p, 2)
+    h1, dl1 = _hg_dlog(mu, _col(p, 0))
+    h2, dl2 = _hg_dlog(mu, _col(p, 1))
+    jac = np.stack([(1.0 - f) * h1 * dl1, f * h2 * dl2, h2 - h1], axis=-1)
+    return (1.0 - f) * h1 + f * h2, jac
+
+
+def _hg_draine_gradient(mu: FloatArray, p: FloatArray) -> tuple[FloatArray, FloatArray]:
+    gh, gd, a, w = (_col(p, i) for i in range(4))
+    h, dlh = _hg_dlog(mu, gh)
+    hd, dld = _hg_dlog(mu, gd)
+    norm = 1.0 + a * (1.0 + 2.0 * gd * gd) / 3.0
+    shape = 1.0 + a * mu * mu
+    draine = hd * shape / norm
+    d_gd = draine * (dld - (4.0 * a * gd / 3.0) / norm)
+    d_a = draine * (mu * mu / shape - ((1.0 + 2.0 * gd * gd) / 3.0) / norm)
+    jac = np.stack([(1.0 - w) * h * dlh, w * d_gd, w * d_a, draine - h], axis=-1)
+    return (1.0 - w) * h + w * draine, jac
+
+
+def _two_term_hg_gradient(mu: FloatArray, p: FloatArray) -> tuple[FloatArray, FloatArray]:
+    b, c = _col(p, 0), _col(p, 1)
+    hf, dlf = _hg_dlog(mu, b)
+    hb, dlb = _hg_dlog(mu, -b)
+    d_b = 0.5 * (1.0 - c) * hf * dlf - 0.5 * (1.0 + c) * hb * dlb
+    jac = np.stack([d_b, 0.5 * (hb - hf)], axis=-1)
+    return 0.5 * (1.0 - c) * hf + 0.5 * (1.0 + c) * hb, jac
+
+
+def _gauss_two_node(m: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """Nodes x1 >= x2 and weight of x1 of the two-node rule with moments m1..m3 (m0 = 1).
+
+    ``<P_l>`` of HG(g) is ``g^l``, so a two-lobe model's lobes are the nodes.
+    Falls back to (m1 + s, m1 - s, 1/2), s = sqrt(max(m2 - m1^2, 0)), where the
+    moments are not those of two nodes.
+    """
+    m1, m2, m3 = m[:, 1], m[:, 2], m[:, 3]
+    var = m2 - m1 * m1
+    det = np.where(np.abs(var) > 1e-12, var, 1e-12)
+    a = (m3 - m1 * m2) / det  # x^2 = a x + b for both nodes
+    b = (m2 * m2 - m1 * m3) / det
+    disc = a * a + 4.0 * b
+    ok = (disc > 0) & (var > 1e-12)
+    root = np.sqrt(np.where(ok, disc, 0.0))
+    x1 = np.where(ok, 0.5 * (a + root), m1 + np.sqrt(np.maximum(var, 0.0)))
+    x2 = np.where(ok, 0.5 * (a - root), m1 - np.sqrt(np.maximum(var, 0.0)))
+    span = np.where(np.abs(x1 - x2) > 1e-12, x1 - x2, 1.0)
+    w1 = np.where(ok, (m1 - x2) / span, 0.5)
+    return x1, x2, w1
+
+
+def _clip_g(x: FloatArray) -> FloatArray:
+    return np.clip(x, -0.98, 0.98)
+
+
+def _const(n: int, *values: float) -> FloatArray:
+    return np.tile(np.array(values, dtype=np.float64), (n, 1))
+
+
+def _hg_starts(m: FloatArray) -> list[FloatArray]:
+    n = m.shape[0]
+    return [_clip_g(m[:, 1:2]), _const(n, 0.5), _const(n, -0.3)]
+
+
+def _cs_starts(m: FloatArray) -> list[FloatArray]:
+    n = m.shape[0]
+    # Invert the CS mean cosine on a fine grid (monotonic in g): start at the table's g.
+    grid = np.linspace(-0.98, 0.98, 197)
+    gcs = np.asarray(cornette_shanks1992_asymmetry(g=grid))
+    start = np.interp(np.clip(m[:, 1], gcs[0], gcs[-1]), gcs, grid)[:, None]
+    return [start, _const(n, 0.5), _const(n, -0.3)]
+
+
+def _dhg_costa_starts(m: FloatArray) -> list[FloatArray]:
+    n = m.shape[0]
+    x1, x2, w1 = _gauss_two_node(m)
+    moment = np.stack([_clip_g(x1), _clip_g(x2), np.clip(w1, 0.02, 0.98)], axis=1)
+    g = _clip_g(m[:, 1])
+    return [
+        moment,
+        np.stack([np.clip(g + 0.2, -0.9, 0.95), np.clip(g - 0.4, -0.9, 0.9), np.full(n, 0.7)], 1),
+        _const(n, 0.8, -0.2, 0.9),
+        _const(n, 0.6, 0.1, 0.5),
+    ]
+
+
+def _dhg_kobe_starts(m: FloatArray) -> list[FloatArray]:
+    n = m.shape[0]
+    x1, x2, w1 = _gauss_two_node(m)
+    moment = np.stack(
+        [np.clip(x1, 0.02, 0.98), np.clip(x2, -0.98, -0.02), np.clip(1.0 - w1, 0.02, 0.98)], 1
+    )
+    g = np.clip(m[:, 1], 0.05, 0.95)
+    return [moment, np.stack([g, np.full(n, -0.3), np.full(n, 0.1)], 1), _const(n, 0.8, -0.5, 0.3)]
+
+
+def _hg_draine_starts(m: FloatArray) -> list[FloatArray]:
+    n = m.shape[0]
+    x1, x2, w1 = _gauss_two_node(m)
+    moment = np.stack(
+        [_clip_g(x1), _clip_g(x2), np.full(n, 1.0), np.clip(1.0 - w1, 0.02, 0.98)], axis=1
+    )
+    return [moment, _const(n, 0.9, 0.5, 10.0, 0.5), _const(n, 0.6, -0.2, 1.0, 0.3)]
+
+
+def _two_term_hg_starts(m: FloatArray) -> list[FloatArray]:
+    n = m.shape[0]
+    # <P_1> = -c b, <P_2> = b^2: b from the second moment, c from the first.
+    b = np.clip(np.sqrt(np.clip(m[:, 2], 0.0, None)), 0.02, 0.98)
+    c = np.clip(-m[:, 1] / b, -0.98, 0.98)
+    return [np.stack([b, c], 1), _const(n, 0.5, -0.5), _const(n, 0.9, -0.9)]
+
+
+def _forward_lobe_first(p: FloatArray) -> FloatArray:
+    """Costa's DHG with g1 >= g2 (swapping the lobes with alpha -> 1 - alpha)."""
+    out = p.copy()
+    swap = p[:, 0] < p[:, 1]
+    out[swap, 0], out[swap, 1], out[swap, 2] = p[swap, 1], p[swap, 0], 1.0 - p[swap, 2]
+    return out
+
+
 # ------------------------------------------------------------------- registry
 
 
 @dataclass(frozen=True)
 class AnalyticModel:
-    """One analytic phase function, by name.
+    """One analytic phase function, by name: its formula, parameters and source.
+
+    Everything that reads a phase model (the TOML configuration, the presets,
+    :func:`~dustoptics.scattering.fit.fit_phase`, the sky's fitted
+    approximations) reads this record; nothing lists the models a second time.
 
     Attributes
     ----------
     name : str
-        Registry name (the function's name).
+        Registry name (the function's name, author and year).
     phase : callable
-        ``phase(mu, **parameters)`` [sr^-1].
+        ``phase(mu, **parameters)`` [sr^-1], with its range checks.
     asymmetry : callable
         ``asymmetry(**parameters)``, the mean cosine [-].
     parameters : tuple of str
-        Names of the keyword parameters.
+        Names of the keyword parameters, in order.
     citation : str
         Where the model is defined.
+    formula : str
+        The model in words and symbols (``mu = cos(theta)``).
+    aliases : tuple of str
+        Other accepted spellings (hyphenated, short) of :attr:`name`.
+    kernel : callable or None
+        ``kernel(mu, *parameters)``: the same formula as :attr:`phase`
+        without range checks, for arrays that are already valid.
+    bounds : tuple of (float, float)
+        Per parameter, the open range a fit searches (empty: not fitted).
+    starts : callable or None
+        ``starts(moments)``: starting points (a list of arrays, shape
+        ``(n, k)``) from the Legendre moments ``<P_0..P_3>`` of ``n`` tables
+        (shape ``(n, 4)``).
+    gradient : callable or None
+        ``gradient(mu, p)`` -> ``(value, d value / d p)``, shapes ``(n, m)``
+        and ``(n, m, k)``, for parameters ``p`` of shape ``(n, k)`` and
+        ``mu`` of shape ``(m,)``: the analytic derivatives a fit uses.
+    canonical : callable or None
+        ``canonical(p)``: the one ordering of equivalent parameter sets a fit
+        reports (a two-lobe model's lobes), or None to report as found.
     """
 
     name: str
@@ -938,76 +1215,206 @@ class AnalyticModel:
     asymmetry: Callable[..., FloatOrArray]
     parameters: tuple[str, ...]
     citation: str
+    formula: str = ""
+    aliases: tuple[str, ...] = ()
+    kernel: Callable[..., FloatArray] | None = None
+    bounds: tuple[tuple[float, float], ...] = ()
+    starts: Callable[[FloatArray], list[FloatArray]] | None = None
+    gradient: Callable[[FloatArray, FloatArray], tuple[FloatArray, FloatArray]] | None = None
+    canonical: Callable[[FloatArray], FloatArray] | None = None
+
+    @property
+    def fittable(self) -> bool:
+        """Whether :func:`~dustoptics.scattering.fit.fit_phase` can fit it."""
+        return self.gradient is not None and self.starts is not None and bool(self.bounds)
 
 
-ANALYTIC_MODELS: Final[Mapping[str, AnalyticModel]] = MappingProxyType(
-    {
-        m.name: m
-        for m in (
-            AnalyticModel("rayleigh", rayleigh, rayleigh_asymmetry, (), CHANDRASEKHAR_1950),
-            AnalyticModel(
-                "rayleigh_depolarized",
-                rayleigh_depolarized,
-                rayleigh_depolarized_asymmetry,
-                ("depolarization",),
-                f"{CHANDRASEKHAR_1950}; {BUCHOLTZ_1995}",
-            ),
-            AnalyticModel(
-                "rayleigh_penndorf1957",
-                rayleigh_penndorf1957,
-                rayleigh_penndorf1957_asymmetry,
-                (),
-                f"{PENNDORF_1957}; as printed in {COSTA_2021}",
-            ),
-            AnalyticModel(
-                "henyey_greenstein",
-                henyey_greenstein,
-                henyey_greenstein_asymmetry,
-                ("g",),
-                HENYEY_GREENSTEIN_1941,
-            ),
-            AnalyticModel(
-                "dhg_costa2021",
-                dhg_costa2021,
-                dhg_costa2021_asymmetry,
-                ("g1", "g2", "alpha"),
-                COSTA_2021,
-            ),
-            AnalyticModel(
-                "dhg_kobe2026", dhg_kobe2026, dhg_kobe2026_asymmetry, ("g1", "g2", "f"), KOBE_2026
-            ),
-            AnalyticModel(
-                "cornette_shanks1992",
-                cornette_shanks1992,
-                cornette_shanks1992_asymmetry,
-                ("g",),
-                CORNETTE_SHANKS_1992,
-            ),
-            AnalyticModel(
-                "draine2003", draine2003, draine2003_asymmetry, ("g", "alpha"), DRAINE_2003
-            ),
-            AnalyticModel(
-                "hg_draine_jendersie_deon2023",
-                hg_draine_jendersie_deon2023,
-                hg_draine_jendersie_deon2023_asymmetry,
-                ("g_hg", "g_d", "alpha", "w_d"),
-                JENDERSIE_DEON_2023,
-            ),
+_REGISTRY: dict[str, AnalyticModel] = {}
+_ALIASES: dict[str, str] = {}
+
+#: Every analytic phase model, by name (a read-only view of the registry).
+ANALYTIC_MODELS: Final[Mapping[str, AnalyticModel]] = MappingProxyType(_REGISTRY)
+
+#: Other spellings of the models' names (hyphenated, short), each to its registry name.
+ANALYTIC_MODEL_ALIASES: Final[Mapping[str, str]] = MappingProxyType(_ALIASES)
+
+
+def register_analytic_model(model: AnalyticModel) -> AnalyticModel:
+    """Add a phase model to :data:`ANALYTIC_MODELS` (its aliases to :data:`ANALYTIC_MODEL_ALIASES`).
+
+    The package's own models are registered this way when this module is
+    imported; a model registered later is read like them by the TOML
+    configuration and, with ``bounds``, ``starts`` and ``gradient``, by
+    :func:`~dustoptics.scattering.fit.fit_phase`.
+
+    Parameters
+    ----------
+    model : AnalyticModel
+        The record.
+
+    Returns
+    -------
+    AnalyticModel
+        ``model`` itself.
+
+    Raises
+    ------
+    ValueError
+        A name or alias already taken; ``bounds`` that do not give one range
+        per parameter; a fittable model without ``kernel``.
+    """
+    for label in (model.name, *model.aliases):
+        if label in _REGISTRY or label in _ALIASES:
+            raise ValueError(f"phase model name or alias {label!r} is already registered")
+    if model.bounds and len(model.bounds) != len(model.parameters):
+        raise ValueError(
+            f"bounds of {model.name!r} must give one (low, high) per parameter "
+            f"{model.parameters}; got {len(model.bounds)}"
         )
-    }
-)
+    if model.fittable and model.kernel is None:
+        raise ValueError(f"fittable phase model {model.name!r} needs a kernel")
+    _REGISTRY[model.name] = model
+    for alias in model.aliases:
+        _ALIASES[alias] = model.name
+    return model
+
+
+_G: Final = (-1.0, 1.0)  # the open range of an asymmetry parameter g
+
+# The package's own models, in the order of the module docstring.
+for _model in (
+    AnalyticModel(
+        "rayleigh",
+        rayleigh,
+        rayleigh_asymmetry,
+        (),
+        CHANDRASEKHAR_1950,
+        formula="3 (1 + mu^2) / (16 pi)",
+    ),
+    AnalyticModel(
+        "rayleigh_depolarized",
+        rayleigh_depolarized,
+        rayleigh_depolarized_asymmetry,
+        ("depolarization",),
+        f"{CHANDRASEKHAR_1950}; {BUCHOLTZ_1995}",
+        formula="3 ((1 + 3 gamma) + (1 - gamma) mu^2) / (16 pi (1 + 2 gamma)), "
+        "gamma = delta / (2 - delta), delta the depolarization factor",
+        aliases=("rayleigh-depolarized",),
+    ),
+    AnalyticModel(
+        "rayleigh_penndorf1957",
+        rayleigh_penndorf1957,
+        rayleigh_penndorf1957_asymmetry,
+        (),
+        f"{PENNDORF_1957}; as printed in {COSTA_2021}",
+        formula="0.7629 (1 + 0.932 mu^2) / (4 pi)",
+        aliases=("rayleigh-penndorf1957",),
+    ),
+    AnalyticModel(
+        "henyey_greenstein",
+        henyey_greenstein,
+        henyey_greenstein_asymmetry,
+        ("g",),
+        HENYEY_GREENSTEIN_1941,
+        formula="HG(g) = (1 - g^2) / (4 pi (1 + g^2 - 2 g mu)^(3/2))",
+        aliases=("henyey-greenstein", "hg"),
+        kernel=_hg,
+        bounds=(_G,),
+        starts=_hg_starts,
+        gradient=_hg_gradient,
+    ),
+    AnalyticModel(
+        "dhg_costa2021",
+        dhg_costa2021,
+        dhg_costa2021_asymmetry,
+        ("g1", "g2", "alpha"),
+        COSTA_2021,
+        formula="alpha HG(g1) + (1 - alpha) HG(g2)",
+        aliases=("dhg-costa2021", "dhg"),
+        kernel=_dhg_costa,
+        bounds=(_G, _G, (0.0, 1.0)),
+        starts=_dhg_costa_starts,
+        gradient=_dhg_costa_gradient,
+        canonical=_forward_lobe_first,
+    ),
+    AnalyticModel(
+        "dhg_kobe2026",
+        dhg_kobe2026,
+        dhg_kobe2026_asymmetry,
+        ("g1", "g2", "f"),
+        KOBE_2026,
+        formula="(1 - f) HG(g1) + f HG(g2), g1 >= 0 >= g2",
+        aliases=("dhg-kobe2026", "dhg-kobe"),
+        kernel=_dhg_kobe,
+        bounds=((0.0, 1.0), (-1.0, 0.0), (0.0, 1.0)),
+        starts=_dhg_kobe_starts,
+        gradient=_dhg_kobe_gradient,
+    ),
+    AnalyticModel(
+        "cornette_shanks1992",
+        cornette_shanks1992,
+        cornette_shanks1992_asymmetry,
+        ("g",),
+        CORNETTE_SHANKS_1992,
+        formula="3 (1 - g^2) (1 + mu^2) / (8 pi (2 + g^2) (1 + g^2 - 2 g mu)^(3/2))",
+        aliases=("cornette-shanks1992", "cs"),
+        kernel=_cornette_shanks,
+        bounds=(_G,),
+        starts=_cs_starts,
+        gradient=_cs_gradient,
+    ),
+    AnalyticModel(
+        "draine2003",
+        draine2003,
+        draine2003_asymmetry,
+        ("g", "alpha"),
+        DRAINE_2003,
+        formula="Draine(g, alpha) = HG(g) (1 + alpha mu^2) / (1 + alpha (1 + 2 g^2) / 3)",
+        kernel=_draine,
+    ),
+    AnalyticModel(
+        "hg_draine_jendersie_deon2023",
+        hg_draine_jendersie_deon2023,
+        hg_draine_jendersie_deon2023_asymmetry,
+        ("g_hg", "g_d", "alpha", "w_d"),
+        JENDERSIE_DEON_2023,
+        formula="(1 - w_d) HG(g_hg) + w_d Draine(g_d, alpha), "
+        "Draine(g, a) = HG(g) (1 + a mu^2) / (1 + a (1 + 2 g^2) / 3)",
+        aliases=("hg-draine-jendersie-deon2023", "hg-draine"),
+        kernel=_hg_draine,
+        bounds=(_G, _G, (-1.0, 200.0), (0.0, 1.0)),
+        starts=_hg_draine_starts,
+        gradient=_hg_draine_gradient,
+    ),
+    AnalyticModel(
+        "two_term_hg_hapke2012",
+        two_term_hg_hapke2012,
+        two_term_hg_hapke2012_asymmetry,
+        ("b", "c"),
+        HAPKE_2012,
+        formula="(1 - c)/2 HG(b) + (1 + c)/2 HG(-b) (scattering angle; Hapke's phase "
+        "angle is 180 deg - theta)",
+        aliases=("two-term-hg-hapke2012", "tthg"),
+        kernel=_two_term_hg,
+        bounds=((0.0, 1.0), (-1.0, 1.0)),
+        starts=_two_term_hg_starts,
+        gradient=_two_term_hg_gradient,
+    ),
+):
+    register_analytic_model(_model)
 
 
 def get_analytic_model(name: str) -> AnalyticModel:
-    """The analytic phase function registered as ``name``.
+    """The analytic phase function registered as ``name`` (or one of its aliases).
 
     Raises
     ------
     ValueError
         For an unknown name; the message lists the valid ones.
     """
-    check_choice("name", name, tuple(ANALYTIC_MODELS))
-    return ANALYTIC_MODELS[name]
+    canonical = ANALYTIC_MODEL_ALIASES.get(name, name)
+    check_choice("name", canonical, (*ANALYTIC_MODELS, *ANALYTIC_MODEL_ALIASES))
+    return ANALYTIC_MODELS[canonical]
 
 
 # --------------------------------------------------------- Costa et al. 2021

@@ -67,11 +67,11 @@ so, it does not refine further.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from functools import lru_cache
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -91,11 +91,15 @@ from dustoptics.scattering.mie_derivatives_blocked import (
 )
 from dustoptics.scattering.quadrature import (
     QuadratureDiagnostics,
+    QuadratureSettings,
     _gauss_points,
     _node_weights,
     gauss_legendre,
 )
 from dustoptics.table import Table, TableDerivatives
+
+if TYPE_CHECKING:  # the request's module imports this one
+    from dustoptics.scattering.optics import OpticsRequest
 
 __all__ = [
     "INDEX_PARAMETERS",
@@ -507,6 +511,57 @@ def _cross(
     return {k: np.array(v) for k, v in out.items()}
 
 
+@dataclass(frozen=True)
+class _At:
+    """One wavelength's fixed inputs to the derivative sums."""
+
+    m: complex
+    wavelength_nm: float
+    distribution: SizeDistribution
+    settings: QuadratureSettings
+    mu_out: np.ndarray
+    index_directions: Sequence[complex]
+    dist_parameters: Sequence[str]
+    per_particle: bool
+    n_q: int
+    n_order: int
+    angular_keys: tuple[str, ...]
+
+    @property
+    def k_um(self) -> float:
+        """Wavenumber. [um^-1]"""
+        return 2.0 * math.pi / (self.wavelength_nm * 1e-3)
+
+    @property
+    def area(self) -> float:
+        """pi / k^2, the efficiencies' unit of area. [um^2]"""
+        return math.pi / self.k_um**2
+
+    @property
+    def lossless(self) -> bool:
+        return self.m.imag == 0.0
+
+    @property
+    def n_dist(self) -> int:
+        return len(self.dist_parameters)
+
+    def common(self) -> dict[str, Any]:
+        """The keywords every sum of this wavelength shares."""
+        return {
+            "k_um": self.k_um,
+            "dist_parameters": self.dist_parameters,
+            "per_particle": self.per_particle,
+            # The angular m derivatives (half the work a sphere) only for index parameters.
+            "with_m": bool(self.index_directions),
+        }
+
+    def rule(self, panels: np.ndarray, *, halves: bool) -> tuple[np.ndarray, np.ndarray]:
+        """Nodes (size parameters) and rule weights of panels, fine or coarse."""
+        return _rule_nodes(
+            panels, wavelength_nm=self.wavelength_nm, settings=self.settings, halves=halves
+        )
+
+
 def _one_wavelength(
     i: int,
     table: Table,
@@ -518,140 +573,191 @@ def _one_wavelength(
     with_radius: bool,
     per_particle: bool,
 ) -> _Wavelength:
-    wavelength_nm = float(table.wavelength_nm[i])
-    k_um = 2.0 * math.pi / (wavelength_nm * 1e-3)
-    area = math.pi / k_um**2
-    distribution = diagnostics.distribution
-    settings = diagnostics.settings
     matrix = table.f12 is not None
     n_order = 0 if table.alpha1 is None else int(table.alpha1.shape[1])
-    n_q = 4 if (matrix or n_order) else 1
-    angular_keys = ("phase", "f12", "f33", "f34")[: 4 if matrix else 1]
-    mu_out = np.cos(np.deg2rad(np.asarray(table.theta_deg, dtype=np.float64)))
-    lossless = m.imag == 0.0
-    n_dist = len(dist_parameters)
+    at = _At(
+        m=m,
+        wavelength_nm=float(table.wavelength_nm[i]),
+        distribution=diagnostics.distribution,
+        settings=diagnostics.settings,
+        mu_out=np.cos(np.deg2rad(np.asarray(table.theta_deg, dtype=np.float64))),
+        index_directions=index_directions,
+        dist_parameters=dist_parameters,
+        per_particle=per_particle,
+        n_q=4 if (matrix or n_order) else 1,
+        n_order=n_order,
+        angular_keys=("phase", "f12", "f33", "f34")[: 4 if matrix else 1],
+    )
+    if at.distribution.is_monodisperse:
+        return _monodisperse(at, with_radius=with_radius)
+    greek_panels = None if diagnostics.expansion_panels is None else diagnostics.expansion_panels[i]
+    values, errors, phase_sums = _angular_outputs(at, diagnostics.panels[i], greek_panels)
+    cross = _cross_outputs(
+        at, diagnostics.panels[i], diagnostics.cross_section_panels[i], phase_sums
+    )
+    for key, (v, e) in cross.items():
+        values[key] = v
+        errors[key] = e
+    return _Wavelength(values, errors)
+
+
+def _monodisperse(at: _At, *, with_radius: bool) -> _Wavelength:
+    """One sphere: its derivatives exactly, with zero error estimates."""
+    k_um, per_particle, n_q = at.k_um, at.per_particle, at.n_q
+    x = np.array([k_um * at.distribution.mean_radius_um])
+    ang, dang, sums, dsums = _accumulate(
+        at.m, x, np.ones((1, 1)), np.ascontiguousarray(at.mu_out), per_particle, with_radius
+    )
+    s = _Sums(ang, dang, sums, dsums)
+    directions = list(at.index_directions)
+    ang_d = _angular(s, 0, directions, per_particle=per_particle, n_q=n_q, project=lambda f: f)
+    cross = _cross(s, 0, directions, per_particle=per_particle, area=at.area, lossless=at.lossless)
+    if with_radius:
+        # d/dr = k d/dx: the kernel's x direction, read as a direction "n" of weight k.
+        radial = _Sums(ang, dang[[2, 2]] * k_um, sums, dsums[[2, 2]] * k_um)
+        ang_r = _angular(
+            radial, 0, [1.0 + 0j], per_particle=per_particle, n_q=n_q, project=lambda f: f
+        )
+        cross_r = _cross(
+            radial, 0, [1.0 + 0j], per_particle=per_particle, area=at.area, lossless=False
+        )
+        if at.lossless:
+            cross_r["cext_um2"] = cross_r["csca_um2"]
+        ang_d = np.concatenate([ang_r, ang_d])
+        cross = {k: np.concatenate([cross_r[k], cross[k]]) for k in cross}
     values: dict[str, np.ndarray] = {}
     errors: dict[str, np.ndarray] = {}
+    for q, key in enumerate(at.angular_keys):
+        values[key] = ang_d[:, q]
+        errors[key] = np.zeros(ang_d.shape[0])
+    for key, v in cross.items():
+        values[key] = v
+        errors[key] = np.zeros(v.shape[0])
+    return _Wavelength(values, errors)
 
-    if distribution.is_monodisperse:
-        x = np.array([k_um * distribution.mean_radius_um])
-        ang, dang, sums, dsums = _accumulate(
-            m, x, np.ones((1, 1)), np.ascontiguousarray(mu_out), per_particle, with_radius
-        )
-        s = _Sums(ang, dang, sums, dsums)
-        directions = list(index_directions)
-        ang_d = _angular(s, 0, directions, per_particle=per_particle, n_q=n_q, project=lambda f: f)
-        cross = _cross(s, 0, directions, per_particle=per_particle, area=area, lossless=lossless)
-        if with_radius:
-            # d/dr = k d/dx: the kernel's x direction, read as a direction "n" of weight k.
-            radial = _Sums(ang, dang[[2, 2]] * k_um, sums, dsums[[2, 2]] * k_um)
-            ang_r = _angular(
-                radial, 0, [1.0 + 0j], per_particle=per_particle, n_q=n_q, project=lambda f: f
-            )
-            cross_r = _cross(
-                radial, 0, [1.0 + 0j], per_particle=per_particle, area=area, lossless=False
-            )
-            if lossless:
-                cross_r["cext_um2"] = cross_r["csca_um2"]
-            ang_d = np.concatenate([ang_r, ang_d])
-            cross = {k: np.concatenate([cross_r[k], cross[k]]) for k in cross}
-        for q, key in enumerate(angular_keys):
-            values[key] = ang_d[:, q]
-            errors[key] = np.zeros(ang_d.shape[0])
-        for key, v in cross.items():
-            values[key] = v
-            errors[key] = np.zeros(v.shape[0])
-        return _Wavelength(values, errors)
 
-    # Angles: at the output angles, or at Gauss angles projected on Legendre
-    # polynomials when there are fewer of those (as the table's phase function).
-    panels = diagnostics.panels[i]
-    x_fine, rule_fine = _rule_nodes(
-        panels, wavelength_nm=wavelength_nm, settings=settings, halves=True
-    )
-    x_coarse, rule_coarse = _rule_nodes(
-        panels, wavelength_nm=wavelength_nm, settings=settings, halves=False
-    )
-    common = {
-        "k_um": k_um,
-        "dist_parameters": dist_parameters,
-        "per_particle": per_particle,
-        # The angular m derivatives (half the work a sphere) only for index parameters.
-        "with_m": bool(index_directions),
-    }
+def _angular_outputs(
+    at: _At, panels: np.ndarray, greek_panels: np.ndarray | None
+) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray], list[tuple[np.ndarray, np.ndarray]]]:
+    """The angular outputs' derivatives and error estimates (and the expansion
+    coefficients'), with the fine and coarse rules' sums for the cross-sections."""
+    x_fine, rule_fine = at.rule(panels, halves=True)
+    x_coarse, rule_coarse = at.rule(panels, halves=False)
     x_top = max(float(x_fine.max()), float(x_coarse.max()), 1e-3)
     nmax = mie.wiscombe_nmax(x_top * 1.0001 + 1.0)
     n_half = 16 * ((nmax + 1 + 15) // 16)
-    pair = []
-    greek_pair = []
-    # Sums and their m derivatives of the fine and the coarse rule (for the cross-sections).
-    phase_sums: list[tuple[np.ndarray, np.ndarray]] = []
-    # The expansion coefficients' own panels (refined to their own tolerance), if
-    # the table has them and they differ from the phase function's.
-    greek_panels = None if diagnostics.expansion_panels is None else diagnostics.expansion_panels[i]
-    own_greek = (
-        bool(n_order) and greek_panels is not None and not np.array_equal(greek_panels, panels)
-    )
-    if 2 * n_half < mu_out.size or n_order:
-        lmax = 2 * nmax
-        for x, rule in ((x_fine, rule_fine), (x_coarse, rule_coarse)):
-            s_ = _legendre_sums(m, distribution, x, rule, lmax=lmax, n_stokes=n_q, **common)  # type: ignore[arg-type]
-            phase_sums.append((s_.sums, s_.dsums))
-            # In Legendre coefficients (the derivative is linear in them).
-            pair.append(
-                _angular(
-                    s_,
-                    n_dist,
-                    index_directions,
-                    per_particle=per_particle,
-                    n_q=n_q,
-                    project=lambda f: f,
-                )
-            )
-            if n_order and not own_greek:
-                greek_pair.append(_greek(s_, n_dist, index_directions, per_particle, n_order, lmax))
-        if own_greek:
-            assert greek_panels is not None
-            for halves in (True, False):
-                x, rule = _rule_nodes(
-                    greek_panels, wavelength_nm=wavelength_nm, settings=settings, halves=halves
-                )
-                s_ = _legendre_sums(m, distribution, x, rule, lmax=lmax, n_stokes=4, **common)  # type: ignore[arg-type]
-                greek_pair.append(_greek(s_, n_dist, index_directions, per_particle, n_order, lmax))
-        # The fine rule's derivatives and their differences from the coarse rule's,
-        # at the output angles, all rows at once.
-        shape = pair[0].shape
-        rows = np.concatenate([pair[0], pair[0] - pair[1]]).reshape(-1, shape[-1])
-        found_at = _legendre_evaluate_rows(rows, np.ascontiguousarray(mu_out))
-        fine, diff = found_at.reshape((2, *shape[:-1], mu_out.size))
+    rules = ((x_fine, rule_fine), (x_coarse, rule_coarse))
+    # Angles: at the output angles, or at Gauss angles projected on Legendre
+    # polynomials when there are fewer of those (as the table's phase function).
+    if 2 * n_half < at.mu_out.size or at.n_order:
+        fine, diff, greek_pair, phase_sums = _legendre_outputs(
+            at, rules, panels, greek_panels, nmax
+        )
     else:
-        mu = np.ascontiguousarray(mu_out)
-        for x, rule in ((x_fine, rule_fine), (x_coarse, rule_coarse)):
-            s_ = _sums(m, distribution, x, rule, mu=mu, n_stokes=n_q, **common)  # type: ignore[arg-type]
-            phase_sums.append((s_.sums, s_.dsums))
-            pair.append(
-                _angular(
-                    s_,
-                    n_dist,
-                    index_directions,
-                    per_particle=per_particle,
-                    n_q=n_q,
-                    project=lambda f: f,
-                )
-            )
-        fine, diff = pair[0], pair[0] - pair[1]
-    for q, key in enumerate(angular_keys):
+        fine, diff, phase_sums = _direct_outputs(at, rules)
+        greek_pair = []
+    values: dict[str, np.ndarray] = {}
+    errors: dict[str, np.ndarray] = {}
+    for q, key in enumerate(at.angular_keys):
         values[key] = fine[:, q]
         errors[key] = np.max(np.abs(diff[:, q]), axis=-1)
     if greek_pair:
         for j, key in enumerate(EXPANSION_KEYS):
             values[key] = greek_pair[0][:, j]
             errors[key] = np.max(np.abs(greek_pair[0][:, j] - greek_pair[1][:, j]), axis=-1)
+    return values, errors, phase_sums
 
-    # The cross-section panels continue from the phase function's: most are the
-    # same panels, whose rules the angular sums above have summed already. Only
-    # the panels that differ are summed again (their sums without angles).
-    cross_panels = diagnostics.cross_section_panels[i]
+
+def _legendre_outputs(
+    at: _At,
+    rules: Sequence[tuple[np.ndarray, np.ndarray]],
+    panels: np.ndarray,
+    greek_panels: np.ndarray | None,
+    nmax: int,
+) -> tuple[np.ndarray, np.ndarray, list[np.ndarray], list[tuple[np.ndarray, np.ndarray]]]:
+    """Angular derivatives in Legendre coefficients, evaluated at the output
+    angles: (fine rule's, fine minus coarse, expansion pair, rules' sums)."""
+    n_dist, directions, per_particle, n_order = (
+        at.n_dist,
+        at.index_directions,
+        at.per_particle,
+        at.n_order,
+    )
+    # The expansion coefficients' own panels (refined to their own tolerance), if
+    # the table has them and they differ from the phase function's.
+    own_greek = (
+        bool(n_order) and greek_panels is not None and not np.array_equal(greek_panels, panels)
+    )
+    lmax = 2 * nmax
+    pair = []
+    greek_pair = []
+    phase_sums: list[tuple[np.ndarray, np.ndarray]] = []
+    for x, rule in rules:
+        s_ = _legendre_sums(
+            at.m, at.distribution, x, rule, lmax=lmax, n_stokes=at.n_q, **at.common()
+        )
+        phase_sums.append((s_.sums, s_.dsums))
+        # In Legendre coefficients (the derivative is linear in them).
+        pair.append(
+            _angular(
+                s_, n_dist, directions, per_particle=per_particle, n_q=at.n_q, project=lambda f: f
+            )
+        )
+        if n_order and not own_greek:
+            greek_pair.append(_greek(s_, n_dist, directions, per_particle, n_order, lmax))
+    if own_greek:
+        assert greek_panels is not None
+        for halves in (True, False):
+            x, rule = at.rule(greek_panels, halves=halves)
+            s_ = _legendre_sums(
+                at.m, at.distribution, x, rule, lmax=lmax, n_stokes=4, **at.common()
+            )
+            greek_pair.append(_greek(s_, n_dist, directions, per_particle, n_order, lmax))
+    # The fine rule's derivatives and their differences from the coarse rule's,
+    # at the output angles, all rows at once.
+    shape = pair[0].shape
+    rows = np.concatenate([pair[0], pair[0] - pair[1]]).reshape(-1, shape[-1])
+    found_at = _legendre_evaluate_rows(rows, np.ascontiguousarray(at.mu_out))
+    fine, diff = found_at.reshape((2, *shape[:-1], at.mu_out.size))
+    return fine, diff, greek_pair, phase_sums
+
+
+def _direct_outputs(
+    at: _At, rules: Sequence[tuple[np.ndarray, np.ndarray]]
+) -> tuple[np.ndarray, np.ndarray, list[tuple[np.ndarray, np.ndarray]]]:
+    """Angular derivatives summed at the output angles: (fine rule's, fine minus
+    coarse, rules' sums)."""
+    mu = np.ascontiguousarray(at.mu_out)
+    pair = []
+    phase_sums: list[tuple[np.ndarray, np.ndarray]] = []
+    for x, rule in rules:
+        s_ = _sums(at.m, at.distribution, x, rule, mu=mu, n_stokes=at.n_q, **at.common())
+        phase_sums.append((s_.sums, s_.dsums))
+        pair.append(
+            _angular(
+                s_,
+                at.n_dist,
+                at.index_directions,
+                per_particle=at.per_particle,
+                n_q=at.n_q,
+                project=lambda f: f,
+            )
+        )
+    return pair[0], pair[0] - pair[1], phase_sums
+
+
+def _cross_outputs(
+    at: _At,
+    panels: np.ndarray,
+    cross_panels: np.ndarray,
+    phase_sums: Sequence[tuple[np.ndarray, np.ndarray]],
+) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """The cross-sections' and g's derivatives and error estimates, by key.
+
+    The cross-section panels continue from the phase function's: most are the
+    same panels, whose rules the angular sums have summed already.  Only the
+    panels that differ are summed again (their sums without angles).
+    """
     only_phase = _panels_not_in(panels, cross_panels)
     only_cross = _panels_not_in(cross_panels, panels)
     found = []
@@ -660,10 +766,8 @@ def _one_wavelength(
         for part, sign in ((only_phase, -1.0), (only_cross, 1.0)):
             if part.size == 0:
                 continue
-            x, rule = _rule_nodes(
-                part, wavelength_nm=wavelength_nm, settings=settings, halves=halves
-            )
-            s = _sums(m, distribution, x, rule, mu=np.empty(0), boundary=False, **common)  # type: ignore[arg-type]
+            x, rule = at.rule(part, halves=halves)
+            s = _sums(at.m, at.distribution, x, rule, mu=np.empty(0), boundary=False, **at.common())
             sums = sums + sign * s.sums
             dsums = dsums + sign * s.dsums
         n_w = sums.shape[0]
@@ -671,41 +775,32 @@ def _one_wavelength(
         found.append(
             _cross(
                 s,
-                n_dist,
-                index_directions,
-                per_particle=per_particle,
-                area=area,
-                lossless=lossless,
+                at.n_dist,
+                at.index_directions,
+                per_particle=at.per_particle,
+                area=at.area,
+                lossless=at.lossless,
             )
         )
-    for key, v in found[0].items():
-        values[key] = v
-        errors[key] = np.abs(v - found[1][key])
-    return _Wavelength(values, errors)
+    return {key: (v, np.abs(v - found[1][key])) for key, v in found[0].items()}
 
 
 def table_derivatives(
-    table: Table,
-    *,
-    parameters: Sequence[str],
-    index_directions: Mapping[str, np.ndarray],
-    weighting: str,
-    workers: int = 1,
+    table: Table, request: OpticsRequest, *, workers: int = 1
 ) -> TableDerivatives:
     """Derivatives of a table of :func:`~dustoptics.scattering.optics.compute_optics`.
 
     Parameters
     ----------
     table : Table
-        A table computed by ``compute_optics`` in this process (its
+        The table computed for ``request`` in this process (its
         ``diagnostics`` hold the radius panels), of homogeneous spheres.
-    parameters : sequence of str
-        Checked names (:func:`check_parameters`), in the order wanted.
-    index_directions : mapping of str to numpy.ndarray
-        For each parameter of the refractive index, dm/dp per wavelength
-        (complex; ``"n"``: 1, ``"k"``: 1j). [-] per unit of the parameter
-    weighting : {"scattering", "number"}
-        The table's weighting.
+    request : OpticsRequest
+        Its request (:func:`~dustoptics.scattering.optics.optics_request`):
+        the parameters (``request.derivatives``, checked, in the order
+        wanted), the refractive index whose parameters move m (dm/dp per
+        wavelength: ``"n"``: 1, ``"k"``: 1j, a mixture's by the chain rule)
+        and the weighting.
     workers : int
         Threads over wavelengths; the result does not depend on it.
 
@@ -717,6 +812,8 @@ def table_derivatives(
         polydisperse population), ``g``, ``cext_um2``, ``csca_um2``,
         ``cback_um2``, with error estimates (module docstring).
     """
+    parameters = request.derivatives
+    directions = index_directions(request.refractive_index, parameters, request.wavelength_nm)
     diagnostics = table.diagnostics
     if diagnostics is None or table.refractive_index is None:
         raise ValueError(
@@ -724,13 +821,13 @@ def table_derivatives(
             "compute_optics returns, not one read from a file or changed"
         )
     distribution = diagnostics.distribution
-    index_names = [p for p in parameters if p in index_directions]
+    index_names = [p for p in parameters if p in directions]
     with_radius = distribution.is_monodisperse and "radius_um" in parameters
     dist_parameters = (
-        [] if distribution.is_monodisperse else [p for p in parameters if p not in index_directions]
+        [] if distribution.is_monodisperse else [p for p in parameters if p not in directions]
     )
     order = (["radius_um"] if with_radius else []) + dist_parameters + index_names
-    per_particle = weighting == "number"
+    per_particle = request.per_particle
     m_all = np.asarray(table.refractive_index)
 
     def one(i: int) -> _Wavelength:
@@ -739,7 +836,7 @@ def table_derivatives(
             table,
             diagnostics,
             m=complex(m_all[i]),
-            index_directions=[complex(index_directions[p][i]) for p in index_names],
+            index_directions=[complex(directions[p][i]) for p in index_names],
             dist_parameters=dist_parameters,
             with_radius=with_radius,
             per_particle=per_particle,

@@ -3,7 +3,8 @@
 :func:`sweep` computes a configuration (:mod:`dustoptics.models.config`)
 over axes of its inputs (:mod:`dustoptics.sweep.spec`), sharing the Mie work
 of points that differ only in their size distribution
-(:mod:`dustoptics.sweep.shared`), on a Dask cluster, stored chunk by chunk in
+(:mod:`dustoptics.sweep.shared`), each chunk one task (:mod:`dustoptics.sweep.chunk`),
+on a Dask cluster, stored chunk by chunk in
 a resumable Zarr store (:mod:`dustoptics.sweep.run`) that one run writes at a
 time and whose chunks carry their digests (:mod:`dustoptics.sweep.store`,
 :func:`verify_store`); :mod:`dustoptics.sweep.lookup`
@@ -11,8 +12,9 @@ turns a sweep over effective radius into a 3-D texture for renderers.  Needs
 the ``sweep`` extra (dask[distributed], xarray, zarr).
 """
 
+from dustoptics.sweep.chunk import compute_chunk
 from dustoptics.sweep.lookup import write_lookup
-from dustoptics.sweep.run import compute_chunk, local_cluster, sweep
+from dustoptics.sweep.run import local_cluster, sweep
 from dustoptics.sweep.spec import Axis, SweepSpec, load_sweep
 from dustoptics.sweep.store import verify_store
 

@@ -31,22 +31,20 @@ sweep gives the same bytes.
 from __future__ import annotations
 
 import contextlib
-import ctypes
 import fcntl
 import json
 import math
 import os
 import pickle
-import platform
 import shutil
 import signal
 import sys
+import tempfile
 import threading
 import time
-import warnings
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, TextIO
 
@@ -54,14 +52,12 @@ import numpy as np
 
 from dustoptics._validation import BudgetError, check_budget
 from dustoptics.io._atomic import write_files
-from dustoptics.models.compute import build_table
 from dustoptics.models.config import BuildConfig
 from dustoptics.scattering import optics
-from dustoptics.scattering.optics import resolve_refractive_index
-from dustoptics.scattering.quadrature import QuadratureSettings
 from dustoptics.sweep import _fork  # noqa: F401  (Dask's pools renewed in forked children)
+from dustoptics.sweep.chunk import PER_WAVELENGTH, ChunkResult, compute_chunk, shareable
 from dustoptics.sweep.run_token import RunToken as _RunToken
-from dustoptics.sweep.spec import SweepSpec, _load_points, parse_points
+from dustoptics.sweep.spec import SweepSpec, _load_points
 from dustoptics.sweep.store import (
     MARKERS,
     StoreLayout,
@@ -72,20 +68,7 @@ from dustoptics.sweep.store import (
 )
 from dustoptics.table import Provenance, canonical_json, software_versions
 
-__all__ = ["ChunkResult", "compute_chunk", "local_cluster", "sweep"]
-
-#: Variables per point and wavelength (besides ``phase``), with units and meaning.
-_PER_WAVELENGTH = {
-    "cext_um2": ("um2", "mean extinction cross-section per particle"),
-    "csca_um2": ("um2", "mean scattering cross-section per particle"),
-    "g": ("1", "asymmetry parameter 2 pi int P mu dmu"),
-    "error_estimate": ("1", "estimated largest relative error of the phase function at any angle"),
-    "cross_section_error_estimate": (
-        "1",
-        "estimated error of cext, csca (relative) and g (absolute)",
-    ),
-    "n_nodes": ("1", "radius nodes of the quadrature of the phase function"),
-}
+__all__ = ["local_cluster", "sweep"]
 
 #: Blocks of wavelengths by default.  Chunks of the benchmark sweep take
 #: 0.5-3 s; the last to finish leaves the other workers idle, about half a
@@ -97,6 +80,8 @@ _WAVELENGTH_BLOCKS = 24
 
 def _require_extra() -> tuple[Any, Any, Any]:
     """xarray, zarr and dask.distributed, or an ImportError naming the extra."""
+    # Imported here, not at module level: they are the optional 'sweep' extra, and
+    # they add 1.2 s to importing dustoptics.sweep (measured: 1.34 s without them).
     try:
         import distributed
         import xarray
@@ -107,200 +92,6 @@ def _require_extra() -> tuple[Any, Any, Any]:
             f"pip install 'dustoptics[sweep]' ({exc})"
         ) from None
     return xarray, zarr, distributed
-
-
-# ---------------------------------------------------------------------- one chunk
-
-
-@dataclass(frozen=True)
-class ChunkResult:
-    """What a task returns: its arrays and the work it did.
-
-    Attributes
-    ----------
-    arrays : Mapping
-        ``phase`` (points, wavelengths, angles) and the variables of
-        :data:`_PER_WAVELENGTH` (points, wavelengths), points in C order of
-        the chunk.
-    spheres_computed, spheres_weighted : int
-        Spheres whose Mie sums were computed, and sphere-distribution pairs
-        weighted (equal without sharing). [-]
-    seconds : float
-        Time the task took on its worker. [s]
-    cpu_seconds : float
-        CPU time of the thread that ran it: below ``seconds`` by the time it
-        waited (for a core, or for the GIL). [s]
-    """
-
-    arrays: Mapping[str, np.ndarray]
-    spheres_computed: int
-    spheres_weighted: int
-    seconds: float
-    cpu_seconds: float
-
-
-def _shareable(config: BuildConfig) -> bool:
-    return (
-        config.phase.model == "mie"
-        and config.size_distribution is not None
-        and config.size_distribution.build().has_density
-    )
-
-
-# glibc's mallopt parameters (malloc.h).
-_M_TRIM_THRESHOLD, _M_MMAP_THRESHOLD = -1, -3
-_GLIBC_MMAP_THRESHOLD = 128 * 1024  # glibc's default, before any adjustment
-_allocator_lock = threading.Lock()
-_allocator_users = 0
-
-
-@contextmanager
-def _allocations_reused() -> Iterator[None]:
-    """Let glibc reuse freed memory for the duration of a task, in processes
-    whose allocator thresholds were fixed by the environment.
-
-    Dask starts its worker processes with ``MALLOC_TRIM_THRESHOLD_=65536``
-    (``distributed.nanny.pre-spawn-environ``), so that they return memory to
-    the operating system.  Fixing a threshold also stops glibc from raising
-    its mmap threshold, so every array above 128 KiB is a fresh mapping
-    whose pages fault in and are zeroed again: a chunk ran 35-40 % slower in
-    a worker than in a plain process (the same four wavelengths of the
-    benchmark sweep, 1.3-1.4 s against 1.8-2.0 s).  While any chunk runs,
-    arrays up to 64 MiB come from the heap and stay there; when the last one
-    ends, the thresholds the environment set (or glibc's defaults) are back
-    and ``malloc_trim`` returns the free memory, as Dask intends.  Elsewhere
-    (other C libraries, or no threshold in the environment) nothing changes.
-    """
-    global _allocator_users
-    fixed = "MALLOC_TRIM_THRESHOLD_" in os.environ or "MALLOC_MMAP_THRESHOLD_" in os.environ
-    libc = None
-    if fixed and sys.platform.startswith("linux") and platform.libc_ver()[0] == "glibc":
-        try:
-            libc = ctypes.CDLL("libc.so.6")
-        except OSError:
-            libc = None
-    if libc is None:
-        yield
-        return
-    with _allocator_lock:
-        _allocator_users += 1
-        if _allocator_users == 1:
-            libc.mallopt(_M_MMAP_THRESHOLD, 64 << 20)
-            libc.mallopt(_M_TRIM_THRESHOLD, 256 << 20)
-    try:
-        yield
-    finally:
-        with _allocator_lock:
-            _allocator_users -= 1
-            if _allocator_users == 0:
-                for name, param, default in (
-                    ("MALLOC_MMAP_THRESHOLD_", _M_MMAP_THRESHOLD, _GLIBC_MMAP_THRESHOLD),
-                    ("MALLOC_TRIM_THRESHOLD_", _M_TRIM_THRESHOLD, 2 * _GLIBC_MMAP_THRESHOLD),
-                ):
-                    try:
-                        value = int(os.environ.get(name, default))
-                    except ValueError:
-                        value = default
-                    libc.mallopt(param, value)
-                libc.malloc_trim(0)
-
-
-def compute_chunk(
-    points: Sequence[Mapping[str, Any]],
-    wl_start: int,
-    wl_stop: int,
-    *,
-    shared: bool = True,
-    allow_large: bool = False,
-) -> ChunkResult:
-    """Compute one chunk: points (TOML data) at wavelengths ``[wl_start, wl_stop)``.
-
-    With ``shared`` (and a polydisperse Mie model), the points, which differ
-    only in their size distribution, share their spheres
-    (:func:`dustoptics.sweep.shared.solve_shared`); otherwise each point is
-    :func:`dustoptics.models.compute.build_table` at those wavelengths, equal
-    to the bit to the same wavelengths of a single build, which refuses a
-    point beyond its budget unless ``allow_large``.
-    """
-    start, cpu = time.perf_counter(), time.thread_time()
-    with _allocations_reused():
-        arrays, computed, weighted = _compute_arrays(points, wl_start, wl_stop, shared, allow_large)
-    return ChunkResult(
-        arrays, computed, weighted, time.perf_counter() - start, time.thread_time() - cpu
-    )
-
-
-def _compute_arrays(
-    points: Sequence[Mapping[str, Any]],
-    wl_start: int,
-    wl_stop: int,
-    shared: bool,
-    allow_large: bool = False,
-) -> tuple[dict[str, np.ndarray], int, int]:
-    """The arrays of :func:`compute_chunk`, and the spheres computed and weighted."""
-    configs = parse_points(points)
-    wl_all = configs[0].wavelengths_nm
-    wl = wl_all[wl_start:wl_stop]
-    theta = configs[0].theta_deg
-    n_p, n_w = len(configs), wl.size
-    arrays = {"phase": np.empty((n_p, n_w, theta.size))}
-    arrays.update({k: np.full((n_p, n_w), np.nan) for k in _PER_WAVELENGTH})
-    computed = weighted = 0
-    if shared and all(_shareable(c) for c in configs):
-        from dustoptics.sweep.shared import solve_shared
-
-        first = configs[0]
-        assert first.material is not None
-        assert first.optics.rtol is not None and first.optics.cross_section_rtol is not None
-        m, _ = resolve_refractive_index(first.material.build(), wl)
-        mu = np.cos(np.deg2rad(theta))
-        dists = [c.size_distribution.build() for c in configs]  # type: ignore[union-attr]
-        buffers: dict[bool, np.ndarray] = {}
-        for w in range(n_w):
-            results, stats = solve_shared(
-                m=complex(m[w]),
-                wavelength_nm=float(wl[w]),
-                mu_out=mu,
-                distributions=dists,
-                per_particle=first.optics.weighting == "number",
-                settings=QuadratureSettings(),
-                rtol=first.optics.rtol,
-                cross_rtol=first.optics.cross_section_rtol,
-                buffers=buffers,
-            )
-            computed += stats.spheres_computed
-            weighted += stats.spheres_weighted
-            for p, r in enumerate(results):
-                if not (np.all(np.isfinite(r.phase)) and np.all(r.phase > 0)):
-                    raise FloatingPointError(
-                        "phase function is not finite and positive; please report this input"
-                    )
-                arrays["phase"][p, w] = r.phase
-                arrays["cext_um2"][p, w] = r.cext
-                arrays["csca_um2"][p, w] = r.csca
-                arrays["g"][p, w] = r.g
-                arrays["error_estimate"][p, w] = r.err_phase
-                arrays["cross_section_error_estimate"][p, w] = r.err_cross
-                arrays["n_nodes"][p, w] = r.n_nodes
-    else:
-        for p, config in enumerate(configs):
-            part = replace(
-                config, optics=replace(config.optics, wavelengths_nm=tuple(float(x) for x in wl))
-            )
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore")
-                table = build_table(part, workers=1, allow_large=allow_large)
-            arrays["phase"][p] = table.phase
-            arrays["g"][p] = table.g
-            for name in ("cext_um2", "csca_um2", "error_estimate", "cross_section_error_estimate"):
-                value = getattr(table, name)
-                if value is not None:
-                    arrays[name][p] = value
-            if table.n_nodes is not None:
-                arrays["n_nodes"][p] = table.n_nodes
-                computed += int(np.sum(table.n_nodes))
-                weighted += int(np.sum(table.n_nodes))
-    return arrays, computed, weighted
 
 
 # ---------------------------------------------------------------------- layout
@@ -375,7 +166,7 @@ def _layout(spec: SweepSpec, n_wl: int, chunk_wavelengths: int | None, max_point
 def _template(spec: SweepSpec, configs: list[BuildConfig], layout: _Layout, method: str) -> Any:
     """The Dataset's coordinates, per-point variables and attributes, with
     lazy (unwritten) placeholders for the computed arrays."""
-    import dask.array as da
+    import dask.array as da  # the optional 'sweep' extra (see _require_extra)
     import xarray as xr
 
     first = configs[0]
@@ -409,7 +200,7 @@ def _template(spec: SweepSpec, configs: list[BuildConfig], layout: _Layout, meth
             },
         )
     }
-    for name, (units, meaning) in _PER_WAVELENGTH.items():
+    for name, (units, meaning) in PER_WAVELENGTH.items():
         data[name] = (
             dims + ("wavelength_nm",),
             da.full(shape + (wl.size,), np.nan, chunks=chunks + (layout.wl_chunk,)),
@@ -461,7 +252,7 @@ def _template(spec: SweepSpec, configs: list[BuildConfig], layout: _Layout, meth
 
 def _store_layout(layout: _Layout) -> StoreLayout:
     """Which files the chunks of ``layout`` write (``phase`` keeps its angles whole)."""
-    return StoreLayout(layout.grid, {"phase": 1, **dict.fromkeys(_PER_WAVELENGTH, 0)})
+    return StoreLayout(layout.grid, {"phase": 1, **dict.fromkeys(PER_WAVELENGTH, 0)})
 
 
 @contextmanager
@@ -492,7 +283,7 @@ def _writing_for(store: Path, run_token: str) -> Iterator[bool]:
 def _write_chunk(store: Path, region: tuple[slice, ...], name: str, result: ChunkResult) -> None:
     """The chunk's arrays, then its completion marker with their digests (written
     last, atomically)."""
-    import zarr
+    import zarr  # the optional 'sweep' extra (see _require_extra)
 
     group = zarr.open_group(str(store), mode="r+", zarr_format=2)
     shape = tuple(s.stop - s.start for s in region[:-1])
@@ -767,7 +558,7 @@ def local_cluster(workers: int | None = None, *, threads: int = 1, processes: bo
         rather than printing every worker's traceback.  Close it (or use it
         as a context manager) when done.
     """
-    import dask
+    import dask  # the optional 'sweep' extra (see _require_extra)
 
     _, _, distributed = _require_extra()
     with dask.config.set(_LOCAL_CLUSTER_CONFIG), _sigint_blocked():
@@ -851,7 +642,7 @@ def _check_cost(
             "command line) to go ahead"
         )
     per_chunk = int(np.prod(layout.axis_chunks)) * layout.wl_chunk
-    arrays = 2.0 * 8.0 * per_chunk * (n_theta + len(_PER_WAVELENGTH))
+    arrays = 2.0 * 8.0 * per_chunk * (n_theta + len(PER_WAVELENGTH))
     solver = max((c.memory_bytes for _, c in mie), default=0.0)
     check_budget(
         "a chunk of the sweep",
@@ -989,23 +780,10 @@ def sweep(
         Without the ``sweep`` extra.
     """
     xr, _, distributed = _require_extra()
-    if not isinstance(max_points, int) or isinstance(max_points, bool) or max_points < 1:
-        raise ValueError(f"max_points must be a positive integer; got {max_points!r}")
-    if chunk_wavelengths is not None and (
-        not isinstance(chunk_wavelengths, int)
-        or isinstance(chunk_wavelengths, bool)
-        or chunk_wavelengths < 1
-    ):
-        raise ValueError(f"chunk_wavelengths must be a positive integer; got {chunk_wavelengths!r}")
-    if workers is not None and (
-        not isinstance(workers, int) or isinstance(workers, bool) or workers < 1
-    ):
-        raise ValueError(f"workers must be a positive integer; got {workers!r}")
-    if not isinstance(allow_large, bool):
-        raise TypeError(f"allow_large must be True or False; got {allow_large!r}")
+    _check_options(max_points, chunk_wavelengths, workers, allow_large)
     spec, data, configs, costs = _load(config, over, allow_large)
     layout = _layout(spec, configs[0].wavelengths_nm.size, chunk_wavelengths, max_points)
-    method = "shared" if shared and all(_shareable(c) for c in configs) else "independent"
+    method = "shared" if shared and all(shareable(c) for c in configs) else "independent"
     template = _template(spec, configs, layout, method)
     identity = canonical_json(
         {
@@ -1016,10 +794,8 @@ def sweep(
         }
     )
     netcdf = out is not None and str(out).endswith(".nc")
-    temporary = None
+    temporary: str | None = None
     if out is None:
-        import tempfile
-
         temporary = tempfile.mkdtemp(prefix="dustoptics-sweep-")
         store = Path(temporary) / "sweep.zarr"
     else:
@@ -1042,15 +818,9 @@ def sweep(
         with held_store(
             store, identity=identity, layout=_store_layout(layout), create=create
         ) as new:
-            if new:
-                done: set[str] = set()
-            else:
-                done = done_chunks(store, read_layout(store), repair=True)
-            todo = [c for c in layout.chunks() if layout.name(c) not in done]
-            stream: Any = progress if progress is not None and hasattr(progress, "write") else None
-            callback: Any = progress if callable(progress) and stream is None else None
+            todo = _todo(store, layout, new=new)
             total = spec.n_points * layout.n_wl
-            bar = _Progress(stream, callback, total, total - sum(layout.size(c) for c in todo))
+            bar = _progress_bar(progress, total, total - sum(layout.size(c) for c in todo))
             if todo:
                 _compute(
                     data,
@@ -1064,21 +834,64 @@ def sweep(
                     allow_large=allow_large,
                     distributed=distributed,
                 )
-            if netcdf:
-                assert out is not None
-                ds = xr.open_zarr(store, consolidated=True).load()
-                write_files(
-                    {Path(out): lambda path: ds.to_netcdf(path, engine="h5netcdf")},
-                    overwrite=True,
-                )
-                shutil.rmtree(store)  # still held: no other run is using it
-                return xr.open_dataset(out, engine="h5netcdf")
-            if temporary is not None:
-                return xr.open_zarr(store, consolidated=True).load()
-            return xr.open_zarr(store, consolidated=True)
+            return _result(xr, store, out=out, netcdf=netcdf, in_memory=temporary is not None)
     finally:
         if temporary is not None:
             shutil.rmtree(temporary, ignore_errors=True)
+
+
+def _check_options(max_points: Any, chunk_wavelengths: Any, workers: Any, allow_large: Any) -> None:
+    """Refuse :func:`sweep`'s options outside their ranges, before any work."""
+    for key, value in (
+        ("max_points", max_points),
+        ("chunk_wavelengths", chunk_wavelengths),
+        ("workers", workers),
+    ):
+        if key != "max_points" and value is None:
+            continue
+        if not isinstance(value, int) or isinstance(value, bool) or value < 1:
+            raise ValueError(f"{key} must be a positive integer; got {value!r}")
+    if not isinstance(allow_large, bool):
+        raise TypeError(f"allow_large must be True or False; got {allow_large!r}")
+
+
+def _todo(store: Path, layout: _Layout, *, new: bool) -> list[tuple[int, ...]]:
+    """The chunks a held store does not hold yet (all of a new one)."""
+    done: set[str] = set() if new else done_chunks(store, read_layout(store), repair=True)
+    return [c for c in layout.chunks() if layout.name(c) not in done]
+
+
+def _progress_bar(
+    progress: TextIO | Callable[[int, int], None] | None, total: int, done: int
+) -> _Progress:
+    """A progress bar on a stream, a callback, or neither."""
+    stream: Any = progress if progress is not None and hasattr(progress, "write") else None
+    callback: Any = progress if callable(progress) and stream is None else None
+    return _Progress(stream, callback, total, done)
+
+
+def _result(
+    xr: Any,
+    store: Path,
+    *,
+    out: str | os.PathLike[str] | None,
+    netcdf: bool,
+    in_memory: bool,
+) -> Any:
+    """The finished sweep: from a netCDF file written from the store (which is
+    removed), loaded from a temporary store, or opened lazily from the store."""
+    if netcdf:
+        assert out is not None
+        ds = xr.open_zarr(store, consolidated=True).load()
+        write_files(
+            {Path(out): lambda path: ds.to_netcdf(path, engine="h5netcdf")},
+            overwrite=True,
+        )
+        shutil.rmtree(store)  # still held: no other run is using it
+        return xr.open_dataset(out, engine="h5netcdf")
+    if in_memory:
+        return xr.open_zarr(store, consolidated=True).load()
+    return xr.open_zarr(store, consolidated=True)
 
 
 def _compute(

@@ -55,6 +55,7 @@ import numpy as np
 
 from dustoptics import _validation
 from dustoptics._validation import BudgetError, check_budget
+from dustoptics.models.compute import mie_request
 from dustoptics.models.config import (
     BuildConfig,
     ConfigError,
@@ -65,7 +66,6 @@ from dustoptics.models.config import (
 )
 from dustoptics.models.presets import list_presets, preset_text
 from dustoptics.scattering.optics import RequestCost, check_cost
-from dustoptics.scattering.quadrature import QuadratureSettings
 from dustoptics.table import canonical_json, plain
 
 __all__ = ["Axis", "SweepSpec", "canonical_key", "config_data", "load_sweep", "toml_text"]
@@ -623,7 +623,6 @@ def _validate(
                 ) from None
     materials: dict[str, Any] = {}
     parse = _point_parser()
-    settings = QuadratureSettings()
     points, configs, costs = [], [], []
     for index in spec.indices():
         data = spec.point_data(index)
@@ -636,7 +635,7 @@ def _validate(
             ) from None
         points.append(data)
         configs.append(config)
-        costs.append(_point_cost(spec, index, config, settings, allow_large))
+        costs.append(_point_cost(spec, index, config, allow_large))
         if config.material is not None:
             materials.setdefault(canonical_json(config.material.to_inputs()), (config, index))
     for config, index in materials.values():
@@ -657,24 +656,14 @@ def _point_cost(
     spec: SweepSpec,
     index: Sequence[int],
     config: BuildConfig,
-    settings: QuadratureSettings,
     allow_large: bool,
 ) -> RequestCost | None:
     """A point's Mie cost as a single build estimates it (one thread: a chunk
     is one task), refused where a single build would refuse it."""
     if not config.phase.uses_mie or config.size_distribution is None:
         return None
-    weighting = config.optics.weighting or "scattering"
     try:
-        return check_cost(
-            config.size_distribution.build(),
-            config.wavelengths_nm,
-            int(config.theta_deg.size),
-            settings=settings,
-            weighting=weighting,
-            workers=1,
-            allow_large=allow_large,
-        )
+        return check_cost(mie_request(config), workers=1, allow_large=allow_large)
     except BudgetError as exc:
         raise BudgetError(f"sweep point ({_where(spec, index)}): {exc}") from None
     except ValueError as exc:

@@ -392,24 +392,37 @@ def test_disort_and_libradtran_from_a_configuration_that_asks_for_the_expansion(
     assert np.all(bound < 1e-4)
 
 
-@pytest.mark.parametrize(
-    ("name", "phase", "needle"),
-    [
-        ("CONFIG", 'model = "mie"', "set 'expansion = true' (optics.expansion) under [optics] in"),
-        ("blue-moons", None, "presets --show blue-moons > my-blue-moons.toml"),
-        ("hybrid", None, "which only a Mie model has (phase.model = 'mie'"),
-    ],
-)
-def test_rt_formats_without_the_expansion_are_refused_naming_the_key(
-    config, tmp_path, capsys, monkeypatch, name, phase, needle
+def test_rt_formats_refuse_a_model_without_the_expansion_before_any_work(
+    tmp_path, capsys, monkeypatch
 ):
     _no_work(monkeypatch)
-    target = str(config) if name == "CONFIG" else name
-    argv = ["build", target, "--out", str(tmp_path / "o"), "--format", "disort", "--quiet"]
+    argv = ["build", "hybrid", "--out", str(tmp_path / "o"), "--format", "disort", "--quiet"]
     assert main(argv) == 2
     err = capsys.readouterr().err
-    assert "--format disort needs" in err and needle in err and len(err.splitlines()) == 1, err
+    assert "--format disort needs" in err and len(err.splitlines()) == 1, err
+    assert "which only a Mie model has (phase.model = 'mie'" in err
     assert not (tmp_path / "o").exists()
+
+
+def test_rt_formats_ask_a_mie_model_for_the_expansion(config, tmp_path, capsys):
+    """The configuration does not ask for the expansion; --format disort does, and the build
+    computes it, says so and records it: the same table as the configuration asking for it."""
+    argv = ["build", str(config), "--format", "disort,netcdf"]
+    assert main([*argv, "--out", str(tmp_path / "asked")]) == 0
+    note = (
+        "--format disort needs the phase function's expansion coefficients: computed "
+        "(optics.expansion = true)"
+    )
+    assert f"dustoptics: {note}" in capsys.readouterr().err
+    asked = do.open_table(tmp_path / "asked" / "small-dust" / "small-dust.nc")
+    assert note in asked.provenance.notes and asked.alpha1 is not None
+    own = tmp_path / "own.toml"
+    own.write_text(SMALL.replace("n_theta = 19", "n_theta = 19\nexpansion = true"), "utf-8")
+    assert run_build(own, tmp_path / "own", "--format", "disort,netcdf") == 0
+    table = do.open_table(tmp_path / "own" / "small-dust" / "small-dust.nc")
+    assert table.provenance.input_hash == asked.provenance.input_hash
+    disort = "small-dust/small-dust_disort.txt"
+    assert (tmp_path / "asked" / disort).read_bytes() == (tmp_path / "own" / disort).read_bytes()
 
 
 def test_the_expansion_is_a_mie_models_key(tmp_path, capsys):

@@ -43,18 +43,11 @@ def test_build_help_marks_the_default_formats(capsys):
 
 
 def test_the_format_list_comes_from_the_registry(capsys, monkeypatch):
-    """A format registered later appears too, described by its writer's docstring."""
-
-    def write_fancy(table, out_dir, *, overwrite=False):
-        """Write :func:`~dustoptics.io.write` output as ``NAME.fancy``, atomically.
-
-        More text that is not shown.
-        """
-        return []
-
-    monkeypatch.setitem(io.FORMATS, "fancy", write_fancy)
+    """A format registered later appears too, described by its record's summary."""
+    fancy = io.Format(name="fancy", summary="NAME.fancy: a fancy file", write=lambda *a, **k: [])
+    monkeypatch.setitem(io.FORMATS, "fancy", fancy)
     text = _help(capsys, "export")
-    assert re.search(r"^  fancy +Write write output as NAME\.fancy, atomically$", text, re.M)
+    assert re.search(r"^  fancy +NAME\.fancy: a fancy file$", text, re.M)
 
 
 def test_every_help_ends_with_an_example_that_parses(capsys):

@@ -5,6 +5,7 @@ Each test reproduces a defect found by fuzzing main at 3e27677 and checks it is 
 
 from __future__ import annotations
 
+import dataclasses
 import errno
 import os
 
@@ -100,7 +101,7 @@ def test_a_failing_format_leaves_the_old_set(tmp_path, capsys, monkeypatch):
     def failing(*args, **kwargs):
         raise ValueError("glsl rejects this table (simulated)")
 
-    monkeypatch.setitem(io.FORMATS, "glsl", failing)
+    monkeypatch.setitem(io.FORMATS, "glsl", dataclasses.replace(io.FORMATS["glsl"], write=failing))
     argv = [
         "build",
         str(config2),

@@ -5,10 +5,9 @@ from __future__ import annotations
 import pytest
 
 import dustoptics as do
-from dustoptics.io import FormatError
+from dustoptics.io import FormatError, FormatOptions
 from dustoptics.io.describe import describe_path, describe_table
-from dustoptics.io.outputs import write_formats
-from dustoptics.models.build import FormatOptions, prepare_export
+from dustoptics.io.outputs import prepare_export, write_formats
 
 
 @pytest.fixture(scope="module")

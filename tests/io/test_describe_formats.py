@@ -13,11 +13,10 @@ import pytest
 
 import dustoptics as do
 from dustoptics.cli import main
-from dustoptics.io import FORMATS, FormatError
+from dustoptics.io import FORMATS, FormatError, FormatOptions
 from dustoptics.io.describe import describe_path
-from dustoptics.io.describe_formats import kind_of
-from dustoptics.io.outputs import write_formats
-from dustoptics.models.build import FormatOptions, prepare_export
+from dustoptics.io.describe_formats import describer_of
+from dustoptics.io.outputs import prepare_export, write_formats
 
 #: What every file's description starts with, by the file's ending.
 FIRST_WORDS = {
@@ -125,8 +124,8 @@ def test_a_fit_its_shaders_and_a_sky_through_the_command_line(
         buffer = io.StringIO()
         with redirect_stdout(buffer):
             assert main(["info", str(path)]) == 0
-        assert "henyey-greenstein" in buffer.getvalue(), path.name
-    text = describe_path(fit / "small_henyey-greenstein.json")
+        assert "henyey_greenstein" in buffer.getvalue(), path.name
+    text = describe_path(fit / "small_henyey_greenstein.json")
     assert text.startswith("phase-function fit:")
     assert "440 nm: g " in text
     sky_out = tmp_path / "skies"
@@ -176,4 +175,4 @@ def test_what_is_not_ours_is_refused(tmp_path: Path) -> None:
     (tmp_path / "d.txt").write_text("# dustoptics DISORT moments file, format version 1\nx y\n")
     with pytest.raises(FormatError, match="does not start with a number"):
         describe_path(tmp_path / "d.txt")
-    assert kind_of(tmp_path / "notes.md") is None
+    assert describer_of(tmp_path / "notes.md") is None

@@ -10,7 +10,7 @@ import pytest
 import dustoptics as do
 from dustoptics.atmosphere.build import SET_PROVENANCE_SUFFIX, set_inputs
 from dustoptics.atmosphere.sets import earth_atmosphere
-from dustoptics.io import FormatError, read_hdf5, write_hdf5
+from dustoptics.io import FormatError, FormatOptions, read_hdf5, write_hdf5
 from dustoptics.io.csv.cosmoscout import check_cosmoscout_set
 from dustoptics.io.outputs import (
     Placement,
@@ -21,7 +21,6 @@ from dustoptics.io.outputs import (
     write_atmosphere_set,
     write_formats,
 )
-from dustoptics.models.build import FormatOptions
 
 
 @pytest.fixture(scope="module")

@@ -61,17 +61,11 @@ MOVED = {
 
 
 @pytest.mark.parametrize("name", sorted(MOVED))
-def test_the_old_config_path_warns_and_gives_the_same_object(name: str) -> None:
+def test_the_old_config_path_is_gone(name: str) -> None:
+    """Building and reading files live in their own modules only (never released elsewhere)."""
     config = importlib.import_module("dustoptics.models.config")
-    new = MOVED[name].__name__
-    with pytest.warns(
-        DeprecationWarning,
-        match=rf"dustoptics\.models\.config\.{name} moved to {new}\.{name}; the old path is "
-        r"removed in 0\.3",
-    ) as caught:
-        old = getattr(config, name)
-    assert old is getattr(MOVED[name], name)
-    assert caught[0].filename == __file__
+    assert not hasattr(config, name)
+    assert hasattr(MOVED[name], name)
 
 
 def test_the_public_names_do_not_warn() -> None:

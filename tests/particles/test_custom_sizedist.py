@@ -260,16 +260,11 @@ MOVED = ("DensityDistribution", "MultiModal", "TabulatedDistribution", "from_dic
 
 
 @pytest.mark.parametrize("name", MOVED)
-def test_the_old_path_warns_and_gives_the_same_object(name: str) -> None:
+def test_the_old_sizedist_path_is_gone(name: str) -> None:
+    """The user's distributions live in custom_sizedist only (the old path was never released)."""
     sizedist = importlib.import_module("dustoptics.particles.sizedist")
-    with pytest.warns(
-        DeprecationWarning,
-        match=rf"dustoptics\.particles\.sizedist\.{name} moved to "
-        rf"dustoptics\.particles\.custom_sizedist\.{name}; the old path is removed in 0\.3",
-    ) as caught:
-        old = getattr(sizedist, name)
-    assert old is getattr(custom_sizedist, name)
-    assert caught[0].filename == __file__  # points at the line that asked
+    assert not hasattr(sizedist, name)
+    assert hasattr(custom_sizedist, name)
 
 
 def test_the_public_names_do_not_warn() -> None:

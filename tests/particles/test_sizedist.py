@@ -435,3 +435,20 @@ def test_bad_method_arguments_raise() -> None:
         dist.radius_bounds_um(tail_fraction=1e-3, lower_moment=3.0, upper_moment=2.0)
     with pytest.raises(TypeError):
         dist.moment_tail_fraction(2, 1.0, True)  # type: ignore[call-arg]  # keyword-only
+
+
+def test_the_families_register_themselves_once() -> None:
+    """The registry holds every family by its model name; a second class with a taken name fails."""
+    from dustoptics.particles import sizedist as sd
+
+    assert sd.SIZE_DISTRIBUTIONS["modified_gamma"] is sd.ModifiedGamma
+    assert sd.get_size_distribution("deirmendjian1969_modified_gamma") is sd.DeirmendjianGamma
+    assert len(sd.SIZE_DISTRIBUTIONS) == 11  # 10 families a TOML file can name + density_function
+    with pytest.raises(ValueError, match="'gamma' is already registered by Gamma"):
+
+        class Other(sd.Gamma):
+            model = "gamma"
+
+    assert sd.SIZE_DISTRIBUTIONS["gamma"] is sd.Gamma
+    with pytest.raises(ValueError, match="size distribution model must be one of 'modified_gamma'"):
+        sd.get_size_distribution("lognormal")

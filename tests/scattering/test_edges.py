@@ -17,7 +17,7 @@ import dustoptics as do
 from dustoptics._validation import BudgetError
 from dustoptics.particles.sizedist import MIN_V_EFF
 from dustoptics.scattering import mie
-from dustoptics.scattering.optics import WORK_BUDGET, estimate_cost
+from dustoptics.scattering.optics import WORK_BUDGET, estimate_cost, optics_request
 from dustoptics.scattering.quadrature import QuadratureSettings
 
 GAMMA = do.ModifiedGamma(r_eff_um=1.6, v_eff=0.2)
@@ -102,24 +102,11 @@ def test_strings_are_both_type_and_value_errors():
 
 
 def test_the_budget_can_be_lifted_and_is_estimated_without_allocating():
-    cost = estimate_cost(
-        do.Monodisperse(radius_um=1e4),
-        np.array([360.0, 830.0]),
-        1801,
-        settings=QuadratureSettings(),
-        weighting="scattering",
-        workers=2,
-    )
+    big = optics_request(1.5, do.Monodisperse(radius_um=1e4), [360.0, 830.0])
+    cost = estimate_cost(big, workers=2)
     # n_max x angles x 16 bytes of pi and tau: 1.75e5 x 1801 x 32 B = 10 GB for one sphere.
     assert cost.memory_bytes > 5e9
-    default = estimate_cost(
-        GAMMA,
-        np.arange(360.0, 831.0, 10.0),
-        1801,
-        settings=QuadratureSettings(),
-        weighting="scattering",
-        workers=2,
-    )
+    default = estimate_cost(optics_request(1.5, GAMMA), workers=2)
     assert default.memory_bytes < 0.1e9 and default.work < WORK_BUDGET / 100
 
 

@@ -11,6 +11,7 @@ test_tabulated_phase.
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 import math
 import warnings
@@ -23,6 +24,7 @@ from scipy import integrate
 
 from dustoptics.scattering import phase
 from dustoptics.scattering.phase import (
+    ANALYTIC_MODEL_ALIASES,
     ANALYTIC_MODELS,
     COLLIENNE2013_MARS,
     COSTA2021_MARS_DHG_CODE,
@@ -51,6 +53,9 @@ from dustoptics.scattering.phase import (
     rayleigh,
     rayleigh_depolarized,
     rayleigh_penndorf1957,
+    register_analytic_model,
+    two_term_hg_hapke2012,
+    two_term_hg_hapke2012_asymmetry,
 )
 
 FOUR_PI = 4.0 * math.pi
@@ -103,6 +108,7 @@ MODEL_PARAMS = {
     "hg_draine_jendersie_deon2023": st.fixed_dictionaries(
         {"g_hg": g_st, "g_d": g_st, "alpha": alpha_st, "w_d": weight_st}
     ),
+    "two_term_hg_hapke2012": st.fixed_dictionaries({"b": g_st, "c": st.floats(-1.0, 1.0)}),
 }
 NORMALIZED = sorted(MODEL_PARAMS)
 
@@ -111,7 +117,34 @@ def test_registry_covers_every_model() -> None:
     assert set(ANALYTIC_MODELS) == set(MODEL_PARAMS) | {"rayleigh_penndorf1957"}
     for name, model in ANALYTIC_MODELS.items():
         assert get_analytic_model(name) is model
-        assert model.name == name and model.citation
+        assert model.name == name and model.citation and model.formula
+        for alias in model.aliases:
+            assert get_analytic_model(alias) is model
+
+
+def test_hyphenated_spellings_are_aliases_of_the_registry_names() -> None:
+    assert get_analytic_model("dhg-costa2021") is ANALYTIC_MODELS["dhg_costa2021"]
+    assert get_analytic_model("cs") is ANALYTIC_MODELS["cornette_shanks1992"]
+    assert ANALYTIC_MODEL_ALIASES["two-term-hg-hapke2012"] == "two_term_hg_hapke2012"
+    # Every underscore name that has a hyphenated spelling accepts it.
+    for name in ANALYTIC_MODELS:
+        if "_" in name:
+            assert get_analytic_model(name.replace("_", "-")).name == name
+
+
+def test_two_term_hg_is_the_costa_dhg_with_opposite_lobes() -> None:
+    """Hapke's two-term HG (1 - c)/2 HG(b) + (1 + c)/2 HG(-b) written out by hand."""
+    mu = np.linspace(-1.0, 1.0, 41)
+    b, c = 0.4, 0.3
+
+    def hg(g: float) -> np.ndarray:
+        return (1 - g * g) / (1 + g * g - 2 * g * mu) ** 1.5 / FOUR_PI
+
+    expected = 0.5 * (1 - c) * hg(b) + 0.5 * (1 + c) * hg(-b)
+    np.testing.assert_allclose(two_term_hg_hapke2012(mu, b=b, c=c), expected, rtol=1e-13)
+    assert two_term_hg_hapke2012_asymmetry(b=b, c=c) == pytest.approx(-c * b, rel=1e-15)
+    with pytest.raises(ValueError, match="c must be in the closed interval"):
+        two_term_hg_hapke2012(mu, b=b, c=1.5)
 
 
 def test_reference_quadrature_is_accurate() -> None:
@@ -492,3 +525,16 @@ def test_collienne_dataset() -> None:
 def test_module_exports_exist() -> None:
     for name in phase.__all__:
         assert hasattr(phase, name), name
+
+
+def test_registering_a_taken_name_or_wrong_bounds_is_refused() -> None:
+    hg = ANALYTIC_MODELS["henyey_greenstein"]
+    with pytest.raises(ValueError, match="'henyey_greenstein' is already registered"):
+        register_analytic_model(hg)
+    with pytest.raises(ValueError, match="'henyey-greenstein' is already registered"):
+        register_analytic_model(dataclasses.replace(hg, name="hg_copy"))
+    with pytest.raises(ValueError, match="must give one"):
+        register_analytic_model(
+            dataclasses.replace(hg, name="hg_copy", aliases=(), bounds=((-1.0, 1.0),) * 2)
+        )
+    assert "hg_copy" not in ANALYTIC_MODELS

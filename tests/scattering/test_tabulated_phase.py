@@ -214,6 +214,15 @@ def test_module_exports_exist() -> None:
         assert hasattr(tabulated_phase, name), name
 
 
+@pytest.mark.parametrize("name", tabulated_phase.__all__)
+def test_tabulated_phase_names_live_in_their_own_module_only(name: str) -> None:
+    """The old ``phase.<name>`` path (never released) is gone."""
+    assert name not in phase.__all__
+    assert not hasattr(phase, name)
+    with pytest.raises(ImportError):
+        exec(f"from dustoptics.scattering.phase import {name}", {})
+
+
 def test_package_names_do_not_warn() -> None:
     with warnings.catch_warnings():
         warnings.simplefilter("error")

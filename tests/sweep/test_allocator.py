@@ -24,7 +24,7 @@ pytestmark = pytest.mark.skipif(
 CHILD = r"""
 import ctypes
 import resource
-from dustoptics.sweep.run import _allocations_reused
+from dustoptics.sweep.chunk import _allocations_reused
 
 libc = ctypes.CDLL("libc.so.6")
 libc.malloc.restype = ctypes.c_void_p

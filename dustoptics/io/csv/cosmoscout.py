@@ -71,20 +71,19 @@ import re
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Final
+from typing import Any, Final
 
 import numpy as np
 
 from dustoptics._validation import as_float_array
+from dustoptics.atmosphere.column import ExponentialProfile, sample_profile
 from dustoptics.atmosphere.sets import Atmosphere
-from dustoptics.io import register_format
 from dustoptics.io._atomic import FormatError, check_targets, file_set, write_files
-from dustoptics.io._text import floats, number, parse, read_rows
+from dustoptics.io._text import floats, number, parse, read_checked, read_rows
+from dustoptics.io.engines.cosmoscout_preprocessor import CosmoScoutSampling, cosmoscout_sampling
+from dustoptics.io.registry import Format, option, register
 from dustoptics.scattering.tabulated_phase import sphere_integral
 from dustoptics.table import Table
-
-if TYPE_CHECKING:
-    from dustoptics.io.engines.cosmoscout_preprocessor import CosmoScoutSampling
 
 __all__ = [
     "COSMOSCOUT_KINDS",
@@ -434,7 +433,85 @@ def write_cosmoscout_files(
     )  # fmt: skip
 
 
-register_format("cosmoscout", write_cosmoscout_files)
+@dataclass(frozen=True)
+class ProfileOptions:
+    """The cosmoscout format's density profile: exponential, sampled at the texel centres.
+
+    Attributes
+    ----------
+    scale_height_m : float
+        The profile's scale height.  Default 10000 (the seeds' Mars dust). [m]
+    top_altitude_m : float
+        Atmosphere top above the surface.  Default 120000 (Mars, 3510 - 3390 km). [m]
+    n_altitudes : int
+        Density samples.  Default 1024.
+    """
+
+    scale_height_m: float = option(
+        help="exponential density profile's scale height [m] (default 10000, the seeds' Mars dust)",
+        default=10_000.0,
+        type="positive_float",
+        metavar="H",
+    )
+    top_altitude_m: float = option(
+        help="atmosphere top above the surface [m] (default 120000, Mars 3510 - 3390 km)",
+        default=120_000.0,
+        type="positive_float",
+        metavar="Z",
+    )
+    n_altitudes: int = option(
+        help="density samples (default 1024)", default=1024, type="positive_int", metavar="N"
+    )
+
+    @property
+    def profile(self) -> ExponentialProfile:
+        """The exponential profile."""
+        return ExponentialProfile(scale_height_m=self.scale_height_m)
+
+    def keywords(self) -> dict[str, Any]:
+        """``density``: the profile at the texel centres (i + 1/2) T / N, relative to the ground.
+
+        Where CosmoScout VR's preprocessor reads the values, as the atmosphere sets do.  The
+        profile's own values (the first below 1): the table keeps its ground number density,
+        and beta times the written density is the coefficient at every sampled altitude.
+        """
+        half_texel = 0.5 * self.top_altitude_m / self.n_altitudes
+        samples = sample_profile(
+            self.profile,
+            bottom_altitude_m=half_texel,
+            top_altitude_m=self.top_altitude_m - half_texel,
+            n_altitudes=self.n_altitudes,
+        )
+        return {"density": np.asarray(samples.relative_density) * samples.peak}
+
+    def recorded(self) -> dict[str, Any]:
+        """The profile's parameters, recorded in the files' provenance."""
+        return {
+            "density_profile": "exponential",
+            "scale_height_m": self.scale_height_m,
+            "top_altitude_m": self.top_altitude_m,
+            "n_altitudes": self.n_altitudes,
+            "density_sampling": "texel centres (i + 1/2) top_altitude_m / n_altitudes",
+        }
+
+    def check(self, wavelength_nm: Any) -> None:
+        """Refuse profile parameters out of range before the table is computed."""
+        sample_profile(
+            self.profile, top_altitude_m=self.top_altitude_m, n_altitudes=self.n_altitudes
+        )
+
+
+RECORD = register(
+    Format(
+        name="cosmoscout",
+        summary="CosmoScout VR's NAME_phase.csv, _scattering, ... (needs N0)",
+        write=write_cosmoscout_files,
+        suffixes=(".csv",),
+        options=ProfileOptions,
+        needs=frozenset({"cross_sections", "number_density"}),
+        plain_name=True,
+    )
+)
 
 
 # ------------------------------------------------------------------ reading
@@ -572,8 +649,6 @@ def read_cosmoscout_constituent(
 def _reader_wavelengths_nm(path: Path) -> list[float]:
     """CosmoScout's reading of a file's first column: skip a line, float32(lambda) * 1e9."""
     out = []
-    from dustoptics.io._text import read_checked
-
     try:
         text = read_checked(path).decode("ascii")
     except UnicodeDecodeError as exc:
@@ -715,11 +790,6 @@ def settings_json(
         [rad]), and ``dustoptics``: why each was chosen and the errors they
         leave (the preprocessor ignores keys it does not read).
     """
-    from dustoptics.io.engines.cosmoscout_preprocessor import (
-        CosmoScoutSampling,
-        cosmoscout_sampling,
-    )
-
     if not isinstance(atmosphere, Atmosphere):
         raise TypeError(f"atmosphere must be an Atmosphere; got {type(atmosphere).__name__}")
     if sampling is None:
@@ -932,8 +1002,6 @@ def write_atmosphere(
         A target exists and ``overwrite`` is False (checked before anything
         is written).
     """
-    from dustoptics.io.engines.cosmoscout_preprocessor import cosmoscout_sampling
-
     root = Path(directory)
     settings_path = root / f"{atmosphere.name}_settings.json"
     check_targets([settings_path], overwrite=overwrite)

@@ -45,7 +45,6 @@ from typing import Any
 
 import numpy as np
 
-from dustoptics.io import register_format
 from dustoptics.io._atomic import FormatError, write_files
 from dustoptics.io._text import (
     check_increasing,
@@ -58,6 +57,7 @@ from dustoptics.io._text import (
     shift,
     wavelength_label,
 )
+from dustoptics.io.registry import Format, register
 from dustoptics.table import (
     EXPANSION_FIELDS,
     MATRIX_FIELDS,
@@ -330,7 +330,15 @@ def write_seed_csv(
     return write_files({path: payload[path.name] for path in paths}, overwrite=overwrite)
 
 
-register_format("csv", write_seed_csv)
+RECORD = register(
+    Format(
+        name="csv",
+        summary="the seed's Mie*Spectrum.csv files and table_summary.json",
+        write=write_seed_csv,
+        suffixes=(".csv", ".json"),
+        inputs_file=lambda name: SUMMARY_FILENAME,
+    )
+)
 
 
 # ------------------------------------------------------------------ reading

@@ -100,14 +100,17 @@ from dustoptics.atmosphere.column import (
     FixedFractionProfile,
     PiecewiseLinearProfile,
 )
-from dustoptics.io import register_format
+from dustoptics.colour import solar_irradiance_astm_g173
 from dustoptics.io._atomic import write_files
+from dustoptics.io.describe_formats import describe_bruneton, is_bruneton
 from dustoptics.io.engines.precomputation import (
     BRUNETON_DEFAULTS,
     PrecomputationSampling,
     precomputation_sampling,
 )
+from dustoptics.io.registry import Format, register
 from dustoptics.io.shaders.glsl import glsl_snippet
+from dustoptics.scattering.fit import fit_table
 
 __all__ = [
     "ASTRONOMICAL_UNIT_M",
@@ -394,8 +397,6 @@ def _check_channels(table: Any) -> None:
 
 
 def _mie_g_fit(table: Any) -> tuple[float, dict[str, Any]]:
-    from dustoptics.scattering.fit import fit_table
-
     fit = fit_table(
         table,
         model="cornette-shanks1992",
@@ -472,8 +473,6 @@ def bruneton_parameters(
         without cross-sections or not covering 440-680 nm, or wavelengths
         outside the solar spectrum's 360-840 nm.
     """
-    from dustoptics.colour import solar_irradiance_astm_g173
-
     albedo = check_closed_interval("ground_albedo", ground_albedo, 0.0, 1.0)
     zenith = check_positive("max_sun_zenith_angle_deg", max_sun_zenith_angle_deg, unit="deg")
     if not 90.0 < zenith <= 180.0:
@@ -866,4 +865,14 @@ def _write_bruneton_table(
     return write_files(files, overwrite=overwrite)
 
 
-register_format("bruneton", _write_bruneton_table)
+RECORD = register(
+    Format(
+        name="bruneton",
+        summary="Bruneton's (2017) aerosol: NAME_bruneton_mie.json, .glsl (needs N0)",
+        write=_write_bruneton_table,
+        suffixes=(".json", ".glsl"),
+        needs=frozenset({"cross_sections", "number_density"}),
+        recognise=is_bruneton,
+        describe=describe_bruneton,
+    )
+)

@@ -78,7 +78,7 @@ References
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Final
 
@@ -435,6 +435,118 @@ def _check_option(key: str, value: Any, needed: Any, why: str) -> Any:
     return int(value)
 
 
+def _choose_refraction(
+    atmosphere: Atmosphere, refraction: bool | None, *, bend: float, reasons: dict[str, str]
+) -> bool:
+    """``refraction`` as given, or on where the horizon bending ``bend`` [rad] exceeds a
+    tenth of the Sun's angular radius; the reason goes into ``reasons``."""
+    if refraction is not None:
+        reasons["refraction"] = "given"
+        return bool(refraction)
+    sun_radius = math.asin(SUN_RADIUS_M / atmosphere.sun_distance_m)
+    chosen = bend > _REFRACTION_FRACTION * sun_radius
+    reasons["refraction"] = (
+        f"horizon bending {math.degrees(bend):.3g} deg "
+        f"{'>' if chosen else '<='} {_REFRACTION_FRACTION:g} x the Sun's angular radius "
+        f"{math.degrees(sun_radius):.3g} deg"
+    )
+    return chosen
+
+
+def _transmittance_error_of(atmosphere: Atmosphere) -> Callable[..., float]:
+    """``error(**quadrature) -> float``: the largest relative error of the preprocessor's
+    transmittance with those quadrature keywords, where exp(-tau) is visible."""
+    columns = _columns(atmosphere)
+
+    def error(**kwargs: Any) -> float:
+        got, want = _transmittance(
+            columns,
+            radius_m=atmosphere.planet_radius_m,
+            thickness_m=atmosphere.thickness_m,
+            **kwargs,
+        )
+        seen = want >= _VISIBLE
+        return float(np.max(np.abs(got / want - 1.0)[seen], initial=0.0))
+
+    return error
+
+
+def _optical_depth_sampling(
+    error: Callable[..., float], *, tol: float, reasons: dict[str, str]
+) -> tuple[float, int]:
+    """``stepSizeOpticalDepth`` and ``sampleCountOpticalDepth`` within ``tol``; their reasons
+    go into ``reasons``."""
+    bound = _MARGIN * tol
+
+    def step_ok(i: int) -> bool:
+        return all(error(refraction=True, step_m=s) <= bound for s in _STEPS_M[i : i + 3])
+
+    def count_ok(n: int) -> bool:
+        return all(error(refraction=False, sample_count=n, mu=mu) <= bound for mu in _MUS)
+
+    step = next((dx for i, dx in enumerate(_STEPS_M) if step_ok(i)), _STEPS_M[-1])
+    count = next((n for n in _COUNTS if count_ok(n)), _COUNTS[-1])
+    reasons["stepSizeOpticalDepth"] = (
+        f"largest of {list(_STEPS_M)} m whose zenith transmittance (and the next two smaller "
+        f"steps') is within {bound:g} of exp(-tau) at every wavelength"
+    )
+    reasons["sampleCountOpticalDepth"] = (
+        f"smallest of {list(_COUNTS)} whose transmittance along straight rays at zenith cosines "
+        f"{list(_MUS)} is within {bound:g} of exp(-tau) at every wavelength (where "
+        f"exp(-tau) >= {_VISIBLE:g})"
+    )
+    return step, count
+
+
+def _scattering_sampling(
+    atmosphere: Atmosphere, *, tol: float, reasons: dict[str, str]
+) -> tuple[float, int]:
+    """The in-scattering step [m] and sample count (single and multiple scattering alike):
+    first-order bias with steps, trapezoid without; their reasons go into ``reasons``."""
+    beta_ground = sum(
+        np.asarray(c.table.beta_ext_per_m, dtype=np.float64)
+        * float(c.profile.relative_density(np.array([0.0]))[0])
+        for c in atmosphere.constituents
+    )
+    beta = float(np.max(beta_ground))
+    thin = min(
+        effective_scale_height_m(c.profile, top_altitude_m=atmosphere.thickness_m)
+        for c in atmosphere.constituents
+        if c.table.csca_um2 is not None and np.any(c.table.csca_um2 > 0)
+    )
+    root = math.sqrt(12.0 * tol)
+    path = math.sqrt(atmosphere.atmosphere_radius_m**2 - atmosphere.planet_radius_m**2)
+    scatter_step = _round_down(min(2.0 * tol / beta, thin * root), 10)
+    scatter_count = _round_up(max(path * beta / root, atmosphere.thickness_m / (thin * root)), 10)
+    for key in ("stepSizeSingleScattering", "stepSizeMultiScattering"):
+        reasons[key] = (
+            f"min(2 tol / beta_ext = {2.0 * tol / beta:.4g} m, H sqrt(12 tol) = {thin * root:.4g} m) "
+            "rounded down to 10 m"
+        )
+    for key in ("sampleCountSingleScattering", "sampleCountMultiScattering"):
+        reasons[key] = (
+            f"max(L beta_ext / sqrt(12 tol) = {path * beta / root:.4g}, "
+            f"T / (H sqrt(12 tol)) = {atmosphere.thickness_m / (thin * root):.4g}) rounded up to 10"
+        )
+    return scatter_step, scatter_count
+
+
+def _why_finer(tol: float) -> dict[str, str]:
+    """What a value coarser than the chosen one would cost, by option, for the refusal."""
+    return {
+        "multiScatteringOrder": f"more than {tol:g} of the diffuse light beyond its orders",
+        "sampleCountOpticalDepth": f"transmittance error above {tol:g}",
+        "stepSizeOpticalDepth": f"transmittance error above {tol:g}",
+        "sampleCountSingleScattering": f"in-scattering error above {tol:g}",
+        "stepSizeSingleScattering": f"in-scattering bias above {tol:g}",
+        "sampleCountMultiScattering": f"in-scattering error above {tol:g}",
+        "stepSizeMultiScattering": f"in-scattering bias above {tol:g}",
+        "sampleCountScatteringDensity": f"phase-function integral off by more than {tol:g}",
+        "sampleCountIndirectIrradiance": f"phase-function integral off by more than {tol:g}",
+        "scatteringTextureNuSize": "the NU slices' interpolation error near the Sun",
+    }
+
+
 def cosmoscout_sampling(
     atmosphere: Atmosphere,
     *,
@@ -488,91 +600,15 @@ def cosmoscout_sampling(
         )
     reasons: dict[str, str] = {}
     bend = horizon_refraction_rad(atmosphere)
-    sun_radius = math.asin(SUN_RADIUS_M / atmosphere.sun_distance_m)
     if "refraction" in given:
         refraction = _check_option("refraction", given.pop("refraction"), None, "")
-    if refraction is None:
-        refraction = bend > _REFRACTION_FRACTION * sun_radius
-        reasons["refraction"] = (
-            f"horizon bending {math.degrees(bend):.3g} deg "
-            f"{'>' if refraction else '<='} {_REFRACTION_FRACTION:g} x the Sun's angular radius "
-            f"{math.degrees(sun_radius):.3g} deg"
-        )
-    else:
-        reasons["refraction"] = "given"
+    refraction = _choose_refraction(atmosphere, refraction, bend=bend, reasons=reasons)
 
     # Transmittance: simulate the preprocessor's two quadratures.
-    columns = _columns(atmosphere)
-
-    def _transmittance_error(_: Atmosphere, **kwargs: Any) -> float:
-        got, want = _transmittance(
-            columns,
-            radius_m=atmosphere.planet_radius_m,
-            thickness_m=atmosphere.thickness_m,
-            **kwargs,
-        )
-        seen = want >= _VISIBLE
-        return float(np.max(np.abs(got / want - 1.0)[seen], initial=0.0))
-
-    step = next(
-        (
-            dx
-            for i, dx in enumerate(_STEPS_M)
-            if all(
-                _transmittance_error(atmosphere, refraction=True, step_m=s) <= _MARGIN * tol
-                for s in _STEPS_M[i : i + 3]
-            )
-        ),
-        _STEPS_M[-1],
-    )
-    count = next(
-        (
-            n
-            for n in _COUNTS
-            if all(
-                _transmittance_error(atmosphere, refraction=False, sample_count=n, mu=mu)
-                <= _MARGIN * tol
-                for mu in _MUS
-            )
-        ),
-        _COUNTS[-1],
-    )
-    reasons["stepSizeOpticalDepth"] = (
-        f"largest of {list(_STEPS_M)} m whose zenith transmittance (and the next two smaller "
-        f"steps') is within {_MARGIN * tol:g} of exp(-tau) at every wavelength"
-    )
-    reasons["sampleCountOpticalDepth"] = (
-        f"smallest of {list(_COUNTS)} whose transmittance along straight rays at zenith cosines "
-        f"{list(_MUS)} is within {_MARGIN * tol:g} of exp(-tau) at every wavelength (where "
-        f"exp(-tau) >= {_VISIBLE:g})"
-    )
-
+    transmittance_error = _transmittance_error_of(atmosphere)
+    step, count = _optical_depth_sampling(transmittance_error, tol=tol, reasons=reasons)
     # In-scattering: first-order bias with steps, trapezoid without.
-    beta_ground = sum(
-        np.asarray(c.table.beta_ext_per_m, dtype=np.float64)
-        * float(c.profile.relative_density(np.array([0.0]))[0])
-        for c in atmosphere.constituents
-    )
-    beta = float(np.max(beta_ground))
-    thin = min(
-        effective_scale_height_m(c.profile, top_altitude_m=atmosphere.thickness_m)
-        for c in atmosphere.constituents
-        if c.table.csca_um2 is not None and np.any(c.table.csca_um2 > 0)
-    )
-    root = math.sqrt(12.0 * tol)
-    path = math.sqrt(atmosphere.atmosphere_radius_m**2 - atmosphere.planet_radius_m**2)
-    scatter_step = _round_down(min(2.0 * tol / beta, thin * root), 10)
-    scatter_count = _round_up(max(path * beta / root, atmosphere.thickness_m / (thin * root)), 10)
-    for key in ("stepSizeSingleScattering", "stepSizeMultiScattering"):
-        reasons[key] = (
-            f"min(2 tol / beta_ext = {2.0 * tol / beta:.4g} m, H sqrt(12 tol) = {thin * root:.4g} m) "
-            "rounded down to 10 m"
-        )
-    for key in ("sampleCountSingleScattering", "sampleCountMultiScattering"):
-        reasons[key] = (
-            f"max(L beta_ext / sqrt(12 tol) = {path * beta / root:.4g}, "
-            f"T / (H sqrt(12 tol)) = {atmosphere.thickness_m / (thin * root):.4g}) rounded up to 10"
-        )
+    scatter_step, scatter_count = _scattering_sampling(atmosphere, tol=tol, reasons=reasons)
 
     pre = precomputation_sampling(atmosphere, tolerance=tol)
     chosen: dict[str, Any] = {
@@ -596,18 +632,7 @@ def cosmoscout_sampling(
     reasons["sampleCountIndirectIrradiance"] = (
         "the scattering density's angular step, at least the default 32"
     )
-    why = {
-        "multiScatteringOrder": f"more than {tol:g} of the diffuse light beyond its orders",
-        "sampleCountOpticalDepth": f"transmittance error above {tol:g}",
-        "stepSizeOpticalDepth": f"transmittance error above {tol:g}",
-        "sampleCountSingleScattering": f"in-scattering error above {tol:g}",
-        "stepSizeSingleScattering": f"in-scattering bias above {tol:g}",
-        "sampleCountMultiScattering": f"in-scattering error above {tol:g}",
-        "stepSizeMultiScattering": f"in-scattering bias above {tol:g}",
-        "sampleCountScatteringDensity": f"phase-function integral off by more than {tol:g}",
-        "sampleCountIndirectIrradiance": f"phase-function integral off by more than {tol:g}",
-        "scatteringTextureNuSize": "the NU slices' interpolation error near the Sun",
-    }
+    why = _why_finer(tol)
     for key, value in given.items():
         if key == "scatteringTextureNuSize":
             # Checked (and capped by the texture size) by the precomputation rules.
@@ -618,11 +643,9 @@ def cosmoscout_sampling(
             )  # fmt: skip
         chosen[key] = _check_option(key, value, chosen[key], why[key])
         reasons[key] = "given"
-    error = _transmittance_error(atmosphere, refraction=True, step_m=chosen["stepSizeOpticalDepth"])
+    error = transmittance_error(refraction=True, step_m=chosen["stepSizeOpticalDepth"])
     error_off = max(
-        _transmittance_error(
-            atmosphere, refraction=False, sample_count=chosen["sampleCountOpticalDepth"], mu=mu
-        )
+        transmittance_error(refraction=False, sample_count=chosen["sampleCountOpticalDepth"], mu=mu)
         for mu in _MUS
     )
     settings = {

@@ -35,9 +35,11 @@ from typing import Any
 
 import numpy as np
 
-from dustoptics.io import register_format
 from dustoptics.io._atomic import safe_stem, write_files
 from dustoptics.io._text import floats, number
+from dustoptics.io.describe_formats import describe_rt_text, is_rt_text
+from dustoptics.io.registry import Format, register
+from dustoptics.table import _installed_version
 
 __all__ = [
     "DISORT_SUFFIX",
@@ -71,8 +73,6 @@ def disort_moments(table: Any, fmt: str) -> tuple[np.ndarray, np.ndarray, np.nda
 
 def header_lines(table: Any, title: str) -> list[str]:
     """The first lines of a file: its title, the table's name and input hash, the version."""
-    from dustoptics.table import _installed_version
-
     return [
         f"# {title}",
         f"# table: {table.name}",
@@ -147,4 +147,14 @@ def write_disort(
     return write_files({path: text.encode("utf-8")}, overwrite=overwrite)
 
 
-register_format("disort", write_disort)
+RECORD = register(
+    Format(
+        name="disort",
+        summary="NAME_disort.txt: DISORT's moments (needs the expansion)",
+        write=write_disort,
+        suffixes=(".txt",),
+        needs=frozenset({"cross_sections", "expansion"}),
+        recognise=is_rt_text,
+        describe=describe_rt_text,
+    )
+)

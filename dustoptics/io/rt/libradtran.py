@@ -41,9 +41,10 @@ from typing import Any
 import numpy as np
 
 from dustoptics._validation import check_positive, check_real
-from dustoptics.io import register_format
 from dustoptics.io._atomic import safe_stem, write_files
 from dustoptics.io._text import floats, number
+from dustoptics.io.describe_formats import describe_rt_text, is_rt_text
+from dustoptics.io.registry import Format, register
 from dustoptics.io.rt.disort import bound_text, disort_moments, header_lines, moment_lines
 
 __all__ = [
@@ -162,4 +163,14 @@ def write_libradtran(
     )
 
 
-register_format("libradtran", write_libradtran)
+RECORD = register(
+    Format(
+        name="libradtran",
+        summary="NAME_aerosol_*.dat: libRadtran's (needs the expansion, N0)",
+        write=write_libradtran,
+        suffixes=(".dat",),
+        needs=frozenset({"cross_sections", "number_density", "expansion"}),
+        recognise=is_rt_text,
+        describe=describe_rt_text,
+    )
+)

@@ -87,12 +87,16 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from numpy.polynomial import legendre
+from scipy.io import netcdf_file
 
 from dustoptics._validation import check_real
-from dustoptics.io import register_format
 from dustoptics.io._atomic import FormatError, safe_stem, write_files
 from dustoptics.io._text import number
+from dustoptics.io.registry import Format, register
 from dustoptics.io.rt.disort import bound_text, header_lines
+from dustoptics.scattering.expansion import evaluate_matrix
+from dustoptics.table import _installed_version
 
 __all__ = [
     "LIBRADTRAN_ELEMENTS",
@@ -174,9 +178,6 @@ def libradtran_matrix_moments(table: Any) -> np.ndarray:
     element of the series up to order L is a polynomial of degree L in mu,
     so the rule projects it exactly.
     """
-    from numpy.polynomial import legendre
-
-    from dustoptics.scattering.expansion import evaluate_matrix
 
     keys = ("alpha1", "alpha2", "alpha3", "alpha4", "beta1", "beta2")
     coefficients = np.stack([np.asarray(getattr(table, k), dtype=np.float64) for k in keys], 1)
@@ -203,10 +204,6 @@ def libradtran_netcdf_bytes(table: Any) -> bytes:
         No expansion coefficients, cross-sections or number density, or the
         angles do not run from 0 to 180 deg.
     """
-    from numpy.polynomial import legendre
-    from scipy.io import netcdf_file
-
-    from dustoptics.table import _installed_version
 
     _needs(table)
     pmom = libradtran_matrix_moments(table)
@@ -365,8 +362,6 @@ def is_libradtran_netcdf(path: Path) -> bool:
 
 def describe_libradtran_netcdf(path: Path, full: bool = True) -> str:
     """What a ``.mie.cdf`` file of the ``libradtran-nc`` format holds (``dustoptics info``)."""
-    from scipy.io import netcdf_file
-
     try:
         with netcdf_file(path, "r", mmap=False) as f:
             attrs = {k: v.decode() if isinstance(v, bytes) else v for k, v in f._attributes.items()}
@@ -398,4 +393,14 @@ def describe_libradtran_netcdf(path: Path, full: bool = True) -> str:
     return "\n".join(lines)
 
 
-register_format("libradtran-nc", write_libradtran_netcdf)
+RECORD = register(
+    Format(
+        name="libradtran-nc",
+        summary="NAME.mie.cdf: libRadtran's P11, P12, P33, P34 (needs the expansion, N0)",
+        write=write_libradtran_netcdf,
+        suffixes=(".cdf",),
+        needs=frozenset({"cross_sections", "number_density", "expansion", "matrix"}),
+        recognise=lambda path: path.suffix.lower() == ".cdf" and is_libradtran_netcdf(path),
+        describe=describe_libradtran_netcdf,
+    )
+)

@@ -37,7 +37,7 @@ import math
 import os
 import re
 from abc import ABC, abstractmethod
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from types import SimpleNamespace
@@ -54,6 +54,8 @@ from dustoptics.colour import (
     channel_weights,
 )
 from dustoptics.io._atomic import safe_stem, write_files
+from dustoptics.io.describe_formats import describe_shader, is_shader
+from dustoptics.io.registry import Format, option
 from dustoptics.scattering.tabulated_phase import sphere_integral
 from dustoptics.table import PHASE_NORMALIZATION
 
@@ -278,6 +280,110 @@ def check_shader_options(
     grid = SimpleNamespace(wavelength_nm=np.asarray(wavelength_nm, dtype=np.float64))
     choose_channels(
         grid, channels_nm=channels_nm, colour=colour, min_band_coverage=min_band_coverage
+    )
+
+
+@dataclass(frozen=True)
+class ChannelOptions:
+    """The three channels of a snippet or a texture (formats glsl, hlsl, wgsl, ktx2, exr, npy).
+
+    Attributes
+    ----------
+    channels_nm : tuple of float, optional
+        The three channels' wavelengths; None: 680, 550, 440. [nm]
+    colour : str, optional
+        Colour channels instead of wavelengths (:data:`COLOUR_MODES`).
+    """
+
+    channels_nm: tuple[float, ...] | None = option(
+        help="wavelengths of the three channels [nm] (default 680,550,440)",
+        type="floats",
+        metavar="R,G,B",
+    )
+    colour: str | None = option(
+        help="colour channels instead of three wavelengths: CIE 1931 XYZ bands, or linear sRGB of "
+        "the table lit by the ASTM G173 sun (a renderer with a white sun reproduces the spectral "
+        "colour)",
+        choices=["cie1931-xyz", "linear-srgb-astmg173"],
+    )
+
+
+@dataclass(frozen=True)
+class ShaderOptions(ChannelOptions):
+    """The options of the hlsl and wgsl formats (glsl: :class:`GLSLOptions`); None leaves
+    :func:`shader_source`'s default.
+
+    Attributes
+    ----------
+    resolution_deg : float, optional
+        Angular step of the constant array. [deg]
+    prefix : str, optional
+        Prefix of every identifier; a prefix other than ``MIE`` also names the lookup
+        ``PREFIX_MiePhaseFunction``.
+    """
+
+    resolution_deg: float | None = option(
+        help="angular step of the constant array [deg] (default 0.25)",
+        type="positive_float",
+        metavar="DEG",
+    )
+    prefix: str | None = option(
+        help="prefix of every identifier: NAME_PHASE, ..., NAME_MiePhaseFunction (default MIE, "
+        "with the seed's MiePhaseFunction)",
+        metavar="NAME",
+    )
+
+    def keywords(self) -> dict[str, Any]:
+        """The keywords of :func:`write_shader`."""
+        out: dict[str, Any] = {"channels_nm": self.channels_nm, "colour": self.colour}
+        if self.resolution_deg is not None:
+            out["resolution_deg"] = self.resolution_deg
+        if self.prefix is not None:
+            # Every identifier prefixed, the lookup too (MIE keeps the seed's names).
+            out["prefix"] = self.prefix
+            if self.prefix != "MIE":
+                out["function_name"] = f"{self.prefix}_MiePhaseFunction"
+        return out
+
+    def check(self, wavelength_nm: Any) -> None:
+        """:func:`check_shader_options` for a wavelength grid [nm], before the table exists."""
+        check_shader_options(
+            wavelength_nm,
+            channels_nm=self.channels_nm,
+            colour=self.colour,
+            resolution_deg=self.resolution_deg or DEFAULT_RESOLUTION_DEG,
+        )
+
+
+def shader_format(
+    language: str, *, summary: str, write: Callable[..., list[Path]], options: type[ShaderOptions]
+) -> Format:
+    """The record of a shading language's format (its module registers it).
+
+    Parameters
+    ----------
+    language : str
+        The format's name and the language (:data:`LANGUAGES`).
+    summary : str
+        One line for ``--help`` and the documentation's format table.
+    write : callable
+        The language's writer.
+    options : type
+        :class:`ShaderOptions` or a subclass.
+
+    Returns
+    -------
+    Format
+    """
+    extension = shader_syntax(language).extension
+    return Format(
+        name=language,
+        summary=summary,
+        write=write,
+        suffixes=(extension,),
+        options=options,
+        recognise=lambda path: is_shader(path, extension),
+        describe=describe_shader,
     )
 
 

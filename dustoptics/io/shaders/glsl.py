@@ -73,13 +73,14 @@ from __future__ import annotations
 import math
 import os
 from collections.abc import Mapping
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from dustoptics._validation import check_choice
-from dustoptics.io import register_format
+from dustoptics.io.registry import option, register
 from dustoptics.io.shaders.common import (
     ACOS_AS4446,
     ACOS_METHODS,
@@ -88,10 +89,12 @@ from dustoptics.io.shaders.common import (
     LOOKUP_COMMENT,
     SAFETY_COMMENT,
     ShaderChannels,
+    ShaderOptions,
     ShaderSyntax,
     float_literal,
     register_syntax,
     shader_channels,
+    shader_format,
     shader_source,
     write_shader,
 )
@@ -423,14 +426,8 @@ def write_glsl(
     out_dir_or_path: str | os.PathLike[str],
     *,
     overwrite: bool = False,
-    channels_nm: Any = None,
-    colour: str | None = None,
-    resolution_deg: float = DEFAULT_RESOLUTION_DEG,
-    prefix: str = "MIE",
-    function_name: str = "MiePhaseFunction",
-    min_band_coverage: float = 0.99,
-    acos: str = "polynomial",
     version: str = "130",
+    **options: Any,
 ) -> list[Path]:
     """Write :func:`glsl_snippet` to a file, atomically.
 
@@ -446,8 +443,12 @@ def write_glsl(
         digits, ``.``, ``_`` and ``-`` replaced by ``_``).
     overwrite : bool
         Replace an existing file.  Default False.
-    channels_nm, colour, resolution_deg, prefix, function_name, min_band_coverage, acos, version
+    version : {"130", "100"}
         As in :func:`glsl_snippet`.
+    **options
+        The other keywords of :func:`glsl_snippet` (``channels_nm``, ``colour``,
+        ``resolution_deg``, ``prefix``, ``function_name``, ``min_band_coverage``,
+        ``acos``).
 
     Returns
     -------
@@ -463,18 +464,33 @@ def write_glsl(
     """
     check_choice("version", version, GLSL_VERSIONS)
     return write_shader(
-        table,
-        out_dir_or_path,
-        language=_LANGUAGE[version],
-        overwrite=overwrite,
-        channels_nm=channels_nm,
-        colour=colour,
-        resolution_deg=resolution_deg,
-        prefix=prefix,
-        function_name=function_name,
-        min_band_coverage=min_band_coverage,
-        acos=acos,
+        table, out_dir_or_path, language=_LANGUAGE[version], overwrite=overwrite, **options
     )
 
 
-register_format("glsl", write_glsl)
+@dataclass(frozen=True)
+class GLSLOptions(ShaderOptions):
+    """The glsl format's options: :class:`~dustoptics.io.shaders.common.ShaderOptions` and the
+    language version (None: ``"130"``)."""
+
+    glsl_version: str | None = option(
+        help="130 = GLSL 1.30+ and ES 3.00+ (default); 100 = GLSL ES 1.00 (WebGL 1)",
+        choices=list(GLSL_VERSIONS),
+    )
+
+    def keywords(self) -> dict[str, Any]:
+        """The keywords of :func:`write_glsl`."""
+        out = super().keywords()
+        if self.glsl_version is not None:
+            out["version"] = self.glsl_version
+        return out
+
+
+RECORD = register(
+    shader_format(
+        "glsl",
+        summary="NAME_phase.glsl: MiePhaseFunction(nu), GLSL 1.30+ or ES 1.00",
+        write=write_glsl,
+        options=GLSLOptions,
+    )
+)

@@ -14,8 +14,14 @@ import os
 from pathlib import Path
 from typing import Any
 
-from dustoptics.io import register_format
-from dustoptics.io.shaders.common import ShaderSyntax, register_syntax, write_shader
+from dustoptics.io.registry import register
+from dustoptics.io.shaders.common import (
+    ShaderOptions,
+    ShaderSyntax,
+    register_syntax,
+    shader_format,
+    write_shader,
+)
 
 __all__ = ["HLSLSyntax", "write_hlsl"]
 
@@ -227,4 +233,11 @@ def write_hlsl(
     return write_shader(table, out_dir_or_path, language="hlsl", overwrite=overwrite, **options)
 
 
-register_format("hlsl", write_hlsl)
+RECORD = register(
+    shader_format(
+        "hlsl",
+        summary="NAME_phase.hlsl: the same lookup in HLSL",
+        write=write_hlsl,
+        options=ShaderOptions,
+    )
+)

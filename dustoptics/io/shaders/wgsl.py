@@ -13,8 +13,14 @@ import os
 from pathlib import Path
 from typing import Any
 
-from dustoptics.io import register_format
-from dustoptics.io.shaders.common import ShaderSyntax, register_syntax, write_shader
+from dustoptics.io.registry import register
+from dustoptics.io.shaders.common import (
+    ShaderOptions,
+    ShaderSyntax,
+    register_syntax,
+    shader_format,
+    write_shader,
+)
 
 __all__ = ["WGSLSyntax", "write_wgsl"]
 
@@ -258,4 +264,11 @@ def write_wgsl(
     return write_shader(table, out_dir_or_path, language="wgsl", overwrite=overwrite, **options)
 
 
-register_format("wgsl", write_wgsl)
+RECORD = register(
+    shader_format(
+        "wgsl",
+        summary="NAME_phase.wgsl: the same lookup in WGSL (WebGPU)",
+        write=write_wgsl,
+        options=ShaderOptions,
+    )
+)

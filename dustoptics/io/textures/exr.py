@@ -18,15 +18,16 @@ import os
 from pathlib import Path
 from typing import Any
 
-from dustoptics.io import register_format
+from dustoptics.io._atomic import FormatError
+from dustoptics.io.describe_formats import describe_texture
+from dustoptics.io.registry import Format, register
 from dustoptics.io.textures.phase_texture import (
-    DEFAULT_MAX_DIMENSION,
     PhaseTexture,
+    TextureOptions,
     check_dimensions,
     metadata_json,
     write_container,
 )
-from dustoptics.io.textures.raw import DEFAULT_N_ANGLES
 
 __all__ = ["read_exr_metadata", "write_exr"]
 
@@ -75,14 +76,7 @@ def write_exr(
     out_dir_or_path: str | os.PathLike[str],
     *,
     overwrite: bool = False,
-    layout: str = "rgb",
-    sampling: str = "theta",
-    n_angles: int = DEFAULT_N_ANGLES,
-    precision: str = "float32",
-    channels_nm: Any = None,
-    colour: str | None = None,
-    min_band_coverage: float = 0.99,
-    max_dimension: int = DEFAULT_MAX_DIMENSION,
+    **options: Any,
 ) -> list[Path]:
     """Write the phase function as an OpenEXR image, atomically.
 
@@ -96,8 +90,9 @@ def write_exr(
         ``<table name>_phase_<layout>_<sampling>_<precision>.exr``.
     overwrite : bool
         Replace an existing file.  Default False.
-    layout, sampling, n_angles, precision, channels_nm, colour, min_band_coverage, max_dimension
-        As :func:`dustoptics.io.textures.phase_texture.phase_texture`.
+    **options
+        The fields of :class:`~dustoptics.io.textures.phase_texture.TextureOptions` (the
+        keywords of :func:`~dustoptics.io.textures.phase_texture.phase_texture`).
 
     Returns
     -------
@@ -120,18 +115,8 @@ def write_exr(
         suffix=".exr",
         encode=lambda texture, target: {target: _writer(texture)},
         overwrite=overwrite,
-        layout=layout,
-        sampling=sampling,
-        n_angles=n_angles,
-        precision=precision,
-        channels_nm=channels_nm,
-        colour=colour,
-        min_band_coverage=min_band_coverage,
-        max_dimension=max_dimension,
+        **options,
     )
-
-
-register_format("exr", write_exr)
 
 
 def read_exr_metadata(path: str | os.PathLike[str]) -> dict[str, Any]:
@@ -145,8 +130,6 @@ def read_exr_metadata(path: str | os.PathLike[str]) -> dict[str, Any]:
     dustoptics.io.FormatError
         Not an OpenEXR file, or one without dustoptics' metadata.
     """
-    from dustoptics.io import FormatError
-
     openexr = _openexr()
     p = Path(path)
     try:
@@ -163,3 +146,21 @@ def read_exr_metadata(path: str | os.PathLike[str]) -> dict[str, Any]:
     if not isinstance(meta, dict):
         raise FormatError(f"{str(p)!r}: its dustoptics metadata is not a JSON object")
     return meta
+
+
+def describe_exr(path: Path, full: bool = True) -> str:
+    """What an OpenEXR phase texture holds, from its metadata (``dustoptics info``)."""
+    return describe_texture(path, read_exr_metadata(path), "OpenEXR", full)
+
+
+RECORD = register(
+    Format(
+        name="exr",
+        summary="NAME_phase_*.exr: the phase texture as OpenEXR",
+        write=write_exr,
+        suffixes=(".exr",),
+        options=TextureOptions,
+        recognise=lambda path: path.suffix.lower() == ".exr",
+        describe=describe_exr,
+    )
+)

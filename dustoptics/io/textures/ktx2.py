@@ -36,15 +36,16 @@ from typing import Any
 
 import numpy as np
 
-from dustoptics.io import register_format
+from dustoptics.io._atomic import FormatError
+from dustoptics.io.describe_formats import describe_texture
+from dustoptics.io.registry import Format, register
 from dustoptics.io.textures.phase_texture import (
-    DEFAULT_MAX_DIMENSION,
     PhaseTexture,
+    TextureOptions,
     check_dimensions,
     metadata_json,
     write_container,
 )
-from dustoptics.io.textures.raw import DEFAULT_N_ANGLES
 
 __all__ = ["KTX2_IDENTIFIER", "VK_FORMATS", "ktx2_bytes", "read_ktx2_metadata", "write_ktx2"]
 
@@ -169,14 +170,7 @@ def write_ktx2(
     out_dir_or_path: str | os.PathLike[str],
     *,
     overwrite: bool = False,
-    layout: str = "rgb",
-    sampling: str = "theta",
-    n_angles: int = DEFAULT_N_ANGLES,
-    precision: str = "float32",
-    channels_nm: Any = None,
-    colour: str | None = None,
-    min_band_coverage: float = 0.99,
-    max_dimension: int = DEFAULT_MAX_DIMENSION,
+    **options: Any,
 ) -> list[Path]:
     """Write the phase function as a KTX2 texture, atomically.
 
@@ -190,8 +184,9 @@ def write_ktx2(
         ``<table name>_phase_<layout>_<sampling>_<precision>.ktx2``.
     overwrite : bool
         Replace an existing file.  Default False.
-    layout, sampling, n_angles, precision, channels_nm, colour, min_band_coverage, max_dimension
-        As :func:`dustoptics.io.textures.phase_texture.phase_texture`.
+    **options
+        The fields of :class:`~dustoptics.io.textures.phase_texture.TextureOptions` (the
+        keywords of :func:`~dustoptics.io.textures.phase_texture.phase_texture`).
 
     Returns
     -------
@@ -212,18 +207,8 @@ def write_ktx2(
         suffix=".ktx2",
         encode=lambda texture, target: {target: ktx2_bytes(texture)},
         overwrite=overwrite,
-        layout=layout,
-        sampling=sampling,
-        n_angles=n_angles,
-        precision=precision,
-        channels_nm=channels_nm,
-        colour=colour,
-        min_band_coverage=min_band_coverage,
-        max_dimension=max_dimension,
+        **options,
     )
-
-
-register_format("ktx2", write_ktx2)
 
 
 def read_ktx2_metadata(path: str | os.PathLike[str]) -> dict[str, Any]:
@@ -237,8 +222,6 @@ def read_ktx2_metadata(path: str | os.PathLike[str]) -> dict[str, Any]:
     dustoptics.io.FormatError
         Not a KTX2 file, a damaged one, or one without dustoptics' metadata.
     """
-    from dustoptics.io import FormatError
-
     p = Path(path)
     size = p.stat().st_size
     with open(p, "rb") as f:
@@ -266,3 +249,21 @@ def read_ktx2_metadata(path: str | os.PathLike[str]) -> dict[str, Any]:
     if not isinstance(meta, dict):
         raise FormatError(f"{str(p)!r}: its dustoptics metadata is not a JSON object")
     return meta
+
+
+def describe_ktx2(path: Path, full: bool = True) -> str:
+    """What an KTX2 phase texture holds, from its metadata (``dustoptics info``)."""
+    return describe_texture(path, read_ktx2_metadata(path), "KTX2", full)
+
+
+RECORD = register(
+    Format(
+        name="ktx2",
+        summary="NAME_phase_*.ktx2: the phase texture as KTX2",
+        write=write_ktx2,
+        suffixes=(".ktx2",),
+        options=TextureOptions,
+        recognise=lambda path: path.suffix.lower() == ".ktx2",
+        describe=describe_ktx2,
+    )
+)

@@ -20,14 +20,13 @@ from typing import Any
 
 import numpy as np
 
-from dustoptics.io import register_format
 from dustoptics.io._atomic import Content
+from dustoptics.io.registry import Format, register
 from dustoptics.io.textures.phase_texture import (
-    DEFAULT_MAX_DIMENSION,
     PhaseTexture,
+    TextureOptions,
     write_container,
 )
-from dustoptics.io.textures.raw import DEFAULT_N_ANGLES
 
 __all__ = ["write_npy"]
 
@@ -57,14 +56,7 @@ def write_npy(
     out_dir: str | os.PathLike[str],
     *,
     overwrite: bool = False,
-    layout: str = "rgb",
-    sampling: str = "theta",
-    n_angles: int = DEFAULT_N_ANGLES,
-    precision: str = "float32",
-    channels_nm: Any = None,
-    colour: str | None = None,
-    min_band_coverage: float = 0.99,
-    max_dimension: int = DEFAULT_MAX_DIMENSION,
+    **options: Any,
 ) -> list[Path]:
     """Write the phase-function texture as ``.npy`` and its ``.json`` sidecar, atomically.
 
@@ -77,8 +69,9 @@ def write_npy(
         ``<table name>_phase_<layout>_<sampling>_<precision>.npy`` and ``.json``.
     overwrite : bool
         Replace existing files.  Default False.
-    layout, sampling, n_angles, precision, channels_nm, colour, min_band_coverage, max_dimension
-        As :func:`dustoptics.io.textures.phase_texture.phase_texture`.
+    **options
+        The fields of :class:`~dustoptics.io.textures.phase_texture.TextureOptions` (the
+        keywords of :func:`~dustoptics.io.textures.phase_texture.phase_texture`).
 
     Returns
     -------
@@ -92,15 +85,16 @@ def write_npy(
         encode=_files,
         overwrite=overwrite,
         accept_file_path=False,
-        layout=layout,
-        sampling=sampling,
-        n_angles=n_angles,
-        precision=precision,
-        channels_nm=channels_nm,
-        colour=colour,
-        min_band_coverage=min_band_coverage,
-        max_dimension=max_dimension,
+        **options,
     )
 
 
-register_format("npy", write_npy)
+RECORD = register(
+    Format(
+        name="npy",
+        summary="NAME_phase_*.npy: the phase texture as NumPy .npy, JSON sidecar",
+        write=write_npy,
+        suffixes=(".npy", ".json"),
+        options=TextureOptions,
+    )
+)

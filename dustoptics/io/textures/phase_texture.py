@@ -62,11 +62,13 @@ import numpy as np
 from dustoptics._validation import check_choice
 from dustoptics.colour import channel_phase
 from dustoptics.io._atomic import Content, safe_stem, write_files
-from dustoptics.io.shaders.common import choose_channels
+from dustoptics.io.registry import option
+from dustoptics.io.shaders.common import ChannelOptions, choose_channels
 from dustoptics.io.textures.raw import (
     DEFAULT_N_ANGLES,
     PHASE_TEXTURE_FORMAT,
     SAMPLINGS,
+    SamplingOptions,
     _normalization_check,
     _sampling_grid,
 )
@@ -354,6 +356,49 @@ def metadata_json(texture: PhaseTexture) -> str:
     return json.dumps(texture.metadata, sort_keys=True, allow_nan=False, ensure_ascii=True)
 
 
+@dataclass(frozen=True)
+class TextureOptions(SamplingOptions, ChannelOptions):
+    """The keywords of the container writers (formats ktx2, exr, npy), once for all three: the
+    keyword arguments of :func:`phase_texture`.  None leaves :func:`phase_texture`'s default.
+
+    Attributes
+    ----------
+    layout : str, optional
+        ``"rgb"`` (angle x three channels, default) or ``"wavelength"``.
+    precision : str, optional
+        ``"float32"`` (default) or ``"float16"``.
+    sampling, n_angles
+        As :class:`~dustoptics.io.textures.raw.SamplingOptions`.
+    channels_nm, colour
+        As :class:`~dustoptics.io.shaders.common.ChannelOptions`.
+    min_band_coverage : float, optional
+        As :func:`choose_channels` (not a command-line option).
+    max_dimension : int, optional
+        Largest texture side (not a command-line option).
+    """
+
+    layout: str | None = option(
+        help="angle x RGB (default) or angle x wavelength",
+        choices=["rgb", "wavelength"],
+    )
+    precision: str | None = option(
+        help="sample type (default float32)", choices=["float32", "float16"]
+    )
+    min_band_coverage: float | None = None
+    max_dimension: int | None = None
+
+    def keywords(self) -> dict[str, Any]:
+        """The keywords given (not None), for :func:`phase_texture`."""
+        out: dict[str, Any] = {"channels_nm": self.channels_nm, "colour": self.colour}
+        for key in ("layout", "sampling", "n_angles", "precision"):
+            if getattr(self, key) is not None:
+                out[key] = getattr(self, key)
+        for key in ("min_band_coverage", "max_dimension"):
+            if getattr(self, key) is not None:
+                out[key] = getattr(self, key)
+        return out
+
+
 def write_container(
     table: Any,
     out_dir_or_path: str | os.PathLike[str],
@@ -391,7 +436,8 @@ def write_container(
     accept_file_path : bool, default True
         Whether ``out_dir_or_path`` may name the file itself.
     **options
-        The keyword arguments of :func:`phase_texture` (``layout``, ``sampling``, ...).
+        The fields of :class:`TextureOptions` (the keyword arguments of
+        :func:`phase_texture`); an unknown name is a TypeError.
 
     Returns
     -------
@@ -405,7 +451,7 @@ def write_container(
     FileExistsError
         A file exists and ``overwrite`` is False (nothing is written).
     """
-    texture = phase_texture(table, **options)
+    texture = phase_texture(table, **TextureOptions(**options).keywords())
     out = Path(out_dir_or_path)
     name = f"{safe_stem(table.name)}_phase_{texture.layout}_{texture.sampling}_{texture.precision}"
     target = out if accept_file_path and out.suffix == suffix else out / f"{name}{suffix}"

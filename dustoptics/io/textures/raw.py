@@ -39,6 +39,7 @@ replaced unless ``overwrite=True``, and a failed call leaves nothing partial.
 from __future__ import annotations
 
 import hashlib
+import io
 import json
 import math
 import os
@@ -49,9 +50,9 @@ from typing import Any
 import numpy as np
 
 from dustoptics._validation import MAX_GRID_POINTS, check_choice
-from dustoptics.io import register_format
 from dustoptics.io._atomic import FormatError, safe_stem, write_files
 from dustoptics.io._text import load_json, read_checked
+from dustoptics.io.registry import Format, option, register
 from dustoptics.scattering.tabulated_phase import sphere_integral
 from dustoptics.table import PHASE_NORMALIZATION
 
@@ -514,8 +515,6 @@ _NPY_HEADER_MAX = 4096
 
 def _read_npy(path: Path, meta: dict[str, Any]) -> TextureData:
     """A :data:`~dustoptics.io.textures.raw.PHASE_TEXTURE_FORMAT` sidecar and its ``.npy``."""
-    import io
-
     dtype, sampling, layout = meta["dtype"], meta["sampling"], meta["layout"]
     if (
         dtype not in ("<f4", "<f2")
@@ -573,4 +572,33 @@ def _read_npy(path: Path, meta: dict[str, Any]) -> TextureData:
     )
 
 
-register_format("texture", write_texture)
+@dataclass(frozen=True)
+class SamplingOptions:
+    """How a texture samples the angle (formats texture, ktx2, exr, npy); None leaves the
+    writer's default.
+
+    Attributes
+    ----------
+    sampling : str, optional
+        ``"theta"`` (default) or ``"cos"``.
+    n_angles : int, optional
+        Samples along the angle axis (default :data:`DEFAULT_N_ANGLES`).
+    """
+
+    sampling: str | None = option(
+        help="uniform in angle or in cos(angle) (default theta)", choices=["theta", "cos"]
+    )
+    n_angles: int | None = option(
+        help="samples along the angle axis (default 721)", type="positive_int", metavar="N"
+    )
+
+
+RECORD = register(
+    Format(
+        name="texture",
+        summary="NAME_phase_theta.raw: float32 texture, JSON sidecar",
+        write=write_texture,
+        suffixes=(".raw", ".json"),
+        options=SamplingOptions,
+    )
+)

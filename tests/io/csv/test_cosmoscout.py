@@ -178,8 +178,8 @@ def test_non_scattering_constituent_has_no_phase_file(ozone, tmp_path):
 
 def test_registry_entry_needs_a_density(aerosols, tmp_path):
     with pytest.raises(ValueError, match="needs density="):
-        FORMATS["cosmoscout"](aerosols, tmp_path, overwrite=False)
-    paths = FORMATS["cosmoscout"](aerosols, tmp_path, overwrite=False, density=DENSITY)
+        FORMATS["cosmoscout"].write(aerosols, tmp_path, overwrite=False)
+    paths = FORMATS["cosmoscout"].write(aerosols, tmp_path, overwrite=False, density=DENSITY)
     assert paths[0].name == "aerosols_phase.csv"
 
 

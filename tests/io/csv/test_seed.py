@@ -109,7 +109,7 @@ def test_wavelength_labels_are_integers_when_integral(table, tmp_path):
 
 
 def test_registry_entry(table, tmp_path):
-    assert [p.name for p in FORMATS["csv"](table, tmp_path, overwrite=False)] == list(
+    assert [p.name for p in FORMATS["csv"].write(table, tmp_path, overwrite=False)] == list(
         SEED_CSV_FILES
     )
 

@@ -102,13 +102,15 @@ def test_cli_refuses_without_expansion(
     assert not list((tmp_path / "out").rglob("*.txt"))
 
 
-def test_cli_build_refuses_before_computing(
+def test_cli_build_refuses_what_it_cannot_compute_before_computing(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    code = main(["build", "blue-moons", "--out", str(tmp_path), "--format", "disort", "--quiet"])
+    # A Mie model's expansion is computed when asked for (tests/cli/test_cli_build.py); an
+    # analytic phase function has neither the expansion nor cross-sections.
+    code = main(["build", "costa", "--out", str(tmp_path), "--format", "disort", "--quiet"])
     assert code == 2
     err = capsys.readouterr().err
-    assert "optics.expansion" in err and "presets --show blue-moons" in err
+    assert "--format disort needs cross-sections, which 'costa' does not have" in err
     assert list(tmp_path.iterdir()) == []
 
 

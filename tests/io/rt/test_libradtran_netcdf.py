@@ -293,25 +293,36 @@ def test_build_export_and_info_from_the_command_line(tmp_path: Path, capsys: Any
     assert main([*export, "--format", "libradtran-nc"]) == 0
     exported = read_cdf(again / "small-dust" / "small-dust.mie.cdf")["pmom"]
     np.testing.assert_array_equal(exported, pmom)
-    # Without the expansion: refused before any work, naming the key.
+    # Without the expansion in the configuration: the format asks for it, the build computes
+    # it, says so and records it (the same coefficients as the configuration's own).
     config.write_text(CONFIG.replace("expansion = true\n", ""), encoding="utf-8")
     capsys.readouterr()
-    assert main([*argv, "libradtran-nc", *density, "--out", str(tmp_path / "none")]) == 2
+    asked = tmp_path / "asked"
+    build = ["build", str(config), "--out", str(asked), "--format", "netcdf,libradtran-nc"]
+    assert main([*build, *density]) == 0
     err = capsys.readouterr().err
-    assert "--format libradtran-nc needs the phase function's expansion coefficients" in err
-    assert "expansion = true" in err
-    assert not (tmp_path / "none").exists()
+    note = (
+        "--format libradtran-nc needs the phase function's expansion coefficients: computed "
+        "(optics.expansion = true)"
+    )
+    assert f"dustoptics: {note}" in err
+    recorded = do.open_table(asked / "small-dust" / "small-dust.nc")
+    assert note in recorded.provenance.notes
+    assert recorded.provenance.inputs["optics"]["expansion"] is True
+    np.testing.assert_array_equal(
+        read_cdf(asked / "small-dust" / "small-dust.mie.cdf")["pmom"], pmom
+    )
 
 
 def test_another_cdf_file_is_not_taken_for_one(tmp_path: Path) -> None:
     from dustoptics.io import FormatError
-    from dustoptics.io.describe_formats import kind_of
+    from dustoptics.io.describe_formats import describer_of
 
     other = tmp_path / "other.mie.cdf"
     with netcdf_file(other, "w", version=1) as f:
         f.file_info = "Netcdf file created using libRadtran-Mie-tool"
         f.createDimension("nlam", 1)
         f.createVariable("wavelen", "d", ("nlam",))[:] = [0.5]
-    assert kind_of(other) is None
+    assert describer_of(other) is None
     with pytest.raises(FormatError, match="not a file dustoptics writes"):
         describe_path(other)

@@ -270,10 +270,10 @@ def test_h5dump_reads_the_file(written):
 
 
 def test_registry_writes_name_nc_and_name_h5(table, tmp_path):
-    assert [p.name for p in FORMATS["netcdf"](table, tmp_path)] == ["mars-dust.nc"]
-    assert [p.name for p in FORMATS["hdf5"](table, tmp_path)] == ["mars-dust.h5"]
+    assert [p.name for p in FORMATS["netcdf"].write(table, tmp_path)] == ["mars-dust.nc"]
+    assert [p.name for p in FORMATS["hdf5"].write(table, tmp_path)] == ["mars-dust.h5"]
     with pytest.raises(FileExistsError, match="mars-dust.nc"):
-        FORMATS["netcdf"](table, tmp_path)
+        FORMATS["netcdf"].write(table, tmp_path)
 
 
 def test_save_without_a_suffix_writes_nc(table, tmp_path):

@@ -1,3 +1,0 @@
-from dustoptics._deprecated import alias_module
-
-alias_module(__name__, "dustoptics.io.shaders")
