@@ -70,17 +70,6 @@ html_show_sourcelink = False
 # ------------------------------------------------------------------ API reference
 autosummary_generate = True
 autosummary_imported_members = False
-# A module that moved keeps a shim at its old path for one release
-# (dustoptics._deprecated.alias_module); the reference shows each module once, at its new
-# path (docs/_templates/autosummary/module.rst leaves these out).
-autosummary_context = {
-    "moved_modules": sorted(
-        ".".join(path.relative_to(HERE.parent).with_suffix("").parts)
-        for path in (HERE.parent / "dustoptics").rglob("*.py")
-        if path.name != "_deprecated.py"
-        and "alias_module(__name__," in path.read_text(encoding="utf-8")
-    )
-}
 autodoc_default_options = {"members": True, "show-inheritance": False}
 autodoc_typehints = "none"  # numpydoc's Parameters sections carry the types
 autodoc_member_order = "bysource"
