@@ -1444,8 +1444,8 @@ for _model in (
         starts=_two_term_hg_starts,
         gradient=_two_term_hg_gradient,
         fit_name="two-term-hg-hapke2012",
-        fit_citation="B. Hapke, Theory of Reflectance and Emittance Spectroscopy, 2nd ed., Cambridge "
-        "University Press (2012), doi:10.1017/CBO9781139025683, section 6.4.2",
+        fit_citation="B. Hapke, Theory of Reflectance and Emittance Spectroscopy, 2nd ed., "
+        "Cambridge University Press (2012), doi:10.1017/CBO9781139025683, section 6.4.2",
     ),
 ):
     register_analytic_model(_model)
