@@ -19,13 +19,13 @@ from dustoptics.io._atomic import check_targets, safe_stem
 from dustoptics.io.engines.fit import _IDENTIFIER, FIT_LANGUAGES, write_fit
 from dustoptics.io.outputs import read_table
 from dustoptics.io.shaders.common import shader_syntax
-from dustoptics.scattering.fit import FIT_MODELS, fit_table, resolve_model
-from dustoptics.scattering.phase import ANALYTIC_MODELS
+from dustoptics.scattering.fit import FIT_MODEL_ALIASES, FIT_MODELS, fit_table, resolve_model
 
 __all__ = ["add_parser", "fit_targets", "run"]
 
 _FIT_MODEL_HELP = ", ".join(
-    f"{name} ({', '.join(ANALYTIC_MODELS[name].aliases)})" for name in FIT_MODELS
+    f"{name} ({', '.join(a for a, n in FIT_MODEL_ALIASES.items() if n == name)})"
+    for name in FIT_MODELS
 )
 
 

@@ -75,7 +75,7 @@ import numpy as np
 
 from dustoptics._validation import as_float_array, check_choice, check_closed_interval
 from dustoptics.colour import channel_phase, channel_weights
-from dustoptics.scattering.phase import ANALYTIC_MODEL_ALIASES, ANALYTIC_MODELS, AnalyticModel
+from dustoptics.scattering.phase import ANALYTIC_MODELS, AnalyticModel
 from dustoptics.scattering.tabulated_phase import _linear_theta_weights
 
 __all__ = [
@@ -89,13 +89,22 @@ __all__ = [
 FloatArray = np.ndarray
 
 
-#: The package's own models that :func:`fit_phase` fits (registry names, author and year).
-FIT_MODELS: tuple[str, ...] = tuple(name for name, m in ANALYTIC_MODELS.items() if m.fittable)
+def _fittable() -> dict[str, AnalyticModel]:
+    """The fittable models of the phase registry, read when called, by the name fits carry."""
+    return {m.fit_label: m for m in ANALYTIC_MODELS.values() if m.fittable}
 
-#: Other spellings accepted for :data:`FIT_MODELS` (hyphenated, short), to the registry name.
-FIT_MODEL_ALIASES: dict[str, str] = {
-    alias: name for alias, name in ANALYTIC_MODEL_ALIASES.items() if name in FIT_MODELS
-}
+
+def _short_names(fittable: dict[str, AnalyticModel]) -> dict[str, str]:
+    """Each fittable model's other aliases (``hg``, ``dhg``, ...), to the name fits carry."""
+    return {a: label for label, m in fittable.items() for a in m.aliases if a != label}
+
+
+#: The package's own models that :func:`fit_phase` fits, by the names their results and
+#: files carry (:attr:`~dustoptics.scattering.phase.AnalyticModel.fit_label`).
+FIT_MODELS: tuple[str, ...] = tuple(_fittable())
+
+#: Short names accepted for :data:`FIT_MODELS`.
+FIT_MODEL_ALIASES: dict[str, str] = _short_names(_fittable())
 
 _SCREEN_ITERATIONS = 10  # from every start, on every _SCREEN_STRIDE-th angle
 _SCREEN_STRIDE = 8
@@ -231,16 +240,19 @@ class FitResult:
 
 
 def resolve_model(model: str) -> str:
-    """Registry name of ``model``: a fittable model of the phase registry, or an alias.
+    """The name fits carry for ``model``: a fittable model's name, registry name or alias.
 
     Read from :data:`~dustoptics.scattering.phase.ANALYTIC_MODELS` when called,
     so a model registered after import (:func:`~dustoptics.scattering.phase.
-    register_analytic_model`) is fitted like the package's own.
+    register_analytic_model`) is fitted like the package's own.  The registry
+    names (``dhg_costa2021``) are accepted too; the error for an unknown name
+    lists the names of :data:`FIT_MODELS` and the short aliases.
     """
-    fittable = tuple(n for n, m in ANALYTIC_MODELS.items() if m.fittable)
-    aliases = tuple(a for a, n in ANALYTIC_MODEL_ALIASES.items() if n in fittable)
-    name = ANALYTIC_MODEL_ALIASES.get(model, model)
-    check_choice("model", model, fittable + aliases)
+    fittable = _fittable()
+    short = _short_names(fittable)
+    registry = {m.name: label for label, m in fittable.items()}
+    name = short.get(model, registry.get(model, model))
+    check_choice("model", name, (*fittable, *short))
     return name
 
 
@@ -508,7 +520,7 @@ def fit_phase(
     >>> bool(abs(r.parameters[0, 0] - 0.6) < 1e-12 and r.max_relative_error[0] < 1e-12)
     True
     """
-    spec = ANALYTIC_MODELS[resolve_model(model)]
+    spec = _fittable()[resolve_model(model)]
     theta, table, cutoff = _checked_table(theta_deg, phase, forward_cutoff_deg)
     n = table.shape[0]
     row_labels = tuple(labels) if labels is not None else tuple(f"row {i}" for i in range(n))
@@ -533,7 +545,7 @@ def fit_phase(
 def _checked_table(
     theta_deg: Any, phase: Any, forward_cutoff_deg: float
 ) -> tuple[FloatArray, FloatArray, float]:
-    """The angles [deg], the rows (n, m) [sr^-1] and the cutoff [deg] of :func:`fit_phase`, checked."""
+    """The angles [deg], rows (n, m) [sr^-1] and cutoff [deg] of :func:`fit_phase`, checked."""
     theta = as_float_array("theta_deg", theta_deg, ndim=1)
     if theta.size < 3 or theta[0] != 0.0 or theta[-1] != 180.0 or np.any(np.diff(theta) <= 0):
         raise ValueError(
@@ -636,9 +648,9 @@ def _result(
         + (f"; angles below {cutoff:g} deg left out" if cutoff > 0 else "; all angles")
     )
     return FitResult(
-        model=spec.name,
+        model=spec.fit_label,
         formula=spec.formula,
-        citation=spec.citation,
+        citation=spec.fit_citation or spec.citation,
         parameter_names=spec.parameters,
         parameters=params,
         labels=row_labels,

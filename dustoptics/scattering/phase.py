@@ -296,9 +296,18 @@ def _dhg_kobe(mu: FloatArray, g1: Any, g2: Any, f: Any) -> FloatArray:
     return (1.0 - f) * _hg(mu, g1) + f * _hg(mu, g2)
 
 
+def _cs_factor(mu: FloatArray, g: Any) -> FloatArray:
+    """Cornette-Shanks over Henyey-Greenstein, ``3 (1 + mu^2) / (2 (2 + g^2))``, as fits take it."""
+    return 1.5 * (1.0 + mu * mu) / (2.0 + g * g)
+
+
 def _cornette_shanks(mu: FloatArray, g: Any) -> FloatArray:
-    """Cornette-Shanks on validated input."""
-    return 1.5 / (2.0 + g * g) * (1.0 + mu * mu) * _hg(mu, g)
+    """Cornette-Shanks on validated input, as fits evaluate it (with its gradient's rounding).
+
+    :func:`cornette_shanks1992` rounds differently in the last bit (its own
+    order of operations, kept so that tables made with it do not change).
+    """
+    return _cs_factor(mu, g) * _hg(mu, g)
 
 
 def _hg_draine(mu: FloatArray, g_hg: Any, g_d: Any, alpha: Any, w_d: Any) -> FloatArray:
@@ -309,11 +318,10 @@ def _hg_draine(mu: FloatArray, g_hg: Any, g_d: Any, alpha: Any, w_d: Any) -> Flo
 def _two_term_hg(mu: FloatArray, b: Any, c: Any) -> FloatArray:
     """Hapke's two-term HG in scattering angle on validated input.
 
-    Written as the Costa double HG with ``g1 = b``, ``g2 = -b``,
-    ``alpha = (1 - c) / 2``.
+    ``(1 - c)/2 HG(b) + (1 + c)/2 HG(-b)``, in the order of operations the fit
+    has always used (its numbers stay the same to the last bit).
     """
-    alpha = 0.5 * (1.0 - c)
-    return _dhg_costa(mu, b, -b, alpha)
+    return 0.5 * (1.0 - c) * _hg(mu, b) + 0.5 * (1.0 + c) * _hg(mu, -b)
 
 
 def _draine_mean(g: Any, alpha: Any) -> FloatArray:
@@ -714,7 +722,10 @@ def cornette_shanks1992(mu: ArrayLike, *, g: ArrayLike) -> FloatOrArray:
     """
     m = _mu(mu)
     m, gg = _broadcast(mu=m, g=_g("g", g))
-    return float_or_array(_cornette_shanks(m, gg))
+    # The formula of the registry's kernel (_cornette_shanks, what fits evaluate) in this
+    # function's own order of operations: the two round differently in the last bit, and
+    # each keeps its own so that neither tables nor fits change.
+    return float_or_array(1.5 / (2.0 + gg * gg) * (1.0 + m * m) * _hg(m, gg))
 
 
 def cornette_shanks1992_asymmetry(*, g: ArrayLike) -> FloatOrArray:
@@ -1031,7 +1042,7 @@ def _hg_gradient(mu: FloatArray, p: FloatArray) -> tuple[FloatArray, FloatArray]
 def _cs_gradient(mu: FloatArray, p: FloatArray) -> tuple[FloatArray, FloatArray]:
     g = _col(p, 0)
     h, dl = _hg_dlog(mu, g)
-    f = 1.5 * (1.0 + mu * mu) / (2.0 + g * g) * h
+    f = _cs_factor(mu, g) * h
     return f, (f * (dl - 2.0 * g / (2.0 + g * g)))[:, :, None]
 
 
@@ -1208,6 +1219,13 @@ class AnalyticModel:
     canonical : callable or None
         ``canonical(p)``: the one ordering of equivalent parameter sets a fit
         reports (a two-lobe model's lobes), or None to report as found.
+    fit_name : str or None
+        The name a fit's results and files carry (:attr:`name` or one of
+        :attr:`aliases`); None: :attr:`name`.  The package's own models keep
+        the hyphenated names their fits have always been written under
+        (``cornette-shanks1992``), so fit outputs do not change.
+    fit_citation : str or None
+        The citation a fit's results carry; None: :attr:`citation`.
     """
 
     name: str
@@ -1222,11 +1240,18 @@ class AnalyticModel:
     starts: Callable[[FloatArray], list[FloatArray]] | None = None
     gradient: Callable[[FloatArray, FloatArray], tuple[FloatArray, FloatArray]] | None = None
     canonical: Callable[[FloatArray], FloatArray] | None = None
+    fit_name: str | None = None
+    fit_citation: str | None = None
 
     @property
     def fittable(self) -> bool:
         """Whether :func:`~dustoptics.scattering.fit.fit_phase` can fit it."""
         return self.gradient is not None and self.starts is not None and bool(self.bounds)
+
+    @property
+    def fit_label(self) -> str:
+        """The name a fit's results and files carry: :attr:`fit_name`, else :attr:`name`."""
+        return self.fit_name or self.name
 
 
 _REGISTRY: dict[str, AnalyticModel] = {}
@@ -1273,6 +1298,11 @@ def register_analytic_model(model: AnalyticModel) -> AnalyticModel:
         )
     if model.fittable and model.kernel is None:
         raise ValueError(f"fittable phase model {model.name!r} needs a kernel")
+    if model.fit_name is not None and model.fit_name not in (model.name, *model.aliases):
+        raise ValueError(
+            f"fit_name of {model.name!r} must be its name or one of its aliases "
+            f"{model.aliases}; got {model.fit_name!r}"
+        )
     _REGISTRY[model.name] = model
     for alias in model.aliases:
         _ALIASES[alias] = model.name
@@ -1322,6 +1352,9 @@ for _model in (
         bounds=(_G,),
         starts=_hg_starts,
         gradient=_hg_gradient,
+        fit_name="henyey-greenstein",
+        fit_citation="L. G. Henyey and J. L. Greenstein, Astrophys. J. 93, 70-83 (1941), "
+        "doi:10.1086/144246",
     ),
     AnalyticModel(
         "dhg_costa2021",
@@ -1336,6 +1369,9 @@ for _model in (
         starts=_dhg_costa_starts,
         gradient=_dhg_costa_gradient,
         canonical=_forward_lobe_first,
+        fit_name="dhg-costa2021",
+        fit_citation="J. Costa et al., IEEE TVCG 27(2), 785-795 (2021), "
+        "doi:10.1109/TVCG.2020.3030333",
     ),
     AnalyticModel(
         "dhg_kobe2026",
@@ -1349,6 +1385,8 @@ for _model in (
         bounds=((0.0, 1.0), (-1.0, 0.0), (0.0, 1.0)),
         starts=_dhg_kobe_starts,
         gradient=_dhg_kobe_gradient,
+        fit_name="dhg-kobe2026",
+        fit_citation="Kobe (2026), master's thesis (the seed's third source)",
     ),
     AnalyticModel(
         "cornette_shanks1992",
@@ -1362,6 +1400,9 @@ for _model in (
         bounds=(_G,),
         starts=_cs_starts,
         gradient=_cs_gradient,
+        fit_name="cornette-shanks1992",
+        fit_citation="W. M. Cornette and J. G. Shanks, Appl. Opt. 31(16), 3152-3160 (1992), "
+        "doi:10.1364/AO.31.003152",
     ),
     AnalyticModel(
         "draine2003",
@@ -1385,6 +1426,9 @@ for _model in (
         bounds=(_G, _G, (-1.0, 200.0), (0.0, 1.0)),
         starts=_hg_draine_starts,
         gradient=_hg_draine_gradient,
+        fit_name="hg-draine-jendersie-deon2023",
+        fit_citation="J. Jendersie and E. d'Eon, ACM SIGGRAPH 2023 Talks, "
+        "doi:10.1145/3587421.3595409",
     ),
     AnalyticModel(
         "two_term_hg_hapke2012",
@@ -1399,6 +1443,9 @@ for _model in (
         bounds=((0.0, 1.0), (-1.0, 1.0)),
         starts=_two_term_hg_starts,
         gradient=_two_term_hg_gradient,
+        fit_name="two-term-hg-hapke2012",
+        fit_citation="B. Hapke, Theory of Reflectance and Emittance Spectroscopy, 2nd ed., "
+        "Cambridge University Press (2012), doi:10.1017/CBO9781139025683, section 6.4.2",
     ),
 ):
     register_analytic_model(_model)

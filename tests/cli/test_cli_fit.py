@@ -27,14 +27,14 @@ def test_fit_writes_into_dir_name_and_refuses_to_replace_before_fitting(
     assert main(argv) == 0
     folder = tmp_path / "costa"  # DIR/NAME/, as build and export write
     names = sorted(p.name for p in folder.iterdir())
-    assert names == [f"costa_henyey_greenstein.{e}" for e in ("glsl", "hlsl", "json", "wgsl")]
-    assert json.loads((folder / "costa_henyey_greenstein.json").read_text())["rows"]
+    assert names == [f"costa_henyey-greenstein.{e}" for e in ("glsl", "hlsl", "json", "wgsl")]
+    assert json.loads((folder / "costa_henyey-greenstein.json").read_text())["rows"]
     out = capsys.readouterr().out
-    assert f"wrote {folder / 'costa_henyey_greenstein.json'}" in out
+    assert f"wrote {folder / 'costa_henyey-greenstein.json'}" in out
     _no_fit(monkeypatch)
     assert main(argv) == 1
     err = capsys.readouterr().err
-    assert "already exist" in err and "costa_henyey_greenstein" in err, err
+    assert "already exist" in err and "costa_henyey-greenstein" in err, err
     monkeypatch.undo()
     assert main([*argv, "--force"]) == 0
 

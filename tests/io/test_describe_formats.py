@@ -124,8 +124,8 @@ def test_a_fit_its_shaders_and_a_sky_through_the_command_line(
         buffer = io.StringIO()
         with redirect_stdout(buffer):
             assert main(["info", str(path)]) == 0
-        assert "henyey_greenstein" in buffer.getvalue(), path.name
-    text = describe_path(fit / "small_henyey_greenstein.json")
+        assert "henyey-greenstein" in buffer.getvalue(), path.name
+    text = describe_path(fit / "small_henyey-greenstein.json")
     assert text.startswith("phase-function fit:")
     assert "440 nm: g " in text
     sky_out = tmp_path / "skies"

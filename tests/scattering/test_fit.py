@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import shutil
 import subprocess
@@ -30,25 +31,25 @@ def _tabulated(values: np.ndarray) -> np.ndarray:
 # Each model at two parameter sets inside its valid range (the second one
 # strongly forward, as dust is).
 CASES = {
-    "henyey_greenstein": ([0.3], [0.85]),
-    "cornette_shanks1992": ([-0.2], [0.8]),
-    "dhg_costa2021": ([0.8, -0.3, 0.7], [0.67, 0.094, 0.743]),
-    "dhg_kobe2026": ([0.7, -0.4, 0.2], [0.9, -0.1, 0.05]),
-    "hg_draine_jendersie_deon2023": ([0.9, 0.4, 5.0, 0.3], [0.95, 0.6, 20.0, 0.45]),
-    "two_term_hg_hapke2012": ([0.4, 0.3], [0.6, -0.5]),
+    "henyey-greenstein": ([0.3], [0.85]),
+    "cornette-shanks1992": ([-0.2], [0.8]),
+    "dhg-costa2021": ([0.8, -0.3, 0.7], [0.67, 0.094, 0.743]),
+    "dhg-kobe2026": ([0.7, -0.4, 0.2], [0.9, -0.1, 0.05]),
+    "hg-draine-jendersie-deon2023": ([0.9, 0.4, 5.0, 0.3], [0.95, 0.6, 20.0, 0.45]),
+    "two-term-hg-hapke2012": ([0.4, 0.3], [0.6, -0.5]),
 }
 
 
 def _evaluate(model: str, p: list[float]) -> np.ndarray:
-    if model == "henyey_greenstein":
+    if model == "henyey-greenstein":
         return ph.henyey_greenstein(MU, g=p[0])
-    if model == "cornette_shanks1992":
+    if model == "cornette-shanks1992":
         return ph.cornette_shanks1992(MU, g=p[0])
-    if model == "dhg_costa2021":
+    if model == "dhg-costa2021":
         return ph.dhg_costa2021(MU, g1=p[0], g2=p[1], alpha=p[2])
-    if model == "dhg_kobe2026":
+    if model == "dhg-kobe2026":
         return ph.dhg_kobe2026(MU, g1=p[0], g2=p[1], f=p[2])
-    if model == "hg_draine_jendersie_deon2023":
+    if model == "hg-draine-jendersie-deon2023":
         return ph.hg_draine_jendersie_deon2023(MU, g_hg=p[0], g_d=p[1], alpha=p[2], w_d=p[3])
     b, c = p
     # Hapke's form in phase angle (180 deg - theta): (1 + c)/2 HG_phase(b) + (1 - c)/2 HG_phase(-b).
@@ -58,15 +59,15 @@ def _evaluate(model: str, p: list[float]) -> np.ndarray:
 
 
 def _asymmetry(model: str, p: list[float]) -> float:
-    if model == "henyey_greenstein":
+    if model == "henyey-greenstein":
         return p[0]
-    if model == "cornette_shanks1992":
+    if model == "cornette-shanks1992":
         return float(ph.cornette_shanks1992_asymmetry(g=p[0]))
-    if model == "dhg_costa2021":
+    if model == "dhg-costa2021":
         return float(ph.dhg_costa2021_asymmetry(g1=p[0], g2=p[1], alpha=p[2]))
-    if model == "dhg_kobe2026":
+    if model == "dhg-kobe2026":
         return float(ph.dhg_kobe2026_asymmetry(g1=p[0], g2=p[1], f=p[2]))
-    if model == "hg_draine_jendersie_deon2023":
+    if model == "hg-draine-jendersie-deon2023":
         return float(
             ph.hg_draine_jendersie_deon2023_asymmetry(g_hg=p[0], g_d=p[1], alpha=p[2], w_d=p[3])
         )
@@ -95,7 +96,7 @@ def test_costa_preset_recovered_to_round_off() -> None:
     """The `costa` preset is alpha HG(g1) + (1 - alpha) HG(g2), 48 wavelengths, 1,801 angles."""
     table = read_hdf5(TABLES / "costa" / "costa.nc")
     r = table.fit(model="dhg")
-    assert r.model == "dhg_costa2021"
+    assert r.model == "dhg-costa2021"
     assert r.max_relative_error.max() < 1e-13
     assert np.abs(r.g_error).max() < 1e-14
     # Costa's source-code values (BRIEF section 4), g1 from Meyran's quadratic held at
@@ -123,7 +124,7 @@ def test_blue_moons_dhg_against_costa_published_parameters() -> None:
     fitted to Mie; under our loss the fit must beat them.
     """
     table = read_hdf5(TABLES / "blue-moons" / "blue-moons.nc")
-    r = table.fit(model="dhg_costa2021")
+    r = table.fit(model="dhg-costa2021")
     costa = {440.0: (0.67, 0.094, 0.743), 550.0: (0.4, 0.094, 0.743), 680.0: (0.03, 0.094, 0.743)}
     for wl, (g1, g2, alpha) in costa.items():
         i = int(np.flatnonzero(table.wavelength_nm == wl)[0])
@@ -139,7 +140,7 @@ def test_blue_moons_dhg_against_costa_published_parameters() -> None:
     np.testing.assert_allclose(r.parameters[i550], [0.962, 0.675, 0.564], atol=2e-3)
 
 
-@pytest.mark.parametrize("model", ["dhg_costa2021", "hg_draine_jendersie_deon2023"])
+@pytest.mark.parametrize("model", ["dhg-costa2021", "hg-draine-jendersie-deon2023"])
 def test_fits_are_continuous_in_wavelength(model: str) -> None:
     """A renderer interpolates the parameters between wavelengths: no lobe swaps.
 
@@ -203,8 +204,8 @@ def test_model_that_cannot_represent_the_table_returns_its_best() -> None:
 
 def test_deterministic_and_parameters_in_range() -> None:
     table = read_hdf5(TABLES / "blue-moons" / "blue-moons.nc")
-    a = table.fit(model="dhg_kobe2026")
-    b = table.fit(model="dhg_kobe2026")
+    a = table.fit(model="dhg-kobe2026")
+    b = table.fit(model="dhg-kobe2026")
     np.testing.assert_array_equal(a.parameters, b.parameters)
     g1, g2, f = a.parameters.T
     assert np.all((g1 >= 0) & (g1 < 1) & (g2 > -1) & (g2 <= 0) & (f > 0) & (f < 1))
@@ -223,7 +224,7 @@ def test_channels_and_forward_cutoff() -> None:
 @pytest.mark.parametrize(
     ("kwargs", "message"),
     [
-        ({"model": "gaussian"}, "model must be one of 'henyey_greenstein'"),
+        ({"model": "gaussian"}, "model must be one of 'henyey-greenstein'"),
         ({"model": "hg", "forward_cutoff_deg": 95.0}, "forward_cutoff_deg must be in"),
     ],
 )
@@ -247,7 +248,7 @@ def _three_channel_fit():
 def test_json_holds_parameters_and_errors() -> None:
     r = _three_channel_fit()
     data = json.loads(fit_json(r))
-    assert data["model"] == "henyey_greenstein"
+    assert data["model"] == "henyey-greenstein"
     assert [row["label"] for row in data["rows"]] == ["R", "G", "B"]
     np.testing.assert_allclose([row["parameters"]["g"] for row in data["rows"]], [0.7, 0.6, 0.5])
     assert all(row["max_relative_error"] < 1e-9 for row in data["rows"])
@@ -287,7 +288,7 @@ def test_wgsl_constants_validate() -> None:
     table = read_hdf5(TABLES / "costa" / "costa.nc")
     for r in (table.fit(model="dhg", colour="wavelengths"), table.fit(model="hg")):
         use = "DUST_G1.x" if r.parameters.shape[0] == 3 else "DUST_G[47]"
-        if r.model == "dhg_costa2021":
+        if r.model == "dhg-costa2021":
             use = "DUST_G1.x"
         code = (
             fit_constants(r, language="wgsl")
@@ -306,10 +307,10 @@ def test_cli_fit_prints_and_writes(tmp_path: Path, capsys: pytest.CaptureFixture
         == 0
     )
     out = capsys.readouterr().out
-    assert "dhg_costa2021" in out and "680 nm" in out
+    assert "dhg-costa2021" in out and "680 nm" in out
     names = sorted(p.name for p in (tmp_path / "costa").iterdir())  # DIR/NAME/, as build's
-    assert names == [f"costa_dhg_costa2021.{e}" for e in ("glsl", "hlsl", "json", "wgsl")]
-    data = json.loads((tmp_path / "costa" / "costa_dhg_costa2021.json").read_text())
+    assert names == [f"costa_dhg-costa2021.{e}" for e in ("glsl", "hlsl", "json", "wgsl")]
+    data = json.loads((tmp_path / "costa" / "costa_dhg-costa2021.json").read_text())
     np.testing.assert_allclose(data["rows"][1]["parameters"]["g1"], 0.4, atol=1e-9)  # 550 nm
     assert main(["fit", str(path), "--out", str(tmp_path)]) == 1  # files exist: no overwrite
     assert main(["fit", str(path), "--model", "nope"]) == 2  # a usage error, before any work
@@ -321,7 +322,8 @@ def test_analytic_derivatives_equal_finite_differences() -> None:
     # central differences of its formula (its record's phase function, with range checks).
     mu = np.cos(np.deg2rad(np.linspace(0.0, 180.0, 181)))
     for name in FIT_MODELS:
-        spec = ph.ANALYTIC_MODELS[name]
+        spec = ph.get_analytic_model(name)
+        assert spec.kernel is not None and spec.gradient is not None
         low = np.array([lo for lo, _ in spec.bounds])
         high = np.array([hi for _, hi in spec.bounds])
         p = low + (high - low) * np.array([[0.3, 0.6, 0.45, 0.7][: low.size]])
@@ -332,6 +334,11 @@ def test_analytic_derivatives_equal_finite_differences() -> None:
             )
 
         f, jac = spec.gradient(mu, p)
+        # The fit's residuals (the kernel) and its Jacobian (the gradient) see the same
+        # values to the bit; the checked function to round-off.
+        np.testing.assert_array_equal(
+            f, spec.kernel(mu, *(p[:, k : k + 1] for k in range(low.size)))
+        )
         np.testing.assert_allclose(f, phase(p), rtol=1e-14)
         for j in range(low.size):
             step = np.zeros(low.size)
@@ -341,18 +348,53 @@ def test_analytic_derivatives_equal_finite_differences() -> None:
 
 
 def test_every_fit_model_is_read_from_the_phase_registry() -> None:
-    """One list: the fit's models, aliases, formulas and citations are the phase records'."""
-    assert tuple(n for n, m in ph.ANALYTIC_MODELS.items() if m.fittable) == FIT_MODELS
-    assert len(FIT_MODELS) == 6 and "rayleigh" not in FIT_MODELS
+    """One list: the fit's models, aliases, formulas and citations are the phase records'.
+
+    Fits keep the names, citations and file names they had before the registry
+    (``dhg-costa2021``, ``costa_dhg-costa2021.json``): each record's fit_name and
+    fit_citation.
+    """
+    fittable = [m for m in ph.ANALYTIC_MODELS.values() if m.fittable]
+    assert tuple(m.fit_label for m in fittable) == FIT_MODELS
+    assert FIT_MODELS == (
+        "henyey-greenstein",
+        "dhg-costa2021",
+        "dhg-kobe2026",
+        "cornette-shanks1992",
+        "hg-draine-jendersie-deon2023",
+        "two-term-hg-hapke2012",
+    )
+    assert FIT_MODEL_ALIASES == {
+        "hg": "henyey-greenstein",
+        "dhg": "dhg-costa2021",
+        "dhg-kobe": "dhg-kobe2026",
+        "cs": "cornette-shanks1992",
+        "hg-draine": "hg-draine-jendersie-deon2023",
+        "tthg": "two-term-hg-hapke2012",
+    }
     for alias, name in FIT_MODEL_ALIASES.items():
-        assert ph.get_analytic_model(alias).name == name
-    assert FIT_MODEL_ALIASES["dhg-costa2021"] == "dhg_costa2021"
-    assert FIT_MODEL_ALIASES["hg"] == "henyey_greenstein"
+        assert ph.get_analytic_model(alias) is ph.get_analytic_model(name)
     p = ph.henyey_greenstein(MU, g=0.5)
-    r = fit_phase(THETA, p, model="henyey-greenstein")
     record = ph.ANALYTIC_MODELS["henyey_greenstein"]
-    assert (r.model, r.formula, r.citation) == (record.name, record.formula, record.citation)
-    assert "Astrophys. J., vol. 93" in r.citation
+    for spelling in ("henyey-greenstein", "hg", "henyey_greenstein"):
+        r = fit_phase(THETA, p, model=spelling)
+        assert (r.model, r.formula, r.citation) == (
+            record.fit_name,
+            record.formula,
+            record.fit_citation,
+        )
+    assert r.citation == (
+        "L. G. Henyey and J. L. Greenstein, Astrophys. J. 93, 70-83 (1941), doi:10.1086/144246"
+    )
+    assert "Astrophys. J., vol. 93" in record.citation  # the registry keeps the full one
+
+
+def test_fit_name_must_be_a_name_of_the_model() -> None:
+    hg = ph.ANALYTIC_MODELS["henyey_greenstein"]
+    copy = dataclasses.replace(hg, name="hg_fitname", aliases=("hg-fitname",), fit_name="hg-x")
+    with pytest.raises(ValueError, match="fit_name of 'hg_fitname' must be its name or one"):
+        ph.register_analytic_model(copy)
+    assert "hg_fitname" not in ph.ANALYTIC_MODELS
 
 
 def test_path_walks_taken_together_equal_walks_one_row_at_a_time() -> None:

@@ -87,7 +87,7 @@ def _hg(mu: np.ndarray, g: np.ndarray) -> np.ndarray:
 def test_dhg_preview_against_an_independent_recomputation(atmosphere, medium, exact) -> None:  # type: ignore[no-untyped-def]
     pv = _preview(medium, exact, phase="fit:dhg")
     fit = pv.fit
-    assert fit is not None and fit.model == "dhg_costa2021"
+    assert fit is not None and fit.model == "dhg-costa2021"
     # The fitted DHG evaluated by hand at the table's angles, put into the
     # atmosphere, and the medium and sky made from it the ordinary way.
     dust = atmosphere.constituent("aerosols")
@@ -142,7 +142,7 @@ def test_rgb_channels_are_read_at_the_engine_s_wavelengths(medium, exact) -> Non
 def test_unknown_phase_is_refused_with_the_allowed_list(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    with pytest.raises(ValueError, match="phase must be one of exact, fit:henyey_greenstein"):
+    with pytest.raises(ValueError, match="phase must be one of exact, fit:henyey-greenstein"):
         Approximations(phase="fit:gaussian")
     out = tmp_path / "x"
     assert main(["sky", "mars", "--phase", "fit:gaussian", "--out", str(out)]) == 2
@@ -255,7 +255,7 @@ def test_one_fit_for_all_wavelengths_is_bruneton_s_g(atmosphere, medium) -> None
     for channels in (None, (680.0, 550.0, 440.0)):
         a = Approximations(phase="fit:cornette-shanks@550", channels_nm=channels)
         approx, fit = approximate_medium(medium, a)
-        assert fit is not None and fit.model == "cornette_shanks1992"
+        assert fit is not None and fit.model == "cornette-shanks1992"
         assert fit.parameters[0, 0] == pytest.approx(g, rel=1e-12)
         dust = approx.tables[1]
         mu = np.cos(np.deg2rad(dust.theta_deg))
