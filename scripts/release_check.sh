@@ -159,7 +159,16 @@ assert where.is_relative_to(Path(sys.argv[1]).resolve()), f"dustoptics imported 
 print(f"dustoptics {dustoptics.__version__} from {where.parent}")
 EOF
 [ "$("$VENV/bin/dustoptics" --version)" = "dustoptics $VERSION" ] || fail "dustoptics --version is not $VERSION"
-"$VENV/bin/dustoptics" build --out tables
+# The README's install lines: the first installs (done above, from the local index), the
+# others run as written with the environment's commands first on PATH.
+mapfile -t INSTALL < <(bash "$ROOT/.ci/quickstart_lines.sh" "$ROOT/README.md" Install)
+[ "${INSTALL[0]:-}" = "python3 -m pip install dustoptics" ] \
+  || fail "README's install block does not start with 'python3 -m pip install dustoptics'"
+[ "${#INSTALL[@]}" -ge 2 ] || fail "README's install block runs nothing after the install"
+for line in "${INSTALL[@]:1}"; do
+  echo "+ $line"
+  PATH="$VENV/bin:$PATH" bash -euo pipefail -c "$line"
+done
 "$VENV/bin/dustoptics" info tables/blue-moons/blue-moons.nc > info.txt
 head -n 5 info.txt
 
