@@ -116,13 +116,16 @@ def _third_party_imports() -> tuple[set[str], set[str]]:
 ENGINES = {"h5netcdf": 'engine="h5netcdf"'}
 
 
-def test_runtime_dependencies_are_what_the_package_imports():
-    project = _pyproject()["project"]
-    runtime = {_requirement_name(r) for r in project["dependencies"]}
+def test_engine_dependencies_are_named_by_the_package():
+    runtime = {_requirement_name(r) for r in _pyproject()["project"]["dependencies"]}
     source = "".join(path.read_text(encoding="utf-8") for path in PACKAGE.rglob("*.py"))
     for name, spelling in ENGINES.items():
         assert name in runtime and spelling in source, name
-    runtime -= set(ENGINES)
+
+
+def test_runtime_dependencies_are_what_the_package_imports():
+    project = _pyproject()["project"]
+    runtime = {_requirement_name(r) for r in project["dependencies"]} - set(ENGINES)
     extras = {
         _requirement_name(r)
         for reqs in project["optional-dependencies"].values()
@@ -400,6 +403,10 @@ def test_metadata_is_complete_for_an_index():
     assert versions and versions[0] == f"3.{floor.group(1)}", versions
     assert "Programming Language :: Python :: 3 :: Only" in classifiers
     assert "Typing :: Typed" in classifiers and (PACKAGE / "py.typed").is_file()
+
+
+def test_every_dependency_has_a_floor_that_works():
+    project = _pyproject()["project"]
     # Every dependency has a floor; scipy's admits no yanked release (1.11.0 was yanked), and
     # OpenEXR's has the OpenEXR.File API that dustoptics.io.textures.exr uses (3.3).
     floors = {}
@@ -494,6 +501,9 @@ def test_extras_mean_what_they_say():
     assert set().union(*(_expand(e, extras) for e in CHECKER_EXTRAS)) <= test
     assert {"radon", "ruff", "mypy"} <= _expand("lint", extras)
     assert {"build", "twine"} == _expand("release", extras)
+
+
+def test_plain_install_reads_netcdf4_and_writes_exr():
     # The netCDF-4 reader of `retrieve` and the EXR writer come with a plain install.
     runtime = {_requirement_name(r) for r in _pyproject()["project"]["dependencies"]}
     assert {"h5netcdf", "openexr"} <= runtime
