@@ -9,9 +9,10 @@
 #      index, the dependencies from the registries this machine's pip uses (extra indexes).
 #   5. Runs the README's user quick start (`dustoptics build`, `info`, `--version`) with the
 #      installed command, and the whole test suite against the installed package: pytest runs
-#      from outside the checkout with --import-mode=append, so `import dustoptics` resolves to
-#      the environment's site-packages (checked, also inside pytest); the package's doctests run
-#      from the installed modules (--pyargs dustoptics).
+#      from outside the checkout, and a plugin loaded before the repository's conftest.py files
+#      imports the installed dustoptics first, so that pytest's putting the checkout on sys.path
+#      cannot shadow it (checked, before and inside pytest); the package's doctests run from
+#      the installed modules (--pyargs dustoptics).
 #
 # Usage: bash scripts/release_check.sh [WORKDIR]     (WORKDIR: default a new temporary folder)
 # Environment: RELEASE_CHECK_PYTEST_ARGS, extra pytest arguments (e.g. "-x"); a checkout at a
@@ -130,7 +131,8 @@ echo "extra indexes: ${EXTRA[*]}"
 VENV="$WORK/venv"
 rm -rf "$VENV"
 "$PYTHON" -m venv "$VENV"
-"$VENV/bin/python" -m pip install --quiet --upgrade pip
+"$VENV/bin/python" -m pip install --quiet --upgrade pip 2>&1 \
+  | { grep -v "^WARNING: Location '.*' is ignored: it is neither a file nor a directory\.$" || true; }
 # Only the wheel: pip must not build the sdist, and the exact version keeps any other
 # "dustoptics" on the extra indexes out.
 # (pip's notes on this machine's partial local mirrors, "Location ... is ignored", are dropped)
@@ -179,18 +181,23 @@ SITE=$("$VENV/bin/python" -c 'import dustoptics, pathlib; print(pathlib.Path(dus
 IGNORE=()
 while IFS= read -r shim; do IGNORE+=("--ignore=$shim"); done \
   < <(grep -rl --include='*.py' 'alias_module(__name__,' "$SITE" | grep -v '/_deprecated.py$' || true)
-# A plugin (on PYTHONPATH, which holds nothing else) checks inside pytest, after collection,
-# that the package the tests import is the installed one.
+# A plugin (on PYTHONPATH, which holds nothing else), loaded before any conftest.py, imports
+# the installed dustoptics: the repository's conftest.py puts the checkout first on sys.path
+# (pytest's default import mode, as the suite always runs), and a package already imported is
+# not looked up again.  After collection it checks that the tests' dustoptics is that one.
 mkdir -p "$WORK/plugin"
 cat > "$WORK/plugin/release_check_site.py" <<'PLUGIN'
 """pytest plugin of scripts/release_check.sh: the tests run against the installed package."""
 import os
 from pathlib import Path
 
+import dustoptics  # the installed copy, before the checkout is on sys.path
+
 
 def pytest_collection_finish(session):
-    import dustoptics
+    import dustoptics as imported
 
+    assert imported is dustoptics
     where = Path(dustoptics.__file__).resolve()
     site = Path(os.environ["RELEASE_CHECK_SITE"]).resolve()
     if not where.is_relative_to(site):
@@ -199,7 +206,7 @@ def pytest_collection_finish(session):
 PLUGIN
 # shellcheck disable=SC2086
 RELEASE_CHECK_SITE="$SITE" PYTHONPATH="$WORK/plugin" "$VENV/bin/python" -m pytest \
-  -p no:cacheprovider -p release_check_site --import-mode=append \
+  -p no:cacheprovider -p release_check_site \
   --rootdir="$ROOT" -c "$ROOT/pyproject.toml" "${IGNORE[@]}" ${RELEASE_CHECK_PYTEST_ARGS:-} \
   "$ROOT/tests" --pyargs dustoptics
 echo "release check passed: dustoptics $VERSION ($SECONDS s)"
