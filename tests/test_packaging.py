@@ -224,11 +224,20 @@ def test_install_then_editable_install_imports_cleanly(tmp_path):
         ).stdout.strip()
     )
     # The runtime dependencies come from this environment (appended after the venv's own
-    # site-packages, as a plain path: its .pth files, e.g. an editable dustoptics, are not run).
-    ours = [p for p in sys.path if Path(p).name in ("site-packages", "dist-packages")]
-    (site / "deps-from-test-environment.pth").write_text(
-        "".join(f"{p}\n" for p in ours), encoding="utf-8"
-    )
+    # site-packages, as a plain path: its .pth files, e.g. an editable dustoptics, are not run),
+    # through a folder of links to all of it but dustoptics (installed there from a wheel by
+    # scripts/release_check.sh, it would shadow the editable install's finder).
+    borrowed = tmp_path / "borrowed-site-packages"
+    borrowed.mkdir()
+    for path in sys.path:
+        if Path(path).name not in ("site-packages", "dist-packages"):
+            continue
+        for entry in Path(path).iterdir():
+            name = entry.name.lower()
+            if name.startswith(("dustoptics", "__editable__")) or (borrowed / entry.name).exists():
+                continue
+            (borrowed / entry.name).symlink_to(entry)
+    (site / "deps-from-test-environment.pth").write_text(f"{borrowed}\n", encoding="utf-8")
     env = {k: v for k, v in os.environ.items() if not k.startswith(("NUMBA_", "PYTHON"))}
     env["XDG_CACHE_HOME"] = str(tmp_path / "user-cache")
     env["PIP_DISABLE_PIP_VERSION_CHECK"] = "1"
