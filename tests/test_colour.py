@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from _shared import shared_path
+from _data import data_path
 
 from dustoptics.colour import (
     SRGB_PRIMARIES_XY,
@@ -31,7 +31,7 @@ TABLES = Path(__file__).resolve().parents[1] / "tables"
 
 
 def _shared_csv(name: str) -> np.ndarray:
-    path = shared_path("reference-data", "spectra", name)
+    path = data_path("spectra", name)
     lines = [ln for ln in path.read_text().splitlines() if ln and not ln.startswith("#")]
     return np.array([[float(v) for v in ln.split(",")] for ln in lines[1:]])
 
@@ -59,7 +59,7 @@ def test_cmf_identities_of_the_standard() -> None:
 
 
 def test_solar_spectrum_bins() -> None:
-    """ASTM G173 ETR bin means as Bruneton's demo lists them (shared copy, read independently)."""
+    """ASTM G173 ETR bin means as Bruneton's demo lists them (tests/data, read independently)."""
     ref = _shared_csv("solar_irradiance_bruneton_pas_astmg173.csv")
     np.testing.assert_array_equal(solar_irradiance_astm_g173(ref[:, 0]), ref[:, 1])
     np.testing.assert_array_equal(solar_irradiance_astm_g173(ref[:, 0] + 9.99), ref[:, 1])
@@ -101,12 +101,9 @@ def test_spectrum_to_xyz_broadcasts() -> None:
 
 def test_srgb_matrix_and_encoding() -> None:
     """IEC 61966-2-1's printed 4-digit matrix (as Bruneton's constants.h lists it), and its derivation."""
-    lines = (
-        shared_path("reference-data", "spectra", "xyz_to_linear_srgb_bruneton.csv")
-        .read_text()
-        .splitlines()
-    )
-    printed = np.array([[float(v) for v in ln.split(",")] for ln in lines[2:5]])
+    path = data_path("spectra", "xyz_to_linear_srgb_bruneton.csv")
+    lines = [ln for ln in path.read_text().splitlines() if not ln.startswith("#")]
+    printed = np.array([[float(v) for v in ln.split(",")] for ln in lines[1:4]])
     np.testing.assert_array_equal(XYZ_TO_LINEAR_SRGB, printed)
     # Derived from the primaries and D65 (x, y = 0.3127, 0.3290): equal to the printed
     # matrix to its rounding (measured 3.7e-4, in the green row).

@@ -112,9 +112,20 @@ def _third_party_imports() -> tuple[set[str], set[str]]:
     return module_level, anywhere
 
 
+#: Runtime dependencies the package uses through xarray's engine names, not by import.
+ENGINES = {"h5netcdf": 'engine="h5netcdf"'}
+
+
+def test_engine_dependencies_are_named_by_the_package():
+    runtime = {_requirement_name(r) for r in _pyproject()["project"]["dependencies"]}
+    source = "".join(path.read_text(encoding="utf-8") for path in PACKAGE.rglob("*.py"))
+    for name, spelling in ENGINES.items():
+        assert name in runtime and spelling in source, name
+
+
 def test_runtime_dependencies_are_what_the_package_imports():
     project = _pyproject()["project"]
-    runtime = {_requirement_name(r) for r in project["dependencies"]}
+    runtime = {_requirement_name(r) for r in project["dependencies"]} - set(ENGINES)
     extras = {
         _requirement_name(r)
         for reqs in project["optional-dependencies"].values()
@@ -213,11 +224,20 @@ def test_install_then_editable_install_imports_cleanly(tmp_path):
         ).stdout.strip()
     )
     # The runtime dependencies come from this environment (appended after the venv's own
-    # site-packages, as a plain path: its .pth files, e.g. an editable dustoptics, are not run).
-    ours = [p for p in sys.path if Path(p).name in ("site-packages", "dist-packages")]
-    (site / "deps-from-test-environment.pth").write_text(
-        "".join(f"{p}\n" for p in ours), encoding="utf-8"
-    )
+    # site-packages, as a plain path: its .pth files, e.g. an editable dustoptics, are not run),
+    # through a folder of links to all of it but dustoptics (installed there from a wheel by
+    # scripts/release_check.sh, it would shadow the editable install's finder).
+    borrowed = tmp_path / "borrowed-site-packages"
+    borrowed.mkdir()
+    for path in sys.path:
+        if Path(path).name not in ("site-packages", "dist-packages"):
+            continue
+        for entry in Path(path).iterdir():
+            name = entry.name.lower()
+            if name.startswith(("dustoptics", "__editable__")) or (borrowed / entry.name).exists():
+                continue
+            (borrowed / entry.name).symlink_to(entry)
+    (site / "deps-from-test-environment.pth").write_text(f"{borrowed}\n", encoding="utf-8")
     env = {k: v for k, v in os.environ.items() if not k.startswith(("NUMBA_", "PYTHON"))}
     env["XDG_CACHE_HOME"] = str(tmp_path / "user-cache")
     env["PIP_DISABLE_PIP_VERSION_CHECK"] = "1"
@@ -323,21 +343,22 @@ def test_citation_cff_is_valid():
 
 
 def test_version_says_where_it_came_from():
-    """setuptools-scm: X.Y.Z at a tag vX.Y.Z, else X.Y.Z.devN+gHASH, the commit's hash."""
+    """setuptools-scm: X.Y.Z at a tag vX.Y.Z, else X.Y(.Z).devN+gHASH, the commit's hash."""
     import dustoptics
 
     pyproject = _pyproject()
     assert "version" in pyproject["project"]["dynamic"]
-    assert pyproject["tool"]["setuptools_scm"]["fallback_version"]
+    # No fallback: a tree without git metadata or .git_archival.txt does not invent a version.
+    assert "fallback_version" not in pyproject["tool"]["setuptools_scm"]
     if not (ROOT / ".git").exists() or shutil.which("git") is None:
-        pytest.skip("not a git checkout: the version is the fallback")
+        pytest.skip("not a git checkout: the version came from .git_archival.txt or PKG-INFO")
     tagged = subprocess.run(
         ["git", "-C", str(ROOT), "describe", "--tags", "--exact-match"], capture_output=True
     )
     pattern = (
         r"\d+\.\d+\.\d+"
         if tagged.returncode == 0
-        else r"\d+\.\d+\.\d+\.dev\d+\+g[0-9a-f]{7,}(\.d\d{8})?"
+        else r"\d+\.\d+(\.\d+)?\.dev\d+\+g[0-9a-f]{7,}(\.d\d{8})?"
     )
     assert re.fullmatch(pattern, dustoptics.__version__), dustoptics.__version__
 
@@ -366,3 +387,280 @@ def test_numba_cache_directory_choice(tmp_path, monkeypatch):
     from numba.core import config
 
     config.reload_config()
+
+
+# ----------------------------------------------------------------------------- release metadata
+
+
+def _floor(requirement: str) -> str | None:
+    match = re.search(r">=\s*([0-9][0-9a-z.]*)", requirement)
+    return match.group(1) if match else None
+
+
+def test_metadata_is_complete_for_an_index():
+    """What an index page shows: readme, licence, keywords, Python versions, floors."""
+    project = _pyproject()["project"]
+    assert project["readme"] == {"file": "README.md", "content-type": "text/markdown"}
+    assert project["license"] == "MIT" and project["license-files"] == ["LICENSE"]
+    assert len(project["keywords"]) >= 5 and "Mie scattering" in project["keywords"]
+    classifiers = project["classifiers"]
+    assert len(set(classifiers)) == len(classifiers)
+    # The Python versions classified are the supported ones: from requires-python's floor.
+    floor = re.fullmatch(r">=3\.(\d+)", project["requires-python"])
+    assert floor, project["requires-python"]
+    versions = [c.rsplit(" :: ", 1)[1] for c in classifiers if re.search(r"Python :: 3\.\d+$", c)]
+    assert versions and versions[0] == f"3.{floor.group(1)}", versions
+    assert "Programming Language :: Python :: 3 :: Only" in classifiers
+    assert "Typing :: Typed" in classifiers and (PACKAGE / "py.typed").is_file()
+
+
+def test_every_dependency_has_a_floor_that_works():
+    project = _pyproject()["project"]
+    # Every dependency has a floor; scipy's admits no yanked release (1.11.0 was yanked), and
+    # OpenEXR's has the OpenEXR.File API that dustoptics.io.textures.exr uses (3.3).
+    floors = {}
+    for requirement in project["dependencies"]:
+        assert _floor(requirement), requirement
+        floors[_requirement_name(requirement)] = tuple(map(int, _floor(requirement).split(".")))
+    assert floors["scipy"] > (1, 11, 0)
+    assert floors["openexr"] >= (3, 3)
+
+
+def _installed_name(directory: Path) -> str:
+    relative = directory.relative_to(ROOT)
+    if relative.parts[0] == "refractive_indices":
+        relative = Path("dustoptics", *relative.parts)
+    return ".".join(relative.parts)
+
+
+def _tree_packages() -> dict[str, Path]:
+    """Installed package name -> folder, for every folder of the tree that holds files."""
+    found = {}
+    for top in (PACKAGE, ROOT / "refractive_indices"):
+        for folder in [top, *sorted(p for p in top.rglob("*") if p.is_dir())]:
+            if "__pycache__" in folder.parts:
+                continue
+            if any(
+                f.is_file() and f.suffix not in (".pyc", ".nbi", ".nbc") for f in folder.iterdir()
+            ):
+                found[_installed_name(folder)] = folder
+    return found
+
+
+def test_packages_are_every_folder_of_the_tree():
+    """The packages list names every folder that holds files (modules or data), and no other:
+    a new subpackage or data folder missing from it would be left out of the wheel (with a
+    warning from `python -m build`, which scripts/release_check.sh turns into a failure)."""
+    tool = _pyproject()["tool"]["setuptools"]
+    assert sorted(tool["packages"]) == sorted(_tree_packages())
+    assert tool["package-dir"] == {
+        "dustoptics": "dustoptics",
+        "dustoptics.refractive_indices": "refractive_indices",
+    }
+
+
+def test_package_data_covers_every_data_file():
+    """Every file of the tree that is not a module matches a package-data pattern."""
+    import fnmatch
+
+    data = _pyproject()["tool"]["setuptools"]["package-data"]
+    missing = []
+    for package, folder in _tree_packages().items():
+        for path in folder.iterdir():
+            if not path.is_file() or path.suffix in (".py", ".pyc", ".nbi", ".nbc"):
+                continue
+            if not any(fnmatch.fnmatch(path.name, p) for p in data.get(package, [])):
+                missing.append(f"{package}: {path.name}")
+    assert not missing, missing
+
+
+USER_EXTRAS = {"pandas", "plot", "sweep"}
+CHECKER_EXTRAS = {"gl", "shaders", "cf"}
+TEST_STACK = {"pytest", "hypothesis", "miepython", "netcdf4", "scatrs", "nanodisort"}
+
+
+def _extras() -> dict[str, list[str]]:
+    return _pyproject()["project"]["optional-dependencies"]
+
+
+def _expand(extra: str, extras: dict[str, list[str]]) -> set[str]:
+    """Distribution names an extra installs, self-references followed."""
+    names: set[str] = set()
+    for requirement in extras[extra]:
+        inner = re.fullmatch(r"dustoptics\[([a-z,]+)\]", requirement)
+        if inner:
+            for other in inner.group(1).split(","):
+                names |= _expand(other, extras)
+        else:
+            names.add(_requirement_name(requirement))
+    return names
+
+
+def test_extras_mean_what_they_say():
+    extras = _extras()
+    assert set(extras) == USER_EXTRAS | CHECKER_EXTRAS | {"all", "test", "lint", "release", "docs"}
+    # [all]: every user feature, nothing of the test stack or the checkers.
+    assert extras["all"] == [f"dustoptics[{','.join(sorted(USER_EXTRAS))}]"]
+    everything = _expand("all", extras)
+    assert everything == set().union(*(_expand(e, extras) for e in USER_EXTRAS))
+    assert not everything & (TEST_STACK | {"pytest", "ruff", "mypy", "sphinx", "build"})
+    # [test]: what the whole suite needs, the user features and the checkers included.
+    test = _expand("test", extras)
+    assert TEST_STACK | everything <= test
+    assert set().union(*(_expand(e, extras) for e in CHECKER_EXTRAS)) <= test
+    assert {"radon", "ruff", "mypy"} <= _expand("lint", extras)
+    assert {"build", "twine"} == _expand("release", extras)
+
+
+def test_plain_install_reads_netcdf4_and_writes_exr():
+    # The netCDF-4 reader of `retrieve` and the EXR writer come with a plain install.
+    runtime = {_requirement_name(r) for r in _pyproject()["project"]["dependencies"]}
+    assert {"h5netcdf", "openexr"} <= runtime
+
+
+#: (blocked module, code that needs it, the install hint its ImportError gives)
+OPTIONAL_IMPORTS = [
+    ("matplotlib", "import dustoptics.plot as m; m._matplotlib()", "dustoptics[plot]"),
+    (
+        "matplotlib",
+        "from dustoptics.sky.scene import check_png_support; check_png_support()",
+        "dustoptics[plot]",
+    ),
+    (
+        "pandas",
+        "from dustoptics.compare import TableComparison; TableComparison.to_frame(None)",
+        "dustoptics[pandas]",
+    ),
+    ("zarr", "from dustoptics.sweep import run; run._require_extra()", "dustoptics[sweep]"),
+    ("distributed", "from dustoptics.sweep import run; run._require_extra()", "dustoptics[sweep]"),
+    ("nanodisort", "from dustoptics.sky import disort; disort._nanodisort()", "dustoptics[test]"),
+    ("OpenEXR", "from dustoptics.io.textures import exr; exr._openexr()", "pip install 'OpenEXR"),
+]
+
+
+@pytest.mark.parametrize(("module", "code", "hint"), OPTIONAL_IMPORTS)
+def test_every_optional_import_names_what_to_install(module, code, hint, tmp_path):
+    blocker = BLOCKER.replace(
+        'BLOCKED = {"miepython", "pandas", "matplotlib", "moderngl", "xarray", "hypothesis", "pytest"}',
+        f"BLOCKED = {{{module!r}}}",
+    )
+    program = blocker + textwrap.dedent(
+        f"""
+        try:
+            {code}
+        except ImportError as exc:
+            print(exc)
+        else:
+            print("no ImportError")
+        """
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", program], capture_output=True, text=True, cwd=tmp_path, timeout=120
+    )
+    assert hint in done.stdout, done.stdout + done.stderr
+
+
+def test_every_optional_import_has_a_case_above():
+    """A new lazy import of an extra's package needs its row in OPTIONAL_IMPORTS."""
+    runtime = {_requirement_name(r) for r in _pyproject()["project"]["dependencies"]}
+    _, anywhere = _third_party_imports()
+    optional = {name.lower() for name in anywhere} - runtime - {"xarray", "dask", "tbb"}
+    covered = {module.lower() for module, _, _ in OPTIONAL_IMPORTS}
+    assert optional <= covered | {"pandas"}, optional - covered
+
+
+# ----------------------------------------------------------------------------- versions
+
+
+GIT = shutil.which("git")
+
+
+def _git(cwd: Path, *args: str) -> str:
+    env = {
+        **os.environ,
+        "GIT_AUTHOR_DATE": "2026-01-01T00:00:00",
+        "GIT_COMMITTER_DATE": "2026-01-01T00:00:00",
+    }
+    done = subprocess.run(
+        [str(GIT), "-c", "user.name=t", "-c", "user.email=t@example.org", *args],
+        cwd=cwd,
+        capture_output=True,
+        text=True,
+        check=True,
+        env=env,
+    )
+    return done.stdout.strip()
+
+
+def _scm_version(root: Path) -> str:
+    """The version setuptools-scm computes for ``root`` with dustoptics' settings."""
+    setuptools_scm = pytest.importorskip("setuptools_scm")
+    settings = _pyproject()["tool"]["setuptools_scm"]
+    return setuptools_scm.get_version(root=str(root), **settings)
+
+
+@pytest.mark.skipif(GIT is None, reason="git is not installed")
+def test_versions_from_tags(tmp_path):
+    """A tag vX.Y.Z is X.Y.Z, with no local label; commits after it are dev versions of the
+    next patch release that name their commit; modified files at a tag make a dev version;
+    a `git archive` knows its version from .git_archival.txt."""
+    repo = tmp_path / "repo"
+    repo.mkdir()
+    for name in (".git_archival.txt", ".gitattributes"):
+        shutil.copy(ROOT / name, repo / name)
+    (repo / "f.txt").write_text("a\n")
+    _git(repo, "init", "-q")
+    _git(repo, "add", "-A")
+    _git(repo, "commit", "-q", "-m", "one")
+    untagged = _scm_version(repo)
+    assert re.fullmatch(r"0\.1\.dev1\+g[0-9a-f]{7,}", untagged), untagged
+
+    _git(repo, "tag", "v0.2.0")
+    assert _scm_version(repo) == "0.2.0"
+    (repo / "f.txt").write_text("b\n")
+    dirty = _scm_version(repo)
+    assert re.fullmatch(r"0\.2\.1\.dev0\+g[0-9a-f]{7,}\.d\d{8}", dirty), dirty
+    _git(repo, "commit", "-q", "-am", "two")
+    head = _git(repo, "rev-parse", "--short=9", "HEAD")
+    after = _scm_version(repo)
+    assert re.fullmatch(rf"0\.2\.1\.dev1\+g{head[:7]}[0-9a-f]*", after), after
+
+    for ref, expected in (("v0.2.0", "0.2.0"), ("HEAD", after)):
+        archive = tmp_path / f"archive-{ref}"
+        archive.mkdir()
+        tar = tmp_path / f"{ref}.tar"
+        _git(repo, "archive", "--format=tar", "-o", str(tar), ref)
+        shutil.unpack_archive(tar, archive)
+        assert "$Format" not in (archive / ".git_archival.txt").read_text()
+        got = _scm_version(archive)
+        assert got.split("+")[0] == expected.split("+")[0], (ref, got)
+        assert "+" not in got or got.split("+")[1].startswith(expected.split("+")[1][:8]), got
+
+
+def test_a_tree_without_git_does_not_invent_a_version(tmp_path):
+    setuptools_scm = pytest.importorskip("setuptools_scm")
+    (tmp_path / ".git_archival.txt").write_text((ROOT / ".git_archival.txt").read_text())
+    with pytest.raises(LookupError):
+        _scm_version(tmp_path)
+    assert setuptools_scm
+
+
+def test_archive_metadata_is_substituted_by_git():
+    attributes = (ROOT / ".gitattributes").read_text(encoding="utf-8").splitlines()
+    assert ".git_archival.txt  export-subst" in attributes
+    archival = (ROOT / ".git_archival.txt").read_text(encoding="utf-8")
+    assert "describe-name: $Format:%(describe:tags=true,match=v[0-9]*)$" in archival
+    assert "node: $Format:%H$" in archival
+
+
+def test_changelog_has_a_section_per_release():
+    """Each tag vX.Y.Z has its section; the next release's header is prepared."""
+    changelog = (ROOT / "CHANGELOG.md").read_text(encoding="utf-8")
+    assert re.search(r"^## \[0\.2\.0\]", changelog, re.M)
+    if GIT is None or not (ROOT / ".git").exists():
+        return
+    tags = subprocess.run(
+        [GIT, "-C", str(ROOT), "tag", "--list", "v[0-9]*"], capture_output=True, text=True
+    ).stdout.split()
+    for tag in tags:
+        assert re.search(rf"^## \[{re.escape(tag[1:])}\]", changelog, re.M), tag

@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pandas as pd
 import pytest
-from _shared import shared_path
+from _data import data_path
 from scipy import constants
 
 from dustoptics.atmosphere import gases
@@ -24,7 +24,7 @@ from dustoptics.atmosphere.gases import (
 )
 from dustoptics.scattering import tabulated_phase
 
-SPECTRA = ("reference-data", "spectra")
+SPECTRA = ("spectra",)
 
 
 # ------------------------------------------------------------------ basic laws
@@ -70,7 +70,7 @@ def test_king_factor_limits_and_values():
 
 
 def _penndorf() -> pd.DataFrame:
-    path = shared_path(*SPECTRA, "rayleigh_penndorf1957_bruneton_clearsky.csv")
+    path = data_path(*SPECTRA, "rayleigh_penndorf1957_bruneton_clearsky.csv")
     return pd.read_csv(path, comment="#")
 
 
@@ -90,7 +90,7 @@ def test_standard_air_against_penndorf_table():
 
 
 def test_penndorf_rows_810_830_are_not_a_rayleigh_law():
-    """The three last rows of the shared copy deviate by 1.2-2.8 % from the model.
+    """The three last rows of the transcription deviate by 1.2-2.8 % from the model.
 
     They cannot be Rayleigh values: between neighbouring rows a Rayleigh
     coefficient falls at least as fast as lambda^-4 (n - 1 decreases with
@@ -277,7 +277,7 @@ def test_ozone_csv_errors(tmp_path, text, match):
 
 
 def test_ozone_csv_reads_shared_bruneton_spectrum():
-    path = shared_path(*SPECTRA, "ozone_xsec_bruneton_pas_233K.csv")
+    path = data_path(*SPECTRA, "ozone_xsec_bruneton_pas_233K.csv")
     xs = read_ozone_csv(path)
     ref = pd.read_csv(path, comment="#")
     np.testing.assert_array_equal(xs.sigma_m2, ref["sigma_O3_m2"].to_numpy())
@@ -317,11 +317,11 @@ def test_mars_co2_cross_section_against_vardavas_keady_form():
 
     Vardavas & Carver (1984) form, sigma = 4.577e-21 / lam^4 K(delta) (A (1 + B / lam^2))^2
     cm^2 (lam in um), with Keady & Kilcrease's CO2 coefficients A = 4.39e-4, B = 6.4e-3
-    (shared copy of photochem_clima_data's rayleigh.yaml).  At the same King factor
+    (photochem_clima_data's rayleigh.yaml, in tests/data).  At the same King factor
     (delta = 0.09, Costa et al.) the Bideau-Mehu index gives 0.8-1.3 % more (measured);
     the file's own delta = 0.0774 makes its King factor 2.3 % smaller.
     """
-    rows = pd.read_csv(shared_path(*SPECTRA, "rayleigh_vardavas_params_photochem.csv"), comment="#")
+    rows = pd.read_csv(data_path(*SPECTRA, "rayleigh_vardavas_params_photochem.csv"), comment="#")
     co2 = rows[rows["species"] == "CO2"].iloc[0]
     wl = np.array([400.0, 550.0, 700.0])
     lam_um = wl / 1000.0

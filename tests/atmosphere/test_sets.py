@@ -7,7 +7,7 @@ import json
 import numpy as np
 import pandas as pd
 import pytest
-from _shared import shared_path
+from _data import data_path
 
 import dustoptics as do
 from dustoptics.atmosphere import gases
@@ -26,7 +26,7 @@ from dustoptics.io.csv.cosmoscout import (
 from dustoptics.table import Table
 
 WL15 = np.linspace(360.0, 830.0, 15)  # CosmoScout's default wavelength set
-SPECTRA_DIR = ("reference-data", "spectra")
+SPECTRA_DIR = ("spectra",)
 
 
 @pytest.fixture(scope="module")
@@ -138,9 +138,7 @@ def test_kobe_earth_with_ozone(tmp_path):
 
 
 def test_earth_with_tabulated_ozone_and_bruneton_layer(tmp_path):
-    xs = gases.read_ozone_csv(
-        shared_path("reference-data", "spectra", "ozone_xsec_bruneton_pas_233K.csv")
-    )
+    xs = gases.read_ozone_csv(data_path("spectra", "ozone_xsec_bruneton_pas_233K.csv"))
     earth = atm.earth_atmosphere(
         wavelength_nm=WL15,
         molecules="penndorf1957",
@@ -169,11 +167,11 @@ def test_default_earth_is_cosmoscouts_15_wavelengths_with_standard_air_and_ozone
     np.testing.assert_allclose(earth.wavelength_nm, np.linspace(360.0, 830.0, 15), rtol=1e-15)
     write_atmosphere(earth, tmp_path)
     assert check_cosmoscout_set(tmp_path) == ["earth_aerosols", "earth_molecules", "earth_ozone"]
-    # Molecules against Penndorf 1957 Table III (0 degC, 1013.25 hPa; shared copy),
+    # Molecules against Penndorf 1957 Table III (0 degC, 1013.25 hPa; tests/data),
     # interpolated log-log between its 10 nm rows, 360-800 nm (its 810-830 nm rows are
     # not a Rayleigh law, see test_gases): within 0.5 %.
     ref = pd.read_csv(
-        shared_path("reference-data", "spectra", "rayleigh_penndorf1957_bruneton_clearsky.csv"),
+        data_path("spectra", "rayleigh_penndorf1957_bruneton_clearsky.csv"),
         comment="#",
     )
     wl, beta_ref = ref["wavelength_nm"].to_numpy(), ref["beta_rayleigh_per_m_0C"].to_numpy()
@@ -183,7 +181,7 @@ def test_default_earth_is_cosmoscouts_15_wavelengths_with_standard_air_and_ozone
     dev = np.abs(mol.beta_sca_per_m / expected - 1.0)[inside]
     assert dev.max() < 5e-3  # measured 2.5e-4 (at 561 nm; log-log interpolation included)
     # Ozone: shipped spectrum at the bin starts (Bruneton's values, read independently).
-    o3 = pd.read_csv(shared_path(*SPECTRA_DIR, "ozone_xsec_bruneton_pas_233K.csv"), comment="#")
+    o3 = pd.read_csv(data_path(*SPECTRA_DIR, "ozone_xsec_bruneton_pas_233K.csv"), comment="#")
     sigma = np.interp(earth.wavelength_nm, o3["wavelength_nm"], o3["sigma_O3_m2"])
     ozone = earth.constituent("ozone").table
     np.testing.assert_allclose(
@@ -194,18 +192,19 @@ def test_default_earth_is_cosmoscouts_15_wavelengths_with_standard_air_and_ozone
 def test_shipped_ozone_against_serdyuchenko_293K_bins():
     """The shipped 233 K bin means against the 293 K measurement binned the same way.
 
-    Serdyuchenko et al. 2014 (raw 293 K samples, shared copy) averaged over
-    [L, L + 10) nm here: in the Chappuis band (500-700 nm) the temperature
+    Serdyuchenko et al. 2014 (raw 293 K samples) averaged over [L, L + 10) nm
+    (tests/data, by scripts/make_test_data.py): in the Chappuis band (500-700 nm) the temperature
     dependence is small (their Part 2: a few percent); measured 0.2-4.6 %.
     """
-    raw = pd.read_csv(
-        shared_path(*SPECTRA_DIR, "ozone_xsec_serdyuchenko2014_293K_raw_355-845nm.csv"),
+    bins = pd.read_csv(
+        data_path(*SPECTRA_DIR, "ozone_xsec_serdyuchenko2014_293K_binmean_500-700nm.csv"),
         comment="#",
     )
-    lam, sigma_cm2 = raw["wavelength_nm"].to_numpy(), raw["sigma_O3_cm2"].to_numpy()
     shipped = gases.ozone_serdyuchenko2014()
     starts = np.arange(500.0, 700.0, 10.0)
-    binned = np.array([sigma_cm2[(lam >= a) & (lam < a + 10.0)].mean() * 1e-4 for a in starts])
+    np.testing.assert_array_equal(bins["bin_start_nm"].to_numpy(), starts)
+    assert np.all(bins["n_samples"].to_numpy() == 1000)
+    binned = bins["sigma_O3_cm2"].to_numpy() * 1e-4
     np.testing.assert_allclose(shipped(starts), binned, rtol=0.05)
 
 

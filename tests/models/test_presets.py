@@ -9,7 +9,7 @@ import warnings
 import numpy as np
 import pandas as pd
 import pytest
-from _shared import shared_path
+from _data import SEED_PHASE_EXCERPT, SEED_ROWS, data_path
 
 from dustoptics.models import presets
 from dustoptics.models.compute import build_table
@@ -160,12 +160,15 @@ def test_blue_moons_seed_reproduces_the_seed_table(built) -> None:
     """Meyran 2022's published table (BRIEF section 5): median 0.4-0.5 % and
     maximum 2.6-3.4 % at 360, 550, 680 nm, the seed's Monte-Carlo noise; the
     engine issue's bounds at every wavelength are median <= 1.5 %, maximum <= 6 %."""
-    seed = pd.read_csv(shared_path("seed-tables", "MiePhaseFunctionSpectrum.csv"), index_col=0)
+    seed = pd.read_csv(data_path(*SEED_PHASE_EXCERPT), index_col=0, comment="#")
     table, _ = built["blue-moons-seed"]
     np.testing.assert_array_equal(table.wavelength_nm, seed.columns.astype(float).to_numpy())
-    # The seed's angles are linspace(0, 180, 1800), printed with rounding.
-    np.testing.assert_allclose(table.theta_deg, seed.index.to_numpy(dtype=float), rtol=0, atol=1e-9)
-    rel = np.abs(table.phase / seed.to_numpy().T - 1)
+    # The seed's angles are linspace(0, 180, 1800), printed with rounding (the excerpt's rows).
+    rows = list(SEED_ROWS)
+    np.testing.assert_allclose(
+        table.theta_deg[rows], seed.index.to_numpy(dtype=float), rtol=0, atol=1e-9
+    )
+    rel = np.abs(table.phase[:, rows] / seed.to_numpy().T - 1)
     median, worst = np.median(rel, axis=1), rel.max(axis=1)
     assert np.all(median <= 0.015) and np.all(worst <= 0.06)
     for wl, top in ((360.0, 0.034), (550.0, 0.036), (680.0, 0.028)):

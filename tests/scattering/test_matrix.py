@@ -18,7 +18,7 @@ from decimal import Decimal
 import miepython
 import numpy as np
 import pytest
-from _shared import shared_path
+from _data import data_path
 from numpy.polynomial import legendre
 from scipy import stats
 from scipy.special import roots_legendre
@@ -26,7 +26,7 @@ from scipy.special import roots_legendre
 import dustoptics as do
 from dustoptics.scattering import expansion
 
-BENCH = ("reference-data", "mie-benchmarks")
+BENCH = ("mie-benchmarks",)
 
 
 def half_unit(text: str) -> float:
@@ -39,7 +39,7 @@ def test_bohren_huffman_sample_matrix() -> None:
     S33/S11 and S34/S11 at 21 angles, to half a unit of the printed digits
     (6 significant figures), and Q_back = 2.92534 from <C_back>."""
     data = json.loads(
-        shared_path(*BENCH, "bohren_huffman_bhmie_sample.json").read_text(), parse_float=str
+        data_path(*BENCH, "bohren_huffman_bhmie_sample.json").read_text(), parse_float=str
     )
     inputs = data["inputs"]
     rows = data["table"]
@@ -67,7 +67,7 @@ def test_bohren_huffman_sample_matrix() -> None:
 
 
 def _miev0_moments(case: int) -> dict[tuple[int, int], str]:
-    path = shared_path(*BENCH, "miev0_wiscombe_legendre_moments.csv")
+    path = data_path(*BENCH, "miev0_wiscombe_legendre_moments.csv")
     lines = [ln for ln in path.read_text().splitlines() if not ln.startswith("#")]
     out = {}
     for row in csv.DictReader(lines):

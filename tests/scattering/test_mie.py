@@ -14,14 +14,14 @@ from decimal import Decimal
 import miepython
 import numpy as np
 import pytest
-from _shared import shared_path
+from _data import data_path
 from reference import mie as reference_mie
 
 import dustoptics as do
 from dustoptics.scattering import mie
 from dustoptics.scattering.mie import single_sphere
 
-BENCH = ("reference-data", "mie-benchmarks")
+BENCH = ("mie-benchmarks",)
 WAVELENGTH_NM = 1000.0  # any wavelength; radius chosen to give the benchmark's x
 
 
@@ -52,7 +52,7 @@ def assert_published(
 
 
 def read_csv(name: str) -> list[dict[str, str]]:
-    path = shared_path(*BENCH, name)
+    path = data_path(*BENCH, name)
     with open(path, newline="") as fh:
         return list(csv.DictReader(row for row in fh if not row.startswith("#")))
 
@@ -214,7 +214,7 @@ def test_wiscombe1979_angular_intensity() -> None:
 
 def test_bohren_huffman_sample() -> None:
     """B&H Appendix A: m = 1.55, r = 0.525 um, lambda = 0.6328 um."""
-    path = shared_path(*BENCH, "bohren_huffman_bhmie_sample.json")
+    path = data_path(*BENCH, "bohren_huffman_bhmie_sample.json")
     data = json.loads(path.read_text(), parse_float=str)
     inputs = data["inputs"]
     table = data["table"]

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 import pytest
-from _shared import shared_path
+from _data import SEED_PHASE_EXCERPT, SEED_ROWS, data_path
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -155,10 +155,10 @@ def test_seed_blue_moons_table_reproduced() -> None:
     Monte-Carlo noise; the issue's bounds are median <= 1.5 %, maximum <= 6 % at
     every wavelength.  rtol = 1e-3 is far below that noise.
     """
-    seed = pd.read_csv(shared_path("seed-tables", "MiePhaseFunctionSpectrum.csv"), index_col=0)
+    seed = pd.read_csv(data_path(*SEED_PHASE_EXCERPT), index_col=0, comment="#")
     theta = seed.index.to_numpy(dtype=float)
     wavelengths = seed.columns.astype(float).to_numpy()
-    assert wavelengths.size == 48 and theta.size == 1800
+    assert wavelengths.size == 48 and theta.size == len(SEED_ROWS)
     t = do.compute_optics(
         do.mars_dust(hematite_fraction=0.03, host_index=1.5, hematite="querry-extraordinary"),
         do.ModifiedGamma(r_eff_um=1.6, v_eff=0.2),
@@ -181,7 +181,7 @@ def test_seed_blue_moons_table_reproduced() -> None:
 def test_seed_used_number_not_cross_section_weighting() -> None:
     """Cross-section weighting differs from the seed's table by 20-36 % median
     (BRIEF section 2), so the seed's average was a number-weighted one."""
-    seed = pd.read_csv(shared_path("seed-tables", "MiePhaseFunctionSpectrum.csv"), index_col=0)
+    seed = pd.read_csv(data_path(*SEED_PHASE_EXCERPT), index_col=0, comment="#")
     theta = seed.index.to_numpy(dtype=float)
     cols = ["360", "550", "680"]
     t = do.compute_optics(

@@ -40,7 +40,8 @@ def _openexr() -> Any:
         import OpenEXR
     except ImportError:
         raise ImportError(
-            "the exr format needs the OpenEXR package: pip install 'dustoptics[textures]'"
+            "the exr format needs the OpenEXR package, a dependency of dustoptics: "
+            "pip install 'OpenEXR>=3.3'"
         ) from None
     return OpenEXR
 

@@ -13,7 +13,7 @@ import os
 
 import numpy as np
 import pytest
-from _shared import shared_path
+from _data import SEED_PHASE_EXCERPT, SEED_ROWS, data_path
 
 import dustoptics as do
 from dustoptics.io import FORMATS, FormatError
@@ -118,10 +118,10 @@ def test_registry_entry(table, tmp_path):
 
 
 def test_phase_header_matches_the_seed_table(table, tmp_path):
-    seed = shared_path("seed-tables", PHASE_FILENAME)
+    seed = data_path(*SEED_PHASE_EXCERPT)
     write_seed_csv(_regridded(table, do.optics.default_wavelengths_nm()), tmp_path)
     ours = (tmp_path / PHASE_FILENAME).read_text().splitlines()
-    theirs = seed.read_text().splitlines()
+    theirs = [line for line in seed.read_text().splitlines() if not line.startswith("#")]
     # Empty first cell, then 360, 370, ..., 830 written as integers: the same header line.
     assert ours[0].split(",")[0] == "" == theirs[0].split(",")[0]
     assert ours[0] == theirs[0]
@@ -131,11 +131,14 @@ def test_phase_header_matches_the_seed_table(table, tmp_path):
     assert ours[-1].split(",")[0] == theirs[-1].split(",")[0] == "180.0"
 
 
-def test_reads_the_seed_phase_table():
-    seed = read_phase_csv(shared_path("seed-tables", PHASE_FILENAME))
+def test_reads_the_seed_phase_table(tmp_path):
+    # The seed's own file: the excerpt's lines below its commented header.
+    lines = data_path(*SEED_PHASE_EXCERPT).read_text().splitlines(keepends=True)
+    (tmp_path / PHASE_FILENAME).write_text("".join(ln for ln in lines if not ln.startswith("#")))
+    seed = read_phase_csv(tmp_path / PHASE_FILENAME)
     np.testing.assert_array_equal(seed.wavelength_nm, do.optics.default_wavelengths_nm())
-    np.testing.assert_array_equal(seed.theta_deg, np.linspace(0.0, 180.0, 1800))
-    assert seed.phase.shape == (48, 1800)
+    np.testing.assert_array_equal(seed.theta_deg, np.linspace(0.0, 180.0, 1800)[list(SEED_ROWS)])
+    assert seed.phase.shape == (48, len(SEED_ROWS))
     assert (
         seed.phase[0, 0] == 27.69420224644522
     )  # first data cell of the seed's file, 360 nm forward

@@ -21,8 +21,8 @@ from typing import Any
 
 import numpy as np
 import pytest
+from _data import data_path
 from _rt_table import rt_table
-from _shared import shared_path
 from numpy.polynomial import legendre
 from scipy.io import netcdf_file
 
@@ -30,7 +30,7 @@ import dustoptics as do
 from dustoptics.io import FORMATS, write
 from dustoptics.io.describe import describe_path
 
-BENCH = ("reference-data", "mie-benchmarks")
+BENCH = ("mie-benchmarks",)
 
 
 def read_cdf(path: Path) -> dict[str, Any]:
@@ -121,7 +121,7 @@ def test_moments_reproduce_the_table_matrix(polarized: do.Table, tmp_path: Path)
 
 
 def _miev0(case: int) -> dict[tuple[int, int], str]:
-    path = shared_path(*BENCH, "miev0_wiscombe_legendre_moments.csv")
+    path = data_path(*BENCH, "miev0_wiscombe_legendre_moments.csv")
     lines = [ln for ln in path.read_text().splitlines() if not ln.startswith("#")]
     return {
         (int(r["moment"]), int(r["k"])): r["value"]
@@ -172,7 +172,7 @@ def test_sign_of_p34_against_bohren_huffman(tmp_path: Path) -> None:
     minus their POL, at all 21 printed angles to half a unit of the printed digits;
     S34 / S11 changes sign over the angles, so a flipped sign cannot pass."""
     data = json.loads(
-        shared_path(*BENCH, "bohren_huffman_bhmie_sample.json").read_text(), parse_float=str
+        data_path(*BENCH, "bohren_huffman_bhmie_sample.json").read_text(), parse_float=str
     )
     inputs = data["inputs"]
     theta = np.array([float(r["theta_deg"]) for r in data["table"]])
