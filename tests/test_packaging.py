@@ -533,7 +533,6 @@ OPTIONAL_IMPORTS = [
     ),
     ("zarr", "from dustoptics.sweep import run; run._require_extra()", "dustoptics[sweep]"),
     ("distributed", "from dustoptics.sweep import run; run._require_extra()", "dustoptics[sweep]"),
-    ("nanodisort", "from dustoptics.sky import disort; disort._nanodisort()", "dustoptics[test]"),
     ("OpenEXR", "from dustoptics.io.textures import exr; exr._openexr()", "pip install 'OpenEXR"),
 ]
 
