@@ -32,6 +32,7 @@ from dustoptics.table.components import (
     QuadratureRecord,
     ScatteringMatrix,
     pmom_from_alpha1,
+    records_from_fields,
 )
 from dustoptics.table.derivatives import TableDerivatives
 from dustoptics.table.provenance import (
@@ -157,6 +158,18 @@ def _check_provenance(provenance: Any) -> None:
             value = getattr(source, key, None)
             if isinstance(value, str):
                 _storable_text(f"provenance.sources[{i}].{key}", value)
+
+
+def _new_record(attribute: str, fields: Mapping[str, Any]) -> Any:
+    """The record ``attribute`` made from ``fields`` (for :meth:`Table.replace`)."""
+    values = dict(fields)
+    record = records_from_fields(values)[attribute]
+    if values or record is None:
+        raise ValueError(
+            f"{attribute} must be a {RECORDS[attribute].__name__} or a mapping of its fields; "
+            f"got {dict(fields)!r}"
+        )
+    return record
 
 
 def _cross_sections_changed(old: CrossSections | None, new: CrossSections | None) -> bool:
@@ -499,7 +512,8 @@ class Table:
         """A copy with some fields changed (validated again).
 
         A record may be given as a mapping of the fields to change in the
-        table's own record: ``table.replace(cross_sections={"number_density_per_m3": 1e8})``.
+        table's own record, ``table.replace(cross_sections={"number_density_per_m3": 1e8})``,
+        or, when the table has none, of the fields of a new one.
 
         The in-memory :attr:`diagnostics` describe the computation that made
         the numbers, so they are dropped when the phase function, the
@@ -512,17 +526,15 @@ class Table:
         Raises
         ------
         ValueError
-            A mapping of changes for a record the table does not have.
+            A mapping for a record the table does not have that lacks a field
+            the record needs, or names a field it does not have.
         """
         for key, value in changes.items():
             if key in RECORDS and isinstance(value, Mapping):
                 record = getattr(self, key)
-                if record is None:
-                    raise ValueError(
-                        f"table {self.name!r} has no {key} to change; give a "
-                        f"{RECORDS[key].__name__} instead of {dict(value)!r}"
-                    )
-                changes[key] = record.replace(**value)
+                changes[key] = (
+                    _new_record(key, value) if record is None else record.replace(**value)
+                )
         numbers = set(changes) & {"phase", "theta_deg", "wavelength_nm", "g"}
         if "cross_sections" in changes and _cross_sections_changed(
             self.cross_sections, changes["cross_sections"]
@@ -552,11 +564,6 @@ class Table:
     def spans_sphere(self) -> bool:
         """Whether the angles run from exactly 0 to exactly 180 degree (all directions)."""
         return bool(self.theta_deg[0] == 0.0 and self.theta_deg[-1] == 180.0)
-
-    @property
-    def has_cross_sections(self) -> bool:
-        """Whether the table carries cross-sections (not only a phase function)."""
-        return self.cross_sections is not None
 
     def _need_cross_sections(self, what: str) -> CrossSections:
         if self.cross_sections is None:

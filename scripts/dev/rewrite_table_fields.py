@@ -8,6 +8,7 @@ rewrites code written against the flat fields, in place:
 * ``t.cext_um2 is None`` -> ``t.cross_sections is None`` (for a quantity the
   record needs), ``t.cback_um2 is None`` ->
   ``(t.cross_sections is None or t.cross_sections.cback_um2 is None)``;
+* ``t.has_cross_sections`` -> ``t.cross_sections is not None``;
 * ``getattr(t, name)`` -> ``t.quantity(name)``;
 * ``Table(..., cext_um2=a, csca_um2=b)`` ->
   ``Table(..., cross_sections=CrossSections(cext_um2=a, csca_um2=b))`` (and the import);
@@ -35,6 +36,7 @@ from __future__ import annotations
 
 import argparse
 import re
+import subprocess
 import sys
 from collections import Counter
 from collections.abc import Sequence
@@ -379,6 +381,12 @@ class _Rewrite(cst.CSTTransformer):
     def leave_Attribute(
         self, original_node: cst.Attribute, updated_node: cst.Attribute
     ) -> cst.BaseExpression:
+        if original_node.attr.value == "has_cross_sections" and self.is_table(original_node.value):
+            self.report.changes["presence test"] += 1
+            return cst.Comparison(
+                left=cst.Attribute(value=updated_node.value, attr=cst.Name("cross_sections")),
+                comparisons=[cst.ComparisonTarget(cst.IsNot(), cst.Name("None"))],
+            )
         moved = self._moved(original_node)
         if moved is None:
             return updated_node
@@ -429,6 +437,30 @@ class _Rewrite(cst.CSTTransformer):
             rpar=[cst.RightParen()],
         )
         return joined
+
+    def leave_UnaryOperation(
+        self, original_node: cst.UnaryOperation, updated_node: cst.UnaryOperation
+    ) -> cst.BaseExpression:
+        # "not t.has_cross_sections" -> "t.cross_sections is None"
+        inner = updated_node.expression
+        if (
+            isinstance(updated_node.operator, cst.Not)
+            and isinstance(original_node.expression, cst.Attribute)
+            and original_node.expression.attr.value == "has_cross_sections"
+            and isinstance(inner, cst.Comparison)
+        ):
+            return inner.with_changes(
+                comparisons=[cst.ComparisonTarget(cst.Is(), cst.Name("None"))]
+            )
+        return updated_node
+
+    def leave_BooleanOperation(
+        self, original_node: cst.BooleanOperation, updated_node: cst.BooleanOperation
+    ) -> cst.BaseExpression:
+        # "t.cext_um2 is not None and t.csca_um2 is not None" became the same test twice.
+        if _dotted(updated_node.left) == _dotted(updated_node.right) != _dotted(original_node.left):
+            return updated_node.left
+        return updated_node
 
     def leave_Call(self, original_node: cst.Call, updated_node: cst.Call) -> cst.BaseExpression:
         name = _callee(original_node.func)
@@ -507,6 +539,11 @@ class _Rewrite(cst.CSTTransformer):
         for record, args in moved.items():
             cls, _, needs = RECORDS[record]
             given = {a.keyword.value for a in args if a.keyword}
+            if all(_is_none(a.value) for a in args):
+                records.append(
+                    cst.Arg(keyword=cst.Name(record), value=cst.Name("None"), equal=_EQUAL)
+                )
+                continue
             if not set(needs) <= given:
                 self.report.undecided.append(
                     f"{self._where(original_node)}: Table(...) gives {sorted(given)} without "
@@ -515,6 +552,13 @@ class _Rewrite(cst.CSTTransformer):
                 return updated_node
             self.imports.add(cls)
             inner = [a.with_changes(comma=cst.MaybeSentinel.DEFAULT) for a in args]
+            inner = [
+                *(
+                    a.with_changes(comma=cst.Comma(whitespace_after=cst.SimpleWhitespace(" ")))
+                    for a in inner[:-1]
+                ),
+                inner[-1],
+            ]
             value: cst.BaseExpression = cst.Call(func=cst.Name(cls), args=inner)
             source = _copied_from(original_node, record)
             if source is not None:
@@ -527,10 +571,11 @@ class _Rewrite(cst.CSTTransformer):
                     body=cst.Name("None"),
                     orelse=value,
                 )
-            records.append(cst.Arg(keyword=cst.Name(record), value=value))
+            records.append(cst.Arg(keyword=cst.Name(record), value=value, equal=_EQUAL))
         self.report.changes["construction"] += 1
-        args = [a.with_changes(comma=cst.MaybeSentinel.DEFAULT) for a in kept]
-        return updated_node.with_changes(args=[*args[:first], *records, *args[first:]])
+        return updated_node.with_changes(
+            args=_laid_out([*kept[:first], *records, *kept[first:]], updated_node.args)
+        )
 
     def _replace(self, original_node: cst.Call, updated_node: cst.Call) -> cst.BaseExpression:
         assert isinstance(original_node.func, cst.Attribute)
@@ -552,28 +597,53 @@ class _Rewrite(cst.CSTTransformer):
         kept, moved, first = grouped
         records = []
         for record, args in moved.items():
+            given = {a.keyword.value for a in args if a.keyword}
+            if set(RECORDS[record][2]) <= given and all(_is_none(a.value) for a in args):
+                records.append(
+                    cst.Arg(keyword=cst.Name(record), value=cst.Name("None"), equal=_EQUAL)
+                )
+                continue
             elements = [
                 cst.DictElement(
                     key=cst.SimpleString(f'"{a.keyword.value}"'),
                     value=a.value,
+                    comma=cst.Comma(whitespace_after=cst.SimpleWhitespace(" ")),
                 )
                 for a in args
                 if a.keyword is not None
             ]
-            records.append(cst.Arg(keyword=cst.Name(record), value=cst.Dict(elements=elements)))
-            if set(RECORDS[record][2]) <= {a.keyword.value for a in args if a.keyword}:
-                self.report.notes.append(
-                    f"{self._where(original_node)}: replace(...) now changes the {record} the "
-                    f"table has (it raises if the table has none)"
-                )
+            elements[-1] = elements[-1].with_changes(comma=cst.MaybeSentinel.DEFAULT)
+            records.append(
+                cst.Arg(keyword=cst.Name(record), value=cst.Dict(elements=elements), equal=_EQUAL)
+            )
         self.report.changes["replace"] += 1
-        args = [a.with_changes(comma=cst.MaybeSentinel.DEFAULT) for a in kept]
-        return updated_node.with_changes(args=[*args[:first], *records, *args[first:]])
+        return updated_node.with_changes(
+            args=_laid_out([*kept[:first], *records, *kept[first:]], updated_node.args)
+        )
 
     def leave_Module(self, original_node: cst.Module, updated_node: cst.Module) -> cst.Module:
         for cls in sorted(self.imports):
             AddImportsVisitor.add_needed_import(self.context, "dustoptics.table", cls)
         return updated_node
+
+
+def _is_none(node: cst.BaseExpression) -> bool:
+    return isinstance(node, cst.Name) and node.value == "None"
+
+
+_EQUAL = cst.AssignEqual(
+    whitespace_before=cst.SimpleWhitespace(""), whitespace_after=cst.SimpleWhitespace("")
+)
+
+
+def _laid_out(args: list[cst.Arg], original: Sequence[cst.Arg]) -> list[cst.Arg]:
+    """``args`` with the commas (and line breaks) of the original arguments, by position.
+
+    The last argument keeps the original last one's comma, so a call laid out one
+    argument a line keeps its trailing comma and closing line.
+    """
+    out = [a.with_changes(comma=original[i].comma) for i, a in enumerate(args[:-1])]
+    return [*out, args[-1].with_changes(comma=original[-1].comma)]
 
 
 def _copied_from(node: cst.Call, record: str) -> cst.BaseExpression | None:
@@ -648,6 +718,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("paths", nargs="*", help="files or folders (default: the repository's)")
     parser.add_argument("--check", action="store_true", help="change nothing; exit 1 if needed")
+    parser.add_argument(
+        "--no-format", action="store_true", help="do not run 'ruff format' on the changed files"
+    )
     args = parser.parse_args(argv)
     files = _files(args.paths)
     scan = _Scan()
@@ -658,6 +731,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     undecided: list[str] = []
     notes: list[str] = []
     changed = 0
+    written: list[Path] = []
     for f in files:
         text = f.read_text(encoding="utf-8")
         rel = (
@@ -673,6 +747,9 @@ def main(argv: Sequence[str] | None = None) -> int:
             print(f"{'would rewrite' if args.check else 'rewrote'} {rel}: {summary}")
             if not args.check:
                 f.write_text(new, encoding="utf-8")
+                written.append(f)
+    if written and not args.no_format:
+        subprocess.run(["ruff", "format", "--quiet", *map(str, written)], check=False)
     print(
         f"{changed} files {'to change' if args.check else 'changed'}: "
         + (", ".join(f"{n} {k}" for k, n in sorted(total.items())) or "nothing")
