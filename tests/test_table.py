@@ -33,8 +33,8 @@ def test_compute_optics_returns_the_table(table: Table) -> None:
     assert table.name == "table"
     assert not hasattr(do, "OpticsTable")
     # Every per-wavelength diagnostic is a field of the table.
-    assert table.n_nodes.dtype == np.int64 and np.all(table.n_nodes >= 16)
-    assert np.all(table.cross_section_n_nodes >= table.n_nodes)
+    assert table.quadrature.n_nodes.dtype == np.int64 and np.all(table.quadrature.n_nodes >= 16)
+    assert np.all(table.quadrature.cross_section_n_nodes >= table.quadrature.n_nodes)
     np.testing.assert_array_equal(table.refractive_index, do.mars_dust()(np.array(WAVELENGTHS)))
     assert np.all(table.converged)
 
@@ -58,7 +58,7 @@ def test_provenance_is_filled_from_the_call(table: Table) -> None:
     assert [s.role for s in p.sources] == ["refractive index", "size distribution"]
     assert p.sources[0].citation == do.mars_dust().citation
     assert p.quadrature["max_error_estimate"] == table.achieved_error
-    assert p.quadrature["n_nodes_total"] == int(table.n_nodes.sum())
+    assert p.quadrature["n_nodes_total"] == int(table.quadrature.n_nodes.sum())
     assert p.quadrature["converged"] is True
     assert set(p.software) >= {"dustoptics", "numpy", "numba"}
     assert len(p.input_hash) == 64
@@ -105,7 +105,7 @@ def test_diagnostics_rebuild_the_nodes(table: Table) -> None:
     assert d.distribution == do.ModifiedGamma(r_eff_um=1.6, v_eff=0.2)
     for i, panels in enumerate(d.panels):
         # Each final panel's two halves carry nodes_per_panel nodes each.
-        assert 2 * panels.shape[0] * d.settings.nodes_per_panel == table.n_nodes[i]
+        assert 2 * panels.shape[0] * d.settings.nodes_per_panel == table.quadrature.n_nodes[i]
     # Changing the numbers drops the diagnostics of the run that made them.
     assert table.replace(phase=table.phase * 1.0).diagnostics is None
     assert table.replace(name="x").diagnostics is d
@@ -183,13 +183,18 @@ def test_progress_reports_every_wavelength_in_order() -> None:
 
 
 def test_derived_quantities_are_derived_from_the_stored_ones(table: Table) -> None:
-    np.testing.assert_array_equal(table.cabs_um2, table.cext_um2 - table.csca_um2)
-    np.testing.assert_array_equal(table.ssa, table.csca_um2 / table.cext_um2)
     np.testing.assert_array_equal(
-        table.qext, table.cext_um2 / table.mean_geometric_cross_section_um2
+        table.cabs_um2, table.cross_sections.cext_um2 - table.cross_sections.csca_um2
     )
-    dense = table.replace(number_density_per_m3=1e6)
-    np.testing.assert_array_equal(dense.beta_ext_per_m, table.cext_um2 * 1e-12 * 1e6)
+    np.testing.assert_array_equal(
+        table.ssa, table.cross_sections.csca_um2 / table.cross_sections.cext_um2
+    )
+    np.testing.assert_array_equal(
+        table.qext,
+        table.cross_sections.cext_um2 / table.cross_sections.mean_geometric_cross_section_um2,
+    )
+    dense = table.replace(cross_sections={"number_density_per_m3": 1e6})
+    np.testing.assert_array_equal(dense.beta_ext_per_m, table.cross_sections.cext_um2 * 1e-12 * 1e6)
 
 
 @pytest.mark.parametrize(
@@ -231,7 +236,9 @@ def test_xarray_selection_and_interpolation_agree_with_the_table(table: Table) -
     # A selection is still a table: the stored quantities at those wavelengths.
     part = Table.from_xarray(ds.isel(wavelength_nm=[0, 2]))
     np.testing.assert_array_equal(part.wavelength_nm, [440.0, 680.0])
-    np.testing.assert_array_equal(part.cext_um2, table.cext_um2[[0, 2]])
+    np.testing.assert_array_equal(
+        part.cross_sections.cext_um2, table.cross_sections.cext_um2[[0, 2]]
+    )
     np.testing.assert_array_equal(part.refractive_index, table.refractive_index[[0, 2]])
 
 
@@ -259,7 +266,7 @@ def test_to_dataframe_has_the_per_wavelength_quantities(table: Table) -> None:
         "error_estimate",
         "n_nodes",
     ):
-        np.testing.assert_array_equal(df[column].to_numpy(), getattr(table, column))
+        np.testing.assert_array_equal(df[column].to_numpy(), table.quantity(column))
     np.testing.assert_array_equal(
         df["refractive_index_imag"].to_numpy(), table.refractive_index.imag
     )
@@ -362,7 +369,7 @@ def test_pmom_is_alpha1_over_2l_plus_1() -> None:
         **{key: [[1.0, 1.5, 2.5]] for key in do.table.EXPANSION_FIELDS},
     )
     np.testing.assert_array_equal(t.pmom, [[1.0, 0.5, 0.5]])
-    np.testing.assert_array_equal(do.table.alpha1_from_pmom(t.pmom), t.alpha1)
+    np.testing.assert_array_equal(do.table.alpha1_from_pmom(t.pmom), t.expansion.alpha1)
     assert do.expansion.pmom_from_alpha1 is do.table.pmom_from_alpha1
 
 

@@ -523,8 +523,8 @@ def _one_wavelength(
     area = math.pi / k_um**2
     distribution = diagnostics.distribution
     settings = diagnostics.settings
-    matrix = table.f12 is not None
-    n_order = 0 if table.alpha1 is None else int(table.alpha1.shape[1])
+    matrix = table.matrix is not None
+    n_order = 0 if table.expansion is None else int(table.expansion.alpha1.shape[1])
     n_q = 4 if (matrix or n_order) else 1
     angular_keys = ("phase", "f12", "f33", "f34")[: 4 if matrix else 1]
     mu_out = np.cos(np.deg2rad(np.asarray(table.theta_deg, dtype=np.float64)))

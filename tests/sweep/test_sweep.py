@@ -404,7 +404,7 @@ def test_independent_points_equal_single_builds_to_the_bit(cluster, config_file,
         table = build_table(parse_point(spec.point_data(index)))
         point = ds.isel({a.key: i for a, i in zip(spec.axes, index)})
         assert np.array_equal(point.phase.values, table.phase)
-        assert np.array_equal(point.cext_um2.values, table.cext_um2)
+        assert np.array_equal(point.cext_um2.values, table.cross_sections.cext_um2)
         assert np.array_equal(point.g.values, table.g)
         record = json.loads(str(point.provenance.values))
         assert record["input_hash"] == table.provenance.input_hash
@@ -418,10 +418,13 @@ def test_shared_sweep_is_within_the_error_estimates_of_single_builds(reference, 
     for index in spec.indices():
         table = build_table(parse_point(spec.point_data(index)))
         point = ds.isel({a.key: i for a, i in zip(spec.axes, index)})
-        bound = point.error_estimate.values + table.error_estimate
+        bound = point.error_estimate.values + table.quadrature.error_estimate
         assert np.all(np.max(np.abs(point.phase.values / table.phase - 1.0), axis=1) <= bound)
-        cross = point.cross_section_error_estimate.values + table.cross_section_error_estimate
-        assert np.all(np.abs(point.cext_um2.values / table.cext_um2 - 1.0) <= cross)
+        cross = (
+            point.cross_section_error_estimate.values
+            + table.quadrature.cross_section_error_estimate
+        )
+        assert np.all(np.abs(point.cext_um2.values / table.cross_sections.cext_um2 - 1.0) <= cross)
         assert np.all(np.abs(point.g.values - table.g) <= cross)
         assert json.loads(str(point.provenance.values))["input_hash"] == table.provenance.input_hash
 
