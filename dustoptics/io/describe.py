@@ -106,7 +106,7 @@ def describe_table(table: Table, *, full: bool = True) -> str:
         "phase function:  [sr^-1], 2 pi int P dmu = 1",
         f"g:               {table.g.min():.6g} .. {table.g.max():.6g}",
     ]
-    cext = table.cross_sections.cext_um2
+    cext = table.quantity("cext_um2")
     if cext is not None:  # table.has_cross_sections
         lines += [
             f"cext_um2:        {cext.min():.6g} .. {cext.max():.6g}",

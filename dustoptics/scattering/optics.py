@@ -80,7 +80,16 @@ from dustoptics.scattering.table_derivatives import (
     index_parameter_names,
     table_derivatives,
 )
-from dustoptics.table import DEFAULT_NAME, Provenance, Source, Table, plain
+from dustoptics.table import (
+    DEFAULT_NAME,
+    CrossSections,
+    Provenance,
+    QuadratureRecord,
+    Source,
+    Table,
+    plain,
+    records_from_fields,
+)
 
 __all__ = [
     "WORK_BUDGET",
@@ -738,27 +747,33 @@ def compute_optics(
         _index_source(refractive_index, label),
         Source(name=distribution.model, role="size distribution", citation=distribution.citation),
     )
+    records = records_from_fields(dict(extra))
     table = Table(
         name=name,
         wavelength_nm=wl,
         theta_deg=theta,
         phase=phase,
         g=np.array([r.g for r in results]),
-        cext_um2=cext,
-        csca_um2=csca,
-        error_estimate=err_phase,
-        cross_section_error_estimate=err_cross,
-        n_nodes=n_nodes,
-        cross_section_n_nodes=cross_n_nodes,
         refractive_index=m,
-        mean_geometric_cross_section_um2=float(distribution.mean_cross_section_um2),
-        cback_um2=np.array([r.cback for r in results]),
-        r_eff_quadrature_um=moments[:, 1] / moments[:, 0],
-        v_eff_quadrature=moments[:, 2] * moments[:, 0] / moments[:, 1] ** 2 - 1.0,
-        mean_volume_quadrature_um3=4.0 / 3.0 * np.pi * moments[:, 1],
-        mean_volume_um3=float(distribution.mean_volume_um3),
-        particle_density_kg_m3=density,
-        **extra,
+        cross_sections=CrossSections(
+            cext_um2=cext,
+            csca_um2=csca,
+            cback_um2=np.array([r.cback for r in results]),
+            mean_geometric_cross_section_um2=float(distribution.mean_cross_section_um2),
+            mean_volume_um3=float(distribution.mean_volume_um3),
+            particle_density_kg_m3=density,
+        ),
+        quadrature=QuadratureRecord(
+            error_estimate=err_phase,
+            cross_section_error_estimate=err_cross,
+            n_nodes=n_nodes,
+            cross_section_n_nodes=cross_n_nodes,
+            r_eff_quadrature_um=moments[:, 1] / moments[:, 0],
+            v_eff_quadrature=moments[:, 2] * moments[:, 0] / moments[:, 1] ** 2 - 1.0,
+            mean_volume_quadrature_um3=4.0 / 3.0 * np.pi * moments[:, 1],
+        ),
+        matrix=records["matrix"],
+        expansion=records["expansion"],
         provenance=Provenance(inputs=plain(inputs), sources=sources, quadrature=plain(record)),
         diagnostics=QuadratureDiagnostics(
             settings=settings,

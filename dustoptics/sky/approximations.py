@@ -509,8 +509,8 @@ def _with_tables(medium: Medium, tables: list[Table]) -> Medium:
         medium,
         wavelength_nm=np.array(tables[0].wavelength_nm, dtype=float),
         tables=tuple(tables),
-        sigma_ext_m2=np.array([t.cross_sections.cext_um2 for t in tables]) * 1e-12,
-        sigma_sca_m2=np.array([t.cross_sections.csca_um2 for t in tables]) * 1e-12,
+        sigma_ext_m2=np.array([t.quantity("cext_um2") for t in tables]) * 1e-12,
+        sigma_sca_m2=np.array([t.quantity("csca_um2") for t in tables]) * 1e-12,
         chi=chi,
         truncation=f,
     )

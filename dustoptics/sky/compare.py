@@ -245,6 +245,7 @@ def mars_sky_atmosphere(
         )
         if not np.array_equal(mie.wavelength_nm, dust.wavelength_nm):
             raise ValueError("cross_sections must be on the model's wavelengths")
+        assert mie.cross_sections is not None  # a Mie table
         dust = dust.replace(
             cross_sections={
                 "cext_um2": mie.cross_sections.cext_um2,

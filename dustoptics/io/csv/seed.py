@@ -65,6 +65,7 @@ from dustoptics.table import (
     UNITS,
     Provenance,
     Table,
+    records_from_fields,
 )
 
 #: Optional per-wavelength quantities of radiative-transfer tables, kept in the summary.
@@ -217,9 +218,9 @@ def _summary_bytes(table: Table, hashes: dict[str, str]) -> bytes:
         }
     per_wavelength: dict[str, Any] = {
         "wavelength_nm": table.wavelength_nm.tolist(),
-        "error_estimate": _optional_list(table.quadrature.error_estimate),
+        "error_estimate": _optional_list(table.quantity("error_estimate")),
         "cross_section_error_estimate": _optional_list(
-            table.quadrature.cross_section_error_estimate
+            table.quantity("cross_section_error_estimate")
         ),
         "n_nodes": None
         if (table.quadrature is None or table.quadrature.n_nodes is None)
@@ -250,8 +251,8 @@ def _summary_bytes(table: Table, hashes: dict[str, str]) -> bytes:
         "provenance": table.provenance.to_dict(),
         "phase_normalization": PHASE_NORMALIZATION,
         "has_cross_sections": table.cross_sections is not None,
-        "mean_geometric_cross_section_um2": table.cross_sections.mean_geometric_cross_section_um2,
-        "number_density_per_m3": table.cross_sections.number_density_per_m3,
+        "mean_geometric_cross_section_um2": table.quantity("mean_geometric_cross_section_um2"),
+        "number_density_per_m3": table.quantity("number_density_per_m3"),
         **{key: table.quantity(key) for key in _EXTRA_SCALARS if table.quantity(key) is not None},
         "per_wavelength": per_wavelength,
         "files": files,
@@ -636,24 +637,31 @@ def read_seed_csv(directory: str | os.PathLike[str], *, verify: bool = True) -> 
     }
     extra.update({key: summary.get(key) for key in _EXTRA_SCALARS})
     fields.update(extra)
-    table = _guard(
-        summary_path,
-        lambda: Table(
+
+    def build() -> Table:
+        flat = {
+            **fields,
+            "error_estimate": array("error_estimate"),
+            "cross_section_error_estimate": array("cross_section_error_estimate"),
+            "n_nodes": counts("n_nodes"),
+            "cross_section_n_nodes": counts("cross_section_n_nodes"),
+            "mean_geometric_cross_section_um2": summary["mean_geometric_cross_section_um2"],
+            "number_density_per_m3": summary["number_density_per_m3"],
+        }
+        flat = {key: value for key, value in flat.items() if value is not None}
+        records = records_from_fields(flat)
+        return Table(
             name=summary["name"],
             wavelength_nm=phase.wavelength_nm,
             theta_deg=phase.theta_deg,
             phase=phase.phase,
-            error_estimate=array("error_estimate"),
-            cross_section_error_estimate=array("cross_section_error_estimate"),
-            n_nodes=counts("n_nodes"),
-            cross_section_n_nodes=counts("cross_section_n_nodes"),
             refractive_index=refractive_index(),
-            mean_geometric_cross_section_um2=summary["mean_geometric_cross_section_um2"],
-            number_density_per_m3=summary["number_density_per_m3"],
             provenance=Provenance.from_dict(summary["provenance"]),
-            **fields,
-        ),
-    )
+            **flat,
+            **records,
+        )
+
+    table = _guard(summary_path, build)
     if columns:
         _check_derived(root / EXTINCTION_FILENAME, table, columns)
     return table

@@ -186,7 +186,7 @@ def _columns(atmosphere: Atmosphere) -> list[_Column]:
     written = atmosphere.cosmoscout_constituents()
     for c in atmosphere.constituents:
         table, density = written[atmosphere.file_prefix(c.role)]
-        n0 = c.table.cross_sections.number_density_per_m3
+        n0 = c.table.quantity("number_density_per_m3")
         assert n0 is not None and (
             table.cross_sections is not None
             and table.cross_sections.number_density_per_m3 is not None
