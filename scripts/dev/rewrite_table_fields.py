@@ -190,7 +190,10 @@ def _callee(node: cst.BaseExpression) -> str | None:
 def _annotation_says_table(annotation: cst.Annotation | None) -> bool | None:
     if annotation is None:
         return None
-    return re.search(r"\bTable\b", _dotted(annotation.annotation)) is not None
+    text = _dotted(annotation.annotation)
+    if re.search(r"\bTable\b", text):
+        return True
+    return None if re.fullmatch(r"\s*(typing\.)?(Any|object)\s*", text) else False
 
 
 #: Method names too common to mark a call as a table's by name alone.
