@@ -106,7 +106,9 @@ def write_table(args: argparse.Namespace, table: Any, formats: Sequence[str]) ->
     if "cosmoscout" in formats:
         if optical_depth is not None and args.number_density_per_m3 is not None:
             raise UsageError("give --optical-depth or --number-density-per-m3, not both")
-        if optical_depth is None and (table.cross_sections is None or table.cross_sections.number_density_per_m3 is None):
+        if optical_depth is None and (
+            table.cross_sections is None or table.cross_sections.number_density_per_m3 is None
+        ):
             raise UsageError(NEEDS_DENSITY)
     table, options = prepare_export(
         table,

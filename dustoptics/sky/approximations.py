@@ -439,7 +439,7 @@ def _channel_table(
     assert table.cross_sections is not None
     w = channels.weights
     phase = (
-        colour.channel_phase(channels, table.phase, csca_um2=table.cross_sections.csca_um2)
+        colour.channel_phase(channels, table.phase, csca_um2=table.quantity("csca_um2"))
         if _scatters(table)
         else colour.channel_phase(channels, table.phase)
     )

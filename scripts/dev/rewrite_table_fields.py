@@ -9,7 +9,8 @@ rewrites code written against the flat fields, in place:
   record needs), ``t.cback_um2 is None`` ->
   ``(t.cross_sections is None or t.cross_sections.cback_um2 is None)``;
 * ``t.has_cross_sections`` -> ``t.cross_sections is not None``;
-* ``getattr(t, name)`` -> ``t.quantity(name)``;
+* ``getattr(t, name)`` -> ``t.quantity(name)``, and ``f(csca_um2=t.csca_um2)`` ->
+  ``f(csca_um2=t.quantity("csca_um2"))`` (passed on, None included);
 * ``Table(..., cext_um2=a, csca_um2=b)`` ->
   ``Table(..., cross_sections=CrossSections(cext_um2=a, csca_um2=b))`` (and the import);
 * ``t.replace(number_density_per_m3=n)`` ->
@@ -196,6 +197,9 @@ def _annotation_says_table(annotation: cst.Annotation | None) -> bool | None:
     return None if re.fullmatch(r"\s*(typing\.)?(Any|object)\s*", text) else False
 
 
+#: Calls whose keywords name the record fields themselves (left to the other rules).
+_KEEPS_RECORDS = {"Table", "replace", *(cls for cls, _, _ in RECORDS.values())}
+
 #: Method names too common to mark a call as a table's by name alone.
 _GENERIC = {"replace", "build", "copy"}
 
@@ -255,6 +259,7 @@ class _Rewrite(cst.CSTTransformer):
         self.scopes: list[dict[str, bool]] = [{}]
         self.report = Report()
         self.imports: set[str] = set()
+        self.calls: list[str | None] = []
 
     # -------------------------------------------------------------- which receivers are tables
 
@@ -465,7 +470,38 @@ class _Rewrite(cst.CSTTransformer):
             return updated_node.left
         return updated_node
 
+    def visit_Call(self, node: cst.Call) -> None:
+        self.calls.append(_callee(node.func))
+
+    def leave_Arg(self, original_node: cst.Arg, updated_node: cst.Arg) -> cst.Arg:
+        # f(cext_um2=t.cext_um2) passes the quantity on, None included: t.quantity("cext_um2").
+        value = original_node.value
+        if (
+            original_node.keyword is None
+            or self.calls[-1] in _KEEPS_RECORDS
+            or not isinstance(value, cst.Attribute)
+            or value.attr.value != original_node.keyword.value
+            or value.attr.value not in RECORD_OF
+        ):
+            return updated_node
+        receiver = value.value
+        if (
+            isinstance(receiver, cst.Attribute)
+            and receiver.attr.value == RECORD_OF[value.attr.value]
+        ):
+            receiver = receiver.value  # written t.cross_sections.csca_um2 already
+        if not self.is_table(receiver):
+            return updated_node
+        self.report.changes["passed on -> quantity"] += 1
+        return updated_node.with_changes(
+            value=cst.Call(
+                func=cst.Attribute(value=receiver, attr=cst.Name("quantity")),
+                args=[cst.Arg(cst.SimpleString(f'"{value.attr.value}"'))],
+            )
+        )
+
     def leave_Call(self, original_node: cst.Call, updated_node: cst.Call) -> cst.BaseExpression:
+        self.calls.pop()
         name = _callee(original_node.func)
         if name == "getattr":
             return self._getattr(original_node, updated_node)

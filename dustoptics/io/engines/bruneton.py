@@ -424,7 +424,9 @@ def bruneton_mie(table: Any) -> dict[str, Any]:
         [m^-1], ``mie_phase_function_g`` (Cornette-Shanks fit at 550 nm) and
         that fit's errors.
     """
-    if (table.cross_sections is None or table.cross_sections.number_density_per_m3 is None) or table.cross_sections is None:
+    if (
+        table.cross_sections is None or table.cross_sections.number_density_per_m3 is None
+    ) or table.cross_sections is None:
         raise ValueError(
             f"table {table.name!r} needs cross-sections and a number density for Bruneton's "
             "mie_scattering and mie_extinction [m^-1]"

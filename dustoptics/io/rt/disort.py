@@ -111,7 +111,7 @@ def disort_text(table: Any) -> str:
         "moment; nan: not estimated), pmom_0 ... [1]",
         *moment_lines(pmom),
         f"# accuracy: cross-sections and g relative error <= "
-        f"{bound_text(table.quadrature.cross_section_error_estimate)}",
+        f"{bound_text(table.quantity('cross_section_error_estimate'))}",
     ]
     for i in range(wl.size):
         row = [number(wl[i]), number(cext[i]), number(ssa[i]), repr(float(err_rows[i]))]

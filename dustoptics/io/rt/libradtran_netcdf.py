@@ -136,7 +136,7 @@ def _needs(table: Any) -> None:
             f"format {fmt!r} needs extinction and scattering cross-sections; table "
             f"{table.name!r} has none (a phase function only)"
         )
-    if (table.cross_sections is None or table.cross_sections.number_density_per_m3 is None):
+    if table.cross_sections is None or table.cross_sections.number_density_per_m3 is None:
         raise ValueError(
             f"format {fmt!r} needs a number density for its aerosol species profile, but table "
             f"{table.name!r} has none: give --number-density-per-m3 (command line) or "
@@ -238,7 +238,7 @@ def libradtran_netcdf_bytes(table: Any) -> bytes:
         "pmom includes the factor 2l+1; P(mu) = sum_l pmom[l] P_l(mu); pmom[P11, 0] = 1"
     )
     f.expansion_error_estimate = bound_text(table.expansion.expansion_error_estimate)
-    f.cross_section_error_estimate = bound_text(table.quadrature.cross_section_error_estimate)
+    f.cross_section_error_estimate = bound_text(table.quantity("cross_section_error_estimate"))
     f.createDimension("nlam", n_wl)
     f.createDimension("nmommax", n_order + 1)
     f.createDimension("nphamat", n_el)

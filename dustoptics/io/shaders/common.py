@@ -313,12 +313,16 @@ def shader_channels(
     # Scattering-weighted channels when the table has cross-sections, so that
     # csca_c * P_c is the channel of csca * P (see dustoptics.colour.channel_phase).
     phase64 = channel_phase(
-        chosen, np.asarray(table.phase_at(theta), dtype=np.float64), csca_um2=table.cross_sections.csca_um2
+        chosen,
+        np.asarray(table.phase_at(theta), dtype=np.float64),
+        csca_um2=table.quantity("csca_um2"),
     )
     phase32 = np.ascontiguousarray(phase64.T.astype(np.float32))
     integral = np.asarray(sphere_integral(phase32.T.astype(np.float64), theta_deg=theta))
     g = channel_phase(
-        chosen, np.asarray(table.g, dtype=np.float64)[:, None], csca_um2=table.cross_sections.csca_um2
+        chosen,
+        np.asarray(table.g, dtype=np.float64)[:, None],
+        csca_um2=table.quantity("csca_um2"),
     )[:, 0]
     cext = csca = None
     if table.cross_sections is not None:
@@ -338,7 +342,9 @@ def shader_channels(
         g=g,
         cext_m2=cext,
         csca_m2=csca,
-        number_density_per_m3=table.cross_sections.number_density_per_m3 if cext is not None else None,
+        number_density_per_m3=table.cross_sections.number_density_per_m3
+        if cext is not None
+        else None,
     )
 
 

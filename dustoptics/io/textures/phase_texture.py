@@ -235,7 +235,7 @@ def phase_texture(
         chosen = choose_channels(
             table, channels_nm=channels_nm, colour=colour, min_band_coverage=min_band_coverage
         )
-        exact = channel_phase(chosen, rows, csca_um2=table.cross_sections.csca_um2)  # (3, n_angles)
+        exact = channel_phase(chosen, rows, csca_um2=table.quantity("csca_um2"))  # (3, n_angles)
         image64 = exact.T[None, :, :]  # (1, n_angles, 3)
         names: tuple[str, ...] = ("R", "G", "B")
         channel_info = {
