@@ -260,6 +260,7 @@ class _Rewrite(cst.CSTTransformer):
         self.report = Report()
         self.imports: set[str] = set()
         self.calls: list[str | None] = []
+        self.in_fstring = 0
 
     # -------------------------------------------------------------- which receivers are tables
 
@@ -470,6 +471,19 @@ class _Rewrite(cst.CSTTransformer):
             return updated_node.left
         return updated_node
 
+    def visit_FormattedString(self, node: cst.FormattedString) -> None:
+        self.in_fstring += 1
+
+    def leave_FormattedString(
+        self, original_node: cst.FormattedString, updated_node: cst.FormattedString
+    ) -> cst.FormattedString:
+        self.in_fstring -= 1
+        return updated_node
+
+    def _text(self, value: str) -> cst.SimpleString:
+        """A string literal, in single quotes inside an f-string (Python < 3.12)."""
+        return cst.SimpleString(f"'{value}'" if self.in_fstring else f'"{value}"')
+
     def visit_Call(self, node: cst.Call) -> None:
         self.calls.append(_callee(node.func))
 
@@ -496,7 +510,7 @@ class _Rewrite(cst.CSTTransformer):
         return updated_node.with_changes(
             value=cst.Call(
                 func=cst.Attribute(value=receiver, attr=cst.Name("quantity")),
-                args=[cst.Arg(cst.SimpleString(f'"{value.attr.value}"'))],
+                args=[cst.Arg(self._text(value.attr.value))],
             )
         )
 
@@ -644,7 +658,7 @@ class _Rewrite(cst.CSTTransformer):
                 continue
             elements = [
                 cst.DictElement(
-                    key=cst.SimpleString(f'"{a.keyword.value}"'),
+                    key=self._text(a.keyword.value),
                     value=a.value,
                     comma=cst.Comma(whitespace_after=cst.SimpleWhitespace(" ")),
                 )
