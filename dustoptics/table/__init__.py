@@ -62,8 +62,6 @@ from dustoptics.table.provenance import (
     software_versions,
 )
 from dustoptics.table.registry import (
-    _FITTERS,
-    _WRITERS,
     TableWriter,
     register_table_fitter,
     register_table_writer,
@@ -134,8 +132,6 @@ _INTERNAL = (
     SCALAR_FIELDS,
     WAVELENGTH_DIM,
     TableWriter,
-    _FITTERS,
-    _WRITERS,
     _installed_version,
     derivative_unit,
     derivative_variable,

@@ -23,7 +23,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from dustoptics._validation import as_float_array
-from dustoptics.table import conversion
+from dustoptics.table import conversion, registry
 from dustoptics.table.components import (
     RECORD_OF,
     RECORDS,
@@ -41,7 +41,6 @@ from dustoptics.table.provenance import (
     _storable_text,
     canonical_json,
 )
-from dustoptics.table.registry import _FITTERS, _WRITERS
 from dustoptics.table.schema import (
     AEROSOL_STANDARD_NAMES,
     DEFAULT_NAME,
@@ -491,19 +490,19 @@ class Table:
         RuntimeError
             No writer is registered (``dustoptics.io`` was never imported).
         """
-        if not _WRITERS:
+        if not registry._WRITERS:
             raise RuntimeError(
                 "Table.save: no table file writer is registered; import dustoptics.io "
                 "(import dustoptics does), which registers the netCDF-4 writer"
             )
         target = Path(path)
         if not target.suffix:
-            target = target.with_name(target.name + next(iter(_WRITERS)))
-        writer = _WRITERS.get(target.suffix.lower())
+            target = target.with_name(target.name + next(iter(registry._WRITERS)))
+        writer = registry._WRITERS.get(target.suffix.lower())
         if writer is None:
             raise ValueError(
                 f"path {str(target)!r}: unknown table file suffix {target.suffix!r}; use one of "
-                f"{', '.join(_WRITERS)} (the first is the default). "
+                f"{', '.join(registry._WRITERS)} (the first is the default). "
                 "Renderer formats (CSV, GLSL, textures) are written by dustoptics.io"
             )
         return writer(self, target, overwrite=overwrite)
@@ -881,12 +880,12 @@ class Table:
         RuntimeError
             No fitter is registered (``dustoptics.scattering`` was never imported).
         """
-        if not _FITTERS:
+        if not registry._FITTERS:
             raise RuntimeError(
                 "Table.fit: no fitter is registered; import dustoptics.scattering "
                 "(import dustoptics does), which registers dustoptics.scattering.fit.fit_table"
             )
-        return _FITTERS[0](
+        return registry._FITTERS[0](
             self,
             model=model,
             colour=colour,
