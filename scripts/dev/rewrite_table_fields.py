@@ -9,8 +9,8 @@ rewrites code written against the flat fields, in place:
   record needs), ``t.cback_um2 is None`` ->
   ``(t.cross_sections is None or t.cross_sections.cback_um2 is None)``;
 * ``t.has_cross_sections`` -> ``t.cross_sections is not None``;
-* ``getattr(t, name)`` -> ``t.quantity(name)``, and ``f(csca_um2=t.csca_um2)`` ->
-  ``f(csca_um2=t.quantity("csca_um2"))`` (passed on, None included);
+* ``getattr(t, name)`` -> ``t.quantity(name)``, and ``f(csca_um2=t.csca_um2)`` or
+  ``{"csca_um2": t.csca_um2}`` -> ``t.quantity("csca_um2")`` (passed on, None included);
 * ``Table(..., cext_um2=a, csca_um2=b)`` ->
   ``Table(..., cross_sections=CrossSections(cext_um2=a, csca_um2=b))`` (and the import);
 * ``t.replace(number_density_per_m3=n)`` ->
@@ -489,29 +489,40 @@ class _Rewrite(cst.CSTTransformer):
 
     def leave_Arg(self, original_node: cst.Arg, updated_node: cst.Arg) -> cst.Arg:
         # f(cext_um2=t.cext_um2) passes the quantity on, None included: t.quantity("cext_um2").
-        value = original_node.value
-        if (
-            original_node.keyword is None
-            or self.calls[-1] in _KEEPS_RECORDS
-            or not isinstance(value, cst.Attribute)
-            or value.attr.value != original_node.keyword.value
-            or value.attr.value not in RECORD_OF
-        ):
+        if original_node.keyword is None:
             return updated_node
-        receiver = value.value
+        value = self._passed_on(original_node.keyword.value, original_node.value)
+        return updated_node if value is None else updated_node.with_changes(value=value)
+
+    def leave_DictElement(
+        self, original_node: cst.DictElement, updated_node: cst.DictElement
+    ) -> cst.DictElement:
+        # {"cext_um2": t.cext_um2}, likewise.
+        key = original_node.key
+        if not isinstance(key, cst.SimpleString):
+            return updated_node
+        value = self._passed_on(key.evaluated_value, original_node.value)
+        return updated_node if value is None else updated_node.with_changes(value=value)
+
+    def _passed_on(self, name: object, value: cst.BaseExpression) -> cst.BaseExpression | None:
+        """``t.quantity(name)`` for ``t.<name>`` (or ``t.<record>.<name>``) passed on under
+        its own name, outside the calls that take records; else None."""
         if (
-            isinstance(receiver, cst.Attribute)
-            and receiver.attr.value == RECORD_OF[value.attr.value]
+            (self.calls and self.calls[-1] in _KEEPS_RECORDS)
+            or not isinstance(value, cst.Attribute)
+            or value.attr.value != name
+            or name not in RECORD_OF
         ):
+            return None
+        receiver = value.value
+        if isinstance(receiver, cst.Attribute) and receiver.attr.value == RECORD_OF[name]:
             receiver = receiver.value  # written t.cross_sections.csca_um2 already
         if not self.is_table(receiver):
-            return updated_node
+            return None
         self.report.changes["passed on -> quantity"] += 1
-        return updated_node.with_changes(
-            value=cst.Call(
-                func=cst.Attribute(value=receiver, attr=cst.Name("quantity")),
-                args=[cst.Arg(self._text(value.attr.value))],
-            )
+        return cst.Call(
+            func=cst.Attribute(value=receiver, attr=cst.Name("quantity")),
+            args=[cst.Arg(self._text(name))],
         )
 
     def leave_Call(self, original_node: cst.Call, updated_node: cst.Call) -> cst.BaseExpression:
