@@ -855,7 +855,7 @@ def _write_bruneton_table(
     mie = {
         "model": "E. Bruneton, precomputed_atmospheric_scattering (2017), atmosphere::Model",
         "units": {"wavelengths": "nm", "mie_scattering, mie_extinction": "m-1 at the density 1"},
-        "number_density_per_m3": table.cross_sections.number_density_per_m3,
+        "number_density_per_m3": table.quantity("number_density_per_m3"),
         "input_hash": table.provenance.input_hash,
         **bruneton_mie(table),
     }
