@@ -64,7 +64,7 @@ def test_mars_dust_reproduces_optical_depth(dust_table, tmp_path):
     dust = mars.constituent("aerosols")
     cext_550 = float(np.interp(550.0, dust_table.wavelength_nm, dust_table.cross_sections.cext_um2))
     tau = optical_depth(
-        number_density_per_m3=dust.table.cross_sections.number_density_per_m3,
+        number_density_per_m3=dust.table.quantity("number_density_per_m3"),
         cext_um2=cext_550,
         profile=dust.profile,
         top_altitude_m=mars.thickness_m,
