@@ -44,9 +44,7 @@ from dustoptics.table.provenance import (
 from dustoptics.table.schema import (
     AEROSOL_STANDARD_NAMES,
     DEFAULT_NAME,
-    DERIVATIVE_FIELDS,
     DERIVED,
-    DERIVED_DERIVATIVES,
     PHASE_NORMALIZATION,
     SCHEMA,
     STANDARD_NAMES,
@@ -672,67 +670,18 @@ class Table:
 
     # ------------------------------------------------------------ derivatives
 
-    def _derived_derivative(
-        self, quantity: str, d: TableDerivatives, j: int
-    ) -> tuple[np.ndarray, np.ndarray] | None:
-        """d(ssa), d(cabs) or d(lidar ratio) of parameter ``j`` by the chain rule, or None."""
-        cs = self._need_cross_sections(quantity)
-        cext = cs.cext_um2
-        dext, eext = d.values["cext_um2"][j], d.error_estimates["cext_um2"][j]
-        dsca, esca = d.values["csca_um2"][j], d.error_estimates["csca_um2"][j]
-        if quantity == "ssa":
-            ssa = cs.ssa
-            return (dsca - ssa * dext) / cext, (esca + ssa * eext) / cext
-        if quantity == "cabs_um2":
-            return dext - dsca, eext + esca
-        if "cback_um2" in d.values and cs.cback_um2 is not None:
-            ratio = self.lidar_ratio_sr
-            dback, eback = d.values["cback_um2"][j], d.error_estimates["cback_um2"][j]
-            return (
-                ratio * (dext / cext - dback / cs.cback_um2),
-                ratio * (eext / cext + eback / cs.cback_um2),
-            )
-        return None
-
     def _derivative_pair(self, quantity: str, parameter: str) -> tuple[np.ndarray, np.ndarray]:
-        d = self.derivatives
-        if d is None:
+        if self.derivatives is None:
             raise ValueError(
                 f"table {self.name!r} holds no derivatives; compute it with "
                 "compute_optics(..., derivatives=(...))"
             )
-        if parameter not in d.parameters:
-            raise ValueError(
-                f"parameter must be one of {', '.join(map(repr, d.parameters))} (the table's "
-                f"derivatives); got {parameter!r}"
-            )
-        j = d.parameters.index(parameter)
-        if quantity in d.values:
-            return d.values[quantity][j], d.error_estimates[quantity][j]
-        if quantity in DERIVED_DERIVATIVES and all(k in d.values for k in ("cext_um2", "csca_um2")):
-            pair = self._derived_derivative(quantity, d, j)
-            if pair is not None:
-                return pair
-        have = [
-            k for k in (*DERIVATIVE_FIELDS, *DERIVED_DERIVATIVES) if k in self.derivative_quantities
-        ]
-        raise ValueError(
-            f"quantity must be one of {', '.join(map(repr, have))} (the table's derivatives); "
-            f"got {quantity!r}"
-        )
+        return self.derivatives.pair(quantity, parameter, self.cross_sections)
 
     @property
     def derivative_quantities(self) -> tuple[str, ...]:
         """The quantities :meth:`derivative` gives (stored, then derived), or ()."""
-        d = self.derivatives
-        if d is None:
-            return ()
-        names = [k for k in DERIVATIVE_FIELDS if k in d.values]
-        if "cext_um2" in d.values and "csca_um2" in d.values:
-            names += ["ssa", "cabs_um2"]
-            if "cback_um2" in d.values:
-                names += ["lidar_ratio_sr"]
-        return tuple(names)
+        return () if self.derivatives is None else self.derivatives.quantities
 
     def derivative(self, quantity: str, parameter: str) -> np.ndarray:
         """d(quantity)/d(parameter), per wavelength (and angle).

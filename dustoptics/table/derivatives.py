@@ -8,8 +8,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from dustoptics._validation import as_float_array
+from dustoptics.table.components import CrossSections
 from dustoptics.table.provenance import _storable_text
-from dustoptics.table.schema import DERIVATIVE_FIELDS
+from dustoptics.table.schema import DERIVATIVE_FIELDS, DERIVED_DERIVATIVES
 
 __all__ = ["TableDerivatives"]
 
@@ -113,4 +114,61 @@ class TableDerivatives:
                 and np.array_equal(self.error_estimates[k], other.error_estimates[k])
                 for k in self.values
             )
+        )
+
+    @property
+    def quantities(self) -> tuple[str, ...]:
+        """The quantities :meth:`pair` gives: the stored ones, then those derived from them."""
+        names = [k for k in DERIVATIVE_FIELDS if k in self.values]
+        if "cext_um2" in self.values and "csca_um2" in self.values:
+            names += ["ssa", "cabs_um2"]
+            if "cback_um2" in self.values:
+                names += ["lidar_ratio_sr"]
+        return tuple(names)
+
+    def pair(
+        self, quantity: str, parameter: str, cross_sections: CrossSections | None
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """d(quantity)/d(parameter) and its error estimate (derived ones by the chain rule,
+        from the table's ``cross_sections``).
+
+        Raises
+        ------
+        ValueError
+            An unknown parameter or quantity (the message lists the allowed ones).
+        """
+        if parameter not in self.parameters:
+            raise ValueError(
+                f"parameter must be one of {', '.join(map(repr, self.parameters))} (the table's "
+                f"derivatives); got {parameter!r}"
+            )
+        j = self.parameters.index(parameter)
+        if quantity in self.values:
+            return self.values[quantity][j], self.error_estimates[quantity][j]
+        if quantity in DERIVED_DERIVATIVES and quantity in self.quantities:
+            assert cross_sections is not None  # the table checks its derivatives' quantities
+            return self._chain_rule(quantity, j, cross_sections)
+        raise ValueError(
+            f"quantity must be one of {', '.join(map(repr, self.quantities))} (the table's "
+            f"derivatives); got {quantity!r}"
+        )
+
+    def _chain_rule(
+        self, quantity: str, j: int, cs: CrossSections
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """d(ssa), d(cabs) or d(lidar ratio) of parameter ``j``, errors propagated linearly."""
+        cext = cs.cext_um2
+        dext, eext = self.values["cext_um2"][j], self.error_estimates["cext_um2"][j]
+        dsca, esca = self.values["csca_um2"][j], self.error_estimates["csca_um2"][j]
+        if quantity == "ssa":
+            ssa = cs.ssa
+            return (dsca - ssa * dext) / cext, (esca + ssa * eext) / cext
+        if quantity == "cabs_um2":
+            return dext - dsca, eext + esca
+        assert cs.cback_um2 is not None  # lidar_ratio_sr: the table has cback_um2's derivatives
+        ratio = 4.0 * np.pi * cext / cs.cback_um2
+        dback, eback = self.values["cback_um2"][j], self.error_estimates["cback_um2"][j]
+        return (
+            ratio * (dext / cext - dback / cs.cback_um2),
+            ratio * (eext / cext + eback / cs.cback_um2),
         )
