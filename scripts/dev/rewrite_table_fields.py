@@ -29,7 +29,8 @@ Usage::
     python scripts/dev/rewrite_table_fields.py [--check] [PATH ...]
 
 Without paths it rewrites ``dustoptics``, ``tests``, ``scripts`` and ``docs``
-(the table package itself aside).  ``--check`` changes nothing and exits 1
+(the table package itself aside), and the examples of the documents (``docs/**/*.rst``,
+``README.md``: doctest lines and fenced ``python`` blocks).  ``--check`` changes nothing and exits 1
 when something would change.  Needs ``libcst``.
 """
 
@@ -778,6 +779,56 @@ def rewrite(
     return out.code, transformer.report
 
 
+#: Names of tables in the documents' examples besides those of :data:`TABLE_NAME`.
+DOC_TABLES = {"sphere", "truth", "a", "mie", "dust"}
+_DOC_FIELD = re.compile(
+    r"(?<![\w.])(?P<name>\w+)\.(?P<field>"
+    + "|".join(sorted(RECORD_OF, key=len, reverse=True))
+    + r"|has_cross_sections)\b"
+)
+
+
+def rewrite_document(text: str) -> tuple[str, int]:
+    """``text`` with the examples' ``t.cext_um2`` -> ``t.cross_sections.cext_um2``.
+
+    Only code is rewritten: doctest lines (``>>>``, ``...``) and the lines of
+    fenced ``python`` blocks of Markdown.
+    """
+    count = 0
+
+    def field(match: re.Match[str]) -> str:
+        nonlocal count
+        name, quantity = match["name"], match["field"]
+        if not (TABLE_NAME.fullmatch(name) or name in DOC_TABLES):
+            return match[0]
+        count += 1
+        if quantity == "has_cross_sections":
+            return f"({name}.cross_sections is not None)"
+        return f"{name}.{RECORD_OF[quantity]}.{quantity}"
+
+    out = []
+    fenced = False
+    for line in text.splitlines(keepends=True):
+        stripped = line.lstrip()
+        if stripped.startswith("```"):
+            fenced = stripped.startswith("```python")
+        elif fenced or stripped.startswith((">>> ", "... ")):
+            line = _DOC_FIELD.sub(field, line)
+        out.append(line)
+    return "".join(out), count
+
+
+def _documents(paths: Sequence[str]) -> list[Path]:
+    roots = [Path(p) for p in paths] or [ROOT / "docs", ROOT / "README.md"]
+    found: list[Path] = []
+    for root in roots:
+        if root.is_file():
+            found += [root] if root.suffix in (".rst", ".md") else []
+        elif root.is_dir():
+            found += sorted(f for f in root.rglob("*") if f.suffix in (".rst", ".md"))
+    return found
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("paths", nargs="*", help="files or folders (default: the repository's)")
@@ -812,6 +863,15 @@ def main(argv: Sequence[str] | None = None) -> int:
             if not args.check:
                 f.write_text(new, encoding="utf-8")
                 written.append(f)
+    for f in _documents(args.paths):
+        text = f.read_text(encoding="utf-8")
+        new, count = rewrite_document(text)
+        if new != text:
+            changed += 1
+            total["example"] += count
+            print(f"{'would rewrite' if args.check else 'rewrote'} {f}: {count} example")
+            if not args.check:
+                f.write_text(new, encoding="utf-8")
     if written and not args.no_format:
         subprocess.run(["ruff", "format", "--quiet", *map(str, written)], check=False)
     print(
