@@ -757,7 +757,7 @@ def _files(paths: Sequence[str]) -> list[Path]:
     ]
     files: list[Path] = []
     for root in roots:
-        found = [root] if root.is_file() else sorted(root.rglob("*.py"))
+        found = [root] if root.is_file() and root.suffix == ".py" else sorted(root.rglob("*.py"))
         files += [
             f
             for f in found
