@@ -409,6 +409,14 @@ class _Rewrite(cst.CSTTransformer):
     def leave_Comparison(
         self, original_node: cst.Comparison, updated_node: cst.Comparison
     ) -> cst.BaseExpression:
+        # "t.has_cross_sections == x" became a comparison inside a comparison: parenthesize it.
+        updated_node = updated_node.with_changes(
+            left=_parenthesized(updated_node.left),
+            comparisons=[
+                c.with_changes(comparator=_parenthesized(c.comparator))
+                for c in updated_node.comparisons
+            ],
+        )
         if len(original_node.comparisons) != 1:
             return updated_node
         target = original_node.comparisons[0]
@@ -690,6 +698,12 @@ class _Rewrite(cst.CSTTransformer):
         for cls in sorted(self.imports):
             AddImportsVisitor.add_needed_import(self.context, "dustoptics.table", cls)
         return updated_node
+
+
+def _parenthesized(node: cst.BaseExpression) -> cst.BaseExpression:
+    if isinstance(node, cst.Comparison) and not node.lpar:
+        return node.with_changes(lpar=[cst.LeftParen()], rpar=[cst.RightParen()])
+    return node
 
 
 def _is_none(node: cst.BaseExpression) -> bool:
