@@ -112,7 +112,7 @@ def test_every_preset_builds(built, name: str) -> None:
     assert table.provenance.inputs == config.to_inputs()
     assert set(config.sources) <= set(table.provenance.sources)
     assert table.provenance.notes[: len(config.choices)] == config.choices
-    assert table.cross_sections is not None == config.phase.uses_mie
+    assert (table.cross_sections is not None) == config.phase.uses_mie
     assert np.all(np.abs(table.g) < 1)
 
 
