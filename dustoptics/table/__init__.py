@@ -41,55 +41,92 @@ file can never hold an albedo that disagrees with its cross-sections.
 from __future__ import annotations
 
 from dustoptics.table.components import (
-    RECORD_OF,
-    RECORDS,
+    RECORD_OF as RECORD_OF,
+)
+from dustoptics.table.components import (
+    RECORDS as RECORDS,
+)
+from dustoptics.table.components import (
     CrossSections,
     Expansion,
     QuadratureRecord,
     ScatteringMatrix,
     alpha1_from_pmom,
     pmom_from_alpha1,
-    records_from_fields,
+)
+from dustoptics.table.components import (
+    records_from_fields as records_from_fields,
 )
 from dustoptics.table.core import Table
 from dustoptics.table.derivatives import TableDerivatives
 from dustoptics.table.provenance import (
     Provenance,
     Source,
-    _installed_version,
     canonical_json,
     plain,
     software_versions,
 )
+from dustoptics.table.provenance import (
+    _installed_version as _installed_version,
+)
 from dustoptics.table.registry import (
-    TableWriter,
+    TableWriter as TableWriter,
+)
+from dustoptics.table.registry import (
     register_table_fitter,
     register_table_writer,
 )
 from dustoptics.table.schema import (
     AEROSOL_STANDARD_NAMES,
-    ANGLE_DIM,
-    COUNT_FIELDS,
     DEFAULT_NAME,
-    DERIVATIVE_FIELDS,
     DERIVED,
-    DERIVED_DERIVATIVES,
-    EXPANSION_FIELDS,
-    FLOAT_FIELDS,
-    MATRIX_FIELDS,
-    ORDER_DIM,
-    PARAMETER_DIM,
     PHASE_NORMALIZATION,
-    SCALAR_FIELDS,
     SCHEMA,
     SOFTWARE,
     STANDARD_NAMES,
     UNITS,
-    WAVELENGTH_DIM,
-    derivative_unit,
-    derivative_variable,
+)
+from dustoptics.table.schema import (
+    ANGLE_DIM as ANGLE_DIM,
+)
+from dustoptics.table.schema import (
+    COUNT_FIELDS as COUNT_FIELDS,
+)
+from dustoptics.table.schema import (
+    DERIVATIVE_FIELDS as DERIVATIVE_FIELDS,
+)
+from dustoptics.table.schema import (
+    DERIVED_DERIVATIVES as DERIVED_DERIVATIVES,
+)
+from dustoptics.table.schema import (
+    EXPANSION_FIELDS as EXPANSION_FIELDS,
+)
+from dustoptics.table.schema import (
+    FLOAT_FIELDS as FLOAT_FIELDS,
+)
+from dustoptics.table.schema import (
+    MATRIX_FIELDS as MATRIX_FIELDS,
+)
+from dustoptics.table.schema import (
+    ORDER_DIM as ORDER_DIM,
+)
+from dustoptics.table.schema import (
+    PARAMETER_DIM as PARAMETER_DIM,
+)
+from dustoptics.table.schema import (
+    SCALAR_FIELDS as SCALAR_FIELDS,
+)
+from dustoptics.table.schema import (
+    WAVELENGTH_DIM as WAVELENGTH_DIM,
+)
+from dustoptics.table.schema import (
+    derivative_unit as derivative_unit,
+)
+from dustoptics.table.schema import (
+    derivative_variable as derivative_variable,
 )
 
+# The names not in __all__ are imported from here by the package's writers and tests.
 __all__ = [
     "AEROSOL_STANDARD_NAMES",
     "DEFAULT_NAME",
@@ -115,25 +152,3 @@ __all__ = [
     "register_table_writer",
     "software_versions",
 ]
-
-# Importable from here for the package's writers and tests, not listed in __all__.
-_INTERNAL = (
-    ANGLE_DIM,
-    COUNT_FIELDS,
-    DERIVATIVE_FIELDS,
-    DERIVED_DERIVATIVES,
-    EXPANSION_FIELDS,
-    FLOAT_FIELDS,
-    MATRIX_FIELDS,
-    ORDER_DIM,
-    PARAMETER_DIM,
-    RECORD_OF,
-    RECORDS,
-    SCALAR_FIELDS,
-    WAVELENGTH_DIM,
-    TableWriter,
-    _installed_version,
-    derivative_unit,
-    derivative_variable,
-    records_from_fields,
-)
