@@ -164,7 +164,6 @@ OVERRIDES: dict[tuple[str, str], bool] = {
     ("tests/sky/test_render.py", "medium"): False,
     ("tests/sky/test_space.py", "medium"): False,
     ("tests/sweep/test_sweep.py", "point"): False,
-    ("tests/sweep/test_sweep.py", "ref"): False,
 }
 
 

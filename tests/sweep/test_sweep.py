@@ -301,10 +301,13 @@ def test_shared_nodes_meet_their_error_estimates(weighting):
                 cross_section_rtol=1e-8,
             )
             assert r.err_phase <= 1e-4 and r.err_cross <= 1e-6
-            assert np.max(np.abs(r.phase / ref.phase[0] - 1.0)) <= 1e-4 + ref.error_estimate[0]
-            cross = 1e-6 + ref.cross_section_error_estimate[0]
-            assert abs(r.cext / ref.cext_um2[0] - 1.0) <= cross
-            assert abs(r.csca / ref.csca_um2[0] - 1.0) <= cross
+            assert (
+                np.max(np.abs(r.phase / ref.phase[0] - 1.0))
+                <= 1e-4 + ref.quadrature.error_estimate[0]
+            )
+            cross = 1e-6 + ref.quadrature.cross_section_error_estimate[0]
+            assert abs(r.cext / ref.cross_sections.cext_um2[0] - 1.0) <= cross
+            assert abs(r.csca / ref.cross_sections.csca_um2[0] - 1.0) <= cross
             assert abs(r.g - ref.g[0]) <= cross
 
 
@@ -332,8 +335,10 @@ def test_few_output_angles_sum_at_the_angles_themselves():
         ref = do.compute_optics(
             m, dist, [450.0], theta, workers=1, rtol=1e-6, cross_section_rtol=1e-8
         )
-        assert np.max(np.abs(r.phase / ref.phase[0] - 1.0)) <= 1e-4 + ref.error_estimate[0]
-        assert abs(r.g - ref.g[0]) <= 1e-6 + ref.cross_section_error_estimate[0]
+        assert (
+            np.max(np.abs(r.phase / ref.phase[0] - 1.0)) <= 1e-4 + ref.quadrature.error_estimate[0]
+        )
+        assert abs(r.g - ref.g[0]) <= 1e-6 + ref.quadrature.cross_section_error_estimate[0]
 
 
 # ---------------------------------------------------------------- the specification
