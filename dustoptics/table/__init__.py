@@ -52,6 +52,7 @@ from dustoptics.table.components import (
     QuadratureRecord,
     ScatteringMatrix,
     alpha1_from_pmom,
+    grouped_fields,
     pmom_from_alpha1,
 )
 from dustoptics.table.components import (
@@ -146,6 +147,7 @@ __all__ = [
     "TableDerivatives",
     "alpha1_from_pmom",
     "canonical_json",
+    "grouped_fields",
     "plain",
     "pmom_from_alpha1",
     "register_table_fitter",

@@ -19,6 +19,7 @@ record fits its grids (:meth:`CrossSections.check_grid`).
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import MISSING, dataclass, fields, replace
 from typing import Any
 
@@ -32,6 +33,7 @@ __all__ = [
     "QuadratureRecord",
     "ScatteringMatrix",
     "alpha1_from_pmom",
+    "grouped_fields",
     "pmom_from_alpha1",
 ]
 
@@ -452,3 +454,30 @@ def records_from_fields(values: dict[str, Any]) -> dict[str, Any]:
             )
         out[attribute] = cls(**own)
     return out
+
+
+def grouped_fields(values: Mapping[str, Any] | None = None, /, **more: Any) -> dict[str, Any]:
+    """:class:`~dustoptics.table.Table` arguments from flat ones, for code that has them flat.
+
+    The stored quantities of the records (a None value meaning absent) are
+    grouped into their records; every other argument is passed on as it is.
+
+    Raises
+    ------
+    ValueError
+        A record is given both whole and by its quantities, or some of a
+        record's quantities are given without one it needs.
+
+    Examples
+    --------
+    >>> sorted(grouped_fields({"g": [0.5], "cext_um2": [2.0]}, csca_um2=[1.0], n_nodes=None))
+    ['cross_sections', 'g']
+    """
+    flat = {**(values or {}), **more}
+    rest = {key: value for key, value in flat.items() if key not in RECORD_OF}
+    quantities = {k: v for k, v in flat.items() if k in RECORD_OF and v is not None}
+    records = {k: v for k, v in records_from_fields(quantities).items() if v is not None}
+    both = sorted(records.keys() & rest.keys())
+    if both:
+        raise ValueError(f"{', '.join(both)} given both whole and by their quantities")
+    return {**rest, **records}

@@ -12,7 +12,9 @@ rewrites code written against the flat fields, in place:
 * ``getattr(t, name)`` -> ``t.quantity(name)``, and ``f(csca_um2=t.csca_um2)`` or
   ``{"csca_um2": t.csca_um2}`` -> ``t.quantity("csca_um2")`` (passed on, None included);
 * ``Table(..., cext_um2=a, csca_um2=b)`` ->
-  ``Table(..., cross_sections=CrossSections(cext_um2=a, csca_um2=b))`` (and the import);
+  ``Table(..., cross_sections=CrossSections(cext_um2=a, csca_um2=b))`` (and the import),
+  and ``Table(..., cext_um2=a, **extra)`` -> ``Table(..., **grouped_fields(extra, cext_um2=a))``
+  (what comes through ``**`` is grouped when the table is made);
 * ``t.replace(number_density_per_m3=n)`` ->
   ``t.replace(cross_sections={"number_density_per_m3": n})``.
 
@@ -603,6 +605,12 @@ class _Rewrite(cst.CSTTransformer):
                 f"{self._where(original_node)}: Table(..., **...): check that no former field "
                 "comes through the ** (group it into its record by hand)"
             )
+        stars = [a for a in updated_node.args if a.star == "**"]
+        has_moved = any(
+            a.keyword is not None and a.keyword.value in RECORD_OF for a in updated_node.args
+        )
+        if len(stars) == 1 and has_moved:
+            return self._construct_from_flat(updated_node, stars[0])
         grouped = self._grouped(original_node, updated_node)
         if grouped is None:
             return updated_node
@@ -648,6 +656,30 @@ class _Rewrite(cst.CSTTransformer):
         return updated_node.with_changes(
             args=_laid_out([*kept[:first], *records, *kept[first:]], updated_node.args)
         )
+
+    def _construct_from_flat(self, updated_node: cst.Call, star: cst.Arg) -> cst.BaseExpression:
+        """Table(..., cext_um2=a, **extra) -> Table(..., **grouped_fields(extra, cext_um2=a)):
+        what comes through the ** is not known here, so the table groups it."""
+        kept = [a for a in updated_node.args if a is not star and not _is_moved(a)]
+        moved = [a for a in updated_node.args if _is_moved(a)]
+        inner = [
+            cst.Arg(star.value),
+            *(a.with_changes(comma=cst.MaybeSentinel.DEFAULT) for a in moved),
+        ]
+        inner = [
+            *(
+                a.with_changes(comma=cst.Comma(whitespace_after=cst.SimpleWhitespace(" ")))
+                for a in inner[:-1]
+            ),
+            inner[-1],
+        ]
+        call = cst.Arg(
+            value=cst.Call(func=cst.Name("grouped_fields"), args=inner),
+            star="**",
+        )
+        self.imports.add("grouped_fields")
+        self.report.changes["construction"] += 1
+        return updated_node.with_changes(args=_laid_out([*kept, call], updated_node.args))
 
     def _replace(self, original_node: cst.Call, updated_node: cst.Call) -> cst.BaseExpression:
         assert isinstance(original_node.func, cst.Attribute)
@@ -697,6 +729,10 @@ class _Rewrite(cst.CSTTransformer):
         for cls in sorted(self.imports):
             AddImportsVisitor.add_needed_import(self.context, "dustoptics.table", cls)
         return updated_node
+
+
+def _is_moved(arg: cst.Arg) -> bool:
+    return arg.keyword is not None and arg.keyword.value in RECORD_OF
 
 
 def _parenthesized(node: cst.BaseExpression) -> cst.BaseExpression:
