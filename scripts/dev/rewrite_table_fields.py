@@ -127,13 +127,14 @@ NOT_TABLES = {
     "phase_run",
     "cross_run",
     "reduced",
+    "mx",
+    "opts",
 }
 
 #: Decisions for receivers the scan cannot make: (path relative to the repository,
 #: receiver as written) -> whether it is a table.
 OVERRIDES: dict[tuple[str, str], bool] = {
     ("dustoptics/_numba_cache.py", "v"): False,
-    ("dustoptics/scattering/optics.py", "mx"): False,
     ("tests/cli/test_cli_main.py", "cli"): False,
     ("tests/particles/test_catalogue.py", "materials"): False,
     ("tests/particles/test_custom_sizedist.py", "sizedist"): False,
