@@ -16,6 +16,7 @@ from dustoptics.table import (
     QuadratureRecord,
     ScatteringMatrix,
     Table,
+    grouped_fields,
     records_from_fields,
 )
 
@@ -337,6 +338,16 @@ def test_replace_changes_a_record_or_makes_one_from_a_mapping(table: Table) -> N
             cross_sections={"cext_um2": [2.0, 1.0], "csca_um2": [1.0, 1.0], "g": [0.1, 0.1]}
         )
     assert table.replace(cross_sections=None).derivatives is None
+
+
+def test_grouped_fields_makes_table_arguments_of_flat_ones() -> None:
+    plain = _phase_only()
+    flat = {**_fields(plain), "cext_um2": [2.0, 1.0], "csca_um2": [1.0, 1.0], "alpha1": None}
+    table = Table(**grouped_fields(flat, error_estimate=[0.1, 0.2], n_nodes=None))
+    np.testing.assert_array_equal(table.cross_sections.cext_um2, [2.0, 1.0])
+    assert table.quadrature.n_nodes is None and table.expansion is None
+    with pytest.raises(ValueError, match="cross_sections given both whole and by their quantities"):
+        grouped_fields(flat, cross_sections=table.cross_sections)
 
 
 def test_records_from_fields_groups_flat_quantities() -> None:

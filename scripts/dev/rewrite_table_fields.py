@@ -884,7 +884,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("paths", nargs="*", help="files or folders (default: the repository's)")
     parser.add_argument("--check", action="store_true", help="change nothing; exit 1 if needed")
     parser.add_argument(
-        "--no-format", action="store_true", help="do not run 'ruff format' on the changed files"
+        "--no-format",
+        action="store_true",
+        help="do not run ruff (import order, format) on the changed files",
     )
     args = parser.parse_args(argv)
     files = _files(args.paths)
@@ -923,7 +925,10 @@ def main(argv: Sequence[str] | None = None) -> int:
             if not args.check:
                 f.write_text(new, encoding="utf-8")
     if written and not args.no_format:
-        subprocess.run(["ruff", "format", "--quiet", *map(str, written)], check=False)
+        files = [str(f) for f in written]
+        # The imports added go where isort puts them; then the layout.
+        subprocess.run(["ruff", "check", "--quiet", "--fix", "--select", "I", *files], check=False)
+        subprocess.run(["ruff", "format", "--quiet", *files], check=False)
     print(
         f"{changed} files {'to change' if args.check else 'changed'}: "
         + (", ".join(f"{n} {k}" for k, n in sorted(total.items())) or "nothing")
