@@ -255,11 +255,11 @@ def table_differences(stored: Table, fresh: Table) -> list[str]:
             f"stored, {fresh.provenance.input_hash[:12]} now)"
         )
     for grid in ("wavelength_nm", "theta_deg"):
-        if not np.array_equal(getattr(stored, grid), getattr(fresh, grid)):
+        if not np.array_equal(stored.quantity(grid), fresh.quantity(grid)):
             problems.append(f"{name}: {grid} grid changed")
             return problems
     for key in _SAME_TABLE_ARRAYS:
-        a, b = getattr(stored, key), getattr(fresh, key)
+        a, b = stored.quantity(key), fresh.quantity(key)
         if (a is None) != (b is None):
             problems.append(f"{name}: {key} present in one table only")
         elif a is not None and not np.allclose(

@@ -420,7 +420,7 @@ def spectra(table: Table) -> Figure:
     mpl = _matplotlib()
     wl = table.wavelength_nm
     style: dict[str, Any] = {"marker": "o", "markersize": 2.5, "linewidth": 1.2}
-    if not table.has_cross_sections:
+    if table.cross_sections is None:
         fig = _new_figure(mpl, size=(7.0, 3.5))
         ax_g = fig.add_subplot()
         ax_g.plot(wl, table.g, color="C0", label="g", **style)
@@ -433,8 +433,8 @@ def spectra(table: Table) -> Figure:
         return fig
     fig = _new_figure(mpl, size=(7.0, 7.5))
     ax_c, ax_w, ax_g = fig.subplots(3, 1, sharex=True)
-    ax_c.plot(wl, table.cext_um2, color="C0", label="extinction", **style)
-    ax_c.plot(wl, table.csca_um2, color="C1", label="scattering", **style)
+    ax_c.plot(wl, table.cross_sections.cext_um2, color="C0", label="extinction", **style)
+    ax_c.plot(wl, table.cross_sections.csca_um2, color="C1", label="scattering", **style)
     ax_c.plot(wl, table.cabs_um2, color="C3", label="absorption", **style)
     ax_c.set_ylim(bottom=0.0)
     ax_c.set_ylabel(_LABEL_CROSS_SECTION)

@@ -395,8 +395,8 @@ class DustOptics:
             "repeats": repeats,
             "times_s": times,
             "time_s": min(times),
-            "n_nodes_total": int(table.n_nodes.sum()),
-            "max_error_estimate": float(table.error_estimate.max()),
+            "n_nodes_total": int(table.quadrature.n_nodes.sum()),
+            "max_error_estimate": float(table.quadrature.error_estimate.max()),
             "converged": bool(converged),
             "_table": table,
         }
@@ -430,7 +430,10 @@ def measure_default(dust: DustOptics, repeats: int) -> dict:
         "n_theta": int(table.theta_deg.size),
         "rtol": RTOL,
         "n_nodes_total": warm["n_nodes_total"],
-        "n_nodes_min_max": [int(table.n_nodes.min()), int(table.n_nodes.max())],
+        "n_nodes_min_max": [
+            int(table.quadrature.n_nodes.min()),
+            int(table.quadrature.n_nodes.max()),
+        ],
         "max_error_estimate": warm["max_error_estimate"],
         "converged": warm["converged"],
         "maxrss_after_warm_mb": maxrss_mb("self"),
@@ -695,8 +698,8 @@ def measure_baseline_a(default_table, n_sub: int) -> dict:
     for i in idx:
         wl = float(table.wavelength_nm[i])
         phase_nodes, cross_nodes = converged_nodes(table, i)
-        assert phase_nodes.radius_um.size == table.n_nodes[i]
-        assert cross_nodes.radius_um.size == table.cross_section_n_nodes[i]
+        assert phase_nodes.radius_um.size == table.quadrature.n_nodes[i]
+        assert cross_nodes.radius_um.size == table.quadrature.cross_section_n_nodes[i]
         log(
             f"baseline A at {wl:g} nm: {phase_nodes.radius_um.size} + {cross_nodes.radius_um.size} nodes ..."
         )
@@ -718,8 +721,8 @@ def measure_baseline_a(default_table, n_sub: int) -> dict:
     cross_time = sum(results[p["wavelength_nm"]]["cross_time_s"] for p in per_wl)
     phase_sub = sum(p["n_nodes"] for p in per_wl)
     cross_sub = sum(p["n_cross_section_nodes"] for p in per_wl)
-    phase_all = int(table.n_nodes.sum())
-    cross_all = int(table.cross_section_n_nodes.sum())
+    phase_all = int(table.quadrature.n_nodes.sum())
+    cross_all = int(table.quadrature.cross_section_n_nodes.sum())
     return {
         "per_wavelength": per_wl,
         "subset_time_s": phase_time + cross_time,
@@ -812,14 +815,22 @@ def measure_accuracy(dust: DustOptics, default_table, a: dict, b: dict) -> dict:
         res = a["_results"][float(wl)]
         rows["dustoptics"].append(
             rel_errors(
-                default_table.phase[i], default_table.cext_um2[i], ref.phase[j], ref.cext_um2[j]
+                default_table.phase[i],
+                default_table.cross_sections.cext_um2[i],
+                ref.phase[j],
+                ref.cross_sections.cext_um2[j],
             )
         )
         rows["baseline_a"].append(
-            rel_errors(res["phase"], res["cext"], ref.phase[j], ref.cext_um2[j])
+            rel_errors(res["phase"], res["cext"], ref.phase[j], ref.cross_sections.cext_um2[j])
         )
         rows["a_vs_dustoptics"].append(
-            rel_errors(res["phase"], res["cext"], default_table.phase[i], default_table.cext_um2[i])
+            rel_errors(
+                res["phase"],
+                res["cext"],
+                default_table.phase[i],
+                default_table.cross_sections.cext_um2[i],
+            )
         )
 
     wl_b = np.array(sorted(b["_results"]))
@@ -838,10 +849,15 @@ def measure_accuracy(dust: DustOptics, default_table, a: dict, b: dict) -> dict:
     for j, wl in enumerate(wl_b):
         res = b["_results"][float(wl)]
         rows["baseline_b"].append(
-            rel_errors(res["phase"], res["cext"], ref_n.phase[j], ref_n.cext_um2[j])
+            rel_errors(res["phase"], res["cext"], ref_n.phase[j], ref_n.cross_sections.cext_um2[j])
         )
         rows["dustoptics_number"].append(
-            rel_errors(num.phase[j], num.cext_um2[j], ref_n.phase[j], ref_n.cext_um2[j])
+            rel_errors(
+                num.phase[j],
+                num.cross_sections.cext_um2[j],
+                ref_n.phase[j],
+                ref_n.cross_sections.cext_um2[j],
+            )
         )
 
     def summary(entries: list[tuple[float, float, float]]) -> dict:
@@ -858,7 +874,7 @@ def measure_accuracy(dust: DustOptics, default_table, a: dict, b: dict) -> dict:
             "(node placement independent of the default's); errors are maxima over the wavelengths shown"
         ),
         "reference_error_estimate_max": float(
-            max(ref.error_estimate.max(), ref_n.error_estimate.max())
+            max(ref.quadrature.error_estimate.max(), ref_n.quadrature.error_estimate.max())
         ),
         "reference_converged": bool(ref_converged and ref_n_converged),
         "wavelengths_a_nm": [float(w) for w in wl_a],
@@ -958,8 +974,8 @@ def measure_rt(dust: DustOptics, repeats: int, quick: bool, *, with_scatrs: bool
         "matrix_only_times_s": matrix_t,
         "matrix_ratio": min(matrix_t) / min(plain_t),
         "ratio": min(full_t) / min(plain_t),
-        "n_order_max": int(full.alpha1.shape[1]),
-        "max_matrix_error_estimate": float(full.matrix_error_estimate.max()),
+        "n_order_max": int(full.expansion.alpha1.shape[1]),
+        "max_matrix_error_estimate": float(full.matrix.matrix_error_estimate.max()),
     }
     if not with_scatrs:
         return out
@@ -975,11 +991,13 @@ def measure_rt(dust: DustOptics, repeats: int, quick: bool, *, with_scatrs: bool
 
     def errors(f11, f12, f33, f34) -> float:
         worst = np.max(np.abs(f11 - ref.phase) / ref.phase)
-        for ours, theirs in ((f12, ref.f12), (f33, ref.f33), (f34, ref.f34)):
+        for ours, theirs in ((f12, ref.matrix.f12), (f33, ref.matrix.f33), (f34, ref.matrix.f34)):
             worst = max(worst, np.max(np.abs(ours - theirs) / ref.phase))
         return float(worst)
 
-    out["dustoptics_error"] = errors(full.phase[idx], full.f12[idx], full.f33[idx], full.f34[idx])
+    out["dustoptics_error"] = errors(
+        full.phase[idx], full.matrix.f12[idx], full.matrix.f33[idx], full.matrix.f34[idx]
+    )
     m = do.mars_dust()(wl)
     ensemble = scatrs.Ensemble(
         scatrs.Sphere(scatrs.refractive.Table((wl * 1e-3).tolist(), list(m))),
@@ -1485,9 +1503,9 @@ def measure_sweep(quick: bool) -> dict:
         warnings.simplefilter("ignore")
         for p, data in enumerate(points):
             table = build_table(parse_point(data), workers=1)
-            nodes += int(np.sum(table.n_nodes))
+            nodes += int(np.sum(table.quadrature.n_nodes))
             diff = np.max(np.abs(shared.arrays["phase"][p] / table.phase - 1.0), axis=1)
-            bound = shared.arrays["error_estimate"][p] + table.error_estimate
+            bound = shared.arrays["error_estimate"][p] + table.quadrature.error_estimate
             worst = max(worst, float(np.max(diff / bound)))
     independent_s = time.perf_counter() - t0
     log(f"sweep: {independent_s:.1f} s; on Dask ...")

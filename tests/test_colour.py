@@ -167,10 +167,16 @@ def test_single_scattering_residual_of_blue_moons_table() -> None:
     """
     table = read_hdf5(TABLES / "blue-moons" / "blue-moons.nc")
     args = (table.wavelength_nm, table.theta_deg, table.phase)
-    exact = single_scattering_residual(*args, mode="linear-srgb-astmg173", csca_um2=table.csca_um2)
+    exact = single_scattering_residual(
+        *args, mode="linear-srgb-astmg173", csca_um2=table.quantity("csca_um2")
+    )
     assert exact.max_relative_error < 1e-13
-    three = single_scattering_residual(*args, mode="wavelengths", csca_um2=table.csca_um2)
-    bands = single_scattering_residual(*args, mode="cie1931-xyz", csca_um2=table.csca_um2)
+    three = single_scattering_residual(
+        *args, mode="wavelengths", csca_um2=table.quantity("csca_um2")
+    )
+    bands = single_scattering_residual(
+        *args, mode="cie1931-xyz", csca_um2=table.quantity("csca_um2")
+    )
     assert three.max_relative_error > 1e-2
     assert bands.max_relative_error > 1e-2
     # A grey table: every mode is exact (the sun's own colour), whatever its channels.

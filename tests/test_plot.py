@@ -17,7 +17,7 @@ import pytest
 
 from dustoptics import plot
 from dustoptics.scattering.phase import henyey_greenstein
-from dustoptics.table import Table
+from dustoptics.table import CrossSections, Table
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 
@@ -43,14 +43,13 @@ def table() -> Table:
         theta_deg=theta,
         phase=phase,
         g=G,
-        cext_um2=CEXT_UM2,
-        csca_um2=CSCA_UM2,
+        cross_sections=CrossSections(cext_um2=CEXT_UM2, csca_um2=CSCA_UM2),
     )
 
 
 @pytest.fixture
 def phase_only(table: Table) -> Table:
-    return table.replace(name="hg-phase-only", cext_um2=None, csca_um2=None)
+    return table.replace(name="hg-phase-only", cross_sections=None)
 
 
 # ---------------------------------------------------------------- phase_function

@@ -28,10 +28,10 @@ def _observations(seed: int) -> tuple[Any, dict[str, float]]:
         THETA,
     )
     rng = np.random.default_rng(seed)
-    assert t.cext_um2 is not None
+    assert t.cross_sections is not None
     sigma = {"ssa": 2e-3, "ratio": 5e-3, "phase": 0.02}
     ssa = t.ssa + sigma["ssa"] * rng.standard_normal(WL.size)
-    ratio = t.cext_um2 / t.cext_um2[1]
+    ratio = t.cross_sections.cext_um2 / t.cross_sections.cext_um2[1]
     ratio = ratio + sigma["ratio"] * ratio * rng.standard_normal(WL.size)
     phase = t.phase[[1, 3]]
     phase_sigma = sigma["phase"] * phase

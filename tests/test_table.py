@@ -10,7 +10,15 @@ import pytest
 
 import dustoptics as do
 from dustoptics.scattering.optics import recompute
-from dustoptics.table import Table
+from dustoptics.table import (
+    CrossSections,
+    Expansion,
+    QuadratureRecord,
+    ScatteringMatrix,
+    Table,
+    grouped_fields,
+    records_from_fields,
+)
 
 THETA = np.linspace(0.0, 180.0, 91)
 WAVELENGTHS = [440.0, 550.0, 680.0]
@@ -33,8 +41,8 @@ def test_compute_optics_returns_the_table(table: Table) -> None:
     assert table.name == "table"
     assert not hasattr(do, "OpticsTable")
     # Every per-wavelength diagnostic is a field of the table.
-    assert table.n_nodes.dtype == np.int64 and np.all(table.n_nodes >= 16)
-    assert np.all(table.cross_section_n_nodes >= table.n_nodes)
+    assert table.quadrature.n_nodes.dtype == np.int64 and np.all(table.quadrature.n_nodes >= 16)
+    assert np.all(table.quadrature.cross_section_n_nodes >= table.quadrature.n_nodes)
     np.testing.assert_array_equal(table.refractive_index, do.mars_dust()(np.array(WAVELENGTHS)))
     assert np.all(table.converged)
 
@@ -58,7 +66,7 @@ def test_provenance_is_filled_from_the_call(table: Table) -> None:
     assert [s.role for s in p.sources] == ["refractive index", "size distribution"]
     assert p.sources[0].citation == do.mars_dust().citation
     assert p.quadrature["max_error_estimate"] == table.achieved_error
-    assert p.quadrature["n_nodes_total"] == int(table.n_nodes.sum())
+    assert p.quadrature["n_nodes_total"] == int(table.quadrature.n_nodes.sum())
     assert p.quadrature["converged"] is True
     assert set(p.software) >= {"dustoptics", "numpy", "numba"}
     assert len(p.input_hash) == 64
@@ -105,7 +113,7 @@ def test_diagnostics_rebuild_the_nodes(table: Table) -> None:
     assert d.distribution == do.ModifiedGamma(r_eff_um=1.6, v_eff=0.2)
     for i, panels in enumerate(d.panels):
         # Each final panel's two halves carry nodes_per_panel nodes each.
-        assert 2 * panels.shape[0] * d.settings.nodes_per_panel == table.n_nodes[i]
+        assert 2 * panels.shape[0] * d.settings.nodes_per_panel == table.quadrature.n_nodes[i]
     # Changing the numbers drops the diagnostics of the run that made them.
     assert table.replace(phase=table.phase * 1.0).diagnostics is None
     assert table.replace(name="x").diagnostics is d
@@ -173,20 +181,25 @@ def test_progress_reports_every_wavelength_in_order() -> None:
 
 
 def test_derived_quantities_are_derived_from_the_stored_ones(table: Table) -> None:
-    np.testing.assert_array_equal(table.cabs_um2, table.cext_um2 - table.csca_um2)
-    np.testing.assert_array_equal(table.ssa, table.csca_um2 / table.cext_um2)
     np.testing.assert_array_equal(
-        table.qext, table.cext_um2 / table.mean_geometric_cross_section_um2
+        table.cabs_um2, table.cross_sections.cext_um2 - table.cross_sections.csca_um2
     )
-    dense = table.replace(number_density_per_m3=1e6)
-    np.testing.assert_array_equal(dense.beta_ext_per_m, table.cext_um2 * 1e-12 * 1e6)
+    np.testing.assert_array_equal(
+        table.ssa, table.cross_sections.csca_um2 / table.cross_sections.cext_um2
+    )
+    np.testing.assert_array_equal(
+        table.qext,
+        table.cross_sections.cext_um2 / table.cross_sections.mean_geometric_cross_section_um2,
+    )
+    dense = table.replace(cross_sections={"number_density_per_m3": 1e6})
+    np.testing.assert_array_equal(dense.beta_ext_per_m, table.cross_sections.cext_um2 * 1e-12 * 1e6)
 
 
 @pytest.mark.parametrize(
     ("changes", "match"),
     [
         ({"name": ""}, "name must be a non-empty string"),
-        ({"n_nodes": [1.5, 2.0, 3.0]}, "n_nodes must be 3 positive integers"),
+        ({"quadrature": {"n_nodes": [1.5, 2.0, 3.0]}}, "n_nodes must be 3 positive integers"),
         ({"refractive_index": [1.5 - 0.1j] * 3}, "k >= 0"),
         ({"refractive_index": [1.5]}, r"refractive_index must have shape \(3,\)"),
         ({"theta_deg": np.linspace(-1.0, 180.0, 91)}, r"within \[0, 180\] degree"),
@@ -195,6 +208,152 @@ def test_derived_quantities_are_derived_from_the_stored_ones(table: Table) -> No
 def test_bad_fields_are_refused(table: Table, changes, match) -> None:
     with pytest.raises(ValueError, match=match):
         table.replace(**changes)
+
+
+# ------------------------------------------------------------------ records (issue 37)
+
+
+def _phase_only(n: int = 2) -> Table:
+    return Table(
+        wavelength_nm=[450.0, 550.0, 650.0][:n],
+        theta_deg=[0.0, 180.0],
+        phase=[[1 / (4 * np.pi)] * 2] * n,
+        g=[0.0] * n,
+    )
+
+
+def test_a_computed_table_has_its_records_and_presence_is_not_none(table: Table) -> None:
+    assert isinstance(table.cross_sections, CrossSections)
+    assert isinstance(table.quadrature, QuadratureRecord)
+    assert table.matrix is None and table.expansion is None
+    plain = _phase_only()
+    assert plain.cross_sections is None and plain.quadrature is None
+    assert plain.quantity("cext_um2") is None and plain.quantity("alpha1") is None
+    np.testing.assert_array_equal(table.quantity("cext_um2"), table.cross_sections.cext_um2)
+    np.testing.assert_array_equal(table.quantity("ssa"), table.ssa)
+    with pytest.raises(ValueError, match="quantity must be a stored or derived quantity"):
+        table.quantity("albedo")
+
+
+@pytest.mark.parametrize(
+    ("make", "error", "match"),
+    [
+        (
+            lambda: CrossSections(cext_um2=[1.0, 2.0], csca_um2=[1.0]),
+            ValueError,
+            r"csca_um2 must have shape \(2,\)",
+        ),
+        (
+            lambda: CrossSections(cext_um2=[1.0], csca_um2=[2.0]),
+            ValueError,
+            "must not exceed cext_um2",
+        ),
+        (lambda: CrossSections(cext_um2=[0.0], csca_um2=[0.0]), ValueError, "cext_um2 > 0"),
+        (
+            lambda: CrossSections(cext_um2=[1.0], csca_um2=[1.0], number_density_per_m3=-1.0),
+            ValueError,
+            "number_density_per_m3",
+        ),
+        (
+            lambda: CrossSections(cext_um2=[[1.0]], csca_um2=[1.0]),
+            ValueError,
+            "one value per wavelength",
+        ),
+        (
+            lambda: QuadratureRecord(error_estimate=[0.1], n_nodes=[0]),
+            ValueError,
+            "n_nodes must be 1 positive integers",
+        ),
+        (
+            lambda: QuadratureRecord(error_estimate=[np.nan]),
+            ValueError,
+            "error_estimate must be finite",
+        ),
+        (
+            lambda: ScatteringMatrix(f12=[[0.0, 0.0]], f33=[[0.0]], f34=[[0.0, 0.0]]),
+            ValueError,
+            r"f33 must have shape \(1, 2\)",
+        ),
+        (
+            lambda: Expansion(
+                alpha1=[[1.0, 0.3]],
+                alpha2=[[0.0]],
+                alpha3=[[0.0]],
+                alpha4=[[0.0]],
+                beta1=[[0.0]],
+                beta2=[[0.0]],
+            ),
+            ValueError,
+            r"alpha2 must have shape \(1, 2\)",
+        ),
+        (lambda: CrossSections(cext_um2=[1.0]), TypeError, "csca_um2"),
+    ],
+)
+def test_each_record_checks_itself(make, error, match) -> None:
+    with pytest.raises(error, match=match):
+        make()
+
+
+def test_the_table_checks_its_records_against_its_grids() -> None:
+    plain = _phase_only(2)
+    with pytest.raises(ValueError, match="CrossSections holds 3 wavelengths; the table has 2"):
+        plain.replace(cross_sections=CrossSections(cext_um2=[1.0] * 3, csca_um2=[0.5] * 3))
+    with pytest.raises(ValueError, match=r"f12, f33 and f34 must have shape .* = \(2, 2\)"):
+        plain.replace(
+            matrix=ScatteringMatrix(f12=[[0.0] * 3] * 2, f33=[[0.0] * 3] * 2, f34=[[0.0] * 3] * 2)
+        )
+    with pytest.raises(TypeError, match="expansion must be a Expansion or None; got dict"):
+        Table(**{**_fields(plain), "expansion": {"alpha1": [[1.0]]}})
+
+
+def _fields(t: Table) -> dict:
+    return {"wavelength_nm": t.wavelength_nm, "theta_deg": t.theta_deg, "phase": t.phase, "g": t.g}
+
+
+def test_replace_changes_a_record_or_makes_one_from_a_mapping(table: Table) -> None:
+    dense = table.replace(cross_sections={"number_density_per_m3": 1e6})
+    assert dense.cross_sections.number_density_per_m3 == 1e6
+    np.testing.assert_array_equal(dense.cross_sections.cback_um2, table.cross_sections.cback_um2)
+    # The cross-sections themselves did not change: diagnostics and derivatives stay.
+    assert dense.diagnostics is table.diagnostics
+    plain = _phase_only()
+    made = plain.replace(cross_sections={"cext_um2": [2.0, 1.0], "csca_um2": [1.0, 1.0]})
+    np.testing.assert_array_equal(made.ssa, [0.5, 1.0])
+    with pytest.raises(
+        ValueError, match=r"cext_um2, csca_um2 must all be given .* without csca_um2"
+    ):
+        plain.replace(cross_sections={"cext_um2": [2.0, 1.0]})
+    with pytest.raises(ValueError, match="cross_sections must be a CrossSections or a mapping"):
+        plain.replace(
+            cross_sections={"cext_um2": [2.0, 1.0], "csca_um2": [1.0, 1.0], "g": [0.1, 0.1]}
+        )
+    assert table.replace(cross_sections=None).derivatives is None
+
+
+def test_grouped_fields_makes_table_arguments_of_flat_ones() -> None:
+    plain = _phase_only()
+    flat = {**_fields(plain), "cext_um2": [2.0, 1.0], "csca_um2": [1.0, 1.0], "alpha1": None}
+    table = Table(**grouped_fields(flat, error_estimate=[0.1, 0.2], n_nodes=None))
+    np.testing.assert_array_equal(table.cross_sections.cext_um2, [2.0, 1.0])
+    assert table.quadrature.n_nodes is None and table.expansion is None
+    with pytest.raises(ValueError, match="cross_sections given both whole and by their quantities"):
+        grouped_fields(flat, cross_sections=table.cross_sections)
+
+
+def test_records_from_fields_groups_flat_quantities() -> None:
+    flat = {"error_estimate": [0.1], "n_nodes": np.array([4]), "alpha1": [[1.0]], "g": [0.2]}
+    with pytest.raises(
+        ValueError, match="alpha1, alpha2, alpha3, alpha4, beta1, beta2 must all be given"
+    ):
+        records_from_fields(dict(flat))
+    del flat["alpha1"]
+    records = records_from_fields(flat)
+    assert flat == {"g": [0.2]}
+    assert records["cross_sections"] is None and records["expansion"] is None
+    assert records["quadrature"].equals(
+        QuadratureRecord(error_estimate=[0.1], n_nodes=np.array([4]))
+    )
+    assert not records["quadrature"].equals(QuadratureRecord(error_estimate=[0.1]))
 
 
 # ------------------------------------------------------------------ xarray and pandas
@@ -221,7 +380,9 @@ def test_xarray_selection_and_interpolation_agree_with_the_table(table: Table) -
     # A selection is still a table: the stored quantities at those wavelengths.
     part = Table.from_xarray(ds.isel(wavelength_nm=[0, 2]))
     np.testing.assert_array_equal(part.wavelength_nm, [440.0, 680.0])
-    np.testing.assert_array_equal(part.cext_um2, table.cext_um2[[0, 2]])
+    np.testing.assert_array_equal(
+        part.cross_sections.cext_um2, table.cross_sections.cext_um2[[0, 2]]
+    )
     np.testing.assert_array_equal(part.refractive_index, table.refractive_index[[0, 2]])
 
 
@@ -249,7 +410,7 @@ def test_to_dataframe_has_the_per_wavelength_quantities(table: Table) -> None:
         "error_estimate",
         "n_nodes",
     ):
-        np.testing.assert_array_equal(df[column].to_numpy(), getattr(table, column))
+        np.testing.assert_array_equal(df[column].to_numpy(), table.quantity(column))
     np.testing.assert_array_equal(
         df["refractive_index_imag"].to_numpy(), table.refractive_index.imag
     )
@@ -284,16 +445,16 @@ def test_the_package_registers_the_writer_and_the_fitter() -> None:
     from dustoptics.io.tables.netcdf import SUFFIXES, save_table
     from dustoptics.scattering.fit import fit_table
 
-    assert tuple(do.table._WRITERS) == SUFFIXES
-    assert set(do.table._WRITERS.values()) == {save_table}
-    assert list(do.table._FITTERS) == [fit_table]
+    assert tuple(do.table.registry._WRITERS) == SUFFIXES
+    assert set(do.table.registry._WRITERS.values()) == {save_table}
+    assert list(do.table.registry._FITTERS) == [fit_table]
 
 
 def test_save_and_fit_without_a_registration_are_clear_errors(
     table: Table, tmp_path, monkeypatch
 ) -> None:
-    monkeypatch.setattr(do.table, "_WRITERS", {})
-    monkeypatch.setattr(do.table, "_FITTERS", [])
+    monkeypatch.setattr(do.table.registry, "_WRITERS", {})
+    monkeypatch.setattr(do.table.registry, "_FITTERS", [])
     with pytest.raises(RuntimeError, match="no table file writer is registered; import dustoptics"):
         table.save(tmp_path / "t.nc")
     with pytest.raises(RuntimeError, match="no fitter is registered; import dustoptics"):
@@ -308,7 +469,7 @@ def test_save_dispatches_on_the_suffix(table: Table, tmp_path, monkeypatch) -> N
         calls.append((t, path, overwrite))
         return path
 
-    monkeypatch.setattr(do.table, "_WRITERS", {})
+    monkeypatch.setattr(do.table.registry, "_WRITERS", {})
     do.table.register_table_writer((".abc", ".XYZ"), writer)
     do.table.register_table_writer([".abc"], writer)  # the same again changes nothing
     assert table.save(tmp_path / "t") == tmp_path / "t.abc"  # the first suffix is the default
@@ -330,10 +491,10 @@ def test_save_dispatches_on_the_suffix(table: Table, tmp_path, monkeypatch) -> N
     ],
 )
 def test_register_table_writer_refuses(suffixes, error, match) -> None:
-    before = dict(do.table._WRITERS)
+    before = dict(do.table.registry._WRITERS)
     with pytest.raises(error, match=match):
         do.table.register_table_writer(suffixes, lambda t, p, *, overwrite=False: p)
-    assert dict(do.table._WRITERS) == before
+    assert dict(do.table.registry._WRITERS) == before
 
 
 def test_register_table_fitter_refuses_a_second_fitter() -> None:
@@ -349,10 +510,10 @@ def test_pmom_is_alpha1_over_2l_plus_1() -> None:
         theta_deg=[0.0, 180.0],
         phase=[[0.1, 0.05]],
         g=[0.8],
-        **{key: [[1.0, 1.5, 2.5]] for key in do.table.EXPANSION_FIELDS},
+        expansion=Expansion(**{key: [[1.0, 1.5, 2.5]] for key in do.table.EXPANSION_FIELDS}),
     )
     np.testing.assert_array_equal(t.pmom, [[1.0, 0.5, 0.5]])
-    np.testing.assert_array_equal(do.table.alpha1_from_pmom(t.pmom), t.alpha1)
+    np.testing.assert_array_equal(do.table.alpha1_from_pmom(t.pmom), t.expansion.alpha1)
     assert do.expansion.pmom_from_alpha1 is do.table.pmom_from_alpha1
 
 

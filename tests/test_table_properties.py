@@ -16,7 +16,7 @@ from hypothesis import strategies as st
 from dustoptics.io import open_table
 from dustoptics.io.tables.netcdf import SUFFIXES
 from dustoptics.scattering.tabulated_phase import renormalize
-from dustoptics.table import Provenance, Source, Table
+from dustoptics.table import CrossSections, Provenance, QuadratureRecord, Source, Table
 
 _positive = st.floats(1e-3, 1e3, allow_nan=False, allow_infinity=False)
 _json_value = st.one_of(
@@ -50,16 +50,20 @@ def tables(draw) -> Table:
     if draw(st.booleans()):
         cext = np.array(draw(st.lists(_positive, min_size=n_wl, max_size=n_wl)))
         ssa = np.array(draw(st.lists(st.floats(0.0, 1.0), min_size=n_wl, max_size=n_wl)))
-        fields.update(cext_um2=cext, csca_um2=np.minimum(cext * ssa, cext))
+        scalars = {}
         if draw(st.booleans()):
-            fields["mean_geometric_cross_section_um2"] = draw(_positive)
+            scalars["mean_geometric_cross_section_um2"] = draw(_positive)
         if draw(st.booleans()):
-            fields["number_density_per_m3"] = draw(st.floats(1.0, 1e25))
+            scalars["number_density_per_m3"] = draw(st.floats(1.0, 1e25))
+        fields["cross_sections"] = CrossSections(
+            cext_um2=cext, csca_um2=np.minimum(cext * ssa, cext), **scalars
+        )
     if draw(st.booleans()):
         errors = st.lists(st.floats(0.0, 0.1), min_size=n_wl, max_size=n_wl)
-        fields.update(error_estimate=draw(errors), cross_section_error_estimate=draw(errors))
         counts = st.lists(st.integers(1, 10**6), min_size=n_wl, max_size=n_wl)
-        fields.update(
+        fields["quadrature"] = QuadratureRecord(
+            error_estimate=draw(errors),
+            cross_section_error_estimate=draw(errors),
             n_nodes=np.array(draw(counts), dtype=np.int64),
             cross_section_n_nodes=np.array(draw(counts), dtype=np.int64),
         )

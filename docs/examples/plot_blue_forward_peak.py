@@ -24,7 +24,7 @@ wavelengths_nm = np.arange(360.0, 831.0, 10.0)
 table = do.compute_optics(dust, dist, wavelengths_nm, theta_deg)
 print(
     f"{table.phase.shape[0]} wavelengths x {table.phase.shape[1]} angles, "
-    f"largest error estimate {table.error_estimate.max():.1e}"
+    f"largest error estimate {table.quadrature.error_estimate.max():.1e}"
 )
 
 # %%

@@ -21,8 +21,8 @@ storm = do.compute_optics(dust, do.ModifiedGamma(r_eff_um=4.0, v_eff=0.3), theta
 clear = do.compute_optics(dust, do.ModifiedGamma(r_eff_um=1.6, v_eff=0.2), theta_deg=theta_deg)
 for name, t in (("storm", storm), ("clear", clear)):
     print(
-        f"{name}: {t.n_nodes.min()}-{t.n_nodes.max()} radius nodes, "
-        f"error estimate <= {t.error_estimate.max():.1e}"
+        f"{name}: {t.quadrature.n_nodes.min()}-{t.quadrature.n_nodes.max()} radius nodes, "
+        f"error estimate <= {t.quadrature.error_estimate.max():.1e}"
     )
 
 # %%
@@ -55,13 +55,13 @@ for ax, key, label in [
 ]:
     ax.plot(
         storm.wavelength_nm,
-        getattr(storm, key),
+        storm.quantity(key),
         color="tab:brown",
         label="storm, r_eff 4 um, v_eff 0.3",
     )
     ax.plot(
         clear.wavelength_nm,
-        getattr(clear, key),
+        clear.quantity(key),
         color="tab:gray",
         label="clear, r_eff 1.6 um, v_eff 0.2",
     )

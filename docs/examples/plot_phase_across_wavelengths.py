@@ -19,7 +19,7 @@ table = build_preset("blue-moons")
 print(
     f"{table.wavelength_nm.size} wavelengths, {table.theta_deg.size} angles; "
     f"g from {table.g.min():.3f} to {table.g.max():.3f}; "
-    f"phase error estimate <= {table.error_estimate.max():.1e}"
+    f"phase error estimate <= {table.quadrature.error_estimate.max():.1e}"
 )
 
 # %%

@@ -88,7 +88,7 @@ from dustoptics.atmosphere.column import ExponentialProfile
 from dustoptics.particles.materials import TabulatedIndex
 from dustoptics.particles.sizedist import LogNormal, SizeDistribution
 from dustoptics.scattering.optics import compute_optics
-from dustoptics.table import Provenance, Source, Table
+from dustoptics.table import CrossSections, Provenance, Source, Table
 
 __all__ = [
     "AEROSOL_COMPONENTS",
@@ -495,14 +495,14 @@ def aerosol_table(
         t = _component_table(
             comp_name, comp.relative_humidity_percent, tuple(wl.tolist()), tuple(theta.tolist())
         )
-        assert t.cext_um2 is not None and t.csca_um2 is not None  # Mie computes them
+        assert t.cross_sections is not None  # Mie computes them
         f = density / total * comp.fraction_within_bounds
-        cext += f * t.cext_um2
-        csca += f * t.csca_um2
-        phase_sum += (f * t.csca_um2)[:, None] * t.phase
-        g_sum += f * t.csca_um2 * t.g
-        area += f * float(t.mean_geometric_cross_section_um2 or 0.0)
-        volume += f * float(t.mean_volume_um3 or 0.0)
+        cext += f * t.cross_sections.cext_um2
+        csca += f * t.cross_sections.csca_um2
+        phase_sum += (f * t.cross_sections.csca_um2)[:, None] * t.phase
+        g_sum += f * t.cross_sections.csca_um2 * t.g
+        area += f * float(t.cross_sections.mean_geometric_cross_section_um2 or 0.0)
+        volume += f * float(t.cross_sections.mean_volume_um3 or 0.0)
         components[comp_name] = {
             "number_density_per_cm3": density,
             "relative_humidity_percent": comp.relative_humidity_percent,
@@ -518,11 +518,13 @@ def aerosol_table(
         theta_deg=theta,
         phase=phase_sum / csca[:, None],
         g=g_sum / csca,
-        cext_um2=cext,
-        csca_um2=csca,
-        mean_geometric_cross_section_um2=area,
-        mean_volume_um3=volume,
-        number_density_per_m3=total * 1e6,
+        cross_sections=CrossSections(
+            cext_um2=cext,
+            csca_um2=csca,
+            mean_geometric_cross_section_um2=area,
+            mean_volume_um3=volume,
+            number_density_per_m3=total * 1e6,
+        ),
         provenance=Provenance(
             inputs={
                 "kind": "opac-aerosol-type",
@@ -558,7 +560,7 @@ def angstrom_exponent(table: Table, *, wavelength_nm: tuple[float, float]) -> fl
     -------
     float
     """
-    if table.cext_um2 is None:
+    if table.cross_sections is None:
         raise ValueError(f"table {table.name!r} has no cext_um2 (a phase-function-only table)")
     w1, w2 = (check_positive("wavelength_nm", w, unit="nm") for w in wavelength_nm)
     wl = table.wavelength_nm
@@ -567,7 +569,7 @@ def angstrom_exponent(table: Table, *, wavelength_nm: tuple[float, float]) -> fl
             raise ValueError(
                 f"wavelength_nm must lie within the table's [{wl[0]:g}, {wl[-1]:g}] nm; got {w!r}"
             )
-    c1, c2 = np.interp([w1, w2], wl, table.cext_um2)
+    c1, c2 = np.interp([w1, w2], wl, table.cross_sections.cext_um2)
     return float(-math.log(c1 / c2) / math.log(w1 / w2))
 
 

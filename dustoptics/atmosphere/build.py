@@ -154,7 +154,7 @@ def build_atmosphere(
     reference = replace(
         cfg, optics=replace(cfg.optics, wavelengths_nm=(float(reference_wavelength_nm),), n_theta=2)
     )
-    cext = TableBuilder(reference).build().cext_um2
+    cext = TableBuilder(reference).build().quantity("cext_um2")
     assert cext is not None  # a Mie configuration computes cross-sections
     return sets.mars_atmosphere(
         dust_table=dust_table,
@@ -265,7 +265,7 @@ def set_provenance(atmosphere: Atmosphere, inputs: Mapping[str, Any]) -> str:
     constituents: dict[str, dict[str, Any]] = {
         c.role: {
             "table": c.table.name,
-            "number_density_per_m3": c.table.number_density_per_m3,
+            "number_density_per_m3": c.table.quantity("number_density_per_m3"),
             "provenance": c.table.provenance.to_dict(),
         }
         for c in atmosphere.constituents

@@ -118,7 +118,7 @@ from dustoptics.particles.catalogue import get_material
 from dustoptics.particles.materials import GasFormulaIndex
 from dustoptics.scattering import phase as _phase
 from dustoptics.scattering import tabulated_phase as _tabulated
-from dustoptics.table import Provenance, Source, Table
+from dustoptics.table import CrossSections, Provenance, Source, Table
 
 __all__ = [
     "AIR_EDLEN1953",
@@ -571,9 +571,9 @@ class RayleighModel:
             theta_deg=theta,
             phase=p,
             g=np.zeros(wl.size),
-            cext_um2=sigma_um2,
-            csca_um2=sigma_um2,
-            number_density_per_m3=n,
+            cross_sections=CrossSections(
+                cext_um2=sigma_um2, csca_um2=sigma_um2, number_density_per_m3=n
+            ),
             provenance=Provenance(inputs=inputs, sources=sources, notes=self.notes),
         )
 
@@ -842,9 +842,9 @@ def collienne2013_table(
         theta_deg=theta,
         phase=p,
         g=np.zeros(wl.size),
-        cext_um2=beta * _M2_TO_UM2,
-        csca_um2=beta * _M2_TO_UM2,
-        number_density_per_m3=1.0,
+        cross_sections=CrossSections(
+            cext_um2=beta * _M2_TO_UM2, csca_um2=beta * _M2_TO_UM2, number_density_per_m3=1.0
+        ),
         provenance=Provenance(
             inputs={"kind": "collienne2013-molecules", "wavelength_nm": wl, "theta_deg": theta},
             sources=(
@@ -1150,9 +1150,9 @@ def ozone_table(
         theta_deg=theta,
         phase=np.full((wl.size, theta.size), 1.0 / (4.0 * math.pi)),
         g=np.zeros(wl.size),
-        cext_um2=sigma * _M2_TO_UM2,
-        csca_um2=np.zeros(wl.size),
-        number_density_per_m3=n,
+        cross_sections=CrossSections(
+            cext_um2=sigma * _M2_TO_UM2, csca_um2=np.zeros(wl.size), number_density_per_m3=n
+        ),
         provenance=Provenance(
             inputs={
                 "kind": "ozone",

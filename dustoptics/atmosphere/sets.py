@@ -75,7 +75,7 @@ from dustoptics.atmosphere.column import (
 )
 from dustoptics.scattering import phase as _phase
 from dustoptics.scattering import tabulated_phase as _tabulated
-from dustoptics.table import Provenance, Source, Table
+from dustoptics.table import CrossSections, Provenance, Source, Table
 
 __all__ = [
     "CONSTITUENT_ROLES",
@@ -171,15 +171,18 @@ class Constituent:
         check_choice("role", self.role, CONSTITUENT_ROLES)
         if not isinstance(self.table, Table):
             raise TypeError(f"table must be a dustoptics Table; got {type(self.table).__name__}")
-        if not self.table.has_cross_sections or self.table.number_density_per_m3 is None:
+        if self.table.cross_sections is None or (
+            self.table.cross_sections is None
+            or self.table.cross_sections.number_density_per_m3 is None
+        ):
             raise ValueError(
                 f"constituent {self.role!r}: table {self.table.name!r} needs cross-sections and "
                 "number_density_per_m3 (the density where the profile is 1)"
             )
         if not isinstance(self.profile, DensityProfile):
             raise TypeError(f"profile must be a DensityProfile; got {type(self.profile).__name__}")
-        assert self.table.csca_um2 is not None  # has_cross_sections
-        if self.role == "ozone" and np.any(self.table.csca_um2 > 0):
+        assert self.table.cross_sections is not None  # has_cross_sections
+        if self.role == "ozone" and np.any(self.table.cross_sections.csca_um2 > 0):
             raise ValueError(
                 f"constituent 'ozone' must not scatter (csca_um2 = 0); table {self.table.name!r} does"
             )
@@ -311,8 +314,15 @@ class Atmosphere:
             )
             table = c.table
             if s.peak != 1.0:
-                assert table.number_density_per_m3 is not None  # checked by the constituent
-                table = table.replace(number_density_per_m3=table.number_density_per_m3 * s.peak)
+                assert (
+                    table.cross_sections is not None
+                    and table.cross_sections.number_density_per_m3 is not None
+                )  # checked by the constituent
+                table = table.replace(
+                    cross_sections={
+                        "number_density_per_m3": table.cross_sections.number_density_per_m3 * s.peak
+                    }
+                )
             out[self.file_prefix(c.role)] = (table, np.array(s.relative_density))
         return out
 
@@ -391,7 +401,7 @@ def with_optical_depth(
         quadrature=prov.quadrature,
         notes=(*prov.notes, note),
     )
-    return table.replace(number_density_per_m3=n0, provenance=provenance)
+    return table.replace(cross_sections={"number_density_per_m3": n0}, provenance=provenance)
 
 
 def _cext_at(table: Table, wavelength_nm: float) -> float:
@@ -402,9 +412,9 @@ def _cext_at(table: Table, wavelength_nm: float) -> float:
             f"reference_wavelength_nm must lie within the table's wavelengths [{wl[0]:g}, {wl[-1]:g}] nm "
             f"(no extrapolation); got {wavelength_nm!r}"
         )
-    if table.cext_um2 is None:
+    if table.cross_sections is None:
         raise ValueError(f"table {table.name!r} holds a phase function only; it needs cext_um2")
-    return float(np.interp(w, wl, table.cext_um2))
+    return float(np.interp(w, wl, table.cross_sections.cext_um2))
 
 
 def _molecules(
@@ -535,9 +545,9 @@ def _kobe_aerosols(wl: np.ndarray, *, g: float) -> Table:
         theta_deg=theta,
         phase=p,
         g=np.full(wl.size, float(_phase.cornette_shanks1992_asymmetry(g=g))),
-        cext_um2=beta_sca / 0.9 * 1e12,
-        csca_um2=beta_sca * 1e12,
-        number_density_per_m3=1.0,
+        cross_sections=CrossSections(
+            cext_um2=beta_sca / 0.9 * 1e12, csca_um2=beta_sca * 1e12, number_density_per_m3=1.0
+        ),
         provenance=Provenance(
             inputs={"kind": "kobe2026-aerosols", "wavelength_nm": wl, "cornette_shanks_g": g},
             sources=(
@@ -678,8 +688,8 @@ def _earth_aerosols(
                 relative_humidity_percent=relative_humidity_percent,
                 theta_deg=[0.0, 180.0],
             )
-            assert at_ref.cext_um2 is not None  # Mie computes it
-            reference_cext = float(at_ref.cext_um2[0])
+            assert at_ref.cross_sections is not None  # Mie computes it
+            reference_cext = float(at_ref.cross_sections.cext_um2[0])
     else:
         table = _kobe_aerosols(wl, g=g)
     if profile is None:
@@ -834,9 +844,12 @@ def earth_atmosphere(
                     "ozone_number_density_per_m3 is set by a FixedFractionProfile (fraction x the "
                     f"molecules' density); got ozone_number_density_per_m3={ozone_number_density_per_m3!r} too"
                 )
-            assert mol_table.number_density_per_m3 is not None  # the molecules' table sets it
+            assert (
+                mol_table.cross_sections is not None
+                and mol_table.cross_sections.number_density_per_m3 is not None
+            )  # the molecules' table sets it
             n_o3 = profile.number_density_per_m3(
-                base_number_density_per_m3=mol_table.number_density_per_m3
+                base_number_density_per_m3=mol_table.cross_sections.number_density_per_m3
             )
         elif ozone_number_density_per_m3 is None:
             raise ValueError(

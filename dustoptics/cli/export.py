@@ -78,16 +78,19 @@ def run(args: argparse.Namespace) -> int:
     table = read_table(args.file)
     if args.number_density_per_m3 is not None:
         table = with_inputs(
-            table.replace(number_density_per_m3=args.number_density_per_m3),
+            table.replace(cross_sections={"number_density_per_m3": args.number_density_per_m3}),
             number_density_per_m3=args.number_density_per_m3,
         )
     check_needs(
         args.format,
         name=table.name,
-        cross_sections=table.has_cross_sections,
-        density=table.number_density_per_m3 is not None,
+        cross_sections=table.cross_sections is not None,
+        density=(
+            table.cross_sections is not None
+            and table.cross_sections.number_density_per_m3 is not None
+        ),
         no_expansion=None
-        if table.alpha1 is not None
+        if table.expansion is not None
         else f"which {str(args.file)!r} does not hold: build the table from a configuration "
         "with 'expansion = true' under [optics] (or compute_optics(..., expansion=True))",
     )
@@ -108,7 +111,9 @@ def write_table(args: argparse.Namespace, table: Any, formats: Sequence[str]) ->
     if "cosmoscout" in formats:
         if optical_depth is not None and args.number_density_per_m3 is not None:
             raise UsageError("give --optical-depth or --number-density-per-m3, not both")
-        if optical_depth is None and table.number_density_per_m3 is None:
+        if optical_depth is None and (
+            table.cross_sections is None or table.cross_sections.number_density_per_m3 is None
+        ):
             raise UsageError(NEEDS_DENSITY)
     table, options = prepare_export(
         table,

@@ -115,7 +115,7 @@ def describe_table(table: Table, *, full: bool = True) -> str:
         "phase function:  [sr^-1], 2 pi int P dmu = 1",
         f"g:               {table.g.min():.6g} .. {table.g.max():.6g}",
     ]
-    cext = table.cext_um2
+    cext = table.quantity("cext_um2")
     if cext is not None:  # table.has_cross_sections
         lines += [
             f"cext_um2:        {cext.min():.6g} .. {cext.max():.6g}",
@@ -123,13 +123,15 @@ def describe_table(table: Table, *, full: bool = True) -> str:
         ]
     else:
         lines.append("cross-sections:  none (phase function only)")
-    if table.number_density_per_m3 is not None:
-        lines.append(f"number density:  {table.number_density_per_m3:.6g} m^-3")
-    if table.error_estimate is not None:
-        lines.append(f"error estimate:  phase <= {table.error_estimate.max():.2e} (relative)")
-    if table.cross_section_error_estimate is not None:
+    if table.cross_sections is not None and table.cross_sections.number_density_per_m3 is not None:
+        lines.append(f"number density:  {table.cross_sections.number_density_per_m3:.6g} m^-3")
+    if table.quadrature is not None:
         lines.append(
-            f"                 cross-sections, g <= {table.cross_section_error_estimate.max():.2e}"
+            f"error estimate:  phase <= {table.quadrature.error_estimate.max():.2e} (relative)"
+        )
+    if table.quadrature is not None and table.quadrature.cross_section_error_estimate is not None:
+        lines.append(
+            f"                 cross-sections, g <= {table.quadrature.cross_section_error_estimate.max():.2e}"
         )
     if not full:
         lines += _made_from(prov.to_dict()["inputs"])

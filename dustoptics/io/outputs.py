@@ -184,7 +184,7 @@ def prepare_export(
             profile=profile.profile,
             top_altitude_m=profile.top_altitude_m,
         )
-    if table.number_density_per_m3 is None:
+    if table.cross_sections is None or table.cross_sections.number_density_per_m3 is None:
         raise ValueError(
             "the cosmoscout format needs a number density for beta [m^-1]: give optical_depth "
             "or a table with number_density_per_m3"

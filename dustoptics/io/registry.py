@@ -76,17 +76,23 @@ class Need:
 NEEDS: dict[str, Need] = {
     need.key: need
     for need in (
-        Need("cross_sections", "cross-sections", lambda t: t.cext_um2 is not None),
-        Need("number_density", "a number density", lambda t: t.number_density_per_m3 is not None),
+        Need("cross_sections", "cross-sections", lambda t: t.cross_sections is not None),
+        Need(
+            "number_density",
+            "a number density",
+            lambda t: (
+                t.cross_sections is not None and t.cross_sections.number_density_per_m3 is not None
+            ),
+        ),
         Need(
             "expansion",
             "the phase function's expansion coefficients",
-            lambda t: t.alpha1 is not None,
+            lambda t: t.expansion is not None,
         ),
         Need(
             "matrix",
             "the scattering matrix's expansion coefficients",
-            lambda t: t.beta2 is not None,
+            lambda t: t.expansion is not None,
         ),
     )
 }

@@ -207,7 +207,9 @@ def build_table(
                 table = table.replace(
                     phase=blended, g=_tabulated.mean_cosine(blended, theta_deg=theta)
                 )
-            table = table.replace(number_density_per_m3=config.number_density_per_m3)
+            table = table.replace(
+                cross_sections={"number_density_per_m3": config.number_density_per_m3}
+            )
         else:
             assert ph.analytic is not None
             if progress is not None:

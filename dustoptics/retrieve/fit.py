@@ -385,16 +385,16 @@ def _predict(
         value = table.phase[i, j]
         jac = [table.derivative("phase", p)[i, j] for p in parameters]
     elif obs.name == "extinction_ratio":
-        assert table.cext_um2 is not None
+        assert table.cross_sections is not None
         r = int(np.searchsorted(table.wavelength_nm, obs.reference_nm))
-        cext = table.cext_um2
+        cext = table.cross_sections.cext_um2
         value = cext[i] / cext[r]
         jac = []
         for p in parameters:
             d = table.derivative("cext_um2", p)
             jac.append(value * (d[i] / cext[i] - d[r] / cext[r]))
     else:
-        value = getattr(table, obs.name)[i]
+        value = table.quantity(obs.name)[i]
         jac = [table.derivative(obs.name, p)[i] for p in parameters]
     return np.asarray(value), np.column_stack(jac)
 

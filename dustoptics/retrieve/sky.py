@@ -442,11 +442,13 @@ class SkyModel:
 
 def _moved(table: Table, parameter: str, h: float) -> Table:
     """The table's optics moved by ``h`` along its derivatives with respect to ``parameter``."""
-    assert table.cext_um2 is not None and table.csca_um2 is not None
+    assert table.cross_sections is not None
     return table.replace(
         phase=table.phase + h * table.derivative("phase", parameter),
-        cext_um2=table.cext_um2 + h * table.derivative("cext_um2", parameter),
-        csca_um2=table.csca_um2 + h * table.derivative("csca_um2", parameter),
+        cross_sections={
+            "cext_um2": table.cross_sections.cext_um2 + h * table.derivative("cext_um2", parameter),
+            "csca_um2": table.cross_sections.csca_um2 + h * table.derivative("csca_um2", parameter),
+        },
         g=table.g + h * table.derivative("g", parameter),
         derivatives=None,
     )

@@ -716,7 +716,7 @@ def fit_table(
         )
     resolve_model(model)
     channels = channel_weights(lam, mode=colour, channels_nm=channels_nm)
-    phase = channel_phase(channels, table.phase, csca_um2=table.csca_um2)
+    phase = channel_phase(channels, table.phase, csca_um2=table.quantity("csca_um2"))
     return fit_phase(
         theta,
         phase,

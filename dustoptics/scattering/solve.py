@@ -21,7 +21,14 @@ import numpy as np
 
 from dustoptics.scattering.quadrature import QuadratureDiagnostics
 from dustoptics.scattering.refinement import _Result, _WavelengthSolver, kernels_loaded
-from dustoptics.table import Provenance, Table, plain
+from dustoptics.table import (
+    CrossSections,
+    Provenance,
+    QuadratureRecord,
+    Table,
+    plain,
+    records_from_fields,
+)
 
 if TYPE_CHECKING:  # the front door's module imports this one
     from dustoptics.scattering.optics import OpticsRequest, RequestCost
@@ -224,27 +231,35 @@ def _table(
     """The one place a computed table is built from its request and results."""
     distribution = request.distribution
     moments = np.array([r.moments for r in results])
+    records = records_from_fields(dict(extra))  # the matrix and the expansion, where computed
     return Table(
         name=name,
         wavelength_nm=request.wavelength_nm,
         theta_deg=request.theta_deg,
         phase=np.vstack([r.phase for r in results]),
         g=np.array([r.g for r in results]),
-        cext_um2=cext,
-        csca_um2=csca,
-        error_estimate=err_phase,
-        cross_section_error_estimate=np.array([r.err_cross for r in results]),
-        n_nodes=np.array([r.n_nodes for r in results], dtype=np.int64),
-        cross_section_n_nodes=np.array([r.cross_section_n_nodes for r in results], dtype=np.int64),
         refractive_index=request.m,
-        mean_geometric_cross_section_um2=float(distribution.mean_cross_section_um2),
-        cback_um2=np.array([r.cback for r in results]),
-        r_eff_quadrature_um=moments[:, 1] / moments[:, 0],
-        v_eff_quadrature=moments[:, 2] * moments[:, 0] / moments[:, 1] ** 2 - 1.0,
-        mean_volume_quadrature_um3=4.0 / 3.0 * np.pi * moments[:, 1],
-        mean_volume_um3=float(distribution.mean_volume_um3),
-        particle_density_kg_m3=request.particle_density_kg_m3,
-        **extra,
+        cross_sections=CrossSections(
+            cext_um2=cext,
+            csca_um2=csca,
+            cback_um2=np.array([r.cback for r in results]),
+            mean_geometric_cross_section_um2=float(distribution.mean_cross_section_um2),
+            mean_volume_um3=float(distribution.mean_volume_um3),
+            particle_density_kg_m3=request.particle_density_kg_m3,
+        ),
+        quadrature=QuadratureRecord(
+            error_estimate=err_phase,
+            cross_section_error_estimate=np.array([r.err_cross for r in results]),
+            n_nodes=np.array([r.n_nodes for r in results], dtype=np.int64),
+            cross_section_n_nodes=np.array(
+                [r.cross_section_n_nodes for r in results], dtype=np.int64
+            ),
+            r_eff_quadrature_um=moments[:, 1] / moments[:, 0],
+            v_eff_quadrature=moments[:, 2] * moments[:, 0] / moments[:, 1] ** 2 - 1.0,
+            mean_volume_quadrature_um3=4.0 / 3.0 * np.pi * moments[:, 1],
+        ),
+        matrix=records["matrix"],
+        expansion=records["expansion"],
         provenance=Provenance(
             inputs=plain(request.inputs()),
             sources=request.sources(),

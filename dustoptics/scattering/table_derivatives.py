@@ -573,8 +573,8 @@ def _one_wavelength(
     with_radius: bool,
     per_particle: bool,
 ) -> _Wavelength:
-    matrix = table.f12 is not None
-    n_order = 0 if table.alpha1 is None else int(table.alpha1.shape[1])
+    matrix = table.matrix is not None
+    n_order = 0 if table.expansion is None else int(table.expansion.alpha1.shape[1])
     at = _At(
         m=m,
         wavelength_nm=float(table.wavelength_nm[i]),

@@ -99,7 +99,7 @@ from dustoptics.scattering.tabulated_phase import mean_cosine, sphere_integral
 from dustoptics.sky._shared import shared_geometry
 from dustoptics.sky.medium import Medium, legendre_moments
 from dustoptics.sky.scene import SkyRadiance, display_rgb, sky_radiance, sunlit_xyz
-from dustoptics.table import Table
+from dustoptics.table import CrossSections, Table
 
 __all__ = [
     "ANGLE_SAMPLINGS",
@@ -281,7 +281,7 @@ def _parse_angles(text: str) -> tuple[str, int]:
 
 
 def _scatters(table: Table) -> bool:
-    return table.csca_um2 is not None and bool(np.any(table.csca_um2 > 0))
+    return table.cross_sections is not None and bool(np.any(table.cross_sections.csca_um2 > 0))
 
 
 def _engine_grid(
@@ -437,10 +437,10 @@ def _channel_table(
     table: Table, channels: colour.ChannelWeights, wavelength_nm: np.ndarray
 ) -> Table:
     """The table at three channels: cross-sections read linearly, phase weighted by scattering."""
-    assert table.cext_um2 is not None and table.csca_um2 is not None
+    assert table.cross_sections is not None
     w = channels.weights
     phase = (
-        colour.channel_phase(channels, table.phase, csca_um2=table.csca_um2)
+        colour.channel_phase(channels, table.phase, csca_um2=table.quantity("csca_um2"))
         if _scatters(table)
         else colour.channel_phase(channels, table.phase)
     )
@@ -451,9 +451,11 @@ def _channel_table(
         phase=phase,
         g=np.clip(np.atleast_1d(mean_cosine(phase, theta_deg=theta)), -1.0, 1.0),
         name=table.name,
-        cext_um2=w @ table.cext_um2,
-        csca_um2=w @ table.csca_um2,
-        number_density_per_m3=table.number_density_per_m3,
+        cross_sections=CrossSections(
+            cext_um2=w @ table.cross_sections.cext_um2,
+            csca_um2=w @ table.cross_sections.csca_um2,
+            number_density_per_m3=table.cross_sections.number_density_per_m3,
+        ),
     )
 
 
@@ -505,8 +507,8 @@ def _with_tables(medium: Medium, tables: list[Table]) -> Medium:
         medium,
         wavelength_nm=np.array(tables[0].wavelength_nm, dtype=float),
         tables=tuple(tables),
-        sigma_ext_m2=np.array([t.cext_um2 for t in tables]) * 1e-12,
-        sigma_sca_m2=np.array([t.csca_um2 for t in tables]) * 1e-12,
+        sigma_ext_m2=np.array([t.quantity("cext_um2") for t in tables]) * 1e-12,
+        sigma_sca_m2=np.array([t.quantity("csca_um2") for t in tables]) * 1e-12,
         chi=chi,
         truncation=f,
     )
@@ -586,9 +588,13 @@ def _replace_phase(table: Table, theta: np.ndarray, phase: np.ndarray) -> Table:
         phase=phase,
         g=np.clip(np.atleast_1d(mean_cosine(phase, theta_deg=theta)), -1.0, 1.0),
         name=table.name,
-        cext_um2=table.cext_um2,
-        csca_um2=table.csca_um2,
-        number_density_per_m3=table.number_density_per_m3,
+        cross_sections=None
+        if table.cross_sections is None
+        else CrossSections(
+            cext_um2=table.cross_sections.cext_um2,
+            csca_um2=table.cross_sections.csca_um2,
+            number_density_per_m3=table.cross_sections.number_density_per_m3,
+        ),
     )
 
 

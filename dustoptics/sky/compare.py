@@ -71,7 +71,7 @@ from dustoptics.sky.medium import Medium
 from dustoptics.sky.orders import N_LAYERS, check_orders_cost
 from dustoptics.sky.render import N_PATH, check_render_cost
 from dustoptics.sky.scene import SkyRadiance, default_view_zenith_deg, sky_radiance
-from dustoptics.table import Provenance, Source, Table
+from dustoptics.table import CrossSections, Provenance, Source, Table
 
 __all__ = [
     "BELL_2006",
@@ -160,9 +160,9 @@ def collienne_molecules(wavelength_nm: tuple[float, ...], *, like: Table) -> Tab
         theta_deg=like.theta_deg,
         phase=like.phase,
         g=like.g,
-        cext_um2=beta * 1e12,
-        csca_um2=beta * 1e12,
-        number_density_per_m3=1.0,
+        cross_sections=CrossSections(
+            cext_um2=beta * 1e12, csca_um2=beta * 1e12, number_density_per_m3=1.0
+        ),
         provenance=Provenance(
             inputs={"kind": "collienne2013-molecules", "wavelength_nm": wl},
             sources=(
@@ -180,9 +180,11 @@ def _collienne(grid: tuple[float, ...]) -> Atmosphere:
     dust = _preset_table("collienne", grid)
     grey = np.ones(len(grid))
     dust = dust.replace(
-        cext_um2=grey,
-        csca_um2=COLLIENNE_AEROSOL_SINGLE_SCATTERING_ALBEDO * grey,
-        mean_geometric_cross_section_um2=1.0,
+        cross_sections={
+            "cext_um2": grey,
+            "csca_um2": COLLIENNE_AEROSOL_SINGLE_SCATTERING_ALBEDO * grey,
+            "mean_geometric_cross_section_um2": 1.0,
+        },
     )
     atm = mars_atmosphere(
         dust_table=dust,
@@ -236,7 +238,7 @@ def mars_sky_atmosphere(
     if model == "collienne":
         return _collienne(grid)
     dust = _preset_table(model, grid)
-    if not dust.has_cross_sections:
+    if dust.cross_sections is None:
         mie = (
             cross_sections
             if cross_sections is not None
@@ -244,10 +246,13 @@ def mars_sky_atmosphere(
         )
         if not np.array_equal(mie.wavelength_nm, dust.wavelength_nm):
             raise ValueError("cross_sections must be on the model's wavelengths")
+        assert mie.cross_sections is not None  # a Mie table
         dust = dust.replace(
-            cext_um2=mie.cext_um2,
-            csca_um2=mie.csca_um2,
-            mean_geometric_cross_section_um2=mie.mean_geometric_cross_section_um2,
+            cross_sections={
+                "cext_um2": mie.cross_sections.cext_um2,
+                "csca_um2": mie.cross_sections.csca_um2,
+                "mean_geometric_cross_section_um2": mie.cross_sections.mean_geometric_cross_section_um2,
+            },
         )
     return mars_atmosphere(
         dust_table=dust,

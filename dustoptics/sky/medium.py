@@ -279,16 +279,18 @@ class MediumOptics(_ColumnOptics):
         roles, tables, n0, ext, sca, chi = [], [], [], [], [], []
         for c in atmosphere.constituents:
             t = c.table
-            assert t.cext_um2 is not None and t.csca_um2 is not None
-            assert t.number_density_per_m3 is not None
+            assert t.cross_sections is not None
+            assert (
+                t.cross_sections is not None and t.cross_sections.number_density_per_m3 is not None
+            )
             roles.append(c.role)
             tables.append(t)
-            n0.append(t.number_density_per_m3)
-            ext.append(t.cext_um2 * _UM2_TO_M2)
-            sca.append(t.csca_um2 * _UM2_TO_M2)
+            n0.append(t.cross_sections.number_density_per_m3)
+            ext.append(t.cross_sections.cext_um2 * _UM2_TO_M2)
+            sca.append(t.cross_sections.csca_um2 * _UM2_TO_M2)
             chi.append(
                 legendre_moments(t, n_mom)
-                if np.any(t.csca_um2 > 0)
+                if np.any(t.cross_sections.csca_um2 > 0)
                 else np.zeros((t.wavelength_nm.size, n_mom))
             )
         chi_arr = np.array(chi)
@@ -408,7 +410,7 @@ class Medium(_ColumnOptics):
 
 
 def _scatters(table: Table) -> bool:
-    return table.csca_um2 is not None and bool(np.any(table.csca_um2 > 0))
+    return table.cross_sections is not None and bool(np.any(table.cross_sections.csca_um2 > 0))
 
 
 def _altitude_grid(top: float, n: int) -> np.ndarray:

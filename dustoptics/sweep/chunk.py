@@ -265,11 +265,11 @@ def _independent_arrays(
         arrays["phase"][p] = table.phase
         arrays["g"][p] = table.g
         for name in ("cext_um2", "csca_um2", "error_estimate", "cross_section_error_estimate"):
-            value = getattr(table, name)
+            value = table.quantity(name)
             if value is not None:
                 arrays[name][p] = value
-        if table.n_nodes is not None:
-            arrays["n_nodes"][p] = table.n_nodes
-            computed += int(np.sum(table.n_nodes))
-            weighted += int(np.sum(table.n_nodes))
+        if table.quadrature is not None and table.quadrature.n_nodes is not None:
+            arrays["n_nodes"][p] = table.quadrature.n_nodes
+            computed += int(np.sum(table.quadrature.n_nodes))
+            weighted += int(np.sum(table.quadrature.n_nodes))
     return computed, weighted

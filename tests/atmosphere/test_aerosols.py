@@ -35,8 +35,10 @@ def test_component_cross_sections_match_opac(name: str, rh: int) -> None:
     wl = [350.0, 550.0, 800.0]
     table = aerosols._component_table(name, comp.relative_humidity_percent, tuple(wl), (0.0, 180.0))
     rows = np.searchsorted(comp.refractive_index.wavelength_nm, wl)
-    assert table.cext_um2 is not None
-    ours = table.cext_um2 * comp.fraction_within_bounds  # OPAC counts the whole log-normal
+    assert table.cross_sections is not None
+    ours = (
+        table.cross_sections.cext_um2 * comp.fraction_within_bounds
+    )  # OPAC counts the whole log-normal
     np.testing.assert_allclose(ours, comp.opac_cext_um2[rows], rtol=3e-3)
     np.testing.assert_allclose(table.ssa, comp.opac_ssa[rows], atol=2e-3)
 
@@ -63,9 +65,9 @@ def test_one_mode_against_miepython() -> None:
     cext = float(np.sum(w * qext * math.pi * r**2))
     csca = float(np.sum(w * qsca * math.pi * r**2))
     table = aerosols._component_table("inso", 0, (wl_nm,), (0.0, 180.0))
-    assert table.cext_um2 is not None and table.csca_um2 is not None
-    assert table.cext_um2[0] == pytest.approx(cext, rel=2e-3)
-    assert table.csca_um2[0] == pytest.approx(csca, rel=2e-3)
+    assert table.cross_sections is not None
+    assert table.cross_sections.cext_um2[0] == pytest.approx(cext, rel=2e-3)
+    assert table.cross_sections.csca_um2[0] == pytest.approx(csca, rel=2e-3)
 
 
 # ------------------------------------------------------------------ types
@@ -101,14 +103,14 @@ def test_mixture_is_the_number_weighted_sum() -> None:
         n
         / kind.total_number_density_per_cm3
         * aerosols.aerosol_component(c).fraction_within_bounds
-        * aerosols._component_table(c, 80 if c == "waso" else 0, wl, theta).cext_um2
+        * aerosols._component_table(c, 80 if c == "waso" else 0, wl, theta).cross_sections.cext_um2
         for c, n in kind.number_density_per_cm3.items()
     )
-    np.testing.assert_allclose(table.cext_um2, expected, rtol=1e-12)
+    np.testing.assert_allclose(table.cross_sections.cext_um2, expected, rtol=1e-12)
     mu = np.cos(np.radians(table.theta_deg))
     norm = -2 * math.pi * np.trapezoid(table.phase, mu, axis=1)
     np.testing.assert_allclose(norm, 1.0, atol=2e-3)
-    assert table.number_density_per_m3 == pytest.approx(15300.4e6)
+    assert table.cross_sections.number_density_per_m3 == pytest.approx(15300.4e6)
 
 
 # ------------------------------------------------------------------ the Earth
@@ -117,9 +119,12 @@ def test_mixture_is_the_number_weighted_sum() -> None:
 def _tau(atm, wavelength_nm: float) -> float:
     c = atm.constituent("aerosols")
     top = atm.atmosphere_radius_m - atm.planet_radius_m
-    cext = np.interp(wavelength_nm, c.table.wavelength_nm, c.table.cext_um2)
+    cext = np.interp(wavelength_nm, c.table.wavelength_nm, c.table.cross_sections.cext_um2)
     return float(
-        c.table.number_density_per_m3 * cext * 1e-12 * c.profile.column_length_m(top_altitude_m=top)
+        c.table.cross_sections.number_density_per_m3
+        * cext
+        * 1e-12
+        * c.profile.column_length_m(top_altitude_m=top)
     )
 
 
@@ -141,8 +146,8 @@ def test_optical_depth_at_its_wavelength(tau: float, nm: float) -> None:
     )
     top = atm.atmosphere_radius_m - atm.planet_radius_m
     got = (
-        c.table.number_density_per_m3
-        * exact.cext_um2[0]
+        c.table.cross_sections.number_density_per_m3
+        * exact.cross_sections.cext_um2[0]
         * 1e-12
         * c.profile.column_length_m(top_altitude_m=top)
     )

@@ -70,7 +70,9 @@ def test_mars_dust_from_a_configuration_file_and_its_optical_depth(tmp_path):
     np.testing.assert_array_equal(dust_a.wavelength_nm, grid)
     assert dust_a.theta_deg.size == 1801  # every 0.1 deg
     # N0 is proportional to tau.
-    ratio = dust_b.number_density_per_m3 / dust_a.number_density_per_m3
+    ratio = (
+        dust_b.cross_sections.number_density_per_m3 / dust_a.cross_sections.number_density_per_m3
+    )
     assert ratio == pytest.approx(0.7 / 0.5, rel=1e-12)
 
 

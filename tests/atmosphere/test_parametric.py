@@ -106,7 +106,7 @@ def test_ada_against_exact_mie(m, r_eff_um, low, high):
     """ADA misses the edge contribution and falls 4-15 % short of exact Mie."""
     dist = ModifiedGamma(r_eff_um=r_eff_um, v_eff=0.2)
     ada = ada_cext_um2(wavelength_nm=WL, refractive_index=m, distribution=dist)
-    mie = optics.compute_optics(m, dist, WL, [0.0, 180.0], rtol=1e-3).cext_um2
+    mie = optics.compute_optics(m, dist, WL, [0.0, 180.0], rtol=1e-3).cross_sections.cext_um2
     err = ada / mie - 1.0
     assert np.all((err > low) & (err < high)), err
 

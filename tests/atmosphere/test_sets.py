@@ -62,9 +62,9 @@ def test_mars_dust_reproduces_optical_depth(dust_table, tmp_path):
         dust_table=dust_table, optical_depth=0.7, reference_wavelength_nm=550.0
     )
     dust = mars.constituent("aerosols")
-    cext_550 = float(np.interp(550.0, dust_table.wavelength_nm, dust_table.cext_um2))
+    cext_550 = float(np.interp(550.0, dust_table.wavelength_nm, dust_table.cross_sections.cext_um2))
     tau = optical_depth(
-        number_density_per_m3=dust.table.number_density_per_m3,
+        number_density_per_m3=dust.table.quantity("number_density_per_m3"),
         cext_um2=cext_550,
         profile=dust.profile,
         top_altitude_m=mars.thickness_m,
@@ -221,9 +221,11 @@ def test_optical_depth_recorded_in_provenance(dust_table):
     assert column["optical_depth"] == 0.6 and column["reference_wavelength_nm"] == 550.0
     assert any("optical depth 0.6 at 550 nm" in n for n in t.provenance.notes)
     # Identity: tau = N0 <C_ext> L, L = H (1 - exp(-top / H)).
-    cext = np.interp(550.0, dust_table.wavelength_nm, dust_table.cext_um2) * 1e-12
+    cext = np.interp(550.0, dust_table.wavelength_nm, dust_table.cross_sections.cext_um2) * 1e-12
     length = 11100.0 * (1 - np.exp(-120e3 / 11100.0))
-    np.testing.assert_allclose(t.number_density_per_m3 * cext * length, 0.6, rtol=1e-12)
+    np.testing.assert_allclose(
+        t.cross_sections.number_density_per_m3 * cext * length, 0.6, rtol=1e-12
+    )
     assert t.provenance.input_hash != dust_table.provenance.input_hash
 
 

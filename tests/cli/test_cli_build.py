@@ -24,7 +24,7 @@ def test_build_writes_every_format_and_they_agree(config, tmp_path, capsys):
     h5 = read_hdf5(folder / "small-dust.h5")
     csv = read_seed_csv(folder)
     assert h5.equals(csv)
-    assert h5.number_density_per_m3 == 1e8
+    assert h5.cross_sections.number_density_per_m3 == 1e8
     # The table is what the library computes from the same configuration, the number
     # density given on the command line included (an input: it is in the input hash).
     ref = do.build_table(dataclasses.replace(do.load_config(config), number_density_per_m3=1e8))
@@ -40,7 +40,7 @@ def test_build_writes_every_format_and_they_agree(config, tmp_path, capsys):
     # <C_sca> in um^2 = 1e-12 m^2.
     peak = np.exp(-0.5 * 120e3 / 1024 / 10e3)
     np.testing.assert_allclose(
-        constituent.beta_sca_per_m, 1e8 * peak * ref.csca_um2 * 1e-12, rtol=1e-15
+        constituent.beta_sca_per_m, 1e8 * peak * ref.cross_sections.csca_um2 * 1e-12, rtol=1e-15
     )
     assert constituent.density.max() == 1.0
 
@@ -168,7 +168,12 @@ def test_single_preset_cosmoscout_from_optical_depth(config, tmp_path):
     assert column["optical_depth"] == 0.4 and column["reference_wavelength_nm"] == 550.0
     # Identity: tau = N0 <C_ext>(550 nm) L, L = H (1 - exp(-top / H)), top 120 km.
     length = 11100.0 * (1 - np.exp(-120e3 / 11100.0))
-    tau = table.number_density_per_m3 * table.cext_um2[1] * 1e-12 * length
+    tau = (
+        table.cross_sections.number_density_per_m3
+        * table.cross_sections.cext_um2[1]
+        * 1e-12
+        * length
+    )
     np.testing.assert_allclose(tau, 0.4, rtol=1e-12)
     both = [*args, "--number-density-per-m3", "1e8", "--force"]
     assert run_build(config, out, *both) == 2
@@ -187,7 +192,7 @@ def test_preset_build_matches_the_library(tmp_path):
     assert main(["build", "costa", "--out", str(tmp_path), "--quiet", "--format", "hdf5"]) == 0
     table = read_hdf5(tmp_path / "costa" / "costa.h5")
     assert table.equals(presets.build_preset("costa"))
-    assert not table.has_cross_sections
+    assert table.cross_sections is None
 
 
 def test_number_density_option_is_recorded_and_changes_the_input_hash(config, tmp_path):
@@ -201,14 +206,14 @@ def test_number_density_option_is_recorded_and_changes_the_input_hash(config, tm
     dense = read_hdf5(tmp_path / "dense" / "small-dust" / "small-dust.h5")
     assert plain.provenance.inputs["number_density_per_m3"] is None
     assert dense.provenance.inputs["number_density_per_m3"] == 2e8
-    assert dense.number_density_per_m3 == 2e8
+    assert dense.cross_sections.number_density_per_m3 == 2e8
     assert dense.provenance.input_hash != plain.provenance.input_hash
     # export: the same record for the same input.
     source = tmp_path / "plain" / "small-dust" / "small-dust.h5"
     argv = ["export", str(source), "--out", str(tmp_path / "exp"), "--format", "hdf5", "--quiet"]
     assert main([*argv, "--number-density-per-m3", "2e8"]) == 0
     exported = read_hdf5(tmp_path / "exp" / "small-dust" / "small-dust.h5")
-    assert exported.number_density_per_m3 == 2e8
+    assert exported.cross_sections.number_density_per_m3 == 2e8
     assert exported.provenance.input_hash == dense.provenance.input_hash
 
 
@@ -384,11 +389,13 @@ def test_disort_and_libradtran_from_a_configuration_that_asks_for_the_expansion(
     ]
     table = do.open_table(folder / "small-dust.nc")
     assert table.provenance.inputs["optics"]["expansion"] is True
-    np.testing.assert_allclose(table.alpha1[:, 0], 1.0)
+    np.testing.assert_allclose(table.expansion.alpha1[:, 0], 1.0)
     # alpha1_1 = 3 g, each side within its own error estimate: g converges at rtol, the
     # coefficients at rtol/100 (alpha1_l / (2 l + 1) bounded by expansion_error_estimate).
-    bound = 3 * (table.cross_section_error_estimate + table.expansion_error_estimate)
-    assert np.all(np.abs(table.alpha1[:, 1] - 3 * table.g) <= bound)
+    bound = 3 * (
+        table.quadrature.cross_section_error_estimate + table.expansion.expansion_error_estimate
+    )
+    assert np.all(np.abs(table.expansion.alpha1[:, 1] - 3 * table.g) <= bound)
     assert np.all(bound < 1e-4)
 
 
@@ -415,7 +422,7 @@ def test_rt_formats_ask_a_mie_model_for_the_expansion(config, tmp_path, capsys):
     )
     assert f"dustoptics: {note}" in capsys.readouterr().err
     asked = do.open_table(tmp_path / "asked" / "small-dust" / "small-dust.nc")
-    assert note in asked.provenance.notes and asked.alpha1 is not None
+    assert note in asked.provenance.notes and asked.expansion is not None
     own = tmp_path / "own.toml"
     own.write_text(SMALL.replace("n_theta = 19", "n_theta = 19\nexpansion = true"), "utf-8")
     assert run_build(own, tmp_path / "own", "--format", "disort,netcdf") == 0

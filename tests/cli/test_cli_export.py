@@ -73,7 +73,11 @@ def test_export_over_another_table_is_refused_before_any_work(
     assert (out / "small-dust" / "small-dust.nc").read_bytes() == before
     monkeypatch.undo()
     assert main([*argv, "--force"]) == 0
-    assert read_hdf5(out / "small-dust" / "small-dust.nc").number_density_per_m3 is None
+    assert (
+        read_hdf5(out / "small-dust" / "small-dust.nc").cross_sections is None
+        or read_hdf5(out / "small-dust" / "small-dust.nc").cross_sections.number_density_per_m3
+        is None
+    )
 
 
 @pytest.mark.parametrize(

@@ -57,7 +57,7 @@ def test_info_reads_every_format_and_a_build_folder(config, tmp_path, capsys):
         assert title in out
     # beta_sca = N0 <C_sca> at the first texel centre's density (the largest written sample,
     # 1): the default exponential, scale height 10 km, sampled at (i + 1/2) 120 km / 1024.
-    c_sca_m2 = table.csca_um2 * 1e-12 * np.exp(-0.5 * 120e3 / 1024 / 10e3)
+    c_sca_m2 = table.cross_sections.csca_um2 * 1e-12 * np.exp(-0.5 * 120e3 / 1024 / 10e3)
     assert f"beta_sca:        {1e8 * c_sca_m2.min():.6g} .. {1e8 * c_sca_m2.max():.6g} m^-1" in out
 
 

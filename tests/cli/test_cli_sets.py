@@ -48,7 +48,7 @@ def test_build_mars_and_earth_write_whole_cosmoscout_sets(config, tmp_path):
     from dataclasses import replace
 
     at550 = replace(cfg, optics=replace(cfg.optics, wavelengths_nm=(550.0,), n_theta=2))
-    cext_m2 = do.build_table(at550).cext_um2[0] * 1e-12
+    cext_m2 = do.build_table(at550).cross_sections.cext_um2[0] * 1e-12
     h, top = 11100.0, 120e3
     # The files give the coefficient where the relative density is 1: the first density
     # sample, at the centre of the first of N texels, (1/2) top / N above the ground.
@@ -85,7 +85,7 @@ def read_hdf5_free_csca(cfg, i):
     grid = replace(
         cfg, optics=replace(cfg.optics, wavelengths_nm=COSMOSCOUT_WAVELENGTHS_NM, n_theta=1801)
     )
-    return do.build_table(grid).csca_um2[i] * 1e-12
+    return do.build_table(grid).cross_sections.csca_um2[i] * 1e-12
 
 
 def test_set_provenance_records_the_command_inputs(config, tmp_path):

@@ -78,7 +78,7 @@ def test_a_new_size_distribution_registers_itself_and_builds_from_toml(weibull: 
     config = parse_config(block("weibull.toml"))
     assert config.size_distribution.build() == dist
     table = build_table(config, workers=1)
-    np.testing.assert_allclose(table.r_eff_quadrature_um, expected, rtol=1e-3)
+    np.testing.assert_allclose(table.quadrature.r_eff_quadrature_um, expected, rtol=1e-3)
     assert table.provenance.inputs["size_distribution"] == {
         "model": "weibull",
         "scale_um": 0.3,

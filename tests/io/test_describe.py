@@ -27,7 +27,10 @@ def folder(table, tmp_path_factory):
     out = tmp_path_factory.mktemp("described")
     formats = ["hdf5", "csv", "glsl", "texture", "cosmoscout"]
     dense, options = prepare_export(
-        table.replace(number_density_per_m3=1e8), formats, options=FormatOptions(), n_altitudes=16
+        table.replace(cross_sections={"number_density_per_m3": 1e8}),
+        formats,
+        options=FormatOptions(),
+        n_altitudes=16,
     )
     write_formats(dense, out, formats, options=options)
     return out

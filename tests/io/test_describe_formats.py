@@ -51,7 +51,7 @@ def table() -> do.Table:
         np.linspace(0.0, 180.0, 181),
         name="small",
         expansion=True,
-    ).replace(number_density_per_m3=1e8)
+    ).replace(cross_sections={"number_density_per_m3": 1e8})
 
 
 @pytest.fixture(scope="module")

@@ -87,7 +87,12 @@ def test_prepare_export_sets_the_density_profile_and_the_optical_depth(small_tab
     # tau = N0 <C_ext> L, L = H (1 - exp(-top / H)) with the 120 km top.
     length = 11_100.0 * (1 - np.exp(-120e3 / 11_100.0))
     i = int(np.flatnonzero(table.wavelength_nm == 450.0)[0])
-    tau = table.number_density_per_m3 * table.cext_um2[i] * 1e-12 * length
+    tau = (
+        table.cross_sections.number_density_per_m3
+        * table.cross_sections.cext_um2[i]
+        * 1e-12
+        * length
+    )
     np.testing.assert_allclose(tau, 0.4, rtol=1e-12)
     density = options.for_format("cosmoscout")["density"]
     assert density.shape == (64,)
@@ -108,7 +113,7 @@ def test_the_cosmoscout_files_give_the_coefficient_at_every_texel_centre(small_t
     """beta (written at the largest sample) times the written density is N0 C_ext exp(-z / H)
     at the texel centres z = (i + 1/2) T / N, the altitudes CosmoScout VR's preprocessor reads."""
     table, options = prepare_export(
-        small_table.replace(number_density_per_m3=1e8),
+        small_table.replace(cross_sections={"number_density_per_m3": 1e8}),
         ["cosmoscout"],
         scale_height_m=11_100.0,
         n_altitudes=32,
@@ -116,6 +121,6 @@ def test_the_cosmoscout_files_give_the_coefficient_at_every_texel_centre(small_t
     write_formats(table, tmp_path, ["cosmoscout"], options=options)
     c = read_cosmoscout_constituent(tmp_path, table.name)
     z = (np.arange(32) + 0.5) * 120e3 / 32
-    want = 1e8 * table.cext_um2 * 1e-12 * np.exp(-z / 11_100.0)[:, None]
+    want = 1e8 * table.cross_sections.cext_um2 * 1e-12 * np.exp(-z / 11_100.0)[:, None]
     got = (c.beta_sca_per_m + c.beta_abs_per_m)[None, :] * c.density[:, None]
     np.testing.assert_allclose(got, want, rtol=1e-6)  # the CSV's printed digits

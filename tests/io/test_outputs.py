@@ -136,7 +136,7 @@ def test_write_atmosphere_set_writes_the_record_beside_cosmoscouts_files(tmp_pat
         **inputs,
         "constituents": {c.role: c.table.provenance.input_hash for c in atm.constituents},
         "number_densities_per_m3": {
-            c.role: c.table.number_density_per_m3 for c in atm.constituents
+            c.role: c.table.cross_sections.number_density_per_m3 for c in atm.constituents
         },
     }
     assert check_cosmoscout_set(tmp_path) == ["earth_aerosols", "earth_molecules", "earth_ozone"]

@@ -31,7 +31,7 @@ def test_progress_does_not_change_the_result() -> None:
     assert calls[0] == (0, 10) and calls[-1] == (10, 10)
     assert [d for d, _ in calls] == sorted(d for d, _ in calls) and len(calls) >= 3
     for key in ("phase", "g", "cext_um2", "csca_um2", "error_estimate"):
-        assert getattr(with_progress, key).tobytes() == getattr(plain, key).tobytes()
+        assert with_progress.quantity(key).tobytes() == plain.quantity(key).tobytes()
     assert with_progress.provenance.to_dict() == plain.provenance.to_dict()
 
 
@@ -44,8 +44,10 @@ def test_number_density_and_sources() -> None:
             )
         )
     )
-    assert table.number_density_per_m3 == 2e8
-    np.testing.assert_allclose(table.beta_ext_per_m, 2e8 * table.cext_um2 * 1e-12, rtol=1e-15)
+    assert table.cross_sections.number_density_per_m3 == 2e8
+    np.testing.assert_allclose(
+        table.beta_ext_per_m, 2e8 * table.cross_sections.cext_um2 * 1e-12, rtol=1e-15
+    )
     roles = [s.role for s in table.provenance.sources]
     assert roles == ["refractive index", "size distribution"]
 
@@ -56,7 +58,7 @@ def test_analytic_model_table() -> None:
         '[phase]\nmodel = "henyey_greenstein"\ng = 0.6\n'
     )
     table = build_table(parse_config(text))
-    assert table.cext_um2 is None and table.phase.shape == (2, 721)
+    assert table.cross_sections is None and table.phase.shape == (2, 721)
     np.testing.assert_allclose(
         tabulated_phase.sphere_integral(table.phase, theta_deg=table.theta_deg), 1.0, rtol=1e-13
     )

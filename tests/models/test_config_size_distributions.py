@@ -111,7 +111,7 @@ def test_family_from_toml_to_table(family: str) -> None:
     assert dist.r_eff_um == pytest.approx(expected_um, rel=1e-9)
     table = build_table(config, workers=1)
     # The table's radius quadrature integrates the same distribution.
-    np.testing.assert_allclose(table.r_eff_quadrature_um, expected_um, rtol=2e-3)
+    np.testing.assert_allclose(table.quadrature.r_eff_quadrature_um, expected_um, rtol=2e-3)
     assert table.provenance.inputs["size_distribution"]["model"] == family
 
 

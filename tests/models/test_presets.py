@@ -130,7 +130,7 @@ def test_every_preset_builds(built, name: str) -> None:
     assert table.provenance.inputs == config.to_inputs()
     assert set(config.sources) <= set(table.provenance.sources)
     assert table.provenance.notes[: len(config.choices)] == config.choices
-    assert table.has_cross_sections == config.phase.uses_mie
+    assert (table.cross_sections is not None) == config.phase.uses_mie
     assert np.all(np.abs(table.g) < 1)
 
 
@@ -148,7 +148,7 @@ def test_building_twice_is_identical_to_the_byte(built, name: str) -> None:
         "error_estimate",
         "cross_section_error_estimate",
     ):
-        a, b = getattr(first, key), getattr(second, key)
+        a, b = first.quantity(key), second.quantity(key)
         assert (a is None) == (b is None), key
         if a is not None:
             assert a.tobytes() == b.tobytes(), key
@@ -213,8 +213,8 @@ def test_hybrid_is_the_renormalized_half_blend(built, name: str, mie: str, outsi
         theta_deg=theta,
     )
     np.testing.assert_allclose(hyb.phase, expected, rtol=1e-13, atol=0)
-    np.testing.assert_array_equal(hyb.cext_um2, base.cext_um2)
-    np.testing.assert_array_equal(hyb.csca_um2, base.csca_um2)
+    np.testing.assert_array_equal(hyb.cross_sections.cext_um2, base.cross_sections.cext_um2)
+    np.testing.assert_array_equal(hyb.cross_sections.csca_um2, base.cross_sections.csca_um2)
     np.testing.assert_allclose(
         tabulated_phase.sphere_integral(hyb.phase, theta_deg=theta), 1.0, rtol=1e-12
     )
@@ -242,7 +242,7 @@ def test_costa_g_matches_published_parameters(built) -> None:
     clamp holds the end values beyond.  The table's g (mean cosine of the sampled,
     renormalized table at 0.1 deg) agrees to its sampling error, < 1e-5."""
     table, _ = built["costa"]
-    assert table.cext_um2 is None
+    assert table.cross_sections is None
     for wl, g1 in ((360.0, 0.67), (440.0, 0.67), (550.0, 0.4), (680.0, 0.03), (830.0, 0.03)):
         i = int(np.flatnonzero(table.wavelength_nm == wl)[0])
         assert table.g[i] == pytest.approx(0.743 * g1 + 0.257 * 0.094, abs=1e-5)
@@ -251,7 +251,7 @@ def test_costa_g_matches_published_parameters(built) -> None:
 def test_collienne_is_cornette_shanks_08(built) -> None:
     """Cornette-Shanks mean cosine 3 g (4 + g^2) / (5 (2 + g^2)) = 0.843636... at g = 0.8."""
     table, _ = built["collienne"]
-    assert table.cext_um2 is None
+    assert table.cross_sections is None
     assert presets.load_preset("collienne").phase.parameters["g"] == 0.8
     np.testing.assert_allclose(table.g, 3 * 0.8 * 4.64 / (5 * 2.64), atol=1e-5)
     np.testing.assert_array_equal(table.phase, np.broadcast_to(table.phase[0], table.phase.shape))
@@ -269,7 +269,7 @@ def test_cosmoscout_mars_inputs(built) -> None:
     assert inputs["material"]["hematite_fraction"] == 0.03
     assert inputs["material"]["hematite"] == "hematite-querry1985-extraordinary"
     table, _ = built["cosmoscout-mars"]
-    assert np.all(table.ssa <= 1) and np.all(table.error_estimate <= 1e-4)
+    assert np.all(table.ssa <= 1) and np.all(table.quadrature.error_estimate <= 1e-4)
 
 
 def test_seed_and_physical_presets_differ_only_in_weighting_and_angles() -> None:

@@ -188,7 +188,7 @@ def test_user_distributions_through_compute_optics() -> None:
     tab = TabulatedDistribution(radius_um=r, dn_dr=ref.pdf(r))
     a = do.compute_optics(1.5 + 0.01j, ref, [550.0], [0.0, 90.0, 180.0])
     b = do.compute_optics(1.5 + 0.01j, tab, [550.0], [0.0, 90.0, 180.0])
-    np.testing.assert_allclose(b.cext_um2, a.cext_um2, rtol=1e-4)
+    np.testing.assert_allclose(b.cross_sections.cext_um2, a.cross_sections.cext_um2, rtol=1e-4)
     np.testing.assert_allclose(b.phase, a.phase, rtol=1e-3)
 
 

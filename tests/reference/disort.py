@@ -285,7 +285,7 @@ def validation_atmosphere(
     profile = ExponentialProfile(scale_height_m=1200.0)
     aerosol = validation_table("earth-aerosol", wl) if table is None else table
     if kind == "rayleigh":
-        aerosol = aerosol.replace(number_density_per_m3=1e-30)
+        aerosol = aerosol.replace(cross_sections={"number_density_per_m3": 1e-30})
     else:
         aerosol = sets.with_optical_depth(
             aerosol,

@@ -59,8 +59,8 @@ def brute_force(
 
 def check(t: do.Table, i: int, ref: dict) -> None:
     assert np.max(np.abs(t.phase[i] / ref["phase"] - 1)) <= 1e-4
-    assert t.cext_um2[i] == pytest.approx(ref["cext"], rel=1e-6)
-    assert t.csca_um2[i] == pytest.approx(ref["csca"], rel=1e-6)
+    assert t.cross_sections.cext_um2[i] == pytest.approx(ref["cext"], rel=1e-6)
+    assert t.cross_sections.csca_um2[i] == pytest.approx(ref["csca"], rel=1e-6)
     assert abs(t.g[i] - ref["g"]) <= 1e-6
 
 
@@ -109,5 +109,5 @@ def test_nonabsorbing_spheres_reach_1e3() -> None:
     t = do.compute_optics(m, do.ModifiedGamma(r_eff_um=1.0, v_eff=0.2), [550.0], THETA)
     ref = brute_force(m, 1.0, 0.2, 550.0, dx_panel=0.125)
     assert np.max(np.abs(t.phase[0] / ref["phase"] - 1)) <= 1e-3
-    assert t.cext_um2[0] == pytest.approx(ref["cext"], rel=1e-4)
+    assert t.cross_sections.cext_um2[0] == pytest.approx(ref["cext"], rel=1e-4)
     assert abs(t.g[0] - ref["g"]) <= 1e-4

@@ -85,11 +85,11 @@ def test_population_of_coated_spheres_against_scatrs() -> None:
         scatrs.LayeredSphere([1.5 + 0.01j, 1.31], [0.5]),
         scatrs.Gamma(effective_radius=1.0, effective_variance=0.1),
     ).compute(0.55, rtol=1e-9, greek=8, refine_backscatter=True)
-    assert t.cext_um2[0] == pytest.approx(float(r.c_ext), rel=1e-6)
-    assert t.csca_um2[0] == pytest.approx(float(r.c_sca), rel=1e-6)
+    assert t.cross_sections.cext_um2[0] == pytest.approx(float(r.c_ext), rel=1e-6)
+    assert t.cross_sections.csca_um2[0] == pytest.approx(float(r.c_sca), rel=1e-6)
     assert t.g[0] == pytest.approx(float(r.g), abs=1e-6)
-    assert t.cback_um2[0] == pytest.approx(float(r.c_back), rel=1e-4)
-    np.testing.assert_allclose(t.alpha1[0, :9], np.asarray(r.greek.alpha1)[:9], atol=1e-5)
+    assert t.cross_sections.cback_um2[0] == pytest.approx(float(r.c_back), rel=1e-4)
+    np.testing.assert_allclose(t.expansion.alpha1[0, :9], np.asarray(r.greek.alpha1)[:9], atol=1e-5)
     assert "coated sphere" in t.provenance.inputs["refractive_index"]["description"]
     again = do.optics.recompute(t.provenance)
     assert again.equals(t)

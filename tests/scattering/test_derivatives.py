@@ -112,7 +112,7 @@ def _table(
 
 
 def _field(t: Table, name: str) -> np.ndarray:
-    return np.asarray(getattr(t, name), dtype=np.float64)
+    return np.asarray(t.quantity(name), dtype=np.float64)
 
 
 def _scale(t: Table, name: str, kind: str) -> np.ndarray:
@@ -126,11 +126,13 @@ def _scale(t: Table, name: str, kind: str) -> np.ndarray:
 def _error(t: Table, kind: str) -> np.ndarray:
     """The table's error estimate for a field of this kind, per wavelength."""
     if kind == "f11":
-        return np.asarray(t.error_estimate)[:, None]
+        return np.asarray(t.quadrature.error_estimate)[:, None]
     if kind == "back":
-        return np.asarray(t.error_estimate) + np.asarray(t.cross_section_error_estimate)
+        return np.asarray(t.quadrature.error_estimate) + np.asarray(
+            t.quadrature.cross_section_error_estimate
+        )
     # ssa = C_sca / C_ext: twice the cross-sections' relative error.
-    return 2.0 * np.asarray(t.cross_section_error_estimate)
+    return 2.0 * np.asarray(t.quadrature.cross_section_error_estimate)
 
 
 @pytest.fixture(scope="module")

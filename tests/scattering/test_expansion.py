@@ -69,7 +69,7 @@ KEYS = ("alpha1", "alpha2", "alpha3", "alpha4", "beta1", "beta2")
 
 
 def coefficients(table: do.Table, i: int = 0) -> np.ndarray:
-    return np.array([getattr(table, k)[i] for k in KEYS])
+    return np.array([table.quantity(k)[i] for k in KEYS])
 
 
 def test_lists_are_the_published_lengths() -> None:
@@ -84,12 +84,12 @@ def test_garcia_siewert_haze_l() -> None:
     t = do.compute_optics(
         1.33, do.DeirmendjianGamma(**HAZE_L_MODEL), [700.0], [0.0, 180.0], expansion=True, rtol=1e-5
     )
-    alpha1 = t.alpha1[0]
+    alpha1 = t.expansion.alpha1[0]
     assert alpha1[0] == pytest.approx(1.0, abs=1e-15)
     diff = np.abs(alpha1[1:83] - np.array(HAZE_L))
     assert np.max(diff) <= 0.52e-5
     assert np.count_nonzero(diff > 0.5e-5) <= 2
-    assert t.expansion_error_estimate[0] < 1e-6
+    assert t.expansion.expansion_error_estimate[0] < 1e-6
 
 
 def test_garcia_siewert_cloud_c1_is_off_in_its_last_digit() -> None:
@@ -108,11 +108,11 @@ def test_garcia_siewert_cloud_c1_is_off_in_its_last_digit() -> None:
     t = do.compute_optics(
         1.33, do.DeirmendjianGamma(**CLOUD_C1_MODEL), [700.0], [0.0, 180.0], expansion=True
     )
-    diff = np.abs(t.alpha1[0, 1:300] - np.array(CLOUD_C1))
+    diff = np.abs(t.expansion.alpha1[0, 1:300] - np.array(CLOUD_C1))
     assert np.max(diff[:35]) <= 0.5e-3
     assert np.max(diff) <= 1.1e-3
     # The l = 1 moment is 3 g.
-    assert t.alpha1[0, 1] == pytest.approx(3 * t.g[0], abs=3e-6)
+    assert t.expansion.alpha1[0, 1] == pytest.approx(3 * t.g[0], abs=3e-6)
 
 
 def test_haze_l_against_scatrs() -> None:
@@ -136,7 +136,7 @@ def test_haze_l_against_scatrs() -> None:
         assert np.max(np.abs(row[:n] - sign * theirs[:n])) <= 1e-6, key
         # Orders beyond ours are below the tolerance in theirs too.
         assert np.max(np.abs(theirs[n:]), initial=0.0) <= 1e-6
-    assert t.cext_um2[0] == pytest.approx(float(result.c_ext), rel=1e-7)
+    assert t.cross_sections.cext_um2[0] == pytest.approx(float(result.c_ext), rel=1e-7)
 
 
 def test_rayleigh_limit() -> None:
@@ -173,9 +173,14 @@ def test_coefficients_reproduce_the_matrix() -> None:
     )  # fmt: skip
     el = expansion.evaluate_matrix(coefficients(t), theta)
     scale = 4 * np.pi * t.phase[0]
-    assert t.matrix_error_estimate is not None
-    tol = float(t.matrix_error_estimate[0])
-    for key, ours in (("a1", t.phase), ("b1", t.f12), ("a3", t.f33), ("b2", t.f34)):
+    assert t.matrix is not None and t.matrix.matrix_error_estimate is not None
+    tol = float(t.matrix.matrix_error_estimate[0])
+    for key, ours in (
+        ("a1", t.phase),
+        ("b1", t.matrix.f12),
+        ("a3", t.matrix.f33),
+        ("b2", t.matrix.f34),
+    ):
         assert np.max(np.abs(el[key] - 4 * np.pi * ours[0]) / scale) <= tol, key
     np.testing.assert_allclose(el["a2"], el["a1"], rtol=1e-10)
     np.testing.assert_allclose(el["a4"], el["a3"], atol=1e-10 * scale.max())
@@ -187,10 +192,12 @@ def test_requested_order_and_padding() -> None:
     d = do.ModifiedGamma(r_eff_um=0.3, v_eff=0.1)
     full = do.compute_optics(1.5, d, [600.0, 800.0], [0.0, 180.0], expansion=True)
     five = do.compute_optics(1.5, d, [600.0, 800.0], [0.0, 180.0], expansion=5)
-    assert five.alpha1.shape == (2, 6)
-    np.testing.assert_array_equal(five.alpha1, full.alpha1[:, :6])
-    wide = do.compute_optics(1.5, d, [600.0], [0.0, 180.0], expansion=full.alpha1.shape[1] + 10)
-    assert np.all(wide.alpha1[0, full.alpha1.shape[1] :] == 0.0)
+    assert five.expansion.alpha1.shape == (2, 6)
+    np.testing.assert_array_equal(five.expansion.alpha1, full.expansion.alpha1[:, :6])
+    wide = do.compute_optics(
+        1.5, d, [600.0], [0.0, 180.0], expansion=full.expansion.alpha1.shape[1] + 10
+    )
+    assert np.all(wide.expansion.alpha1[0, full.expansion.alpha1.shape[1] :] == 0.0)
 
 
 @pytest.mark.parametrize("bad", [-1, 2.5, "all"])

@@ -54,15 +54,15 @@ def test_bohren_huffman_sample_matrix() -> None:
     )
     for i, row in enumerate(rows):
         for key, value in (
-            ("POL_minus_S12_over_S11", -t.f12[0, i] / t.phase[0, i]),
-            ("S33_over_S11", t.f33[0, i] / t.phase[0, i]),
-            ("S34_over_S11", t.f34[0, i] / t.phase[0, i]),
+            ("POL_minus_S12_over_S11", -t.matrix.f12[0, i] / t.phase[0, i]),
+            ("S33_over_S11", t.matrix.f33[0, i] / t.phase[0, i]),
+            ("S34_over_S11", t.matrix.f34[0, i] / t.phase[0, i]),
         ):
             text = row[key]
             # Six significant figures, or the fixed digits of a small value.
             tol = max(half_unit(text), 0.5e-5 * abs(float(text)))
             assert abs(value - float(text)) <= tol + 1e-12, (key, row["theta_deg"], value, text)
-    qback = t.cback_um2[0] / (np.pi * radius**2)
+    qback = t.cross_sections.cback_um2[0] / (np.pi * radius**2)
     assert abs(qback - float(data["scalars"]["Qback"])) <= half_unit(data["scalars"]["Qback"])
 
 
@@ -95,7 +95,7 @@ def test_miev0_polarized_legendre_moments(case: int, x: float) -> None:
         expansion=True,
     )
     coefficients = np.array(
-        [getattr(t, k)[0] for k in ("alpha1", "alpha2", "alpha3", "alpha4", "beta1", "beta2")]
+        [t.quantity(k)[0] for k in ("alpha1", "alpha2", "alpha3", "alpha4", "beta1", "beta2")]
     )
     n_order = coefficients.shape[1]
     mu, w = roots_legendre(n_order + 8)
@@ -151,10 +151,13 @@ def test_matrix_against_brute_force() -> None:
     f11 = ref[0]
     assert np.max(np.abs(t.phase[0] - f11) / f11) <= 1e-4
     for j, key in enumerate(("f12", "f33", "f34"), start=1):
-        assert np.max(np.abs(getattr(t, key)[0] - ref[j]) / f11) <= 1e-4, key
-    assert t.matrix_error_estimate[0] <= t.provenance.quadrature["rtol"]
+        assert np.max(np.abs(t.quantity(key)[0] - ref[j]) / f11) <= 1e-4, key
+    assert t.matrix.matrix_error_estimate[0] <= t.provenance.quadrature["rtol"]
     # Spheres: |F12|, |F33|, |F34| <= F11, and F12^2 + F33^2 + F34^2 <= F11^2.
-    assert np.all(t.f12[0] ** 2 + t.f33[0] ** 2 + t.f34[0] ** 2 <= t.phase[0] ** 2 * (1 + 1e-9))
+    assert np.all(
+        t.matrix.f12[0] ** 2 + t.matrix.f33[0] ** 2 + t.matrix.f34[0] ** 2
+        <= t.phase[0] ** 2 * (1 + 1e-9)
+    )
 
 
 def test_phase_only_path_unchanged_by_the_matrix() -> None:
@@ -164,19 +167,31 @@ def test_phase_only_path_unchanged_by_the_matrix() -> None:
     d = do.ModifiedGamma(r_eff_um=1.6, v_eff=0.2)
     plain = do.compute_optics(1.52 + 0.01j, d, [450.0, 700.0])
     full = do.compute_optics(1.52 + 0.01j, d, [450.0, 700.0], polarization=True)
-    assert plain.f12 is None and plain.alpha1 is None
-    bound = plain.error_estimate + full.error_estimate
+    assert plain.matrix is None and plain.expansion is None
+    bound = plain.quadrature.error_estimate + full.quadrature.error_estimate
     assert np.all(np.max(np.abs(full.phase / plain.phase - 1), axis=1) <= bound)
-    cross_bound = plain.cross_section_error_estimate + full.cross_section_error_estimate
-    assert np.all(np.abs(full.cext_um2 / plain.cext_um2 - 1) <= cross_bound)
+    cross_bound = (
+        plain.quadrature.cross_section_error_estimate + full.quadrature.cross_section_error_estimate
+    )
+    assert np.all(
+        np.abs(full.cross_sections.cext_um2 / plain.cross_sections.cext_um2 - 1) <= cross_bound
+    )
     # Forward: S1(0) = S2(0), so F12 = F34 = 0 and F33 = F11.
-    assert np.all(np.abs(full.f12[:, 0]) <= 1e-12 * full.phase[:, 0])
-    np.testing.assert_allclose(full.f33[:, 0], full.phase[:, 0], rtol=1e-12)
+    assert np.all(np.abs(full.matrix.f12[:, 0]) <= 1e-12 * full.phase[:, 0])
+    np.testing.assert_allclose(full.matrix.f33[:, 0], full.phase[:, 0], rtol=1e-12)
 
 
 def test_backscatter_and_lidar_ratio() -> None:
     """<C_back> = 4 pi P(180) <C_sca> for cross-section weighting (B&H p. 122
     definition; the table's phase function at 180 deg) and S = 4 pi <C_ext> / <C_back>."""
     t = do.compute_optics(1.52 + 0.01j, do.ModifiedGamma(r_eff_um=1.6, v_eff=0.2), [550.0])
-    np.testing.assert_allclose(t.cback_um2, 4 * np.pi * t.phase[:, -1] * t.csca_um2, rtol=3e-4)
-    np.testing.assert_allclose(t.lidar_ratio_sr, 4 * np.pi * t.cext_um2 / t.cback_um2, rtol=1e-15)
+    np.testing.assert_allclose(
+        t.cross_sections.cback_um2,
+        4 * np.pi * t.phase[:, -1] * t.cross_sections.csca_um2,
+        rtol=3e-4,
+    )
+    np.testing.assert_allclose(
+        t.lidar_ratio_sr,
+        4 * np.pi * t.cross_sections.cext_um2 / t.cross_sections.cback_um2,
+        rtol=1e-15,
+    )

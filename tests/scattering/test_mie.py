@@ -184,7 +184,9 @@ def test_wiscombe1979_efficiencies() -> None:
         assert_published(t.qext[0], row["Qext"], label + " Qext")
         assert_published(t.qsca[0], row["Qsca"], label + " Qsca")
         assert_published(
-            t.cabs_um2[0] / t.mean_geometric_cross_section_um2, row["Qabs"], label + " Qabs"
+            t.cabs_um2[0] / t.cross_sections.mean_geometric_cross_section_um2,
+            row["Qabs"],
+            label + " Qabs",
         )
         assert_published(t.g[0], row["g"], label + " g")
 
@@ -258,7 +260,7 @@ def test_monodisperse_equals_miepython(m: complex, x: float) -> None:
     np.testing.assert_allclose(t.g[0], g, rtol=1e-10, atol=1e-13)
     p_ref = miepython.i_unpolarized(np.conj(m), x, np.cos(np.deg2rad(theta)), norm="one")
     np.testing.assert_allclose(t.phase[0], p_ref, rtol=1e-9)
-    assert t.error_estimate[0] == 0.0 and t.n_nodes[0] == 1
+    assert t.quadrature.error_estimate[0] == 0.0 and t.quadrature.n_nodes[0] == 1
 
 
 def test_small_sphere_keeps_precision() -> None:

@@ -56,7 +56,9 @@ def test_identities(r_eff, v_eff, n, k, wavelength, weighting) -> None:
     assert abs(t.g[0]) <= 1
     norm, mean_cos = sphere_integrals(t.phase[0])
     assert abs(norm - 1) < 1e-6
-    tolerance = t.error_estimate[0] + t.cross_section_error_estimate[0] + 1e-12
+    tolerance = (
+        t.quadrature.error_estimate[0] + t.quadrature.cross_section_error_estimate[0] + 1e-12
+    )
     assert abs(mean_cos - t.g[0]) <= tolerance
     assert np.all(t.phase > 0)
 
@@ -68,7 +70,9 @@ def test_g_and_the_tabulated_phase_functions_mean_cosine() -> None:
     )
     _, mean_cos = sphere_integrals(t.phase[0])
     difference = abs(mean_cos - t.g[0])
-    assert difference <= t.error_estimate[0] + t.cross_section_error_estimate[0]
+    assert (
+        difference <= t.quadrature.error_estimate[0] + t.quadrature.cross_section_error_estimate[0]
+    )
     # g itself is the better value: a ten times tighter phase quadrature moves its mean cosine to g.
     fine = do.compute_optics(
         2 + 0.0156j, do.ModifiedGamma(r_eff_um=0.5, v_eff=0.125), [639.0], THETA_GL, rtol=1e-5
@@ -118,7 +122,7 @@ def test_deterministic_and_independent_of_threads() -> None:
     a = do.compute_optics(*args, rtol=1e-3, workers=1)
     b = do.compute_optics(*args, rtol=1e-3, workers=2)
     assert a.phase.tobytes() == b.phase.tobytes()
-    assert a.cext_um2.tobytes() == b.cext_um2.tobytes()
+    assert a.cross_sections.cext_um2.tobytes() == b.cross_sections.cext_um2.tobytes()
     assert a.g.tobytes() == b.g.tobytes()
 
 
@@ -126,8 +130,10 @@ def test_monodisperse_cross_sections_have_units_um2() -> None:
     """<C_ext> = Q_ext pi r^2 in um^2 for a single sphere of radius r."""
     r = 0.7
     t = do.compute_optics(1.5 + 0.01j, do.Monodisperse(radius_um=r), [550.0], [0.0, 180.0])
-    assert t.cext_um2[0] == pytest.approx(t.qext[0] * np.pi * r * r, rel=1e-14)
-    assert t.mean_geometric_cross_section_um2 == pytest.approx(np.pi * r * r, rel=1e-14)
+    assert t.cross_sections.cext_um2[0] == pytest.approx(t.qext[0] * np.pi * r * r, rel=1e-14)
+    assert t.cross_sections.mean_geometric_cross_section_um2 == pytest.approx(
+        np.pi * r * r, rel=1e-14
+    )
 
 
 def test_refractive_index_forms_agree() -> None:

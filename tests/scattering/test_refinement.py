@@ -47,12 +47,18 @@ def test_doubling_nodes_stays_within_error_estimate(weighting: str) -> None:
                 )
             )
         finer = solver.finish(*runs)
-        assert finer.n_nodes == 2 * t.n_nodes[i]
-        assert finer.cross_section_n_nodes == 2 * t.cross_section_n_nodes[i]
-        assert np.max(np.abs(finer.phase / t.phase[i] - 1)) <= t.error_estimate[i]
-        assert abs(finer.cext / t.cext_um2[i] - 1) <= t.cross_section_error_estimate[i]
-        assert abs(finer.csca / t.csca_um2[i] - 1) <= t.cross_section_error_estimate[i]
-        assert abs(finer.g - t.g[i]) <= t.cross_section_error_estimate[i]
+        assert finer.n_nodes == 2 * t.quadrature.n_nodes[i]
+        assert finer.cross_section_n_nodes == 2 * t.quadrature.cross_section_n_nodes[i]
+        assert np.max(np.abs(finer.phase / t.phase[i] - 1)) <= t.quadrature.error_estimate[i]
+        assert (
+            abs(finer.cext / t.cross_sections.cext_um2[i] - 1)
+            <= t.quadrature.cross_section_error_estimate[i]
+        )
+        assert (
+            abs(finer.csca / t.cross_sections.csca_um2[i] - 1)
+            <= t.quadrature.cross_section_error_estimate[i]
+        )
+        assert abs(finer.g - t.g[i]) <= t.quadrature.cross_section_error_estimate[i]
 
 
 def test_phase_refinement_errors_equal_the_numpy_formula():

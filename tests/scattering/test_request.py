@@ -107,7 +107,7 @@ def test_a_configuration_is_built_from_its_request() -> None:
     table = build_table(config, workers=1)
     direct = compute_request(request, workers=1, name=config.name)
     np.testing.assert_array_equal(table.phase, direct.phase)
-    np.testing.assert_array_equal(table.cext_um2, direct.cext_um2)
+    np.testing.assert_array_equal(table.cross_sections.cext_um2, direct.cross_sections.cext_um2)
     part = mie_request(config, wavelength_nm=np.array([650.0]))
     np.testing.assert_array_equal(part.m, request.m[1:])
 

@@ -109,7 +109,7 @@ def test_dhg_preview_against_an_independent_recomputation(atmosphere, medium, ex
 def test_float16_error_within_the_half_float_epsilon(medium, exact) -> None:  # type: ignore[no-untyped-def]
     approx, _ = approximate_medium(medium, Approximations(float16=True))
     for t16, t in zip(approx.tables, medium.tables, strict=True):
-        if not np.any(t.csca_um2 > 0):
+        if not np.any(t.cross_sections.csca_um2 > 0):
             continue
         assert np.all(t.phase >= 2.0**-14)  # binary16's normal range: relative rounding holds
         rel = np.abs(t16.phase / t.phase - 1.0)
@@ -171,7 +171,7 @@ def test_too_few_angles_refused_with_the_smallest_that_does(atmosphere, medium) 
     need = int(info.value.args[0].rsplit("theta:", 1)[1])
     with pytest.raises(ValueError, match=f"the smallest that does is theta:{need}$"):
         check_approximations(Approximations(angles="theta:19"), atmosphere)  # before the medium
-    scattering = [t for t in medium.tables if np.any(t.csca_um2 > 0)]
+    scattering = [t for t in medium.tables if np.any(t.cross_sections.csca_um2 > 0)]
     assert max(_angle_error(t, need) for t in scattering) <= 0.005
     assert max(_angle_error(t, need - 1) for t in scattering) > 0.005
     check_approximations(Approximations(angles=f"theta:{need}"), medium)  # accepted

@@ -59,7 +59,9 @@ def test_collienne_is_the_thesis_model() -> None:
     grid = (360.0, 440.0, 475.0, 510.0, 680.0, 830.0)
     atm = cmp.mars_sky_atmosphere("collienne", wavelength_nm=grid)
     mol, aer = atm.constituents
-    beta = mol.table.csca_um2 * 1e-12 * mol.table.number_density_per_m3
+    beta = (
+        mol.table.cross_sections.csca_um2 * 1e-12 * mol.table.cross_sections.number_density_per_m3
+    )
     c = phase.COLLIENNE2013_MARS
     expected = [5.75e-6, 5.75e-6, (5.75e-6 + 13.57e-6) / 2, 13.57e-6, 19.918e-6, 19.918e-6]
     np.testing.assert_allclose(beta, expected, rtol=1e-12)
@@ -72,7 +74,9 @@ def test_collienne_is_the_thesis_model() -> None:
         tau[0], np.array(expected) * 8000.0 * (1 - math.exp(-top / 8000.0)), rtol=2e-3
     )
     np.testing.assert_allclose(tau[1], cmp.COLLIENNE_AEROSOL_OPTICAL_DEPTH, rtol=2e-3)
-    np.testing.assert_allclose(aer.table.csca_um2 / aer.table.cext_um2, 0.9, rtol=1e-12)
+    np.testing.assert_allclose(
+        aer.table.cross_sections.csca_um2 / aer.table.cross_sections.cext_um2, 0.9, rtol=1e-12
+    )
     np.testing.assert_allclose(
         aer.table.g, phase.cornette_shanks1992_asymmetry(g=0.8), rtol=0, atol=2e-3
     )

@@ -76,10 +76,11 @@ def _rayleigh_layer(tau: float, omega: float) -> Medium:
     mol = base.constituent("molecules").table
     mu = np.cos(np.deg2rad(mol.theta_deg))
     phase = (3.0 / (16.0 * math.pi)) * (1.0 + mu**2)
-    cext = mol.cext_um2
+    cext = mol.cross_sections.cext_um2
     n0 = 0.5 * tau / (cext[0] * 1e-12 * TOP_M)
     table = mol.replace(
-        phase=phase[None, :], csca_um2=omega * cext, number_density_per_m3=float(n0)
+        phase=phase[None, :],
+        cross_sections={"csca_um2": omega * cext, "number_density_per_m3": float(n0)},
     )
     flat = PiecewiseLinearProfile(altitude_m=[0.0, TOP_M], density=[1.0, 1.0])
     atm = sets.Atmosphere(

@@ -33,13 +33,16 @@ def thin_earth() -> Medium:
             sets.Constituent(
                 role="molecules",
                 table=mol.table.replace(
-                    number_density_per_m3=mol.table.number_density_per_m3 * 1e-4
+                    cross_sections={
+                        "number_density_per_m3": mol.table.cross_sections.number_density_per_m3
+                        * 1e-4
+                    }
                 ),
                 profile=mol.profile,
             ),
             sets.Constituent(
                 role="aerosols",
-                table=aer.table.replace(number_density_per_m3=1e-30),
+                table=aer.table.replace(cross_sections={"number_density_per_m3": 1e-30}),
                 profile=aer.profile,
             ),
         ),

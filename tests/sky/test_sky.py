@@ -39,7 +39,7 @@ def _flat_mars(dust: do.Table, tau: float) -> sets.Atmosphere:
 def test_energy_is_conserved_without_absorption(dust: do.Table) -> None:
     # Identity: with no absorption in the atmosphere, the flux leaving at the
     # top plus the flux absorbed by the ground equals the incident flux.
-    clear = dust.replace(csca_um2=dust.cext_um2)
+    clear = dust.replace(cross_sections={"csca_um2": dust.cross_sections.cext_um2})
     medium = Medium.from_atmosphere(_flat_mars(clear, 1.0))
     for albedo in (0.0, 0.3):
         f = solve_orders(
@@ -65,7 +65,11 @@ def test_optically_thin_limit_is_single_scattering(dust: do.Table) -> None:
         constituents=(
             sets.Constituent(
                 role="molecules",
-                table=mol.replace(number_density_per_m3=mol.number_density_per_m3 * 1e-4),
+                table=mol.replace(
+                    cross_sections={
+                        "number_density_per_m3": mol.cross_sections.number_density_per_m3 * 1e-4
+                    }
+                ),
                 profile=atm.constituent("molecules").profile,
             ),
             atm.constituent("aerosols"),

@@ -30,7 +30,12 @@ def _thin(atm: sets.Atmosphere, factor: float) -> sets.Atmosphere:
         constituents=tuple(
             sets.Constituent(
                 role=c.role,
-                table=c.table.replace(number_density_per_m3=c.table.number_density_per_m3 * factor),
+                table=c.table.replace(
+                    cross_sections={
+                        "number_density_per_m3": c.table.cross_sections.number_density_per_m3
+                        * factor
+                    }
+                ),
                 profile=c.profile,
             )
             for c in atm.constituents
@@ -65,9 +70,9 @@ def test_thin_limb_is_single_scattering_along_the_chord(dust: do.Table) -> None:
         for c in atm.constituents:
             col = np.trapezoid(c.profile.relative_density(np.minimum(z, r_top - r_p)), s)
             t = c.table
-            if t.csca_um2 is None or not np.any(t.csca_um2 > 0):
+            if t.cross_sections is None or not np.any(t.cross_sections.csca_um2 > 0):
                 continue
-            sca = t.csca_um2 * 1e-12 * t.number_density_per_m3
+            sca = t.cross_sections.csca_um2 * 1e-12 * t.cross_sections.number_density_per_m3
             expect[i] += sca * col * t.phase_at(np.array([beta]))[:, 0]
     got = limb.radiance[:, 0, :]
     np.testing.assert_allclose(got, expect, rtol=5e-3)

@@ -221,12 +221,12 @@ def _constituent_files(
         raise TypeError(
             f"constituent {name!r}: table must be a dustoptics.table.Table; got {type(table).__name__}"
         )
-    if not table.has_cross_sections:
+    if table.cross_sections is None:
         raise ValueError(
             f"constituent {name!r}: table {table.name!r} holds a phase function only; CosmoScout "
             "needs scattering and absorption coefficients (a table with cross-sections)"
         )
-    if table.number_density_per_m3 is None:
+    if table.cross_sections is None or table.cross_sections.number_density_per_m3 is None:
         raise ValueError(
             f"constituent {name!r}: table {table.name!r} has no number_density_per_m3; give the "
             "peak number density [m^-3] (Table.replace(number_density_per_m3=...)) so that "
@@ -235,8 +235,8 @@ def _constituent_files(
     profile = _check_density(name, density)
     lam = [cosmoscout_wavelength_text(w) for w in floats("wavelength_nm", table.wavelength_nm)]
     files: dict[Path, bytes] = {}
-    assert table.csca_um2 is not None  # checked by _check_density's caller
-    scatters = bool(np.any(table.csca_um2 > 0))
+    assert table.cross_sections is not None  # checked by _check_density's caller
+    scatters = bool(np.any(table.cross_sections.csca_um2 > 0))
     if scatters:
         theta = cosmoscout_phase_angles(n_theta)
         phase = table.phase_at(theta)
@@ -424,8 +424,19 @@ def write_cosmoscout_files(
         )
     density = np.asarray(density, dtype=float)
     peak = float(np.max(density)) if density.size else 0.0
-    if density.ndim == 1 and 0.0 < peak < 1.0 and table.number_density_per_m3 is not None:
-        table = table.replace(number_density_per_m3=table.number_density_per_m3 * peak)
+    if (
+        density.ndim == 1
+        and 0.0 < peak < 1.0
+        and (
+            table.cross_sections is not None
+            and table.cross_sections.number_density_per_m3 is not None
+        )
+    ):
+        table = table.replace(
+            cross_sections={
+                "number_density_per_m3": table.cross_sections.number_density_per_m3 * peak
+            }
+        )
         density = density / peak
     return write_cosmoscout_constituent(
         table, out_dir, name=table.name if name is None else name, density=density,
@@ -864,7 +875,7 @@ def _phase_columns(atmosphere: Atmosphere, n_theta: int | None, tolerance: float
     tables = [
         c.table
         for c in atmosphere.constituents
-        if c.table.csca_um2 is not None and np.any(c.table.csca_um2 > 0)
+        if c.table.cross_sections is not None and np.any(c.table.cross_sections.csca_um2 > 0)
     ]
 
     def ok(n: int) -> bool:

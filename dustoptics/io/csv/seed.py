@@ -65,6 +65,7 @@ from dustoptics.table import (
     UNITS,
     Provenance,
     Table,
+    grouped_fields,
 )
 
 #: Optional per-wavelength quantities of radiative-transfer tables, kept in the summary.
@@ -156,7 +157,10 @@ class PhaseFunctionSpectrum:
 
 
 def _columns(table: Table) -> tuple[tuple[str, str, str, int, bool], ...]:
-    has_area = table.mean_geometric_cross_section_um2 is not None
+    has_area = (
+        table.cross_sections is not None
+        and table.cross_sections.mean_geometric_cross_section_um2 is not None
+    )
     return tuple(c for c in EXTINCTION_COLUMNS if has_area or c[0] not in _EFFICIENCIES)
 
 
@@ -173,7 +177,7 @@ def _phase_csv_bytes(table: Table) -> bytes:
 def _extinction_csv_bytes(table: Table) -> bytes:
     columns = _columns(table)
     data = [
-        [shift(v, exponent) for v in floats(attribute, getattr(table, attribute))]
+        [shift(v, exponent) for v in floats(attribute, table.quantity(attribute))]
         for _header, _unit, attribute, exponent, _stored in columns
     ]
     lines = [",".join(c[0] for c in columns)]
@@ -199,7 +203,7 @@ def _summary_bytes(table: Table, hashes: dict[str, str]) -> bytes:
             "n_theta": int(table.theta_deg.size),
         }
     }
-    if table.has_cross_sections:
+    if table.cross_sections is not None:
         files[EXTINCTION_FILENAME] = {
             "sha256": hashes[EXTINCTION_FILENAME],
             "columns": [
@@ -214,12 +218,16 @@ def _summary_bytes(table: Table, hashes: dict[str, str]) -> bytes:
         }
     per_wavelength: dict[str, Any] = {
         "wavelength_nm": table.wavelength_nm.tolist(),
-        "error_estimate": _optional_list(table.error_estimate),
-        "cross_section_error_estimate": _optional_list(table.cross_section_error_estimate),
-        "n_nodes": None if table.n_nodes is None else table.n_nodes.tolist(),
+        "error_estimate": _optional_list(table.quantity("error_estimate")),
+        "cross_section_error_estimate": _optional_list(
+            table.quantity("cross_section_error_estimate")
+        ),
+        "n_nodes": None
+        if (table.quadrature is None or table.quadrature.n_nodes is None)
+        else table.quadrature.n_nodes.tolist(),
         "cross_section_n_nodes": None
-        if table.cross_section_n_nodes is None
-        else table.cross_section_n_nodes.tolist(),
+        if (table.quadrature is None or table.quadrature.cross_section_n_nodes is None)
+        else table.quadrature.cross_section_n_nodes.tolist(),
         "refractive_index_real": None
         if table.refractive_index is None
         else table.refractive_index.real.tolist(),
@@ -228,12 +236,12 @@ def _summary_bytes(table: Table, hashes: dict[str, str]) -> bytes:
         else table.refractive_index.imag.tolist(),
     }
     for key in _EXTRA_PER_WAVELENGTH:
-        if getattr(table, key) is not None:
-            per_wavelength[key] = _optional_list(getattr(table, key))
+        if table.quantity(key) is not None:
+            per_wavelength[key] = _optional_list(table.quantity(key))
     for key in (*MATRIX_FIELDS, *EXPANSION_FIELDS):
-        if getattr(table, key) is not None:
-            per_wavelength[key] = np.asarray(getattr(table, key), dtype=np.float64).tolist()
-    if not table.has_cross_sections:
+        if table.quantity(key) is not None:
+            per_wavelength[key] = np.asarray(table.quantity(key), dtype=np.float64).tolist()
+    if table.cross_sections is None:
         per_wavelength["g"] = table.g.tolist()
     summary = {
         "format": FORMAT,
@@ -242,10 +250,10 @@ def _summary_bytes(table: Table, hashes: dict[str, str]) -> bytes:
         "input_hash": table.provenance.input_hash,
         "provenance": table.provenance.to_dict(),
         "phase_normalization": PHASE_NORMALIZATION,
-        "has_cross_sections": table.has_cross_sections,
-        "mean_geometric_cross_section_um2": table.mean_geometric_cross_section_um2,
-        "number_density_per_m3": table.number_density_per_m3,
-        **{key: getattr(table, key) for key in _EXTRA_SCALARS if getattr(table, key) is not None},
+        "has_cross_sections": table.cross_sections is not None,
+        "mean_geometric_cross_section_um2": table.quantity("mean_geometric_cross_section_um2"),
+        "number_density_per_m3": table.quantity("number_density_per_m3"),
+        **{key: table.quantity(key) for key in _EXTRA_SCALARS if table.quantity(key) is not None},
         "per_wavelength": per_wavelength,
         "files": files,
         "units": {key: UNITS[key][0] for key in _SUMMARY_UNITS},
@@ -257,7 +265,9 @@ def _summary_bytes(table: Table, hashes: dict[str, str]) -> bytes:
 def seed_csv_paths(table: Table, directory: str | os.PathLike[str]) -> list[Path]:
     """The files :func:`write_seed_csv` writes for ``table`` into ``directory``."""
     root = Path(directory)
-    names = SEED_CSV_FILES if table.has_cross_sections else (PHASE_FILENAME, SUMMARY_FILENAME)
+    names = (
+        SEED_CSV_FILES if table.cross_sections is not None else (PHASE_FILENAME, SUMMARY_FILENAME)
+    )
     return [root / name for name in names]
 
 
@@ -323,7 +333,7 @@ def write_seed_csv(
         raise TypeError(f"table must be a dustoptics.table.Table; got {type(table).__name__}")
     paths = seed_csv_paths(table, directory)
     payload = {PHASE_FILENAME: _phase_csv_bytes(table)}
-    if table.has_cross_sections:
+    if table.cross_sections is not None:
         payload[EXTINCTION_FILENAME] = _extinction_csv_bytes(table)
     hashes = {name: hashlib.sha256(data).hexdigest() for name, data in payload.items()}
     payload[SUMMARY_FILENAME] = _summary_bytes(table, hashes)
@@ -507,7 +517,7 @@ def _check_derived(path: Path, table: Table, columns: dict[str, np.ndarray]) -> 
         if stored or attribute not in columns:
             continue
         try:
-            expected = getattr(table, attribute)
+            expected = table.quantity(attribute)
         except ValueError as exc:
             raise FormatError(f"{path}: column {header} cannot be checked: {exc}") from None
         if not np.array_equal(columns[attribute], expected):
@@ -642,15 +652,17 @@ def read_seed_csv(directory: str | os.PathLike[str], *, verify: bool = True) -> 
             wavelength_nm=phase.wavelength_nm,
             theta_deg=phase.theta_deg,
             phase=phase.phase,
-            error_estimate=array("error_estimate"),
-            cross_section_error_estimate=array("cross_section_error_estimate"),
-            n_nodes=counts("n_nodes"),
-            cross_section_n_nodes=counts("cross_section_n_nodes"),
             refractive_index=refractive_index(),
-            mean_geometric_cross_section_um2=summary["mean_geometric_cross_section_um2"],
-            number_density_per_m3=summary["number_density_per_m3"],
             provenance=Provenance.from_dict(summary["provenance"]),
-            **fields,
+            **grouped_fields(
+                fields,
+                error_estimate=array("error_estimate"),
+                cross_section_error_estimate=array("cross_section_error_estimate"),
+                n_nodes=counts("n_nodes"),
+                cross_section_n_nodes=counts("cross_section_n_nodes"),
+                mean_geometric_cross_section_um2=summary["mean_geometric_cross_section_um2"],
+                number_density_per_m3=summary["number_density_per_m3"],
+            ),
         ),
     )
     if columns:

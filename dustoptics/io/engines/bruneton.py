@@ -425,7 +425,9 @@ def bruneton_mie(table: Any) -> dict[str, Any]:
         [m^-1], ``mie_phase_function_g`` (Cornette-Shanks fit at 550 nm) and
         that fit's errors.
     """
-    if table.number_density_per_m3 is None or table.cext_um2 is None:
+    if (
+        table.cross_sections is None or table.cross_sections.number_density_per_m3 is None
+    ) or table.cross_sections is None:
         raise ValueError(
             f"table {table.name!r} needs cross-sections and a number density for Bruneton's "
             "mie_scattering and mie_extinction [m^-1]"
@@ -852,7 +854,7 @@ def _write_bruneton_table(
     mie = {
         "model": "E. Bruneton, precomputed_atmospheric_scattering (2017), atmosphere::Model",
         "units": {"wavelengths": "nm", "mie_scattering, mie_extinction": "m-1 at the density 1"},
-        "number_density_per_m3": table.number_density_per_m3,
+        "number_density_per_m3": table.quantity("number_density_per_m3"),
         "input_hash": table.provenance.input_hash,
         **bruneton_mie(table),
     }

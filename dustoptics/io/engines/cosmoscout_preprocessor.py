@@ -186,8 +186,11 @@ def _columns(atmosphere: Atmosphere) -> list[_Column]:
     written = atmosphere.cosmoscout_constituents()
     for c in atmosphere.constituents:
         table, density = written[atmosphere.file_prefix(c.role)]
-        n0 = c.table.number_density_per_m3
-        assert n0 is not None and table.number_density_per_m3 is not None
+        n0 = c.table.quantity("number_density_per_m3")
+        assert n0 is not None and (
+            table.cross_sections is not None
+            and table.cross_sections.number_density_per_m3 is not None
+        )
         out.append(
             _Column(
                 density=np.asarray(density, dtype=np.float32),
@@ -195,7 +198,7 @@ def _columns(atmosphere: Atmosphere) -> list[_Column]:
                 exact_tau=np.asarray(c.table.beta_ext_per_m, dtype=np.float64)
                 * c.profile.column_length_m(top_altitude_m=atmosphere.thickness_m),
                 profile=c.profile,
-                peak=table.number_density_per_m3 / n0,
+                peak=table.cross_sections.number_density_per_m3 / n0,
             )
         )
     return out
@@ -512,7 +515,7 @@ def _scattering_sampling(
     thin = min(
         effective_scale_height_m(c.profile, top_altitude_m=atmosphere.thickness_m)
         for c in atmosphere.constituents
-        if c.table.csca_um2 is not None and np.any(c.table.csca_um2 > 0)
+        if c.table.cross_sections is not None and np.any(c.table.cross_sections.csca_um2 > 0)
     )
     root = math.sqrt(12.0 * tol)
     path = math.sqrt(atmosphere.atmosphere_radius_m**2 - atmosphere.planet_radius_m**2)

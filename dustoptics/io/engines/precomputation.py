@@ -171,8 +171,8 @@ def _scatterers(atmosphere: Atmosphere, wavelength_nm: np.ndarray | None) -> lis
     out = []
     for c in atmosphere.constituents:
         t = c.table
-        assert t.csca_um2 is not None  # a constituent has cross-sections
-        if not np.any(t.csca_um2 > 0):
+        assert t.cross_sections is not None  # a constituent has cross-sections
+        if not np.any(t.cross_sections.csca_um2 > 0):
             continue
         out.append(
             _Scatterer(

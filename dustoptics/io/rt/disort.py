@@ -56,19 +56,19 @@ DISORT_SUFFIX = "_disort.txt"
 
 def disort_moments(table: Any, fmt: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Wavelengths, cext and DISORT's moments of ``table``; a ValueError names what is missing."""
-    if table.alpha1 is None:
+    if table.expansion is None:
         raise ValueError(
             f"format {fmt!r} needs the phase function's Legendre moments, but table "
             f"{table.name!r} has no expansion coefficients: compute it with "
             "compute_optics(..., expansion=True) (or expansion=N for N orders), save it "
             "(table.save) and export that file"
         )
-    if table.cext_um2 is None:
+    if table.cross_sections is None:
         raise ValueError(
             f"format {fmt!r} needs extinction and scattering cross-sections; table "
             f"{table.name!r} has none (a phase-function-only table)"
         )
-    return table.wavelength_nm, table.cext_um2, table.pmom
+    return table.wavelength_nm, table.cross_sections.cext_um2, table.pmom
 
 
 def header_lines(table: Any, title: str) -> list[str]:
@@ -102,7 +102,7 @@ def disort_text(table: Any) -> str:
     """
     wl, cext, pmom = disort_moments(table, "disort")
     ssa = table.ssa
-    err = table.expansion_error_estimate
+    err = table.expansion.expansion_error_estimate
     err_rows = np.full(wl.shape, np.nan) if err is None else np.asarray(err, dtype=np.float64)
     lines = header_lines(table, "dustoptics DISORT moments file, format version 1")
     lines += [
@@ -111,7 +111,7 @@ def disort_text(table: Any) -> str:
         "moment; nan: not estimated), pmom_0 ... [1]",
         *moment_lines(pmom),
         f"# accuracy: cross-sections and g relative error <= "
-        f"{bound_text(table.cross_section_error_estimate)}",
+        f"{bound_text(table.quantity('cross_section_error_estimate'))}",
     ]
     for i in range(wl.size):
         row = [number(wl[i]), number(cext[i]), number(ssa[i]), repr(float(err_rows[i]))]

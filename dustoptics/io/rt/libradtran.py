@@ -87,13 +87,15 @@ def libradtran_texts(table: Any, *, bottom_km: float = 0.0, top_km: float = 1.0)
     if not top > bottom:
         raise ValueError(f"top_km must exceed bottom_km = {bottom!r}; got top_km = {top!r}")
     wl, cext, pmom = disort_moments(table, "libradtran")
-    if table.number_density_per_m3 is None:
+    if table.cross_sections is None or table.cross_sections.number_density_per_m3 is None:
         raise ValueError(
             f"format 'libradtran' needs an extinction coefficient [km-1], but table "
             f"{table.name!r} has no number density: give --number-density-per-m3 (command "
             "line) or table.replace(number_density_per_m3=...)"
         )
-    n_m3 = check_positive("number_density_per_m3", table.number_density_per_m3, unit="m-3")
+    n_m3 = check_positive(
+        "number_density_per_m3", table.cross_sections.number_density_per_m3, unit="m-3"
+    )
     stem = safe_stem(table.name)
     layer_name = stem + LIBRADTRAN_LAYER_SUFFIX
     ext_km = np.asarray(cext, dtype=np.float64) * (n_m3 * _UM2_PER_M3_TO_PER_KM)
@@ -107,9 +109,9 @@ def libradtran_texts(table: Any, *, bottom_km: float = 0.0, top_km: float = 1.0)
         f"# extinction coefficient = N <C_ext> with N = {number(n_m3)} m-3 "
         "(1e-9 N[m-3] cext[um2] km-1)",
         *moment_lines(pmom),
-        f"# accuracy: moments error <= {bound_text(table.expansion_error_estimate)}; "
+        f"# accuracy: moments error <= {bound_text(table.expansion.expansion_error_estimate)}; "
         f"cross-sections and g relative error <= "
-        f"{bound_text(table.cross_section_error_estimate)}",
+        f"{bound_text(table.quantity('cross_section_error_estimate'))}",
     ]
     ssa = table.ssa
     for i in range(wl.size):

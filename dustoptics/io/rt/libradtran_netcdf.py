@@ -129,18 +129,18 @@ _FILE_INFO = "libRadtran optical properties (the mie tool's netCDF layout), writ
 def _needs(table: Any) -> None:
     """A ValueError naming what the table lacks for this format."""
     fmt = "libradtran-nc"
-    if table.alpha1 is None or table.beta2 is None:
+    if table.expansion is None:
         raise ValueError(
             f"format {fmt!r} needs the scattering matrix's expansion coefficients, but table "
             f"{table.name!r} has none: compute it with compute_optics(..., expansion=True) "
             "(or optics.expansion = true in a configuration)"
         )
-    if table.cext_um2 is None:
+    if table.cross_sections is None:
         raise ValueError(
             f"format {fmt!r} needs extinction and scattering cross-sections; table "
             f"{table.name!r} has none (a phase function only)"
         )
-    if table.number_density_per_m3 is None:
+    if table.cross_sections is None or table.cross_sections.number_density_per_m3 is None:
         raise ValueError(
             f"format {fmt!r} needs a number density for its aerosol species profile, but table "
             f"{table.name!r} has none: give --number-density-per-m3 (command line) or "
@@ -180,7 +180,7 @@ def libradtran_matrix_moments(table: Any) -> np.ndarray:
     """
 
     keys = ("alpha1", "alpha2", "alpha3", "alpha4", "beta1", "beta2")
-    coefficients = np.stack([np.asarray(getattr(table, k), dtype=np.float64) for k in keys], 1)
+    coefficients = np.stack([np.asarray(table.quantity(k), dtype=np.float64) for k in keys], 1)
     n_wl, _, n_order = coefficients.shape
     mu, weight = legendre.leggauss(n_order + 1)
     theta = np.rad2deg(np.arccos(mu))
@@ -234,8 +234,8 @@ def libradtran_netcdf_bytes(table: Any) -> bytes:
     f.normalization = (
         "pmom includes the factor 2l+1; P(mu) = sum_l pmom[l] P_l(mu); pmom[P11, 0] = 1"
     )
-    f.expansion_error_estimate = bound_text(table.expansion_error_estimate)
-    f.cross_section_error_estimate = bound_text(table.cross_section_error_estimate)
+    f.expansion_error_estimate = bound_text(table.expansion.expansion_error_estimate)
+    f.cross_section_error_estimate = bound_text(table.quantity("cross_section_error_estimate"))
     f.createDimension("nlam", n_wl)
     f.createDimension("nmommax", n_order + 1)
     f.createDimension("nphamat", n_el)
@@ -251,7 +251,7 @@ def libradtran_netcdf_bytes(table: Any) -> bytes:
     var("wavelen", "d", ("nlam",), table.wavelength_nm * 1e-3, "wavelength", "micrometer")
     var("hum", "d", ("nhum",), [0.0], "relative humidity (dust does not swell)", "per cent")
     two = ("nlam", "nhum")
-    ext = np.asarray(table.cext_um2, dtype=np.float64) * _UM2_TO_KM_CM3
+    ext = np.asarray(table.cross_sections.cext_um2, dtype=np.float64) * _UM2_TO_KM_CM3
     var("ext", "d", two, ext[:, None], "extinction coefficient per particle per cm3", "km^-1 cm^3")
     var("ssa", "d", two, np.asarray(table.ssa)[:, None], "single scattering albedo", "-")
     var("gg", "d", two, np.asarray(table.g)[:, None], "asymmetry factor", "-")
@@ -299,7 +299,7 @@ def libradtran_species_text(table: Any, *, bottom_km: float = 0.0, top_km: float
         raise ValueError(f"top_km must exceed bottom_km = {bottom!r}; got top_km = {top!r}")
     _needs(table)
     stem = safe_stem(table.name)
-    n_cm3 = float(table.number_density_per_m3) * 1e-6
+    n_cm3 = float(table.cross_sections.number_density_per_m3) * 1e-6
     lines = [
         *header_lines(table, "dustoptics libRadtran aerosol species profile, format version 1"),
         f"# uvspec input: aerosol_default + aerosol_species_library ./ + aerosol_species_file "

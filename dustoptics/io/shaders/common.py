@@ -419,17 +419,19 @@ def shader_channels(
     # Scattering-weighted channels when the table has cross-sections, so that
     # csca_c * P_c is the channel of csca * P (see dustoptics.colour.channel_phase).
     phase64 = channel_phase(
-        chosen, np.asarray(table.phase_at(theta), dtype=np.float64), csca_um2=table.csca_um2
+        chosen,
+        np.asarray(table.phase_at(theta), dtype=np.float64),
+        csca_um2=table.quantity("csca_um2"),
     )
     phase32 = np.ascontiguousarray(phase64.T.astype(np.float32))
     integral = np.asarray(sphere_integral(phase32.T.astype(np.float64), theta_deg=theta))
     g = channel_phase(
-        chosen, np.asarray(table.g, dtype=np.float64)[:, None], csca_um2=table.csca_um2
+        chosen, np.asarray(table.g, dtype=np.float64)[:, None], csca_um2=table.quantity("csca_um2")
     )[:, 0]
     cext = csca = None
-    if table.cext_um2 is not None:
-        cext = weights @ np.asarray(table.cext_um2, dtype=np.float64) * _UM2_TO_M2
-        csca = weights @ np.asarray(table.csca_um2, dtype=np.float64) * _UM2_TO_M2
+    if table.cross_sections is not None:
+        cext = weights @ np.asarray(table.cross_sections.cext_um2, dtype=np.float64) * _UM2_TO_M2
+        csca = weights @ np.asarray(table.cross_sections.csca_um2, dtype=np.float64) * _UM2_TO_M2
     for array in (weights, theta, phase32, integral, g, cext, csca):
         if array is not None:
             array.setflags(write=False)
@@ -444,7 +446,9 @@ def shader_channels(
         g=g,
         cext_m2=cext,
         csca_m2=csca,
-        number_density_per_m3=table.number_density_per_m3 if cext is not None else None,
+        number_density_per_m3=table.cross_sections.number_density_per_m3
+        if cext is not None
+        else None,
     )
 
 

@@ -237,7 +237,7 @@ def phase_texture(
         chosen = choose_channels(
             table, channels_nm=channels_nm, colour=colour, min_band_coverage=min_band_coverage
         )
-        exact = channel_phase(chosen, rows, csca_um2=table.csca_um2)  # (3, n_angles)
+        exact = channel_phase(chosen, rows, csca_um2=table.quantity("csca_um2"))  # (3, n_angles)
         image64 = exact.T[None, :, :]  # (1, n_angles, 3)
         names: tuple[str, ...] = ("R", "G", "B")
         channel_info = {
@@ -246,7 +246,7 @@ def phase_texture(
             "wavelength_nm": chosen.centroid_nm.tolist(),
             "descriptions": list(chosen.descriptions),
             "weights_over_table_wavelengths": chosen.weights.tolist(),
-            "scattering_weighted": table.csca_um2 is not None,
+            "scattering_weighted": table.cross_sections is not None,
         }
     else:
         if channels_nm is not None or colour is not None:

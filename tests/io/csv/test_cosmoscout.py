@@ -26,7 +26,7 @@ from dustoptics.io.csv.cosmoscout import (
     write_cosmoscout_constituent,
     write_cosmoscout_set,
 )
-from dustoptics.table import Table
+from dustoptics.table import CrossSections, Table
 
 WAVELENGTHS_NM = [440.0, 550.0, 680.0]
 DENSITY = np.exp(
@@ -53,9 +53,9 @@ def _table(
         theta_deg=theta,
         phase=phase,
         g=np.zeros(n),
-        cext_um2=np.full(n, cext),
-        csca_um2=np.full(n, csca),
-        number_density_per_m3=density,
+        cross_sections=CrossSections(
+            cext_um2=np.full(n, cext), csca_um2=np.full(n, csca), number_density_per_m3=density
+        ),
     )
 
 
@@ -216,14 +216,14 @@ def test_mismatched_wavelengths_are_refused(aerosols, tmp_path):
 def test_tables_without_what_cosmoscout_needs(aerosols, tmp_path):
     with pytest.raises(ValueError, match="no number_density_per_m3"):
         write_cosmoscout_constituent(
-            aerosols.replace(number_density_per_m3=None),
+            aerosols.replace(cross_sections={"number_density_per_m3": None}),
             tmp_path,
             name="dust",
             density=DENSITY,
         )
     with pytest.raises(ValueError, match="phase function only"):
         write_cosmoscout_constituent(
-            aerosols.replace(cext_um2=None, csca_um2=None),
+            aerosols.replace(cross_sections=None),
             tmp_path,
             name="dust",
             density=DENSITY,

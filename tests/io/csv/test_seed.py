@@ -44,14 +44,14 @@ def table() -> Table:
         workers=1,
         name="mars-dust",
     )
-    return optics.replace(number_density_per_m3=1e8)
+    return optics.replace(cross_sections={"number_density_per_m3": 1e8})
 
 
 def _regridded(table: Table, wavelengths_nm: np.ndarray) -> Table:
     """The table's numbers repeated onto another wavelength grid (layout tests only)."""
     idx = np.arange(wavelengths_nm.size) % table.wavelength_nm.size
     changes = {
-        name: getattr(table, name)[idx]
+        name: table.quantity(name)[idx]
         for name in (*PER_WAVELENGTH, "n_nodes", "cross_section_n_nodes", "refractive_index")
     }
     return table.replace(wavelength_nm=wavelengths_nm, phase=table.phase[idx], **changes)
@@ -73,14 +73,14 @@ def test_round_trip_is_bit_exact_with_provenance(table, tmp_path):
 
 
 def test_phase_only_table_writes_no_extinction_file(table, tmp_path):
-    phase_only = table.replace(cext_um2=None, csca_um2=None, mean_geometric_cross_section_um2=None)
+    phase_only = table.replace(cross_sections=None)
     paths = write_seed_csv(phase_only, tmp_path)
     assert [p.name for p in paths] == [PHASE_FILENAME, SUMMARY_FILENAME]
     assert read_seed_csv(tmp_path).equals(phase_only)  # g comes back from the summary
 
 
 def test_molecule_table_has_no_efficiency_columns(table, tmp_path):
-    molecule = table.replace(mean_geometric_cross_section_um2=None)
+    molecule = table.replace(cross_sections={"mean_geometric_cross_section_um2": None})
     write_seed_csv(molecule, tmp_path)
     header = (tmp_path / EXTINCTION_FILENAME).read_text().splitlines()[0]
     assert header == "wavelength_nm,cext_m2,csca_m2,cabs_m2,ssa,g"
@@ -94,8 +94,8 @@ def test_cross_sections_are_written_in_m2(table, tmp_path):
     rows = np.array([[float(c) for c in line.split(",")] for line in lines[1:]])
     np.testing.assert_array_equal(rows[:, 0], table.wavelength_nm)
     # 1 um^2 = 1e-12 m^2; the decimal shift is exact, the float product within one rounding.
-    np.testing.assert_allclose(rows[:, 1], table.cext_um2 * 1e-12, rtol=1e-15)
-    np.testing.assert_allclose(rows[:, 3], table.csca_um2 * 1e-12, rtol=1e-15)
+    np.testing.assert_allclose(rows[:, 1], table.cross_sections.cext_um2 * 1e-12, rtol=1e-15)
+    np.testing.assert_allclose(rows[:, 3], table.cross_sections.csca_um2 * 1e-12, rtol=1e-15)
     np.testing.assert_allclose(rows[:, 5], table.cabs_um2 * 1e-12, rtol=1e-15)
     np.testing.assert_array_equal(rows[:, 2], table.qext)
     np.testing.assert_array_equal(rows[:, 7], table.g)
@@ -158,7 +158,7 @@ def test_summary_records_provenance_and_checksums(table, tmp_path):
     assert summary["number_density_per_m3"] == 1e8
     assert summary["provenance"]["software"]["numpy"] == np.__version__
     assert summary["provenance"]["quadrature"]["weighting"] == "scattering"
-    assert summary["per_wavelength"]["error_estimate"] == table.error_estimate.tolist()
+    assert summary["per_wavelength"]["error_estimate"] == table.quadrature.error_estimate.tolist()
     for name in (PHASE_FILENAME, EXTINCTION_FILENAME):
         digest = hashlib.sha256((tmp_path / name).read_bytes()).hexdigest()
         assert summary["files"][name]["sha256"] == digest

@@ -25,4 +25,4 @@ def rt_table() -> do.Table:
         rtol=1e-3,
         expansion=True,
         name="mars rt",
-    ).replace(number_density_per_m3=N_M3)
+    ).replace(cross_sections={"number_density_per_m3": N_M3})

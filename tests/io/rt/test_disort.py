@@ -33,13 +33,15 @@ def test_disort_file(table: do.Table, tmp_path: Path) -> None:
     assert path.name == "mars_rt_disort.txt"
     rows = np.loadtxt(path, ndmin=2)
     np.testing.assert_array_equal(rows[:, 0], table.wavelength_nm)
-    np.testing.assert_array_equal(rows[:, 1], table.cext_um2)
-    np.testing.assert_array_equal(rows[:, 2], table.csca_um2 / table.cext_um2)
-    np.testing.assert_array_equal(rows[:, 3], table.expansion_error_estimate)
+    np.testing.assert_array_equal(rows[:, 1], table.cross_sections.cext_um2)
+    np.testing.assert_array_equal(
+        rows[:, 2], table.cross_sections.csca_um2 / table.cross_sections.cext_um2
+    )
+    np.testing.assert_array_equal(rows[:, 3], table.expansion.expansion_error_estimate)
     pmom = rows[:, 4:]
     # DISORT's moments: chi_l = alpha1_l / (2 l + 1), computed here independently.
-    l_ = np.arange(table.alpha1.shape[1])
-    np.testing.assert_allclose(pmom, table.alpha1 / (2 * l_ + 1), rtol=1e-15, atol=0)
+    l_ = np.arange(table.expansion.alpha1.shape[1])
+    np.testing.assert_allclose(pmom, table.expansion.alpha1 / (2 * l_ + 1), rtol=1e-15, atol=0)
     # Identities: chi_0 = 1 (normalization), chi_1 = g (asymmetry parameter).
     np.testing.assert_array_equal(pmom[:, 0], 1.0)
     np.testing.assert_allclose(pmom[:, 1], table.g, atol=1e-6)
@@ -53,18 +55,12 @@ def test_disort_file(table: do.Table, tmp_path: Path) -> None:
 
 def test_refusals(table: do.Table, tmp_path: Path) -> None:
     plain = table.replace(
-        alpha1=None,
-        alpha2=None,
-        alpha3=None,
-        alpha4=None,
-        beta1=None,
-        beta2=None,
-        expansion_error_estimate=None,
+        expansion=None,
     )
     with pytest.raises(ValueError, match=r"expansion=True"):
         write(plain, tmp_path, format="disort")
     with pytest.raises(ValueError, match="cross-sections"):
-        write(table.replace(cext_um2=None, csca_um2=None), tmp_path, format="disort")
+        write(table.replace(cross_sections=None), tmp_path, format="disort")
     assert list(tmp_path.iterdir()) == []
 
 
@@ -80,7 +76,7 @@ def test_cli_export(table: do.Table, tmp_path: Path) -> None:
         "mars_rt_disort.txt",
     ]
     (disort,) = out.rglob("mars_rt_disort.txt")
-    np.testing.assert_array_equal(np.loadtxt(disort, ndmin=2)[:, 1], table.cext_um2)
+    np.testing.assert_array_equal(np.loadtxt(disort, ndmin=2)[:, 1], table.cross_sections.cext_um2)
 
 
 def test_cli_refuses_without_expansion(
@@ -88,13 +84,7 @@ def test_cli_refuses_without_expansion(
 ) -> None:
     src = tmp_path / "plain.nc"
     table.replace(
-        alpha1=None,
-        alpha2=None,
-        alpha3=None,
-        alpha4=None,
-        beta1=None,
-        beta2=None,
-        expansion_error_estimate=None,
+        expansion=None,
     ).save(src)
     code = main(["export", str(src), "--out", str(tmp_path / "out"), "--format", "disort"])
     assert code != 0

@@ -35,12 +35,16 @@ def test_libradtran_files(table: do.Table, tmp_path: Path) -> None:
     np.testing.assert_array_equal(rows[:, 0], table.wavelength_nm)
     # Extinction [km-1] = N [m-3] * cext [um2] * 1e-12 [m2 um-2] * 1e3 [m km-1].
     np.testing.assert_allclose(
-        rows[:, 1], table.number_density_per_m3 * table.cext_um2 * 1e-12 * 1e3, rtol=1e-15
+        rows[:, 1],
+        table.cross_sections.number_density_per_m3 * table.cross_sections.cext_um2 * 1e-12 * 1e3,
+        rtol=1e-15,
     )
     np.testing.assert_allclose(rows[:, 1], table.beta_ext_per_m * 1e3, rtol=1e-15)
     np.testing.assert_array_equal(rows[:, 2], table.ssa)
-    l_ = np.arange(table.alpha1.shape[1])
-    np.testing.assert_allclose(rows[:, 3:], table.alpha1 / (2 * l_ + 1), rtol=1e-15, atol=0)
+    l_ = np.arange(table.expansion.alpha1.shape[1])
+    np.testing.assert_allclose(
+        rows[:, 3:], table.expansion.alpha1 / (2 * l_ + 1), rtol=1e-15, atol=0
+    )
     assert rows[0, 3] == 1.0
     header = [ln for ln in layer.read_text().splitlines() if ln.startswith("#")]
     assert any(table.provenance.input_hash in ln for ln in header)
@@ -48,18 +52,16 @@ def test_libradtran_files(table: do.Table, tmp_path: Path) -> None:
 
 def test_refusals(table: do.Table, tmp_path: Path) -> None:
     plain = table.replace(
-        alpha1=None,
-        alpha2=None,
-        alpha3=None,
-        alpha4=None,
-        beta1=None,
-        beta2=None,
-        expansion_error_estimate=None,
+        expansion=None,
     )
     with pytest.raises(ValueError, match=r"expansion=True"):
         write(plain, tmp_path, format="libradtran")
     with pytest.raises(ValueError, match="number-density-per-m3"):
-        write(table.replace(number_density_per_m3=None), tmp_path, format="libradtran")
+        write(
+            table.replace(cross_sections={"number_density_per_m3": None}),
+            tmp_path,
+            format="libradtran",
+        )
     with pytest.raises(ValueError, match="top_km"):
         write(table, tmp_path, format="libradtran", bottom_km=2.0, top_km=1.0)
     assert list(tmp_path.iterdir()) == []

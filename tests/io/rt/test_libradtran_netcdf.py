@@ -53,7 +53,7 @@ def polarized() -> do.Table:
         expansion=True,
         polarization=True,
         name="mars pol",
-    ).replace(number_density_per_m3=2.0e6)
+    ).replace(cross_sections={"number_density_per_m3": 2.0e6})
 
 
 def test_registered() -> None:
@@ -61,7 +61,7 @@ def test_registered() -> None:
 
 
 def test_round_trip(polarized: do.Table, tmp_path: Path) -> None:
-    assert polarized.alpha1 is not None and polarized.cext_um2 is not None
+    assert polarized.expansion is not None and polarized.cross_sections is not None
     cdf, profile = write(polarized, tmp_path, format="libradtran-nc", bottom_km=0.0, top_km=10.0)
     assert cdf.name == "mars_pol.mie.cdf"
     assert profile.name == "mars_pol_aerosol_species.dat"
@@ -72,12 +72,14 @@ def test_round_trip(polarized: do.Table, tmp_path: Path) -> None:
     assert int(d["_version"]) == 20110916
     np.testing.assert_allclose(d["wavelen"] * 1e3, polarized.wavelength_nm, rtol=1e-15)
     # ext per particle per cm3 [km-1 cm3] = cext [um2] 1e-12 [m2/um2] 1e6 [cm3/m3] 1e3 [m/km].
-    np.testing.assert_allclose(d["ext"][:, 0], polarized.cext_um2 * 1e-3, rtol=1e-15)
+    np.testing.assert_allclose(d["ext"][:, 0], polarized.cross_sections.cext_um2 * 1e-3, rtol=1e-15)
     np.testing.assert_array_equal(d["ssa"][:, 0], polarized.ssa)
     pmom = d["pmom"][:, 0]
     assert np.all(pmom[:, 0, 0] == 1.0)  # uvspec refuses a phase function whose pmom_0 != 1
     np.testing.assert_array_equal(d["gg"][:, 0], polarized.g)
-    np.testing.assert_array_equal(pmom[:, 0, : polarized.alpha1.shape[1]], polarized.alpha1)
+    np.testing.assert_array_equal(
+        pmom[:, 0, : polarized.expansion.alpha1.shape[1]], polarized.expansion.alpha1
+    )
     # The reader errs when nmom reaches nmommax (src/miecalc.c); the last moment is zero.
     assert np.all(d["nmom"] < dims["nmommax"])
     assert np.all(pmom[:, :, -1] == 0.0)
@@ -103,15 +105,20 @@ def test_moments_reproduce_the_table_matrix(polarized: do.Table, tmp_path: Path)
     the same sums from 180 deg down."""
     (cdf, _) = write(polarized, tmp_path, format="libradtran-nc")
     d = read_cdf(cdf)
-    f12, f33, f34 = polarized.f12, polarized.f33, polarized.f34
+    f12, f33, f34 = polarized.matrix.f12, polarized.matrix.f33, polarized.matrix.f34
     assert f12 is not None and f33 is not None and f34 is not None
-    assert polarized.expansion_error_estimate is not None
-    assert polarized.matrix_error_estimate is not None
+    assert (
+        polarized.expansion is not None and polarized.expansion.expansion_error_estimate is not None
+    )
+    assert polarized.matrix is not None and polarized.matrix.matrix_error_estimate is not None
     mu = np.cos(np.deg2rad(polarized.theta_deg))
     four_pi = 4.0 * np.pi
     for w in range(polarized.wavelength_nm.size):
         expected = four_pi * np.stack([polarized.phase[w], f12[w], f33[w], -f34[w]])
-        tol = 2.0 * (polarized.expansion_error_estimate[w] + polarized.matrix_error_estimate[w])
+        tol = 2.0 * (
+            polarized.expansion.expansion_error_estimate[w]
+            + polarized.matrix.matrix_error_estimate[w]
+        )
         for p in range(4):
             summed = legendre.legval(mu, d["pmom"][w, 0, p])
             assert np.max(np.abs(summed - expected[p]) / expected[0]) <= tol, (w, p)
@@ -144,7 +151,7 @@ def test_what_libradtrans_mie_tool_writes_from_miev0(case: int, x: float, tmp_pa
         np.linspace(0.0, 180.0, 181),
         expansion=True,
         name="miev0",
-    ).replace(number_density_per_m3=1.0)
+    ).replace(cross_sections={"number_density_per_m3": 1.0})
     (cdf, _) = write(t, tmp_path, format="libradtran-nc")
     pmom = read_cdf(cdf)["pmom"][0, 0]
     norm = float(ref[(0, 1)]) + float(ref[(0, 2)])
@@ -183,7 +190,7 @@ def test_sign_of_p34_against_bohren_huffman(tmp_path: Path) -> None:
         theta,
         expansion=True,
         name="bh",
-    ).replace(number_density_per_m3=1.0)
+    ).replace(cross_sections={"number_density_per_m3": 1.0})
     (cdf, _) = write(t, tmp_path, format="libradtran-nc")
     d = read_cdf(cdf)
     phase = d["phase"][0, 0][:, ::-1]  # back to the table's ascending angles
@@ -205,22 +212,20 @@ def test_refusals(tmp_path: Path) -> None:
     table = rt_table()
     with pytest.raises(ValueError, match=r"expansion=True"):
         plain = table.replace(
-            alpha1=None,
-            alpha2=None,
-            alpha3=None,
-            alpha4=None,
-            beta1=None,
-            beta2=None,
-            expansion_error_estimate=None,
+            expansion=None,
         )
         write(plain, tmp_path, format="libradtran-nc")
     with pytest.raises(ValueError, match=r"number-density-per-m3"):
-        write(table.replace(number_density_per_m3=None), tmp_path, format="libradtran-nc")
+        write(
+            table.replace(cross_sections={"number_density_per_m3": None}),
+            tmp_path,
+            format="libradtran-nc",
+        )
     with pytest.raises(ValueError, match=r"top_km must exceed"):
         write(table, tmp_path, format="libradtran-nc", bottom_km=2.0, top_km=1.0)
     narrow = do.compute_optics(
         1.5, do.Monodisperse(radius_um=0.2), [500.0], [0.0, 90.0], expansion=True
-    ).replace(number_density_per_m3=1.0)
+    ).replace(cross_sections={"number_density_per_m3": 1.0})
     with pytest.raises(ValueError, match=r"angles from 0 to 180 deg"):
         write(narrow, tmp_path, format="libradtran-nc")
     assert list(tmp_path.iterdir()) == []
@@ -282,9 +287,11 @@ def test_build_export_and_info_from_the_command_line(tmp_path: Path, capsys: Any
         "small-dust_aerosol_species.dat",
     ]
     table = do.open_table(folder / "small-dust.nc")
-    assert table.alpha1 is not None
+    assert table.expansion is not None
     pmom = read_cdf(folder / "small-dust.mie.cdf")["pmom"]
-    np.testing.assert_array_equal(pmom[:, 0, 0, : table.alpha1.shape[1]], table.alpha1)
+    np.testing.assert_array_equal(
+        pmom[:, 0, 0, : table.expansion.alpha1.shape[1]], table.expansion.alpha1
+    )
     capsys.readouterr()
     assert main(["info", str(folder / "small-dust.mie.cdf")]) == 0
     assert "P11, P12, P33, P34" in capsys.readouterr().out

@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from dustoptics.scattering.phase import henyey_greenstein
-from dustoptics.table import Provenance, Table
+from dustoptics.table import CrossSections, Provenance, Table
 
 # lavapipe's compile time grows faster than linearly with the constant array's
 # length (measured: 1 s for 181 samples, 80 s for 361 on a loaded 2-core
@@ -27,9 +27,11 @@ def hg_table(g: tuple[float, ...] = (0.8, 0.7, 0.6)) -> Table:
         theta_deg=theta,
         phase=np.array([henyey_greenstein(mu, g=x) for x in g]),
         g=np.array(g),
-        cext_um2=np.array([2.0, 1.5, 1.0]),
-        csca_um2=np.array([1.8, 1.4, 0.95]),
-        number_density_per_m3=1e6,
+        cross_sections=CrossSections(
+            cext_um2=np.array([2.0, 1.5, 1.0]),
+            csca_um2=np.array([1.8, 1.4, 0.95]),
+            number_density_per_m3=1e6,
+        ),
         provenance=Provenance(inputs={"model": "hg", "g": list(g)}),
     )
 

@@ -54,7 +54,7 @@ def mie_table() -> Table:
         rtol=1e-3,
         name="test-dust",
     )
-    return optics.replace(number_density_per_m3=1e6)
+    return optics.replace(cross_sections={"number_density_per_m3": 1e6})
 
 
 def hg_table(
@@ -140,7 +140,7 @@ def test_snippet_layout_and_values(mie_table: Table) -> None:
     ch = glsl_channels(mie_table)
     np.testing.assert_array_equal(ch.phase, expected)
     np.testing.assert_array_equal(ch.g, mie_table.g[[2, 1, 0]])
-    np.testing.assert_array_equal(ch.cext_m2, mie_table.cext_um2[[2, 1, 0]] * 1e-12)
+    np.testing.assert_array_equal(ch.cext_m2, mie_table.cross_sections.cext_um2[[2, 1, 0]] * 1e-12)
     for name in (
         "MIE_G",
         "MIE_CEXT_M2",

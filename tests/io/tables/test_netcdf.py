@@ -41,7 +41,7 @@ def table() -> Table:
         name="mars-dust",
     )
     # Meyran's renderer value (brief section 6), as m^-3
-    return t.replace(number_density_per_m3=4.64e8)
+    return t.replace(cross_sections={"number_density_per_m3": 4.64e8})
 
 
 @pytest.fixture(scope="module")
@@ -93,7 +93,7 @@ def test_save_and_open_every_suffix_to_the_bit(table, tmp_path, suffix):
     path = table.save(tmp_path / f"t{suffix}")
     back = open_table(path)
     assert back.equals(table)  # every array bit for bit, scalars, provenance
-    assert back.n_nodes.dtype == np.int64
+    assert back.quadrature.n_nodes.dtype == np.int64
     np.testing.assert_array_equal(back.refractive_index, table.refractive_index)
 
 
@@ -102,7 +102,7 @@ def test_phase_only_and_molecule_tables_round_trip(rayleigh, table, tmp_path):
     with h5py.File(path, "r") as f:
         assert set(f) == {"wavelength_nm", "theta_deg", "phase", "g"}  # nothing derived
     assert open_table(path).equals(rayleigh)
-    molecule = table.replace(mean_geometric_cross_section_um2=None, name="gas")
+    molecule = table.replace(cross_sections={"mean_geometric_cross_section_um2": None}, name="gas")
     back = open_table(molecule.save(tmp_path / "gas.nc"))
     assert back.equals(molecule)
     with h5py.File(tmp_path / "gas.nc", "r") as f:
@@ -127,7 +127,9 @@ def test_a_table_rebuilt_from_its_file_provenance_gives_the_same_bytes(table, tm
 
     path = table.save(tmp_path / "a.nc")
     stored = open_table(path)
-    again = recompute(stored.provenance, name=stored.name).replace(number_density_per_m3=4.64e8)
+    again = recompute(stored.provenance, name=stored.name).replace(
+        cross_sections={"number_density_per_m3": 4.64e8}
+    )
     assert again.save(tmp_path / "b.nc").read_bytes() == path.read_bytes()
 
 
@@ -231,7 +233,7 @@ def test_netcdf4_reads_the_file(table, written):
         assert nc.variables["theta_deg"].units == "degree"
         assert nc.getncattr("Conventions") == "CF-1.10"
         np.testing.assert_array_equal(nc.variables["phase"][:].data, table.phase)
-        np.testing.assert_array_equal(nc.variables["n_nodes"][:].data, table.n_nodes)
+        np.testing.assert_array_equal(nc.variables["n_nodes"][:].data, table.quadrature.n_nodes)
         assert float(nc.variables["number_density_per_m3"][...]) == 4.64e8
 
 

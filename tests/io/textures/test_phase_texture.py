@@ -30,7 +30,7 @@ from dustoptics.io.textures.npy import write_npy
 from dustoptics.io.textures.phase_texture import phase_texture
 from dustoptics.io.textures.raw import PHASE_TEXTURE_FORMAT
 from dustoptics.scattering.phase import henyey_greenstein
-from dustoptics.table import Provenance, Table
+from dustoptics.table import CrossSections, Provenance, Table
 
 READER_DIR = Path(__file__).parents[1] / "ktx2_reader"
 EPS16 = 2.0**-10  # float16 spacing at 1
@@ -47,8 +47,9 @@ def hg_table(n_theta: int = 181) -> Table:
         theta_deg=theta,
         phase=np.array([henyey_greenstein(mu, g=x) for x in g]),
         g=np.array(g),
-        cext_um2=np.array([2.0, 1.5, 1.0]),
-        csca_um2=np.array([1.8, 1.4, 0.95]),
+        cross_sections=CrossSections(
+            cext_um2=np.array([2.0, 1.5, 1.0]), csca_um2=np.array([1.8, 1.4, 0.95])
+        ),
         provenance=Provenance(inputs={"model": "hg", "g": list(g)}),
     )
 
