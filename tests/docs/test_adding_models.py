@@ -1,4 +1,4 @@
-"""The worked examples of docs/contributing/adding_models.rst, read from the page and run.
+"""The worked examples of docs/contributing/adding.rst, read from the page and run.
 
 Each example is taken from its ``:caption:`` code block, so the page cannot drift from
 what works: a new size distribution (checked against an independent form and built
@@ -28,7 +28,7 @@ from dustoptics.particles.sizedist import DeirmendjianGamma, get_size_distributi
 from dustoptics.scattering import phase, tabulated_phase
 from dustoptics.scattering.fit import fit_phase
 
-PAGE = Path(__file__).resolve().parents[2] / "docs" / "contributing" / "adding_models.rst"
+PAGE = Path(__file__).resolve().parents[2] / "docs" / "contributing" / "adding.rst"
 
 
 def block(caption: str) -> str:
