@@ -55,9 +55,17 @@ from dustoptics.io._atomic import write_files
 from dustoptics.models.config import BuildConfig
 from dustoptics.scattering import optics
 from dustoptics.sweep import _fork  # noqa: F401  (Dask's pools renewed in forked children)
-from dustoptics.sweep.chunk import PER_WAVELENGTH, ChunkResult, compute_chunk, shareable
+from dustoptics.sweep.chunk import (
+    EXPANSION,
+    MATRIX,
+    PER_WAVELENGTH,
+    ChunkResult,
+    compute_chunk,
+    outputs,
+    shareable,
+)
 from dustoptics.sweep.run_token import RunToken as _RunToken
-from dustoptics.sweep.spec import SweepSpec, _load_points
+from dustoptics.sweep.spec import SweepSpec, _load_points, expansion_orders
 from dustoptics.sweep.store import (
     MARKERS,
     StoreLayout,
@@ -200,10 +208,24 @@ def _template(spec: SweepSpec, configs: list[BuildConfig], layout: _Layout, meth
             },
         )
     }
-    for name, (units, meaning) in PER_WAVELENGTH.items():
+    sizes = {"theta_deg": theta.size, "order": expansion_orders(first)}
+    if sizes["order"]:
+        coords["order"] = (
+            "order",
+            np.arange(sizes["order"]),
+            {"units": "1", "long_name": "order l of the generalized spherical functions"},
+        )
+    meanings = {**PER_WAVELENGTH, **MATRIX, **EXPANSION}
+    for name, extra in outputs(first).items():
+        if name == "phase":
+            continue
+        units, meaning = meanings[name]
+        n_extra = tuple(sizes[d] for d in extra)
         data[name] = (
-            dims + ("wavelength_nm",),
-            da.full(shape + (wl.size,), np.nan, chunks=chunks + (layout.wl_chunk,)),
+            dims + ("wavelength_nm",) + extra,
+            da.full(
+                shape + (wl.size,) + n_extra, np.nan, chunks=chunks + (layout.wl_chunk,) + n_extra
+            ),
             {"units": units, "long_name": meaning},
         )
     geometric = np.full(shape, np.nan)
@@ -245,14 +267,33 @@ def _template(spec: SweepSpec, configs: list[BuildConfig], layout: _Layout, meth
                 if method == "shared"
                 else "independent builds: every point equals a single build of its configuration to the bit"
             )
+            + _records_accuracy(first)
         ),
     }
     return xr.Dataset(data, coords=coords, attrs=attrs)
 
 
-def _store_layout(layout: _Layout) -> StoreLayout:
-    """Which files the chunks of ``layout`` write (``phase`` keeps its angles whole)."""
-    return StoreLayout(layout.grid, {"phase": 1, **dict.fromkeys(PER_WAVELENGTH, 0)})
+def _records_accuracy(config: BuildConfig) -> str:
+    """The accuracy statement's words on the matrix and the expansion coefficients
+    (nothing for a sweep without them, whose attributes stay as they were)."""
+    words = ""
+    if config.optics.polarization:
+        words += (
+            "; matrix_error_estimate (F12, F33, F34 relative to F11 at the same angle) is "
+            "each point's own, and error_estimate includes it"
+        )
+    if config.optics.expansion is not None:
+        words += (
+            "; expansion_error_estimate bounds every expansion coefficient divided by (2 l + 1), "
+            f"orders 0..{config.optics.expansion} (zero beyond the orders the spheres need)"
+        )
+    return words
+
+
+def _store_layout(layout: _Layout, config: BuildConfig) -> StoreLayout:
+    """Which files the chunks of ``layout`` write (arrays over angles or orders keep
+    them whole)."""
+    return StoreLayout(layout.grid, {k: len(extra) for k, extra in outputs(config).items()})
 
 
 @contextmanager
@@ -642,16 +683,24 @@ def _check_cost(
             "command line) to go ahead"
         )
     per_chunk = int(np.prod(layout.axis_chunks)) * layout.wl_chunk
-    arrays = 2.0 * 8.0 * per_chunk * (n_theta + len(PER_WAVELENGTH))
+    # Values per point-wavelength of every computed array: the angles of phase (and of
+    # F12, F33, F34), the orders of the expansion coefficients, one of each other.
+    per_value = sum(
+        math.prod(template.sizes[d] for d in v.dims[v.dims.index("wavelength_nm") + 1 :])
+        for v in template.data_vars.values()
+        if "wavelength_nm" in v.dims
+    )
+    arrays = 2.0 * 8.0 * per_chunk * per_value
     solver = max((c.memory_bytes for _, c in mie), default=0.0)
     check_budget(
         "a chunk of the sweep",
         solver + arrays,
         allow_large=False,
         change=(
-            f"a chunk holds up to {per_chunk} point-wavelengths x {n_theta} angles beside the "
-            "solver of its largest point: use a smaller max_points or chunk_wavelengths, fewer "
-            "angles, or smaller particles"
+            f"a chunk holds up to {per_chunk} point-wavelengths x {per_value} values (the "
+            f"phase function's {n_theta} angles, and the matrix's and expansion's where asked) "
+            "beside the solver of its largest point: use a smaller max_points or "
+            "chunk_wavelengths, fewer angles or orders, or smaller particles"
         ),
     )
     size = float(template.nbytes)
@@ -816,7 +865,7 @@ def sweep(
             template.to_zarr(folder, compute=False, mode="w-", zarr_format=2, consolidated=True)
 
         with held_store(
-            store, identity=identity, layout=_store_layout(layout), create=create
+            store, identity=identity, layout=_store_layout(layout, configs[0]), create=create
         ) as new:
             todo = _todo(store, layout, new=new)
             total = spec.n_points * layout.n_wl
