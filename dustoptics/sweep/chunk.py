@@ -102,9 +102,10 @@ class ChunkResult:
     Attributes
     ----------
     arrays : Mapping
-        ``phase`` (points, wavelengths, angles) and the variables of
-        :data:`PER_WAVELENGTH` (points, wavelengths), points in C order of
-        the chunk.
+        ``phase`` (points, wavelengths, angles), the variables of
+        :data:`PER_WAVELENGTH` (points, wavelengths), and those of
+        :data:`MATRIX` and :data:`EXPANSION` where the configuration asks for
+        them (:func:`outputs`), points in C order of the chunk.
     spheres_computed, spheres_weighted : int
         Spheres whose Mie sums were computed, and sphere-distribution pairs
         weighted (equal without sharing). [-]

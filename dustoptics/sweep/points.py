@@ -61,24 +61,7 @@ def point_table(ds: Any, point: Mapping[str, float], *, name: str | None = None)
         axis, or a value the axis does not hold; or the stored provenance does
         not match its recorded hash (a damaged store).
     """
-    axes = [d for d in ds.phase.dims if d not in ("wavelength_nm", "theta_deg")]
-    extra = sorted(set(point) - set(axes))
-    missing = [a for a in axes if a not in point]
-    if extra or missing:
-        raise ValueError(
-            f"point must give one value of every axis of the sweep, {axes}; "
-            + (f"got {extra} which are not axes" if extra else f"missing {missing}")
-        )
-    index = {}
-    for axis in axes:
-        hit = np.flatnonzero(np.asarray(ds[axis].values) == point[axis])
-        if hit.size != 1:
-            raise ValueError(
-                f"point: {axis} = {point[axis]!r} is not a value of the sweep's axis; its "
-                f"values: {np.asarray(ds[axis].values).tolist()}"
-            )
-        index[axis] = int(hit[0])
-    one = ds.isel(index).load()
+    one = ds.isel(_point_index(ds, point)).load()
     record = json.loads(str(one.provenance.values))
     provenance = Provenance(inputs=record["inputs"])
     if provenance.input_hash != record["input_hash"]:
@@ -101,6 +84,28 @@ def point_table(ds: Any, point: Mapping[str, float], *, name: str | None = None)
     if name is not None:
         fields["name"] = name
     return Table(**fields)
+
+
+def _point_index(ds: Any, point: Mapping[str, float]) -> dict[str, int]:
+    """The index along every axis of the point that ``point`` names by its values."""
+    axes = [d for d in ds.phase.dims if d not in ("wavelength_nm", "theta_deg")]
+    extra = sorted(set(point) - set(axes))
+    missing = [a for a in axes if a not in point]
+    if extra or missing:
+        raise ValueError(
+            f"point must give one value of every axis of the sweep, {axes}; "
+            + (f"got {extra} which are not axes" if extra else f"missing {missing}")
+        )
+    index: dict[str, int] = {}
+    for axis in axes:
+        hit = np.flatnonzero(np.asarray(ds[axis].values) == point[axis])
+        if hit.size != 1:
+            raise ValueError(
+                f"point: {axis} = {point[axis]!r} is not a value of the sweep's axis; its "
+                f"values: {np.asarray(ds[axis].values).tolist()}"
+            )
+        index[axis] = int(hit[0])
+    return index
 
 
 def _values(one: Any, key: str) -> np.ndarray:

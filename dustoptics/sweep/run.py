@@ -171,18 +171,58 @@ def _layout(spec: SweepSpec, n_wl: int, chunk_wavelengths: int | None, max_point
 # ---------------------------------------------------------------------- store
 
 
+def _computed_variables(
+    first: BuildConfig,
+    dims: tuple[str, ...],
+    shape: tuple[int, ...],
+    layout: _Layout,
+    coords: dict[str, Any],
+) -> dict[str, Any]:
+    """Lazy (unwritten) placeholders of the arrays the chunks compute
+    (:func:`~dustoptics.sweep.chunk.outputs`); adds the ``order`` coordinate to
+    ``coords`` where the expansion coefficients have one."""
+    import dask.array as da  # the optional 'sweep' extra (see _require_extra)
+
+    wl, theta = first.wavelengths_nm, first.theta_deg
+    sizes = {"theta_deg": theta.size, "order": expansion_orders(first)}
+    if sizes["order"]:
+        coords["order"] = (
+            "order",
+            np.arange(sizes["order"]),
+            {"units": "1", "long_name": "order l of the generalized spherical functions"},
+        )
+    meanings = {
+        "phase": ("sr-1", "phase function, 2 pi int_{-1}^{1} P(mu) dmu = 1 (per steradian)"),
+        **PER_WAVELENGTH,
+        **MATRIX,
+        **EXPANSION,
+    }
+    data: dict[str, Any] = {}
+    for name, extra in outputs(first).items():
+        units, meaning = meanings[name]
+        n_extra = tuple(sizes[d] for d in extra)
+        data[name] = (
+            dims + ("wavelength_nm",) + extra,
+            da.full(
+                shape + (wl.size,) + n_extra,
+                np.nan,
+                chunks=layout.axis_chunks + (layout.wl_chunk,) + n_extra,
+            ),
+            {"units": units, "long_name": meaning},
+        )
+    return data
+
+
 def _template(spec: SweepSpec, configs: list[BuildConfig], layout: _Layout, method: str) -> Any:
     """The Dataset's coordinates, per-point variables and attributes, with
     lazy (unwritten) placeholders for the computed arrays."""
-    import dask.array as da  # the optional 'sweep' extra (see _require_extra)
-    import xarray as xr
+    import xarray as xr  # the optional 'sweep' extra (see _require_extra)
 
     first = configs[0]
     dims = tuple(a.key for a in spec.axes)
     shape = spec.shape
     wl = first.wavelengths_nm
     theta = first.theta_deg
-    chunks = layout.axis_chunks
     coords: dict[str, Any] = {
         a.key: (a.key, np.array(a.values), {"long_name": f"swept input {a.key}"}) for a in spec.axes
     }
@@ -196,38 +236,7 @@ def _template(spec: SweepSpec, configs: list[BuildConfig], layout: _Layout, meth
         theta,
         {"units": "degree", "long_name": "scattering angle, 0 = forward"},
     )
-    data: dict[str, Any] = {
-        "phase": (
-            dims + ("wavelength_nm", "theta_deg"),
-            da.full(
-                shape + (wl.size, theta.size), np.nan, chunks=chunks + (layout.wl_chunk, theta.size)
-            ),
-            {
-                "units": "sr-1",
-                "long_name": "phase function, 2 pi int_{-1}^{1} P(mu) dmu = 1 (per steradian)",
-            },
-        )
-    }
-    sizes = {"theta_deg": theta.size, "order": expansion_orders(first)}
-    if sizes["order"]:
-        coords["order"] = (
-            "order",
-            np.arange(sizes["order"]),
-            {"units": "1", "long_name": "order l of the generalized spherical functions"},
-        )
-    meanings = {**PER_WAVELENGTH, **MATRIX, **EXPANSION}
-    for name, extra in outputs(first).items():
-        if name == "phase":
-            continue
-        units, meaning = meanings[name]
-        n_extra = tuple(sizes[d] for d in extra)
-        data[name] = (
-            dims + ("wavelength_nm",) + extra,
-            da.full(
-                shape + (wl.size,) + n_extra, np.nan, chunks=chunks + (layout.wl_chunk,) + n_extra
-            ),
-            {"units": units, "long_name": meaning},
-        )
+    data = _computed_variables(first, dims, shape, layout, coords)
     geometric = np.full(shape, np.nan)
     provenance = np.empty(shape, dtype=object)
     sources: dict[str, Any] = {}
@@ -645,6 +654,17 @@ def _close(objects: Sequence[Any]) -> None:
             obj.close()
 
 
+def _values_per_point_wavelength(template: Any) -> int:
+    """Values per point and wavelength of every computed array: the angles of
+    ``phase`` (and of F12, F33, F34), the orders of the expansion coefficients,
+    one of each other."""
+    return sum(
+        math.prod(template.sizes[d] for d in v.dims[v.dims.index("wavelength_nm") + 1 :])
+        for v in template.data_vars.values()
+        if "wavelength_nm" in v.dims
+    )
+
+
 def _check_cost(
     spec: SweepSpec,
     costs: Sequence[Any],
@@ -683,13 +703,7 @@ def _check_cost(
             "command line) to go ahead"
         )
     per_chunk = int(np.prod(layout.axis_chunks)) * layout.wl_chunk
-    # Values per point-wavelength of every computed array: the angles of phase (and of
-    # F12, F33, F34), the orders of the expansion coefficients, one of each other.
-    per_value = sum(
-        math.prod(template.sizes[d] for d in v.dims[v.dims.index("wavelength_nm") + 1 :])
-        for v in template.data_vars.values()
-        if "wavelength_nm" in v.dims
-    )
+    per_value = _values_per_point_wavelength(template)
     arrays = 2.0 * 8.0 * per_chunk * per_value
     solver = max((c.memory_bytes for _, c in mie), default=0.0)
     check_budget(
@@ -807,14 +821,20 @@ def sweep(
         [um^2], ``g``, ``error_estimate``, ``cross_section_error_estimate``,
         ``n_nodes``, per point ``mean_geometric_cross_section_um2`` [um^2]
         and ``provenance`` (its inputs and their hash), attributes with the
-        sweep, software versions, sources and the accuracy statement.  For a
+        sweep, software versions, sources and the accuracy statement.  With
+        ``optics.polarization = true`` also ``f12``, ``f33``, ``f34``
+        [sr^-1] and ``matrix_error_estimate``; with ``optics.expansion = N``
+        also ``alpha1`` .. ``alpha4``, ``beta1``, ``beta2`` over an ``order``
+        dimension (0..N) and ``expansion_error_estimate``
+        (:func:`~dustoptics.sweep.point_table` reads a point as a table).  For a
         Zarr ``out``, the dataset opened from the store, every chunk checked.
 
     Raises
     ------
     ValueError
         An invalid axis or value (before any work: the message names the
-        axis, the value and its range), a request beyond the budget
+        axis, the value and its range), ``optics.expansion = true`` (every
+        order the spheres need differs by point: give an order N), a request beyond the budget
         (:class:`~dustoptics._validation.BudgetError`), a store holding
         another sweep or damaged where a chunk cannot be recomputed
         (:class:`~dustoptics.io.FormatError`), or a store that another run is
