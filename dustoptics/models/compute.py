@@ -108,6 +108,7 @@ def mie_request(config: BuildConfig, *, wavelength_nm: np.ndarray | None = None)
         weighting=config.optics.weighting,
         cross_section_rtol=config.optics.cross_section_rtol,
         expansion=False if config.optics.expansion is None else config.optics.expansion,
+        polarization=config.optics.polarization,
     )
 
 

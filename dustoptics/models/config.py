@@ -65,7 +65,8 @@ for ``phase.model = "mie"`` also ``expansion``: ``true`` for the expansion
 coefficients in generalized spherical functions of every order the spheres
 need, or an integer N for orders 0..N (default ``false``, none), which the
 DISORT and libRadtran formats need (``dustoptics build CONFIG --format
-disort,libradtran``).
+disort,libradtran``), and ``polarization``: ``true`` for the scattering matrix
+F12, F33, F34 beside the phase function (default ``false``).
 
 ``[phase]``: ``model`` one of
 
@@ -604,6 +605,9 @@ class OpticsConfig:
     expansion : bool, int or None
         ``True`` (every order needed) or the highest order N of the expansion
         coefficients (``compute_optics(expansion=...)``); None for none.
+    polarization : bool
+        Whether the scattering matrix F12, F33, F34 is computed
+        (``compute_optics(polarization=...)``).
     """
 
     wavelengths_nm: tuple[float, ...]
@@ -612,6 +616,7 @@ class OpticsConfig:
     rtol: float | None = None
     cross_section_rtol: float | None = None
     expansion: bool | int | None = None
+    polarization: bool = False
 
     @property
     def theta_deg(self) -> np.ndarray:
@@ -626,6 +631,8 @@ class OpticsConfig:
             )
         if self.expansion is not None:  # recorded only when asked: other tables' inputs unchanged
             out["expansion"] = self.expansion
+        if self.polarization:  # likewise
+            out["polarization"] = True
         return out
 
 
@@ -961,12 +968,13 @@ def _parse_wavelengths(ctx: _Context, value: Any) -> tuple[float, ...]:
 def _parse_optics(ctx: _Context, value: Any, *, mie: bool, model: str) -> OpticsConfig:
     sec = _table(ctx, "optics", value)
     allowed = ("wavelengths_nm", "n_theta", "theta_step_deg")
-    mie_keys = ("weighting", "rtol", "cross_section_rtol", "expansion")
+    mie_keys = ("weighting", "rtol", "cross_section_rtol", "expansion", "polarization")
     if not mie:
         for key in mie_keys:
             if key in sec:
                 raise _not_used(ctx, f"optics.{key}", model)
     expansion = _expansion(ctx, sec.get("expansion", False), model)
+    polarization = _polarization(ctx, sec.get("polarization", False), model)
     _known_keys(ctx, "optics", sec, allowed + mie_keys)
     wavelengths = _parse_wavelengths(ctx, sec.get("wavelengths_nm", dict(_DEFAULT_WAVELENGTHS)))
     if "n_theta" in sec and "theta_step_deg" in sec:
@@ -1001,7 +1009,7 @@ def _parse_optics(ctx: _Context, value: Any, *, mie: bool, model: str) -> Optics
     cross = _open(
         ctx, "optics.cross_section_rtol", sec.get("cross_section_rtol", rtol / 100.0), 0.0, 0.1
     )
-    return OpticsConfig(wavelengths, n_theta, weighting, rtol, cross, expansion)
+    return OpticsConfig(wavelengths, n_theta, weighting, rtol, cross, expansion, polarization)
 
 
 #: Highest order ``optics.expansion`` accepts (``true`` gives every order the spheres need).
@@ -1032,6 +1040,20 @@ def _expansion(ctx: _Context, value: Any, model: str) -> bool | int | None:
             key,
             f"must be an order in [0, {MAX_EXPANSION_ORDER}] (true: every order the spheres "
             f"need); got {value!r}",
+        )
+    return value
+
+
+def _polarization(ctx: _Context, value: Any, model: str) -> bool:
+    """``optics.polarization``: whether the scattering matrix is computed (Mie only)."""
+    key = "optics.polarization"
+    if not isinstance(value, bool):
+        raise ctx.error(key, f"must be true or false; got {value!r} ({_type_name(value)})")
+    if value and model != "mie":
+        raise ctx.error(
+            key,
+            f"is available for phase.model = 'mie' only; got phase.model = {model!r} (the "
+            "matrix is the Mie one, not that of a blend with an analytic phase function)",
         )
     return value
 

@@ -29,9 +29,18 @@ import numpy as np
 from dustoptics.models.compute import build_table, mie_request
 from dustoptics.models.config import BuildConfig
 from dustoptics.sweep.shared import solve_shared
-from dustoptics.sweep.spec import parse_points
+from dustoptics.sweep.spec import expansion_orders, parse_points
+from dustoptics.table import Table
 
-__all__ = ["PER_WAVELENGTH", "ChunkResult", "compute_chunk", "shareable"]
+__all__ = [
+    "EXPANSION",
+    "MATRIX",
+    "PER_WAVELENGTH",
+    "ChunkResult",
+    "compute_chunk",
+    "outputs",
+    "shareable",
+]
 
 #: Variables per point and wavelength (besides ``phase``), with units and meaning.
 PER_WAVELENGTH = {
@@ -46,6 +55,45 @@ PER_WAVELENGTH = {
     "n_nodes": ("1", "radius nodes of the quadrature of the phase function"),
 }
 
+#: The scattering matrix (``optics.polarization = true``): per point, wavelength and
+#: angle, then its error estimate per point and wavelength.
+MATRIX = {
+    "f12": ("sr-1", "scattering matrix element F12, normalized as the phase function (F11)"),
+    "f33": ("sr-1", "scattering matrix element F33, normalized as the phase function (F11)"),
+    "f34": ("sr-1", "scattering matrix element F34, normalized as the phase function (F11)"),
+    "matrix_error_estimate": (
+        "1",
+        "estimated largest error of F12, F33, F34 relative to F11 at the same angle",
+    ),
+}
+
+#: The expansion coefficients in generalized spherical functions (``optics.expansion
+#: = N``): per point, wavelength and order l = 0..N, then their error estimate.
+EXPANSION = {
+    **{
+        name: ("1", f"expansion coefficient {name}_l in generalized spherical functions")
+        for name in ("alpha1", "alpha2", "alpha3", "alpha4", "beta1", "beta2")
+    },
+    "expansion_error_estimate": (
+        "1",
+        "bound on the error of every expansion coefficient divided by (2 l + 1)",
+    ),
+}
+
+
+def outputs(config: BuildConfig) -> dict[str, tuple[str, ...]]:
+    """The arrays a sweep of ``config`` computes -> their dimensions after the point's
+    and the wavelength's: ``phase`` and :data:`PER_WAVELENGTH` always, :data:`MATRIX`
+    with ``optics.polarization``, :data:`EXPANSION` with ``optics.expansion = N`` (on
+    an ``order`` dimension of N + 1)."""
+    out: dict[str, tuple[str, ...]] = {"phase": ("theta_deg",)}
+    out.update(dict.fromkeys(PER_WAVELENGTH, ()))
+    if config.optics.polarization:
+        out.update({k: () if k.endswith("_estimate") else ("theta_deg",) for k in MATRIX})
+    if config.optics.expansion is not None:
+        out.update({k: () if k.endswith("_estimate") else ("order",) for k in EXPANSION})
+    return out
+
 
 @dataclass(frozen=True)
 class ChunkResult:
@@ -54,9 +102,10 @@ class ChunkResult:
     Attributes
     ----------
     arrays : Mapping
-        ``phase`` (points, wavelengths, angles) and the variables of
-        :data:`PER_WAVELENGTH` (points, wavelengths), points in C order of
-        the chunk.
+        ``phase`` (points, wavelengths, angles), the variables of
+        :data:`PER_WAVELENGTH` (points, wavelengths), and those of
+        :data:`MATRIX` and :data:`EXPANSION` where the configuration asks for
+        them (:func:`outputs`), points in C order of the chunk.
     spheres_computed, spheres_weighted : int
         Spheres whose Mie sums were computed, and sphere-distribution pairs
         weighted (equal without sharing). [-]
@@ -75,8 +124,13 @@ class ChunkResult:
 
 
 def shareable(config: BuildConfig) -> bool:
+    """Whether a point's spheres can be shared with others (:mod:`dustoptics.sweep.shared`):
+    a polydisperse Mie phase function without the matrix or expansion coefficients, which
+    the shared solver does not compute."""
     return (
         config.phase.model == "mie"
+        and not config.optics.polarization
+        and config.optics.expansion is None
         and config.size_distribution is not None
         and config.size_distribution.build().has_density
     )
@@ -195,8 +249,11 @@ def _compute_arrays(
     wl = configs[0].wavelengths_nm[wavelength_start:wavelength_stop]
     theta = configs[0].theta_deg
     n_p, n_w = len(configs), wl.size
+    sizes = {"theta_deg": theta.size, "order": expansion_orders(configs[0])}
     arrays = {"phase": np.empty((n_p, n_w, theta.size))}
-    arrays.update({k: np.full((n_p, n_w), np.nan) for k in PER_WAVELENGTH})
+    for name, dims in outputs(configs[0]).items():
+        if name != "phase":
+            arrays[name] = np.full((n_p, n_w, *(sizes[d] for d in dims)), np.nan)
     if shared and all(shareable(c) for c in configs):
         computed, weighted = _shared_arrays(configs, wl, arrays)
     else:
@@ -272,4 +329,20 @@ def _independent_arrays(
             arrays["n_nodes"][p] = table.quadrature.n_nodes
             computed += int(np.sum(table.quadrature.n_nodes))
             weighted += int(np.sum(table.quadrature.n_nodes))
+        _fill_records(arrays, p, table)
     return computed, weighted
+
+
+def _fill_records(arrays: dict[str, np.ndarray], p: int, table: Table) -> None:
+    """Point ``p``'s matrix and expansion coefficients where ``arrays`` hold them.
+
+    A sweep asks for them in every point's configuration (one base), so a table
+    without a record that ``arrays`` hold is a bug, not an input to skip.
+    """
+    for record, names in ((table.matrix, MATRIX), (table.expansion, EXPANSION)):
+        if next(iter(names)) not in arrays:
+            continue
+        if record is None:
+            raise RuntimeError(f"the point's table has no {', '.join(names)}; please report this")
+        for name in names:
+            arrays[name][p] = getattr(record, name)

@@ -55,9 +55,17 @@ from dustoptics.io._atomic import write_files
 from dustoptics.models.config import BuildConfig
 from dustoptics.scattering import optics
 from dustoptics.sweep import _fork  # noqa: F401  (Dask's pools renewed in forked children)
-from dustoptics.sweep.chunk import PER_WAVELENGTH, ChunkResult, compute_chunk, shareable
+from dustoptics.sweep.chunk import (
+    EXPANSION,
+    MATRIX,
+    PER_WAVELENGTH,
+    ChunkResult,
+    compute_chunk,
+    outputs,
+    shareable,
+)
 from dustoptics.sweep.run_token import RunToken as _RunToken
-from dustoptics.sweep.spec import SweepSpec, _load_points
+from dustoptics.sweep.spec import SweepSpec, _load_points, expansion_orders
 from dustoptics.sweep.store import (
     MARKERS,
     StoreLayout,
@@ -163,18 +171,58 @@ def _layout(spec: SweepSpec, n_wl: int, chunk_wavelengths: int | None, max_point
 # ---------------------------------------------------------------------- store
 
 
+def _computed_variables(
+    first: BuildConfig,
+    dims: tuple[str, ...],
+    shape: tuple[int, ...],
+    layout: _Layout,
+    coords: dict[str, Any],
+) -> dict[str, Any]:
+    """Lazy (unwritten) placeholders of the arrays the chunks compute
+    (:func:`~dustoptics.sweep.chunk.outputs`); adds the ``order`` coordinate to
+    ``coords`` where the expansion coefficients have one."""
+    import dask.array as da  # the optional 'sweep' extra (see _require_extra)
+
+    wl, theta = first.wavelengths_nm, first.theta_deg
+    sizes = {"theta_deg": theta.size, "order": expansion_orders(first)}
+    if sizes["order"]:
+        coords["order"] = (
+            "order",
+            np.arange(sizes["order"]),
+            {"units": "1", "long_name": "order l of the generalized spherical functions"},
+        )
+    meanings = {
+        "phase": ("sr-1", "phase function, 2 pi int_{-1}^{1} P(mu) dmu = 1 (per steradian)"),
+        **PER_WAVELENGTH,
+        **MATRIX,
+        **EXPANSION,
+    }
+    data: dict[str, Any] = {}
+    for name, extra in outputs(first).items():
+        units, meaning = meanings[name]
+        n_extra = tuple(sizes[d] for d in extra)
+        data[name] = (
+            dims + ("wavelength_nm",) + extra,
+            da.full(
+                shape + (wl.size,) + n_extra,
+                np.nan,
+                chunks=layout.axis_chunks + (layout.wl_chunk,) + n_extra,
+            ),
+            {"units": units, "long_name": meaning},
+        )
+    return data
+
+
 def _template(spec: SweepSpec, configs: list[BuildConfig], layout: _Layout, method: str) -> Any:
     """The Dataset's coordinates, per-point variables and attributes, with
     lazy (unwritten) placeholders for the computed arrays."""
-    import dask.array as da  # the optional 'sweep' extra (see _require_extra)
-    import xarray as xr
+    import xarray as xr  # the optional 'sweep' extra (see _require_extra)
 
     first = configs[0]
     dims = tuple(a.key for a in spec.axes)
     shape = spec.shape
     wl = first.wavelengths_nm
     theta = first.theta_deg
-    chunks = layout.axis_chunks
     coords: dict[str, Any] = {
         a.key: (a.key, np.array(a.values), {"long_name": f"swept input {a.key}"}) for a in spec.axes
     }
@@ -188,24 +236,7 @@ def _template(spec: SweepSpec, configs: list[BuildConfig], layout: _Layout, meth
         theta,
         {"units": "degree", "long_name": "scattering angle, 0 = forward"},
     )
-    data: dict[str, Any] = {
-        "phase": (
-            dims + ("wavelength_nm", "theta_deg"),
-            da.full(
-                shape + (wl.size, theta.size), np.nan, chunks=chunks + (layout.wl_chunk, theta.size)
-            ),
-            {
-                "units": "sr-1",
-                "long_name": "phase function, 2 pi int_{-1}^{1} P(mu) dmu = 1 (per steradian)",
-            },
-        )
-    }
-    for name, (units, meaning) in PER_WAVELENGTH.items():
-        data[name] = (
-            dims + ("wavelength_nm",),
-            da.full(shape + (wl.size,), np.nan, chunks=chunks + (layout.wl_chunk,)),
-            {"units": units, "long_name": meaning},
-        )
+    data = _computed_variables(first, dims, shape, layout, coords)
     geometric = np.full(shape, np.nan)
     provenance = np.empty(shape, dtype=object)
     sources: dict[str, Any] = {}
@@ -245,14 +276,33 @@ def _template(spec: SweepSpec, configs: list[BuildConfig], layout: _Layout, meth
                 if method == "shared"
                 else "independent builds: every point equals a single build of its configuration to the bit"
             )
+            + _records_accuracy(first)
         ),
     }
     return xr.Dataset(data, coords=coords, attrs=attrs)
 
 
-def _store_layout(layout: _Layout) -> StoreLayout:
-    """Which files the chunks of ``layout`` write (``phase`` keeps its angles whole)."""
-    return StoreLayout(layout.grid, {"phase": 1, **dict.fromkeys(PER_WAVELENGTH, 0)})
+def _records_accuracy(config: BuildConfig) -> str:
+    """The accuracy statement's words on the matrix and the expansion coefficients
+    (nothing for a sweep without them, whose attributes stay as they were)."""
+    words = ""
+    if config.optics.polarization:
+        words += (
+            "; matrix_error_estimate (F12, F33, F34 relative to F11 at the same angle) is "
+            "each point's own, and error_estimate includes it"
+        )
+    if config.optics.expansion is not None:
+        words += (
+            "; expansion_error_estimate bounds every expansion coefficient divided by (2 l + 1), "
+            f"orders 0..{config.optics.expansion} (zero beyond the orders the spheres need)"
+        )
+    return words
+
+
+def _store_layout(layout: _Layout, config: BuildConfig) -> StoreLayout:
+    """Which files the chunks of ``layout`` write (arrays over angles or orders keep
+    them whole)."""
+    return StoreLayout(layout.grid, {k: len(extra) for k, extra in outputs(config).items()})
 
 
 @contextmanager
@@ -604,6 +654,17 @@ def _close(objects: Sequence[Any]) -> None:
             obj.close()
 
 
+def _values_per_point_wavelength(template: Any) -> int:
+    """Values per point and wavelength of every computed array: the angles of
+    ``phase`` (and of F12, F33, F34), the orders of the expansion coefficients,
+    one of each other."""
+    return sum(
+        math.prod(template.sizes[d] for d in v.dims[v.dims.index("wavelength_nm") + 1 :])
+        for v in template.data_vars.values()
+        if "wavelength_nm" in v.dims
+    )
+
+
 def _check_cost(
     spec: SweepSpec,
     costs: Sequence[Any],
@@ -642,16 +703,18 @@ def _check_cost(
             "command line) to go ahead"
         )
     per_chunk = int(np.prod(layout.axis_chunks)) * layout.wl_chunk
-    arrays = 2.0 * 8.0 * per_chunk * (n_theta + len(PER_WAVELENGTH))
+    per_value = _values_per_point_wavelength(template)
+    arrays = 2.0 * 8.0 * per_chunk * per_value
     solver = max((c.memory_bytes for _, c in mie), default=0.0)
     check_budget(
         "a chunk of the sweep",
         solver + arrays,
         allow_large=False,
         change=(
-            f"a chunk holds up to {per_chunk} point-wavelengths x {n_theta} angles beside the "
-            "solver of its largest point: use a smaller max_points or chunk_wavelengths, fewer "
-            "angles, or smaller particles"
+            f"a chunk holds up to {per_chunk} point-wavelengths x {per_value} values (the "
+            f"phase function's {n_theta} angles, and the matrix's and expansion's where asked) "
+            "beside the solver of its largest point: use a smaller max_points or "
+            "chunk_wavelengths, fewer angles or orders, or smaller particles"
         ),
     )
     size = float(template.nbytes)
@@ -758,14 +821,20 @@ def sweep(
         [um^2], ``g``, ``error_estimate``, ``cross_section_error_estimate``,
         ``n_nodes``, per point ``mean_geometric_cross_section_um2`` [um^2]
         and ``provenance`` (its inputs and their hash), attributes with the
-        sweep, software versions, sources and the accuracy statement.  For a
+        sweep, software versions, sources and the accuracy statement.  With
+        ``optics.polarization = true`` also ``f12``, ``f33``, ``f34``
+        [sr^-1] and ``matrix_error_estimate``; with ``optics.expansion = N``
+        also ``alpha1`` .. ``alpha4``, ``beta1``, ``beta2`` over an ``order``
+        dimension (0..N) and ``expansion_error_estimate``
+        (:func:`~dustoptics.sweep.point_table` reads a point as a table).  For a
         Zarr ``out``, the dataset opened from the store, every chunk checked.
 
     Raises
     ------
     ValueError
         An invalid axis or value (before any work: the message names the
-        axis, the value and its range), a request beyond the budget
+        axis, the value and its range), ``optics.expansion = true`` (every
+        order the spheres need differs by point: give an order N), a request beyond the budget
         (:class:`~dustoptics._validation.BudgetError`), a store holding
         another sweep or damaged where a chunk cannot be recomputed
         (:class:`~dustoptics.io.FormatError`), or a store that another run is
@@ -816,7 +885,7 @@ def sweep(
             template.to_zarr(folder, compute=False, mode="w-", zarr_format=2, consolidated=True)
 
         with held_store(
-            store, identity=identity, layout=_store_layout(layout), create=create
+            store, identity=identity, layout=_store_layout(layout, configs[0]), create=create
         ) as new:
             todo = _todo(store, layout, new=new)
             total = spec.n_points * layout.n_wl

@@ -358,6 +358,41 @@ def _flatten_sweep_table(
     return out
 
 
+# ------------------------------------------------------------------ outputs
+
+#: Why a sweep refuses ``optics.expansion = true``.
+_EVERY_ORDER = (
+    "a sweep cannot take true (every order the spheres need, which differs by point and "
+    "wavelength): it stores the coefficients of every point on one order axis, so give the "
+    "highest order N (optics.expansion = N; about 2 x the largest size parameter keeps every "
+    "order that matters)"
+)
+
+
+def expansion_orders(config: BuildConfig) -> int:
+    """The length of a sweep's ``order`` dimension: N + 1 for ``optics.expansion = N``,
+    0 without expansion coefficients.
+
+    Raises
+    ------
+    ValueError
+        ``optics.expansion = true`` (see :func:`load_sweep`).
+    """
+    expansion = config.optics.expansion
+    if expansion is None:
+        return 0
+    if expansion is True:
+        raise ValueError(f"optics.expansion: {_EVERY_ORDER}")
+    return int(expansion) + 1
+
+
+def _check_outputs(base: Mapping[str, Any], source: str) -> None:
+    """Refuse what a sweep cannot store, naming the key, before any point is made."""
+    optics = base.get("optics")
+    if isinstance(optics, Mapping) and optics.get("expansion") is True:
+        raise ConfigError(_EVERY_ORDER, key="optics.expansion", line=None, source=source)
+
+
 # ------------------------------------------------------------------ the spec
 
 
@@ -523,6 +558,7 @@ def _load_points(
     if not isinstance(allow_large, bool):
         raise TypeError(f"allow_large must be True or False; got {allow_large!r}")
     base, table, source = _base_from(config)
+    _check_outputs(base, source)
     raw = {key: values for key, (_, values) in _flatten_sweep_table(table).items()}
     if over is not None:
         if not isinstance(over, Mapping):
