@@ -15,19 +15,22 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import stat
 import sys
+import warnings
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from dustoptics._files import FormatError
+from dustoptics._files import FormatError, read_checked
 from dustoptics.cli.errors import PROG, UsageError
 from dustoptics.cli.parser import add_command
 from dustoptics.io._atomic import check_targets, write_files
 from dustoptics.models.build import is_config_path
-from dustoptics.models.files import load_config
+from dustoptics.models.config import parse_config
+from dustoptics.models.files import PresetCopyWarning, preset_copy_problems
 from dustoptics.models.presets import load_preset
 
 __all__ = ["add_parser", "run"]
@@ -105,8 +108,20 @@ def add_parser(sub: Any) -> None:
         help="go ahead when the sky solves are estimated beyond five minutes, or a table the "
         "fit may compute (at the size bounds) beyond the budget of one",
     )
+    p.add_argument(
+        "--max-observation-bytes",
+        type=int,
+        default=MAX_OBSERVATIONS_BYTES,
+        metavar="BYTES",
+        help="largest observations file, on disk and as its variables declare they are in "
+        f"memory, that is read (default {MAX_OBSERVATIONS_BYTES}, 256 MiB)",
+    )
     p.add_argument("--out", type=Path, metavar="FILE.json", help="write the result as JSON")
-    p.add_argument("--force", action="store_true", help="replace an existing --out file")
+    p.add_argument(
+        "--force",
+        action="store_true",
+        help="replace an existing --out file (never one of the inputs)",
+    )
 
 
 def _pairs(options: list[str], flag: str, sep: str) -> dict[str, tuple[float, float]]:
@@ -128,14 +143,20 @@ def _pairs(options: list[str], flag: str, sep: str) -> dict[str, tuple[float, fl
     return out
 
 
-#: Largest observations file the command reads (it loads it whole): 256 MiB. [bytes]
+#: Largest observations file the command reads (it loads it whole), on disk and as its
+#: variables declare their size in memory: 256 MiB (``--max-observation-bytes``). [bytes]
 MAX_OBSERVATIONS_BYTES = 256 * 1024**2
 
+#: Largest configuration file ``--model`` reads: 16 MiB. [bytes]
+MAX_MODEL_BYTES = 16 * 1024**2
 
-def _read_observations(path: Path) -> Any:
+
+def _read_observations(path: Path, limit: int = MAX_OBSERVATIONS_BYTES) -> Any:
     """The observations file as an xarray Dataset, loaded; a missing file, one that is
-    not a regular file (FIFO, device, directory), a larger one than
-    :data:`MAX_OBSERVATIONS_BYTES` or one xarray cannot read is refused in one line."""
+    not a regular file (FIFO, device, directory), one larger than ``limit`` [bytes] on
+    disk or whose variables declare more than ``limit`` bytes in memory (checked from
+    their declared shapes before any is read), or one xarray cannot read is refused
+    in one line."""
     import xarray as xr  # lazy: xarray adds 0.7-1 s to every command's start-up (-X importtime)
 
     try:
@@ -144,28 +165,83 @@ def _read_observations(path: Path) -> Any:
         raise FileNotFoundError(f"{path}: no such file") from None
     if not stat.S_ISREG(info.st_mode):
         raise FormatError(f"{path}: not a regular file (a FIFO, device, socket or directory)")
-    if info.st_size > MAX_OBSERVATIONS_BYTES:
+    if info.st_size > limit:
         raise FormatError(
-            f"{path}: {info.st_size} bytes, larger than the {MAX_OBSERVATIONS_BYTES}-byte "
-            "limit of the observations"
+            f"{path}: {info.st_size} bytes, larger than the {limit}-byte limit of the "
+            "observations (--max-observation-bytes)"
         )
     try:
         with xr.open_dataset(path) as ds:
+            _check_declared_size(path, ds, limit)
             return ds.load()
-    except (OSError, ValueError, KeyError, TypeError) as exc:
+    except (OSError, ValueError, KeyError, TypeError, OverflowError) as exc:
+        if isinstance(exc, FormatError):
+            raise
         raise FormatError(
             f"{path}: not a netCDF file of observations that xarray can read "
             f"({type(exc).__name__}: {exc})"
         ) from None
 
 
+def _check_declared_size(path: Path, ds: Any, limit: int) -> None:
+    """Refuse a file whose variables declare more than ``limit`` bytes in memory
+    (their shapes times their item sizes, before a byte of them is read)."""
+    declared = {str(name): int(var.size) * var.dtype.itemsize for name, var in ds.variables.items()}
+    total = sum(declared.values())
+    if total > limit:
+        name, size = max(declared.items(), key=lambda item: item[1])
+        raise FormatError(
+            f"{path}: its variables declare {total} bytes in memory ({name!r}: {size} bytes, "
+            f"shape {tuple(ds.variables[name].shape)}), beyond the {limit}-byte limit of the "
+            "observations; refused before reading (--max-observation-bytes raises it)"
+        )
+
+
 def _model(name: str) -> Any:
+    """The preset, or the configuration file read through the guarded reader (a regular
+    file of at most :data:`MAX_MODEL_BYTES`, never a FIFO or a device)."""
     if is_config_path(name):
-        return load_config(name)
+        try:
+            text = read_checked(name, limit=MAX_MODEL_BYTES).decode("utf-8")
+        except FileNotFoundError:
+            raise FileNotFoundError(f"--model {name}: no such file") from None
+        except UnicodeDecodeError as exc:
+            raise FormatError(f"--model {name}: not UTF-8 text ({exc.reason})") from None
+        except FormatError as exc:
+            raise FormatError(f"--model {exc}") from None
+        config = parse_config(text, source=name)
+        for problem in preset_copy_problems(config):
+            warnings.warn(f"configuration {name!r} {problem}", PresetCopyWarning, stacklevel=2)
+        return config
     try:
         return load_preset(name)
     except ValueError as exc:
         raise UsageError(f"--model: {exc}") from None
+
+
+def _same_file(a: Path, b: Path) -> bool:
+    """Whether ``a`` and ``b`` name one file (the same inode, or the same resolved path)."""
+    try:
+        return a.resolve() == b.resolve() or (b.exists() and a.exists() and a.samefile(b))
+    except OSError:
+        return False
+
+
+def _check_not_an_input(out: Path, inputs: dict[str, Path]) -> None:
+    """Refuse an ``--out`` that is one of the command's inputs, even with ``--force``."""
+    for what, path in inputs.items():
+        if _same_file(out, path):
+            raise UsageError(
+                f"--out {out} is the {what} {path}: retrieve never writes over its own "
+                "input; choose another --out"
+            )
+
+
+def _finite_or_none(values: Any) -> Any:
+    """A list (of lists) of floats with NaN and inf as None (JSON has neither)."""
+    if isinstance(values, list):
+        return [_finite_or_none(v) for v in values]
+    return values if math.isfinite(values) else None
 
 
 def _write(result: Any, path: Path, force: bool) -> None:
@@ -174,8 +250,8 @@ def _write(result: Any, path: Path, force: bool) -> None:
     record = {
         "parameters": list(result.parameters),
         "values": result.values.tolist(),
-        "standard_errors": result.standard_errors.tolist(),
-        "covariance": result.covariance.tolist(),
+        "standard_errors": _finite_or_none(result.standard_errors.tolist()),
+        "covariance": _finite_or_none(result.covariance.tolist()),
         "initial_values": result.initial_values.tolist(),
         "labels": list(result.labels),
         "residuals": result.residuals.tolist(),
@@ -187,7 +263,8 @@ def _write(result: Any, path: Path, force: bool) -> None:
         "sky_solves": result.sky_solves,
         "path_values": result.history_values.tolist(),
     }
-    write_files({path: (json.dumps(record, indent=1) + "\n").encode()}, overwrite=force)
+    text = json.dumps(record, indent=1)
+    write_files({path: (text + "\n").encode()}, overwrite=force)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -210,10 +287,17 @@ def run(args: argparse.Namespace) -> int:
         sky = SkySettings(**settings)
     except ValueError as exc:
         raise UsageError(f"--sky-streams/--sky-tol: {exc}") from None
+    if args.max_observation_bytes < 1:
+        raise UsageError(f"--max-observation-bytes must be >= 1; got {args.max_observation_bytes}")
+    if args.out is not None:
+        inputs = {"observations file": args.observations}
+        if is_config_path(args.model):
+            inputs["--model file"] = Path(args.model)
+        _check_not_an_input(args.out, inputs)
     model = _model(args.model)
     if args.out is not None:
         check_targets([args.out], overwrite=args.force)
-    observations = _read_observations(args.observations)
+    observations = _read_observations(args.observations, args.max_observation_bytes)
 
     result = retrieve(
         observations,

@@ -31,6 +31,7 @@ from dustoptics.retrieve.sky import (
     sky_progress,
     sky_samples,
 )
+from dustoptics.scattering import optics as _optics
 from dustoptics.scattering.optics import (
     check_cost,
     compute_optics,
@@ -273,6 +274,44 @@ def _check_corner_cost(
         ) from None
 
 
+def _check_fit_cost(
+    model: Mapping[str, Any],
+    grids: Sequence[tuple[np.ndarray, np.ndarray]],
+    max_iterations: int,
+    allow_large: bool,
+) -> None:
+    """The whole fit's work, estimated before any table: the start's tables (one per
+    grid of wavelengths [nm] and angles [deg]) times the most evaluations
+    (``max_iterations`` and the one at the solution), within compute_optics'
+    :data:`~dustoptics.scattering.optics.WORK_BUDGET` unless ``allow_large``."""
+    settings = model.get("quadrature") or QuadratureSettings()
+    workers = model.get("workers") or os.cpu_count() or 1
+    per_table = 0.0
+    sizes = []
+    for wavelength_nm, theta_deg in grids:
+        request = optics_request(
+            model["refractive_index"],
+            model["distribution"],
+            wavelength_nm,
+            theta_deg,
+            quadrature=settings,
+            weighting=model.get("weighting", "scattering"),
+        )
+        per_table += check_cost(request, workers=workers, allow_large=allow_large).work
+        sizes.append(f"{wavelength_nm.size} wavelengths x {theta_deg.size} angles")
+    total = per_table * (max_iterations + 1)
+    budget = _optics.WORK_BUDGET  # read at the call: a caller may lower it
+    if total > budget and not allow_large:
+        raise BudgetError(
+            f"retrieve: the fit would need about {total:.3g} sphere-order-angle terms "
+            f"({per_table:.3g} per evaluation at the start, {' and '.join(sizes)}, times "
+            f"max_iterations={max_iterations} + 1 evaluations), beyond the budget of "
+            f"{budget:g} (about ten minutes): observe fewer wavelengths or angles, lower "
+            "max_iterations (--max-iterations), or pass allow_large=True (--allow-large) "
+            "to go ahead"
+        )
+
+
 # ----------------------------------------------------------------- observations
 
 
@@ -328,43 +367,134 @@ def _as_dataset(observations: Any) -> Any:
     return observations
 
 
+#: Units the coordinates may declare (an attribute ``units``); none declared means these.
+_COORDINATE_UNITS: Mapping[str, tuple[str, ...]] = {
+    "wavelength_nm": ("nm", "nanometer", "nanometers", "nanometre", "nanometres"),
+    "theta_deg": ("deg", "degree", "degrees"),
+}
+#: Domain of each coordinate of the optical observations: (low, high, inclusive low). [nm, deg]
+_COORDINATE_DOMAIN: Mapping[str, tuple[float, float, bool]] = {
+    "wavelength_nm": (0.0, 1e7, False),
+    "theta_deg": (0.0, 180.0, True),
+}
+
+
+def _numbers(name: str, what: str, raw: Any) -> np.ndarray:
+    """``raw`` as float64, or a TypeError naming the variable and its dtype."""
+    array = np.asarray(raw)
+    if array.dtype.kind not in "biuf":
+        raise TypeError(
+            f"observations: {name!r} {what} must be real numbers; got dtype {array.dtype} "
+            f"({np.ravel(array)[:3].tolist()!r}...)"
+        )
+    return np.asarray(array, dtype=np.float64)
+
+
+def _coordinate(var: Any, name: str, coordinate: str) -> np.ndarray:
+    """A coordinate of an optical observation, checked: present, numbers in its unit
+    and domain, finite (:data:`_COORDINATE_DOMAIN`)."""
+    if coordinate not in var.coords:
+        raise ValueError(
+            f"observations: {name!r} needs the coordinate {coordinate!r} along its dimension"
+        )
+    coord = var[coordinate]
+    units = coord.attrs.get("units")
+    if units is not None and str(units).strip().lower() not in _COORDINATE_UNITS[coordinate]:
+        raise ValueError(
+            f"observations: {name!r} coordinate {coordinate} must be in "
+            f"{_COORDINATE_UNITS[coordinate][0]}; got units={units!r}"
+        )
+    values = _numbers(name, f"coordinate {coordinate}", coord.values)
+    low, high, inclusive = _COORDINATE_DOMAIN[coordinate]
+    inside = (values >= low if inclusive else values > low) & (values <= high)
+    if not np.all(inside):
+        bad = values[~inside][:5].tolist()
+        interval = f"{'[' if inclusive else '('}{low:g}, {high:g}]"
+        raise ValueError(
+            f"observations: {name!r} coordinate {coordinate} must be finite and within "
+            f"{interval}; got {bad}"
+        )
+    return values
+
+
 def _variable_and_sigma(observations: Any, name: str) -> tuple[Any, np.ndarray]:
     """The variable ``name`` in its dimensions' order, and its one-sigma uncertainties."""
     var = observations[name]
     dims = OBSERVABLES.get(name) or SKY_OBSERVABLES[name]
-    if set(var.dims) != set(dims):
+    if set(var.dims) != set(dims) or var.ndim != len(dims):
         raise ValueError(f"observations: {name!r} must have dimensions {dims}; got {var.dims}")
     var = var.transpose(*dims)
+    _numbers(name, "values", var.values)
     if f"{name}_uncertainty" in observations:
-        sigma = observations[f"{name}_uncertainty"].transpose(*dims).broadcast_like(var)
-        return var, np.asarray(sigma.values, dtype=np.float64)
+        sigma = observations[f"{name}_uncertainty"]
+        if not set(sigma.dims) <= set(dims):
+            raise ValueError(
+                f"observations: {name + '_uncertainty'!r} must have dimensions among {dims}; "
+                f"got {sigma.dims}"
+            )
+        try:
+            sigma = sigma.transpose(*[d for d in dims if d in sigma.dims]).broadcast_like(var)
+        except (ValueError, KeyError, IndexError) as exc:
+            raise ValueError(
+                f"observations: {name + '_uncertainty'!r} does not match {name!r} "
+                f"(shape {sigma.shape} against {var.shape}): {exc}"
+            ) from None
+        if sigma.shape != var.shape:
+            raise ValueError(
+                f"observations: {name + '_uncertainty'!r} must have the shape of {name!r} "
+                f"{var.shape}; got {sigma.shape}"
+            )
+        return var, _numbers(name, "uncertainties", sigma.values)
     if "uncertainty" in var.attrs:
-        return var, np.full(var.shape, float(var.attrs["uncertainty"]))
+        raw = var.attrs["uncertainty"]
+        sigma_values = _numbers(name, "attribute uncertainty", raw)
+        if sigma_values.size != 1:
+            raise ValueError(
+                f"observations: {name!r} attribute uncertainty must be one number; "
+                f"got {np.ravel(sigma_values)[:5].tolist()}"
+            )
+        return var, np.full(var.shape, float(sigma_values.ravel()[0]))
     raise ValueError(
         f"observations: {name!r} needs its one-sigma uncertainty: a variable "
         f"{name + '_uncertainty'!r} or an attribute 'uncertainty'"
     )
 
 
+def _reference_nm(var: Any, wavelength_nm: np.ndarray) -> float:
+    """The ``reference_wavelength_nm`` of an extinction ratio: a finite number > 0. [nm]"""
+    if "reference_wavelength_nm" not in var.attrs:
+        raise ValueError(
+            "observations: 'extinction_ratio' needs the attribute reference_wavelength_nm"
+        )
+    raw = var.attrs["reference_wavelength_nm"]
+    array = np.asarray(raw)
+    reference = float(array.ravel()[0]) if array.dtype.kind in "biuf" and array.size == 1 else None
+    low, high, _ = _COORDINATE_DOMAIN["wavelength_nm"]
+    if reference is None or not low < reference <= high:
+        shown = f"{reference:g}" if reference is not None else repr(raw)
+        raise ValueError(
+            "observations: 'extinction_ratio' attribute reference_wavelength_nm must be one "
+            f"finite number within ({low:g}, {high:g}] nm; got {shown}"
+        )
+    return reference
+
+
 def _optical_observation(name: str, var: Any, sigma_values: np.ndarray) -> _Observation:
     """The finite samples of an optical observable (not the sky's)."""
     values = np.asarray(var.values, dtype=np.float64)
-    wl = np.asarray(var["wavelength_nm"].values, dtype=np.float64)
+    wl = _coordinate(var, name, "wavelength_nm")
     if values.ndim == 2:
-        theta = np.asarray(var["theta_deg"].values, dtype=np.float64)
+        theta = _coordinate(var, name, "theta_deg")
         wl_s, theta_s = np.meshgrid(wl, theta, indexing="ij")
     else:
         wl_s, theta_s = wl, np.full(wl.shape, np.nan)
     keep = np.isfinite(values)
     if not np.all(np.isfinite(sigma_values[keep]) & (sigma_values[keep] > 0)):
-        raise ValueError(f"observations: {name!r} uncertainties must be finite and > 0")
-    reference = math.nan
-    if name == "extinction_ratio":
-        if "reference_wavelength_nm" not in var.attrs:
-            raise ValueError(
-                "observations: 'extinction_ratio' needs the attribute reference_wavelength_nm"
-            )
-        reference = float(var.attrs["reference_wavelength_nm"])
+        bad = sigma_values[keep][~(np.isfinite(sigma_values[keep]) & (sigma_values[keep] > 0))]
+        raise ValueError(
+            f"observations: {name!r} uncertainties must be finite and > 0; got {bad[:5].tolist()}"
+        )
+    reference = _reference_nm(var, wl) if name == "extinction_ratio" else math.nan
     return _Observation(
         name,
         wl_s[keep].ravel(),
@@ -525,8 +655,7 @@ def retrieve(
     names = _checked_parameters(keywords, parameters)
     start, lower, upper = _checked_bounds(keywords, names, bounds)
     prior_list = _checked_priors(names, priors)
-    if not (isinstance(max_iterations, int) and max_iterations >= 1):
-        raise ValueError(f"max_iterations must be a positive integer; got {max_iterations!r}")
+    _check_options(max_iterations, tolerance, allow_large)
     if sky is None:
         sky = SkySettings()
     elif not isinstance(sky, SkySettings):
@@ -535,6 +664,10 @@ def retrieve(
     began = time.perf_counter()
     sky_model = SkyModel(sky_list, sky) if sky_list else None
     wavelengths, theta = _optical_grid(obs)
+    grids = [(wavelengths, theta)] if obs else []
+    if sky_model is not None:
+        grids.append((sky_model.wavelength_nm, default_theta_deg()))
+    _check_fit_cost(keywords, grids, max_iterations, allow_large)
     if obs:
         _check_corner_cost(keywords, names, upper, wavelengths, theta, allow_large)
     if sky_model is not None:  # the sky's table: its wavelengths, the default angles
@@ -573,19 +706,33 @@ def retrieve(
     jac = problem.jacobian(result.x)
     residuals = final["residuals"]
     covariance = np.linalg.pinv(jac.T @ jac)
+    standard_errors = np.sqrt(np.diag(covariance))
+    converged, message = bool(result.status > 0), str(result.message)
+    uninformed = _uninformed(jac, upper - lower)
+    if uninformed.any():
+        covariance[uninformed, :] = covariance[:, uninformed] = np.nan
+        covariance[uninformed, uninformed] = np.inf
+        standard_errors[uninformed] = np.inf
+        converged = False
+        message = (
+            "the data carry no information on "
+            f"{', '.join(p for p, u in zip(names, uninformed, strict=True) if u)}: the "
+            "chi-square is flat across the bounds (uncertainties too large, or observations "
+            f"that do not depend on the parameter); not a fit (the optimizer: {message})"
+        )
     return Retrieval(
         parameters=names,
         values=np.array(result.x),
         covariance=covariance,
-        standard_errors=np.sqrt(np.diag(covariance)),
+        standard_errors=standard_errors,
         initial_values=start,
         residuals=residuals,
         labels=problem.labels,
         chi_square=float(residuals @ residuals),
         iterations=int(result.njev or 0),
         function_evaluations=int(result.nfev),
-        converged=bool(result.status > 0),
-        message=str(result.message),
+        converged=converged,
+        message=message,
         model=_set(keywords, dict(zip(names, result.x.tolist()))),
         table=final["table"] if obs else final["sky_table"],
         sky_solves=sky_model.solves if sky_model is not None else 0,
@@ -594,11 +741,51 @@ def retrieve(
     )
 
 
+#: A parameter is not constrained by the data when its standard error exceeds this
+#: multiple of its bounds' width: across the bounds the chi-square changes by less than
+#: its square's inverse (1e-6). [-]
+UNINFORMED_WIDTHS = 1e3
+
+
+def _uninformed(jacobian: np.ndarray, width: np.ndarray) -> np.ndarray:
+    """Which parameters the weighted residuals' Jacobian says nothing about.
+
+    The standard errors are computed from the Jacobian with its columns scaled to
+    unit norm (so that uncertainties of 1e308, whose squared residuals underflow,
+    still give the right answer).  A zero or non-finite column, a direction of the
+    scaled Jacobian with a singular value below round-off, or a standard error
+    beyond :data:`UNINFORMED_WIDTHS` times the bounds' ``width`` marks the
+    parameters it involves.
+    """
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore", under="ignore"):
+        peak = np.max(np.abs(jacobian), axis=0, initial=0.0)
+        norms = peak * np.sqrt(np.sum(np.square(jacobian / peak), axis=0))
+    out = ~(np.isfinite(norms) & (norms > 0.0))
+    if out.all():
+        return out
+    scaled = jacobian[:, ~out] / norms[~out]
+    _, s, vt = np.linalg.svd(scaled, full_matrices=True)  # vt: (k, k) with fewer rows than k
+    s = np.r_[s, np.zeros(vt.shape[0] - s.size)]
+    rank = s > s.max() * max(scaled.shape) * np.finfo(float).eps
+    flat = np.any(np.abs(vt[~rank]) > 1e-8, axis=0)
+    with np.errstate(divide="ignore", over="ignore"):
+        errors = np.sqrt(np.sum(np.square(vt[rank].T / s[rank]), axis=1)) / norms[~out]
+    out[~out] = flat | ~(errors <= UNINFORMED_WIDTHS * width[~out])
+    return out
+
+
 def _checked_parameters(keywords: dict[str, Any], parameters: Sequence[str]) -> tuple[str, ...]:
     """The parameters to fit, checked against the model (:func:`retrieve`)."""
-    names = check_parameters(
-        parameters, keywords["distribution"], index_parameter_names(keywords["refractive_index"])
-    )
+    try:
+        names = check_parameters(
+            parameters,
+            keywords["distribution"],
+            index_parameter_names(keywords["refractive_index"]),
+        )
+    except TypeError as exc:
+        raise TypeError(f"parameters: {exc}; got {parameters!r}") from None
+    except ValueError as exc:
+        raise ValueError(f"parameters: {exc}") from None
     if not names:
         raise ValueError("parameters must name at least one parameter to fit")
     if any(p in INDEX_PARAMETERS for p in names):
@@ -612,17 +799,44 @@ def _checked_parameters(keywords: dict[str, Any], parameters: Sequence[str]) -> 
     return names
 
 
+def _real(value: Any) -> bool:
+    """Whether ``value`` is a real number (not a bool, a string or an array)."""
+    return isinstance(value, int | float | np.integer | np.floating) and not isinstance(
+        value, bool | np.bool_
+    )
+
+
+def _pair(what: str, parameter: str, pair: Any, form: str) -> tuple[float, float]:
+    """``pair`` as two floats, or a TypeError/ValueError naming ``what`` and ``parameter``."""
+    if isinstance(pair, str) or not isinstance(pair, Sequence | np.ndarray):
+        raise TypeError(f"{what}[{parameter!r}] must be a pair {form}; got {pair!r}")
+    if len(pair) != 2:
+        raise ValueError(
+            f"{what}[{parameter!r}] must be a pair {form} of two numbers; got {pair!r} "
+            f"({len(pair)} item{'s' if len(pair) != 1 else ''})"
+        )
+    if not all(_real(v) for v in pair):
+        raise TypeError(f"{what}[{parameter!r}] must hold two real numbers {form}; got {pair!r}")
+    return float(pair[0]), float(pair[1])
+
+
 def _checked_bounds(
     keywords: dict[str, Any], names: Sequence[str], bounds: Any
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The start, lower and upper bounds of ``names`` (:func:`retrieve`)."""
-    if not isinstance(bounds, Mapping) or set(names) - set(bounds):
-        raise ValueError(
-            f"bounds must give (lower, upper) for every parameter {list(names)}; got {bounds!r}"
+    if not isinstance(bounds, Mapping):
+        raise TypeError(
+            f"bounds must be a mapping {{parameter: (lower, upper)}}; got {type(bounds).__name__}"
         )
+    if set(names) - set(bounds):
+        raise ValueError(
+            f"bounds must give (lower, upper) for every parameter {list(names)}; "
+            f"got {bounds!r}"
+        )
+    pairs = [_pair("bounds", p, bounds[p], "(lower, upper)") for p in names]
     start = np.array([_get(keywords, p) for p in names])
-    lower = np.array([float(bounds[p][0]) for p in names])
-    upper = np.array([float(bounds[p][1]) for p in names])
+    lower = np.array([lo for lo, _ in pairs])
+    upper = np.array([hi for _, hi in pairs])
     if not np.all(np.isfinite(lower) & np.isfinite(upper)):
         raise ValueError(
             f"bounds must be finite numbers (they also set the sky's finite-difference step); "
@@ -643,14 +857,40 @@ def _checked_priors(
     names: Sequence[str], priors: Mapping[str, tuple[float, float]] | None
 ) -> list[tuple[int, float, float]]:
     """(parameter index, mean, standard deviation) of each prior (:func:`retrieve`)."""
+    if priors is not None and not isinstance(priors, Mapping):
+        raise TypeError(
+            f"priors must be a mapping {{parameter: (mean, sd)}} or None; "
+            f"got {type(priors).__name__}"
+        )
     prior_list = []
-    for p, (mean, sd) in (priors or {}).items():
+    for p, pair in (priors or {}).items():
         if p not in names:
             raise ValueError(f"priors: {p!r} is not a fitted parameter ({list(names)})")
+        mean, sd = _pair("priors", p, pair, "(mean, sd)")
         if not (math.isfinite(mean) and math.isfinite(sd) and sd > 0):
-            raise ValueError(f"priors: {p!r} needs a finite mean and a standard deviation > 0")
-        prior_list.append((list(names).index(p), float(mean), float(sd)))
+            raise ValueError(
+                f"priors: {p!r} needs a finite mean and a standard deviation > 0; "
+                f"got mean={mean!r}, sd={sd!r}"
+            )
+        prior_list.append((list(names).index(p), mean, sd))
     return prior_list
+
+
+#: Most evaluations of the residuals a fit may be asked for (scipy's ``max_nfev``). [-]
+MAX_ITERATIONS = 100_000
+
+
+def _check_options(max_iterations: Any, tolerance: Any, allow_large: Any) -> None:
+    """The numerical options of :func:`retrieve`: types and domains."""
+    if not (type(max_iterations) is int and 1 <= max_iterations <= MAX_ITERATIONS):
+        raise ValueError(
+            f"max_iterations must be an integer within [1, {MAX_ITERATIONS}]; "
+            f"got {max_iterations!r}"
+        )
+    if not (_real(tolerance) and 1e-15 <= tolerance < 1.0):
+        raise ValueError(f"tolerance must be a number within [1e-15, 1); got {tolerance!r}")
+    if not isinstance(allow_large, bool | np.bool_):
+        raise TypeError(f"allow_large must be True or False; got {allow_large!r}")
 
 
 def _optical_grid(obs: Sequence[_Observation]) -> tuple[np.ndarray, np.ndarray]:
