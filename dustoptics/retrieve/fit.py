@@ -782,10 +782,11 @@ def _checked_parameters(keywords: dict[str, Any], parameters: Sequence[str]) -> 
             keywords["distribution"],
             index_parameter_names(keywords["refractive_index"]),
         )
-    except TypeError as exc:
-        raise TypeError(f"parameters: {exc}; got {parameters!r}") from None
-    except ValueError as exc:
-        raise ValueError(f"parameters: {exc}") from None
+    except (TypeError, ValueError) as exc:  # worded for compute_optics(derivatives=...)
+        text = str(exc)
+        if text.startswith("derivatives"):
+            text = "parameters" + text[len("derivatives") :]
+        raise type(exc)(text) from None
     if not names:
         raise ValueError("parameters must name at least one parameter to fit")
     if any(p in INDEX_PARAMETERS for p in names):
@@ -830,8 +831,7 @@ def _checked_bounds(
         )
     if set(names) - set(bounds):
         raise ValueError(
-            f"bounds must give (lower, upper) for every parameter {list(names)}; "
-            f"got {bounds!r}"
+            f"bounds must give (lower, upper) for every parameter {list(names)}; got {bounds!r}"
         )
     pairs = [_pair("bounds", p, bounds[p], "(lower, upper)") for p in names]
     start = np.array([_get(keywords, p) for p in names])
