@@ -367,3 +367,15 @@ def test_command_line_reports_an_uninformative_fit(
     assert "NOT converged" in printed and "no information on r_eff_um" in printed
     record = json.loads(out.read_text(encoding="utf-8"))
     assert record["converged"] is False and record["standard_errors"] == [None]
+
+
+def test_command_line_bounds_the_iterations(
+    tmp_path: Any, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from dustoptics.cli import main
+
+    obs, config = _files(tmp_path)
+    argv = ["retrieve", str(obs), "--model", str(config), "--fit", "r_eff_um=0.1:3"]
+    for n in ("0", "99999999999999999999"):
+        assert main([*argv, "--max-iterations", n]) == 2
+        assert f"--max-iterations must be within [1, 100000]; got {n}" in capsys.readouterr().err

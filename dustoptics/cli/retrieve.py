@@ -273,11 +273,14 @@ def run(args: argparse.Namespace) -> int:
 
     # lazy: dustoptics.retrieve (scipy.optimize, xarray) adds 0.8-1 s to every command's start-up
     from dustoptics.retrieve import SkySettings, retrieve
+    from dustoptics.retrieve.fit import MAX_ITERATIONS
 
     bounds = _pairs(args.fit, "--fit", ":")
     priors = _pairs(args.prior, "--prior", ",")
-    if args.max_iterations < 1:
-        raise UsageError(f"--max-iterations must be >= 1; got {args.max_iterations}")
+    if not 1 <= args.max_iterations <= MAX_ITERATIONS:
+        raise UsageError(
+            f"--max-iterations must be within [1, {MAX_ITERATIONS}]; got {args.max_iterations}"
+        )
     settings = {}
     if args.sky_streams is not None:
         settings["n_streams"] = args.sky_streams
