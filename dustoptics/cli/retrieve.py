@@ -173,31 +173,38 @@ def _write(result: Any, path: Path, force: bool) -> None:
     write_files({path: (text + "\n").encode()}, overwrite=force)
 
 
-def run(args: argparse.Namespace) -> int:
-    """Run ``retrieve``; returns the exit status.  The options, the model and the
-    output file are checked before the observations are read or any table computed."""
-
-    # lazy: dustoptics.retrieve (scipy.optimize, xarray) adds 0.8-1 s to every command's start-up
-    from dustoptics.retrieve import SkySettings, retrieve
+def _checked_options(args: argparse.Namespace) -> Any:
+    """The numerical options checked (usage errors), and the sky's settings."""
+    from dustoptics.retrieve import SkySettings
     from dustoptics.retrieve.fit import MAX_ITERATIONS
 
-    bounds = _pairs(args.fit, "--fit", ":")
-    priors = _pairs(args.prior, "--prior", ",")
     if not 1 <= args.max_iterations <= MAX_ITERATIONS:
         raise UsageError(
             f"--max-iterations must be within [1, {MAX_ITERATIONS}]; got {args.max_iterations}"
         )
+    if args.max_observation_bytes < 1:
+        raise UsageError(f"--max-observation-bytes must be >= 1; got {args.max_observation_bytes}")
     settings = {}
     if args.sky_streams is not None:
         settings["n_streams"] = args.sky_streams
     if args.sky_tol is not None:
         settings["tol"] = args.sky_tol
     try:
-        sky = SkySettings(**settings)
+        return SkySettings(**settings)
     except ValueError as exc:
         raise UsageError(f"--sky-streams/--sky-tol: {exc}") from None
-    if args.max_observation_bytes < 1:
-        raise UsageError(f"--max-observation-bytes must be >= 1; got {args.max_observation_bytes}")
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run ``retrieve``; returns the exit status.  The options, the model and the
+    output file are checked before the observations are read or any table computed."""
+
+    # lazy: dustoptics.retrieve (scipy.optimize, xarray) adds 0.8-1 s to every command's start-up
+    from dustoptics.retrieve import retrieve
+
+    bounds = _pairs(args.fit, "--fit", ":")
+    priors = _pairs(args.prior, "--prior", ",")
+    sky = _checked_options(args)
     if args.out is not None:
         inputs = {"observations file": args.observations}
         if is_config_path(args.model):

@@ -1,6 +1,7 @@
-"""The fit of :func:`retrieve` and its optical observations (the package docstring says what).
+"""The fit of :func:`retrieve` (the package docstring says what) and the checks of its arguments.
 
-Optical observations (``ssa``, ``g``, ``extinction_ratio``, ``phase``) are
+Optical observations (``ssa``, ``g``, ``extinction_ratio``, ``phase``, read and checked
+by :mod:`dustoptics.retrieve.observations`) are
 predicted from one table with exact derivatives; sky observations
 (``sky_radiance``, ``sky_chromaticity``) by :mod:`dustoptics.retrieve.sky`
 from a second table on the sky's wavelengths and the default angles.
@@ -24,12 +25,18 @@ from dustoptics.models.config import BuildConfig
 from dustoptics.particles.mixing import Mixture
 from dustoptics.particles.sizedist import Monodisperse, SizeDistribution
 from dustoptics.particles.sizedist_derivatives import parameter_value, with_parameter
+from dustoptics.retrieve.observations import (
+    OBSERVABLES,
+    Observation,
+    observations_of,
+    optical_grid,
+    predict,
+    sample_labels,
+)
 from dustoptics.retrieve.sky import (
-    SKY_OBSERVABLES,
     SkyModel,
     SkySettings,
     sky_progress,
-    sky_samples,
 )
 from dustoptics.scattering import optics as _optics
 from dustoptics.scattering.optics import (
@@ -50,14 +57,6 @@ if TYPE_CHECKING:
     import xarray as xr
 
 __all__ = ["OBSERVABLES", "Retrieval", "retrieve"]
-
-#: Observation variables :func:`retrieve` understands, and their dimensions.
-OBSERVABLES: Mapping[str, tuple[str, ...]] = {
-    "ssa": ("wavelength_nm",),
-    "g": ("wavelength_nm",),
-    "extinction_ratio": ("wavelength_nm",),
-    "phase": ("wavelength_nm", "theta_deg"),
-}
 
 
 @dataclass(frozen=True)
@@ -312,229 +311,6 @@ def _check_fit_cost(
         )
 
 
-# ----------------------------------------------------------------- observations
-
-
-@dataclass(frozen=True)
-class _Observation:
-    name: str
-    wavelength_nm: np.ndarray  # per sample
-    theta_deg: np.ndarray  # per sample (NaN: none)
-    value: np.ndarray
-    sigma: np.ndarray
-    reference_nm: float = math.nan
-
-
-def _observations(observations: Any) -> tuple[list[_Observation], list[Any]]:
-    """The optical observations and the sky's samples (:func:`~dustoptics.retrieve.sky.sky_samples`)."""
-    observations = _as_dataset(observations)
-    known = (*OBSERVABLES, *SKY_OBSERVABLES)
-    names = [str(k) for k in observations.data_vars if not str(k).endswith("_uncertainty")]
-    unknown = [k for k in names if k not in known]
-    if unknown or not names:
-        raise ValueError(
-            f"observations: variables must be among {', '.join(known)} (with "
-            f"<name>_uncertainty); got {names}"
-        )
-    found = []
-    sky = []
-    for name in names:
-        var, sigma_values = _variable_and_sigma(observations, name)
-        if name in SKY_OBSERVABLES:
-            sky += sky_samples(var, sigma_values)
-        else:
-            found.append(_optical_observation(name, var, sigma_values))
-    if sum(o.value.size for o in found) + sum(s.value.size for s in sky) == 0:
-        raise ValueError("observations: no finite samples")
-    return [o for o in found if o.value.size], sky
-
-
-def _as_dataset(observations: Any) -> Any:
-    """``observations`` as an xarray Dataset (a named DataArray becomes one)."""
-    # lazy: the package imports without xarray (tests/test_packaging.py); it adds 0.7-1 s
-    import xarray as xr
-
-    if isinstance(observations, xr.DataArray):
-        if observations.name is None:
-            known = (*OBSERVABLES, *SKY_OBSERVABLES)
-            raise ValueError(f"observations: a DataArray must be named, one of {', '.join(known)}")
-        observations = observations.to_dataset()
-    if not isinstance(observations, xr.Dataset):
-        raise TypeError(
-            "observations must be an xarray Dataset or named DataArray; "
-            f"got {type(observations).__name__}"
-        )
-    return observations
-
-
-#: Units the coordinates may declare (an attribute ``units``); none declared means these.
-_COORDINATE_UNITS: Mapping[str, tuple[str, ...]] = {
-    "wavelength_nm": ("nm", "nanometer", "nanometers", "nanometre", "nanometres"),
-    "theta_deg": ("deg", "degree", "degrees"),
-}
-#: Domain of each coordinate of the optical observations: (low, high, inclusive low). [nm, deg]
-_COORDINATE_DOMAIN: Mapping[str, tuple[float, float, bool]] = {
-    "wavelength_nm": (0.0, 1e7, False),
-    "theta_deg": (0.0, 180.0, True),
-}
-
-
-def _numbers(name: str, what: str, raw: Any) -> np.ndarray:
-    """``raw`` as float64, or a TypeError naming the variable and its dtype."""
-    array = np.asarray(raw)
-    if array.dtype.kind not in "biuf":
-        raise TypeError(
-            f"observations: {name!r} {what} must be real numbers; got dtype {array.dtype} "
-            f"({np.ravel(array)[:3].tolist()!r}...)"
-        )
-    return np.asarray(array, dtype=np.float64)
-
-
-def _coordinate(var: Any, name: str, coordinate: str) -> np.ndarray:
-    """A coordinate of an optical observation, checked: present, numbers in its unit
-    and domain, finite (:data:`_COORDINATE_DOMAIN`)."""
-    if coordinate not in var.coords:
-        raise ValueError(
-            f"observations: {name!r} needs the coordinate {coordinate!r} along its dimension"
-        )
-    coord = var[coordinate]
-    units = coord.attrs.get("units")
-    if units is not None and str(units).strip().lower() not in _COORDINATE_UNITS[coordinate]:
-        raise ValueError(
-            f"observations: {name!r} coordinate {coordinate} must be in "
-            f"{_COORDINATE_UNITS[coordinate][0]}; got units={units!r}"
-        )
-    values = _numbers(name, f"coordinate {coordinate}", coord.values)
-    low, high, inclusive = _COORDINATE_DOMAIN[coordinate]
-    inside = (values >= low if inclusive else values > low) & (values <= high)
-    if not np.all(inside):
-        bad = values[~inside][:5].tolist()
-        interval = f"{'[' if inclusive else '('}{low:g}, {high:g}]"
-        raise ValueError(
-            f"observations: {name!r} coordinate {coordinate} must be finite and within "
-            f"{interval}; got {bad}"
-        )
-    return values
-
-
-def _variable_and_sigma(observations: Any, name: str) -> tuple[Any, np.ndarray]:
-    """The variable ``name`` in its dimensions' order, and its one-sigma uncertainties."""
-    var = observations[name]
-    dims = OBSERVABLES.get(name) or SKY_OBSERVABLES[name]
-    if set(var.dims) != set(dims) or var.ndim != len(dims):
-        raise ValueError(f"observations: {name!r} must have dimensions {dims}; got {var.dims}")
-    var = var.transpose(*dims)
-    _numbers(name, "values", var.values)
-    if f"{name}_uncertainty" in observations:
-        sigma = observations[f"{name}_uncertainty"]
-        if not set(sigma.dims) <= set(dims):
-            raise ValueError(
-                f"observations: {name + '_uncertainty'!r} must have dimensions among {dims}; "
-                f"got {sigma.dims}"
-            )
-        try:
-            sigma = sigma.transpose(*[d for d in dims if d in sigma.dims]).broadcast_like(var)
-        except (ValueError, KeyError, IndexError) as exc:
-            raise ValueError(
-                f"observations: {name + '_uncertainty'!r} does not match {name!r} "
-                f"(shape {sigma.shape} against {var.shape}): {exc}"
-            ) from None
-        if sigma.shape != var.shape:
-            raise ValueError(
-                f"observations: {name + '_uncertainty'!r} must have the shape of {name!r} "
-                f"{var.shape}; got {sigma.shape}"
-            )
-        return var, _numbers(name, "uncertainties", sigma.values)
-    if "uncertainty" in var.attrs:
-        raw = var.attrs["uncertainty"]
-        sigma_values = _numbers(name, "attribute uncertainty", raw)
-        if sigma_values.size != 1:
-            raise ValueError(
-                f"observations: {name!r} attribute uncertainty must be one number; "
-                f"got {np.ravel(sigma_values)[:5].tolist()}"
-            )
-        return var, np.full(var.shape, float(sigma_values.ravel()[0]))
-    raise ValueError(
-        f"observations: {name!r} needs its one-sigma uncertainty: a variable "
-        f"{name + '_uncertainty'!r} or an attribute 'uncertainty'"
-    )
-
-
-def _reference_nm(var: Any, wavelength_nm: np.ndarray) -> float:
-    """The ``reference_wavelength_nm`` of an extinction ratio: a finite number > 0. [nm]"""
-    if "reference_wavelength_nm" not in var.attrs:
-        raise ValueError(
-            "observations: 'extinction_ratio' needs the attribute reference_wavelength_nm"
-        )
-    raw = var.attrs["reference_wavelength_nm"]
-    array = np.asarray(raw)
-    reference = float(array.ravel()[0]) if array.dtype.kind in "biuf" and array.size == 1 else None
-    low, high, _ = _COORDINATE_DOMAIN["wavelength_nm"]
-    if reference is None or not low < reference <= high:
-        shown = f"{reference:g}" if reference is not None else repr(raw)
-        raise ValueError(
-            "observations: 'extinction_ratio' attribute reference_wavelength_nm must be one "
-            f"finite number within ({low:g}, {high:g}] nm; got {shown}"
-        )
-    return reference
-
-
-def _optical_observation(name: str, var: Any, sigma_values: np.ndarray) -> _Observation:
-    """The finite samples of an optical observable (not the sky's)."""
-    values = np.asarray(var.values, dtype=np.float64)
-    wl = _coordinate(var, name, "wavelength_nm")
-    if values.ndim == 2:
-        theta = _coordinate(var, name, "theta_deg")
-        wl_s, theta_s = np.meshgrid(wl, theta, indexing="ij")
-    else:
-        wl_s, theta_s = wl, np.full(wl.shape, np.nan)
-    keep = np.isfinite(values)
-    if not np.all(np.isfinite(sigma_values[keep]) & (sigma_values[keep] > 0)):
-        bad = sigma_values[keep][~(np.isfinite(sigma_values[keep]) & (sigma_values[keep] > 0))]
-        raise ValueError(
-            f"observations: {name!r} uncertainties must be finite and > 0; got {bad[:5].tolist()}"
-        )
-    reference = _reference_nm(var, wl) if name == "extinction_ratio" else math.nan
-    return _Observation(
-        name,
-        wl_s[keep].ravel(),
-        theta_s[keep].ravel(),
-        values[keep].ravel(),
-        sigma_values[keep].ravel(),
-        reference,
-    )
-
-
-def _predict(
-    table: Table, obs: _Observation, parameters: Sequence[str]
-) -> tuple[np.ndarray, np.ndarray]:
-    """Model values at the samples and their derivatives (n_samples, n_parameters)."""
-    i = np.searchsorted(table.wavelength_nm, obs.wavelength_nm)
-    if obs.name == "phase":
-        j = np.searchsorted(table.theta_deg, obs.theta_deg)
-        value = table.phase[i, j]
-        jac = [table.derivative("phase", p)[i, j] for p in parameters]
-    elif obs.name == "extinction_ratio":
-        assert table.cross_sections is not None
-        r = int(np.searchsorted(table.wavelength_nm, obs.reference_nm))
-        cext = table.cross_sections.cext_um2
-        value = cext[i] / cext[r]
-        jac = []
-        for p in parameters:
-            d = table.derivative("cext_um2", p)
-            jac.append(value * (d[i] / cext[i] - d[r] / cext[r]))
-    else:
-        value = table.quantity(obs.name)[i]
-        jac = [table.derivative(obs.name, p)[i] for p in parameters]
-    return np.asarray(value), np.column_stack(jac)
-
-
-def _labels(obs: _Observation) -> list[str]:
-    if obs.name == "phase":
-        return [f"phase@{w:g}nm,{t:g}deg" for w, t in zip(obs.wavelength_nm, obs.theta_deg)]
-    return [f"{obs.name}@{w:g}nm" for w in obs.wavelength_nm]
-
-
 # ----------------------------------------------------------------- the fit
 
 
@@ -651,7 +427,7 @@ def retrieve(
     (True, 0.004)
     """
     keywords = _model_keywords(model)
-    obs, sky_list = _observations(observations)
+    obs, sky_list = observations_of(observations)
     names = _checked_parameters(keywords, parameters)
     start, lower, upper = _checked_bounds(keywords, names, bounds)
     prior_list = _checked_priors(names, priors)
@@ -663,7 +439,7 @@ def retrieve(
     callback, stream = _reporter(progress)
     began = time.perf_counter()
     sky_model = SkyModel(sky_list, sky) if sky_list else None
-    wavelengths, theta = _optical_grid(obs)
+    wavelengths, theta = optical_grid(obs)
     grids = [(wavelengths, theta)] if obs else []
     if sky_model is not None:
         grids.append((sky_model.wavelength_nm, default_theta_deg()))
@@ -705,21 +481,9 @@ def retrieve(
     final = problem.evaluate(result.x)
     jac = problem.jacobian(result.x)
     residuals = final["residuals"]
-    covariance = np.linalg.pinv(jac.T @ jac)
-    standard_errors = np.sqrt(np.diag(covariance))
-    converged, message = bool(result.status > 0), str(result.message)
-    uninformed = _uninformed(jac, upper - lower)
-    if uninformed.any():
-        covariance[uninformed, :] = covariance[:, uninformed] = np.nan
-        covariance[uninformed, uninformed] = np.inf
-        standard_errors[uninformed] = np.inf
-        converged = False
-        message = (
-            "the data carry no information on "
-            f"{', '.join(p for p, u in zip(names, uninformed, strict=True) if u)}: the "
-            "chi-square is flat across the bounds (uncertainties too large, or observations "
-            f"that do not depend on the parameter); not a fit (the optimizer: {message})"
-        )
+    covariance, standard_errors, converged, message = _uncertainty(
+        jac, upper - lower, names, bool(result.status > 0), str(result.message)
+    )
     return Retrieval(
         parameters=names,
         values=np.array(result.x),
@@ -739,6 +503,33 @@ def retrieve(
         history_values=np.array([h[0] for h in problem.history]),
         history_residuals=np.array([h[1] for h in problem.history]),
     )
+
+
+def _uncertainty(
+    jacobian: np.ndarray,
+    width: np.ndarray,
+    names: Sequence[str],
+    converged: bool,
+    message: str,
+) -> tuple[np.ndarray, np.ndarray, bool, str]:
+    """Covariance (J^T J)^-1, standard errors, convergence and message of a fit: the
+    optimizer's, unless the data carry no information on a parameter (:func:`_uninformed`),
+    whose variance is then infinite and the fit not converged, with the message saying why."""
+    covariance = np.linalg.pinv(jacobian.T @ jacobian)
+    standard_errors = np.sqrt(np.diag(covariance))
+    uninformed = _uninformed(jacobian, width)
+    if uninformed.any():
+        covariance[uninformed, :] = covariance[:, uninformed] = np.nan
+        covariance[uninformed, uninformed] = np.inf
+        standard_errors[uninformed] = np.inf
+        converged = False
+        message = (
+            "the data carry no information on "
+            f"{', '.join(p for p, u in zip(names, uninformed, strict=True) if u)}: the "
+            "chi-square is flat across the bounds (uncertainties too large, or observations "
+            f"that do not depend on the parameter); not a fit (the optimizer: {message})"
+        )
+    return covariance, standard_errors, converged, message
 
 
 #: A parameter is not constrained by the data when its standard error exceeds this
@@ -893,22 +684,6 @@ def _check_options(max_iterations: Any, tolerance: Any, allow_large: Any) -> Non
         raise TypeError(f"allow_large must be True or False; got {allow_large!r}")
 
 
-def _optical_grid(obs: Sequence[_Observation]) -> tuple[np.ndarray, np.ndarray]:
-    """The wavelengths [nm] and angles [deg] of the table the optical observations need
-    (empty without optical observations)."""
-    if not obs:
-        return np.zeros(0), np.zeros(0)
-    wavelengths = np.unique(
-        np.concatenate(
-            [o.wavelength_nm for o in obs]
-            + [np.array([o.reference_nm]) for o in obs if math.isfinite(o.reference_nm)]
-        )
-    )
-    thetas = np.concatenate([o.theta_deg[np.isfinite(o.theta_deg)] for o in obs])
-    theta = np.unique(thetas) if thetas.size else np.array([0.0, 180.0])
-    return wavelengths, theta
-
-
 #: One point of the fit: residuals, the exact rows of the Jacobian (the sky's rows NaN
 #: until asked for), the optical table, the sky's table and values.
 _Entry = dict[str, Any]
@@ -928,7 +703,7 @@ class _Problem:
         *,
         keywords: dict[str, Any],
         names: tuple[str, ...],
-        obs: list[_Observation],
+        obs: list[Observation],
         sky_model: SkyModel | None,
         prior_list: list[tuple[int, float, float]],
         wavelengths: np.ndarray,
@@ -956,7 +731,7 @@ class _Problem:
         self.stream = stream
         self.began = began
         self.sky_report = sky_progress(stream)
-        self.labels = tuple(label for o in obs for label in _labels(o))
+        self.labels = tuple(label for o in obs for label in sample_labels(o))
         self.sky_value = self.sky_sigma = np.zeros(0)
         if sky_model is not None:
             self.sky_value, self.sky_sigma, sky_labels = sky_model.order()
@@ -989,7 +764,7 @@ class _Problem:
             )
             entry["table"] = table
             for o in self.obs:
-                value, d = _predict(table, o, self.names)
+                value, d = predict(table, o, self.names)
                 res.append((value - o.value) / o.sigma)
                 jac.append(d / o.sigma[:, None])
         if self.sky_model is not None:
