@@ -1366,6 +1366,9 @@ RETRIEVE_ARGUMENTS: tuple[tuple[str, ...], ...] = (
     ("--sky-tol", "0"),
     ("--allow-large",),
     ("--force",),
+    ("--max-observation-bytes", "100"),
+    ("--max-observation-bytes", "0"),
+    ("--max-observation-bytes", "1e9"),
 )
 #: Observation files: what each holds.
 RETRIEVE_FILES: tuple[str, ...] = (
@@ -1381,6 +1384,39 @@ RETRIEVE_FILES: tuple[str, ...] = (
     "text",
     "damaged",
     "missing",
+    "phase_nan_theta",
+    "phase_inf_theta",
+    "ratio_nan_reference",
+    "ratio_zero_reference",
+    "ratio_text_reference",
+    "zero_wavelength",
+    "text_wavelength",
+    "wavelength_in_um",
+    "text_values",
+    "huge_uncertainty",
+    "declared_huge",
+    "many_wavelengths",
+)
+#: The ``--model`` of a case: the small dust's TOML mostly, a device or a FIFO sometimes.
+RETRIEVE_MODELS: tuple[str, ...] = ("fuzz.toml",) * 6 + ("/dev/zero", "fifo.toml", "missing.toml")
+#: Where ``--out`` goes: the usual place mostly, over an input sometimes (with --force).
+RETRIEVE_OUTS: tuple[tuple[str, ...], ...] = (("out/fit.json",),) * 6 + (
+    ("obs.nc", "--force"),
+    ("fuzz.toml", "--force"),
+)
+#: Bounds given to the library's retrieve: what a caller may pass by mistake.
+RETRIEVE_API_BOUNDS: tuple[Any, ...] = (
+    (0.1, 3.0),
+    (0.1,),
+    (),
+    (0.1, 3.0, 5.0),
+    "0.1:3",
+    None,
+    ("0.1", 3.0),
+    (True, 3.0),
+    (float("nan"), 3.0),
+    [0.1, 3.0],
+    {"lower": 0.1},
 )
 
 
@@ -1395,6 +1431,42 @@ def _observation_file(path: Path, kind: str) -> None:
         return
     if kind == "missing":
         return
+    if kind == "declared_huge":  # 4e8 values declared, a few KiB written
+        import h5netcdf
+
+        with h5netcdf.File(path, "w") as f:
+            f.dimensions = {"wavelength_nm": 400_000_000}
+            var = f.create_variable("ssa", ("wavelength_nm",), "f8", chunks=(1_000_000,))
+            var.attrs["uncertainty"] = 0.01
+        return
+    unc: dict[str, Any] = {"uncertainty": 1e308 if kind == "huge_uncertainty" else 0.01}
+    theta = np.array([10.0, 90.0, 170.0])
+    if kind in ("phase_nan_theta", "phase_inf_theta"):
+        theta[1] = float("nan") if kind == "phase_nan_theta" else float("inf")
+        kind = "phase"
+    if kind.startswith("ratio_"):
+        reference = {"ratio_nan_reference": float("nan"), "ratio_zero_reference": 0.0}
+        ratio = xr.DataArray([1.1, 1.0, 0.9], coords={"wavelength_nm": wl}, dims="wavelength_nm")
+        ratio.attrs = {**unc, "reference_wavelength_nm": reference.get(kind, "550 nm")}
+        xr.Dataset({"extinction_ratio": ratio}).to_netcdf(path)
+        return
+    if kind in ("zero_wavelength", "text_wavelength", "wavelength_in_um", "many_wavelengths"):
+        coord: Any = {
+            "zero_wavelength": ("wavelength_nm", [0.0, 550.0, 680.0]),
+            "text_wavelength": ("wavelength_nm", ["440", "550", "680"]),
+            "wavelength_in_um": ("wavelength_nm", wl / 1e3, {"units": "um"}),
+            "many_wavelengths": ("wavelength_nm", np.linspace(400.0, 900.0, 100_000)),
+        }[kind]
+        n = len(coord[1])
+        xr.Dataset(
+            {"ssa": ("wavelength_nm", np.full(n, 0.93), unc)}, coords={"wavelength_nm": coord}
+        ).to_netcdf(path)
+        return
+    if kind == "text_values":
+        ssa = xr.DataArray(["a", "b", "c"], coords={"wavelength_nm": wl}, dims="wavelength_nm")
+        ssa.attrs = unc
+        xr.Dataset({"ssa": ssa}).to_netcdf(path)
+        return
     if kind == "empty":
         ds = xr.Dataset()
     elif kind == "ratio":
@@ -1402,7 +1474,6 @@ def _observation_file(path: Path, kind: str) -> None:
         ds = xr.Dataset({"extinction_ratio": ratio, "extinction_ratio_uncertainty": ratio * 0.01})
         ds["extinction_ratio"].attrs["reference_wavelength_nm"] = 550.0
     elif kind == "phase":
-        theta = np.array([10.0, 90.0, 170.0])
         phase = xr.DataArray(
             np.full((3, 3), 0.1), coords={"wavelength_nm": wl, "theta_deg": theta},
             dims=("wavelength_nm", "theta_deg"), attrs={"uncertainty": 0.01},
@@ -1419,8 +1490,8 @@ def _observation_file(path: Path, kind: str) -> None:
         ssa = xr.DataArray([0.9, 0.95], dims="x", attrs={"uncertainty": 0.01})
         ds = xr.Dataset({"ssa": ssa})
     else:
-        values = [0.93, float("nan") if kind == "ssa_nan" else 0.95, 0.96]
-        attrs = {} if kind == "ssa_without_uncertainty" else {"uncertainty": 0.01}
+        values = [0.93, float("nan") if kind in ("ssa_nan",) else 0.95, 0.96]
+        attrs = {} if kind == "ssa_without_uncertainty" else unc
         ssa = xr.DataArray(values, coords={"wavelength_nm": wl}, dims="wavelength_nm", attrs=attrs)
         ds = xr.Dataset({"ssa": ssa})
     ds.to_netcdf(path)
@@ -1428,8 +1499,11 @@ def _observation_file(path: Path, kind: str) -> None:
 
 def retrieve_cases(rng: random.Random, n: int) -> list[Case]:
     """``dustoptics retrieve``: bounds, priors and options at and beyond their edges, on
-    observation files good, incomplete, damaged or of another kind; the small dust's TOML
-    as the model."""
+    observation files good, incomplete, damaged, of another kind or crafted (NaN angles
+    and references, a declared size of 3 GiB, 100,000 wavelengths, an uncertainty of
+    1e308); the small dust's TOML as the model, or a device or a FIFO; ``--out`` over
+    an input; and a quarter of the cases the library's retrieve with bounds of every
+    shape.  An uninformative fit must not say converged; no input may change."""
     cases = []
     for _ in range(n):
         fit = rng.choice(RETRIEVE_FITS)
@@ -1437,15 +1511,71 @@ def retrieve_cases(rng: random.Random, n: int) -> list[Case]:
             a for option in rng.sample(RETRIEVE_ARGUMENTS, rng.choice((0, 1, 2))) for a in option
         ]
         kind = rng.choice(RETRIEVE_FILES)
+        if rng.random() < 0.25:
+            bound = rng.choice(RETRIEVE_API_BOUNDS)
 
-        def run(workdir: Path, fit: str = fit, extra: list[str] = extra, kind: str = kind) -> str:
+            def api(workdir: Path, kind: str = kind, bound: Any = bound) -> str:
+                return _retrieve_api(workdir, kind, bound)
+
+            cases.append(Case("retrieve", f"retrieve() {kind} bounds={bound!r}", api))
+            continue
+        model = rng.choice(RETRIEVE_MODELS)
+        out = rng.choice(RETRIEVE_OUTS)
+
+        def run(
+            workdir: Path,
+            fit: str = fit,
+            extra: list[str] = extra,
+            kind: str = kind,
+            model: str = model,
+            out: tuple[str, ...] = out,
+        ) -> str:
             (workdir / "fuzz.toml").write_text(SMALL_CONFIG, encoding="utf-8")
+            os.mkfifo(workdir / "fifo.toml")  # run_cli's snapshots skip it (not a file)
             _observation_file(workdir / "obs.nc", kind)
-            argv = ["retrieve", "obs.nc", "--model", "fuzz.toml", "--fit", fit, *extra]
-            return run_cli(workdir, [*argv, "--out", "out/fit.json"])
+            inputs = {p: p.read_bytes() for p in (workdir / "obs.nc", workdir / "fuzz.toml")
+                      if p.exists()}  # fmt: skip
+            argv = ["retrieve", "obs.nc", "--model", model, "--fit", fit, *extra]
+            said = run_cli(workdir, [*argv, "--out", *out])
+            for path, data in inputs.items():
+                assert path.read_bytes() == data, f"{path.name} changed"
+            record = workdir / "out" / "fit.json"
+            if kind == "huge_uncertainty" and said == "exit 0" and record.exists():
+                assert not json.loads(record.read_text())["converged"], "called converged"
+            return said
 
-        cases.append(Case("retrieve", f"retrieve {kind} --fit {fit} {' '.join(extra)}", run))
+        words = f"{kind} --model {model} --fit {fit} {' '.join(extra)} --out {' '.join(out)}"
+        cases.append(Case("retrieve", f"retrieve {words}", run))
     return cases
+
+
+def _retrieve_api(workdir: Path, kind: str, bound: Any) -> str:
+    """The library's retrieve on an observation file of ``kind`` with ``bound`` on r_eff_um:
+    a clear ValueError/TypeError (raised on), or a result that does not call an
+    uninformative fit converged."""
+    import numpy as np
+    import xarray as xr
+
+    from dustoptics.models.config import parse_config
+    from dustoptics.retrieve import retrieve
+
+    path = workdir / "obs.nc"
+    _observation_file(path, kind)
+    if kind in ("text", "damaged", "missing", "declared_huge"):
+        return "a file the command line refuses (see the CLI cases)"
+    with xr.open_dataset(path) as ds:
+        observations = ds.load()
+    result = retrieve(
+        observations,
+        model=parse_config(SMALL_CONFIG),
+        parameters=["r_eff_um"],
+        bounds={"r_eff_um": bound},
+        max_iterations=3,
+    )
+    if kind == "huge_uncertainty":
+        assert not result.converged, "an uninformative fit called converged"
+        assert np.isinf(result.standard_errors).all(), "its standard error reported finite"
+    return f"converged={result.converged}"
 
 
 GENERATORS = {

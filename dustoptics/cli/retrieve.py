@@ -15,20 +15,23 @@ from __future__ import annotations
 
 import argparse
 import json
-import stat
+import math
 import sys
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from dustoptics._files import FormatError
+from dustoptics.cli._retrieve_files import (
+    MAX_OBSERVATIONS_BYTES,
+    check_not_an_input,
+    read_model,
+    read_observations,
+)
 from dustoptics.cli.errors import PROG, UsageError
 from dustoptics.cli.parser import add_command
 from dustoptics.io._atomic import check_targets, write_files
 from dustoptics.models.build import is_config_path
-from dustoptics.models.files import load_config
-from dustoptics.models.presets import load_preset
 
 __all__ = ["add_parser", "run"]
 
@@ -105,8 +108,20 @@ def add_parser(sub: Any) -> None:
         help="go ahead when the sky solves are estimated beyond five minutes, or a table the "
         "fit may compute (at the size bounds) beyond the budget of one",
     )
+    p.add_argument(
+        "--max-observation-bytes",
+        type=int,
+        default=MAX_OBSERVATIONS_BYTES,
+        metavar="BYTES",
+        help="largest observations file, on disk and as its variables declare they are in "
+        f"memory, that is read (default {MAX_OBSERVATIONS_BYTES}, 256 MiB)",
+    )
     p.add_argument("--out", type=Path, metavar="FILE.json", help="write the result as JSON")
-    p.add_argument("--force", action="store_true", help="replace an existing --out file")
+    p.add_argument(
+        "--force",
+        action="store_true",
+        help="replace an existing --out file (never one of the inputs)",
+    )
 
 
 def _pairs(options: list[str], flag: str, sep: str) -> dict[str, tuple[float, float]]:
@@ -128,44 +143,11 @@ def _pairs(options: list[str], flag: str, sep: str) -> dict[str, tuple[float, fl
     return out
 
 
-#: Largest observations file the command reads (it loads it whole): 256 MiB. [bytes]
-MAX_OBSERVATIONS_BYTES = 256 * 1024**2
-
-
-def _read_observations(path: Path) -> Any:
-    """The observations file as an xarray Dataset, loaded; a missing file, one that is
-    not a regular file (FIFO, device, directory), a larger one than
-    :data:`MAX_OBSERVATIONS_BYTES` or one xarray cannot read is refused in one line."""
-    import xarray as xr  # lazy: xarray adds 0.7-1 s to every command's start-up (-X importtime)
-
-    try:
-        info = path.stat()
-    except FileNotFoundError:
-        raise FileNotFoundError(f"{path}: no such file") from None
-    if not stat.S_ISREG(info.st_mode):
-        raise FormatError(f"{path}: not a regular file (a FIFO, device, socket or directory)")
-    if info.st_size > MAX_OBSERVATIONS_BYTES:
-        raise FormatError(
-            f"{path}: {info.st_size} bytes, larger than the {MAX_OBSERVATIONS_BYTES}-byte "
-            "limit of the observations"
-        )
-    try:
-        with xr.open_dataset(path) as ds:
-            return ds.load()
-    except (OSError, ValueError, KeyError, TypeError) as exc:
-        raise FormatError(
-            f"{path}: not a netCDF file of observations that xarray can read "
-            f"({type(exc).__name__}: {exc})"
-        ) from None
-
-
-def _model(name: str) -> Any:
-    if is_config_path(name):
-        return load_config(name)
-    try:
-        return load_preset(name)
-    except ValueError as exc:
-        raise UsageError(f"--model: {exc}") from None
+def _finite_or_none(values: Any) -> Any:
+    """A list (of lists) of floats with NaN and inf as None (JSON has neither)."""
+    if isinstance(values, list):
+        return [_finite_or_none(v) for v in values]
+    return values if math.isfinite(values) else None
 
 
 def _write(result: Any, path: Path, force: bool) -> None:
@@ -174,8 +156,8 @@ def _write(result: Any, path: Path, force: bool) -> None:
     record = {
         "parameters": list(result.parameters),
         "values": result.values.tolist(),
-        "standard_errors": result.standard_errors.tolist(),
-        "covariance": result.covariance.tolist(),
+        "standard_errors": _finite_or_none(result.standard_errors.tolist()),
+        "covariance": _finite_or_none(result.covariance.tolist()),
         "initial_values": result.initial_values.tolist(),
         "labels": list(result.labels),
         "residuals": result.residuals.tolist(),
@@ -187,7 +169,30 @@ def _write(result: Any, path: Path, force: bool) -> None:
         "sky_solves": result.sky_solves,
         "path_values": result.history_values.tolist(),
     }
-    write_files({path: (json.dumps(record, indent=1) + "\n").encode()}, overwrite=force)
+    text = json.dumps(record, indent=1)
+    write_files({path: (text + "\n").encode()}, overwrite=force)
+
+
+def _checked_options(args: argparse.Namespace) -> Any:
+    """The numerical options checked (usage errors), and the sky's settings."""
+    from dustoptics.retrieve import SkySettings
+    from dustoptics.retrieve.fit import MAX_ITERATIONS
+
+    if not 1 <= args.max_iterations <= MAX_ITERATIONS:
+        raise UsageError(
+            f"--max-iterations must be within [1, {MAX_ITERATIONS}]; got {args.max_iterations}"
+        )
+    if args.max_observation_bytes < 1:
+        raise UsageError(f"--max-observation-bytes must be >= 1; got {args.max_observation_bytes}")
+    settings = {}
+    if args.sky_streams is not None:
+        settings["n_streams"] = args.sky_streams
+    if args.sky_tol is not None:
+        settings["tol"] = args.sky_tol
+    try:
+        return SkySettings(**settings)
+    except ValueError as exc:
+        raise UsageError(f"--sky-streams/--sky-tol: {exc}") from None
 
 
 def run(args: argparse.Namespace) -> int:
@@ -195,25 +200,20 @@ def run(args: argparse.Namespace) -> int:
     output file are checked before the observations are read or any table computed."""
 
     # lazy: dustoptics.retrieve (scipy.optimize, xarray) adds 0.8-1 s to every command's start-up
-    from dustoptics.retrieve import SkySettings, retrieve
+    from dustoptics.retrieve import retrieve
 
     bounds = _pairs(args.fit, "--fit", ":")
     priors = _pairs(args.prior, "--prior", ",")
-    if args.max_iterations < 1:
-        raise UsageError(f"--max-iterations must be >= 1; got {args.max_iterations}")
-    settings = {}
-    if args.sky_streams is not None:
-        settings["n_streams"] = args.sky_streams
-    if args.sky_tol is not None:
-        settings["tol"] = args.sky_tol
-    try:
-        sky = SkySettings(**settings)
-    except ValueError as exc:
-        raise UsageError(f"--sky-streams/--sky-tol: {exc}") from None
-    model = _model(args.model)
+    sky = _checked_options(args)
+    if args.out is not None:
+        inputs = {"observations file": args.observations}
+        if is_config_path(args.model):
+            inputs["--model file"] = Path(args.model)
+        check_not_an_input(args.out, inputs)
+    model = read_model(args.model)
     if args.out is not None:
         check_targets([args.out], overwrite=args.force)
-    observations = _read_observations(args.observations)
+    observations = read_observations(args.observations, args.max_observation_bytes)
 
     result = retrieve(
         observations,

@@ -49,8 +49,9 @@ and are rendered through :mod:`dustoptics.sky`; their Jacobian is the chain
 rule through the optics' exact derivatives with finite differences in the
 radiative transfer only (:mod:`dustoptics.retrieve.sky`).
 
-Modules: :mod:`~dustoptics.retrieve.fit` (the fit and the optical
-observations), :mod:`~dustoptics.retrieve.sky` (the sky observations).
+Modules: :mod:`~dustoptics.retrieve.fit` (the fit and its arguments' checks),
+:mod:`~dustoptics.retrieve.observations` (the optical observations, checked),
+:mod:`~dustoptics.retrieve.sky` (the sky observations).
 """
 
 from dustoptics.retrieve.fit import OBSERVABLES, Retrieval, retrieve

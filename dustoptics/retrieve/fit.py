@@ -1,6 +1,7 @@
-"""The fit of :func:`retrieve` and its optical observations (the package docstring says what).
+"""The fit of :func:`retrieve` (the package docstring says what) and the checks of its arguments.
 
-Optical observations (``ssa``, ``g``, ``extinction_ratio``, ``phase``) are
+Optical observations (``ssa``, ``g``, ``extinction_ratio``, ``phase``, read and checked
+by :mod:`dustoptics.retrieve.observations`) are
 predicted from one table with exact derivatives; sky observations
 (``sky_radiance``, ``sky_chromaticity``) by :mod:`dustoptics.retrieve.sky`
 from a second table on the sky's wavelengths and the default angles.
@@ -24,13 +25,20 @@ from dustoptics.models.config import BuildConfig
 from dustoptics.particles.mixing import Mixture
 from dustoptics.particles.sizedist import Monodisperse, SizeDistribution
 from dustoptics.particles.sizedist_derivatives import parameter_value, with_parameter
+from dustoptics.retrieve.observations import (
+    OBSERVABLES,
+    Observation,
+    observations_of,
+    optical_grid,
+    predict,
+    sample_labels,
+)
 from dustoptics.retrieve.sky import (
-    SKY_OBSERVABLES,
     SkyModel,
     SkySettings,
     sky_progress,
-    sky_samples,
 )
+from dustoptics.scattering import optics as _optics
 from dustoptics.scattering.optics import (
     check_cost,
     compute_optics,
@@ -49,14 +57,6 @@ if TYPE_CHECKING:
     import xarray as xr
 
 __all__ = ["OBSERVABLES", "Retrieval", "retrieve"]
-
-#: Observation variables :func:`retrieve` understands, and their dimensions.
-OBSERVABLES: Mapping[str, tuple[str, ...]] = {
-    "ssa": ("wavelength_nm",),
-    "g": ("wavelength_nm",),
-    "extinction_ratio": ("wavelength_nm",),
-    "phase": ("wavelength_nm", "theta_deg"),
-}
 
 
 @dataclass(frozen=True)
@@ -273,136 +273,42 @@ def _check_corner_cost(
         ) from None
 
 
-# ----------------------------------------------------------------- observations
-
-
-@dataclass(frozen=True)
-class _Observation:
-    name: str
-    wavelength_nm: np.ndarray  # per sample
-    theta_deg: np.ndarray  # per sample (NaN: none)
-    value: np.ndarray
-    sigma: np.ndarray
-    reference_nm: float = math.nan
-
-
-def _observations(observations: Any) -> tuple[list[_Observation], list[Any]]:
-    """The optical observations and the sky's samples (:func:`~dustoptics.retrieve.sky.sky_samples`)."""
-    observations = _as_dataset(observations)
-    known = (*OBSERVABLES, *SKY_OBSERVABLES)
-    names = [str(k) for k in observations.data_vars if not str(k).endswith("_uncertainty")]
-    unknown = [k for k in names if k not in known]
-    if unknown or not names:
-        raise ValueError(
-            f"observations: variables must be among {', '.join(known)} (with "
-            f"<name>_uncertainty); got {names}"
+def _check_fit_cost(
+    model: Mapping[str, Any],
+    grids: Sequence[tuple[np.ndarray, np.ndarray]],
+    max_iterations: int,
+    allow_large: bool,
+) -> None:
+    """The whole fit's work, estimated before any table: the start's tables (one per
+    grid of wavelengths [nm] and angles [deg]) times the most evaluations
+    (``max_iterations`` and the one at the solution), within compute_optics'
+    :data:`~dustoptics.scattering.optics.WORK_BUDGET` unless ``allow_large``."""
+    settings = model.get("quadrature") or QuadratureSettings()
+    workers = model.get("workers") or os.cpu_count() or 1
+    per_table = 0.0
+    sizes = []
+    for wavelength_nm, theta_deg in grids:
+        request = optics_request(
+            model["refractive_index"],
+            model["distribution"],
+            wavelength_nm,
+            theta_deg,
+            quadrature=settings,
+            weighting=model.get("weighting", "scattering"),
         )
-    found = []
-    sky = []
-    for name in names:
-        var, sigma_values = _variable_and_sigma(observations, name)
-        if name in SKY_OBSERVABLES:
-            sky += sky_samples(var, sigma_values)
-        else:
-            found.append(_optical_observation(name, var, sigma_values))
-    if sum(o.value.size for o in found) + sum(s.value.size for s in sky) == 0:
-        raise ValueError("observations: no finite samples")
-    return [o for o in found if o.value.size], sky
-
-
-def _as_dataset(observations: Any) -> Any:
-    """``observations`` as an xarray Dataset (a named DataArray becomes one)."""
-    # lazy: the package imports without xarray (tests/test_packaging.py); it adds 0.7-1 s
-    import xarray as xr
-
-    if isinstance(observations, xr.DataArray):
-        if observations.name is None:
-            known = (*OBSERVABLES, *SKY_OBSERVABLES)
-            raise ValueError(f"observations: a DataArray must be named, one of {', '.join(known)}")
-        observations = observations.to_dataset()
-    if not isinstance(observations, xr.Dataset):
-        raise TypeError(
-            "observations must be an xarray Dataset or named DataArray; "
-            f"got {type(observations).__name__}"
+        per_table += check_cost(request, workers=workers, allow_large=allow_large).work
+        sizes.append(f"{wavelength_nm.size} wavelengths x {theta_deg.size} angles")
+    total = per_table * (max_iterations + 1)
+    budget = _optics.WORK_BUDGET  # read at the call: a caller may lower it
+    if total > budget and not allow_large:
+        raise BudgetError(
+            f"retrieve: the fit would need about {total:.3g} sphere-order-angle terms "
+            f"({per_table:.3g} per evaluation at the start, {' and '.join(sizes)}, times "
+            f"max_iterations={max_iterations} + 1 evaluations), beyond the budget of "
+            f"{budget:g} (about ten minutes): observe fewer wavelengths or angles, lower "
+            "max_iterations (--max-iterations), or pass allow_large=True (--allow-large) "
+            "to go ahead"
         )
-    return observations
-
-
-def _variable_and_sigma(observations: Any, name: str) -> tuple[Any, np.ndarray]:
-    """The variable ``name`` in its dimensions' order, and its one-sigma uncertainties."""
-    var = observations[name]
-    dims = OBSERVABLES.get(name) or SKY_OBSERVABLES[name]
-    if set(var.dims) != set(dims):
-        raise ValueError(f"observations: {name!r} must have dimensions {dims}; got {var.dims}")
-    var = var.transpose(*dims)
-    if f"{name}_uncertainty" in observations:
-        sigma = observations[f"{name}_uncertainty"].transpose(*dims).broadcast_like(var)
-        return var, np.asarray(sigma.values, dtype=np.float64)
-    if "uncertainty" in var.attrs:
-        return var, np.full(var.shape, float(var.attrs["uncertainty"]))
-    raise ValueError(
-        f"observations: {name!r} needs its one-sigma uncertainty: a variable "
-        f"{name + '_uncertainty'!r} or an attribute 'uncertainty'"
-    )
-
-
-def _optical_observation(name: str, var: Any, sigma_values: np.ndarray) -> _Observation:
-    """The finite samples of an optical observable (not the sky's)."""
-    values = np.asarray(var.values, dtype=np.float64)
-    wl = np.asarray(var["wavelength_nm"].values, dtype=np.float64)
-    if values.ndim == 2:
-        theta = np.asarray(var["theta_deg"].values, dtype=np.float64)
-        wl_s, theta_s = np.meshgrid(wl, theta, indexing="ij")
-    else:
-        wl_s, theta_s = wl, np.full(wl.shape, np.nan)
-    keep = np.isfinite(values)
-    if not np.all(np.isfinite(sigma_values[keep]) & (sigma_values[keep] > 0)):
-        raise ValueError(f"observations: {name!r} uncertainties must be finite and > 0")
-    reference = math.nan
-    if name == "extinction_ratio":
-        if "reference_wavelength_nm" not in var.attrs:
-            raise ValueError(
-                "observations: 'extinction_ratio' needs the attribute reference_wavelength_nm"
-            )
-        reference = float(var.attrs["reference_wavelength_nm"])
-    return _Observation(
-        name,
-        wl_s[keep].ravel(),
-        theta_s[keep].ravel(),
-        values[keep].ravel(),
-        sigma_values[keep].ravel(),
-        reference,
-    )
-
-
-def _predict(
-    table: Table, obs: _Observation, parameters: Sequence[str]
-) -> tuple[np.ndarray, np.ndarray]:
-    """Model values at the samples and their derivatives (n_samples, n_parameters)."""
-    i = np.searchsorted(table.wavelength_nm, obs.wavelength_nm)
-    if obs.name == "phase":
-        j = np.searchsorted(table.theta_deg, obs.theta_deg)
-        value = table.phase[i, j]
-        jac = [table.derivative("phase", p)[i, j] for p in parameters]
-    elif obs.name == "extinction_ratio":
-        assert table.cross_sections is not None
-        r = int(np.searchsorted(table.wavelength_nm, obs.reference_nm))
-        cext = table.cross_sections.cext_um2
-        value = cext[i] / cext[r]
-        jac = []
-        for p in parameters:
-            d = table.derivative("cext_um2", p)
-            jac.append(value * (d[i] / cext[i] - d[r] / cext[r]))
-    else:
-        value = table.quantity(obs.name)[i]
-        jac = [table.derivative(obs.name, p)[i] for p in parameters]
-    return np.asarray(value), np.column_stack(jac)
-
-
-def _labels(obs: _Observation) -> list[str]:
-    if obs.name == "phase":
-        return [f"phase@{w:g}nm,{t:g}deg" for w, t in zip(obs.wavelength_nm, obs.theta_deg)]
-    return [f"{obs.name}@{w:g}nm" for w in obs.wavelength_nm]
 
 
 # ----------------------------------------------------------------- the fit
@@ -521,12 +427,11 @@ def retrieve(
     (True, 0.004)
     """
     keywords = _model_keywords(model)
-    obs, sky_list = _observations(observations)
+    obs, sky_list = observations_of(observations)
     names = _checked_parameters(keywords, parameters)
     start, lower, upper = _checked_bounds(keywords, names, bounds)
     prior_list = _checked_priors(names, priors)
-    if not (isinstance(max_iterations, int) and max_iterations >= 1):
-        raise ValueError(f"max_iterations must be a positive integer; got {max_iterations!r}")
+    _check_options(max_iterations, tolerance, allow_large)
     if sky is None:
         sky = SkySettings()
     elif not isinstance(sky, SkySettings):
@@ -534,7 +439,11 @@ def retrieve(
     callback, stream = _reporter(progress)
     began = time.perf_counter()
     sky_model = SkyModel(sky_list, sky) if sky_list else None
-    wavelengths, theta = _optical_grid(obs)
+    wavelengths, theta = optical_grid(obs)
+    grids = [(wavelengths, theta)] if obs else []
+    if sky_model is not None:
+        grids.append((sky_model.wavelength_nm, default_theta_deg()))
+    _check_fit_cost(keywords, grids, max_iterations, allow_large)
     if obs:
         _check_corner_cost(keywords, names, upper, wavelengths, theta, allow_large)
     if sky_model is not None:  # the sky's table: its wavelengths, the default angles
@@ -572,20 +481,22 @@ def retrieve(
     final = problem.evaluate(result.x)
     jac = problem.jacobian(result.x)
     residuals = final["residuals"]
-    covariance = np.linalg.pinv(jac.T @ jac)
+    covariance, standard_errors, converged, message = _uncertainty(
+        jac, upper - lower, names, bool(result.status > 0), str(result.message)
+    )
     return Retrieval(
         parameters=names,
         values=np.array(result.x),
         covariance=covariance,
-        standard_errors=np.sqrt(np.diag(covariance)),
+        standard_errors=standard_errors,
         initial_values=start,
         residuals=residuals,
         labels=problem.labels,
         chi_square=float(residuals @ residuals),
         iterations=int(result.njev or 0),
         function_evaluations=int(result.nfev),
-        converged=bool(result.status > 0),
-        message=str(result.message),
+        converged=converged,
+        message=message,
         model=_set(keywords, dict(zip(names, result.x.tolist()))),
         table=final["table"] if obs else final["sky_table"],
         sky_solves=sky_model.solves if sky_model is not None else 0,
@@ -594,11 +505,79 @@ def retrieve(
     )
 
 
+def _uncertainty(
+    jacobian: np.ndarray,
+    width: np.ndarray,
+    names: Sequence[str],
+    converged: bool,
+    message: str,
+) -> tuple[np.ndarray, np.ndarray, bool, str]:
+    """Covariance (J^T J)^-1, standard errors, convergence and message of a fit: the
+    optimizer's, unless the data carry no information on a parameter (:func:`_uninformed`),
+    whose variance is then infinite and the fit not converged, with the message saying why."""
+    covariance = np.linalg.pinv(jacobian.T @ jacobian)
+    standard_errors = np.sqrt(np.diag(covariance))
+    uninformed = _uninformed(jacobian, width)
+    if uninformed.any():
+        covariance[uninformed, :] = covariance[:, uninformed] = np.nan
+        covariance[uninformed, uninformed] = np.inf
+        standard_errors[uninformed] = np.inf
+        converged = False
+        message = (
+            "the data carry no information on "
+            f"{', '.join(p for p, u in zip(names, uninformed, strict=True) if u)}: the "
+            "chi-square is flat across the bounds (uncertainties too large, or observations "
+            f"that do not depend on the parameter); not a fit (the optimizer: {message})"
+        )
+    return covariance, standard_errors, converged, message
+
+
+#: A parameter is not constrained by the data when its standard error exceeds this
+#: multiple of its bounds' width: across the bounds the chi-square changes by less than
+#: its square's inverse (1e-6). [-]
+UNINFORMED_WIDTHS = 1e3
+
+
+def _uninformed(jacobian: np.ndarray, width: np.ndarray) -> np.ndarray:
+    """Which parameters the weighted residuals' Jacobian says nothing about.
+
+    The standard errors are computed from the Jacobian with its columns scaled to
+    unit norm (so that uncertainties of 1e308, whose squared residuals underflow,
+    still give the right answer).  A zero or non-finite column, a direction of the
+    scaled Jacobian with a singular value below round-off, or a standard error
+    beyond :data:`UNINFORMED_WIDTHS` times the bounds' ``width`` marks the
+    parameters it involves.
+    """
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore", under="ignore"):
+        peak = np.max(np.abs(jacobian), axis=0, initial=0.0)
+        norms = peak * np.sqrt(np.sum(np.square(jacobian / peak), axis=0))
+    out = ~(np.isfinite(norms) & (norms > 0.0))
+    if out.all():
+        return out
+    scaled = jacobian[:, ~out] / norms[~out]
+    _, s, vt = np.linalg.svd(scaled, full_matrices=True)  # vt: (k, k) with fewer rows than k
+    s = np.r_[s, np.zeros(vt.shape[0] - s.size)]
+    rank = s > s.max() * max(scaled.shape) * np.finfo(float).eps
+    flat = np.any(np.abs(vt[~rank]) > 1e-8, axis=0)
+    with np.errstate(divide="ignore", over="ignore"):
+        errors = np.sqrt(np.sum(np.square(vt[rank].T / s[rank]), axis=1)) / norms[~out]
+    out[~out] = flat | ~(errors <= UNINFORMED_WIDTHS * width[~out])
+    return out
+
+
 def _checked_parameters(keywords: dict[str, Any], parameters: Sequence[str]) -> tuple[str, ...]:
     """The parameters to fit, checked against the model (:func:`retrieve`)."""
-    names = check_parameters(
-        parameters, keywords["distribution"], index_parameter_names(keywords["refractive_index"])
-    )
+    try:
+        names = check_parameters(
+            parameters,
+            keywords["distribution"],
+            index_parameter_names(keywords["refractive_index"]),
+        )
+    except (TypeError, ValueError) as exc:  # worded for compute_optics(derivatives=...)
+        text = str(exc)
+        if text.startswith("derivatives"):
+            text = "parameters" + text[len("derivatives") :]
+        raise type(exc)(text) from None
     if not names:
         raise ValueError("parameters must name at least one parameter to fit")
     if any(p in INDEX_PARAMETERS for p in names):
@@ -612,17 +591,43 @@ def _checked_parameters(keywords: dict[str, Any], parameters: Sequence[str]) -> 
     return names
 
 
+def _real(value: Any) -> bool:
+    """Whether ``value`` is a real number (not a bool, a string or an array)."""
+    return isinstance(value, int | float | np.integer | np.floating) and not isinstance(
+        value, bool | np.bool_
+    )
+
+
+def _pair(what: str, parameter: str, pair: Any, form: str) -> tuple[float, float]:
+    """``pair`` as two floats, or a TypeError/ValueError naming ``what`` and ``parameter``."""
+    if isinstance(pair, str) or not isinstance(pair, Sequence | np.ndarray):
+        raise TypeError(f"{what}[{parameter!r}] must be a pair {form}; got {pair!r}")
+    if len(pair) != 2:
+        raise ValueError(
+            f"{what}[{parameter!r}] must be a pair {form} of two numbers; got {pair!r} "
+            f"({len(pair)} item{'s' if len(pair) != 1 else ''})"
+        )
+    if not all(_real(v) for v in pair):
+        raise TypeError(f"{what}[{parameter!r}] must hold two real numbers {form}; got {pair!r}")
+    return float(pair[0]), float(pair[1])
+
+
 def _checked_bounds(
     keywords: dict[str, Any], names: Sequence[str], bounds: Any
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The start, lower and upper bounds of ``names`` (:func:`retrieve`)."""
-    if not isinstance(bounds, Mapping) or set(names) - set(bounds):
+    if not isinstance(bounds, Mapping):
+        raise TypeError(
+            f"bounds must be a mapping {{parameter: (lower, upper)}}; got {type(bounds).__name__}"
+        )
+    if set(names) - set(bounds):
         raise ValueError(
             f"bounds must give (lower, upper) for every parameter {list(names)}; got {bounds!r}"
         )
+    pairs = [_pair("bounds", p, bounds[p], "(lower, upper)") for p in names]
     start = np.array([_get(keywords, p) for p in names])
-    lower = np.array([float(bounds[p][0]) for p in names])
-    upper = np.array([float(bounds[p][1]) for p in names])
+    lower = np.array([lo for lo, _ in pairs])
+    upper = np.array([hi for _, hi in pairs])
     if not np.all(np.isfinite(lower) & np.isfinite(upper)):
         raise ValueError(
             f"bounds must be finite numbers (they also set the sky's finite-difference step); "
@@ -643,30 +648,40 @@ def _checked_priors(
     names: Sequence[str], priors: Mapping[str, tuple[float, float]] | None
 ) -> list[tuple[int, float, float]]:
     """(parameter index, mean, standard deviation) of each prior (:func:`retrieve`)."""
+    if priors is not None and not isinstance(priors, Mapping):
+        raise TypeError(
+            f"priors must be a mapping {{parameter: (mean, sd)}} or None; "
+            f"got {type(priors).__name__}"
+        )
     prior_list = []
-    for p, (mean, sd) in (priors or {}).items():
+    for p, pair in (priors or {}).items():
         if p not in names:
             raise ValueError(f"priors: {p!r} is not a fitted parameter ({list(names)})")
+        mean, sd = _pair("priors", p, pair, "(mean, sd)")
         if not (math.isfinite(mean) and math.isfinite(sd) and sd > 0):
-            raise ValueError(f"priors: {p!r} needs a finite mean and a standard deviation > 0")
-        prior_list.append((list(names).index(p), float(mean), float(sd)))
+            raise ValueError(
+                f"priors: {p!r} needs a finite mean and a standard deviation > 0; "
+                f"got mean={mean!r}, sd={sd!r}"
+            )
+        prior_list.append((list(names).index(p), mean, sd))
     return prior_list
 
 
-def _optical_grid(obs: Sequence[_Observation]) -> tuple[np.ndarray, np.ndarray]:
-    """The wavelengths [nm] and angles [deg] of the table the optical observations need
-    (empty without optical observations)."""
-    if not obs:
-        return np.zeros(0), np.zeros(0)
-    wavelengths = np.unique(
-        np.concatenate(
-            [o.wavelength_nm for o in obs]
-            + [np.array([o.reference_nm]) for o in obs if math.isfinite(o.reference_nm)]
+#: Most evaluations of the residuals a fit may be asked for (scipy's ``max_nfev``). [-]
+MAX_ITERATIONS = 100_000
+
+
+def _check_options(max_iterations: Any, tolerance: Any, allow_large: Any) -> None:
+    """The numerical options of :func:`retrieve`: types and domains."""
+    if not (type(max_iterations) is int and 1 <= max_iterations <= MAX_ITERATIONS):
+        raise ValueError(
+            f"max_iterations must be an integer within [1, {MAX_ITERATIONS}]; "
+            f"got {max_iterations!r}"
         )
-    )
-    thetas = np.concatenate([o.theta_deg[np.isfinite(o.theta_deg)] for o in obs])
-    theta = np.unique(thetas) if thetas.size else np.array([0.0, 180.0])
-    return wavelengths, theta
+    if not (_real(tolerance) and 1e-15 <= tolerance < 1.0):
+        raise ValueError(f"tolerance must be a number within [1e-15, 1); got {tolerance!r}")
+    if not isinstance(allow_large, bool | np.bool_):
+        raise TypeError(f"allow_large must be True or False; got {allow_large!r}")
 
 
 #: One point of the fit: residuals, the exact rows of the Jacobian (the sky's rows NaN
@@ -688,7 +703,7 @@ class _Problem:
         *,
         keywords: dict[str, Any],
         names: tuple[str, ...],
-        obs: list[_Observation],
+        obs: list[Observation],
         sky_model: SkyModel | None,
         prior_list: list[tuple[int, float, float]],
         wavelengths: np.ndarray,
@@ -716,7 +731,7 @@ class _Problem:
         self.stream = stream
         self.began = began
         self.sky_report = sky_progress(stream)
-        self.labels = tuple(label for o in obs for label in _labels(o))
+        self.labels = tuple(label for o in obs for label in sample_labels(o))
         self.sky_value = self.sky_sigma = np.zeros(0)
         if sky_model is not None:
             self.sky_value, self.sky_sigma, sky_labels = sky_model.order()
@@ -749,7 +764,7 @@ class _Problem:
             )
             entry["table"] = table
             for o in self.obs:
-                value, d = _predict(table, o, self.names)
+                value, d = predict(table, o, self.names)
                 res.append((value - o.value) / o.sigma)
                 jac.append(d / o.sigma[:, None])
         if self.sky_model is not None:

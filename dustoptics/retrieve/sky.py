@@ -186,12 +186,24 @@ def _attr(var: Any, key: str, default: float | None, low: float, high: float) ->
     return value
 
 
+def _coordinate(var: Any, key: str) -> np.ndarray:
+    """The coordinate ``key`` of a sky variable as numbers, or a ValueError naming it."""
+    if key not in var.coords:
+        raise ValueError(f"observations: {var.name!r} needs the coordinate {key!r}")
+    values = np.asarray(var[key].values)
+    if values.dtype.kind not in "biuf":
+        raise ValueError(
+            f"observations: {var.name!r} coordinate {key} must be numbers; got dtype {values.dtype}"
+        )
+    return np.asarray(values, dtype=np.float64)
+
+
 def sky_samples(var: Any, sigma: np.ndarray) -> list[_SkySamples]:
     """The finite samples of one sky variable, per scene (one per Sun elevation)."""
     name = str(var.name)
     dims = SKY_OBSERVABLES[name]
     values = np.asarray(var.values, dtype=np.float64)
-    elevations = np.asarray(var["sun_elevation_deg"].values, dtype=np.float64)
+    elevations = _coordinate(var, "sun_elevation_deg")
     if not np.all((elevations >= -10.0) & (elevations <= 90.0)):
         raise ValueError(
             f"observations: {name!r} sun_elevation_deg must be within [-10, 90]; "
@@ -206,9 +218,9 @@ def sky_samples(var: Any, sigma: np.ndarray) -> list[_SkySamples]:
         scene = SkyScene(float(elev), tau, ref, albedo, altitude)
         v, s = values[i], sigma[i]
         if name == "sky_radiance":
-            wl = np.asarray(var["wavelength_nm"].values, dtype=np.float64)
-            zen = np.asarray(var["view_zenith_deg"].values, dtype=np.float64)
-            azi = np.asarray(var["view_azimuth_deg"].values, dtype=np.float64)
+            wl = _coordinate(var, "wavelength_nm")
+            zen = _coordinate(var, "view_zenith_deg")
+            azi = _coordinate(var, "view_azimuth_deg")
             if zen.shape != (v.shape[1],) or azi.shape != zen.shape:
                 raise ValueError(
                     "observations: 'sky_radiance' needs the coordinates view_zenith_deg and "
@@ -217,6 +229,16 @@ def sky_samples(var: Any, sigma: np.ndarray) -> list[_SkySamples]:
             if not np.all((zen >= 0.0) & (zen <= 90.0)):
                 raise ValueError(
                     f"observations: view_zenith_deg must be within [0, 90]; got {zen.tolist()}"
+                )
+            if not np.all((azi >= -360.0) & (azi <= 360.0)):
+                raise ValueError(
+                    "observations: view_azimuth_deg must be finite and within [-360, 360]; "
+                    f"got {azi.tolist()}"
+                )
+            if not np.all((wl > 0.0) & (wl <= 1e7)):
+                raise ValueError(
+                    "observations: 'sky_radiance' coordinate wavelength_nm must be finite and "
+                    f"within (0, 1e+07]; got {wl[~((wl > 0.0) & (wl <= 1e7))][:5].tolist()}"
                 )
             wl_s, zen_s = np.meshgrid(wl, zen, indexing="ij")
             azi_s = np.broadcast_to(azi, v.shape)
