@@ -173,7 +173,7 @@ def _components(table: Table) -> list[str]:
         error = e.expansion_error_estimate
         lines.append(
             f"expansion:       alpha1-4, beta1-2, orders l = 0 .. {e.n_order - 1}"
-            + ("" if error is None else f", error <= {error.max():.2e} (per 2 l + 1)")
+            + ("" if error is None else f", error <= {error.max():.2e} (of each / (2 l + 1))")
         )
     if table.matrix is not None:
         error = table.matrix.matrix_error_estimate
