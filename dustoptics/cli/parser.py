@@ -10,6 +10,8 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import re
+import textwrap
 from collections.abc import Sequence
 from typing import Any, NoReturn
 
@@ -19,7 +21,10 @@ from dustoptics import __version__
 from dustoptics.cli.errors import PROG
 from dustoptics.io._text import printable
 
-__all__ = ["add_command", "build_parser"]
+__all__ = ["HELP_COLUMNS", "HelpFormatter", "add_command", "build_parser"]
+
+#: Width of ``--help``, whatever the terminal's: an 80-column terminal shows it unwrapped.
+HELP_COLUMNS = 80
 
 #: Command modules of :mod:`dustoptics.cli`, in the order of the help's command list.
 _COMMAND_MODULES = (
@@ -40,6 +45,53 @@ class _Parser(argparse.ArgumentParser):
 
     def error(self, message: str) -> NoReturn:
         self.exit(2, f"{PROG}: error: {printable(message)} (see '{self.prog} --help')\n")
+
+
+class HelpFormatter(argparse.RawDescriptionHelpFormatter):
+    """Help at most :data:`HELP_COLUMNS` wide, never breaking a word at its hyphens.
+
+    argparse's own formatter follows the terminal's width and breaks
+    ``--allow-large`` into ``--allow-`` and ``large``; this one wraps the
+    options' help at spaces only.  Descriptions and epilogs keep their line
+    breaks; a line too long is wrapped: an example (an indented command line)
+    with a shell continuation (`` \\``), an entry of a list (``name  text``)
+    under its text.
+    """
+
+    def __init__(self, prog: str, **kwargs: Any) -> None:
+        kwargs.setdefault("width", HELP_COLUMNS)
+        super().__init__(prog, **kwargs)
+
+    def start_section(self, heading: str | None) -> None:
+        if heading:  # a group's title, wrapped too (its colon included)
+            room = self._width - self._current_indent - 1
+            heading = "\n".join(
+                textwrap.wrap(heading, room, break_on_hyphens=False, break_long_words=False)
+            )
+        super().start_section(heading)
+
+    def _split_lines(self, text: str, width: int) -> list[str]:
+        text = " ".join(text.split())
+        return textwrap.wrap(text, width, break_on_hyphens=False, break_long_words=False)
+
+    def _fill_text(self, text: str, width: int, indent: str) -> str:
+        lines = []
+        for line in text.splitlines():
+            own = indent + line[: len(line) - len(line.lstrip())]
+            # A list's entry (``name  text``) wraps under its text; an example (an indented
+            # command) with a shell continuation, so that it can still be pasted.
+            column = re.match(r"\s*\S+\s{2,}", line)
+            example = own != indent and column is None
+            wrapped = textwrap.wrap(
+                line.strip(),
+                width - 2 if example else width,
+                initial_indent=own,
+                subsequent_indent=indent + " " * column.end() if column else own + "    " * example,
+                break_on_hyphens=False,
+                break_long_words=False,
+            ) or [""]
+            lines += [w + " \\" for w in wrapped[:-1]] + wrapped[-1:] if example else wrapped
+        return "\n".join(lines) + "\n"
 
 
 def add_command(
@@ -71,7 +123,7 @@ def add_command(
         help=help,
         description=description or help[:1].upper() + help[1:] + ".",
         epilog=f"{label}:\n" + "\n".join(f"  {line}" for line in examples),
-        formatter_class=argparse.RawDescriptionHelpFormatter,
+        formatter_class=HelpFormatter,
     )
     return parser
 
@@ -131,6 +183,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     parser = _Parser(
         prog=PROG,
+        formatter_class=HelpFormatter,
         description="Exact, reproducible optics of atmospheric dust and lookup tables for renderers.",
     )
     parser.add_argument("--version", action="version", version=f"{PROG} {__version__}")

@@ -7,7 +7,7 @@ from pathlib import Path
 
 from dustoptics.io.outputs import Placement
 
-__all__ = ["report_placement", "say"]
+__all__ = ["count", "report_placement", "say"]
 
 
 def say(args: argparse.Namespace, text: str) -> None:
@@ -16,13 +16,23 @@ def say(args: argparse.Namespace, text: str) -> None:
         print(text)
 
 
+def count(n: int, noun: str, plural: str | None = None) -> str:
+    """``n`` and the noun, singular for one: ``count(1, "file")`` is ``"1 file"``.
+
+    >>> count(1, "file"), count(2, "file"), count(0, "entry", "entries")
+    ('1 file', '2 files', '0 entries')
+    """
+    return f"{n} {noun if n == 1 else plural or noun + 's'}"
+
+
 def report_placement(args: argparse.Namespace, name: str, out_dir: Path, placed: Placement) -> None:
     """The files a placement wrote, then those it left untouched (up to date)."""
     if placed.written:
-        say(args, f"{name}: wrote {len(placed.written)} files to {out_dir}")
+        say(args, f"{name}: wrote {count(len(placed.written), 'file')} to {out_dir}")
         for path in placed.written:
             say(args, f"  {path}")
     if placed.unchanged:
-        say(args, f"{name}: {len(placed.unchanged)} files up to date in {out_dir} (left untouched)")
+        n = count(len(placed.unchanged), "file")
+        say(args, f"{name}: {n} up to date in {out_dir} (left untouched)")
         for path in placed.unchanged:
             say(args, f"  {path}")

@@ -1,8 +1,12 @@
 """``dustoptics sky``: the sky an atmosphere makes, as images and data (:class:`~dustoptics.sky.job.SkyJob`).
 
 The files go into ``DIR/NAME/``, NAME the job's (``mars-hybrid``, ``earth``,
-``mars-comparison``), as ``build`` and ``export`` place theirs.  The presets,
-the image size and the files that would be replaced are checked before any work.
+``mars-comparison``), as ``build`` and ``export`` place theirs: run again with
+the same inputs, the files are up to date and left untouched; files of other
+inputs are replaced only with ``--force``.  The presets, the image size and the
+files that would be replaced are checked before any work.  The PNG images need
+matplotlib (the ``plot`` extra): without it, or with ``--no-png``, the netCDF
+file is written alone.
 """
 
 from __future__ import annotations
@@ -17,9 +21,10 @@ from dustoptics._validation import check_inside
 from dustoptics.cli.aerosol_options import add_aerosol_options, aerosol_keywords
 from dustoptics.cli.errors import PROG, UsageError
 from dustoptics.cli.parser import _positive_float, add_command
-from dustoptics.cli.report import say
+from dustoptics.cli.report import report_placement, say
 from dustoptics.cli.sky_preview import add_preview_options, approximations_from_args, report_preview
 from dustoptics.models.presets import list_presets
+from dustoptics.sky import scene
 from dustoptics.sky.job import SkyJob
 
 __all__ = ["add_parser", "run"]
@@ -125,6 +130,7 @@ def add_parser(sub: Any) -> None:
         q.add_argument("--force", action="store_true", help="replace existing files")
         q.add_argument("--quiet", action="store_true", help="no summary output or progress")
         q.add_argument("--allow-large", action="store_true", help=_LARGE_HELP)
+        q.add_argument("--no-png", action="store_true", help=_NO_PNG_HELP)
         add_preview_options(q)
         if planet == "earth":
             add_aerosol_options(q)
@@ -161,7 +167,10 @@ def add_parser(sub: Any) -> None:
     q.add_argument("--force", action="store_true", help="replace existing files")
     q.add_argument("--quiet", action="store_true", help="no summary output or progress")
     q.add_argument("--allow-large", action="store_true", help=_LARGE_HELP)
+    q.add_argument("--no-png", action="store_true", help=_NO_PNG_HELP)
 
+
+_NO_PNG_HELP = "no PNG images: the netCDF file only (without matplotlib, the default)"
 
 _LARGE_HELP = (
     "go ahead beyond the memory and work budget of the skies and images (refused before any "
@@ -185,8 +194,31 @@ def _check_presets(option: str, names: tuple[str, ...]) -> None:
         )
 
 
+def _png(args: argparse.Namespace) -> bool:
+    """Whether to write the PNG images: not with ``--no-png``, nor without matplotlib (a
+    one-line note then says so; the rest is written)."""
+    if args.no_png:
+        if args.sky_command != "compare" and (args.sunset or args.space):
+            given = " and ".join(o for o in ("--sunset", "--space") if getattr(args, o[2:]))
+            raise UsageError(
+                f"with --no-png, {given} would write nothing (PNG images only); drop one of them"
+            )
+        return False
+    try:
+        scene.check_png_support()
+    except ImportError:
+        print(
+            f"{PROG}: note: no PNG images, they need matplotlib: pip install "
+            "'dustoptics[plot]' (or give --no-png); writing the rest",
+            file=sys.stderr,
+        )
+        return False
+    return True
+
+
 def run(args: argparse.Namespace) -> int:
     """Run ``sky``: the job's files, known and checked before any work; returns the exit status."""
+    png = _png(args)
 
     if args.sky_command == "compare":
         if args.models is not None:
@@ -199,6 +231,7 @@ def run(args: argparse.Namespace) -> int:
             sun_elevation_deg=args.sun_elevation,
             progress=None if args.quiet else sys.stderr,
             allow_large=args.allow_large,
+            png=png,
         )
     else:
         if not (-10.0 <= args.sun_elevation <= 90.0):
@@ -216,8 +249,8 @@ def run(args: argparse.Namespace) -> int:
             albedo=args.albedo,
             size_px=args.size,
             exposure=args.exposure,
-            sunset=args.sunset,
-            space=args.space,
+            sunset=args.sunset and png,
+            space=args.space and png,
             # Options of 'sky mars' only.
             dust=getattr(args, "dust", "hybrid"),
             optical_depth=getattr(args, "optical_depth", 0.5),
@@ -225,14 +258,14 @@ def run(args: argparse.Namespace) -> int:
             earth_aerosol=aerosol_keywords(args) if args.sky_command == "earth" else {},
             progress=None if args.quiet else sys.stderr,
             allow_large=args.allow_large,
+            png=png,
         )
     # The job's own folder, DIR/NAME/, checked to stay inside DIR (NAME is a preset's).
     job = replace(job, out_dir=args.out / job.name)
     check_inside(args.out, job.out_dir)
-    written = job.write(overwrite=args.force)
-    for path in written:
-        say(args, f"wrote {path}")
-    report_preview(args, written)
+    placed = job.place(force=args.force)
+    report_placement(args, job.name, job.out_dir, placed)
+    report_preview(args, [*placed.written, *placed.unchanged])
     if args.sky_command == "compare" and not args.quiet:  # the rover table, read back
         # lazy: sky.compare adds 20-30 ms to every command's start-up (-X importtime)
         from dustoptics.sky.compare import read_rover_comparison

@@ -82,7 +82,8 @@ def describe_table(table: Table, *, full: bool = True) -> str:
     str
         Lines ``key: value`` (name, grids, ranges of g, the cross-sections
         and the single-scattering albedo, number density, error estimates,
-        input hash, software, sources, notes), then the provenance inputs as
+        the expansion coefficients' orders and the scattering matrix when the
+        table holds them, with their error estimates, input hash, software, sources, notes), then the provenance inputs as
         indented JSON.  Control characters from the table's text are escaped.
 
     Examples
@@ -133,6 +134,7 @@ def describe_table(table: Table, *, full: bool = True) -> str:
         lines.append(
             f"                 cross-sections, g <= {table.quadrature.cross_section_error_estimate.max():.2e}"
         )
+    lines += _components(table)
     if not full:
         lines += _made_from(prov.to_dict()["inputs"])
         if prov.sources:
@@ -161,6 +163,25 @@ def describe_table(table: Table, *, full: bool = True) -> str:
     ]
     # Names, citations and notes come from the file: escape what a terminal would obey.
     return _printable_lines("\n".join(lines))
+
+
+def _components(table: Table) -> list[str]:
+    """The expansion coefficients and the scattering matrix, when the table holds them."""
+    lines = []
+    if table.expansion is not None:
+        e = table.expansion
+        error = e.expansion_error_estimate
+        lines.append(
+            f"expansion:       alpha1-4, beta1-2, orders l = 0 .. {e.n_order - 1}"
+            + ("" if error is None else f", error <= {error.max():.2e} (of each / (2 l + 1))")
+        )
+    if table.matrix is not None:
+        error = table.matrix.matrix_error_estimate
+        lines.append(
+            "matrix:          F12, F33, F34 beside F11"
+            + ("" if error is None else f", error <= {error.max():.2e} (relative to F11)")
+        )
+    return lines
 
 
 def _compact(value: Any) -> str:

@@ -2,7 +2,11 @@
 
 A :class:`SkyJob` names its files before any work (:meth:`SkyJob.targets`),
 computes them in memory (:meth:`SkyJob.files`) and writes them as one set
-(:meth:`SkyJob.write`, :func:`dustoptics.io._atomic.write_files`):
+(:meth:`SkyJob.write`, :func:`dustoptics.io._atomic.write_files`), or
+places them beside the files already there (:meth:`SkyJob.place`,
+:func:`dustoptics.io.outputs.place_outputs`, as ``dustoptics build`` does):
+the same files are left untouched ("up to date"), and a job with other
+inputs than those its netCDF file records is refused before any work.
 
 - ``"mars"`` and ``"earth"``: the sky over an observer near the ground
   (:func:`~dustoptics.sky.scene.sky_radiance`) as a netCDF file
@@ -15,6 +19,7 @@ computes them in memory (:meth:`SkyJob.files`) and writes them as one set
 
 from __future__ import annotations
 
+import dataclasses
 import io
 import os
 from collections.abc import Mapping
@@ -27,22 +32,27 @@ from dustoptics._validation import check_choice
 from dustoptics.atmosphere import sets
 from dustoptics.atmosphere.sets import check_earth_aerosol
 from dustoptics.io._atomic import check_targets, write_files
+from dustoptics.io.outputs import Placement, place_outputs
 from dustoptics.sky import scene, space
 from dustoptics.sky.medium import Medium
 from dustoptics.sky.orders import N_LAYERS, check_orders_cost
 from dustoptics.sky.render import N_PATH, check_render_cost
+from dustoptics.table import canonical_json
 
 if TYPE_CHECKING:
     from dustoptics.atmosphere.sets import Atmosphere
     from dustoptics.sky.approximations import Approximations
 
-__all__ = ["SKY_JOBS", "SUNSET_ELEVATIONS_DEG", "SkyJob"]
+__all__ = ["INPUTS_ATTRIBUTE", "SKY_JOBS", "SUNSET_ELEVATIONS_DEG", "SkyJob"]
 
 #: What a :class:`SkyJob` renders.
 SKY_JOBS: Final = ("mars", "earth", "compare")
 
 #: Sun elevations of the sunset sequence (``sunset=True``). [degree]
 SUNSET_ELEVATIONS_DEG: Final = (20.0, 10.0, 5.0, 2.0, 0.0, -2.0)
+
+#: The netCDF attribute that records a job's inputs (:meth:`SkyJob.inputs`, as canonical JSON).
+INPUTS_ATTRIBUTE: Final = "dustoptics_sky_inputs"
 
 #: Sun elevation unless given: low over Mars (its blue sunset light), high over Earth. [degree]
 _DEFAULT_SUN_ELEVATION_DEG: Final = {"mars": 10.0, "earth": 45.0, "compare": 10.0}
@@ -101,20 +111,26 @@ class SkyJob:
         Go ahead beyond the budgets (an image side beyond
         :data:`~dustoptics.sky.scene.MAX_IMAGE_SIZE`, skies beyond the memory
         and work budget); without it they are refused before any work.
+    png : bool, optional
+        Write the PNG images (default; they need matplotlib, the ``plot``
+        extra).  False: the netCDF file only (a ``sunset`` or ``space`` job,
+        whose results are images only, is then refused).
 
     Raises
     ------
     ValueError
-        An unknown kind, or a Sun elevation, albedo or image size out of range.
+        An unknown kind, or a Sun elevation, albedo or image size out of range;
+        ``sunset`` or ``space`` without ``png``.
     dustoptics._validation.BudgetError
         ``size_px`` beyond :data:`~dustoptics.sky.scene.MAX_IMAGE_SIZE` without
         ``allow_large``.
 
     Notes
     -----
-    :meth:`write` checks before any work that PNG images can be written
-    (matplotlib, :func:`~dustoptics.sky.scene.check_png_support`), that no file
-    would be replaced, and the memory and work budget of every sky the job
+    :meth:`write` and :meth:`place` check before any work that PNG images can be
+    written (matplotlib, :func:`~dustoptics.sky.scene.check_png_support`; with
+    ``png``), that no file would be replaced (:meth:`place`: no file of a job
+    with other inputs), and the memory and work budget of every sky the job
     computes (:meth:`check_budget`).
     """
 
@@ -134,9 +150,15 @@ class SkyJob:
     preview: Approximations | None = None
     progress: TextIO | None = field(default=None, compare=False, repr=False)
     allow_large: bool = False
+    png: bool = True
 
     def __post_init__(self) -> None:
         check_choice("kind", self.kind, SKY_JOBS)
+        if not self.png and (self.sunset or self.space):
+            raise ValueError(
+                "sunset and space give PNG images only; with png=False they would write "
+                "nothing: drop them, or write the PNG images"
+            )
         object.__setattr__(self, "out_dir", Path(os.fspath(self.out_dir)))
         elevation = self.sun_elevation_deg
         if elevation is None:
@@ -183,8 +205,11 @@ class SkyJob:
         out, stem = self.out_dir, self.name
         if self.kind == "compare":
             kinds = ["radiance", "luminance", "chromaticity", "transmittance"]
-            return [out / f"{stem}.nc"] + [out / f"{stem}_{k}.png" for k in kinds]
-        names = [f"{stem}_sky.nc", f"{stem}_fisheye.png", f"{stem}_panorama.png"]
+            return [out / f"{stem}.nc"] + [out / f"{stem}_{k}.png" for k in kinds if self.png]
+        names = [f"{stem}_sky.nc"]
+        if not self.png:
+            return [out / names[0]]
+        names += [f"{stem}_fisheye.png", f"{stem}_panorama.png"]
         if self.sunset:
             names += [f"{stem}_sunset_{e:+05.1f}.png" for e in SUNSET_ELEVATIONS_DEG]
         if self.space:
@@ -192,6 +217,57 @@ class SkyJob:
         if self.preview is not None:
             names.append(f"{stem}_preview.png")
         return [out / n for n in names]
+
+    @property
+    def record(self) -> Path:
+        """The netCDF file that records the job's inputs (:data:`INPUTS_ATTRIBUTE`)."""
+        return self.targets()[0]
+
+    def inputs(self) -> dict[str, Any]:
+        """What the job's files are made from, as its netCDF file records it.
+
+        Every parameter the job of this kind uses except where the files go, the progress,
+        ``allow_large`` and ``png`` (the netCDF file does not depend on them).
+
+        Returns
+        -------
+        dict
+            JSON-serializable.
+        """
+        keys = ["kind", "sun_elevation_deg", "optical_depth"]
+        if self.kind == "compare":
+            # lazy: sky.compare adds 20-30 ms to import dustoptics (-X importtime)
+            from dustoptics.sky.compare import MARS_MODELS
+
+            return {k: getattr(self, k) for k in keys} | {"models": self.models or MARS_MODELS}
+        keys += ["albedo", "size_px", "exposure", "sunset", "space"]
+        keys += ["dust"] if self.kind == "mars" else ["earth_aerosol"]
+        out: dict[str, Any] = {k: getattr(self, k) for k in keys}
+        if self.kind == "earth":
+            out.pop("optical_depth")
+            out["earth_aerosol"] = dict(self.earth_aerosol)
+        preview = self.preview
+        out["preview"] = None if preview is None else dataclasses.asdict(preview)
+        return out
+
+    def recorded_inputs(self) -> dict[str, Any] | None:
+        """The inputs the job's netCDF file records (:meth:`inputs` of the job that wrote it).
+
+        Returns
+        -------
+        dict or None
+            None if the file is missing, unreadable or records none.
+        """
+        import json
+
+        import xarray as xr  # lazy: xarray adds 0.7-1 s to import dustoptics (-X importtime)
+
+        try:
+            with xr.open_dataset(self.record, engine="scipy") as ds:
+                found = json.loads(ds.attrs[INPUTS_ATTRIBUTE])
+        except (OSError, ValueError, KeyError, TypeError):
+            return None
+        return found if isinstance(found, dict) else None
 
     def atmosphere(self) -> Atmosphere:
         """The atmosphere of a "mars" or "earth" job, computed.
@@ -236,13 +312,59 @@ class SkyJob:
         FileExistsError
             A target exists and ``overwrite`` is False, found before any work.
         """
-        scene.check_png_support()  # every job writes PNG images: matplotlib, before any work
+        if self.png:
+            scene.check_png_support()  # PNG images need matplotlib: before any work
         targets = self.targets()
         check_targets(targets, overwrite=overwrite)  # before any work
+        return write_files(self._announced_files(), overwrite=overwrite)
+
+    def place(self, *, force: bool = False) -> Placement:
+        """Compute the files and place them beside those in :attr:`out_dir`, as ``build`` does.
+
+        Files that already hold the same bytes are left untouched (a job run
+        again with the same inputs: "up to date"); the others are written
+        (:func:`dustoptics.io.outputs.place_outputs`).
+
+        Parameters
+        ----------
+        force : bool, optional
+            Replace existing files that differ.  Default False.
+
+        Returns
+        -------
+        dustoptics.io.outputs.Placement
+            The files written and the files left untouched.
+
+        Raises
+        ------
+        FileExistsError
+            Without ``force``: the job's netCDF file exists and records other
+            inputs (or none), found before any work; or files exist that
+            differ from the new ones (nothing is written).
+        """
+        if self.png:
+            scene.check_png_support()  # PNG images need matplotlib: before any work
+        if not force and self.record.exists():
+            found = self.recorded_inputs()
+            if found is None or canonical_json(found) != canonical_json(self.inputs()):
+                raise FileExistsError(
+                    f"{str(self.record)!r} exists and records another sky (other inputs); use "
+                    "--force (force=True) to replace its files, or another --out"
+                )
+
+        def render(directory: Path) -> list[Path]:
+            staged = dataclasses.replace(self, out_dir=directory)
+            return write_files(staged._announced_files(), overwrite=False)
+
+        return place_outputs(render, self.out_dir, force=force)
+
+    def _announced_files(self) -> dict[Path, bytes]:
+        """:meth:`files`, checked to be the files :meth:`targets` announced."""
+        targets = self.targets()
         files = self.files()
         if sorted(files) != sorted(targets):
             raise RuntimeError(f"{self.kind} sky: computed {sorted(files)}, announced {targets}")
-        return write_files(files, overwrite=overwrite)
+        return files
 
     def check_budget(self, medium: Any) -> None:
         """Refuse, before any work, a sky of a "mars" or "earth" job beyond the budget.
@@ -297,6 +419,7 @@ class SkyJob:
         stem = self.out_dir / atm.name
         data = sky.to_xarray()
         out: dict[Path, bytes] = {}
+        images = self.png
         if self.preview is not None:
             from dustoptics.sky.approximations import preview_sky  # lazy: as above
 
@@ -310,9 +433,13 @@ class SkyJob:
                 allow_large=self.allow_large,
             )
             data = pv.to_xarray()
-            out[stem.with_name(f"{atm.name}_preview.png")] = pv.png(exposure=exposure)
+            if images:
+                out[stem.with_name(f"{atm.name}_preview.png")] = pv.png(exposure=exposure)
+        data.attrs[INPUTS_ATTRIBUTE] = canonical_json(self.inputs())
+        out[stem.with_name(f"{atm.name}_sky.nc")] = bytes(data.to_netcdf(engine="scipy"))
+        if not images:
+            return out
         out |= {
-            stem.with_name(f"{atm.name}_sky.nc"): bytes(data.to_netcdf(engine="scipy")),
             stem.with_name(f"{atm.name}_fisheye.png"): scene.png_bytes(
                 sky.fisheye(size=self.size_px, exposure=exposure)
             ),
@@ -354,7 +481,10 @@ class SkyJob:
             progress=self.progress,
             allow_large=self.allow_large,
         )
+        ds.attrs[INPUTS_ATTRIBUTE] = canonical_json(self.inputs())
         out = {self.out_dir / "mars-comparison.nc": bytes(ds.to_netcdf(engine="scipy"))}
+        if not self.png:
+            return out
         for name, fig in plot_comparison(ds).items():
             buf = io.BytesIO()
             fig.savefig(buf, format="png", dpi=110, metadata={"Software": None})

@@ -49,7 +49,14 @@ def test_build_progress_and_summary(config, tmp_path, capsys):
     assert main(["build", str(config), "--out", str(tmp_path), "--format", "hdf5"]) == 0
     captured = capsys.readouterr()
     assert "small-dust: 3/3 wavelengths" in captured.err
-    assert "wrote 1 files" in captured.out
+    assert f"small-dust: wrote 1 file to {tmp_path / 'small-dust'}" in captured.out
+    # One file up to date, then two formats: singular for one, plural for more.
+    assert main(["build", str(config), "--out", str(tmp_path), "--format", "hdf5"]) == 0
+    assert "small-dust: 1 file up to date in " in capsys.readouterr().out
+    assert main(["build", str(config), "--out", str(tmp_path), "--format", "hdf5,glsl"]) == 0
+    out = capsys.readouterr().out
+    assert "small-dust: wrote 1 file to " in out and "small-dust: 1 file up to date in " in out
+    assert "1 files" not in out
 
 
 def test_two_builds_give_identical_bytes(config, tmp_path):

@@ -105,3 +105,33 @@ def test_info_shows_a_summary_and_everything_with_full(config, tmp_path, capsys)
     full = capsys.readouterr().out
     assert "inputs:" in full.splitlines() and "software:        dustoptics " in full
     assert len(full.splitlines()) > len(lines)
+
+
+def test_info_names_the_expansion_coefficients_and_the_matrix(tmp_path, capsys):
+    import dustoptics as do
+    from dustoptics.io import write_hdf5
+
+    table = do.compute_optics(
+        1.5,
+        do.Monodisperse(radius_um=0.5),
+        [550.0, 650.0],
+        [0.0, 90.0, 180.0],
+        polarization=True,
+        expansion=True,
+    )
+    path = tmp_path / "table.nc"
+    write_hdf5(table, path)
+    order = table.expansion.n_order - 1
+    for extra in ([], ["--full"]):
+        assert main(["info", str(path), *extra]) == 0
+        out = capsys.readouterr().out
+        assert f"expansion:       alpha1-4, beta1-2, orders l = 0 .. {order}, error <= " in out
+        assert "matrix:          F12, F33, F34 beside F11, error <= " in out
+
+
+def test_info_names_no_expansion_when_the_table_has_none(config, tmp_path, capsys):
+    assert run_build(config, tmp_path, "--format", "netcdf") == 0
+    capsys.readouterr()
+    assert main(["info", str(tmp_path / "small-dust" / "small-dust.nc")]) == 0
+    out = capsys.readouterr().out
+    assert "expansion:" not in out and "matrix:" not in out

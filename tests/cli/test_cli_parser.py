@@ -37,7 +37,9 @@ def test_help_lists_every_format_on_a_line_of_its_own(capsys, command):
 
 def test_build_help_marks_the_default_formats(capsys):
     text = _help(capsys, "build")
-    marked = [line.split()[0] for line in text.splitlines() if line.endswith("(default)")]
+    # Each format's entry: its line, and the lines under its text where it wraps.
+    entries = re.findall(r"^  (\S+)  +(.*(?:\n {4,}\S.*)*)", text, re.M)
+    marked = [name for name, entry in entries if entry.endswith("(default)")]
     assert marked == ["csv", "netcdf"]
     assert "(default netcdf,csv)" in text
 
@@ -57,9 +59,28 @@ def test_every_help_ends_with_an_example_that_parses(capsys):
     for argv, _ in commands:
         text = _help(capsys, *argv).rstrip().splitlines()
         start = max(i for i, line in enumerate(text) if line in ("example:", "examples:"))
-        examples = [line.strip() for line in text[start + 1 :]]
+        # A long example wraps with a shell continuation: one command still.
+        block = re.sub(r" \\\n\s+", " ", "\n".join(text[start + 1 :]))
+        examples = [line.strip() for line in block.splitlines()]
         assert examples, argv
         for example in examples:
             words = shlex.split(example.split(" > ")[0])
             assert words[0] == "dustoptics" and tuple(words[1 : 1 + len(argv)]) == argv
             parser.parse_args(words[1:])  # a usage error would exit 2
+
+
+@pytest.mark.parametrize("columns", ["40", "200"])
+def test_help_fits_80_columns_and_keeps_option_names_whole(capsys, monkeypatch, columns):
+    """Whatever the terminal's width, every --help is 80 columns at most, and an option name
+    is never broken at its hyphens (argparse's default breaks --allow-large)."""
+    monkeypatch.setenv("COLUMNS", columns)
+    parser = _parser()
+    for argv, sub in [((), parser), *_commands(parser)]:
+        text = _help(capsys, *argv)
+        lines = text.splitlines()
+        assert max(len(line) for line in lines) <= 80, (argv, max(lines, key=len))
+        words = text.split()
+        for action in sub._actions:
+            for option in action.option_strings:
+                assert option in words or f"[{option}" in text, (argv, option)
+        assert not any(re.search(r"(^|\s)--?[a-z]+(-[a-z0-9]+)*-$", line) for line in lines), argv

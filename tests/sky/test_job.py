@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import pytest
@@ -101,3 +102,28 @@ def test_the_limb_budget_is_checked_before_the_sky(tmp_path: Path, monkeypatch) 
     with pytest.raises(BudgetError, match="limb_radiance would solve"):
         job.write()
     assert not any(tmp_path.iterdir())
+
+
+def test_without_png_the_job_is_the_netcdf_file_only(tmp_path: Path, monkeypatch) -> None:
+    def missing() -> None:
+        raise ImportError("writing PNG images needs matplotlib")
+
+    monkeypatch.setattr(scene, "check_png_support", missing)
+    for kind in ("mars", "earth", "compare"):
+        job = SkyJob(kind, out_dir=tmp_path, png=False)
+        assert [p.suffix for p in job.targets()] == [".nc"] and job.record == job.targets()[0]
+    with pytest.raises(ValueError, match="sunset and space give PNG images only"):
+        SkyJob("earth", out_dir=tmp_path, png=False, sunset=True)
+
+
+def test_place_leaves_the_same_files_and_refuses_other_inputs(tmp_path: Path) -> None:
+    pytest.importorskip("xarray")
+    job = SkyJob("earth", out_dir=tmp_path, sun_elevation_deg=30.0, png=False)
+    assert job.place().written == (job.record,)
+    assert job.recorded_inputs() == json.loads(json.dumps(job.inputs()))
+    placed = job.place()
+    assert placed.written == () and placed.unchanged == (job.record,)
+    other = SkyJob("earth", out_dir=tmp_path, sun_elevation_deg=20.0, png=False)
+    with pytest.raises(FileExistsError, match="records another sky"):
+        other.place()
+    assert other.place(force=True).written == (job.record,)

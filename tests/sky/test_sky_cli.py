@@ -2,18 +2,22 @@
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 from dustoptics.cli import main
+from dustoptics.sky.job import INPUTS_ATTRIBUTE
 
 xr = pytest.importorskip("xarray")
 mpl_image = pytest.importorskip("matplotlib.image")
 
 
-def test_sky_earth_writes_images_and_data(tmp_path: Path) -> None:
+def test_sky_earth_writes_images_and_data(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     out = tmp_path / "sky"
     argv = ["sky", "earth", "--sun-elevation", "30", "--size", "64", "--out", str(out), "--quiet"]
     assert main(argv) == 0
@@ -26,9 +30,16 @@ def test_sky_earth_writes_images_and_data(tmp_path: Path) -> None:
     assert np.all(ds.radiance.values >= 0)
     # Zenith of a clear Earth sky: bluer than the sunlight's white.
     assert float(ds.chromaticity_x[0, 0]) < 0.30
-    # Existing files are not replaced without --force (exit 1), before any work.
-    assert main(argv) == 1
-    assert main([*argv, "--force"]) == 0
+    assert json.loads(ds.attrs[INPUTS_ATTRIBUTE])["sun_elevation_deg"] == 30.0
+    # Again with the same inputs: the same bytes, up to date (exit 0), as build does.
+    before = {p: p.read_bytes() for p in (out / "earth").iterdir()}
+    assert main(argv[:-1]) == 0
+    assert "earth: 3 files up to date in " in capsys.readouterr().out
+    assert {p: p.read_bytes() for p in (out / "earth").iterdir()} == before
+    # Other inputs: not replaced without --force (exit 1), before any work.
+    assert main([*argv, "--albedo", "0.3"]) == 1
+    assert "records another sky" in capsys.readouterr().err
+    assert main([*argv, "--albedo", "0.3", "--force"]) == 0
 
 
 def test_sky_reports_progress_without_quiet(
