@@ -229,7 +229,7 @@ def _constituent_files(
     if table.cross_sections is None or table.cross_sections.number_density_per_m3 is None:
         raise ValueError(
             f"constituent {name!r}: table {table.name!r} has no number_density_per_m3; give the "
-            "peak number density [m^-3] (Table.replace(number_density_per_m3=...)) so that "
+            "peak number density [m^-3] (Table.replace(cross_sections={'number_density_per_m3': ...})) so that "
             "beta = N C can be written in m^-1"
         )
     profile = _check_density(name, density)

@@ -91,7 +91,7 @@ def libradtran_texts(table: Any, *, bottom_km: float = 0.0, top_km: float = 1.0)
         raise ValueError(
             f"format 'libradtran' needs an extinction coefficient [km-1], but table "
             f"{table.name!r} has no number density: give --number-density-per-m3 (command "
-            "line) or table.replace(number_density_per_m3=...)"
+            "line) or table.replace(cross_sections={'number_density_per_m3': ...})"
         )
     n_m3 = check_positive(
         "number_density_per_m3", table.cross_sections.number_density_per_m3, unit="m-3"

@@ -144,7 +144,7 @@ def _needs(table: Any) -> None:
         raise ValueError(
             f"format {fmt!r} needs a number density for its aerosol species profile, but table "
             f"{table.name!r} has none: give --number-density-per-m3 (command line) or "
-            "table.replace(number_density_per_m3=...)"
+            "table.replace(cross_sections={'number_density_per_m3': ...})"
         )
     theta = np.asarray(table.theta_deg, dtype=np.float64)
     if theta.size < 2 or theta[0] != 0.0 or theta[-1] != 180.0:
