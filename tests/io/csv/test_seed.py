@@ -27,7 +27,7 @@ from dustoptics.io.csv.seed import (
     read_seed_csv,
     write_seed_csv,
 )
-from dustoptics.table import Table
+from dustoptics.table import Table, grouped_fields
 
 PER_WAVELENGTH = ("g", "cext_um2", "csca_um2", "error_estimate", "cross_section_error_estimate")
 
@@ -54,7 +54,15 @@ def _regridded(table: Table, wavelengths_nm: np.ndarray) -> Table:
         name: table.quantity(name)[idx]
         for name in (*PER_WAVELENGTH, "n_nodes", "cross_section_n_nodes", "refractive_index")
     }
-    return table.replace(wavelength_nm=wavelengths_nm, phase=table.phase[idx], **changes)
+    changes.update(
+        {
+            key: table.quantity(key)
+            for key in ("mean_geometric_cross_section_um2", "number_density_per_m3")
+        }
+    )
+    return table.replace(
+        wavelength_nm=wavelengths_nm, phase=table.phase[idx], **grouped_fields(changes)
+    )
 
 
 def _files(directory) -> list[str]:

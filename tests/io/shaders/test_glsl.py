@@ -35,7 +35,7 @@ from dustoptics.io.shaders.glsl import (
     write_glsl,
 )
 from dustoptics.scattering.phase import henyey_greenstein
-from dustoptics.table import Provenance, Table
+from dustoptics.table import CrossSections, Provenance, Table
 
 EPS32 = float(np.finfo(np.float32).eps)  # 2^-23: float32 spacing at 1
 
@@ -70,10 +70,9 @@ def hg_table(
     phase = np.array([henyey_greenstein(mu, g=x) for x in g])
     extra = {}
     if cross_sections:
-        extra = {
-            "cext_um2": np.linspace(2.0, 1.0, len(g)),
-            "csca_um2": np.linspace(1.8, 0.95, len(g)),
-        }
+        extra["cross_sections"] = CrossSections(
+            cext_um2=np.linspace(2.0, 1.0, len(g)), csca_um2=np.linspace(1.8, 0.95, len(g))
+        )
     return Table(
         name="hg",
         wavelength_nm=np.array(wavelength_nm),
