@@ -39,7 +39,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.integrate import quad
 
 from dustoptics._files import FormatError, read_checked
-from dustoptics._validation import as_float_array, check_positive, check_real
+from dustoptics._validation import as_float_array, check_real
 from dustoptics.particles.sizedist import (
     COSMOSCOUT_VR,
     SIZE_DISTRIBUTIONS,
@@ -47,6 +47,7 @@ from dustoptics.particles.sizedist import (
     SizeDistribution,
     SizeParameter,
     _as_radius,
+    _check_radius_range,
     _numeric_bounds,
     _scalar_or_array,
 )
@@ -453,12 +454,7 @@ class DensityDistribution(SizeDistribution):
     def __post_init__(self) -> None:
         if not callable(self.density):
             raise ValueError(f"density must be a callable radius_um -> n(r); got {self.density!r}")
-        lo = check_positive("r_min_um", self.r_min_um, unit="um")
-        hi = check_positive("r_max_um", self.r_max_um, unit="um")
-        if not (hi > lo and math.isfinite(hi)):
-            raise ValueError(
-                f"r_max_um must be finite and > r_min_um = {lo!r} um; got {self.r_max_um!r}"
-            )
+        lo, hi = _check_radius_range(self.r_min_um, self.r_max_um)
         object.__setattr__(self, "r_min_um", lo)
         object.__setattr__(self, "r_max_um", hi)
         probe = np.geomspace(lo, hi, 257)
