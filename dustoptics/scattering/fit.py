@@ -69,6 +69,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from functools import cache
 from typing import Any
 
 import numpy as np
@@ -256,19 +257,14 @@ def resolve_model(model: str) -> str:
     return name
 
 
+@cache
 def _bounds(model: AnalyticModel) -> tuple[FloatArray, FloatArray]:
-    """The lower and upper bounds of the model's parameters, shape (k,) each."""
-    low_high = _BOUNDS.get(model.name)
-    if low_high is None:
-        low = np.array([low for low, _ in model.bounds])
-        high = np.array([high for _, high in model.bounds])
-        low.setflags(write=False)
-        high.setflags(write=False)
-        low_high = _BOUNDS[model.name] = (low, high)
-    return low_high
-
-
-_BOUNDS: dict[str, tuple[FloatArray, FloatArray]] = {}
+    """The lower and upper bounds of the model's parameters, shape (k,) each (read-only)."""
+    low = np.array([low for low, _ in model.bounds])
+    high = np.array([high for _, high in model.bounds])
+    low.setflags(write=False)
+    high.setflags(write=False)
+    return low, high
 
 
 def _to_u(model: AnalyticModel, p: FloatArray) -> FloatArray:

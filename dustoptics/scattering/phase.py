@@ -180,11 +180,6 @@ BUCHOLTZ_1995: Final = (
     'A. Bucholtz, "Rayleigh-scattering calculations for the terrestrial atmosphere," '
     "Appl. Opt., vol. 34, no. 15, pp. 2765-2773, 1995, doi:10.1364/AO.34.002765"
 )
-CHANCE_SPURR_1997: Final = (
-    'K. V. Chance and R. J. D. Spurr, "Ring effect studies: Rayleigh scattering, including '
-    'molecular parameters for rotational Raman scattering, and the Fraunhofer spectrum," '
-    "Appl. Opt., vol. 36, no. 21, pp. 5224-5230, 1997, doi:10.1364/AO.36.005224"
-)
 PENNDORF_1957: Final = (
     'R. Penndorf, "Tables of the refractive index for standard air and the Rayleigh '
     "scattering coefficient for the spectral region between 0.2 and 20.0 um and their "
@@ -1632,9 +1627,7 @@ def costa2021_mars_dhg(wavelength_nm: ArrayLike, *, outside: str = "quadratic") 
        atmosphere," M.Sc. thesis, Hochschule Hannover, 2022, section 4.
     """
     check_choice("outside", outside, _COSTA_OUTSIDE)
-    wl = np.atleast_1d(as_float_array("wavelength_nm", wavelength_nm))
-    if wl.ndim != 1:
-        raise ValueError(f"wavelength_nm must be a scalar or 1-dimensional; got shape {wl.shape}")
+    wl = _readonly("wavelength_nm", wavelength_nm)
     if not np.all(wl > 0):
         raise ValueError(f"wavelength_nm must be > 0 [nm]; got {_show(wavelength_nm)}")
     low, high = COSTA2021_WAVELENGTH_RANGE_NM
