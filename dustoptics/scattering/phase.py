@@ -72,29 +72,9 @@ Phase functions sampled on a grid of angles, and what is done to them
 
 References
 ----------
-.. [1] L. G. Henyey and J. L. Greenstein, "Diffuse radiation in the Galaxy,"
-   Astrophys. J., vol. 93, pp. 70-83, 1941, doi:10.1086/144246.
-.. [2] S. Chandrasekhar, Radiative Transfer. Oxford: Clarendon Press, 1950.
-.. [3] A. Bucholtz, "Rayleigh-scattering calculations for the terrestrial
-   atmosphere," Appl. Opt., vol. 34, no. 15, pp. 2765-2773, 1995,
-   doi:10.1364/AO.34.002765.
-.. [4] W. M. Cornette and J. G. Shanks, "Physically reasonable analytic
-   expression for the single-scattering phase function," Appl. Opt., vol. 31,
-   no. 16, pp. 3152-3160, 1992, doi:10.1364/AO.31.003152.
-.. [5] B. T. Draine, "Scattering by interstellar dust grains. I. Optical and
-   ultraviolet," Astrophys. J., vol. 598, pp. 1017-1025, 2003,
-   doi:10.1086/379118.
-.. [6] J. Jendersie and E. d'Eon, "An approximate Mie scattering function for
-   fog and cloud rendering," in ACM SIGGRAPH 2023 Talks, 2023,
-   doi:10.1145/3587421.3595409.
-.. [7] J. Costa, A. Bock, C. Emmart, C. Hansen, A. Ynnerman and C. Silva,
-   "Interactive visualization of atmospheric effects for celestial bodies,"
-   IEEE Trans. Vis. Comput. Graph., vol. 27, no. 2, pp. 785-795, 2021,
-   doi:10.1109/TVCG.2020.3030333.
-.. [8] T. Meyran, "Physically based real-time rendering of the Martian
-   atmosphere," M.Sc. thesis, Hochschule Hannover, 2022.
-.. [9] D. Kobe, "Ozone absorption in single atmospheric scattering,"
-   graduation work, Digital Arts and Entertainment, Howest, 2026.
+Each model's docstring cites its source; the same citations, as the models'
+records carry them, are the constants ``HENYEY_GREENSTEIN_1941``, ...,
+``COLLIENNE_2013`` below.
 """
 
 from __future__ import annotations
