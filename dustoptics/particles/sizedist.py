@@ -50,11 +50,6 @@ Distributions the user puts together (a mixture of modes, a measured table, a
 density function) and :func:`~dustoptics.particles.custom_sizedist.from_dict`
 are in :mod:`dustoptics.particles.custom_sizedist`.
 
-This module is one concept although it is long: a size distribution given by a
-formula with a few parameters, whose moments, tail fractions and tail bounds are
-closed forms, and the interface every distribution shares.  Most of its lines are
-the families' docstrings and closed forms, each family a short class.
-
 The effective radius and variance are (Hansen & Travis 1974)::
 
     r_eff = <r^3> / <r^2>

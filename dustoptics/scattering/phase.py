@@ -3,8 +3,7 @@
 One concept, the analytic phase function, in one module: each model with
 its closed-form asymmetry parameter, the registry that names them, and the
 published parameter sets (Costa et al. 2021, Collienne et al. 2013) that are
-evaluated with them.  Most of its length is the models' docstrings and
-citations.
+evaluated with them.
 
 Conventions
 -----------
