@@ -41,15 +41,10 @@ Top level (before any ``[section]``)::
 :data:`dustoptics.particles.sizedist.SIZE_DISTRIBUTIONS` (or one of its aliases,
 recorded under the family's name) with its constructor's parameters as keys, each
 checked against the range its class declares (:attr:`SizeDistribution.parameters
-<dustoptics.particles.sizedist.SizeDistribution.parameters>`) and then by the class:
-``"modified_gamma"`` (``r_eff_um`` > 0, ``v_eff`` in (0, 0.5)),
-``"modified_log_normal"`` (``r_eff_um`` > 0, ``v_eff`` > 0), ``"gamma"``
-(``shape`` > 0, ``scale_um`` > 0), ``"log_normal"`` (``median_radius_um`` > 0,
-``sigma`` > 0), ``"monodisperse"`` (``radius_um`` > 0), ``"deirmendjian_gamma"``
-(``alpha`` > -1, ``b`` > 0, ``gamma`` > 0), ``"power_law"`` (``exponent``,
-``r_min_um``, ``r_max_um``), ``"tabulated"`` (``radius_um`` and ``dn_dr`` or
-``dn_dlnr``, arrays), ``"truncated"`` (``r_min_um``, ``r_max_um`` and ``parent``,
-an inline table describing another distribution), or ``"multimodal"`` with one
+<dustoptics.particles.sizedist.SizeDistribution.parameters>`) and then by the class
+(``"modified_gamma"``: ``r_eff_um`` > 0, ``v_eff`` in (0, 0.5); ``"tabulated"``:
+arrays; ``"truncated"``: ``parent``, an inline table describing another
+distribution), or ``"multimodal"`` with one
 ``[[size_distribution.modes]]`` table per mode, each a model above plus
 ``relative_number_density`` > 0
 (:class:`dustoptics.particles.custom_sizedist.MultiModal`).  Only

@@ -29,7 +29,7 @@ from __future__ import annotations
 
 import csv
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, ClassVar
@@ -39,7 +39,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.integrate import quad
 
 from dustoptics._files import FormatError, read_checked
-from dustoptics._validation import as_float_array, check_positive, check_real
+from dustoptics._validation import as_float_array, check_real
 from dustoptics.particles.sizedist import (
     COSMOSCOUT_VR,
     SIZE_DISTRIBUTIONS,
@@ -47,6 +47,7 @@ from dustoptics.particles.sizedist import (
     SizeDistribution,
     SizeParameter,
     _as_radius,
+    _check_radius_range,
     _numeric_bounds,
     _scalar_or_array,
 )
@@ -236,6 +237,16 @@ def _power_integrals(
     return np.asarray((b ** (p + 1.0) - a ** (p + 1.0)) / (p + 1.0))
 
 
+def _tail_point_by_point(
+    below: Callable[[float], float], radius_um: NDArray[np.float64], upper: bool
+) -> NDArray[np.float64]:
+    """Tail fractions from ``below(r)``, a moment's fraction below one radius (NaN stays NaN)."""
+    flat = np.atleast_1d(radius_um).astype(np.float64).ravel()
+    fraction = np.array([np.nan if np.isnan(v) else below(float(v)) for v in flat])
+    fraction = np.clip(fraction, 0.0, 1.0).reshape(np.shape(radius_um))
+    return np.asarray(1.0 - fraction if upper else fraction, dtype=np.float64)
+
+
 @dataclass(frozen=True, slots=True, kw_only=True, eq=False)
 class TabulatedDistribution(SizeDistribution):
     """A measured distribution: n(r) linear between tabulated radii, 0 outside.
@@ -391,12 +402,7 @@ class TabulatedDistribution(SizeDistribution):
 
     def _tail(self, k: float, radius_um: NDArray[np.float64], upper: bool) -> NDArray[np.float64]:
         full = self._raw_moment(k, float(self.radius_um[-1]))
-        flat = np.atleast_1d(radius_um).astype(np.float64)
-        below = np.array(
-            [np.nan if np.isnan(v) else self._raw_moment(k, float(v)) / full for v in flat.ravel()]
-        )
-        below = np.clip(below, 0.0, 1.0).reshape(np.shape(radius_um))
-        return np.asarray(1.0 - below if upper else below, dtype=np.float64)
+        return _tail_point_by_point(lambda v: self._raw_moment(k, v) / full, radius_um, upper)
 
     def _bounds(
         self, tail_fraction: float, lower_moment: float, upper_moment: float
@@ -453,12 +459,7 @@ class DensityDistribution(SizeDistribution):
     def __post_init__(self) -> None:
         if not callable(self.density):
             raise ValueError(f"density must be a callable radius_um -> n(r); got {self.density!r}")
-        lo = check_positive("r_min_um", self.r_min_um, unit="um")
-        hi = check_positive("r_max_um", self.r_max_um, unit="um")
-        if not (hi > lo and math.isfinite(hi)):
-            raise ValueError(
-                f"r_max_um must be finite and > r_min_um = {lo!r} um; got {self.r_max_um!r}"
-            )
+        lo, hi = _check_radius_range(self.r_min_um, self.r_max_um)
         object.__setattr__(self, "r_min_um", lo)
         object.__setattr__(self, "r_max_um", hi)
         probe = np.geomspace(lo, hi, 257)
@@ -510,19 +511,11 @@ class DensityDistribution(SizeDistribution):
         return self._integral(k, self.r_min_um, self.r_max_um)
 
     def _tail(self, k: float, radius_um: NDArray[np.float64], upper: bool) -> NDArray[np.float64]:
-        full = self._integral(k, self.r_min_um, self.r_max_um)
-        flat = np.atleast_1d(radius_um).astype(np.float64).ravel()
-        below = np.array(
-            [
-                np.nan
-                if np.isnan(v)
-                else self._integral(k, self.r_min_um, min(max(v, self.r_min_um), self.r_max_um))
-                / full
-                for v in flat
-            ]
+        lo, hi = self.r_min_um, self.r_max_um
+        full = self._integral(k, lo, hi)
+        return _tail_point_by_point(
+            lambda v: self._integral(k, lo, min(max(v, lo), hi)) / full, radius_um, upper
         )
-        below = np.clip(below, 0.0, 1.0).reshape(np.shape(radius_um))
-        return np.asarray(1.0 - below if upper else below, dtype=np.float64)
 
     def _bounds(
         self, tail_fraction: float, lower_moment: float, upper_moment: float

@@ -50,11 +50,6 @@ Distributions the user puts together (a mixture of modes, a measured table, a
 density function) and :func:`~dustoptics.particles.custom_sizedist.from_dict`
 are in :mod:`dustoptics.particles.custom_sizedist`.
 
-This module is one concept although it is long: a size distribution given by a
-formula with a few parameters, whose moments, tail fractions and tail bounds are
-closed forms, and the interface every distribution shares.  Most of its lines are
-the families' docstrings and closed forms, each family a short class.
-
 The effective radius and variance are (Hansen & Travis 1974)::
 
     r_eff = <r^3> / <r^2>
@@ -207,6 +202,15 @@ def _check_v_eff(value: Any, high: float) -> float:
             f"got {value!r}"
         )
     return out
+
+
+def _check_radius_range(r_min_um: Any, r_max_um: Any) -> tuple[float, float]:
+    """``(r_min_um, r_max_um)`` of a finite support, ``0 < r_min_um < r_max_um < inf`` [um]."""
+    lo = check_positive("r_min_um", r_min_um, unit="um")
+    hi = check_positive("r_max_um", r_max_um, unit="um")
+    if not (hi > lo and math.isfinite(hi)):
+        raise ValueError(f"r_max_um must be finite and > r_min_um = {lo!r} um; got {r_max_um!r}")
+    return lo, hi
 
 
 def _check_tail_fraction(tail_fraction: Any) -> float:
@@ -389,9 +393,9 @@ class SizeDistribution(ABC):
     ) -> tuple[float, float]:
         """Unvalidated implementation of :meth:`radius_bounds_um`."""
 
-    @abstractmethod
     def _parameters(self) -> dict[str, Any]:
-        """Model parameters, keyed by name with the unit in the name."""
+        """Model parameters, keyed by name with the unit in the name (:attr:`parameters`)."""
+        return {p.name: getattr(self, p.name) for p in self.parameters}
 
     def moment_tail_fraction(self, k: float, radius_um: ArrayLike, *, upper: bool) -> FloatOrArray:
         """Fraction of the k-th moment integral above or below a radius.
@@ -736,9 +740,6 @@ class ModifiedGamma(_GammaFamily):
     def _shape_scale(self) -> tuple[float, float]:
         return self.shape, self.scale_um
 
-    def _parameters(self) -> dict[str, Any]:
-        return {"r_eff_um": self.r_eff_um, "v_eff": self.v_eff}
-
 
 @dataclass(frozen=True, slots=True, kw_only=True)
 class Gamma(_GammaFamily):
@@ -789,9 +790,6 @@ class Gamma(_GammaFamily):
 
     def _shape_scale(self) -> tuple[float, float]:
         return self.shape, self.scale_um
-
-    def _parameters(self) -> dict[str, Any]:
-        return {"shape": self.shape, "scale_um": self.scale_um}
 
 
 # ------------------------------------------------------------------ log-normal
@@ -921,9 +919,6 @@ class LogNormal(_LogNormalFamily):
     def _mu_sigma(self) -> tuple[float, float]:
         return math.log(self.median_radius_um), self.sigma
 
-    def _parameters(self) -> dict[str, Any]:
-        return {"median_radius_um": self.median_radius_um, "sigma": self.sigma}
-
 
 @dataclass(frozen=True, slots=True, kw_only=True)
 class ModifiedLogNormal(_LogNormalFamily):
@@ -1004,9 +999,6 @@ class ModifiedLogNormal(_LogNormalFamily):
     def _mu_sigma(self) -> tuple[float, float]:
         s2 = math.log1p(self.v_eff)
         return math.log(self.r_eff_um) - 2.5 * s2, math.sqrt(s2)
-
-    def _parameters(self) -> dict[str, Any]:
-        return {"r_eff_um": self.r_eff_um, "v_eff": self.v_eff}
 
 
 # --------------------------------------------------------------- monodisperse
@@ -1090,9 +1082,6 @@ class Monodisperse(SizeDistribution):
     def v_eff(self) -> float:
         """Effective variance, 0. [1]"""
         return 0.0
-
-    def _parameters(self) -> dict[str, Any]:
-        return {"radius_um": self.radius_um}
 
 
 # ----------------------------------------- more families from the literature
@@ -1252,9 +1241,6 @@ class DeirmendjianGamma(SizeDistribution):
             (t_hi / self.b) ** (1.0 / self.gamma)
         )
 
-    def _parameters(self) -> dict[str, Any]:
-        return {"alpha": self.alpha, "b": self.b, "gamma": self.gamma}
-
 
 @dataclass(frozen=True, slots=True, kw_only=True)
 class PowerLaw(SizeDistribution):
@@ -1294,12 +1280,7 @@ class PowerLaw(SizeDistribution):
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "exponent", check_real("exponent", self.exponent))
-        lo = check_positive("r_min_um", self.r_min_um, unit="um")
-        hi = check_positive("r_max_um", self.r_max_um, unit="um")
-        if not (hi > lo and math.isfinite(hi)):
-            raise ValueError(
-                f"r_max_um must be finite and > r_min_um = {lo!r} um; got {self.r_max_um!r}"
-            )
+        lo, hi = _check_radius_range(self.r_min_um, self.r_max_um)
         object.__setattr__(self, "r_min_um", lo)
         object.__setattr__(self, "r_max_um", hi)
 
@@ -1336,9 +1317,6 @@ class PowerLaw(SizeDistribution):
         return _numeric_bounds(
             self, tail_fraction, lower_moment, upper_moment, (self.r_min_um, self.r_max_um)
         )
-
-    def _parameters(self) -> dict[str, Any]:
-        return {"exponent": self.exponent, "r_min_um": self.r_min_um, "r_max_um": self.r_max_um}
 
 
 # ----------------------------------------------------------------- truncation

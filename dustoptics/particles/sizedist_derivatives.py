@@ -22,12 +22,10 @@ derivative inside the support) and :func:`boundary_terms` the point masses, as
 (radius, coefficient) pairs; both together integrate to 0 (the density stays
 normalized), which the tests check with ``scipy.integrate.quad``.
 
-Parameter names are the classes' field names (``"r_eff_um"``, ``"v_eff"``,
-``"median_radius_um"``, ``"sigma"``, ``"shape"``, ``"scale_um"``, ``"alpha"``,
-``"b"``, ``"gamma"``, ``"exponent"``, ``"r_min_um"``, ``"r_max_um"``); a
-mixture's are ``"modes[i].<name>"`` and ``"relative_number_densities[i]"``, a
-truncation's parent's ``"parent.<name>"``, nested as deep as the distribution
-is (``"modes[1].parent.v_eff"``).  :func:`parameter_names` lists them,
+Parameter names are the classes' numeric ``parameters`` (``"r_eff_um"``,
+``"v_eff"``, ...); a mixture's are ``"modes[i].<name>"`` and
+``"relative_number_densities[i]"``, a truncation's parent's ``"parent.<name>"``,
+nested as deep as the distribution is (``"modes[1].parent.v_eff"``).  :func:`parameter_names` lists them,
 :func:`parameter_value` reads one and :func:`with_parameter` makes the
 distribution with one of them changed (for finite differences).
 

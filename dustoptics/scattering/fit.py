@@ -11,13 +11,10 @@ Models (:data:`FIT_MODELS`)
 ---------------------------
 Every model of :data:`dustoptics.scattering.phase.ANALYTIC_MODELS` whose
 record carries the ranges a fit searches, starting values and analytic
-derivatives (:attr:`~dustoptics.scattering.phase.AnalyticModel.fittable`):
-``henyey_greenstein``, ``dhg_costa2021`` (reported with g1 >= g2, the forward
-lobe first), ``dhg_kobe2026`` (g1 >= 0 >= g2), ``cornette_shanks1992``,
-``hg_draine_jendersie_deon2023`` and ``two_term_hg_hapke2012``.  Their
-formulas, ranges and citations are in the records; the hyphenated spellings
-(``dhg-costa2021``) and short names (``hg``, ``dhg``, ``dhg-kobe``, ``cs``,
-``hg-draine``, ``tthg``) are aliases (:data:`FIT_MODEL_ALIASES`).
+derivatives (:attr:`~dustoptics.scattering.phase.AnalyticModel.fittable`).
+Their formulas, ranges, lobe order (``dhg_costa2021`` forward lobe first) and
+citations are in the records; the hyphenated spellings (``dhg-costa2021``) and
+short names (``hg``, ``cs``, ...) are aliases (:data:`FIT_MODEL_ALIASES`).
 
 Loss
 ----
@@ -69,6 +66,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from functools import cache
 from typing import Any
 
 import numpy as np
@@ -256,19 +254,14 @@ def resolve_model(model: str) -> str:
     return name
 
 
+@cache
 def _bounds(model: AnalyticModel) -> tuple[FloatArray, FloatArray]:
-    """The lower and upper bounds of the model's parameters, shape (k,) each."""
-    low_high = _BOUNDS.get(model.name)
-    if low_high is None:
-        low = np.array([low for low, _ in model.bounds])
-        high = np.array([high for _, high in model.bounds])
-        low.setflags(write=False)
-        high.setflags(write=False)
-        low_high = _BOUNDS[model.name] = (low, high)
-    return low_high
-
-
-_BOUNDS: dict[str, tuple[FloatArray, FloatArray]] = {}
+    """The lower and upper bounds of the model's parameters, shape (k,) each (read-only)."""
+    low = np.array([low for low, _ in model.bounds])
+    high = np.array([high for _, high in model.bounds])
+    low.setflags(write=False)
+    high.setflags(write=False)
+    return low, high
 
 
 def _to_u(model: AnalyticModel, p: FloatArray) -> FloatArray:
