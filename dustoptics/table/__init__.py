@@ -41,12 +41,6 @@ file can never hold an albedo that disagrees with its cross-sections.
 from __future__ import annotations
 
 from dustoptics.table.components import (
-    RECORD_OF as RECORD_OF,
-)
-from dustoptics.table.components import (
-    RECORDS as RECORDS,
-)
-from dustoptics.table.components import (
     CrossSections,
     Expansion,
     QuadratureRecord,
@@ -54,9 +48,6 @@ from dustoptics.table.components import (
     alpha1_from_pmom,
     grouped_fields,
     pmom_from_alpha1,
-)
-from dustoptics.table.components import (
-    records_from_fields as records_from_fields,
 )
 from dustoptics.table.core import Table
 from dustoptics.table.derivatives import TableDerivatives
@@ -69,9 +60,6 @@ from dustoptics.table.provenance import (
 )
 from dustoptics.table.provenance import (
     _installed_version as _installed_version,
-)
-from dustoptics.table.registry import (
-    TableWriter as TableWriter,
 )
 from dustoptics.table.registry import (
     register_table_fitter,
@@ -91,9 +79,6 @@ from dustoptics.table.schema import (
     ANGLE_DIM as ANGLE_DIM,
 )
 from dustoptics.table.schema import (
-    COUNT_FIELDS as COUNT_FIELDS,
-)
-from dustoptics.table.schema import (
     DERIVATIVE_FIELDS as DERIVATIVE_FIELDS,
 )
 from dustoptics.table.schema import (
@@ -101,9 +86,6 @@ from dustoptics.table.schema import (
 )
 from dustoptics.table.schema import (
     EXPANSION_FIELDS as EXPANSION_FIELDS,
-)
-from dustoptics.table.schema import (
-    FLOAT_FIELDS as FLOAT_FIELDS,
 )
 from dustoptics.table.schema import (
     MATRIX_FIELDS as MATRIX_FIELDS,
@@ -119,9 +101,6 @@ from dustoptics.table.schema import (
 )
 from dustoptics.table.schema import (
     WAVELENGTH_DIM as WAVELENGTH_DIM,
-)
-from dustoptics.table.schema import (
-    derivative_unit as derivative_unit,
 )
 from dustoptics.table.schema import (
     derivative_variable as derivative_variable,

@@ -422,40 +422,6 @@ RECORD_OF: dict[str, str] = {
 }
 
 
-def records_from_fields(values: dict[str, Any]) -> dict[str, Any]:
-    """Group stored quantities by name into records, for readers of flat files.
-
-    Pops every quantity of :data:`RECORD_OF` from ``values`` and returns
-    table attribute -> record (or None when none of its quantities is there).
-
-    Raises
-    ------
-    ValueError
-        Some of a record's quantities are there but one it needs is not.
-
-    Examples
-    --------
-    >>> flat = {"cext_um2": [2.0], "csca_um2": [1.0], "g": [0.5]}
-    >>> sorted(k for k, v in records_from_fields(flat).items() if v is not None), flat
-    (['cross_sections'], {'g': [0.5]})
-    """
-    out: dict[str, Any] = {}
-    for attribute, cls in RECORDS.items():
-        own = {f.name: values.pop(f.name) for f in fields(cls) if f.name in values}  # type: ignore[arg-type]
-        required = [f.name for f in fields(cls) if f.default is MISSING]  # type: ignore[arg-type]
-        if not own:
-            out[attribute] = None
-            continue
-        missing = [key for key in required if key not in own]
-        if missing:
-            raise ValueError(
-                f"{', '.join(required)} must all be given or all be None (the {cls.__name__} of "
-                f"a table); got {', '.join(own)} without {', '.join(missing)}"
-            )
-        out[attribute] = cls(**own)
-    return out
-
-
 def grouped_fields(values: Mapping[str, Any] | None = None, /, **more: Any) -> dict[str, Any]:
     """:class:`~dustoptics.table.Table` arguments from flat ones, for code that has them flat.
 
@@ -474,10 +440,19 @@ def grouped_fields(values: Mapping[str, Any] | None = None, /, **more: Any) -> d
     ['cross_sections', 'g']
     """
     flat = {**(values or {}), **more}
-    rest = {key: value for key, value in flat.items() if key not in RECORD_OF}
-    quantities = {k: v for k, v in flat.items() if k in RECORD_OF and v is not None}
-    records = {k: v for k, v in records_from_fields(quantities).items() if v is not None}
-    both = sorted(records.keys() & rest.keys())
-    if both:
-        raise ValueError(f"{', '.join(both)} given both whole and by their quantities")
-    return {**rest, **records}
+    out = {key: value for key, value in flat.items() if key not in RECORD_OF}
+    for attribute, cls in RECORDS.items():
+        own = {f.name: flat[f.name] for f in fields(cls) if flat.get(f.name) is not None}  # type: ignore[arg-type]
+        if not own:
+            continue
+        required = [f.name for f in fields(cls) if f.default is MISSING]  # type: ignore[arg-type]
+        missing = [key for key in required if key not in own]
+        if missing:
+            raise ValueError(
+                f"{', '.join(required)} must all be given or all be None (the {cls.__name__} of "
+                f"a table); got {', '.join(own)} without {', '.join(missing)}"
+            )
+        if attribute in out:
+            raise ValueError(f"{attribute} given both whole and by their quantities")
+        out[attribute] = cls(**own)
+    return out

@@ -6,11 +6,7 @@ in records (:mod:`dustoptics.table.components`), each present whole or not at
 all: ``table.cross_sections``, ``table.quadrature``, ``table.matrix``,
 ``table.expansion``, ``table.derivatives`` and the in-memory
 ``table.diagnostics``.  Presence is ``table.expansion is not None``.
-
-Everything else is derived, never stored twice: ``cabs_um2 = cext - csca``,
-``ssa = csca / cext``, ``qext = cext / (pi <r^2>)``, and
-``beta_ext_per_m = N cext`` (and likewise for scattering and absorption), so a
-file can never hold an albedo that disagrees with its cross-sections.
+The rest is derived, never stored twice (:mod:`dustoptics.table`).
 """
 
 from __future__ import annotations
@@ -31,8 +27,9 @@ from dustoptics.table.components import (
     Expansion,
     QuadratureRecord,
     ScatteringMatrix,
+    _frozen,
+    grouped_fields,
     pmom_from_alpha1,
-    records_from_fields,
 )
 from dustoptics.table.derivatives import TableDerivatives
 from dustoptics.table.provenance import (
@@ -65,14 +62,6 @@ __all__ = ["Table"]
 
 #: Quantities the core holds itself (the records hold the other stored ones).
 _CORE = ("wavelength_nm", "theta_deg", "phase", "g", "refractive_index")
-
-
-def _frozen(arr: np.ndarray | None) -> np.ndarray | None:
-    if arr is None:
-        return None
-    out = np.array(arr, copy=True)
-    out.setflags(write=False)
-    return out
 
 
 def _wavelengths(value: Any) -> np.ndarray:
@@ -159,14 +148,13 @@ def _check_provenance(provenance: Any) -> None:
 
 def _new_record(attribute: str, fields: Mapping[str, Any]) -> Any:
     """The record ``attribute`` made from ``fields`` (for :meth:`Table.replace`)."""
-    values = dict(fields)
-    record = records_from_fields(values)[attribute]
-    if values or record is None:
+    made = grouped_fields(fields)
+    if list(made) != [attribute] or attribute in fields:
         raise ValueError(
             f"{attribute} must be a {RECORDS[attribute].__name__} or a mapping of its fields; "
             f"got {dict(fields)!r}"
         )
-    return record
+    return made[attribute]
 
 
 def _cross_sections_changed(old: CrossSections | None, new: CrossSections | None) -> bool:
@@ -272,7 +260,7 @@ class Table:
             record.check_grid(n_wavelength=wl.size, n_theta=theta.size)
         _check_provenance(self.provenance)
         for key, arr in core.items():
-            object.__setattr__(self, key, _frozen(arr))
+            object.__setattr__(self, key, None if arr is None else _frozen(arr))
         if self.derivatives is not None:
             self._check_derivatives(self.derivatives)
 
