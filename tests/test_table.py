@@ -508,7 +508,7 @@ def test_pmom_is_alpha1_over_2l_plus_1() -> None:
         theta_deg=[0.0, 180.0],
         phase=[[0.1, 0.05]],
         g=[0.8],
-        expansion=Expansion(**{key: [[1.0, 1.5, 2.5]] for key in do.table.EXPANSION_FIELDS}),
+        expansion=Expansion(**{key: [[1.0, 1.5, 2.5]] for key in do.table.schema.EXPANSION_FIELDS}),
     )
     np.testing.assert_array_equal(t.pmom, [[1.0, 0.5, 0.5]])
     np.testing.assert_array_equal(do.table.alpha1_from_pmom(t.pmom), t.expansion.alpha1)

@@ -60,6 +60,16 @@ if TYPE_CHECKING:
 
 __all__ = ["Table"]
 
+#: CrossSections scaling method -> what a table lacks when it gives None.
+_LACKS = {
+    "efficiency": "has no mean geometric cross-section; {what} is undefined",
+    "volume_coefficient": "has no number density; give number_density_per_m3 for {what}",
+    "mass_coefficient": (
+        "has no particle density or mean volume; {what} needs "
+        "compute_optics(particle_density_kg_m3=...)"
+    ),
+}
+
 #: Quantities the core holds itself (the records hold the other stored ones).
 _CORE = ("wavelength_nm", "theta_deg", "phase", "g", "refractive_index")
 
@@ -557,29 +567,12 @@ class Table:
             )
         return self.cross_sections
 
-    def _efficiency(self, what: str, cross_section_um2: np.ndarray) -> np.ndarray:
-        value = self._need_cross_sections(what).efficiency(cross_section_um2)
+    def _scaled(self, what: str, scaling: str, process: str) -> np.ndarray:
+        """Cross-section ``c{process}_um2`` scaled by the :class:`CrossSections` method ``scaling``."""
+        cs = self._need_cross_sections(what)
+        value = getattr(cs, scaling)(getattr(cs, f"c{process}_um2"))
         if value is None:
-            raise ValueError(
-                f"table {self.name!r} has no mean geometric cross-section; {what} is undefined"
-            )
-        return value
-
-    def _volume(self, what: str, cross_section_um2: np.ndarray) -> np.ndarray:
-        value = self._need_cross_sections(what).volume_coefficient(cross_section_um2)
-        if value is None:
-            raise ValueError(
-                f"table {self.name!r} has no number density; give number_density_per_m3 for {what}"
-            )
-        return value
-
-    def _mass(self, what: str, cross_section_um2: np.ndarray) -> np.ndarray:
-        value = self._need_cross_sections(what).mass_coefficient(cross_section_um2)
-        if value is None:
-            raise ValueError(
-                f"table {self.name!r} has no particle density or mean volume; {what} needs "
-                "compute_optics(particle_density_kg_m3=...)"
-            )
+            raise ValueError(f"table {self.name!r} " + _LACKS[scaling].format(what=what))
         return value
 
     @property
@@ -595,32 +588,32 @@ class Table:
     @property
     def qext(self) -> np.ndarray:
         """Extinction efficiency cext / (pi <r^2>). [-]"""
-        return self._efficiency("qext", self._need_cross_sections("qext").cext_um2)
+        return self._scaled("qext", "efficiency", "ext")
 
     @property
     def qsca(self) -> np.ndarray:
         """Scattering efficiency csca / (pi <r^2>). [-]"""
-        return self._efficiency("qsca", self._need_cross_sections("qsca").csca_um2)
+        return self._scaled("qsca", "efficiency", "sca")
 
     @property
     def qabs(self) -> np.ndarray:
         """Absorption efficiency cabs / (pi <r^2>). [-]"""
-        return self._efficiency("qabs", self.cabs_um2)
+        return self._scaled("qabs", "efficiency", "abs")
 
     @property
     def beta_ext_per_m(self) -> np.ndarray:
         """Extinction coefficient N cext at the number density. [m^-1]"""
-        return self._volume("beta_ext_per_m", self._need_cross_sections("beta_ext_per_m").cext_um2)
+        return self._scaled("beta_ext_per_m", "volume_coefficient", "ext")
 
     @property
     def beta_sca_per_m(self) -> np.ndarray:
         """Scattering coefficient N csca at the number density. [m^-1]"""
-        return self._volume("beta_sca_per_m", self._need_cross_sections("beta_sca_per_m").csca_um2)
+        return self._scaled("beta_sca_per_m", "volume_coefficient", "sca")
 
     @property
     def beta_abs_per_m(self) -> np.ndarray:
         """Absorption coefficient N cabs at the number density. [m^-1]"""
-        return self._volume("beta_abs_per_m", self.cabs_um2)
+        return self._scaled("beta_abs_per_m", "volume_coefficient", "abs")
 
     @property
     def lidar_ratio_sr(self) -> np.ndarray:
@@ -633,19 +626,17 @@ class Table:
     @property
     def mass_ext_m2_per_kg(self) -> np.ndarray:
         """Mass extinction coefficient <C_ext> / (rho <V>). [m^2 kg^-1]"""
-        cs = self._need_cross_sections("mass_ext_m2_per_kg")
-        return self._mass("mass_ext_m2_per_kg", cs.cext_um2)
+        return self._scaled("mass_ext_m2_per_kg", "mass_coefficient", "ext")
 
     @property
     def mass_sca_m2_per_kg(self) -> np.ndarray:
         """Mass scattering coefficient <C_sca> / (rho <V>). [m^2 kg^-1]"""
-        cs = self._need_cross_sections("mass_sca_m2_per_kg")
-        return self._mass("mass_sca_m2_per_kg", cs.csca_um2)
+        return self._scaled("mass_sca_m2_per_kg", "mass_coefficient", "sca")
 
     @property
     def mass_abs_m2_per_kg(self) -> np.ndarray:
         """Mass absorption coefficient <C_abs> / (rho <V>). [m^2 kg^-1]"""
-        return self._mass("mass_abs_m2_per_kg", self.cabs_um2)
+        return self._scaled("mass_abs_m2_per_kg", "mass_coefficient", "abs")
 
     @property
     def pmom(self) -> np.ndarray:
