@@ -91,18 +91,13 @@ def _optional_positive(name: str, value: Any) -> float | None:
     return None if value is None else check_positive(name, value)
 
 
-def _same_arrays(a: Any, b: Any) -> bool:
-    """Whether two records of one class hold bit-identical arrays and equal scalars."""
-    if type(a) is not type(b):
-        return False
-    for f in fields(a):
-        x, y = getattr(a, f.name), getattr(b, f.name)
-        if isinstance(x, np.ndarray) or isinstance(y, np.ndarray):
-            if x is None or y is None or x.dtype != y.dtype or not np.array_equal(x, y):
-                return False
-        elif x != y:
-            return False
-    return True
+def _same(x: Any, y: Any) -> bool:
+    """Whether two values are bit-identical arrays, equal records or equal scalars (or None)."""
+    if isinstance(x, np.ndarray) or isinstance(y, np.ndarray):
+        return x is not None and y is not None and x.dtype == y.dtype and np.array_equal(x, y)
+    if isinstance(x, _Record):
+        return x.equals(y)
+    return bool(x == y)
 
 
 class _Record:
@@ -122,7 +117,10 @@ class _Record:
 
     def equals(self, other: object) -> bool:
         """Whether both hold bit-identical arrays and equal scalars."""
-        return _same_arrays(self, other)
+        return type(self) is type(other) and all(
+            _same(getattr(self, f.name), getattr(other, f.name))
+            for f in fields(self)  # type: ignore[arg-type]
+        )
 
     def check_grid(self, *, n_wavelength: int, n_theta: int) -> None:
         """Check that the record fits a table of ``n_wavelength`` x ``n_theta``.

@@ -28,6 +28,8 @@ from dustoptics.table.components import (
     QuadratureRecord,
     ScatteringMatrix,
     _frozen,
+    _per_wavelength,
+    _same,
     grouped_fields,
     pmom_from_alpha1,
 )
@@ -114,13 +116,8 @@ def _phase(value: Any, n_wavelength: int, n_theta: int) -> np.ndarray:
 def _asymmetry(value: Any, n_wavelength: int) -> np.ndarray:
     if value is None:
         raise ValueError("g must be given, one asymmetry parameter per wavelength")
-    g = as_float_array("g", value)
-    if g.shape != (n_wavelength,):
-        raise ValueError(
-            f"g must have shape ({n_wavelength},), one value per wavelength; got {g.shape}"
-        )
-    if not np.all(np.isfinite(g)):
-        raise ValueError(f"g must be finite; got {g.tolist()}")
+    g = _per_wavelength("g", value, n_wavelength)
+    assert g is not None
     if np.any(np.abs(g) > 1):
         raise ValueError(f"g must satisfy |g| <= 1; got {g.tolist()}")
     return g
@@ -727,18 +724,9 @@ class Table:
         """
         if not isinstance(other, Table):
             return False
-        for key in _CORE:
-            a, b = getattr(self, key), getattr(other, key)
-            if (a is None) != (b is None):
-                return False
-            if a is not None and (a.dtype != b.dtype or not np.array_equal(a, b)):
-                return False
-        for key in RECORDS:
-            a, b = getattr(self, key), getattr(other, key)
-            if (a is None) != (b is None) or (a is not None and not a.equals(b)):
-                return False
         return (
-            self.name == other.name
+            all(_same(getattr(self, k), getattr(other, k)) for k in (*_CORE, *RECORDS))
+            and self.name == other.name
             and self.provenance.to_dict() == other.provenance.to_dict()
             and (
                 self.derivatives is None
