@@ -26,6 +26,7 @@ from typing import Any
 import numpy as np
 
 from dustoptics._validation import as_float_array, check_positive
+from dustoptics.table.schema import SCALAR_FIELDS
 
 __all__ = [
     "CrossSections",
@@ -189,12 +190,7 @@ class CrossSections(_Record):
             "csca_um2": csca,
             "cback_um2": _per_wavelength("cback_um2", self.cback_um2, cext.size),
         }
-        for key in (
-            "mean_geometric_cross_section_um2",
-            "number_density_per_m3",
-            "mean_volume_um3",
-            "particle_density_kg_m3",
-        ):
+        for key in SCALAR_FIELDS:
             checked[key] = _optional_positive(key, getattr(self, key))
         for key, value in checked.items():
             object.__setattr__(self, key, value)

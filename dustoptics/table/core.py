@@ -1,12 +1,8 @@
-"""The table's core: one constituent's phase function over wavelength and angle, with its records.
+"""The table's core: :class:`Table`, one constituent's phase function over wavelength and angle.
 
-A :class:`Table` always holds the wavelengths, the angles, the phase function
-and its asymmetry parameter, a name and the provenance; everything else comes
-in records (:mod:`dustoptics.table.components`), each present whole or not at
-all: ``table.cross_sections``, ``table.quadrature``, ``table.matrix``,
-``table.expansion``, ``table.derivatives`` and the in-memory
-``table.diagnostics``.  Presence is ``table.expansion is not None``.
-The rest is derived, never stored twice (:mod:`dustoptics.table`).
+Its optional parts (:mod:`.components`, :mod:`.derivatives` and the in-memory
+``table.diagnostics``) are present whole or not at all (``table.expansion is not
+None``); :mod:`dustoptics.table` describes the stored and derived quantities.
 """
 
 from __future__ import annotations
