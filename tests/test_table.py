@@ -17,7 +17,6 @@ from dustoptics.table import (
     ScatteringMatrix,
     Table,
     grouped_fields,
-    records_from_fields,
 )
 
 THETA = np.linspace(0.0, 180.0, 91)
@@ -340,20 +339,19 @@ def test_grouped_fields_makes_table_arguments_of_flat_ones() -> None:
         grouped_fields(flat, cross_sections=table.cross_sections)
 
 
-def test_records_from_fields_groups_flat_quantities() -> None:
+def test_grouped_fields_groups_flat_quantities_into_records() -> None:
     flat = {"error_estimate": [0.1], "n_nodes": np.array([4]), "alpha1": [[1.0]], "g": [0.2]}
     with pytest.raises(
         ValueError, match="alpha1, alpha2, alpha3, alpha4, beta1, beta2 must all be given"
     ):
-        records_from_fields(dict(flat))
+        grouped_fields(flat)
     del flat["alpha1"]
-    records = records_from_fields(flat)
-    assert flat == {"g": [0.2]}
-    assert records["cross_sections"] is None and records["expansion"] is None
-    assert records["quadrature"].equals(
+    grouped = grouped_fields(flat)
+    assert sorted(grouped) == ["g", "quadrature"] and grouped["g"] == [0.2]
+    assert grouped["quadrature"].equals(
         QuadratureRecord(error_estimate=[0.1], n_nodes=np.array([4]))
     )
-    assert not records["quadrature"].equals(QuadratureRecord(error_estimate=[0.1]))
+    assert not grouped["quadrature"].equals(QuadratureRecord(error_estimate=[0.1]))
 
 
 # ------------------------------------------------------------------ xarray and pandas
@@ -510,7 +508,7 @@ def test_pmom_is_alpha1_over_2l_plus_1() -> None:
         theta_deg=[0.0, 180.0],
         phase=[[0.1, 0.05]],
         g=[0.8],
-        expansion=Expansion(**{key: [[1.0, 1.5, 2.5]] for key in do.table.EXPANSION_FIELDS}),
+        expansion=Expansion(**{key: [[1.0, 1.5, 2.5]] for key in do.table.schema.EXPANSION_FIELDS}),
     )
     np.testing.assert_array_equal(t.pmom, [[1.0, 0.5, 0.5]])
     np.testing.assert_array_equal(do.table.alpha1_from_pmom(t.pmom), t.expansion.alpha1)

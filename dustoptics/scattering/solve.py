@@ -26,8 +26,8 @@ from dustoptics.table import (
     Provenance,
     QuadratureRecord,
     Table,
+    grouped_fields,
     plain,
-    records_from_fields,
 )
 
 if TYPE_CHECKING:  # the front door's module imports this one
@@ -231,7 +231,7 @@ def _table(
     """The one place a computed table is built from its request and results."""
     distribution = request.distribution
     moments = np.array([r.moments for r in results])
-    records = records_from_fields(dict(extra))  # the matrix and the expansion, where computed
+    records = grouped_fields(extra)  # the matrix and the expansion, where computed
     return Table(
         name=name,
         wavelength_nm=request.wavelength_nm,
@@ -258,8 +258,8 @@ def _table(
             v_eff_quadrature=moments[:, 2] * moments[:, 0] / moments[:, 1] ** 2 - 1.0,
             mean_volume_quadrature_um3=4.0 / 3.0 * np.pi * moments[:, 1],
         ),
-        matrix=records["matrix"],
-        expansion=records["expansion"],
+        matrix=records.get("matrix"),
+        expansion=records.get("expansion"),
         provenance=Provenance(
             inputs=plain(request.inputs()),
             sources=request.sources(),

@@ -41,12 +41,6 @@ file can never hold an albedo that disagrees with its cross-sections.
 from __future__ import annotations
 
 from dustoptics.table.components import (
-    RECORD_OF as RECORD_OF,
-)
-from dustoptics.table.components import (
-    RECORDS as RECORDS,
-)
-from dustoptics.table.components import (
     CrossSections,
     Expansion,
     QuadratureRecord,
@@ -55,28 +49,10 @@ from dustoptics.table.components import (
     grouped_fields,
     pmom_from_alpha1,
 )
-from dustoptics.table.components import (
-    records_from_fields as records_from_fields,
-)
 from dustoptics.table.core import Table
 from dustoptics.table.derivatives import TableDerivatives
-from dustoptics.table.provenance import (
-    Provenance,
-    Source,
-    canonical_json,
-    plain,
-    software_versions,
-)
-from dustoptics.table.provenance import (
-    _installed_version as _installed_version,
-)
-from dustoptics.table.registry import (
-    TableWriter as TableWriter,
-)
-from dustoptics.table.registry import (
-    register_table_fitter,
-    register_table_writer,
-)
+from dustoptics.table.provenance import Provenance, Source, canonical_json, plain, software_versions
+from dustoptics.table.registry import register_table_fitter, register_table_writer
 from dustoptics.table.schema import (
     AEROSOL_STANDARD_NAMES,
     DEFAULT_NAME,
@@ -87,47 +63,7 @@ from dustoptics.table.schema import (
     STANDARD_NAMES,
     UNITS,
 )
-from dustoptics.table.schema import (
-    ANGLE_DIM as ANGLE_DIM,
-)
-from dustoptics.table.schema import (
-    COUNT_FIELDS as COUNT_FIELDS,
-)
-from dustoptics.table.schema import (
-    DERIVATIVE_FIELDS as DERIVATIVE_FIELDS,
-)
-from dustoptics.table.schema import (
-    DERIVED_DERIVATIVES as DERIVED_DERIVATIVES,
-)
-from dustoptics.table.schema import (
-    EXPANSION_FIELDS as EXPANSION_FIELDS,
-)
-from dustoptics.table.schema import (
-    FLOAT_FIELDS as FLOAT_FIELDS,
-)
-from dustoptics.table.schema import (
-    MATRIX_FIELDS as MATRIX_FIELDS,
-)
-from dustoptics.table.schema import (
-    ORDER_DIM as ORDER_DIM,
-)
-from dustoptics.table.schema import (
-    PARAMETER_DIM as PARAMETER_DIM,
-)
-from dustoptics.table.schema import (
-    SCALAR_FIELDS as SCALAR_FIELDS,
-)
-from dustoptics.table.schema import (
-    WAVELENGTH_DIM as WAVELENGTH_DIM,
-)
-from dustoptics.table.schema import (
-    derivative_unit as derivative_unit,
-)
-from dustoptics.table.schema import (
-    derivative_variable as derivative_variable,
-)
 
-# The names not in __all__ are imported from here by the package's writers and tests.
 __all__ = [
     "AEROSOL_STANDARD_NAMES",
     "DEFAULT_NAME",

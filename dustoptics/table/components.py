@@ -26,6 +26,7 @@ from typing import Any
 import numpy as np
 
 from dustoptics._validation import as_float_array, check_positive
+from dustoptics.table.schema import SCALAR_FIELDS
 
 __all__ = [
     "CrossSections",
@@ -91,18 +92,13 @@ def _optional_positive(name: str, value: Any) -> float | None:
     return None if value is None else check_positive(name, value)
 
 
-def _same_arrays(a: Any, b: Any) -> bool:
-    """Whether two records of one class hold bit-identical arrays and equal scalars."""
-    if type(a) is not type(b):
-        return False
-    for f in fields(a):
-        x, y = getattr(a, f.name), getattr(b, f.name)
-        if isinstance(x, np.ndarray) or isinstance(y, np.ndarray):
-            if x is None or y is None or x.dtype != y.dtype or not np.array_equal(x, y):
-                return False
-        elif x != y:
-            return False
-    return True
+def _same(x: Any, y: Any) -> bool:
+    """Whether two values are bit-identical arrays, equal records or equal scalars (or None)."""
+    if isinstance(x, np.ndarray) or isinstance(y, np.ndarray):
+        return x is not None and y is not None and x.dtype == y.dtype and np.array_equal(x, y)
+    if isinstance(x, _Record):
+        return x.equals(y)
+    return bool(x == y)
 
 
 class _Record:
@@ -122,7 +118,10 @@ class _Record:
 
     def equals(self, other: object) -> bool:
         """Whether both hold bit-identical arrays and equal scalars."""
-        return _same_arrays(self, other)
+        return type(self) is type(other) and all(
+            _same(getattr(self, f.name), getattr(other, f.name))
+            for f in fields(self)  # type: ignore[arg-type]
+        )
 
     def check_grid(self, *, n_wavelength: int, n_theta: int) -> None:
         """Check that the record fits a table of ``n_wavelength`` x ``n_theta``.
@@ -191,12 +190,7 @@ class CrossSections(_Record):
             "csca_um2": csca,
             "cback_um2": _per_wavelength("cback_um2", self.cback_um2, cext.size),
         }
-        for key in (
-            "mean_geometric_cross_section_um2",
-            "number_density_per_m3",
-            "mean_volume_um3",
-            "particle_density_kg_m3",
-        ):
+        for key in SCALAR_FIELDS:
             checked[key] = _optional_positive(key, getattr(self, key))
         for key, value in checked.items():
             object.__setattr__(self, key, value)
@@ -422,40 +416,6 @@ RECORD_OF: dict[str, str] = {
 }
 
 
-def records_from_fields(values: dict[str, Any]) -> dict[str, Any]:
-    """Group stored quantities by name into records, for readers of flat files.
-
-    Pops every quantity of :data:`RECORD_OF` from ``values`` and returns
-    table attribute -> record (or None when none of its quantities is there).
-
-    Raises
-    ------
-    ValueError
-        Some of a record's quantities are there but one it needs is not.
-
-    Examples
-    --------
-    >>> flat = {"cext_um2": [2.0], "csca_um2": [1.0], "g": [0.5]}
-    >>> sorted(k for k, v in records_from_fields(flat).items() if v is not None), flat
-    (['cross_sections'], {'g': [0.5]})
-    """
-    out: dict[str, Any] = {}
-    for attribute, cls in RECORDS.items():
-        own = {f.name: values.pop(f.name) for f in fields(cls) if f.name in values}  # type: ignore[arg-type]
-        required = [f.name for f in fields(cls) if f.default is MISSING]  # type: ignore[arg-type]
-        if not own:
-            out[attribute] = None
-            continue
-        missing = [key for key in required if key not in own]
-        if missing:
-            raise ValueError(
-                f"{', '.join(required)} must all be given or all be None (the {cls.__name__} of "
-                f"a table); got {', '.join(own)} without {', '.join(missing)}"
-            )
-        out[attribute] = cls(**own)
-    return out
-
-
 def grouped_fields(values: Mapping[str, Any] | None = None, /, **more: Any) -> dict[str, Any]:
     """:class:`~dustoptics.table.Table` arguments from flat ones, for code that has them flat.
 
@@ -474,10 +434,19 @@ def grouped_fields(values: Mapping[str, Any] | None = None, /, **more: Any) -> d
     ['cross_sections', 'g']
     """
     flat = {**(values or {}), **more}
-    rest = {key: value for key, value in flat.items() if key not in RECORD_OF}
-    quantities = {k: v for k, v in flat.items() if k in RECORD_OF and v is not None}
-    records = {k: v for k, v in records_from_fields(quantities).items() if v is not None}
-    both = sorted(records.keys() & rest.keys())
-    if both:
-        raise ValueError(f"{', '.join(both)} given both whole and by their quantities")
-    return {**rest, **records}
+    out = {key: value for key, value in flat.items() if key not in RECORD_OF}
+    for attribute, cls in RECORDS.items():
+        own = {f.name: flat[f.name] for f in fields(cls) if flat.get(f.name) is not None}  # type: ignore[arg-type]
+        if not own:
+            continue
+        required = [f.name for f in fields(cls) if f.default is MISSING]  # type: ignore[arg-type]
+        missing = [key for key in required if key not in own]
+        if missing:
+            raise ValueError(
+                f"{', '.join(required)} must all be given or all be None (the {cls.__name__} of "
+                f"a table); got {', '.join(own)} without {', '.join(missing)}"
+            )
+        if attribute in out:
+            raise ValueError(f"{attribute} given both whole and by their quantities")
+        out[attribute] = cls(**own)
+    return out

@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from dustoptics.table.components import records_from_fields
+from dustoptics.table.components import grouped_fields
 from dustoptics.table.derivatives import TableDerivatives
 from dustoptics.table.provenance import Provenance, _provenance_json
 from dustoptics.table.schema import (
@@ -214,10 +214,8 @@ def table_fields(ds: xr.Dataset) -> dict[str, Any]:
             f"dataset attribute 'provenance' is missing or not a provenance record: {exc}"
         ) from None
     refractive_index = _refractive_index(values)
-    records = records_from_fields(values)
     return {
-        **values,
-        **records,
+        **grouped_fields(values),
         "name": ds.attrs.get("name", DEFAULT_NAME),
         "refractive_index": refractive_index,
         "provenance": provenance,

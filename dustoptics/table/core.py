@@ -1,16 +1,8 @@
-"""The table's core: one constituent's phase function over wavelength and angle, with its records.
+"""The table's core: :class:`Table`, one constituent's phase function over wavelength and angle.
 
-A :class:`Table` always holds the wavelengths, the angles, the phase function
-and its asymmetry parameter, a name and the provenance; everything else comes
-in records (:mod:`dustoptics.table.components`), each present whole or not at
-all: ``table.cross_sections``, ``table.quadrature``, ``table.matrix``,
-``table.expansion``, ``table.derivatives`` and the in-memory
-``table.diagnostics``.  Presence is ``table.expansion is not None``.
-
-Everything else is derived, never stored twice: ``cabs_um2 = cext - csca``,
-``ssa = csca / cext``, ``qext = cext / (pi <r^2>)``, and
-``beta_ext_per_m = N cext`` (and likewise for scattering and absorption), so a
-file can never hold an albedo that disagrees with its cross-sections.
+Its optional parts (:mod:`.components`, :mod:`.derivatives` and the in-memory
+``table.diagnostics``) are present whole or not at all (``table.expansion is not
+None``); :mod:`dustoptics.table` describes the stored and derived quantities.
 """
 
 from __future__ import annotations
@@ -31,8 +23,11 @@ from dustoptics.table.components import (
     Expansion,
     QuadratureRecord,
     ScatteringMatrix,
+    _frozen,
+    _per_wavelength,
+    _same,
+    grouped_fields,
     pmom_from_alpha1,
-    records_from_fields,
 )
 from dustoptics.table.derivatives import TableDerivatives
 from dustoptics.table.provenance import (
@@ -63,16 +58,18 @@ if TYPE_CHECKING:
 
 __all__ = ["Table"]
 
+#: CrossSections scaling method -> what a table lacks when it gives None.
+_LACKS = {
+    "efficiency": "has no mean geometric cross-section; {what} is undefined",
+    "volume_coefficient": "has no number density; give number_density_per_m3 for {what}",
+    "mass_coefficient": (
+        "has no particle density or mean volume; {what} needs "
+        "compute_optics(particle_density_kg_m3=...)"
+    ),
+}
+
 #: Quantities the core holds itself (the records hold the other stored ones).
 _CORE = ("wavelength_nm", "theta_deg", "phase", "g", "refractive_index")
-
-
-def _frozen(arr: np.ndarray | None) -> np.ndarray | None:
-    if arr is None:
-        return None
-    out = np.array(arr, copy=True)
-    out.setflags(write=False)
-    return out
 
 
 def _wavelengths(value: Any) -> np.ndarray:
@@ -115,13 +112,8 @@ def _phase(value: Any, n_wavelength: int, n_theta: int) -> np.ndarray:
 def _asymmetry(value: Any, n_wavelength: int) -> np.ndarray:
     if value is None:
         raise ValueError("g must be given, one asymmetry parameter per wavelength")
-    g = as_float_array("g", value)
-    if g.shape != (n_wavelength,):
-        raise ValueError(
-            f"g must have shape ({n_wavelength},), one value per wavelength; got {g.shape}"
-        )
-    if not np.all(np.isfinite(g)):
-        raise ValueError(f"g must be finite; got {g.tolist()}")
+    g = _per_wavelength("g", value, n_wavelength)
+    assert g is not None
     if np.any(np.abs(g) > 1):
         raise ValueError(f"g must satisfy |g| <= 1; got {g.tolist()}")
     return g
@@ -159,14 +151,13 @@ def _check_provenance(provenance: Any) -> None:
 
 def _new_record(attribute: str, fields: Mapping[str, Any]) -> Any:
     """The record ``attribute`` made from ``fields`` (for :meth:`Table.replace`)."""
-    values = dict(fields)
-    record = records_from_fields(values)[attribute]
-    if values or record is None:
+    made = grouped_fields(fields)
+    if list(made) != [attribute] or attribute in fields:
         raise ValueError(
             f"{attribute} must be a {RECORDS[attribute].__name__} or a mapping of its fields; "
             f"got {dict(fields)!r}"
         )
-    return record
+    return made[attribute]
 
 
 def _cross_sections_changed(old: CrossSections | None, new: CrossSections | None) -> bool:
@@ -272,7 +263,7 @@ class Table:
             record.check_grid(n_wavelength=wl.size, n_theta=theta.size)
         _check_provenance(self.provenance)
         for key, arr in core.items():
-            object.__setattr__(self, key, _frozen(arr))
+            object.__setattr__(self, key, None if arr is None else _frozen(arr))
         if self.derivatives is not None:
             self._check_derivatives(self.derivatives)
 
@@ -569,29 +560,12 @@ class Table:
             )
         return self.cross_sections
 
-    def _efficiency(self, what: str, cross_section_um2: np.ndarray) -> np.ndarray:
-        value = self._need_cross_sections(what).efficiency(cross_section_um2)
+    def _scaled(self, what: str, scaling: str, process: str) -> np.ndarray:
+        """Cross-section ``c{process}_um2`` scaled by the :class:`CrossSections` method ``scaling``."""
+        cs = self._need_cross_sections(what)
+        value = getattr(cs, scaling)(getattr(cs, f"c{process}_um2"))
         if value is None:
-            raise ValueError(
-                f"table {self.name!r} has no mean geometric cross-section; {what} is undefined"
-            )
-        return value
-
-    def _volume(self, what: str, cross_section_um2: np.ndarray) -> np.ndarray:
-        value = self._need_cross_sections(what).volume_coefficient(cross_section_um2)
-        if value is None:
-            raise ValueError(
-                f"table {self.name!r} has no number density; give number_density_per_m3 for {what}"
-            )
-        return value
-
-    def _mass(self, what: str, cross_section_um2: np.ndarray) -> np.ndarray:
-        value = self._need_cross_sections(what).mass_coefficient(cross_section_um2)
-        if value is None:
-            raise ValueError(
-                f"table {self.name!r} has no particle density or mean volume; {what} needs "
-                "compute_optics(particle_density_kg_m3=...)"
-            )
+            raise ValueError(f"table {self.name!r} " + _LACKS[scaling].format(what=what))
         return value
 
     @property
@@ -607,32 +581,32 @@ class Table:
     @property
     def qext(self) -> np.ndarray:
         """Extinction efficiency cext / (pi <r^2>). [-]"""
-        return self._efficiency("qext", self._need_cross_sections("qext").cext_um2)
+        return self._scaled("qext", "efficiency", "ext")
 
     @property
     def qsca(self) -> np.ndarray:
         """Scattering efficiency csca / (pi <r^2>). [-]"""
-        return self._efficiency("qsca", self._need_cross_sections("qsca").csca_um2)
+        return self._scaled("qsca", "efficiency", "sca")
 
     @property
     def qabs(self) -> np.ndarray:
         """Absorption efficiency cabs / (pi <r^2>). [-]"""
-        return self._efficiency("qabs", self.cabs_um2)
+        return self._scaled("qabs", "efficiency", "abs")
 
     @property
     def beta_ext_per_m(self) -> np.ndarray:
         """Extinction coefficient N cext at the number density. [m^-1]"""
-        return self._volume("beta_ext_per_m", self._need_cross_sections("beta_ext_per_m").cext_um2)
+        return self._scaled("beta_ext_per_m", "volume_coefficient", "ext")
 
     @property
     def beta_sca_per_m(self) -> np.ndarray:
         """Scattering coefficient N csca at the number density. [m^-1]"""
-        return self._volume("beta_sca_per_m", self._need_cross_sections("beta_sca_per_m").csca_um2)
+        return self._scaled("beta_sca_per_m", "volume_coefficient", "sca")
 
     @property
     def beta_abs_per_m(self) -> np.ndarray:
         """Absorption coefficient N cabs at the number density. [m^-1]"""
-        return self._volume("beta_abs_per_m", self.cabs_um2)
+        return self._scaled("beta_abs_per_m", "volume_coefficient", "abs")
 
     @property
     def lidar_ratio_sr(self) -> np.ndarray:
@@ -645,19 +619,17 @@ class Table:
     @property
     def mass_ext_m2_per_kg(self) -> np.ndarray:
         """Mass extinction coefficient <C_ext> / (rho <V>). [m^2 kg^-1]"""
-        cs = self._need_cross_sections("mass_ext_m2_per_kg")
-        return self._mass("mass_ext_m2_per_kg", cs.cext_um2)
+        return self._scaled("mass_ext_m2_per_kg", "mass_coefficient", "ext")
 
     @property
     def mass_sca_m2_per_kg(self) -> np.ndarray:
         """Mass scattering coefficient <C_sca> / (rho <V>). [m^2 kg^-1]"""
-        cs = self._need_cross_sections("mass_sca_m2_per_kg")
-        return self._mass("mass_sca_m2_per_kg", cs.csca_um2)
+        return self._scaled("mass_sca_m2_per_kg", "mass_coefficient", "sca")
 
     @property
     def mass_abs_m2_per_kg(self) -> np.ndarray:
         """Mass absorption coefficient <C_abs> / (rho <V>). [m^2 kg^-1]"""
-        return self._mass("mass_abs_m2_per_kg", self.cabs_um2)
+        return self._scaled("mass_abs_m2_per_kg", "mass_coefficient", "abs")
 
     @property
     def pmom(self) -> np.ndarray:
@@ -748,18 +720,9 @@ class Table:
         """
         if not isinstance(other, Table):
             return False
-        for key in _CORE:
-            a, b = getattr(self, key), getattr(other, key)
-            if (a is None) != (b is None):
-                return False
-            if a is not None and (a.dtype != b.dtype or not np.array_equal(a, b)):
-                return False
-        for key in RECORDS:
-            a, b = getattr(self, key), getattr(other, key)
-            if (a is None) != (b is None) or (a is not None and not a.equals(b)):
-                return False
         return (
-            self.name == other.name
+            all(_same(getattr(self, k), getattr(other, k)) for k in (*_CORE, *RECORDS))
+            and self.name == other.name
             and self.provenance.to_dict() == other.provenance.to_dict()
             and (
                 self.derivatives is None

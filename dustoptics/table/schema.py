@@ -170,19 +170,12 @@ EXPANSION_FIELDS = ("alpha1", "alpha2", "alpha3", "alpha4", "beta1", "beta2")
 #: them); angular ones have shape (n_wavelength, n_theta).
 DERIVATIVE_FIELDS = (
     "phase",
-    "f12",
-    "f33",
-    "f34",
+    *MATRIX_FIELDS,
     "g",
     "cext_um2",
     "csca_um2",
     "cback_um2",
-    "alpha1",
-    "alpha2",
-    "alpha3",
-    "alpha4",
-    "beta1",
-    "beta2",
+    *EXPANSION_FIELDS,
 )
 #: Derived quantities whose derivatives follow from the stored ones.
 DERIVED_DERIVATIVES = ("ssa", "cabs_um2", "lidar_ratio_sr")

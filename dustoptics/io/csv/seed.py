@@ -59,14 +59,13 @@ from dustoptics.io._text import (
 )
 from dustoptics.io.registry import Format, register
 from dustoptics.table import (
-    EXPANSION_FIELDS,
-    MATRIX_FIELDS,
     PHASE_NORMALIZATION,
     UNITS,
     Provenance,
     Table,
     grouped_fields,
 )
+from dustoptics.table.schema import EXPANSION_FIELDS, MATRIX_FIELDS
 
 #: Optional per-wavelength quantities of radiative-transfer tables, kept in the summary.
 _EXTRA_PER_WAVELENGTH = (

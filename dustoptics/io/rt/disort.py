@@ -39,7 +39,7 @@ from dustoptics.io._atomic import safe_stem, write_files
 from dustoptics.io._text import floats, number
 from dustoptics.io.describe_formats import describe_rt_text, is_rt_text
 from dustoptics.io.registry import Format, register
-from dustoptics.table import _installed_version
+from dustoptics.table.provenance import _installed_version
 
 __all__ = [
     "DISORT_SUFFIX",

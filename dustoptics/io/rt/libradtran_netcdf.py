@@ -96,7 +96,7 @@ from dustoptics.io._text import number
 from dustoptics.io.registry import Format, register
 from dustoptics.io.rt.disort import bound_text, header_lines
 from dustoptics.scattering.expansion import evaluate_matrix
-from dustoptics.table import _installed_version
+from dustoptics.table.provenance import _installed_version
 
 __all__ = [
     "LIBRADTRAN_ELEMENTS",

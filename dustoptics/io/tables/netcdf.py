@@ -78,7 +78,8 @@ import numpy as np
 from dustoptics.io._atomic import FormatError, write_files
 from dustoptics.io.registry import Format, register
 from dustoptics.scattering.tabulated_phase import sphere_integral
-from dustoptics.table import (
+from dustoptics.table import Table, canonical_json, register_table_writer
+from dustoptics.table.schema import (
     ANGLE_DIM,
     DERIVATIVE_FIELDS,
     DERIVED,
@@ -91,10 +92,7 @@ from dustoptics.table import (
     SCHEMA,
     UNITS,
     WAVELENGTH_DIM,
-    Table,
-    canonical_json,
     derivative_variable,
-    register_table_writer,
 )
 
 __all__ = [
