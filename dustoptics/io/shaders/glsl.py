@@ -429,39 +429,8 @@ def write_glsl(
     version: str = "130",
     **options: Any,
 ) -> list[Path]:
-    """Write :func:`glsl_snippet` to a file, atomically.
-
-    Parameters
-    ----------
-    table : dustoptics.table.Table
-        The table.
-    out_dir_or_path : path-like
-        A path ending in ``.glsl`` is the file to write; anything else is a
-        directory (created if missing) that receives
-        ``<table name>_phase.glsl`` (``version="100"``:
-        ``<table name>_phase_es100.glsl``; characters other than letters,
-        digits, ``.``, ``_`` and ``-`` replaced by ``_``).
-    overwrite : bool
-        Replace an existing file.  Default False.
-    version : {"130", "100"}
-        As in :func:`glsl_snippet`.
-    **options
-        The other keywords of :func:`glsl_snippet` (``channels_nm``, ``colour``,
-        ``resolution_deg``, ``prefix``, ``function_name``, ``min_band_coverage``,
-        ``acos``).
-
-    Returns
-    -------
-    list of pathlib.Path
-        The written file.
-
-    Raises
-    ------
-    FileExistsError
-        The file exists and ``overwrite`` is False (nothing is written).
-    ValueError
-        As :func:`glsl_snippet`.
-    """
+    """Write :func:`glsl_snippet` (:func:`~dustoptics.io.shaders.common.write_shader` with the
+    ``language`` of ``version``, ``"130"`` or ``"100"``: ``<table name>_phase_es100.glsl``)."""
     check_choice("version", version, GLSL_VERSIONS)
     return write_shader(
         table, out_dir_or_path, language=_LANGUAGE[version], overwrite=overwrite, **options
