@@ -226,7 +226,7 @@ def _constituent_files(
             f"constituent {name!r}: table {table.name!r} holds a phase function only; CosmoScout "
             "needs scattering and absorption coefficients (a table with cross-sections)"
         )
-    if table.cross_sections is None or table.cross_sections.number_density_per_m3 is None:
+    if table.cross_sections.number_density_per_m3 is None:
         raise ValueError(
             f"constituent {name!r}: table {table.name!r} has no number_density_per_m3; give the "
             "peak number density [m^-3] (Table.replace(cross_sections={'number_density_per_m3': ...})) so that "
@@ -235,7 +235,6 @@ def _constituent_files(
     profile = _check_density(name, density)
     lam = [cosmoscout_wavelength_text(w) for w in floats("wavelength_nm", table.wavelength_nm)]
     files: dict[Path, bytes] = {}
-    assert table.cross_sections is not None  # checked by _check_density's caller
     scatters = bool(np.any(table.cross_sections.csca_um2 > 0))
     if scatters:
         theta = cosmoscout_phase_angles(n_theta)
