@@ -364,26 +364,17 @@ def glsl_float(value: Any) -> str:
     return float_literal(value)
 
 
-def glsl_snippet(
-    table: Any,
-    *,
-    channels_nm: Any = None,
-    colour: str | None = None,
-    resolution_deg: float = DEFAULT_RESOLUTION_DEG,
-    prefix: str = "MIE",
-    function_name: str = "MiePhaseFunction",
-    min_band_coverage: float = 0.99,
-    acos: str = "polynomial",
-    version: str = "130",
-) -> str:
+def glsl_snippet(table: Any, *, version: str = "130", **options: Any) -> str:
     """GLSL source: the phase function as a constant array and its lookup function.
 
     Parameters
     ----------
     table : dustoptics.table.Table
         The table.
-    channels_nm, colour, resolution_deg, prefix, function_name, min_band_coverage, acos
-        As :func:`dustoptics.io.shaders.common.shader_source`.
+    **options
+        The keywords of :func:`dustoptics.io.shaders.common.shader_source` but ``language``
+        (``channels_nm``, ``colour``, ``resolution_deg``, ``prefix``, ``function_name``,
+        ``min_band_coverage``, ``acos``).
     version : {"130", "100"}
         ``"130"`` (default): GLSL 1.30 and later, GLSL ES 3.00 and later, a
         ``const vec3`` array and ``vec3 MiePhaseFunction(float nu)``.
@@ -408,17 +399,7 @@ def glsl_snippet(
     ...                       function_name="DustPhase")                  # doctest: +SKIP
     """
     check_choice("version", version, GLSL_VERSIONS)
-    return shader_source(
-        table,
-        language=_LANGUAGE[version],
-        channels_nm=channels_nm,
-        colour=colour,
-        resolution_deg=resolution_deg,
-        prefix=prefix,
-        function_name=function_name,
-        min_band_coverage=min_band_coverage,
-        acos=acos,
-    )
+    return shader_source(table, language=_LANGUAGE[version], **options)
 
 
 def write_glsl(
