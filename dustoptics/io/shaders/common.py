@@ -868,21 +868,12 @@ def shader_source(
         if ch.number_density_per_m3 is not None:
             n0 = ch.number_density_per_m3
             n0_note = "number density of the beta coefficients [m^-3]"
+            per_m = "coefficient [m^-1]"
             constants += [
                 ("float", "NUMBER_DENSITY_PER_M3", sx.lit(n0), n0_note),
-                (
-                    "vec3",
-                    "BETA_EXT_PER_M",
-                    sx.vec(n0 * ch.cext_m2),
-                    "extinction coefficient [m^-1]",
-                ),
-                (
-                    "vec3",
-                    "BETA_SCA_PER_M",
-                    sx.vec(n0 * ch.csca_m2),
-                    "scattering coefficient [m^-1]",
-                ),
-                ("vec3", "BETA_ABS_PER_M", sx.vec(n0 * cabs), "absorption coefficient [m^-1]"),
+                ("vec3", "BETA_EXT_PER_M", sx.vec(n0 * ch.cext_m2), f"extinction {per_m}"),
+                ("vec3", "BETA_SCA_PER_M", sx.vec(n0 * ch.csca_m2), f"scattering {per_m}"),
+                ("vec3", "BETA_ABS_PER_M", sx.vec(n0 * cabs), f"absorption {per_m}"),
             ]
     lines += [sx.const(kind, names[key], value, note) for kind, key, value, note in constants]
     lines += sx.array_lines(ch, names)
