@@ -820,19 +820,15 @@ def settings_json(
         "maxAltitude": atmosphere.atmosphere_radius_m,
         "ior": atmosphere.refractivity,
     }
+    files = {
+        "phase": "phase",
+        "betaSca": "scattering",
+        "betaAbs": "absorption",
+        "density": "density",
+    }
     for c in atmosphere.constituents:
-        if c.role == "ozone":
-            data["ozone"] = {
-                "betaAbs": name(c.role, "absorption"),
-                "density": name(c.role, "density"),
-            }
-        else:
-            data[c.role] = {
-                "phase": name(c.role, "phase"),
-                "betaSca": name(c.role, "scattering"),
-                "betaAbs": name(c.role, "absorption"),
-                "density": name(c.role, "density"),
-            }
+        keys = ("betaAbs", "density") if c.role == "ozone" else tuple(files)  # ozone: absorbs only
+        data[c.role] = {key: name(c.role, files[key]) for key in keys}
     data.update(sampling.settings)
     data["dustoptics"] = sampling.to_dict()
     return json.dumps(data, indent=2, allow_nan=False) + "\n"
