@@ -218,9 +218,7 @@ def _ask_for_needs(name: str, builder: TableBuilder, formats: Sequence[str]) -> 
     """What the formats need that the computation can supply is asked of it (the expansion
     coefficients, and with them the scattering matrix's), for a Mie model; what it cannot
     supply is left to :func:`check_needs` to refuse."""
-    needing = sorted(
-        set(formats_needing("expansion", formats)) | set(formats_needing("matrix", formats))
-    )
+    needing = formats_needing(("expansion", "matrix"), formats)
     if needing and builder.config.phase.model == "mie":
         builder.ask_for_expansion(f"--format {','.join(needing)}")
 

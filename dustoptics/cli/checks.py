@@ -82,9 +82,7 @@ def check_needs(
             f"--format {','.join(lacking)} needs cross-sections, which {name!r} does not have "
             "(a phase function only): build a Mie or hybrid model"
         )
-    lacking = sorted(
-        set(formats_needing("expansion", formats)) | set(formats_needing("matrix", formats))
-    )
+    lacking = formats_needing(("expansion", "matrix"), formats)
     if lacking and no_expansion is not None:
         raise UsageError(
             f"--format {','.join(lacking)} needs the phase function's expansion coefficients, "

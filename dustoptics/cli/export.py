@@ -30,6 +30,7 @@ from dustoptics.io.outputs import (
     read_table,
     with_inputs,
 )
+from dustoptics.io.registry import NEEDS
 
 __all__ = ["NEEDS_DENSITY", "add_parser", "format_options", "run", "same_table", "write_table"]
 
@@ -84,11 +85,8 @@ def run(args: argparse.Namespace) -> int:
     check_needs(
         args.format,
         name=table.name,
-        cross_sections=table.cross_sections is not None,
-        density=(
-            table.cross_sections is not None
-            and table.cross_sections.number_density_per_m3 is not None
-        ),
+        cross_sections=NEEDS["cross_sections"].present(table),
+        density=NEEDS["number_density"].present(table),
         no_expansion=None
         if table.expansion is not None
         else f"which {str(args.file)!r} does not hold: build the table from a configuration "

@@ -16,13 +16,10 @@ sequences read from a file are shown escaped, never sent to the terminal.
 
 from __future__ import annotations
 
-import json
 import os
 import re
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
-
-import numpy as np
 
 from dustoptics._files import load_json
 from dustoptics.atmosphere.build import SET_PROVENANCE_SUFFIX
@@ -30,7 +27,7 @@ from dustoptics.io._atomic import FormatError, whole_set
 from dustoptics.io._text import printable
 from dustoptics.io.csv.cosmoscout import check_cosmoscout_set, read_cosmoscout_constituent
 from dustoptics.io.csv.seed import EXTINCTION_FILENAME, PHASE_FILENAME, SUMMARY_FILENAME
-from dustoptics.io.describe_formats import describer_of
+from dustoptics.io.describe_formats import _range, describer_of, inputs_lines
 from dustoptics.io.outputs import TABLE_SUFFIXES, read_table
 from dustoptics.io.textures.raw import read_texture
 
@@ -156,11 +153,7 @@ def describe_table(table: Table, *, full: bool = True) -> str:
     if prov.notes:
         lines.append("notes:")
         lines += [f"  - {n}" for n in prov.notes]
-    lines.append("inputs:")
-    lines += [
-        "  " + line
-        for line in json.dumps(prov.to_dict()["inputs"], indent=2, sort_keys=True).splitlines()
-    ]
+    lines += inputs_lines(prov.to_dict()["inputs"])
     # Names, citations and notes come from the file: escape what a terminal would obey.
     return _printable_lines("\n".join(lines))
 
@@ -337,11 +330,6 @@ def _describe_directory(root: Path, full: bool = True) -> str:
     return "\n\n".join(f"== {title} ==\n{text}" for title, text in sections)
 
 
-def _range(values: Any, unit: str) -> str:
-    values = np.asarray(values, dtype=float)
-    return f"{values.min():.6g} .. {values.max():.6g} {unit}".rstrip()
-
-
 def _describe_constituent(root: Path, name: str) -> str:
     """A CosmoScout VR constituent: its four CSV files in ``root``."""
 
@@ -407,12 +395,7 @@ def _set_text(root: Path, name: str, full: bool) -> str:
         given = {k: v for k, v in record["inputs"].items() if k != "constituents"}
         lines += ["", f"made from:       {_compact(given)[1:-1]}", f"{_MORE}every input {_FULL}"]
     elif record is not None:
-        lines.append("")
-        lines.append("inputs:")
-        lines += [
-            "  " + line
-            for line in json.dumps(record["inputs"], indent=2, sort_keys=True).splitlines()
-        ]
+        lines += ["", *inputs_lines(record["inputs"])]
     return "\n".join(lines)
 
 
@@ -437,9 +420,4 @@ def _describe_texture(sidecar: Path, full: bool = True) -> str:
     ]
     if not full:
         return "\n".join([*lines, f"{_MORE}every input {_FULL}"])
-    lines.append("inputs:")
-    lines += [
-        "  " + line
-        for line in json.dumps(meta["provenance"]["inputs"], indent=2, sort_keys=True).splitlines()
-    ]
-    return "\n".join(lines)
+    return "\n".join([*lines, *inputs_lines(meta["provenance"]["inputs"])])

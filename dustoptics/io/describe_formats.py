@@ -15,7 +15,8 @@ from __future__ import annotations
 
 import json
 import struct
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -99,6 +100,24 @@ def _kv(key: Any, value: Any) -> str:
 def _range(values: Any, unit: str = "") -> str:
     values = np.asarray(values, dtype=float)
     return f"{np.nanmin(values):.6g} .. {np.nanmax(values):.6g} {unit}".rstrip()
+
+
+def inputs_lines(inputs: Any) -> list[str]:
+    """``inputs:`` and then ``inputs`` as JSON (sorted keys), indented."""
+    return [
+        "inputs:",
+        *("  " + s for s in json.dumps(inputs, indent=2, sort_keys=True).splitlines()),
+    ]
+
+
+@contextmanager
+def damaged(path: Path, what: str) -> Iterator[None]:
+    """A KeyError, TypeError or ValueError while reading ``path`` becomes a FormatError
+    that names ``what`` and the error."""
+    try:
+        yield
+    except (KeyError, TypeError, ValueError) as exc:
+        raise _format_error(path, f"{what} ({type(exc).__name__}: {exc})") from None
 
 
 # --- What a file is ---------------------------------------------------------------------------
@@ -271,12 +290,9 @@ def describe_bruneton(path: Path, full: bool = True) -> str:
             lines.append(f"the same numbers, with units and provenance: {json_path.name}")
         return "\n".join(lines)
     data = load_json(path)
-    try:
-        return "\n".join(_bruneton_lines(path, data, full))
-    except (KeyError, TypeError, ValueError) as exc:
-        raise _format_error(
-            path, f"a damaged Bruneton file ({type(exc).__name__}: {exc})"
-        ) from None
+    with damaged(path, "a damaged Bruneton file"):
+        lines = _bruneton_lines(path, data, full)
+    return "\n".join(lines)
 
 
 def _bruneton_lines(path: Path, data: dict[str, Any], full: bool) -> list[str]:
@@ -327,12 +343,9 @@ def _bruneton_lines(path: Path, data: dict[str, Any], full: bool) -> list[str]:
 def describe_texture(path: Path, meta: dict[str, Any], container: str, full: bool = True) -> str:
     """An OpenEXR or KTX2 phase texture, from the metadata inside it (key ``dustoptics``, read
     by the container's module)."""
-    try:
-        return "\n".join(_texture_lines(path, meta, container, full))
-    except (KeyError, TypeError, ValueError) as exc:
-        raise _format_error(
-            path, f"damaged texture metadata ({type(exc).__name__}: {exc})"
-        ) from None
+    with damaged(path, "damaged texture metadata"):
+        lines = _texture_lines(path, meta, container, full)
+    return "\n".join(lines)
 
 
 def _texture_lines(path: Path, meta: dict[str, Any], container: str, full: bool) -> list[str]:
@@ -349,9 +362,7 @@ def _texture_lines(path: Path, meta: dict[str, Any], container: str, full: bool)
         f"input hash:      {meta['input_hash']}",
     ]
     if full and isinstance(meta.get("provenance"), dict):
-        lines.append("inputs:")
-        inputs = meta["provenance"].get("inputs", {})
-        lines += ["  " + s for s in json.dumps(inputs, indent=2, sort_keys=True).splitlines()]
+        lines += inputs_lines(meta["provenance"].get("inputs", {}))
     return lines
 
 
@@ -362,7 +373,7 @@ def describe_fit(path: Path, full: bool = True) -> str:
     """A fit's JSON (``dustoptics fit``): the model, its formula and citation, each row's
     parameters and errors."""
     data = load_json(path)
-    try:
+    with damaged(path, "a damaged fit file"):
         lines = [
             f"phase-function fit: {path.name}",
             f"model:           {data['model']}: {data['formula']}",
@@ -379,8 +390,6 @@ def describe_fit(path: Path, full: bool = True) -> str:
                 f"{float(row['max_relative_error']):.3g}, median "
                 f"{float(row['median_relative_error']):.3g}"
             )
-    except (KeyError, TypeError, ValueError) as exc:
-        raise _format_error(path, f"a damaged fit file ({type(exc).__name__}: {exc})") from None
     return "\n".join(lines)
 
 

@@ -1,20 +1,8 @@
 """The formats a table is written in: one record per format, gathered in one registry.
 
 Modelled on xarray's backend entry points.  A format module defines one
-:class:`Format` record and registers it (:func:`register`) when imported:
-
-- ``name``, ``summary`` (one line), ``suffixes`` of the files it writes;
-- ``write(table, out_dir, *, overwrite=False, **keywords) -> list[Path]``;
-- ``options``: a frozen dataclass of the format's options; each field made
-  with :func:`option` carries its command-line help (``--NAME-WITH-DASHES``),
-  and None means "the writer's default".  The dataclass may define
-  ``keywords()`` (the writer's keywords; default: the fields given),
-  ``recorded()`` (what the files record in their provenance; default: the
-  keywords) and ``check(wavelength_nm)`` (refuse before the table is computed);
-- ``needs``: what the table must hold (keys of :data:`NEEDS`);
-- ``recognise(path)`` and ``describe(path, full)`` for ``dustoptics info``;
-- ``plain_name`` (files named by the table's name as it is) and ``inputs_file``
-  (the file that records the table's inputs, compared before it is replaced).
+:class:`Format` record (its fields say what a format gives) and registers it
+(:func:`register`) when imported.
 
 Everything else reads :data:`FORMATS`: the command line's ``--format`` list,
 its option groups and needs check, ``info``, :class:`FormatOptions` and the
@@ -135,8 +123,12 @@ class Format:
     suffixes : tuple of str
         Suffixes of the files it writes.
     options : type, optional
-        A frozen dataclass of its options (fields made with :func:`option` are
-        command-line options); None: no options.
+        A frozen dataclass of its options; None: no options.  Each field made with
+        :func:`option` is a command-line option (``--NAME-WITH-DASHES``) and None
+        means "the writer's default".  The dataclass may define ``keywords()`` (the
+        writer's keywords; default: the fields given), ``recorded()`` (what the
+        files record in their provenance; default: the keywords) and
+        ``check(wavelength_nm)`` (refuse before the table is computed).
     needs : frozenset of str
         Keys of :data:`NEEDS`.
     recognise : callable, optional
@@ -238,9 +230,11 @@ def write(
     return FORMATS[format].write(table, out_dir, overwrite=overwrite, **keywords)
 
 
-def formats_needing(need: str, formats: Iterable[str]) -> list[str]:
-    """The names among ``formats`` whose records need ``need`` (a key of :data:`NEEDS`), sorted."""
-    return sorted(name for name in set(formats) if need in FORMATS[name].needs)
+def formats_needing(need: str | tuple[str, ...], formats: Iterable[str]) -> list[str]:
+    """The names among ``formats`` whose records need ``need`` (a key of :data:`NEEDS`, or any
+    of several), sorted."""
+    needs = {need} if isinstance(need, str) else set(need)
+    return sorted(name for name in set(formats) if needs & FORMATS[name].needs)
 
 
 def cli_fields(fmt: Format) -> tuple[dataclasses.Field[Any], ...]:

@@ -226,7 +226,7 @@ def _constituent_files(
             f"constituent {name!r}: table {table.name!r} holds a phase function only; CosmoScout "
             "needs scattering and absorption coefficients (a table with cross-sections)"
         )
-    if table.cross_sections is None or table.cross_sections.number_density_per_m3 is None:
+    if table.cross_sections.number_density_per_m3 is None:
         raise ValueError(
             f"constituent {name!r}: table {table.name!r} has no number_density_per_m3; give the "
             "peak number density [m^-3] (Table.replace(cross_sections={'number_density_per_m3': ...})) so that "
@@ -235,7 +235,6 @@ def _constituent_files(
     profile = _check_density(name, density)
     lam = [cosmoscout_wavelength_text(w) for w in floats("wavelength_nm", table.wavelength_nm)]
     files: dict[Path, bytes] = {}
-    assert table.cross_sections is not None  # checked by _check_density's caller
     scatters = bool(np.any(table.cross_sections.csca_um2 > 0))
     if scatters:
         theta = cosmoscout_phase_angles(n_theta)
@@ -821,19 +820,15 @@ def settings_json(
         "maxAltitude": atmosphere.atmosphere_radius_m,
         "ior": atmosphere.refractivity,
     }
+    files = {
+        "phase": "phase",
+        "betaSca": "scattering",
+        "betaAbs": "absorption",
+        "density": "density",
+    }
     for c in atmosphere.constituents:
-        if c.role == "ozone":
-            data["ozone"] = {
-                "betaAbs": name(c.role, "absorption"),
-                "density": name(c.role, "density"),
-            }
-        else:
-            data[c.role] = {
-                "phase": name(c.role, "phase"),
-                "betaSca": name(c.role, "scattering"),
-                "betaAbs": name(c.role, "absorption"),
-                "density": name(c.role, "density"),
-            }
+        keys = ("betaAbs", "density") if c.role == "ozone" else tuple(files)  # ozone: absorbs only
+        data[c.role] = {key: name(c.role, files[key]) for key in keys}
     data.update(sampling.settings)
     data["dustoptics"] = sampling.to_dict()
     return json.dumps(data, indent=2, allow_nan=False) + "\n"

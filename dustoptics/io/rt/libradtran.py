@@ -50,6 +50,7 @@ from dustoptics.io.rt.disort import bound_text, disort_moments, header_lines, mo
 __all__ = [
     "LIBRADTRAN_EXPLICIT_SUFFIX",
     "LIBRADTRAN_LAYER_SUFFIX",
+    "layer_bounds",
     "libradtran_texts",
     "write_libradtran",
 ]
@@ -59,6 +60,15 @@ LIBRADTRAN_LAYER_SUFFIX = "_aerosol_layer.dat"
 
 #: How many kilometres-per-metre and um2-per-m2 make km-1 from m-3 and um2.
 _UM2_PER_M3_TO_PER_KM = 1e-12 * 1e3
+
+
+def layer_bounds(*, bottom_km: float, top_km: float) -> tuple[float, float]:
+    """The layer's bottom and top [km], checked: real, ``top_km > bottom_km`` (else ValueError)."""
+    bottom = check_real("bottom_km", bottom_km)
+    top = check_real("top_km", top_km)
+    if not top > bottom:
+        raise ValueError(f"top_km must exceed bottom_km = {bottom!r}; got top_km = {top!r}")
+    return bottom, top
 
 
 def libradtran_texts(table: Any, *, bottom_km: float = 0.0, top_km: float = 1.0) -> tuple[str, str]:
@@ -82,10 +92,7 @@ def libradtran_texts(table: Any, *, bottom_km: float = 0.0, top_km: float = 1.0)
         No expansion coefficients, cross-sections or number density, or
         ``top_km <= bottom_km``.
     """
-    bottom = check_real("bottom_km", bottom_km)
-    top = check_real("top_km", top_km)
-    if not top > bottom:
-        raise ValueError(f"top_km must exceed bottom_km = {bottom!r}; got top_km = {top!r}")
+    bottom, top = layer_bounds(bottom_km=bottom_km, top_km=top_km)
     wl, cext, pmom = disort_moments(table, "libradtran")
     if table.cross_sections is None or table.cross_sections.number_density_per_m3 is None:
         raise ValueError(

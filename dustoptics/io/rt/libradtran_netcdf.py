@@ -90,11 +90,11 @@ import numpy as np
 from numpy.polynomial import legendre
 from scipy.io import netcdf_file
 
-from dustoptics._validation import check_real
 from dustoptics.io._atomic import FormatError, safe_stem, write_files
 from dustoptics.io._text import number
 from dustoptics.io.registry import Format, register
 from dustoptics.io.rt.disort import bound_text, header_lines
+from dustoptics.io.rt.libradtran import layer_bounds
 from dustoptics.scattering.expansion import evaluate_matrix
 from dustoptics.table.provenance import _installed_version
 
@@ -293,10 +293,7 @@ def libradtran_species_text(table: Any, *, bottom_km: float = 0.0, top_km: float
     ValueError
         As :func:`libradtran_netcdf_bytes`, or ``top_km <= bottom_km``.
     """
-    bottom = check_real("bottom_km", bottom_km)
-    top = check_real("top_km", top_km)
-    if not top > bottom:
-        raise ValueError(f"top_km must exceed bottom_km = {bottom!r}; got top_km = {top!r}")
+    bottom, top = layer_bounds(bottom_km=bottom_km, top_km=top_km)
     _needs(table)
     stem = safe_stem(table.name)
     n_cm3 = float(table.cross_sections.number_density_per_m3) * 1e-6

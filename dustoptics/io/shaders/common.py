@@ -846,78 +846,36 @@ def shader_source(
             else "Abramowitz & Stegun 4.4.46 polynomial"
         ),
         "",
-        sx.const("int", names["PHASE_N"], str(n), ""),  # N, the number of samples
-        sx.const(
-            "float",
-            names["PHASE_INDEX_PER_RAD"],
-            sx.lit((n - 1) / math.pi),
-            "(N - 1) / pi [rad^-1]",
-        ),
-        sx.const("float", names["PI"], sx.lit(math.pi), "pi in float32"),
-        sx.const(
-            "vec3",
-            names["WAVELENGTH_NM"],
-            sx.vec(ch.wavelength_nm),
-            "[nm]" if ch.mode == "wavelengths" else "weighted mean wavelengths [nm]",
-        ),
-        sx.const("vec3", names["G"], sx.vec(ch.g), "asymmetry parameter [-]"),
+    ]
+    wavelength_note = "[nm]" if ch.mode == "wavelengths" else "weighted mean wavelengths [nm]"
+    constants = [  # (kind, key, value, comment)
+        ("int", "PHASE_N", str(n), ""),  # N, the number of samples
+        ("float", "PHASE_INDEX_PER_RAD", sx.lit((n - 1) / math.pi), "(N - 1) / pi [rad^-1]"),
+        ("float", "PI", sx.lit(math.pi), "pi in float32"),
+        ("vec3", "WAVELENGTH_NM", sx.vec(ch.wavelength_nm), wavelength_note),
+        ("vec3", "G", sx.vec(ch.g), "asymmetry parameter [-]"),
     ]
     if ch.cext_m2 is not None and ch.csca_m2 is not None:
         cabs = ch.cext_m2 - ch.csca_m2
-        lines += [
-            sx.const(
-                "vec3",
-                names["CEXT_M2"],
-                sx.vec(ch.cext_m2),
-                "mean extinction cross-section per particle [m^2]",
-            ),
-            sx.const(
-                "vec3",
-                names["CSCA_M2"],
-                sx.vec(ch.csca_m2),
-                "mean scattering cross-section per particle [m^2]",
-            ),
-            sx.const(
-                "vec3",
-                names["CABS_M2"],
-                sx.vec(cabs),
-                "mean absorption cross-section per particle [m^2]",
-            ),
-            sx.const(
-                "vec3",
-                names["SSA"],
-                sx.vec(ch.csca_m2 / ch.cext_m2),
-                "single-scattering albedo csca / cext [-]",
-            ),
+        ssa = ch.csca_m2 / ch.cext_m2
+        per_particle = "cross-section per particle [m^2]"
+        constants += [
+            ("vec3", "CEXT_M2", sx.vec(ch.cext_m2), f"mean extinction {per_particle}"),
+            ("vec3", "CSCA_M2", sx.vec(ch.csca_m2), f"mean scattering {per_particle}"),
+            ("vec3", "CABS_M2", sx.vec(cabs), f"mean absorption {per_particle}"),
+            ("vec3", "SSA", sx.vec(ssa), "single-scattering albedo csca / cext [-]"),
         ]
         if ch.number_density_per_m3 is not None:
-            density = ch.number_density_per_m3
-            lines += [
-                sx.const(
-                    "float",
-                    names["NUMBER_DENSITY_PER_M3"],
-                    sx.lit(density),
-                    "number density of the beta coefficients [m^-3]",
-                ),
-                sx.const(
-                    "vec3",
-                    names["BETA_EXT_PER_M"],
-                    sx.vec(density * ch.cext_m2),
-                    "extinction coefficient [m^-1]",
-                ),
-                sx.const(
-                    "vec3",
-                    names["BETA_SCA_PER_M"],
-                    sx.vec(density * ch.csca_m2),
-                    "scattering coefficient [m^-1]",
-                ),
-                sx.const(
-                    "vec3",
-                    names["BETA_ABS_PER_M"],
-                    sx.vec(density * cabs),
-                    "absorption coefficient [m^-1]",
-                ),
+            n0 = ch.number_density_per_m3
+            n0_note = "number density of the beta coefficients [m^-3]"
+            per_m = "coefficient [m^-1]"
+            constants += [
+                ("float", "NUMBER_DENSITY_PER_M3", sx.lit(n0), n0_note),
+                ("vec3", "BETA_EXT_PER_M", sx.vec(n0 * ch.cext_m2), f"extinction {per_m}"),
+                ("vec3", "BETA_SCA_PER_M", sx.vec(n0 * ch.csca_m2), f"scattering {per_m}"),
+                ("vec3", "BETA_ABS_PER_M", sx.vec(n0 * cabs), f"absorption {per_m}"),
             ]
+    lines += [sx.const(kind, names[key], value, note) for kind, key, value, note in constants]
     lines += sx.array_lines(ch, names)
     lines += [""] + sx.lookup_lines(ch, names, function_name, acos)
     return "\n".join(lines) + "\n"

@@ -364,26 +364,17 @@ def glsl_float(value: Any) -> str:
     return float_literal(value)
 
 
-def glsl_snippet(
-    table: Any,
-    *,
-    channels_nm: Any = None,
-    colour: str | None = None,
-    resolution_deg: float = DEFAULT_RESOLUTION_DEG,
-    prefix: str = "MIE",
-    function_name: str = "MiePhaseFunction",
-    min_band_coverage: float = 0.99,
-    acos: str = "polynomial",
-    version: str = "130",
-) -> str:
+def glsl_snippet(table: Any, *, version: str = "130", **options: Any) -> str:
     """GLSL source: the phase function as a constant array and its lookup function.
 
     Parameters
     ----------
     table : dustoptics.table.Table
         The table.
-    channels_nm, colour, resolution_deg, prefix, function_name, min_band_coverage, acos
-        As :func:`dustoptics.io.shaders.common.shader_source`.
+    **options
+        The keywords of :func:`dustoptics.io.shaders.common.shader_source` but ``language``
+        (``channels_nm``, ``colour``, ``resolution_deg``, ``prefix``, ``function_name``,
+        ``min_band_coverage``, ``acos``).
     version : {"130", "100"}
         ``"130"`` (default): GLSL 1.30 and later, GLSL ES 3.00 and later, a
         ``const vec3`` array and ``vec3 MiePhaseFunction(float nu)``.
@@ -408,17 +399,7 @@ def glsl_snippet(
     ...                       function_name="DustPhase")                  # doctest: +SKIP
     """
     check_choice("version", version, GLSL_VERSIONS)
-    return shader_source(
-        table,
-        language=_LANGUAGE[version],
-        channels_nm=channels_nm,
-        colour=colour,
-        resolution_deg=resolution_deg,
-        prefix=prefix,
-        function_name=function_name,
-        min_band_coverage=min_band_coverage,
-        acos=acos,
-    )
+    return shader_source(table, language=_LANGUAGE[version], **options)
 
 
 def write_glsl(
@@ -429,39 +410,8 @@ def write_glsl(
     version: str = "130",
     **options: Any,
 ) -> list[Path]:
-    """Write :func:`glsl_snippet` to a file, atomically.
-
-    Parameters
-    ----------
-    table : dustoptics.table.Table
-        The table.
-    out_dir_or_path : path-like
-        A path ending in ``.glsl`` is the file to write; anything else is a
-        directory (created if missing) that receives
-        ``<table name>_phase.glsl`` (``version="100"``:
-        ``<table name>_phase_es100.glsl``; characters other than letters,
-        digits, ``.``, ``_`` and ``-`` replaced by ``_``).
-    overwrite : bool
-        Replace an existing file.  Default False.
-    version : {"130", "100"}
-        As in :func:`glsl_snippet`.
-    **options
-        The other keywords of :func:`glsl_snippet` (``channels_nm``, ``colour``,
-        ``resolution_deg``, ``prefix``, ``function_name``, ``min_band_coverage``,
-        ``acos``).
-
-    Returns
-    -------
-    list of pathlib.Path
-        The written file.
-
-    Raises
-    ------
-    FileExistsError
-        The file exists and ``overwrite`` is False (nothing is written).
-    ValueError
-        As :func:`glsl_snippet`.
-    """
+    """Write :func:`glsl_snippet` (:func:`~dustoptics.io.shaders.common.write_shader` with the
+    ``language`` of ``version``, ``"130"`` or ``"100"``: ``<table name>_phase_es100.glsl``)."""
     check_choice("version", version, GLSL_VERSIONS)
     return write_shader(
         table, out_dir_or_path, language=_LANGUAGE[version], overwrite=overwrite, **options

@@ -79,36 +79,15 @@ def write_exr(
     overwrite: bool = False,
     **options: Any,
 ) -> list[Path]:
-    """Write the phase function as an OpenEXR image, atomically.
-
-    Parameters
-    ----------
-    table : dustoptics.table.Table
-        The table.
-    out_dir_or_path : path-like
-        A path ending in ``.exr`` is the file to write; anything else is a
-        directory (created if missing) that receives
-        ``<table name>_phase_<layout>_<sampling>_<precision>.exr``.
-    overwrite : bool
-        Replace an existing file.  Default False.
-    **options
-        The fields of :class:`~dustoptics.io.textures.phase_texture.TextureOptions` (the
-        keywords of :func:`~dustoptics.io.textures.phase_texture.phase_texture`).
-
-    Returns
-    -------
-    list of pathlib.Path
-        The written file.
+    """Write the phase function as an OpenEXR image, atomically: the ``.exr`` file
+    ``out_dir_or_path`` or a file in that directory, as
+    :func:`~dustoptics.io.textures.phase_texture.write_container` (``**options``: the fields of
+    :class:`~dustoptics.io.textures.phase_texture.TextureOptions`).
 
     Raises
     ------
     ImportError
         OpenEXR is not installed (the message names the ``textures`` extra).
-    ValueError
-        As :func:`~dustoptics.io.textures.phase_texture.phase_texture` (before
-        anything is written).
-    FileExistsError
-        The file exists and ``overwrite`` is False.
     """
     return write_container(
         table,

@@ -172,35 +172,10 @@ def write_ktx2(
     overwrite: bool = False,
     **options: Any,
 ) -> list[Path]:
-    """Write the phase function as a KTX2 texture, atomically.
-
-    Parameters
-    ----------
-    table : dustoptics.table.Table
-        The table.
-    out_dir_or_path : path-like
-        A path ending in ``.ktx2`` is the file to write; anything else is a
-        directory (created if missing) that receives
-        ``<table name>_phase_<layout>_<sampling>_<precision>.ktx2``.
-    overwrite : bool
-        Replace an existing file.  Default False.
-    **options
-        The fields of :class:`~dustoptics.io.textures.phase_texture.TextureOptions` (the
-        keywords of :func:`~dustoptics.io.textures.phase_texture.phase_texture`).
-
-    Returns
-    -------
-    list of pathlib.Path
-        The written file.
-
-    Raises
-    ------
-    ValueError
-        As :func:`~dustoptics.io.textures.phase_texture.phase_texture` (before
-        anything is written).
-    FileExistsError
-        The file exists and ``overwrite`` is False.
-    """
+    """Write the phase function as a KTX2 texture, atomically: the ``.ktx2`` file
+    ``out_dir_or_path`` or a file in that directory, as
+    :func:`~dustoptics.io.textures.phase_texture.write_container` (``**options``: the fields of
+    :class:`~dustoptics.io.textures.phase_texture.TextureOptions`)."""
     return write_container(
         table,
         out_dir_or_path,

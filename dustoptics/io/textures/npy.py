@@ -58,26 +58,9 @@ def write_npy(
     overwrite: bool = False,
     **options: Any,
 ) -> list[Path]:
-    """Write the phase-function texture as ``.npy`` and its ``.json`` sidecar, atomically.
-
-    Parameters
-    ----------
-    table : dustoptics.table.Table
-        The table.
-    out_dir : path-like
-        Directory (created if missing) that receives
-        ``<table name>_phase_<layout>_<sampling>_<precision>.npy`` and ``.json``.
-    overwrite : bool
-        Replace existing files.  Default False.
-    **options
-        The fields of :class:`~dustoptics.io.textures.phase_texture.TextureOptions` (the
-        keywords of :func:`~dustoptics.io.textures.phase_texture.phase_texture`).
-
-    Returns
-    -------
-    list of pathlib.Path
-        ``[<stem>.npy, <stem>.json]``.
-    """
+    """Write the phase-function texture as ``<stem>.npy`` and its ``<stem>.json`` sidecar in
+    ``out_dir``, atomically, as :func:`~dustoptics.io.textures.phase_texture.write_container`
+    (``**options``: the fields of :class:`~dustoptics.io.textures.phase_texture.TextureOptions`)."""
     return write_container(
         table,
         out_dir,

@@ -390,10 +390,8 @@ class TextureOptions(SamplingOptions, ChannelOptions):
     def keywords(self) -> dict[str, Any]:
         """The keywords given (not None), for :func:`phase_texture`."""
         out: dict[str, Any] = {"channels_nm": self.channels_nm, "colour": self.colour}
-        for key in ("layout", "sampling", "n_angles", "precision"):
-            if getattr(self, key) is not None:
-                out[key] = getattr(self, key)
-        for key in ("min_band_coverage", "max_dimension"):
+        keys = ("layout", "sampling", "n_angles", "precision", "min_band_coverage", "max_dimension")
+        for key in keys:
             if getattr(self, key) is not None:
                 out[key] = getattr(self, key)
         return out
