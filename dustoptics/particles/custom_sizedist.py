@@ -88,6 +88,7 @@ class MultiModal(SizeDistribution):
     --------
     CosmoScout VR's Mars aerosols: a fine and a coarse mode, 1000 : 1 in number.
 
+    >>> from dustoptics.particles.sizedist import ModifiedLogNormal
     >>> mars = MultiModal(
     ...     modes=(ModifiedLogNormal(r_eff_um=0.04, v_eff=0.1),
     ...            ModifiedLogNormal(r_eff_um=1.4, v_eff=0.35)),

@@ -76,7 +76,7 @@ import numpy as np
 from dustoptics._numba_cache import F8_1D, F8_2D, I8, kernel
 
 # The moments are the table's convention (Table.pmom), defined with the data model.
-from dustoptics.table import alpha1_from_pmom, pmom_from_alpha1
+from dustoptics.table.components import alpha1_from_pmom, pmom_from_alpha1  # bare in compile children
 
 __all__ = [
     "DeltaM",
