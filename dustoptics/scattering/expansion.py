@@ -76,7 +76,8 @@ import numpy as np
 from dustoptics._numba_cache import F8_1D, F8_2D, I8, kernel
 
 # The moments are the table's convention (Table.pmom), defined with the data model.
-from dustoptics.table.components import alpha1_from_pmom, pmom_from_alpha1  # bare in compile children
+# From the defining module: compile children import this one with bare package __init__s.
+from dustoptics.table.components import alpha1_from_pmom, pmom_from_alpha1
 
 __all__ = [
     "DeltaM",
