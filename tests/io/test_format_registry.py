@@ -10,38 +10,13 @@ import sys
 from pathlib import Path
 
 import pytest
+from cli._cli import config_fixture  # noqa: F401 (fixture config)
 
 from dustoptics.cli import main
 from dustoptics.io import FORMATS, FormatOptions
 from dustoptics.io.registry import NEEDS, Format, format_table, option_groups, register
 
 EXAMPLE = Path(__file__).resolve().parents[2] / "docs" / "contributing" / "example_format.py"
-
-SMALL = """\
-name = "small-dust"
-description = "three wavelengths of Blue Moon's dust, for the format registry's tests"
-
-[material]
-model = "mars_dust"
-hematite_fraction = 0.03
-host_index = { n = 1.5, k = 0.0 }
-hematite = "querry-extraordinary"
-rule = "maxwell_garnett"
-
-[size_distribution]
-model = "modified_gamma"
-r_eff_um = 1.0
-v_eff = 0.2
-
-[optics]
-weighting = "scattering"
-rtol = 1e-3
-wavelengths_nm = [440.0, 550.0, 680.0]
-n_theta = 19
-
-[phase]
-model = "mie"
-"""
 
 
 @pytest.fixture(name="example")
@@ -57,13 +32,6 @@ def example_fixture():
     finally:
         FORMATS.pop("g-table", None)
         sys.modules.pop("example_format", None)
-
-
-@pytest.fixture(name="config")
-def config_fixture(tmp_path):
-    path = tmp_path / "small.toml"
-    path.write_text(SMALL, encoding="utf-8")
-    return path
 
 
 def test_the_example_is_in_build_help(example, capsys):
