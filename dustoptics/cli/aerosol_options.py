@@ -19,6 +19,7 @@ from dustoptics.atmosphere.sets import (
     check_earth_aerosol,
 )
 from dustoptics.cli.errors import UsageError
+from dustoptics.cli.parser import detail_group
 
 __all__ = ["AEROSOL_OPTIONS", "add_aerosol_options", "aerosol_keywords"]
 
@@ -85,9 +86,7 @@ def _humidity(text: str) -> int:
 
 def add_aerosol_options(parser: argparse.ArgumentParser) -> None:
     """Add the Earth's aerosol options to ``parser`` (their own group)."""
-    g = parser.add_argument_group(
-        "Earth aerosols (OPAC's types, Hess et al. 1998, by dustoptics' Mie)"
-    )
+    g = detail_group(parser, "Earth aerosols (OPAC's types, Hess et al. 1998, by dustoptics' Mie)")
     g.add_argument(
         "--aerosol",
         type=_aerosol,

@@ -13,7 +13,7 @@ import argparse
 from collections.abc import Callable, Sequence
 from typing import Any
 
-from dustoptics.cli.parser import _float_list, _positive_float, _positive_int
+from dustoptics.cli.parser import _float_list, _positive_float, _positive_int, detail_group
 from dustoptics.io import FORMATS
 from dustoptics.io.registry import option_groups
 
@@ -107,7 +107,7 @@ def add_format_options(
         "in the table's provenance)",
     )
     for names, fields in option_groups():
-        g = p.add_argument_group(", ".join(names))
+        g = detail_group(p, ", ".join(names))
         for f in fields:
             keywords = dict(f.metadata["argparse"])
             if "type" in keywords:

@@ -11,6 +11,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import re
+import sys
 import textwrap
 from collections.abc import Sequence
 from typing import Any, NoReturn
@@ -21,7 +22,7 @@ from dustoptics import __version__
 from dustoptics.cli.errors import PROG
 from dustoptics.io._text import printable
 
-__all__ = ["HELP_COLUMNS", "HelpFormatter", "add_command", "build_parser"]
+__all__ = ["HELP_COLUMNS", "HelpFormatter", "add_command", "build_parser", "detail_group"]
 
 #: Width of ``--help``, whatever the terminal's: an 80-column terminal shows it unwrapped.
 HELP_COLUMNS = 80
@@ -41,10 +42,71 @@ _COMMAND_MODULES = (
 
 
 class _Parser(argparse.ArgumentParser):
-    """argparse with usage errors on one line: ``dustoptics: error: <message>``."""
+    """argparse with usage errors on one line (``dustoptics: error: <message>``) and a short
+    ``--help``.
+
+    Argument groups marked with :func:`detail_group` (each format's options) are left out of
+    ``--help`` and shown by ``--help-all``, which a parser gets with its first such group.
+    """
 
     def error(self, message: str) -> NoReturn:
         self.exit(2, f"{PROG}: error: {printable(message)} (see '{self.prog} --help')\n")
+
+    def format_help(self, *, full: bool = False) -> str:
+        groups = self._action_groups
+        hidden = [] if full else [g for g in groups if getattr(g, "detail", False)]
+        helps = [(a, a.help) for g in hidden for a in g._group_actions]
+        # Out of the usage line too: argparse leaves out the actions whose help is SUPPRESS.
+        for action, _ in helps:
+            action.help = argparse.SUPPRESS
+        self._action_groups = [g for g in groups if g not in hidden]
+        try:
+            return super().format_help()
+        finally:
+            self._action_groups = groups
+            for action, text in helps:
+                action.help = text
+
+
+class _HelpAll(argparse.Action):
+    """``--help-all``: the whole help, the detail groups included."""
+
+    def __init__(self, option_strings: Sequence[str], dest: str, **kwargs: Any) -> None:
+        super().__init__(option_strings, dest=argparse.SUPPRESS, nargs=0, **kwargs)
+
+    def __call__(self, parser: argparse.ArgumentParser, *args: Any, **kwargs: Any) -> None:
+        text = (
+            parser.format_help(full=True) if isinstance(parser, _Parser) else parser.format_help()
+        )
+        parser._print_message(text, sys.stdout)
+        parser.exit(0)
+
+
+def detail_group(
+    parser: argparse.ArgumentParser, title: str, description: str | None = None
+) -> argparse._ArgumentGroup:
+    """An argument group shown by ``--help-all`` only (``--help`` says it is there).
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser
+        The command's parser; it gets ``--help-all`` with its first detail group.
+    title, description : str
+        The group's heading and text.
+
+    Returns
+    -------
+    argparse._ArgumentGroup
+    """
+    if not any(isinstance(a, _HelpAll) for a in parser._actions):
+        parser.add_argument(
+            "--help-all",
+            action=_HelpAll,
+            help="show this help with every format's options (left out of --help), and exit",
+        )
+    group = parser.add_argument_group(title, description)
+    group.detail = True  # type: ignore[attr-defined]
+    return group
 
 
 class HelpFormatter(argparse.RawDescriptionHelpFormatter):

@@ -12,9 +12,13 @@ from dustoptics import io
 from dustoptics.cli import _parser, main
 
 
-def _help(capsys, *argv: str) -> str:
-    assert main([*argv, "--help"]) == 0
+def _help(capsys, *argv: str, flag: str = "--help") -> str:
+    assert main([*argv, flag]) == 0
     return capsys.readouterr().out
+
+
+def _has_help_all(parser: argparse.ArgumentParser) -> bool:
+    return any("--help-all" in action.option_strings for action in parser._actions)
 
 
 def _commands(parser: argparse.ArgumentParser, prefix: tuple[str, ...] = ()):
@@ -76,7 +80,7 @@ def test_help_fits_80_columns_and_keeps_option_names_whole(capsys, monkeypatch, 
     monkeypatch.setenv("COLUMNS", columns)
     parser = _parser()
     for argv, sub in [((), parser), *_commands(parser)]:
-        text = _help(capsys, *argv)
+        text = _help(capsys, *argv, flag="--help-all" if _has_help_all(sub) else "--help")
         lines = text.splitlines()
         assert max(len(line) for line in lines) <= 80, (argv, max(lines, key=len))
         words = text.split()
@@ -84,3 +88,22 @@ def test_help_fits_80_columns_and_keeps_option_names_whole(capsys, monkeypatch, 
             for option in action.option_strings:
                 assert option in words or f"[{option}" in text, (argv, option)
         assert not any(re.search(r"(^|\s)--?[a-z]+(-[a-z0-9]+)*-$", line) for line in lines), argv
+
+
+def test_help_is_short_and_help_all_has_every_format_option(capsys):
+    """``--help`` leaves each format's options out (and says where they are); ``--help-all``
+    shows them; both parse the same options."""
+    short = _help(capsys, "build")
+    full = _help(capsys, "build", flag="--help-all")
+    assert "--help-all" in short and "--n-angles" not in short and "--glsl-version" not in short
+    assert "--n-angles N" in full and "--glsl-version" in full
+    assert len(short.splitlines()) < len(full.splitlines()) - 40
+    args = _parser().parse_args(["build", "--format", "texture", "--n-angles", "91"])
+    assert args.n_angles == 91
+
+
+def test_help_all_is_only_where_there_is_more_to_show(capsys):
+    parser = _parser()
+    with_more = {argv for argv, sub in _commands(parser) if _has_help_all(sub)}
+    assert ("build",) in with_more and ("export",) in with_more
+    assert ("info",) not in with_more

@@ -35,7 +35,7 @@ def example_fixture():
 
 
 def test_the_example_is_in_build_help(example, capsys):
-    assert main(["build", "--help"]) == 0
+    assert main(["build", "--help-all"]) == 0
     out = capsys.readouterr().out
     assert "g-table" in out and "g and ssa per wavelength" in out
     assert "--g-digits N" in out and "significant digits of g and ssa" in out
@@ -100,7 +100,7 @@ def test_build_refuses_what_a_phase_only_model_cannot_supply(example, tmp_path, 
 
 def test_without_the_example_nothing_mentions_it(capsys):
     assert "g-table" not in FORMATS and "g-table" not in format_table()
-    assert main(["build", "--help"]) == 0
+    assert main(["build", "--help-all"]) == 0
     assert "g-table" not in capsys.readouterr().out
 
 
