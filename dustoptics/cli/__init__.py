@@ -56,6 +56,9 @@ from __future__ import annotations
 
 import argparse
 import gc
+import sys
+import warnings
+from typing import TextIO
 
 from dustoptics.cli import _interrupt, errors
 
@@ -84,7 +87,11 @@ def main(argv: list[str] | None = None) -> int:
             args = build_parser().parse_args(argv)
         except SystemExit as exc:  # argparse: --help/--version (0) or usage (2)
             return int(exc.code or 0)
-        status: int = args.run(args)
+        with warnings.catch_warnings():
+            # A warning the library gives a user reaches them as one line, not as Python's
+            # "file:line: Category: message" with the source line under it.
+            warnings.showwarning = _show_warning
+            status: int = args.run(args)
         return status
 
     with _interrupt.handling():  # Ctrl-C: one line and 130, wherever it lands
@@ -96,6 +103,18 @@ def main(argv: list[str] | None = None) -> int:
         # run, and every file is closed by now.  Not in a program that calls main().
         gc.freeze()
     return status
+
+
+def _show_warning(
+    message: Warning | str,
+    category: type[Warning],
+    filename: str,
+    lineno: int,
+    file: TextIO | None = None,
+    line: str | None = None,
+) -> None:
+    """``dustoptics: warning: <message>`` on stderr (:func:`warnings.showwarning`'s signature)."""
+    print(f"{errors.PROG}: warning: {message}", file=sys.stderr)
 
 
 def _parser() -> argparse.ArgumentParser:

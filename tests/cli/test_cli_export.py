@@ -99,3 +99,28 @@ def test_export_of_what_a_table_lacks_is_refused_before_any_work(
     err = capsys.readouterr().err
     assert needle in err and len(err.splitlines()) == 1, err
     assert not (tmp_path / "out").exists()
+
+
+def test_a_texture_that_loses_its_normalization_is_written_with_a_one_line_warning(
+    config, tmp_path, capsys
+):
+    """The library's warning reaches the user as ``dustoptics: warning: ...``, one line, no
+    Python source location."""
+    assert (
+        run_build(
+            config,
+            tmp_path / "t",
+            "--format",
+            "texture",
+            "--sampling",
+            "cos",
+            "--n-angles",
+            "16",
+            "--quiet",
+        )
+        == 0
+    )
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1, err
+    assert err[0].startswith("dustoptics: warning: the texture's samples (cos sampling, 16 angles)")
+    assert ".py:" not in err[0]

@@ -43,9 +43,10 @@ import io
 import json
 import math
 import os
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, Final
 
 import numpy as np
 
@@ -61,7 +62,9 @@ __all__ = [
     "PHASE_TEXTURE_FORMAT",
     "SAMPLINGS",
     "TEXTURE_FORMAT",
+    "NORMALIZATION_TOLERANCE",
     "TextureData",
+    "TextureNormalizationWarning",
     "read_texture",
     "texture_values",
     "write_texture",
@@ -164,17 +167,48 @@ def texture_values(
     return phase, theta, mu
 
 
+#: Largest ``|sphere integral of a texture's samples - 1|`` written without a
+#: :class:`TextureNormalizationWarning` [-]: the tolerance ``dustoptics sky --angles`` refuses
+#: beyond (:mod:`dustoptics.sky.approximations`).
+NORMALIZATION_TOLERANCE: Final = 0.005
+
+
+class TextureNormalizationWarning(UserWarning):
+    """A texture's samples, read as the renderer interpolates them, lose the phase function's
+    normalization by more than :data:`NORMALIZATION_TOLERANCE`."""
+
+
 def _normalization_check(
     phase32: np.ndarray, theta: np.ndarray, mu: np.ndarray | None
 ) -> list[float]:
-    """2 pi int P dmu of each row, read the way the sampling is meant to be interpolated."""
+    """2 pi int P dmu of each row, read the way the sampling is meant to be interpolated.
+
+    Warns (:class:`TextureNormalizationWarning`) when a row is more than
+    :data:`NORMALIZATION_TOLERANCE` from 1.
+    """
     p = phase32.astype(np.float64)
     if mu is None:  # linear in theta between samples: integrated exactly
-        return np.atleast_1d(sphere_integral(p, theta_deg=theta)).tolist()
-    # linear in mu between samples: the trapezoid rule is exact (mu decreasing)
-    return (
-        2.0 * math.pi * np.sum(0.5 * (p[:, 1:] + p[:, :-1]) * (mu[:-1] - mu[1:]), axis=1)
-    ).tolist()
+        integrals = np.atleast_1d(sphere_integral(p, theta_deg=theta))
+    else:  # linear in mu between samples: the trapezoid rule is exact (mu decreasing)
+        integrals = 2.0 * math.pi * np.sum(0.5 * (p[:, 1:] + p[:, :-1]) * (mu[:-1] - mu[1:]), axis=1)
+    error = np.abs(integrals - 1.0)
+    worst = int(np.argmax(error))
+    if error[worst] > NORMALIZATION_TOLERANCE:
+        sampling = "theta" if mu is None else "cos"
+        advice = (
+            "more angles (--n-angles)"
+            if mu is None
+            else "sampling 'theta' or more angles (the forward peak falls between the first cos samples)"
+        )
+        warnings.warn(
+            f"the texture's samples ({sampling} sampling, {theta.size} angles) integrate over the "
+            f"sphere to {integrals[worst]:.4g} (row {worst}), not 1 within "
+            f"{NORMALIZATION_TOLERANCE:g}: read by a renderer, the phase function is off by "
+            f"{100 * error[worst]:.2g} %; use {advice}",
+            TextureNormalizationWarning,
+            stacklevel=3,
+        )
+    return integrals.tolist()
 
 
 def _sidecar(

@@ -249,3 +249,23 @@ def test_info_on_a_sidecar_nested_too_deeply_is_a_format_error(tmp_path) -> None
         read_texture(side)
     with pytest.raises(FormatError, match="not a file dustoptics writes"):
         describe_path(side)
+
+
+def test_a_texture_that_loses_its_normalization_warns_and_one_that_keeps_it_does_not(tmp_path):
+    """HG g = 0.8 sampled at 31 cos(theta) steps: its first interval (0 to 21 deg) misses the
+    forward peak, so the samples integrate (trapezoid rule in mu, as a renderer reads them) to
+    the sum computed here independently; 361 theta steps keep it within the tolerance."""
+    import warnings
+
+    from dustoptics.io.textures.raw import NORMALIZATION_TOLERANCE, TextureNormalizationWarning
+
+    table = make_table(n_theta=1801)
+    mu = np.linspace(1.0, -1.0, 31)
+    p = henyey_greenstein(mu, g=0.8)
+    expected = 2 * math.pi * np.sum(0.5 * (p[1:] + p[:-1]) * -np.diff(mu))
+    assert abs(expected - 1) > NORMALIZATION_TOLERANCE
+    with pytest.warns(TextureNormalizationWarning, match=f"to {expected:.4g} \\(row 0\\)"):
+        write_texture(table, tmp_path, sampling="cos", n_angles=31)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", TextureNormalizationWarning)
+        write_texture(table, tmp_path / "fine", n_angles=361)
