@@ -899,7 +899,8 @@ def write_shader(
         A path ending in the language's extension (``.glsl``, ``.hlsl``,
         ``.wgsl``) is the file to write; anything else is a directory
         (created if missing) that receives ``<table name>_phase<ext>``
-        (GLSL ES 1.00: ``<table name>_phase_es100.glsl``), with characters
+        (GLSL ES 1.00: ``<table name>_phase_es100.glsl``; with ``colour``, its name
+        follows ``_phase``: ``<table name>_phase_cie1931-xyz.glsl``), with characters
         other than letters, digits, ``.``, ``_`` and ``-`` replaced by ``_``.
     language : {"glsl", "glsl100", "hlsl", "wgsl"}
         Shading language.
@@ -926,5 +927,11 @@ def write_shader(
     source = shader_source(table, language=language, **options)
     ext = sx.extension
     out = Path(out_dir_or_path)
-    target = out if out.suffix == ext else out / f"{safe_stem(table.name)}{sx.file_tail}{ext}"
+    # Each colour mode its own file: the modes' numbers differ, their files must not collide.
+    tail = (
+        sx.file_tail.replace("_phase", f"_phase_{options['colour']}", 1)
+        if options.get("colour")
+        else sx.file_tail
+    )
+    target = out if out.suffix == ext else out / f"{safe_stem(table.name)}{tail}{ext}"
     return write_files({target: source.encode("ascii")}, overwrite=overwrite)

@@ -412,7 +412,8 @@ def write_container(
     What every container writer does (:func:`~dustoptics.io.textures.ktx2.write_ktx2`,
     :func:`~dustoptics.io.textures.exr.write_exr`, :func:`~dustoptics.io.textures.npy.write_npy`):
     make the texture with :func:`phase_texture` (so its errors come before anything is
-    written), name the file ``<table name>_phase_<layout>_<sampling>_<precision><suffix>``,
+    written), name the file ``<table name>_phase_<layout>_<sampling>_<precision><suffix>`` (with
+    ``colour``, its name after ``_phase``),
     let the container encode it, and write every file in one atomic step
     (:func:`dustoptics.io._atomic.write_files`).
 
@@ -451,6 +452,11 @@ def write_container(
     """
     texture = phase_texture(table, **TextureOptions(**options).keywords())
     out = Path(out_dir_or_path)
-    name = f"{safe_stem(table.name)}_phase_{texture.layout}_{texture.sampling}_{texture.precision}"
+    # Each colour mode its own file (as the shaders'): the modes' numbers differ.
+    mode = f"_{options['colour']}" if options.get("colour") else ""
+    name = (
+        f"{safe_stem(table.name)}_phase{mode}_{texture.layout}_{texture.sampling}_"
+        f"{texture.precision}"
+    )
     target = out if accept_file_path and out.suffix == suffix else out / f"{name}{suffix}"
     return write_files(encode(texture, target), overwrite=overwrite)

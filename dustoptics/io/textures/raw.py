@@ -59,10 +59,10 @@ from dustoptics.table import PHASE_NORMALIZATION
 
 __all__ = [
     "DEFAULT_N_ANGLES",
+    "NORMALIZATION_TOLERANCE",
     "PHASE_TEXTURE_FORMAT",
     "SAMPLINGS",
     "TEXTURE_FORMAT",
-    "NORMALIZATION_TOLERANCE",
     "TextureData",
     "TextureNormalizationWarning",
     "read_texture",
@@ -190,7 +190,9 @@ def _normalization_check(
     if mu is None:  # linear in theta between samples: integrated exactly
         integrals = np.atleast_1d(sphere_integral(p, theta_deg=theta))
     else:  # linear in mu between samples: the trapezoid rule is exact (mu decreasing)
-        integrals = 2.0 * math.pi * np.sum(0.5 * (p[:, 1:] + p[:, :-1]) * (mu[:-1] - mu[1:]), axis=1)
+        integrals = (
+            2.0 * math.pi * np.sum(0.5 * (p[:, 1:] + p[:, :-1]) * (mu[:-1] - mu[1:]), axis=1)
+        )
     error = np.abs(integrals - 1.0)
     worst = int(np.argmax(error))
     if error[worst] > NORMALIZATION_TOLERANCE:

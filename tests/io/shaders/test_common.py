@@ -113,3 +113,15 @@ def test_cli_export_writes_every_language_with_prefix(tmp_path) -> None:
         text = path.read_text()
         assert "DUST_MiePhaseFunction(" in text and "MIE_" not in text
     assert main(["export", str(h5), "--out", str(out), "--format", "wgsl,msl"]) == 2
+
+
+def test_each_colour_mode_writes_a_file_of_its_own(tmp_path) -> None:
+    """Three wavelengths, CIE 1931 XYZ and linear sRGB give different numbers: three files."""
+    kw = {"min_band_coverage": 0.0}  # the test table's 440-680 nm do not cover the bands
+    (plain,) = write(TABLE, tmp_path, format="glsl")
+    (xyz,) = write(TABLE, tmp_path, format="glsl", colour="cie1931-xyz", **kw)
+    (srgb,) = write(TABLE, tmp_path, format="wgsl", colour="linear-srgb-astmg173", **kw)
+    assert plain.name == "hg_phase.glsl"
+    assert xyz.name == "hg_phase_cie1931-xyz.glsl"
+    assert srgb.name == "hg_phase_linear-srgb-astmg173.wgsl"
+    assert plain.read_bytes() != xyz.read_bytes()
