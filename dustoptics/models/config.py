@@ -85,6 +85,7 @@ import itertools
 import math
 import re
 import tomllib
+import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from types import MappingProxyType
@@ -1098,6 +1099,25 @@ def _parse_phase(ctx: _Context, value: Any) -> PhaseConfig:
     return PhaseConfig(model, model, _parse_analytic(ctx, sec, model, ("model",)))
 
 
+class SweepAxesIgnored(UserWarning):
+    """A configuration with a ``[sweep]`` table was read as one point: its own values."""
+
+
+def _sweep_axes_left_out(ctx: _Context, data: dict[str, Any]) -> None:
+    """A ``[sweep]`` table (:mod:`dustoptics.sweep`'s axes) is taken out of ``data``: the
+    configuration is its own values, one point, and a warning says so."""
+    if "sweep" not in data:
+        return
+    axes = _table(ctx, "sweep", data.pop("sweep"))
+    warnings.warn(
+        f"{ctx.source}: the [sweep] table ({len(axes)} "
+        f"{'axis' if len(axes) == 1 else 'axes'}: {', '.join(map(repr, axes))}) is left out: "
+        "this is the configuration's own values, one point ('dustoptics sweep' computes the axes)",
+        SweepAxesIgnored,
+        stacklevel=3,
+    )
+
+
 def parse_config(text: str, *, source: str = "<string>") -> BuildConfig:
     """Validate a TOML build configuration.
 
@@ -1135,6 +1155,7 @@ def parse_config(text: str, *, source: str = "<string>") -> BuildConfig:
         ) from None
     except ValueError as exc:  # tomllib's own: an integer of more than 4300 digits
         raise ConfigError(f"invalid TOML: {exc}", key=None, line=None, source=source) from None
+    _sweep_axes_left_out(ctx, data)
     _known_keys(ctx, "", data, _TOP_KEYS)
     name = _string(ctx, "name", _required(ctx, "", data, "name"))
     try:

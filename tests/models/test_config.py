@@ -367,3 +367,16 @@ def test_config_is_frozen() -> None:
         config.name = "x"  # type: ignore[misc]
     with pytest.raises(TypeError):
         config.material.parameters["hematite_fraction"] = 0.5  # type: ignore[index]
+
+
+def test_a_configuration_with_a_sweep_table_reads_as_its_own_point() -> None:
+    """A sweep's file builds as one point, its own values, and a warning names the axes;
+    a [sweep] that is not a table is refused naming the key."""
+    with_axes = BLUE + '\n[sweep]\n"size_distribution.r_eff_um" = [1.0, 1.5]\n'
+    with pytest.warns(
+        UserWarning, match=r"\[sweep\] table \(1 axis: 'size_distribution.r_eff_um'\)"
+    ):
+        point = parse_config(with_axes, source="storm.toml")
+    assert dataclasses.replace(point, source="<string>") == parse_config(BLUE)
+    with pytest.raises(ConfigError, match="sweep"):
+        parse_config(BLUE + "\nsweep = 3\n")
