@@ -504,7 +504,8 @@ def _spread(n: int) -> list[int]:
 
 
 class _Progress:
-    """``sweep: N/M point-wavelengths (P %), elapsed, ETA`` on a stream."""
+    """``sweep [####....] N/M point-wavelengths, elapsed, ETA`` on a stream, within 80 columns
+    for sweeps of up to a million point-wavelengths and a day's work."""
 
     def __init__(
         self,
@@ -537,13 +538,12 @@ class _Progress:
             eta = "0 s"
         else:
             eta = f"{(self.total - self.done) / rate:.0f} s" if rate > 0 else "?"
-        width = 24
+        width = 16
         filled = int(width * self.done / max(1, self.total))
         bar = "#" * filled + "." * (width - filled)
         end = "\n" if (self.done == self.total or not self.tty) else "\r"
         print(
-            f"sweep [{bar}] {self.done}/{self.total} point-wavelengths "
-            f"({100.0 * self.done / max(1, self.total):.0f} %), {elapsed:.0f} s elapsed, ETA {eta}",
+            f"sweep [{bar}] {self.done}/{self.total} point-wavelengths, {elapsed:.0f} s, ETA {eta}",
             end=end,
             file=self.stream,
         )

@@ -188,3 +188,17 @@ def test_chunk_memory_estimate_counts_the_extra_arrays(case, tmp_path, monkeypat
         ("expansion" in p["inputs"]["optics"]) == (case in ("expansion", "both"))
         for p in provenance
     )
+
+
+def test_the_progress_line_fits_80_columns_at_a_million_point_wavelengths():
+    import io
+
+    from dustoptics.sweep.run import _Progress
+
+    stream = io.StringIO()
+    progress = _Progress(stream, None, 1_000_000, 0)
+    progress.start -= 86_399.0  # a day, less a second: the longest elapsed and ETA figures
+    progress.add(1)
+    lines = stream.getvalue().splitlines()
+    assert lines[-1].startswith("sweep [") and "1/1000000 point-wavelengths" in lines[-1]
+    assert max(map(len, lines)) <= 80, lines
