@@ -31,7 +31,7 @@ def test_every_python_example_of_the_readme_runs(tmp_path, monkeypatch):
     for i, block in enumerate(_python_blocks(), start=1):
         try:
             exec(compile(block, f"README.md python block {i}", "exec"), namespace)
-        except Exception as exc:  # noqa: BLE001 (the block's number in the failure)
+        except Exception as exc:  # the block's number in the failure
             raise AssertionError(f"README python block {i} fails: {exc!r}") from exc
     assert (tmp_path / "mars-dust.nc").is_file() and (tmp_path / "storm.zarr").is_dir()
     assert namespace["p_rgb"].shape == (3, 1801)  # type: ignore[attr-defined]
