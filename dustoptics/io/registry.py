@@ -18,6 +18,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 __all__ = [
     "FORMATS",
     "NEEDS",
@@ -31,6 +33,7 @@ __all__ = [
     "option",
     "option_groups",
     "register",
+    "with_export",
     "write",
 ]
 
@@ -221,13 +224,36 @@ def write(
 ) -> list[Path]:
     """Write ``table`` into ``out_dir`` in the named format (see :data:`FORMATS`).
 
+    The options given (``**keywords``) are recorded in the provenance of the table the writer
+    gets (:func:`with_export`), as the command line records them: a file's ``input_hash`` is
+    the same whether this function or ``dustoptics build``/``export`` wrote it.
+
     Raises
     ------
     ValueError
         Unknown format (the message lists the valid names).
     """
     _check_names([format])
-    return FORMATS[format].write(table, out_dir, overwrite=overwrite, **keywords)
+    fmt = FORMATS[format]
+    return fmt.write(with_export(table, fmt, keywords), out_dir, overwrite=overwrite, **keywords)
+
+
+def with_export(table: Any, fmt: Format, keywords: Mapping[str, Any]) -> Any:
+    """``table`` with the writer ``keywords`` given recorded under ``"export"`` in its
+    provenance inputs, so that a file's ``input_hash`` means one thing whoever wrote it (the
+    command line or :func:`write`): the SHA-256 of the inputs of its numbers, the table's and
+    the export options given.  Formats whose options record something else (``recorded()``)
+    are recorded by :func:`dustoptics.io.outputs.write_formats`."""
+    given = {
+        k: np.asarray(v).tolist() if isinstance(v, (tuple, list, np.ndarray)) else v
+        for k, v in keywords.items()
+        if v is not None
+    }
+    if not given or fmt.options is None or hasattr(fmt.options, "recorded"):
+        return table
+    prov = table.provenance
+    inputs = {**prov.inputs, "export": {"format": fmt.name, **given}}
+    return table.replace(provenance=dataclasses.replace(prov, inputs=inputs))
 
 
 def formats_needing(need: str | tuple[str, ...], formats: Iterable[str]) -> list[str]:

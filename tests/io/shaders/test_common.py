@@ -125,3 +125,22 @@ def test_each_colour_mode_writes_a_file_of_its_own(tmp_path) -> None:
     assert xyz.name == "hg_phase_cie1931-xyz.glsl"
     assert srgb.name == "hg_phase_linear-srgb-astmg173.wgsl"
     assert plain.read_bytes() != xyz.read_bytes()
+
+
+def test_input_hash_means_one_thing_from_the_api_and_the_command_line(tmp_path) -> None:
+    """dustoptics.io.write and the command line's write_formats record the same export
+    options, so the same file, its input_hash included; without options, the table's hash."""
+    from dustoptics.io.outputs import write_formats
+    from dustoptics.io.registry import FormatOptions
+
+    channels = (650.0, 530.0, 450.0)
+    (api,) = write(TABLE, tmp_path / "api", format="glsl", channels_nm=channels)
+    (cli,) = write_formats(
+        TABLE, tmp_path / "cli", ["glsl"], options=FormatOptions(channels_nm=channels)
+    )
+    assert api.read_bytes() == cli.read_bytes()
+    assert TABLE.provenance.input_hash not in api.read_text()
+    (plain,) = write(TABLE, tmp_path / "plain", format="glsl")
+    assert f"input_hash (SHA-256 of the table's inputs): {TABLE.provenance.input_hash}" in (
+        plain.read_text()
+    )
