@@ -16,11 +16,24 @@ import stat
 from pathlib import Path
 from typing import Any
 
-__all__ = ["MAX_JSON_DEPTH", "MAX_TEXT_BYTES", "FormatError", "load_json", "read_checked"]
+__all__ = [
+    "MAX_CONFIG_BYTES",
+    "MAX_JSON_DEPTH",
+    "MAX_TEXT_BYTES",
+    "FormatError",
+    "load_json",
+    "read_checked",
+    "read_config_text",
+]
 
 #: Largest text file (CSV, JSON sidecar) a reader accepts: 64 MiB, 40 times a
 #: 48 x 1,801 seed CSV table. [bytes]
 MAX_TEXT_BYTES = 64 * 1024**2
+
+#: Largest TOML configuration file a command reads (``build CONFIG``, ``sweep CONFIG``,
+#: ``retrieve --model``): 16 MiB, a thousand times a preset with a tabulated distribution.
+#: [bytes]
+MAX_CONFIG_BYTES = 16 * 1024**2
 
 #: Deepest nesting of arrays and objects a JSON sidecar may have (ours have 4).
 MAX_JSON_DEPTH = 32
@@ -121,3 +134,23 @@ def load_json(path: str | os.PathLike[str], *, encoding: str = "utf-8") -> Any:
         return json.loads(text)
     except (ValueError, RecursionError) as exc:
         raise FormatError(f"{p}: not valid JSON ({' '.join(str(exc).split())})") from None
+
+
+def read_config_text(path: str | os.PathLike[str], *, limit: int = MAX_CONFIG_BYTES) -> str:
+    """The UTF-8 text of a configuration file, read as :func:`read_checked` reads (a FIFO, a
+    device or a file over ``limit`` bytes refused before a byte is read).
+
+    Raises
+    ------
+    FileNotFoundError
+        No such file.
+    FormatError
+        Not a regular file, larger than ``limit``, or not UTF-8 text.
+    """
+    data = read_checked(path, limit=limit)
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise FormatError(
+            f"{Path(path)}: not UTF-8 text (byte {exc.start}); a configuration is a TOML file"
+        ) from None

@@ -17,6 +17,7 @@ import warnings
 from pathlib import Path
 from typing import Final
 
+from dustoptics._files import read_config_text
 from dustoptics.models import presets
 from dustoptics.models.config import BuildConfig, parse_config
 
@@ -101,11 +102,14 @@ def load_config(path: str | os.PathLike[str]) -> BuildConfig:
     ------
     dustoptics.models.config.ConfigError
         As :func:`~dustoptics.models.config.parse_config`, with the path in the message.
+    dustoptics.io.FormatError
+        Not a regular file (a FIFO, a device), larger than
+        :data:`dustoptics._files.MAX_CONFIG_BYTES`, or not UTF-8 text: refused before it is read.
     OSError
         If the file cannot be read.
     """
     p = Path(path)
-    config = parse_config(p.read_text(encoding="utf-8"), source=str(p))
+    config = parse_config(read_config_text(p), source=str(p))
     for problem in preset_copy_problems(config):
         warnings.warn(f"configuration {str(p)!r} {problem}", PresetCopyWarning, stacklevel=2)
     return config

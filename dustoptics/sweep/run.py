@@ -909,6 +909,10 @@ def sweep(
             shutil.rmtree(temporary, ignore_errors=True)
 
 
+#: Most worker processes per core a local cluster starts without ``allow_large``.
+_MAX_WORKERS_PER_CORE = 4
+
+
 def _check_options(max_points: Any, chunk_wavelengths: Any, workers: Any, allow_large: Any) -> None:
     """Refuse :func:`sweep`'s options outside their ranges, before any work."""
     for key, value in (
@@ -922,6 +926,14 @@ def _check_options(max_points: Any, chunk_wavelengths: Any, workers: Any, allow_
             raise ValueError(f"{key} must be a positive integer; got {value!r}")
     if not isinstance(allow_large, bool):
         raise TypeError(f"allow_large must be True or False; got {allow_large!r}")
+    most = _MAX_WORKERS_PER_CORE * (os.cpu_count() or 1)
+    if workers is not None and workers > most and not allow_large:
+        raise ValueError(
+            f"workers={workers}: a local cluster of at most {most} worker processes "
+            f"({_MAX_WORKERS_PER_CORE} per core of this machine's {os.cpu_count() or 1}; each "
+            "one a Python process with its own compiled kernels); pass allow_large=True "
+            "(--allow-large) to start more"
+        )
 
 
 def _todo(store: Path, layout: _Layout, *, new: bool) -> list[tuple[int, ...]]:

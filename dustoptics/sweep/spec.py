@@ -54,6 +54,7 @@ from typing import Any
 import numpy as np
 
 from dustoptics import _validation
+from dustoptics._files import read_config_text
 from dustoptics._validation import BudgetError, check_budget
 from dustoptics.models.compute import mie_request
 from dustoptics.models.config import (
@@ -334,6 +335,11 @@ def _toml_spelling(parts: Sequence[str]) -> str:
     return ".".join(_toml_key(p) for p in parts)
 
 
+#: Deepest dotted ``[sweep]`` key: the configuration's deepest input
+#: (``size_distribution.modes[1].r_eff_um``, ``material.host_index.n``) is 3 deep.
+_MAX_KEY_DEPTH = 8
+
+
 def _flatten_sweep_table(
     table: Mapping[str, Any], prefix: tuple[str, ...] = ()
 ) -> dict[str, tuple[str, Any]]:
@@ -341,6 +347,11 @@ def _flatten_sweep_table(
     quoted (``"a.b" = [...]``) or nested (``a.b = [...]``, which TOML reads as
     tables).  Two entries for one input are refused, naming both."""
     out: dict[str, tuple[str, Any]] = {}
+    if len(prefix) > _MAX_KEY_DEPTH:
+        raise ValueError(
+            f"[sweep] key {_toml_spelling(prefix[:4])}... is nested {len(prefix)} tables deep; "
+            f"a configuration's inputs are at most {_MAX_KEY_DEPTH} deep"
+        )
     for k, v in table.items():
         parts = prefix + (str(k),)
         if isinstance(v, Mapping) and not {"start", "stop", "num"} & set(v):
@@ -492,7 +503,7 @@ def _base_from(config: Any) -> tuple[dict[str, Any], dict[str, Any], str]:
                     f"config must be a preset name ({', '.join(list_presets())}), a TOML file, "
                     f"TOML text or a BuildConfig; got {text_config!r}"
                 )
-            text, source = path.read_text(encoding="utf-8"), str(path)
+            text, source = read_config_text(path), str(path)
         try:
             data = tomllib.loads(text)
         except tomllib.TOMLDecodeError as exc:

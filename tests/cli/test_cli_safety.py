@@ -265,3 +265,41 @@ def test_glsl_options_are_checked_before_computing(tmp_path, capsys, monkeypatch
     assert main(argv) in (1, 2)
     _error_line(capsys)
     assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("kind", ["fifo", "device", "large", "binary"])
+def test_a_configuration_that_is_not_a_small_text_file_is_refused_before_reading(
+    tmp_path, capsys, kind
+):
+    """``build CONFIG`` reads through the guarded reader, as ``sweep`` and ``retrieve --model``:
+    a FIFO (which hung), /dev/zero (MemoryError), a file over the limit, bytes that are not
+    UTF-8."""
+    from dustoptics._files import MAX_CONFIG_BYTES
+
+    path = tmp_path / "model.toml"
+    if kind == "fifo":
+        os.mkfifo(path)
+    elif kind == "device":
+        path = "/dev/zero"
+    elif kind == "large":
+        with open(path, "wb") as f:
+            f.truncate(MAX_CONFIG_BYTES + 1)
+    else:
+        path.write_bytes(b"name = \xff\xfe\n")
+    assert main(["build", str(path), "--out", str(tmp_path / "out"), "--quiet"]) == 1
+    line = _error_line(capsys)
+    assert str(path) in line
+    assert ("not a regular file" in line) if kind in ("fifo", "device") else True
+    assert ("limit" in line) if kind == "large" else True
+    assert ("not UTF-8" in line) if kind == "binary" else True
+    assert not (tmp_path / "out").exists()
+
+
+def test_more_sweep_workers_than_a_machine_holds_is_a_usage_error(tmp_path, capsys):
+    """--workers 1000 started a thousand processes and failed after minutes."""
+    most = 4 * (os.cpu_count() or 1)
+    argv = ["sweep", "blue-moons", "--out", str(tmp_path / "s.zarr"), "--workers", str(most + 1)]
+    pytest.importorskip("dask")
+    assert main(argv) == 1
+    assert f"at most {most} worker processes" in _error_line(capsys)
+    assert not (tmp_path / "s.zarr").exists()

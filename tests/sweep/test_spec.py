@@ -173,3 +173,22 @@ def test_allow_large_must_be_a_bool():
 def test_an_axis_value_beyond_the_float_range_is_a_clean_error():
     with pytest.raises(ValueError, match=r"values must be finite"):
         load_sweep(TINY, {R_EFF: [10**400]})
+
+
+def test_a_sweep_key_nested_deeper_than_any_input_is_refused_not_a_recursion_error():
+    """A [sweep.a.a.a...] table 2,000 deep exhausted Python's stack (RecursionError)."""
+    text = TINY + "\n[" + ".".join(["sweep"] + ["a"] * 2000) + "]\nx = [1, 2]\n"
+    with pytest.raises(ValueError, match=r"nested 9 tables deep; .* at most 8 deep"):
+        load_sweep(text)
+
+
+def test_a_configuration_file_is_read_through_the_guarded_reader(tmp_path):
+    """A FIFO is refused without blocking, like a device or an oversized file."""
+    import os
+
+    from dustoptics._files import FormatError
+
+    fifo = tmp_path / "sweep.toml"
+    os.mkfifo(fifo)
+    with pytest.raises((FormatError, ValueError), match="sweep.toml"):
+        load_sweep(str(fifo))
