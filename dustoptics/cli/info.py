@@ -49,6 +49,10 @@ def add_parser(sub: Any) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run ``info``; returns the exit status."""
+    # info checks a sweep store's chunks before calling it complete (the sweep layer
+    # registers how); imported here, not at the top: every command's parser imports this module.
+    import dustoptics.sweep.store  # noqa: F401
+
     # What a file says is shown, never obeyed: describe_path escapes control characters.
     print(describe_path(args.file, full=args.full))
     return 0

@@ -41,6 +41,7 @@ __all__ = [
     "is_bruneton",
     "is_rt_text",
     "is_shader",
+    "register_store_verifier",
 ]
 
 #: Shading languages by file suffix.
@@ -61,6 +62,17 @@ _BRUNETON_MODEL = "E. Bruneton, precomputed_atmospheric_scattering (2017)"
 _SWEEP_IDENTITY = "sweep-identity.json"
 #: The folder of a store's chunk completion markers (``dustoptics.sweep.store.MARKERS``).
 _SWEEP_MARKERS = "sweep-done"
+
+#: The check of every chunk of a sweep store (:func:`dustoptics.sweep.store.verify_store`,
+#: registered by that module: this layer does not import the sweep's).
+_store_verifiers: list[Callable[[Path], int]] = []
+
+
+def register_store_verifier(verify: Callable[[Path], int]) -> None:
+    """Set the function that checks a sweep store's every chunk before ``info`` calls it
+    complete (``verify(path) -> chunks checked``, raising :class:`FormatError`)."""
+    _store_verifiers[:] = [verify]
+
 
 #: The attributes of a sky file its summary shows.
 _SKY_SUMMARY = (
@@ -434,8 +446,9 @@ def describe_sweep(path: Path, full: bool = True) -> str:
     """A sweep (``dustoptics sweep``): its Zarr store or netCDF file: the axes and their values,
     the variables, each point's accuracy, and for a store how many chunks are done.
 
-    Reads the metadata and the small variables only (the phase functions stay on disk).  The
-    chunks' digests are checked by :func:`dustoptics.sweep.verify_store`, not here.
+    Reads the metadata and the small variables; a store whose chunks are all marked done is
+    called complete only after :func:`dustoptics.sweep.verify_store` (registered by
+    :mod:`dustoptics.sweep.store`) has checked every chunk against its digests.
     """
     import xarray as xr  # here: xarray adds ~0.7 s to `import dustoptics` (-X importtime)
 
@@ -464,12 +477,23 @@ def describe_sweep(path: Path, full: bool = True) -> str:
         if store:
             n_chunks = int(np.prod([len(c) for c in (ds["phase"].chunks or ())]))
             done = len(list((path / _SWEEP_MARKERS).glob("*")))
-            state = "complete" if done == n_chunks else "incomplete: resume with the same command"
-            lines.append(_kv("chunks", f"{done} of {n_chunks} done ({state})"))
-            lines.append(_kv("verify", "dustoptics.sweep.verify_store(path) checks every chunk"))
+            lines.append(
+                _kv("chunks", f"{done} of {n_chunks} done ({_store_state(path, done, n_chunks)})")
+            )
         if full:
             lines += [_kv(k, _attr(v)) for k, v in sorted(ds.attrs.items()) if k != "title"]
     return "\n".join(lines)
+
+
+def _store_state(path: Path, done: int, n_chunks: int) -> str:
+    """Whether a store is complete: every chunk marked done and, checked against its digests,
+    whole (a damaged chunk is a :class:`FormatError`, not "complete")."""
+    if done != n_chunks:
+        return "incomplete: resume with the same command"
+    if not _store_verifiers:
+        return "every chunk marked done; dustoptics.sweep.verify_store(path) checks them"
+    _store_verifiers[0](path)
+    return "complete: every chunk checked against its digests"
 
 
 def _attr(value: Any) -> Any:

@@ -42,6 +42,7 @@ from pathlib import Path
 from typing import Any
 
 from dustoptics.io._atomic import FILE_MODE, FormatError, held_lock
+from dustoptics.io.describe_formats import register_store_verifier
 
 __all__ = ["StoreBusyError", "verify_store"]
 
@@ -510,3 +511,7 @@ def verify_store(path: str | os.PathLike[str]) -> int:
             "to compute it"
         )
     return sum(1 for _ in layout.names())
+
+
+# ``dustoptics info`` checks a store's chunks before it calls the store complete.
+register_store_verifier(verify_store)

@@ -304,3 +304,18 @@ def test_markers_written_at_once_by_many_workers_all_arrive(tmp_path):
         list(pool.map(write, names * 3))
     assert [n for n in names if chunk_problem(tmp_path, layout, n) is not None] == []
     assert sorted(p.name for p in (tmp_path / MARKERS).iterdir()) == sorted(names)
+
+
+def test_info_calls_a_store_complete_only_after_checking_every_chunk(copy, capsys):
+    """``dustoptics info`` said "2 of 2 done (complete)", exit 0, for a store with a flipped
+    byte, which verify_store catches; now it checks the chunks first."""
+    from dustoptics.cli import main
+
+    assert main(["info", str(copy)]) == 0
+    assert "2 of 2 done (complete: every chunk checked against its digests)" in (
+        capsys.readouterr().out
+    )
+    flip_a_byte(copy / "phase" / "0.0.0")
+    assert main(["info", str(copy)]) == 1
+    err = capsys.readouterr().err
+    assert "chunk 0.0" in err and "complete" not in err
