@@ -343,7 +343,20 @@ def whole_set(
 
 
 def _stage_file(path: Path, content: Content) -> None:
-    """Write ``content`` to ``path`` (new), flushed, fsync-ed, mode :data:`FILE_MODE`."""
+    """Write ``content`` to ``path`` (new), flushed, fsync-ed, mode :data:`FILE_MODE`.
+
+    An :class:`OSError` that names no file (``write``'s ENOSPC, ``fsync``'s EIO) is raised
+    again naming ``path``: a user sees which file of which folder could not be written.
+    """
+    try:
+        _write_new(path, content)
+    except OSError as exc:
+        if exc.filename is not None or exc.errno is None:
+            raise
+        raise type(exc)(exc.errno, f"{exc.strerror} (writing)", str(path)) from None
+
+
+def _write_new(path: Path, content: Content) -> None:
     if isinstance(content, bytes):
         fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
         with os.fdopen(fd, "wb") as handle:

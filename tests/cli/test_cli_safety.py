@@ -121,7 +121,7 @@ def test_full_disk_leaves_the_old_set_with_a_one_line_error(tmp_path, capsys, mo
     config, out = _config(tmp_path), tmp_path / "out"
     assert main(["build", str(config), "--out", str(out), "--quiet", "--format", "hdf5,csv"]) == 0
     before = {p.name: p.read_bytes() for p in (out / "small").iterdir()}
-    real = _atomic._stage_file
+    real = _atomic._write_new
 
     def full(path, content):
         if path.suffix == ".csv":
@@ -130,7 +130,7 @@ def test_full_disk_leaves_the_old_set_with_a_one_line_error(tmp_path, capsys, mo
             )
         return real(path, content)
 
-    monkeypatch.setattr(_atomic, "_stage_file", full)
+    monkeypatch.setattr(_atomic, "_write_new", full)
     config2 = _config(tmp_path, **{"r_eff_um = 0.5": "r_eff_um = 0.6"})
     assert (
         main(
@@ -138,7 +138,9 @@ def test_full_disk_leaves_the_old_set_with_a_one_line_error(tmp_path, capsys, mo
         )
         == 1
     )
-    assert "No space left on device" in _error_line(capsys)
+    line = _error_line(capsys)
+    assert "No space left on device" in line
+    assert "MiePhaseFunctionSpectrum.csv" in line  # the file that could not be written
     assert {p.name: p.read_bytes() for p in (out / "small").iterdir()} == before
 
 
