@@ -329,7 +329,7 @@ def phase_texture(
         "channels": channel_info,
         "precision": precision,
         "max_relative_rounding_error": rounding,
-        "sphere_integral_of_samples": _normalization_check(integral_rows, theta, mu),
+        "sphere_integral_of_samples": _normalization_check(integral_rows, theta, mu, table),
         "axes": {"columns": angle_axis, "rows": row_axis},
         "table": table.name,
         "input_hash": table.provenance.input_hash,

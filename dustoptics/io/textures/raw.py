@@ -179,12 +179,13 @@ class TextureNormalizationWarning(UserWarning):
 
 
 def _normalization_check(
-    phase32: np.ndarray, theta: np.ndarray, mu: np.ndarray | None
+    phase32: np.ndarray, theta: np.ndarray, mu: np.ndarray | None, table: Any
 ) -> list[float]:
     """2 pi int P dmu of each row, read the way the sampling is meant to be interpolated.
 
     Warns (:class:`TextureNormalizationWarning`) when a row is more than
-    :data:`NORMALIZATION_TOLERANCE` from 1.
+    :data:`NORMALIZATION_TOLERANCE` from 1, saying whether the texture's sampling or the
+    table's own angle grid (its phase function, linear between its angles) loses it.
     """
     p = phase32.astype(np.float64)
     if mu is None:  # linear in theta between samples: integrated exactly
@@ -196,17 +197,26 @@ def _normalization_check(
     error = np.abs(integrals - 1.0)
     worst = int(np.argmax(error))
     if error[worst] > NORMALIZATION_TOLERANCE:
+        own = np.atleast_1d(sphere_integral(table.phase, theta_deg=table.theta_deg))
+        own_worst = int(np.argmax(np.abs(own - 1.0)))
+        if abs(own[own_worst] - 1.0) > NORMALIZATION_TOLERANCE:
+            advice = (
+                f"the table's own {np.asarray(table.theta_deg).size} angles already integrate to "
+                f"{own[own_worst]:.4g}: compute it on more angles (n_theta)"
+            )
+        elif mu is None:
+            advice = "use more angles (--n-angles)"
+        else:
+            advice = (
+                "use sampling 'theta' or more angles (the forward peak falls between the "
+                "first cos samples)"
+            )
         sampling = "theta" if mu is None else "cos"
-        advice = (
-            "more angles (--n-angles)"
-            if mu is None
-            else "sampling 'theta' or more angles (the forward peak falls between the first cos samples)"
-        )
         warnings.warn(
-            f"the texture's samples ({sampling} sampling, {theta.size} angles) integrate over the "
-            f"sphere to {integrals[worst]:.4g} (row {worst}), not 1 within "
+            f"the texture's samples ({sampling} sampling, {theta.size} angles) integrate over "
+            f"the sphere to {integrals[worst]:.4g} (row {worst}), not 1 within "
             f"{NORMALIZATION_TOLERANCE:g}: read by a renderer, the phase function is off by "
-            f"{100 * error[worst]:.2g} %; use {advice}",
+            f"{100 * error[worst]:.2g} %; {advice}",
             TextureNormalizationWarning,
             stacklevel=3,
         )
@@ -291,7 +301,7 @@ def _sidecar(
         "quantity": "phase function",
         "unit": "sr^-1",
         "normalization": PHASE_NORMALIZATION,
-        "sphere_integral_of_samples": _normalization_check(phase32, theta, mu),
+        "sphere_integral_of_samples": _normalization_check(phase32, theta, mu, table),
         "source_angles": int(np.asarray(table.theta_deg).size),
         "table": table.name,
         "input_hash": table.provenance.input_hash,
