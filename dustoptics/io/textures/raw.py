@@ -596,15 +596,28 @@ def _read_npy(path: Path, meta: dict[str, Any]) -> TextureData:
     itemsize = 4 if dtype == "<f4" else 2
     nbytes = height * width * channels * itemsize
     _, data = _array_file(path, meta, nbytes, nbytes + _NPY_HEADER_MAX, ".npy array")
+    # The header's declared shape and type are checked before numpy allocates them (a
+    # header may declare 112 GiB in a file of a few hundred bytes).
+    try:
+        buffer = io.BytesIO(data)
+        version = np.lib.format.read_magic(buffer)
+        read_header = (
+            np.lib.format.read_array_header_1_0
+            if version == (1, 0)
+            else np.lib.format.read_array_header_2_0
+        )
+        shape, _, declared = read_header(buffer, max_header_size=_NPY_HEADER_MAX)
+    except (ValueError, OSError, EOFError, SyntaxError) as exc:
+        raise FormatError(f"{path}: the array file is not a NumPy .npy array ({exc})") from None
+    if declared != np.dtype(dtype) or tuple(shape) != (height, width, channels):
+        raise FormatError(
+            f"{path}: the array file holds {declared.str} of shape {list(shape)}; the "
+            f"sidecar says {dtype} of shape {[height, width, channels]}"
+        )
     try:
         pixels = np.load(io.BytesIO(data), allow_pickle=False)
     except (ValueError, OSError, EOFError) as exc:
         raise FormatError(f"{path}: the array file is not a NumPy .npy array ({exc})") from None
-    if pixels.dtype != np.dtype(dtype) or pixels.shape != (height, width, channels):
-        raise FormatError(
-            f"{path}: the array file holds {pixels.dtype.str} of shape {list(pixels.shape)}; the "
-            f"sidecar says {dtype} of shape {[height, width, channels]}"
-        )
     rows = pixels[0].T if layout == "rgb" else pixels[:, :, 0]
     phase = np.ascontiguousarray(rows, dtype=np.float32)
     phase.setflags(write=False)

@@ -269,3 +269,29 @@ def test_a_texture_that_loses_its_normalization_warns_and_one_that_keeps_it_does
     with warnings.catch_warnings():
         warnings.simplefilter("error", TextureNormalizationWarning)
         write_texture(table, tmp_path / "fine", n_angles=361)
+
+
+def test_an_npy_header_declaring_a_huge_array_is_refused_before_numpy_allocates(tmp_path):
+    """A header rewritten to declare (100000, 100000, 3) float32 (112 GiB) in a file of a few
+    hundred bytes, with the sidecar's checksum made to match: numpy allocated first."""
+    import hashlib
+    import re
+    import struct
+
+    from dustoptics.io.textures.npy import write_npy
+
+    array, side = write_npy(make_table(), tmp_path, layout="rgb", n_angles=91)
+    data = array.read_bytes()
+    major = data[6]
+    size_format, start = ("<H", 10) if major == 1 else ("<I", 12)
+    (n,) = struct.unpack(size_format, data[8:start])
+    header = data[start : start + n].decode("latin1")
+    huge = re.sub(r"'shape': \([^)]*\)", "'shape': (100000, 100000, 3)", header).rstrip()
+    crafted = data[:start] + (huge.ljust(n - 1) + "\n").encode("latin1") + data[start + n :]
+    assert len(crafted) == len(data)
+    array.write_bytes(crafted)
+    meta = json.loads(side.read_text())
+    meta["sha256"] = hashlib.sha256(crafted).hexdigest()
+    side.write_text(json.dumps(meta))
+    with pytest.raises(FormatError, match=r"shape \[100000, 100000, 3\]; the sidecar says"):
+        read_texture(side)
