@@ -23,6 +23,7 @@ users too:
 
 from __future__ import annotations
 
+import contextlib
 import os
 import tempfile
 from collections.abc import Callable, Mapping, Sequence
@@ -33,7 +34,7 @@ from typing import TYPE_CHECKING, Any
 from dustoptics._validation import check_file_name, check_inside
 from dustoptics.atmosphere.build import SET_PROVENANCE_SUFFIX, set_provenance
 from dustoptics.atmosphere.sets import with_optical_depth
-from dustoptics.io._atomic import FormatError, _commit, file_set, write_files
+from dustoptics.io._atomic import STAGE_PREFIX, FormatError, _commit, file_set, write_files
 from dustoptics.io.csv.cosmoscout import ProfileOptions, write_atmosphere
 from dustoptics.io.csv.seed import SUMMARY_FILENAME, read_seed_csv
 from dustoptics.io.engines.bruneton import write_bruneton
@@ -356,8 +357,29 @@ def place_outputs(
         for path in render(staging):
             rendered[out / Path(path).resolve().relative_to(staging)] = Path(path)
         contents: dict[Path, bytes] = {t: p.read_bytes() for t, p in rendered.items()}
+        if _all_up_to_date(out, rendered, same):
+            # Nothing to write: no staging directory, no lock (a read-only folder of the
+            # same files is up to date).  Each file is replaced only whole (os.replace), so
+            # files that all hold the new content are one set even while a writer runs.
+            return Placement(written=(), unchanged=tuple(rendered))
         written = _commit(contents, overwrite=force, root=out, select=select)
     return Placement(written=tuple(written), unchanged=tuple(unchanged))
+
+
+def _all_up_to_date(
+    out: Path, rendered: Mapping[Path, Path], same: Callable[[Path, Path], bool] | None
+) -> bool:
+    """Whether every target already holds its new file's bytes (or content, by ``same``), and
+    no interrupted write is left in ``out`` (which the next write must settle first)."""
+    with contextlib.suppress(OSError):
+        if any(e.name.startswith(STAGE_PREFIX) for e in out.iterdir()):
+            return False
+    for target, new in rendered.items():
+        if not target.is_file() or target.is_symlink():
+            return False
+        if target.read_bytes() != new.read_bytes() and not (same is not None and same(target, new)):
+            return False
+    return True
 
 
 def place_table(

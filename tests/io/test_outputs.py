@@ -142,3 +142,28 @@ def test_write_atmosphere_set_writes_the_record_beside_cosmoscouts_files(tmp_pat
     assert check_cosmoscout_set(tmp_path) == ["earth_aerosols", "earth_molecules", "earth_ozone"]
     with pytest.raises(FileExistsError):
         write_atmosphere_set(atm, tmp_path, inputs=inputs)
+
+
+def test_files_all_up_to_date_are_left_without_a_write_and_a_leftover_settles_first(
+    tmp_path, monkeypatch
+):
+    """An up-to-date build on a read-only folder failed creating its staging directory: now
+    nothing is staged or locked when every file is the same; with a staging directory left
+    by an interrupted write, the write goes on as before (it settles that first)."""
+    from dustoptics.io import _atomic, outputs
+
+    def render(d):
+        (d / "a.txt").write_text("A")
+        return [d / "a.txt"]
+
+    assert place_outputs(render, tmp_path, force=False).written == (tmp_path / "a.txt",)
+
+    def no_write(*args, **kwargs):
+        raise PermissionError(30, "Read-only file system", str(tmp_path))
+
+    monkeypatch.setattr(outputs, "_commit", no_write)
+    placed = place_outputs(render, tmp_path, force=False)
+    assert placed.written == () and placed.unchanged == (tmp_path / "a.txt",)
+    (tmp_path / f"{_atomic.STAGE_PREFIX}left").mkdir()
+    with pytest.raises(PermissionError):
+        place_outputs(render, tmp_path, force=False)
