@@ -90,7 +90,7 @@ def solar_illuminance_lux(*, sun_distance_m: float) -> float:
     """The Sun's illuminance at the top of an atmosphere ``sun_distance_m`` from it. [lx]
 
     ``683 lm/W * integral of E(lambda) ybar(lambda) d lambda`` over 360-830 nm
-    (the ASTM G173 extraterrestrial spectrum at 1 au [2]_, CIE 1931 ybar, 1 nm
+    (the ASTM G173-03 extraterrestrial spectrum at 1 au, CIE 1931 ybar, 1 nm
     steps, trapezoidal), scaled by ``(1 au / d)^2``: 133,121 lx at 1 au.
 
     Parameters
