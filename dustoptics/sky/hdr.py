@@ -301,8 +301,9 @@ def cubemap(env: EnvironmentMap, *, size: int | None = None) -> np.ndarray:
 
     Y is up and the Sun's azimuth is +X (the map's centre column); each texel
     takes the map's value in its centre direction (bilinear; the ground is
-    uniform).  Face orientations follow OpenGL's cube-map convention (the
-    layout Unity and Godot import as a horizontal strip).
+    uniform).  Face orientations follow OpenGL's cube-map convention; the face
+    order is that of the 6 x 1 strips Unity and Godot import (their face
+    orientations are not checked here).
 
     Parameters
     ----------
