@@ -8,6 +8,7 @@ are named, and refused if they exist without ``--force``, before any work.
 from __future__ import annotations
 
 import argparse
+import json
 from pathlib import Path
 from typing import Any
 
@@ -15,13 +16,19 @@ from dustoptics._validation import check_file_name, check_inside
 from dustoptics.cli.build import table_builder
 from dustoptics.cli.errors import PROG, UsageError
 from dustoptics.cli.parser import _float_list, add_command
-from dustoptics.io._atomic import check_targets, safe_stem
+from dustoptics.io._atomic import check_targets, safe_stem, write_files
 from dustoptics.io.engines.fit import _IDENTIFIER, FIT_LANGUAGES, write_fit
 from dustoptics.io.outputs import read_table
 from dustoptics.io.shaders.common import shader_syntax
+from dustoptics.models.dust_phase_fit import (
+    DUST_FIT_PRESETS,
+    dust_phase_glsl,
+    dust_phase_wgsl,
+    load_dust_phase_fit,
+)
 from dustoptics.scattering.fit import FIT_MODEL_ALIASES, FIT_MODELS, fit_table, resolve_model
 
-__all__ = ["add_parser", "fit_targets", "run"]
+__all__ = ["add_parser", "by_size_targets", "fit_targets", "run"]
 
 _FIT_MODEL_HELP = ", ".join(
     f"{name} ({', '.join(a for a, n in FIT_MODEL_ALIASES.items() if n == name)})"
@@ -38,6 +45,7 @@ def add_parser(sub: Any) -> None:
         examples=(
             f"{PROG} fit tables/blue-moons/blue-moons.nc --model dhg --out fits",
             f"{PROG} fit hybrid --model hg --colour linear-srgb-astmg173",
+            f"{PROG} fit blue-moons --by-size --out fits",
         ),
     )
     p.set_defaults(run=run)
@@ -71,6 +79,74 @@ def add_parser(sub: Any) -> None:
         help="write JSON, GLSL, HLSL and WGSL into DIR/NAME/, NAME the table's name",
     )
     p.add_argument("--force", action="store_true", help="replace existing files")
+    p.add_argument(
+        "--by-size",
+        action="store_true",
+        help="the shipped closed form of a Mars dust preset ("
+        + ", ".join(DUST_FIT_PRESETS)
+        + "): HG + Draine parameters as functions of r_eff per sRGB channel, with its error "
+        "table; with --out, as JSON, GLSL and WGSL functions in DIR/NAME/",
+    )
+
+
+def by_size_targets(out: Path, preset: str) -> list[Path]:
+    """The files ``fit PRESET --by-size --out DIR`` writes, in ``DIR/PRESET/``."""
+    folder = out / check_file_name("name", preset)
+    check_inside(out, folder)
+    return [folder / f"{preset}_by-size{ext}" for ext in (".json", ".glsl", ".wgsl")]
+
+
+def _run_by_size(args: argparse.Namespace) -> int:
+    """``fit PRESET --by-size``: print the closed form's error table; write its files."""
+    if args.table not in DUST_FIT_PRESETS:
+        raise UsageError(
+            f"--by-size: {args.table!r} has no closed form by size; choose from "
+            f"{', '.join(DUST_FIT_PRESETS)}"
+        )
+    targets = by_size_targets(args.out, args.table) if args.out is not None else []
+    check_targets(targets, overwrite=args.force)  # before any work
+    fit = load_dust_phase_fit(args.table)
+    low, high = fit.r_eff_range_um
+    print(
+        f"{fit.preset}: HG + Draine by size, r_eff {low:g} .. {high:g} um, v_eff {fit.v_eff:g}, "
+        "channels " + " ".join(fit.channels)
+    )
+    print("  error of the closed form against Mie: solid-angle weighted RMS and largest")
+    print("  |P_fit / P_Mie - 1| over 0..180 deg (held: a radius between the fitted ones)")
+    print("  (alone: HG + Draine fitted to that radius on its own, fit_phase)")
+    print(
+        f"  {'r_eff um':>9s}  {'':4s}  {'channel':>7s}  {'rms %':>8s}  {'max %':>8s}  "
+        f"{'alone %':>8s}"
+    )
+    for r, fitted, channel, rms, worst, alone in fit.error_table():
+        print(
+            f"  {r:9.4f}  {'fit' if fitted else 'held':4s}  {channel:>7s}  {100 * rms:8.2f}  "
+            f"{100 * worst:8.2f}  {100 * alone:8.2f}"
+        )
+    if targets:
+        data = {
+            "preset": fit.preset,
+            "v_eff": fit.v_eff,
+            "r_eff_range_um": list(fit.r_eff_range_um),
+            "channels": list(fit.channels),
+            "coefficients": fit.coefficients.tolist(),
+            "coefficients_axes": "channel, parameter (g_hg, g_d, alpha, w_d), power of "
+            "ln(r_eff / 1 um)",
+            "errors": list(fit.errors),
+            "citation": fit.citation,
+        }
+        texts = [
+            json.dumps(data, indent=1, sort_keys=True) + "\n",
+            dust_phase_glsl(fit),
+            dust_phase_wgsl(fit),
+        ]
+        written = write_files(
+            {t: text.encode() for t, text in zip(targets, texts, strict=True)},
+            overwrite=args.force,
+        )
+        for path in written:
+            print(f"wrote {path}")
+    return 0
 
 
 def fit_targets(out: Path, name: str, model: str) -> list[Path]:
@@ -88,6 +164,8 @@ def run(args: argparse.Namespace) -> int:
     """Run ``fit``; returns the exit status.  The model, the prefix and where the files go
     are checked before the table is computed or fitted."""
 
+    if args.by_size:
+        return _run_by_size(args)
     try:
         model = resolve_model(args.model)
     except ValueError as exc:

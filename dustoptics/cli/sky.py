@@ -131,6 +131,26 @@ def add_parser(sub: Any) -> None:
         q.add_argument("--quiet", action="store_true", help="no summary output or progress")
         q.add_argument("--allow-large", action="store_true", help=_LARGE_HELP)
         q.add_argument("--no-png", action="store_true", help=_NO_PNG_HELP)
+        q.add_argument(
+            "--exr",
+            choices=("half", "float"),
+            help="also the sky as a linear HDR environment map, NAME_environment.exr "
+            "(equirectangular OpenEXR, Rec. 709 primaries, kcd m-2, the Sun left out and "
+            "described in the header), in 16-bit half or 32-bit float",
+        )
+        q.add_argument(
+            "--exr-height",
+            type=_size,
+            default=512,
+            metavar="PX",
+            help="the environment map's height [pixels] (its width is twice it; default 512)",
+        )
+        q.add_argument(
+            "--cubemap",
+            action="store_true",
+            help="with --exr: also the map on a cube, NAME_environment_cube.exr "
+            "(a 6 x 1 strip +X -X +Y -Y +Z -Z, Y up)",
+        )
         add_preview_options(q)
         if planet == "earth":
             add_aerosol_options(q)
@@ -242,6 +262,8 @@ def run(args: argparse.Namespace) -> int:
             raise UsageError(f"--albedo must be within [0, 1]; got {args.albedo!r}")
         if args.sky_command == "mars":
             _check_presets("--dust", (args.dust,))
+        if args.cubemap and args.exr is None:
+            raise UsageError("--cubemap is the environment map on a cube: give --exr too")
         job = SkyJob(
             args.sky_command,
             out_dir=args.out,
@@ -259,6 +281,9 @@ def run(args: argparse.Namespace) -> int:
             progress=None if args.quiet else sys.stderr,
             allow_large=args.allow_large,
             png=png,
+            exr=args.exr,
+            exr_height_px=args.exr_height,
+            cubemap=args.cubemap,
         )
     # The job's own folder, DIR/NAME/, checked to stay inside DIR (NAME is a preset's).
     job = replace(job, out_dir=args.out / job.name)

@@ -11,7 +11,9 @@ inputs than those its netCDF file records is refused before any work.
 - ``"mars"`` and ``"earth"``: the sky over an observer near the ground
   (:func:`~dustoptics.sky.scene.sky_radiance`) as a netCDF file
   ``NAME_sky.nc``, a fisheye and a panorama (PNG); optionally a sunset
-  sequence at one exposure and the limb seen from space;
+  sequence at one exposure, the limb seen from space, and the sky as a
+  linear HDR environment map (OpenEXR, :mod:`dustoptics.sky.hdr`:
+  ``NAME_environment.exr``, and its cube map ``NAME_environment_cube.exr``);
 - ``"compare"``: the seed thesis's comparisons of the Mars dust models
   (:func:`~dustoptics.sky.compare.compare_mars_models`) as
   ``mars-comparison.nc`` and one figure per quantity.
@@ -33,7 +35,7 @@ from dustoptics.atmosphere import sets
 from dustoptics.atmosphere.sets import check_earth_aerosol
 from dustoptics.io._atomic import check_targets, write_files
 from dustoptics.io.outputs import Placement, place_outputs
-from dustoptics.sky import scene, space
+from dustoptics.sky import hdr, scene, space
 from dustoptics.sky.medium import Medium
 from dustoptics.sky.orders import N_LAYERS, check_orders_cost
 from dustoptics.sky.render import N_PATH, check_render_cost
@@ -115,6 +117,16 @@ class SkyJob:
         Write the PNG images (default; they need matplotlib, the ``plot``
         extra).  False: the netCDF file only (a ``sunset`` or ``space`` job,
         whose results are images only, is then refused).
+    exr : str, optional
+        mars, earth: also the sky as an equirectangular OpenEXR environment map
+        ``NAME_environment.exr`` in this precision, ``"half"`` or ``"float"``
+        (:data:`~dustoptics.sky.hdr.EXR_PRECISIONS`; linear Rec. 709, kcd m^-2,
+        the Sun left out: :mod:`dustoptics.sky.hdr`).  Default None: none.
+    exr_height_px : int, optional
+        The environment map's height (its width is twice it).  Default 512. [pixels]
+    cubemap : bool, optional
+        With ``exr``: also the map on a cube, ``NAME_environment_cube.exr`` (a
+        6 x 1 strip, :func:`~dustoptics.sky.hdr.cubemap`).
 
     Raises
     ------
@@ -151,9 +163,13 @@ class SkyJob:
     progress: TextIO | None = field(default=None, compare=False, repr=False)
     allow_large: bool = False
     png: bool = True
+    exr: str | None = None
+    exr_height_px: int = 512
+    cubemap: bool = False
 
     def __post_init__(self) -> None:
         check_choice("kind", self.kind, SKY_JOBS)
+        self._check_exr()
         if not self.png and (self.sunset or self.space):
             raise ValueError(
                 "sunset and space give PNG images only; with png=False they would write "
@@ -183,6 +199,16 @@ class SkyJob:
             check_earth_aerosol(**self.earth_aerosol)
         object.__setattr__(self, "earth_aerosol", MappingProxyType(dict(self.earth_aerosol)))
 
+    def _check_exr(self) -> None:
+        if self.exr is None:
+            if self.cubemap:
+                raise ValueError("cubemap is the environment map on a cube: give exr too")
+            return
+        check_choice("exr", self.exr, hdr.EXR_PRECISIONS)
+        if self.kind == "compare":
+            raise ValueError("exr is for the mars and earth skies; got kind 'compare'")
+        scene.check_image_size("exr_height_px", self.exr_height_px, allow_large=self.allow_large)
+
     @property
     def _sun_elevation(self) -> float:
         assert self.sun_elevation_deg is not None  # set in __post_init__
@@ -207,8 +233,12 @@ class SkyJob:
             kinds = ["radiance", "luminance", "chromaticity", "transmittance"]
             return [out / f"{stem}.nc"] + [out / f"{stem}_{k}.png" for k in kinds if self.png]
         names = [f"{stem}_sky.nc"]
+        if self.exr is not None:
+            names.append(f"{stem}_environment.exr")
+            if self.cubemap:
+                names.append(f"{stem}_environment_cube.exr")
         if not self.png:
-            return [out / names[0]]
+            return [out / n for n in names]
         names += [f"{stem}_fisheye.png", f"{stem}_panorama.png"]
         if self.sunset:
             names += [f"{stem}_sunset_{e:+05.1f}.png" for e in SUNSET_ELEVATIONS_DEG]
@@ -227,7 +257,8 @@ class SkyJob:
         """What the job's files are made from, as its netCDF file records it.
 
         Every parameter the job of this kind uses except where the files go, the progress,
-        ``allow_large`` and ``png`` (the netCDF file does not depend on them).
+        ``allow_large``, ``png`` and the environment map's (the netCDF file does not depend
+        on them).
 
         Returns
         -------
@@ -437,6 +468,21 @@ class SkyJob:
                 out[stem.with_name(f"{atm.name}_preview.png")] = pv.png(exposure=exposure)
         data.attrs[INPUTS_ATTRIBUTE] = canonical_json(self.inputs())
         out[stem.with_name(f"{atm.name}_sky.nc")] = bytes(data.to_netcdf(engine="scipy"))
+        if self.exr is not None:
+            env = hdr.environment_map(
+                sky,
+                sun_distance_m=atm.sun_distance_m,
+                height=self.exr_height_px,
+                exposure=exposure,
+                allow_large=self.allow_large,
+            )
+            out[stem.with_name(f"{atm.name}_environment.exr")] = hdr.exr_bytes(
+                env, precision=self.exr
+            )
+            if self.cubemap:
+                out[stem.with_name(f"{atm.name}_environment_cube.exr")] = hdr.exr_bytes(
+                    env, precision=self.exr, cube=True
+                )
         if not images:
             return out
         out |= {

@@ -15,8 +15,12 @@ from __future__ import annotations
 
 import json
 import os
+import tempfile
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
+
+import numpy as np
 
 from dustoptics.io._atomic import FormatError
 from dustoptics.io.describe_formats import describe_texture
@@ -29,7 +33,7 @@ from dustoptics.io.textures.phase_texture import (
     write_container,
 )
 
-__all__ = ["read_exr_metadata", "write_exr"]
+__all__ = ["encode_exr", "read_exr_metadata", "write_exr"]
 
 # The data window is stored as int32 coordinates.
 _CONTAINER_LIMIT = 2**31 - 1
@@ -70,6 +74,64 @@ def _writer(texture: PhaseTexture) -> Any:
             image.write(str(path))
 
     return write
+
+
+def encode_exr(
+    channels: Mapping[str, np.ndarray],
+    *,
+    attributes: Mapping[str, Any] | None = None,
+    metadata: Mapping[str, Any] | None = None,
+) -> bytes:
+    """An OpenEXR image as bytes: scanlines, ZIP compression (lossless), deterministic.
+
+    The encoder behind the phase textures, for any other image the package
+    writes (the sky's environment maps, :mod:`dustoptics.sky.hdr`).
+
+    Parameters
+    ----------
+    channels : mapping of str to numpy.ndarray
+        Channel name to pixels, shape (height, width) or (height, width, k)
+        (``"RGB"`` with k = 3 gives channels R, G, B), dtype float16 (HALF) or
+        float32 (FLOAT).
+    attributes : mapping, optional
+        Further header attributes, as the OpenEXR binding takes them (standard
+        ones such as ``chromaticities`` and ``whiteLuminance``; a Python float
+        is written as a float attribute, a str as a string).
+    metadata : mapping, optional
+        Written as the string attribute ``dustoptics`` (canonical JSON: sorted
+        keys, ASCII, no NaN), read back by :func:`read_exr_metadata`.
+
+    Returns
+    -------
+    bytes
+
+    Raises
+    ------
+    ImportError
+        OpenEXR is not installed.
+    ValueError
+        A channel neither float16 nor float32.
+    """
+    openexr = _openexr()
+    for name, pixels in channels.items():
+        if pixels.dtype not in (np.float16, np.float32):
+            raise ValueError(
+                f"channels[{name!r}] must be float16 (half) or float32 (float); got {pixels.dtype}"
+            )
+    header: dict[str, Any] = {
+        "compression": openexr.ZIP_COMPRESSION,
+        "type": openexr.scanlineimage,
+        **(attributes or {}),
+    }
+    if metadata is not None:
+        header["dustoptics"] = json.dumps(
+            dict(metadata), sort_keys=True, allow_nan=False, ensure_ascii=True
+        )
+    with tempfile.TemporaryDirectory(prefix="dustoptics-exr-") as tmp:
+        target = Path(tmp) / "image.exr"
+        with openexr.File(header, {k: np.ascontiguousarray(v) for k, v in channels.items()}) as f:
+            f.write(str(target))
+        return target.read_bytes()
 
 
 def write_exr(
