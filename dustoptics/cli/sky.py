@@ -25,7 +25,7 @@ from dustoptics.cli.report import report_placement, say
 from dustoptics.cli.sky_preview import add_preview_options, approximations_from_args, report_preview
 from dustoptics.models.presets import list_presets
 from dustoptics.sky import scene
-from dustoptics.sky.job import SkyJob
+from dustoptics.sky.job import SkyJob, sky_colour_summary
 
 __all__ = ["add_parser", "run"]
 
@@ -291,6 +291,9 @@ def run(args: argparse.Namespace) -> int:
     placed = job.place(force=args.force)
     report_placement(args, job.name, job.out_dir, placed)
     report_preview(args, [*placed.written, *placed.unchanged])
+    sky_file = job.out_dir / f"{job.name}_sky.nc"
+    if args.sky_command != "compare" and sky_file.is_file():
+        say(args, sky_colour_summary(sky_file))
     if args.sky_command == "compare" and not args.quiet:  # the rover table, read back
         # lazy: sky.compare adds 20-30 ms to every command's start-up (-X importtime)
         from dustoptics.sky.compare import read_rover_comparison

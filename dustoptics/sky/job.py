@@ -30,6 +30,8 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import TYPE_CHECKING, Any, Final, TextIO
 
+import numpy as np
+
 from dustoptics._validation import check_choice
 from dustoptics.atmosphere import sets
 from dustoptics.atmosphere.sets import check_earth_aerosol
@@ -45,7 +47,7 @@ if TYPE_CHECKING:
     from dustoptics.atmosphere.sets import Atmosphere
     from dustoptics.sky.approximations import Approximations
 
-__all__ = ["INPUTS_ATTRIBUTE", "SKY_JOBS", "SUNSET_ELEVATIONS_DEG", "SkyJob"]
+__all__ = ["INPUTS_ATTRIBUTE", "SKY_JOBS", "SUNSET_ELEVATIONS_DEG", "SkyJob", "sky_colour_summary"]
 
 #: What a :class:`SkyJob` renders.
 SKY_JOBS: Final = ("mars", "earth", "compare")
@@ -536,3 +538,45 @@ class SkyJob:
             fig.savefig(buf, format="png", dpi=110, metadata={"Software": None})
             out[self.out_dir / f"mars-comparison_{name}.png"] = buf.getvalue()
         return out
+
+
+def sky_colour_summary(path: str | os.PathLike[str]) -> str:
+    """The colour of a sky file (``NAME_sky.nc``): CIE 1931 (x, y) and the sRGB colour (at the
+    direction's own brightness, brightest channel 1) of the zenith and of the horizon away from
+    the Sun (azimuth 180 deg), and the luminance ratio of the two.
+
+    Parameters
+    ----------
+    path : path-like
+        A sky file ``dustoptics sky mars|earth`` writes.
+
+    Returns
+    -------
+    str
+        Two lines, ``zenith: xy 0.4321, 0.3889, sRGB #c49a74`` and the horizon's.
+    """
+    import xarray as xr  # lazy: xarray adds ~0.7 s to `import dustoptics` (-X importtime)
+
+    from dustoptics import colour
+
+    with xr.open_dataset(path, engine="scipy", decode_times=False, cache=False) as ds:
+        x, y, lum = ds["chromaticity_x"], ds["chromaticity_y"], ds["luminance_factor"]
+        zenith = {"view_zenith_angle": 0.0}
+        horizon = {"view_zenith_angle": 90.0, "view_azimuth_angle": 180.0}
+        points = []
+        for where in (zenith, horizon):
+            sel = {k: v for k, v in where.items() if k in x.dims}
+            xs, ys, ls = (
+                float(np.asarray(v.sel(sel, method="nearest")).ravel()[0]) for v in (x, y, lum)
+            )
+            points.append((xs, ys, ls))
+    lines = []
+    for label, (xs, ys, _) in zip(("zenith", "horizon away from the Sun"), points):
+        xyz = np.array([xs / ys, 1.0, (1.0 - xs - ys) / ys])
+        rgb = np.clip(colour.xyz_to_linear_srgb(xyz), 0.0, None)
+        shown = colour.srgb_encode(rgb / max(float(np.max(rgb)), 1e-300))
+        hex_rgb = "".join(f"{round(255 * float(c)):02x}" for c in shown)
+        lines.append(f"{label}: xy {xs:.4f}, {ys:.4f}, sRGB #{hex_rgb}")
+    ratio = points[1][2] / points[0][2] if points[0][2] > 0 else float("nan")
+    lines.append(f"horizon / zenith luminance: {ratio:.3g}")
+    return "\n".join(lines)

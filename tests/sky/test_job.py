@@ -127,3 +127,29 @@ def test_place_leaves_the_same_files_and_refuses_other_inputs(tmp_path: Path) ->
     with pytest.raises(FileExistsError, match="records another sky"):
         other.place()
     assert other.place(force=True).written == (job.record,)
+
+
+def test_the_sky_colour_summary_reads_the_zenith_and_the_horizon(tmp_path):
+    """D65's chromaticity (IEC 61966-2-1: x 0.3127, y 0.3290) is sRGB white; a horizon twice
+    as bright as the zenith gives a luminance ratio of 2."""
+    import numpy as np
+    import xarray as xr
+
+    from dustoptics.sky.job import sky_colour_summary
+
+    zenith_deg, azimuth_deg = np.array([0.0, 45.0, 90.0]), np.array([0.0, 90.0, 180.0])
+    x = np.full((3, 3), 0.3127)
+    y = np.full((3, 3), 0.3290)
+    lum = np.ones((3, 3))
+    lum[2, 2] = 2.0
+    dims = ("view_zenith_angle", "view_azimuth_angle")
+    ds = xr.Dataset(
+        {"chromaticity_x": (dims, x), "chromaticity_y": (dims, y), "luminance_factor": (dims, lum)},
+        coords={"view_zenith_angle": zenith_deg, "view_azimuth_angle": azimuth_deg},
+    )
+    path = tmp_path / "white_sky.nc"
+    ds.to_netcdf(path, engine="scipy")
+    lines = sky_colour_summary(path).splitlines()
+    assert lines[0] == "zenith: xy 0.3127, 0.3290, sRGB #ffffff"
+    assert lines[1] == "horizon away from the Sun: xy 0.3127, 0.3290, sRGB #ffffff"
+    assert lines[2] == "horizon / zenith luminance: 2"
