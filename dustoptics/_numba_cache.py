@@ -213,6 +213,41 @@ def cache_dir() -> Path:
     return _PACKAGE_DIR / "scattering" / "__pycache__"
 
 
+#: Commands whose first run in an installation compiles numba kernels of their own (which
+#: :func:`compile_kernels` does not announce), with the time that takes on 2 cores
+#: (``dustoptics build`` announces its own compiling, kernel by kernel).
+FIRST_RUN_COMMANDS: dict[str, str] = {
+    "sky": "about half a minute",
+    "retrieve": "about a quarter of a minute",
+    "sweep": "about a quarter of a minute per worker",
+}
+
+
+def _first_run_marker(command: str) -> Path:
+    return cache_dir() / f".dustoptics-ran-{command}"
+
+
+def first_run_notice(command: str) -> str | None:
+    """The line a command's first run in this installation prints before it goes silent
+    compiling; None after it has once succeeded (:func:`mark_first_run`) or for a command of
+    no kernels of its own."""
+    if command not in FIRST_RUN_COMMANDS or _first_run_marker(command).exists():
+        return None
+    return (
+        f"dustoptics: first '{command}' of this installation: numba compiles its kernels once "
+        f"({FIRST_RUN_COMMANDS[command]} on 2 cores) into {cache_dir()}; later runs start at once"
+    )
+
+
+def mark_first_run(command: str) -> None:
+    """Record that ``command`` has run (its kernels are cached); quietly nothing where the
+    cache directory cannot be written."""
+    marker = _first_run_marker(command)
+    with contextlib.suppress(OSError):
+        marker.parent.mkdir(parents=True, exist_ok=True)
+        marker.touch()
+
+
 # ----------------------------------------------------------------------------
 # Kernels
 # ----------------------------------------------------------------------------

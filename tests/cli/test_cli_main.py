@@ -136,3 +136,18 @@ def test_main_and_the_parser_import_without_a_warning():
         warnings.simplefilter("error")
         module = importlib.import_module("dustoptics.cli")
         assert callable(module.main) and callable(module._parser)
+
+
+def test_a_commands_first_run_says_it_compiles_then_never_again(tmp_path, capsys, monkeypatch):
+    """The first 'sky' of an installation was silent for half a minute while numba compiled:
+    now one line says so, once; a run that failed says it again next time."""
+    from dustoptics import _numba_cache
+
+    monkeypatch.setattr(_numba_cache, "cache_dir", lambda: tmp_path / "cache")
+    argv = ["sky", "mars", "--out", str(tmp_path / "out"), "--sun-elevation", "95"]
+    assert main(argv) == 2  # a usage error: nothing compiled, nothing recorded
+    assert "first 'sky' of this installation" in capsys.readouterr().err
+    _numba_cache.mark_first_run("sky")
+    assert main(argv) == 2
+    assert "first 'sky'" not in capsys.readouterr().err
+    assert _numba_cache.first_run_notice("build") is None  # build announces its own
