@@ -19,3 +19,6 @@ from hypothesis import settings
 settings.register_profile("deterministic", derandomize=True, database=None)
 settings.register_profile("explore", derandomize=False)
 settings.load_profile("deterministic")
+
+# Run by Blender's own Python (``blender -b --python``), not by pytest: it imports ``bpy``.
+collect_ignore = ["sky/blender_sphere.py"]
