@@ -98,7 +98,7 @@ import sys
 import threading
 import time
 import types
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, TextIO
@@ -215,7 +215,7 @@ def cache_dir() -> Path:
 
 #: Commands whose first run in an installation compiles numba kernels of their own (which
 #: :func:`compile_kernels` does not announce), with the time that takes on 2 cores
-#: (``dustoptics build`` announces its own compiling, kernel by kernel).
+#: (``dustoptics build`` announces its own compiling, kernel by kernel): :func:`compile_notice`.
 FIRST_RUN_COMMANDS: dict[str, str] = {
     "sky": "about half a minute",
     "retrieve": "about a quarter of a minute",
@@ -223,29 +223,36 @@ FIRST_RUN_COMMANDS: dict[str, str] = {
 }
 
 
-def _first_run_marker(command: str) -> Path:
-    return cache_dir() / f".dustoptics-ran-{command}"
+@contextlib.contextmanager
+def compile_notice(command: str, stream: TextIO | None) -> Iterator[None]:
+    """Within the block, the first kernel numba compiles (not loads from its cache) for
+    ``command`` (one of :data:`FIRST_RUN_COMMANDS`) is announced on ``stream``, once: a first
+    run is not silent while it compiles.  Nothing for other commands or without a stream.
 
+    numba's ``numba:compile`` event starts only on a cache miss (``Dispatcher.compile``).
+    """
+    if stream is None or command not in FIRST_RUN_COMMANDS:
+        yield
+        return
+    from numba.core import event  # here: only commands that compute import numba
 
-def first_run_notice(command: str) -> str | None:
-    """The line a command's first run in this installation prints before it goes silent
-    compiling; None after it has once succeeded (:func:`mark_first_run`) or for a command of
-    no kernels of its own."""
-    if command not in FIRST_RUN_COMMANDS or _first_run_marker(command).exists():
-        return None
-    return (
-        f"dustoptics: first '{command}' of this installation: numba compiles its kernels once "
-        f"({FIRST_RUN_COMMANDS[command]} on 2 cores) into {cache_dir()}; later runs start at once"
-    )
+    class _Announce(event.Listener):  # type: ignore[misc]
+        said = False
 
+        def on_start(self, ev: Any) -> None:
+            if not self.said:
+                self.said = True
+                stream.write(
+                    f"dustoptics: compiling the '{command}' kernels, once for this installation "
+                    f"({FIRST_RUN_COMMANDS[command]} on 2 cores; cached in {cache_dir()}) ...\n"
+                )
+                stream.flush()
 
-def mark_first_run(command: str) -> None:
-    """Record that ``command`` has run (its kernels are cached); quietly nothing where the
-    cache directory cannot be written."""
-    marker = _first_run_marker(command)
-    with contextlib.suppress(OSError):
-        marker.parent.mkdir(parents=True, exist_ok=True)
-        marker.touch()
+        def on_end(self, ev: Any) -> None:
+            pass
+
+    with event.install_listener("numba:compile", _Announce()):
+        yield
 
 
 # ----------------------------------------------------------------------------

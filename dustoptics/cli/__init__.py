@@ -88,17 +88,13 @@ def main(argv: list[str] | None = None) -> int:
             args = build_parser().parse_args(argv)
         except SystemExit as exc:  # argparse: --help/--version (0) or usage (2)
             return int(exc.code or 0)
-        # A first run that compiles says so before it goes silent (build says it itself).
-        notice = _numba_cache.first_run_notice(args.command)
-        if notice is not None and not getattr(args, "quiet", False):
-            print(notice, file=sys.stderr, flush=True)
-        with warnings.catch_warnings():
+        # A first run says so when numba starts compiling (build announces its own kernels).
+        stream = None if getattr(args, "quiet", False) else sys.stderr
+        with warnings.catch_warnings(), _numba_cache.compile_notice(args.command, stream):
             # A warning the library gives a user reaches them as one line, not as Python's
             # "file:line: Category: message" with the source line under it.
             warnings.showwarning = _show_warning
             status: int = args.run(args)
-        if notice is not None and status == 0:
-            _numba_cache.mark_first_run(args.command)
         return status
 
     with _interrupt.handling():  # Ctrl-C: one line and 130, wherever it lands

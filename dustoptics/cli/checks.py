@@ -22,6 +22,7 @@ from dustoptics.atmosphere.build import SET_PROVENANCE_SUFFIX, set_inputs
 from dustoptics.cli.errors import UsageError
 from dustoptics.io import FORMATS, FormatError, read_hdf5
 from dustoptics.io.registry import formats_needing
+from dustoptics.models.presets import list_presets
 from dustoptics.table import canonical_json
 
 if TYPE_CHECKING:
@@ -221,3 +222,14 @@ def no_expansion(name: str, config: BuildConfig) -> str:
         f"which only a Mie model has (phase.model = 'mie' with optics.expansion = true); "
         f"{config.name!r} has phase.model = {config.phase.model!r}"
     )
+
+
+def check_presets(option: str, names: tuple[str, ...]) -> None:
+    """Each name a preset (it names the files, too): a usage error before any work."""
+    known = list_presets()
+    unknown = [n for n in names if n not in known]
+    if unknown:
+        raise UsageError(
+            f"{option}: unknown preset {', '.join(map(repr, unknown))}; choose from "
+            f"{', '.join(known)}"
+        )

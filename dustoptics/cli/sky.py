@@ -19,11 +19,11 @@ from typing import Any
 
 from dustoptics._validation import check_inside
 from dustoptics.cli.aerosol_options import add_aerosol_options, aerosol_keywords
+from dustoptics.cli.checks import check_presets
 from dustoptics.cli.errors import PROG, UsageError
 from dustoptics.cli.parser import _positive_float, add_command
 from dustoptics.cli.report import report_placement, say
 from dustoptics.cli.sky_preview import add_preview_options, approximations_from_args, report_preview
-from dustoptics.models.presets import list_presets
 from dustoptics.sky import scene
 from dustoptics.sky.job import SkyJob, sky_colour_summary
 
@@ -126,11 +126,7 @@ def add_parser(sub: Any) -> None:
             help="also the limb seen from space, Sun in quadrature (NAME_limb.png, its own "
             "exposure unless --exposure)",
         )
-        q.add_argument("--out", type=Path, required=True, metavar="DIR", help=_OUT_HELP)
-        q.add_argument("--force", action="store_true", help="replace existing files")
-        q.add_argument("--quiet", action="store_true", help="no summary output or progress")
-        q.add_argument("--allow-large", action="store_true", help=_LARGE_HELP)
-        q.add_argument("--no-png", action="store_true", help=_NO_PNG_HELP)
+        _add_common_options(q)
         q.add_argument(
             "--exr",
             choices=("half", "float"),
@@ -183,6 +179,11 @@ def add_parser(sub: Any) -> None:
         metavar="DEG",
         help="Sun elevation of the radiance and luminance comparisons [degree]",
     )
+    _add_common_options(q)
+
+
+def _add_common_options(q: argparse.ArgumentParser) -> None:
+    """--out, --force, --quiet, --allow-large, --no-png: every sky command's."""
     q.add_argument("--out", type=Path, required=True, metavar="DIR", help=_OUT_HELP)
     q.add_argument("--force", action="store_true", help="replace existing files")
     q.add_argument("--quiet", action="store_true", help="no summary output or progress")
@@ -201,17 +202,6 @@ _OUT_HELP = (
     "output directory; files go to DIR/NAME/, NAME mars-PRESET, earth or mars-comparison "
     "(as for build)"
 )
-
-
-def _check_presets(option: str, names: tuple[str, ...]) -> None:
-    """Each name a preset (it names the files, too): a usage error before any work."""
-    known = list_presets()
-    unknown = [n for n in names if n not in known]
-    if unknown:
-        raise UsageError(
-            f"{option}: unknown preset {', '.join(map(repr, unknown))}; choose from "
-            f"{', '.join(known)}"
-        )
 
 
 def _png(args: argparse.Namespace) -> bool:
@@ -242,7 +232,7 @@ def run(args: argparse.Namespace) -> int:
 
     if args.sky_command == "compare":
         if args.models is not None:
-            _check_presets("--models", args.models)
+            check_presets("--models", args.models)
         job = SkyJob(
             "compare",
             out_dir=args.out,
@@ -261,7 +251,7 @@ def run(args: argparse.Namespace) -> int:
         if not (0.0 <= args.albedo <= 1.0):
             raise UsageError(f"--albedo must be within [0, 1]; got {args.albedo!r}")
         if args.sky_command == "mars":
-            _check_presets("--dust", (args.dust,))
+            check_presets("--dust", (args.dust,))
         if args.cubemap and args.exr is None:
             raise UsageError("--cubemap is the environment map on a cube: give --exr too")
         job = SkyJob(
@@ -292,8 +282,9 @@ def run(args: argparse.Namespace) -> int:
     report_placement(args, job.name, job.out_dir, placed)
     report_preview(args, [*placed.written, *placed.unchanged])
     sky_file = job.out_dir / f"{job.name}_sky.nc"
-    if args.sky_command != "compare" and sky_file.is_file():
-        say(args, sky_colour_summary(sky_file))
+    summary = sky_colour_summary(sky_file) if sky_file.is_file() else None
+    if summary is not None:
+        say(args, summary)
     if args.sky_command == "compare" and not args.quiet:  # the rover table, read back
         # lazy: sky.compare adds 20-30 ms to every command's start-up (-X importtime)
         from dustoptics.sky.compare import read_rover_comparison

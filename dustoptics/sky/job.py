@@ -540,7 +540,7 @@ class SkyJob:
         return out
 
 
-def sky_colour_summary(path: str | os.PathLike[str]) -> str:
+def sky_colour_summary(path: str | os.PathLike[str]) -> str | None:
     """The colour of a sky file (``NAME_sky.nc``): CIE 1931 (x, y) and the sRGB colour (at the
     direction's own brightness, brightest channel 1) of the zenith and of the horizon away from
     the Sun (azimuth 180 deg), and the luminance ratio of the two.
@@ -552,14 +552,17 @@ def sky_colour_summary(path: str | os.PathLike[str]) -> str:
 
     Returns
     -------
-    str
-        Two lines, ``zenith: xy 0.4321, 0.3889, sRGB #c49a74`` and the horizon's.
+    str or None
+        ``zenith: xy 0.4321, 0.3889, sRGB #c49a74``, the horizon's line and the luminance
+        ratio; None for a file without the sky's chromaticity and luminance.
     """
     import xarray as xr  # lazy: xarray adds ~0.7 s to `import dustoptics` (-X importtime)
 
     from dustoptics import colour
 
     with xr.open_dataset(path, engine="scipy", decode_times=False, cache=False) as ds:
+        if not {"chromaticity_x", "chromaticity_y", "luminance_factor"} <= set(ds.variables):
+            return None  # not a sky of one observer (a preview's, another job's)
         x, y, lum = ds["chromaticity_x"], ds["chromaticity_y"], ds["luminance_factor"]
         zenith = {"view_zenith_angle": 0.0}
         horizon = {"view_zenith_angle": 90.0, "view_azimuth_angle": 180.0}
