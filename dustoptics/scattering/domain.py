@@ -2,7 +2,7 @@
 
 A table is computed from homogeneous (or coated) spheres of size parameter
 x = 2 pi r / lambda and relative refractive index m = n + i k.  Over the box
-:data:`VALIDATED_DOMAIN` (size parameter, n, k and the index contrast |m - 1|)
+:data:`VALIDATED_DOMAIN` (size parameter, n, k and the index contrast abs(m - 1))
 the kernel's outputs, per sphere, have been compared with an
 arbitrary-precision reference (``mpmath``, 30 significant digits: Mie
 coefficients from the Bessel-function ratios' downward recurrence, each started
@@ -73,7 +73,7 @@ class ValidatedDomain:
     max_k : float
         Largest imaginary part k (k >= 0). [-]
     min_index_contrast : float
-        Smallest |m - 1| (the series loses about eps / |m - 1| of relative
+        Smallest abs(m - 1) (the series loses about eps / abs(m - 1) of relative
         precision). [-]
     """
 
