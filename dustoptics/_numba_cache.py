@@ -148,6 +148,10 @@ OPTICS_MODULES = (
     "dustoptics.scattering.quadrature",
     "dustoptics.scattering.refinement",
 )
+#: Every module that declares kernels (:data:`OPTICS_MODULES` and the matrix's):
+#: :func:`kernels` imports them, since ``import dustoptics`` imports its modules
+#: only when their names are first used.
+KERNEL_MODULES = (*OPTICS_MODULES, "dustoptics.scattering.expansion")
 #: A kernel of :data:`OPTICS_MODULES` whose index file in numba's cache says the
 #: cache is not empty (:func:`prestart`).
 _MARKER = "mie._accumulate_grids"
@@ -436,12 +440,15 @@ if hasattr(os, "register_at_fork"):
 
 
 def kernels(groups: Iterable[str] = GROUPS) -> list[Kernel]:
-    """The declared kernels of ``groups``, of the modules imported so far (``import
-    dustoptics`` imports them all)."""
+    """The declared kernels of ``groups`` (the modules of :data:`KERNEL_MODULES`
+    imported first, if they were not)."""
     wanted = set(groups)
     unknown = wanted - set(GROUPS)
     if unknown:
         raise ValueError(f"groups must be among {GROUPS}; got {sorted(unknown)}")
+    for module in KERNEL_MODULES:
+        if module not in sys.modules:
+            importlib.import_module(module)
     return [k for k in _KERNELS.values() if k.group in wanted]
 
 

@@ -8,6 +8,7 @@ Usage::
     python scripts/benchmark.py --preview [--json OUT.json]
     python scripts/benchmark.py --compile [--json OUT.json]
     python scripts/benchmark.py --derivatives [--json OUT.json]
+    python scripts/benchmark.py --against REF [--sky] [--repeats N] [--json OUT.json]
 
 Everything below is measured in one run on one machine, and printed as a plain
 text table (progress goes to stderr); ``--json`` writes the same figures with
@@ -162,6 +163,50 @@ the default table: best of N.
     less sensitive to other load); cost ratio = with / alone.  Issue 30's
     target: at most 2x.  Beside them, the size distribution's two alone
     (``("r_eff_um", "v_eff")``, no angular m derivatives), for information.
+
+12. Against another commit (``--against REF``, which runs this section alone,
+    a few minutes on 2 cores; issue 40 item 5's targets).  REF (e.g. ``HEAD~1``)
+    is checked out into a temporary git worktree, and both trees are measured
+    in fresh child processes, each with its own tree first on ``PYTHONPATH``,
+    interleaved: round r runs this tree then REF (REF first in odd rounds), 5
+    rounds (``--repeats``).  The machine is shared and its speed drifts, so the
+    figures are each round's own ratio (this / REF), their median, beside
+    the medians of each tree.  Each round, per tree:
+
+    * import: ``python -X importtime -c "import dustoptics"``, the package's
+      cumulative import time (and whether numpy, scipy or numba came with it);
+    * table: the default table warm (one untimed call, then the best of 3)
+      with ``workers=2`` and with ``workers=1``, wall and the process's CPU
+      time (less sensitive to other load), and the SHA-256 of its bytes
+      (phase, cross-sections, g, error estimates) for each: the same with 1
+      and 2 workers, and the same as REF's where the change keeps the bits;
+      the CPU time of the process over the wall time of the 2-worker call
+      (both cores used: near 2);
+    * build: a warm ``python -m dustoptics.cli build --out TMP`` (the
+      default preset, every default format; numba's cache filled before the
+      first round), the whole process's wall time;
+    * with ``--sky`` also: ``dustoptics sky mars --out TMP`` on an empty
+      ``NUMBA_CACHE_DIR`` (first) and again in that cache (warm), wall time,
+      one round (each first run compiles every kernel of the sky).
+
+    The roofline (this tree, one extra call): the floating-point operations
+    the default table's kernel does, counted from the arguments of every call
+    of ``mie._accumulate_grids`` (wrapped in this process only), against the
+    ones its result needs (the rate: done over the 1-worker table's CPU
+    time): per sphere and order, 16 FLOP per angle pair of the
+    angular sums (the kernel's inner loop: 8 accumulators, 4 multiply-adds
+    each, per 4 orders, covering +mu and -mu) on the block-padded angle slots
+    of the sphere's grid and its LANES batch's order count, and 70 FLOP per
+    order for the Mie coefficients (complex recurrences and a_n, b_n: an
+    estimate); needed = the final quadrature nodes only (phase and
+    cross-section nodes, rebuilt from the table's panels), each on the
+    smallest symmetric Gauss grid that projects its intensity (degree
+    2 n_max) on the Legendre polynomials up to that degree exactly (an
+    integrand of degree 4 n_max: 2 n_max + 1 angles, n_max + 1 pairs), and
+    its Wiscombe n_max orders.  Done / CPU time is the rate achieved per core,
+    shown against this machine's dense matrix product rate per CPU second
+    (numpy's BLAS, a 1024 x 1024 float64 product, best of 5): the hardware's
+    practical ceiling per core.
 
 Timings are wall-clock (``time.perf_counter``); dustoptics runs on all cores,
 the miepython baselines on one, as their users would run them.  Other load on
@@ -2153,6 +2198,364 @@ def _run_section(
     return 0
 
 
+# --------------------------------------------------------------------------- against a commit
+
+#: What a child of ``--against`` runs for the table: the default table warm with 2 and
+#: 1 workers (best of 3 each after one untimed call), its bytes' SHA-256 per worker
+#: count, and the CPU time over wall time of the 2-worker calls.
+AGAINST_TABLE_SNIPPET = """\
+import hashlib, json, sys, time
+import numpy as np
+import dustoptics as do
+
+def digest(t):
+    h = hashlib.sha256()
+    for a in (t.phase, t.g, t.cross_sections.cext_um2, t.cross_sections.csca_um2,
+              t.cross_sections.cback_um2, t.quadrature.error_estimate,
+              t.quadrature.cross_section_error_estimate, t.quadrature.n_nodes):
+        h.update(np.ascontiguousarray(a).tobytes())
+    return h.hexdigest()
+
+dust, dist = do.mars_dust(), do.ModifiedGamma(r_eff_um={r_eff}, v_eff={v_eff})
+out = {{}}
+for workers in (2, 1):
+    do.compute_optics(dust, dist, workers=workers)
+    best, cpu_ratio, least_cpu = None, None, None
+    for _ in range(3):
+        c0, t0 = time.process_time(), time.perf_counter()
+        t = do.compute_optics(dust, dist, workers=workers)
+        wall, cpu = time.perf_counter() - t0, time.process_time() - c0
+        if best is None or wall < best:
+            best, cpu_ratio = wall, cpu / wall
+        least_cpu = cpu if least_cpu is None else min(least_cpu, cpu)
+    out[f"warm_s_{{workers}}"] = best
+    out[f"cpu_over_wall_{{workers}}"] = cpu_ratio
+    out[f"cpu_s_{{workers}}"] = least_cpu
+    out[f"sha256_{{workers}}"] = digest(t)
+print(json.dumps(out))
+"""
+
+#: The roofline's count, in a child of this tree: every call of the kernel's fused loop
+#: over spheres is wrapped (this process only) and its work counted from its arguments.
+AGAINST_ROOFLINE_SNIPPET = """\
+import json, math, time
+import numpy as np
+import dustoptics as do
+from dustoptics.scattering import mie, quadrature
+
+COEF, ANGULAR = 70.0, 16.0
+kernel = mie._accumulate_grids
+done = {{"angular": 0.0, "coefficients": 0.0, "maps": 0.0, "spheres": 0}}
+
+def nmax(x):
+    return np.floor(x + 4.05 * np.cbrt(x) + 2.0)
+
+def counted(m, x, w, node_panel, node_tier, n_panels, per_particle, tier_size, tables,
+            table_start, maps, map_start, symmetric, n_stokes, m_core, core_fraction):
+    j0, n = 0, len(x)
+    n_top = int(tier_size[-1])
+    while j0 < n:
+        t = node_tier[j0]
+        j1 = j0
+        while j1 < n and node_tier[j1] == t:
+            j1 += 1
+        n_t = int(tier_size[t])
+        slots = mie.BLOCK * ((n_t + mie.BLOCK - 1) // mie.BLOCK)
+        for b in range(j0, j1, mie.LANES):
+            xs = x[b:min(b + mie.LANES, j1)]
+            orders = 4 * math.ceil(nmax(float(xs.max())) / 4)
+            done["coefficients"] += COEF * orders * len(xs)
+            done["angular"] += ANGULAR * orders * slots * len(xs)
+        if n_t and t < len(tier_size) - 1:
+            panels = len(set(node_panel[j0:j1].tolist()))
+            done["maps"] += panels * n_stokes * 2.0 * 2.0 * n_t * n_top
+        done["spheres"] += j1 - j0
+        j0 = j1
+    return kernel(m, x, w, node_panel, node_tier, n_panels, per_particle, tier_size, tables,
+                  table_start, maps, map_start, symmetric, n_stokes, m_core, core_fraction)
+
+dust, dist = do.mars_dust(), do.ModifiedGamma(r_eff_um={r_eff}, v_eff={v_eff})
+table = do.compute_optics(dust, dist, workers=1)
+mie._accumulate_grids = counted
+do.compute_optics(dust, dist, workers=1)
+mie._accumulate_grids = kernel
+
+needed = 0.0
+final_nodes = 0
+for i, wl in enumerate(table.wavelength_nm):
+    for panels, angles in ((table.diagnostics.panels[i], True),
+                           (table.diagnostics.cross_section_panels[i], False)):
+        lower, upper = panels[:, 0], panels[:, 1]
+        mid = 0.5 * (lower + upper)
+        nodes, _ = quadrature.panel_nodes(
+            table.diagnostics.distribution, wavelength_nm=float(wl),
+            lower_s=np.concatenate([lower, mid]), upper_s=np.concatenate([mid, upper]),
+            settings=table.diagnostics.settings)
+        nm = nmax(nodes.size_parameter)
+        final_nodes += nm.size
+        needed += float(np.sum(COEF * nm))
+        if angles:
+            needed += float(np.sum(ANGULAR * nm * (nm + 1.0)))
+
+a = np.random.default_rng(0).standard_normal((1024, 1024))
+best = float("inf")
+for _ in range(5):
+    t0 = time.process_time()
+    a @ a
+    best = min(best, time.process_time() - t0)
+print(json.dumps({{
+    "flop_done": done["angular"] + done["coefficients"] + done["maps"],
+    "flop_done_parts": done,
+    "flop_needed": needed,
+    "final_nodes": final_nodes,
+    "dgemm_gflop_s": 2.0 * 1024**3 / best / 1e9,
+}}))
+"""
+
+
+def _child_json(code: str, tree: Path, env_extra: dict[str, str] | None = None) -> dict:
+    """Run ``code`` in a fresh interpreter with ``tree`` first on the path; its last stdout
+    line as JSON."""
+    env = subprocess_env(**(env_extra or {}))
+    env["PYTHONPATH"] = os.pathsep.join(p for p in (str(tree), os.environ.get("PYTHONPATH")) if p)
+    proc = subprocess.run(
+        [sys.executable, "-c", code], env=env, capture_output=True, text=True, check=False, cwd=tree
+    )
+    if proc.returncode != 0:
+        raise RuntimeError(f"child in {tree} failed:\n{proc.stderr[-3000:]}")
+    return json.loads(proc.stdout.strip().splitlines()[-1])
+
+
+def _tree_env(tree: Path, **extra: str) -> dict[str, str]:
+    env = subprocess_env(**extra)
+    env["PYTHONPATH"] = os.pathsep.join(p for p in (str(tree), os.environ.get("PYTHONPATH")) if p)
+    return env
+
+
+def _import_time(tree: Path) -> dict:
+    """``python -X importtime -c "import dustoptics"``: the package's cumulative time [s]."""
+    code = (
+        "import sys, json, dustoptics; "
+        "print(json.dumps(sorted(m for m in ('numpy', 'scipy', 'numba') if m in sys.modules)))"
+    )
+    proc = subprocess.run(
+        [sys.executable, "-X", "importtime", "-c", code],
+        env=_tree_env(tree),
+        capture_output=True,
+        text=True,
+        check=False,
+        cwd=tree,
+    )
+    if proc.returncode != 0:
+        raise RuntimeError(f"import in {tree} failed:\n{proc.stderr[-3000:]}")
+    lines = [ln for ln in proc.stderr.splitlines() if ln.rstrip().endswith("| dustoptics")]
+    cumulative_us = int(lines[-1].split("|")[1])
+    return {"import_s": cumulative_us * 1e-6, "heavy": json.loads(proc.stdout.strip())}
+
+
+def _cli_wall(tree: Path, args: list[str], **env: str) -> float:
+    """Wall time of ``python -m dustoptics.cli ARGS --out TMP`` in a fresh process [s]."""
+    out_dir = tempfile.mkdtemp(prefix="dustoptics-bench-")
+    try:
+        t0 = time.perf_counter()
+        proc = subprocess.run(
+            [sys.executable, "-m", "dustoptics.cli", *args, "--out", out_dir],
+            env=_tree_env(tree, **env),
+            capture_output=True,
+            text=True,
+            check=False,
+            cwd=tree,
+        )
+        wall = time.perf_counter() - t0
+    finally:
+        shutil.rmtree(out_dir, ignore_errors=True)
+    if proc.returncode != 0:
+        raise RuntimeError(f"dustoptics {' '.join(args)} in {tree} failed:\n{proc.stderr[-3000:]}")
+    return wall
+
+
+def _sky_first_and_warm(tree: Path) -> dict:
+    cache = tempfile.mkdtemp(prefix="dustoptics-numba-cache-")
+    try:
+        first = _cli_wall(tree, ["sky", "mars", "--quiet"], NUMBA_CACHE_DIR=cache)
+        warm = _cli_wall(tree, ["sky", "mars", "--quiet"], NUMBA_CACHE_DIR=cache)
+    finally:
+        shutil.rmtree(cache, ignore_errors=True)
+    return {"sky_first_s": first, "sky_warm_s": warm}
+
+
+def _one_round(tree: Path) -> dict:
+    code = AGAINST_TABLE_SNIPPET.format(r_eff=R_EFF_UM, v_eff=V_EFF)
+    return (
+        _import_time(tree)
+        | _child_json(code, tree)
+        | {"build_s": _cli_wall(tree, ["build", "--quiet"])}
+    )
+
+
+def measure_against(ref: str, rounds: int, with_sky: bool) -> dict:
+    """Section 12: this tree against commit ``ref``, interleaved (see the module docstring)."""
+    commit = subprocess.run(
+        ["git", "-C", str(REPO_ROOT), "rev-parse", "--verify", ref + "^{commit}"],
+        capture_output=True,
+        text=True,
+        check=True,
+    ).stdout.strip()
+    here = subprocess.run(
+        ["git", "-C", str(REPO_ROOT), "rev-parse", "HEAD"],
+        capture_output=True,
+        text=True,
+        check=True,
+    ).stdout.strip()
+    dirty = bool(
+        subprocess.run(
+            ["git", "-C", str(REPO_ROOT), "status", "--porcelain", "--untracked-files=no"],
+            capture_output=True,
+            text=True,
+            check=True,
+        ).stdout.strip()
+    )
+    other = Path(tempfile.mkdtemp(prefix="dustoptics-against-")) / "tree"
+    subprocess.run(
+        ["git", "-C", str(REPO_ROOT), "worktree", "add", "--detach", str(other), commit],
+        capture_output=True,
+        check=True,
+    )
+    trees = {"this": REPO_ROOT, "ref": other}
+    try:
+        for name, tree in trees.items():
+            log(f"{name}: filling numba's cache (one build) ...")
+            _cli_wall(tree, ["build", "--quiet"])
+        runs: dict[str, list[dict]] = {"this": [], "ref": []}
+        for r in range(rounds):
+            order = ("this", "ref") if r % 2 == 0 else ("ref", "this")
+            for name in order:
+                log(f"round {r + 1}/{rounds}: {name} ...")
+                runs[name].append(_one_round(trees[name]))
+        sky = {}
+        if with_sky:
+            for name in ("this", "ref"):
+                log(f"{name}: dustoptics sky mars, empty numba cache, then warm ...")
+                sky[name] = _sky_first_and_warm(trees[name])
+        log("roofline (this tree) ...")
+        roof = _child_json(AGAINST_ROOFLINE_SNIPPET.format(r_eff=R_EFF_UM, v_eff=V_EFF), REPO_ROOT)
+    finally:
+        subprocess.run(
+            ["git", "-C", str(REPO_ROOT), "worktree", "remove", "--force", str(other)],
+            capture_output=True,
+            check=False,
+        )
+        shutil.rmtree(other.parent, ignore_errors=True)
+    keys = ("import_s", "warm_s_2", "warm_s_1", "cpu_s_2", "cpu_s_1", "build_s", "cpu_over_wall_2")
+    medians = {
+        name: {k: float(np.median([run[k] for run in rs])) for k in keys}
+        for name, rs in runs.items()
+    }
+    ratios = {
+        k: float(np.median([a[k] / b[k] for a, b in zip(runs["this"], runs["ref"], strict=True)]))
+        for k in keys
+    }
+    this_runs = runs["this"]
+    return {
+        "ref": ref,
+        "ref_commit": commit,
+        "this_commit": here,
+        "this_tree_has_uncommitted_changes": dirty,
+        "rounds": rounds,
+        "runs": runs,
+        "medians": medians,
+        "ratios_this_over_ref": ratios,
+        "same_bytes_1_and_2_workers": all(r["sha256_1"] == r["sha256_2"] for r in this_runs),
+        "same_bytes_as_ref": all(
+            a["sha256_2"] == b["sha256_2"] for a, b in zip(this_runs, runs["ref"], strict=True)
+        ),
+        "heavy_at_import": sorted({m for r in this_runs for m in r["heavy"]}),
+        "sky": sky,
+        "roofline": roof,
+    }
+
+
+#: Issue 40 item 5's targets on a quiet 2-core machine.
+AGAINST_TARGETS = {"warm_s_2": 0.1, "import_s": 0.3, "build_s": 1.0}
+SKY_TARGETS = {"sky_first_s": 20.0, "sky_warm_s": 5.0}
+
+
+def format_against(res: dict, mach: dict) -> str:
+    lines = [
+        f"12. This tree ({res['this_commit'][:10]}"
+        f"{' + uncommitted changes' if res['this_tree_has_uncommitted_changes'] else ''}) "
+        f"against {res['ref']} ({res['ref_commit'][:10]}), {res['rounds']} interleaved rounds"
+    ]
+    machine_rows(lines, mach)
+    med, rat = res["medians"], res["ratios_this_over_ref"]
+    labels = {
+        "import_s": "import dustoptics (-X importtime, cumulative) [s]",
+        "warm_s_2": "default table warm, workers=2, best of 3 [s]",
+        "warm_s_1": "default table warm, workers=1, best of 3 [s]",
+        "cpu_s_2": "  its CPU time (process), workers=2, least of 3 [s]",
+        "cpu_s_1": "  its CPU time (process), workers=1, least of 3 [s]",
+        "cpu_over_wall_2": "CPU / wall of the 2-worker table (2 = both cores busy)",
+        "build_s": "warm `dustoptics build` (whole process) [s]",
+    }
+    report_row(lines, "quantity: this, ref (medians); this/ref (median of rounds)", "")
+    for k, label in labels.items():
+        target = AGAINST_TARGETS.get(k)
+        met = (
+            ""
+            if target is None
+            else f"  target <= {target:g}: {'met' if med['this'][k] <= target else 'MISSED'}"
+        )
+        report_row(lines, label, f"{med['this'][k]:.3f}, {med['ref'][k]:.3f}; {rat[k]:.3f}{met}")
+    report_row(
+        lines, "same bytes with 1 and 2 workers (this tree)", str(res["same_bytes_1_and_2_workers"])
+    )
+    report_row(lines, "same bytes as ref", str(res["same_bytes_as_ref"]))
+    report_row(
+        lines,
+        "numpy / scipy / numba imported by `import dustoptics`",
+        ", ".join(res["heavy_at_import"]) or "none",
+    )
+    for name, sky in res["sky"].items():
+        for k, v in sky.items():
+            target = SKY_TARGETS[k]
+            report_row(
+                lines,
+                f"{name}: `dustoptics sky mars` {k.split('_')[1]} [s]",
+                f"{v:.1f}  target <= {target:g}: {'met' if v <= target else 'MISSED'}",
+            )
+    roof = res["roofline"]
+    cpu_1 = med["this"]["cpu_s_1"]
+    parts = roof["flop_done_parts"]
+    report_row(
+        lines,
+        "roofline: FLOP done by the kernel (default table)",
+        f"{roof['flop_done'] / 1e9:.2f} G",
+    )
+    report_row(
+        lines,
+        "  of which angular sums / coefficients / interpolation maps",
+        f"{parts['angular'] / 1e9:.2f} / {parts['coefficients'] / 1e9:.2f} / {parts['maps'] / 1e9:.2f} G "
+        f"({parts['spheres']:,} spheres)",
+    )
+    report_row(
+        lines,
+        "  FLOP needed (final nodes, minimal Gauss grids)",
+        f"{roof['flop_needed'] / 1e9:.2f} G ({roof['final_nodes']:,} nodes); done/needed "
+        f"{roof['flop_done'] / roof['flop_needed']:.2f}",
+    )
+    report_row(
+        lines,
+        "  rate achieved (done / CPU time of the 1-worker table), per core",
+        f"{roof['flop_done'] / cpu_1 / 1e9:.2f} GFLOP/s",
+    )
+    report_row(
+        lines,
+        "  this machine's dense matrix product (numpy BLAS), per CPU second",
+        f"{roof['dgemm_gflop_s']:.1f} GFLOP/s",
+    )
+    return "\n".join(lines)
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
         description="Benchmark dustoptics against miepython baselines (see the module docstring)."
@@ -2200,7 +2603,20 @@ def main(argv: list[str] | None = None) -> int:
         "with --scatrs also scatrs (~15 min)",
     )
     parser.add_argument("--scatrs", action="store_true", help="with --rt: also time scatrs")
+    parser.add_argument(
+        "--against",
+        metavar="REF",
+        help="only section 12: this tree against commit REF (e.g. HEAD~1), interleaved; "
+        "with --sky also the first and warm `dustoptics sky mars`",
+    )
     args = parser.parse_args(argv)
+    if args.against:
+        return _run_section(
+            args.json,
+            "against",
+            lambda: measure_against(args.against, args.repeats or 5, args.sky),
+            format_against,
+        )
     if args.scatrs and not args.rt:
         parser.error("--scatrs goes with --rt")
     # The sections a flag runs alone, in the order they take precedence:

@@ -77,6 +77,12 @@ def add_parser(sub: Any) -> None:
         "already hold the same table are left untouched",
     )
     p.add_argument("--quiet", action="store_true", help="no progress or summary output")
+    p.add_argument(
+        "--allow-unvalidated",
+        action="store_true",
+        help="go ahead, with a warning recorded in the table, where the size parameters or "
+        "refractive indices leave the validated domain (see 'dustoptics info'; default: refuse)",
+    )
     add_format_options(p, default=DEFAULT_FORMATS, required=False)
     g = p.add_argument_group(
         "atmosphere sets ('build mars', 'build earth': CosmoScout VR's full set)"
@@ -166,6 +172,7 @@ def run(args: argparse.Namespace) -> int:
             progress=None if args.quiet else sys.stderr,
             allow_large=args.allow_large,
         )
+        builder.allow_unvalidated = args.allow_unvalidated
         if args.number_density_per_m3 is not None:
             # An input of the table: recorded in its provenance like the configuration's own.
             builder.config = replace(

@@ -97,6 +97,7 @@ def describe_table(table: Table, *, full: bool = True) -> str:
     ssa:             1 .. 1
     error estimate:  phase <= ... (relative)
                      cross-sections, g <= ...
+    domain:          inside the validated domain (x 5.712 .. 5.712, n 1.5 .. 1.5, k 0 .. 0)
     material:        constant m = (1.5+0j)
     sizes:           monodisperse(radius_um=0.5)
     phase model:     mie, scattering-weighted
@@ -131,6 +132,7 @@ def describe_table(table: Table, *, full: bool = True) -> str:
         lines.append(
             f"                 cross-sections, g <= {table.quadrature.cross_section_error_estimate.max():.2e}"
         )
+    lines += _domain_lines(prov.quadrature)
     lines += _components(table)
     if not full:
         lines += _made_from(prov.to_dict()["inputs"])
@@ -156,6 +158,27 @@ def describe_table(table: Table, *, full: bool = True) -> str:
     lines += inputs_lines(prov.to_dict()["inputs"])
     # Names, citations and notes come from the file: escape what a terminal would obey.
     return _printable_lines("\n".join(lines))
+
+
+def _domain_lines(quadrature: Any) -> list[str]:
+    """Whether the spheres stayed inside the validated domain
+    (:mod:`dustoptics.scattering.domain`), from the provenance's record."""
+    record = quadrature.get("domain") if isinstance(quadrature, dict) else None
+    if not isinstance(record, dict):
+        if quadrature:
+            return ["domain:          not recorded (computed before domain checks)"]
+        return []
+    try:
+        x, n, k = (record[key] for key in ("size_parameter", "n", "k"))
+        span = f"x {x[0]:.4g} .. {x[1]:.4g}, n {n[0]:.4g} .. {n[1]:.4g}, k {k[0]:.3g} .. {k[1]:.3g}"
+    except (KeyError, TypeError, IndexError, ValueError):
+        return [f"domain:          {record!r}"]
+    if record.get("inside") is True:
+        return [f"domain:          inside the validated domain ({span})"]
+    return [
+        f"domain:          OUTSIDE the validated domain ({span}; validated: "
+        f"{record.get('validated', '?')}): accuracy not verified"
+    ]
 
 
 def _components(table: Table) -> list[str]:

@@ -84,14 +84,23 @@ class TableBuilder:
     allow_large : bool, optional
         Go ahead beyond the memory and work budget
         (:func:`dustoptics.scattering.optics.compute_optics`); default False.
+    allow_unvalidated : bool, optional
+        Go ahead, with a warning, outside the validated domain
+        (:mod:`dustoptics.scattering.domain`); default False (refused).
     """
 
     def __init__(
-        self, config: BuildConfig, *, progress: TextIO | None = None, allow_large: bool = False
+        self,
+        config: BuildConfig,
+        *,
+        progress: TextIO | None = None,
+        allow_large: bool = False,
+        allow_unvalidated: bool = False,
     ) -> None:
         self.config = config
         self.progress = progress
         self.allow_large = allow_large
+        self.allow_unvalidated = allow_unvalidated
         #: Why the build asks for more than the configuration does, recorded in the provenance.
         self.notes: list[str] = []
 
@@ -197,7 +206,12 @@ class TableBuilder:
                 )
                 progress.flush()
 
-        table = build_table(self.config, progress=report, allow_large=self.allow_large)
+        table = build_table(
+            self.config,
+            progress=report,
+            allow_large=self.allow_large,
+            allow_unvalidated=self.allow_unvalidated,
+        )
         if self.notes:
             prov = table.provenance
             table = table.replace(provenance=replace(prov, notes=(*prov.notes, *self.notes)))

@@ -126,6 +126,7 @@ def build_table(
     workers: int | None = None,
     progress: Callable[[int, int], None] | None = None,
     allow_large: bool = False,
+    allow_unvalidated: bool = False,
 ) -> Table:
     """Compute the table a configuration describes.
 
@@ -145,6 +146,12 @@ def build_table(
     allow_large : bool, optional
         Go ahead beyond the memory and work budget
         (:func:`dustoptics.scattering.optics.compute_optics`); default False.
+    allow_unvalidated : bool, optional
+        Go ahead, with a warning, where the size parameters or refractive
+        indices leave the validated domain
+        (:data:`dustoptics.scattering.domain.VALIDATED_DOMAIN`); default False,
+        which raises :class:`~dustoptics.scattering.domain.OutsideDomainError`
+        before any work.
 
     Returns
     -------
@@ -189,6 +196,7 @@ def build_table(
                 name=config.name,
                 progress=progress,
                 allow_large=allow_large,
+                allow_unvalidated=allow_unvalidated,
             )
             _add_sources(sources, *table.provenance.sources)
             if ph.model == "hybrid":

@@ -72,13 +72,19 @@ from dustoptics.particles.custom_sizedist import from_dict as _distribution_from
 from dustoptics.particles.materials import RefractiveIndex
 from dustoptics.particles.sizedist import SizeDistribution
 from dustoptics.scattering import mie
+from dustoptics.scattering.domain import check_domain
 from dustoptics.scattering.quadrature import (
     _UPPER_MOMENT,
     QuadratureDiagnostics,
     QuadratureSettings,
     _stretch,
 )
-from dustoptics.scattering.solve import ConvergenceWarning, assemble_table, solve_wavelengths
+from dustoptics.scattering.solve import (
+    ConvergenceWarning,
+    assemble_table,
+    request_indices,
+    solve_wavelengths,
+)
 from dustoptics.scattering.table_derivatives import (
     check_parameters,
     index_parameter_names,
@@ -725,6 +731,7 @@ def compute_optics(
     name: str = DEFAULT_NAME,
     progress: Callable[[int, int], None] | None = None,
     allow_large: bool = False,
+    allow_unvalidated: bool = False,
     polarization: bool = False,
     expansion: bool | int = False,
     particle_density_kg_m3: float | None = None,
@@ -773,6 +780,15 @@ def compute_optics(
         estimated work exceeds :data:`WORK_BUDGET` (about ten minutes); see
         :func:`estimate_cost`.  Default False: such a call raises
         :class:`dustoptics._validation.BudgetError` before any work.
+    allow_unvalidated : bool
+        Go ahead, with a
+        :class:`~dustoptics.scattering.domain.UnvalidatedWarning`, when the
+        size parameters or refractive indices leave the validated domain
+        (:data:`~dustoptics.scattering.domain.VALIDATED_DOMAIN`, where every
+        output's accuracy is verified against arbitrary-precision
+        references).  Default False: such a call raises
+        :class:`~dustoptics.scattering.domain.OutsideDomainError` before any
+        work.  The table's provenance records whether it stayed inside.
     polarization : bool
         Also compute the scattering matrix F12, F33, F34 (F22 = F11 = phase,
         F44 = F33 for spheres), normalized like the phase function and with
@@ -864,7 +880,14 @@ def compute_optics(
         particle_density_kg_m3=particle_density_kg_m3,
         derivatives=derivatives,
     )
-    return _run(request, workers=workers, name=name, progress=progress, allow_large=allow_large)
+    return _run(
+        request,
+        workers=workers,
+        name=name,
+        progress=progress,
+        allow_large=allow_large,
+        allow_unvalidated=allow_unvalidated,
+    )
 
 
 def compute_request(
@@ -874,6 +897,7 @@ def compute_request(
     name: str = DEFAULT_NAME,
     progress: Callable[[int, int], None] | None = None,
     allow_large: bool = False,
+    allow_unvalidated: bool = False,
 ) -> Table:
     """Compute the table of a validated request: cost check, solve, assemble.
 
@@ -881,7 +905,7 @@ def compute_request(
     ----------
     request : OpticsRequest
         From :func:`optics_request`.
-    workers, name, progress, allow_large
+    workers, name, progress, allow_large, allow_unvalidated
         As :func:`compute_optics`'s.
 
     Returns
@@ -889,7 +913,14 @@ def compute_request(
     Table
         The table :func:`compute_optics` returns for the same arguments, to the bit.
     """
-    return _run(request, workers=workers, name=name, progress=progress, allow_large=allow_large)
+    return _run(
+        request,
+        workers=workers,
+        name=name,
+        progress=progress,
+        allow_large=allow_large,
+        allow_unvalidated=allow_unvalidated,
+    )
 
 
 def _run(
@@ -899,8 +930,9 @@ def _run(
     name: str,
     progress: Callable[[int, int], None] | None,
     allow_large: bool,
+    allow_unvalidated: bool,
 ) -> Table:
-    """request -> cost check -> solve -> assemble (-> derivatives); each public
+    """request -> cost and domain checks -> solve -> assemble (-> derivatives); each public
     entry calls this directly, so that warnings point at its caller."""
     if not isinstance(request, OpticsRequest):
         raise TypeError(
@@ -908,6 +940,12 @@ def _run(
         )
     threads = _check_run_options(workers, name, progress, allow_large)
     cost = check_cost(request, workers=threads, allow_large=allow_large)
+    check_domain(
+        m=request_indices(request),
+        min_size_parameter=cost.min_size_parameter,
+        max_size_parameter=cost.max_size_parameter,
+        allow_unvalidated=allow_unvalidated,
+    )
     results = solve_wavelengths(request, workers=threads, progress=progress)
     table = assemble_table(request, results, cost=cost, name=name)
     if not request.derivatives:

@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from dustoptics.scattering.domain import domain_record
 from dustoptics.scattering.quadrature import QuadratureDiagnostics
 from dustoptics.scattering.refinement import _Result, _WavelengthSolver, kernels_loaded
 from dustoptics.table import (
@@ -33,7 +34,7 @@ from dustoptics.table import (
 if TYPE_CHECKING:  # the front door's module imports this one
     from dustoptics.scattering.optics import OpticsRequest, RequestCost
 
-__all__ = ["ConvergenceWarning", "assemble_table", "solve_wavelengths"]
+__all__ = ["ConvergenceWarning", "assemble_table", "request_indices", "solve_wavelengths"]
 
 
 class ConvergenceWarning(UserWarning):
@@ -41,6 +42,14 @@ class ConvergenceWarning(UserWarning):
 
 
 # ---------------------------------------------------------------------- solve
+
+
+def request_indices(request: OpticsRequest) -> np.ndarray:
+    """Every refractive index the request's spheres use: the shell's (or the
+    homogeneous sphere's) and, for a coated sphere, the core's. [-]"""
+    if request.core_fraction > 0.0:
+        return np.concatenate([request.m, request.m_core])
+    return np.asarray(request.m)
 
 
 def solve_wavelengths(
@@ -112,6 +121,11 @@ def assemble_table(
         err_phase = np.maximum(err_phase, extra["matrix_error_estimate"])
     not_converged = _warn_not_converged(request, results, err_phase, extra)
     record = _quadrature_record(request, results, err_phase, extra, converged=not not_converged)
+    record["domain"] = domain_record(
+        m=request_indices(request),
+        min_size_parameter=cost.min_size_parameter,
+        max_size_parameter=cost.max_size_parameter,
+    )
     return _table(
         request,
         results,
