@@ -27,7 +27,13 @@ from dustoptics.atmosphere.build import (
 from dustoptics.cli.aerosol_options import AEROSOL_OPTIONS, add_aerosol_options, aerosol_keywords
 from dustoptics.cli.checks import check_needs, check_outputs, check_set_outputs, no_expansion
 from dustoptics.cli.errors import PROG, UsageError
-from dustoptics.cli.export import format_options, same_table, takes_optical_depth, write_table
+from dustoptics.cli.export import (
+    check_profile_density,
+    format_options,
+    same_table,
+    takes_optical_depth,
+    write_table,
+)
 from dustoptics.cli.formats import add_format_options, format_option_names, unused_format_options
 from dustoptics.cli.parser import _float_list, _positive_float, add_command
 from dustoptics.cli.report import report_placement
@@ -192,13 +198,17 @@ def _check_build_request(args: argparse.Namespace, builder: TableBuilder) -> Non
             f"{builder.name!r} is a phase function without cross-sections; remove it"
         )
     _ask_for_needs(args.name, builder, formats)
+    density = (
+        args.number_density_per_m3 is not None
+        or config.number_density_per_m3 is not None
+        or (getattr(args, "optical_depth", None) is not None and takes_optical_depth(formats))
+    )
+    check_profile_density(args, formats, density=density)
     check_needs(
         formats,
         name=builder.name,
         cross_sections=config.phase.uses_mie,
-        density=args.number_density_per_m3 is not None
-        or config.number_density_per_m3 is not None
-        or (getattr(args, "optical_depth", None) is not None and takes_optical_depth(formats)),
+        density=density,
         no_expansion=None
         if builder.config.optics.expansion is not None
         else no_expansion(args.name, builder.config),

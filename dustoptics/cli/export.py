@@ -40,6 +40,7 @@ from dustoptics.io.rt.profile import RTProfileOptions
 __all__ = [
     "NEEDS_DENSITY",
     "add_parser",
+    "check_profile_density",
     "format_options",
     "run",
     "same_table",
@@ -130,6 +131,15 @@ def run(args: argparse.Namespace) -> int:
         else f"which {str(args.file)!r} does not hold: build the table from a configuration "
         "with 'expansion = true' under [optics] (or compute_optics(..., expansion=True))",
     )
+    check_profile_density(
+        args,
+        args.format,
+        density=NEEDS["number_density"].present(table) or args.optical_depth is not None,
+    )
+    try:
+        format_options(args).check(args.format, wavelength_nm=table.wavelength_nm)
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
     check_outputs(
         args.out, table.name, args.format, inputs=table.provenance.inputs, force=args.force
     )
@@ -142,6 +152,19 @@ def takes_optical_depth(formats: Sequence[str]) -> bool:
     return any(
         name == "cosmoscout" or FORMATS[name].options is RTProfileOptions for name in formats
     )
+
+
+def check_profile_density(
+    args: argparse.Namespace, formats: Sequence[str], *, density: bool
+) -> None:
+    """A profile asked for (``--scale-height-m``, ...) for the disort format needs a number
+    density (its layers' particle columns): a usage error without one, before any work."""
+    profile = FORMATS["disort"].make_options(format_options(args).values)
+    if "disort" in formats and profile.given() and not density:
+        raise UsageError(
+            "--format disort writes the profile asked for as layers of particles, which needs a "
+            "number density: give --number-density-per-m3 or --optical-depth"
+        )
 
 
 def format_options(args: argparse.Namespace) -> FormatOptions:

@@ -46,6 +46,7 @@ The moments, header and checks are shared with libRadtran's layer files
 from __future__ import annotations
 
 import os
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -61,6 +62,7 @@ from dustoptics.table.provenance import _installed_version
 
 __all__ = [
     "DISORT_SUFFIX",
+    "DisortFile",
     "bound_text",
     "disort_moments",
     "disort_text",
@@ -69,6 +71,7 @@ __all__ = [
     "moment_lines",
     "number_density",
     "phase_grid",
+    "read_disort",
     "write_disort",
 ]
 
@@ -254,6 +257,96 @@ def write_disort(
     text = disort_text(table, layers=layers)
     path = Path(os.fspath(out_dir)) / (safe_stem(table.name) + DISORT_SUFFIX)
     return write_files({path: text.encode("utf-8")}, overwrite=overwrite)
+
+
+@dataclass(frozen=True)
+class DisortFile:
+    """What a ``<name>_disort.txt`` file holds (:func:`read_disort`).
+
+    Attributes
+    ----------
+    wavelength_nm : numpy.ndarray, shape (n_wavelength,)
+        [nm]
+    cext_um2, ssa, pmom_error : numpy.ndarray, shape (n_wavelength,)
+        Extinction cross-section [um2], single-scattering albedo and moment error bound [-].
+    pmom : numpy.ndarray, shape (n_wavelength, n_moments)
+        DISORT's ``PMOM``, ``pmom[:, 0] = 1``. [-]
+    mu_phase : numpy.ndarray, shape (nphase,)
+        Cosines of the phase block, increasing (empty without one). [-]
+    phase : numpy.ndarray, shape (n_wavelength, nphase)
+        Phase function at ``mu_phase``, 1/2 int P dmu = 1. [-]
+    layer_bottom_km, layer_top_km, layer_column_per_um2 : numpy.ndarray, shape (n_layers,)
+        The profile's layers, from the surface up (empty without a number density):
+        DISORT's layer optical depth is ``layer_column_per_um2 * cext_um2``. [km], [km], [um-2]
+    """
+
+    wavelength_nm: np.ndarray
+    cext_um2: np.ndarray
+    ssa: np.ndarray
+    pmom_error: np.ndarray
+    pmom: np.ndarray
+    mu_phase: np.ndarray
+    phase: np.ndarray
+    layer_bottom_km: np.ndarray
+    layer_top_km: np.ndarray
+    layer_column_per_um2: np.ndarray
+
+    def dtauc(self) -> np.ndarray:
+        """DISORT's layer optical depths, top layer first, shape (n_wavelength, n_layers). [-]"""
+        return np.outer(self.cext_um2, self.layer_column_per_um2[::-1])
+
+
+def read_disort(path: str | os.PathLike[str]) -> DisortFile:
+    """Read a ``disort`` file of format version 2 (:func:`disort_text`).
+
+    Raises
+    ------
+    ValueError
+        Not a DISORT file of version 2 written by dustoptics, or its rows do not match its
+        header's counts.
+    """
+    text = Path(os.fspath(path)).read_text(encoding="utf-8")
+    lines = text.splitlines()
+    title = f"# dustoptics DISORT moments file, format version {_VERSION}"
+    if not lines or lines[0] != title:
+        raise ValueError(f"{os.fspath(path)!r}: not a DISORT file of format version {_VERSION}")
+    head = [ln[2:] for ln in lines if ln.startswith("# ")]
+    n_mom = nphase = None
+    mu: list[float] = []
+    layers: list[list[float]] = []
+    for h in head:
+        if h.startswith("moments: pmom_0 ... pmom_"):
+            n_mom = int(h.split("(", 1)[1].split()[0])
+        elif h.startswith("nphase: "):
+            nphase = int(h.split()[1].rstrip(";"))
+        elif h.startswith("mu_phase: "):
+            mu = [float(x) for x in h.split()[1:]]
+        elif h.startswith("layer: ") and not h.startswith("layer: bottom"):
+            layers.append([float(x) for x in h.split()[1:]])
+    rows = np.array(
+        [[float(x) for x in ln.split()] for ln in lines if ln.strip() and ln[0] != "#"],
+        dtype=np.float64,
+    )
+    if n_mom is None or nphase is None or len(mu) != nphase:
+        raise ValueError(f"{os.fspath(path)!r}: its header lacks the moment or phase counts")
+    if rows.ndim != 2 or rows.shape[1] != 4 + n_mom + nphase:
+        raise ValueError(
+            f"{os.fspath(path)!r}: rows must have {4 + n_mom + nphase} values "
+            f"(4 + {n_mom} moments + {nphase} phase values)"
+        )
+    lay = np.array(layers[::-1], dtype=np.float64).reshape(-1, 3)
+    return DisortFile(
+        wavelength_nm=rows[:, 0],
+        cext_um2=rows[:, 1],
+        ssa=rows[:, 2],
+        pmom_error=rows[:, 3],
+        pmom=rows[:, 4 : 4 + n_mom],
+        mu_phase=np.array(mu, dtype=np.float64),
+        phase=rows[:, 4 + n_mom :],
+        layer_bottom_km=lay[:, 0],
+        layer_top_km=lay[:, 1],
+        layer_column_per_um2=lay[:, 2],
+    )
 
 
 RECORD = register(
