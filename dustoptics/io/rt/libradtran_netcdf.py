@@ -313,9 +313,12 @@ def libradtran_species_text(
     n_cm3 = layers.relative_density * float(table.cross_sections.number_density_per_m3) * 1e-6
     lines = [
         *header_lines(table, "dustoptics libRadtran aerosol species profile, format version 1"),
-        f"# uvspec input: aerosol_default + aerosol_species_library ./ + aerosol_species_file "
-        f"{stem + LIBRADTRAN_SPECIES_SUFFIX} {stem} (optical properties: {stem}"
-        f"{LIBRADTRAN_NC_SUFFIX}, ext per particle per cm3)",
+        "# uvspec input (libRadtran 2.0.2) that runs these files as written (optical "
+        f"properties: {stem}{LIBRADTRAN_NC_SUFFIX}, ext per particle per cm3; its phase "
+        "function serves uvspec's default intensity correction):",
+        "#   aerosol_default",
+        "#   aerosol_species_library ./",
+        f"#   aerosol_species_file {stem + LIBRADTRAN_SPECIES_SUFFIX} {stem}",
         *coverage_lines(table.wavelength_nm),
         f"# profile: {layers.description}; {layers.n_layers} homogeneous layers",
         f"# columns: altitude [km], number density of {stem} [cm-3] in the layer from the "

@@ -186,8 +186,6 @@ def test_cdisort_reads_the_phase_block(
         return float(np.asarray(s.uu).ravel()[0])
 
     (k,) = np.flatnonzero(table.theta_deg == view_zenith_deg - sza)
-    single = (
-        ssa * table.phase[0, k] * mu0 / (mu0 - mu) * (np.exp(-tau / mu0) - np.exp(-tau / mu))
-    )
+    single = ssa * table.phase[0, k] * mu0 / (mu0 - mu) * (np.exp(-tau / mu0) - np.exp(-tau / mu))
     np.testing.assert_allclose(radiance(True), single, rtol=1e-2)
     assert abs(radiance(False) / single - 1.0) > 0.05
