@@ -211,7 +211,7 @@ def rt_profile(
         )
     description = (
         f"exponential, scale height {number(scale_height_m)} m, top {number(top)} m, "
-        f"{n} layers of equal column"
+        "layers of equal column"
     )
     return ExponentialProfile(scale_height_m=scale_height_m), edges, description
 
