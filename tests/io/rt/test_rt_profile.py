@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import itertools
 import math
 import re
 from pathlib import Path
@@ -109,7 +110,7 @@ def test_cli_writes_the_profile_and_optical_depth_asked_for(tmp_path: Path) -> N
     ]
     levels = [(float(z), name) for z, name in (r for r in explicit if r[0] != "#")]
     tau_900 = 0.0
-    for (z_top, _), (z_bottom, name) in zip(levels[:-1], levels[1:], strict=True):
+    for (z_top, _), (z_bottom, name) in itertools.pairwise(levels):
         rows = np.loadtxt(out / name, ndmin=2)
         tau_900 += rows[1, 1] * (z_top - z_bottom)
     assert tau_900 == pytest.approx(0.5, rel=1e-12)
@@ -137,7 +138,10 @@ def test_cli_profile_changes_the_files(tmp_path: Path) -> None:
 @pytest.mark.parametrize(
     ("extra", "message"),
     [
-        (["--format", "netcdf", "--scale-height-m", "11100"], r"--scale-height-m \(taken by cosmoscout, disort"),
+        (
+            ["--format", "netcdf", "--scale-height-m", "11100"],
+            r"--scale-height-m \(taken by cosmoscout, disort",
+        ),
         (["--format", "disort", "--n-layers", "3"], "needs a number density"),
         (
             ["--format", "libradtran", "--optical-depth", "0.5", "--number-density-per-m3", "1e6"],
