@@ -296,6 +296,25 @@ class DisortFile:
         return np.outer(self.cext_um2, self.layer_column_per_um2[::-1])
 
 
+def _read_header(
+    head: list[str],
+) -> tuple[int | None, int | None, list[float], list[list[float]]]:
+    """The moment count, nphase, mu_phase and the layer lines of a DISORT file's header."""
+    n_mom = nphase = None
+    mu: list[float] = []
+    layers: list[list[float]] = []
+    for h in head:
+        if h.startswith("moments: pmom_0 ... pmom_"):
+            n_mom = int(h.split("(", 1)[1].split()[0])
+        elif h.startswith("nphase: "):
+            nphase = int(h.split()[1].rstrip(";"))
+        elif h.startswith("mu_phase: "):
+            mu = [float(x) for x in h.split()[1:]]
+        elif h.startswith("layer: ") and not h.startswith("layer: bottom"):
+            layers.append([float(x) for x in h.split()[1:]])
+    return n_mom, nphase, mu, layers
+
+
 def read_disort(path: str | os.PathLike[str]) -> DisortFile:
     """Read a ``disort`` file of format version 2 (:func:`disort_text`).
 
@@ -310,19 +329,7 @@ def read_disort(path: str | os.PathLike[str]) -> DisortFile:
     title = f"# dustoptics DISORT moments file, format version {_VERSION}"
     if not lines or lines[0] != title:
         raise ValueError(f"{os.fspath(path)!r}: not a DISORT file of format version {_VERSION}")
-    head = [ln[2:] for ln in lines if ln.startswith("# ")]
-    n_mom = nphase = None
-    mu: list[float] = []
-    layers: list[list[float]] = []
-    for h in head:
-        if h.startswith("moments: pmom_0 ... pmom_"):
-            n_mom = int(h.split("(", 1)[1].split()[0])
-        elif h.startswith("nphase: "):
-            nphase = int(h.split()[1].rstrip(";"))
-        elif h.startswith("mu_phase: "):
-            mu = [float(x) for x in h.split()[1:]]
-        elif h.startswith("layer: ") and not h.startswith("layer: bottom"):
-            layers.append([float(x) for x in h.split()[1:]])
+    n_mom, nphase, mu, layers = _read_header([ln[2:] for ln in lines if ln.startswith("# ")])
     rows = np.array(
         [[float(x) for x in ln.split()] for ln in lines if ln.strip() and ln[0] != "#"],
         dtype=np.float64,
