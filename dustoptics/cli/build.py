@@ -27,8 +27,14 @@ from dustoptics.atmosphere.build import (
 from dustoptics.cli.aerosol_options import AEROSOL_OPTIONS, add_aerosol_options, aerosol_keywords
 from dustoptics.cli.checks import check_needs, check_outputs, check_set_outputs, no_expansion
 from dustoptics.cli.errors import PROG, UsageError
-from dustoptics.cli.export import format_options, same_table, write_table
-from dustoptics.cli.formats import add_format_options, format_option_names
+from dustoptics.cli.export import (
+    check_profile_density,
+    format_options,
+    same_table,
+    takes_optical_depth,
+    write_table,
+)
+from dustoptics.cli.formats import add_format_options, format_option_names, unused_format_options
 from dustoptics.cli.parser import _float_list, _positive_float, add_command
 from dustoptics.cli.report import report_placement
 from dustoptics.io.outputs import place_outputs, with_inputs, write_atmosphere_set
@@ -98,7 +104,8 @@ def add_parser(sub: Any) -> None:
         type=_positive_float,
         metavar="TAU",
         help="vertical optical depth: of the Mars dust (default 0.5; clear seasons 0.3-1), or, "
-        "for one preset with --format cosmoscout, sets its number density (recorded in the provenance)",
+        "for one preset with --format cosmoscout, disort, libradtran or libradtran-nc, sets its "
+        "number density for the profile those files carry (recorded in the provenance)",
     )
     g.add_argument(
         "--reference-wavelength-nm",
@@ -153,7 +160,8 @@ def _refuse_unused_options(args: argparse.Namespace) -> None:
         where = f"'build {args.name}' (an atmosphere set)"
     else:
         unused = given(_SET_OPTIONS) + unused_aerosol
-        if args.optical_depth is not None and "cosmoscout" not in (args.format or ()):
+        unused += unused_format_options(args, args.format or DEFAULT_FORMATS)
+        if args.optical_depth is not None and not takes_optical_depth(args.format or ()):
             unused.append("--optical-depth")
         where = f"'build {args.name}' with --format {','.join(args.format or DEFAULT_FORMATS)}"
     if unused:
@@ -197,13 +205,17 @@ def _check_build_request(args: argparse.Namespace, builder: TableBuilder) -> Non
             f"{builder.name!r} is a phase function without cross-sections; remove it"
         )
     _ask_for_needs(args.name, builder, formats)
+    density = (
+        args.number_density_per_m3 is not None
+        or config.number_density_per_m3 is not None
+        or (getattr(args, "optical_depth", None) is not None and takes_optical_depth(formats))
+    )
+    check_profile_density(args, formats, density=density)
     check_needs(
         formats,
         name=builder.name,
         cross_sections=config.phase.uses_mie,
-        density=args.number_density_per_m3 is not None
-        or config.number_density_per_m3 is not None
-        or (getattr(args, "optical_depth", None) is not None and "cosmoscout" in formats),
+        density=density,
         no_expansion=None
         if builder.config.optics.expansion is not None
         else no_expansion(args.name, builder.config),

@@ -18,11 +18,15 @@ from typing import Any
 
 from dustoptics.cli.checks import NEEDS_DENSITY, check_needs, check_outputs
 from dustoptics.cli.errors import PROG, UsageError
-from dustoptics.cli.formats import add_format_options, format_option_names
-from dustoptics.cli.parser import add_command
+from dustoptics.cli.formats import (
+    add_format_options,
+    format_option_names,
+    unused_format_options,
+)
+from dustoptics.cli.parser import _positive_float, add_command
 from dustoptics.cli.report import report_placement
 from dustoptics.compare import table_differences
-from dustoptics.io import FormatError, FormatOptions, read_hdf5
+from dustoptics.io import FORMATS, FormatError, FormatOptions, read_hdf5
 from dustoptics.io.outputs import (
     TABLE_SUFFIXES,
     place_table,
@@ -31,8 +35,18 @@ from dustoptics.io.outputs import (
     with_inputs,
 )
 from dustoptics.io.registry import NEEDS
+from dustoptics.io.rt.profile import RTProfileOptions
 
-__all__ = ["NEEDS_DENSITY", "add_parser", "format_options", "run", "same_table", "write_table"]
+__all__ = [
+    "NEEDS_DENSITY",
+    "add_parser",
+    "check_profile_density",
+    "format_options",
+    "run",
+    "same_table",
+    "takes_optical_depth",
+    "write_table",
+]
 
 
 def same_table(existing: Path, new: Path) -> bool:
@@ -72,6 +86,23 @@ def add_parser(sub: Any) -> None:
     )
     p.add_argument("--quiet", action="store_true", help="no summary output")
     add_format_options(p, default=(), required=True)
+    g = p.add_argument_group(
+        "optical depth (cosmoscout, disort, libradtran, libradtran-nc: the number density)"
+    )
+    g.add_argument(
+        "--optical-depth",
+        type=_positive_float,
+        metavar="TAU",
+        help="vertical optical depth that sets the number density for the profile the files "
+        "carry (recorded in the provenance); instead of --number-density-per-m3",
+    )
+    g.add_argument(
+        "--reference-wavelength-nm",
+        type=_positive_float,
+        default=550.0,
+        metavar="NM",
+        help="wavelength of that optical depth [nm] (default 550), within the table's",
+    )
 
 
 def run(args: argparse.Namespace) -> int:
@@ -82,20 +113,58 @@ def run(args: argparse.Namespace) -> int:
             table.replace(cross_sections={"number_density_per_m3": args.number_density_per_m3}),
             number_density_per_m3=args.number_density_per_m3,
         )
+    unused = unused_format_options(args, args.format)
+    if args.optical_depth is not None and not takes_optical_depth(args.format):
+        unused.append("--optical-depth")
+    if unused:
+        raise UsageError(
+            f"{', '.join(unused)} changes nothing with --format {','.join(args.format)}; remove it"
+        )
     check_needs(
         args.format,
         name=table.name,
         cross_sections=NEEDS["cross_sections"].present(table),
-        density=NEEDS["number_density"].present(table),
+        density=NEEDS["number_density"].present(table)
+        or (args.optical_depth is not None and NEEDS["cross_sections"].present(table)),
         no_expansion=None
         if table.expansion is not None
         else f"which {str(args.file)!r} does not hold: build the table from a configuration "
         "with 'expansion = true' under [optics] (or compute_optics(..., expansion=True))",
     )
+    check_profile_density(
+        args,
+        args.format,
+        density=NEEDS["number_density"].present(table) or args.optical_depth is not None,
+    )
+    try:
+        format_options(args).check(args.format, wavelength_nm=table.wavelength_nm)
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
     check_outputs(
         args.out, table.name, args.format, inputs=table.provenance.inputs, force=args.force
     )
     return write_table(args, table, args.format)
+
+
+def takes_optical_depth(formats: Sequence[str]) -> bool:
+    """Whether one of ``formats`` writes a profile that ``--optical-depth`` fills: cosmoscout
+    and the radiative-transfer formats."""
+    return any(
+        name == "cosmoscout" or FORMATS[name].options is RTProfileOptions for name in formats
+    )
+
+
+def check_profile_density(
+    args: argparse.Namespace, formats: Sequence[str], *, density: bool
+) -> None:
+    """A profile asked for (``--scale-height-m``, ...) for the disort format needs a number
+    density (its layers' particle columns): a usage error without one, before any work."""
+    profile = FORMATS["disort"].make_options(format_options(args).values)
+    if "disort" in formats and profile.given() and not density:
+        raise UsageError(
+            "--format disort writes the profile asked for as layers of particles, which needs a "
+            "number density: give --number-density-per-m3 or --optical-depth"
+        )
 
 
 def format_options(args: argparse.Namespace) -> FormatOptions:
@@ -106,13 +175,11 @@ def format_options(args: argparse.Namespace) -> FormatOptions:
 def write_table(args: argparse.Namespace, table: Any, formats: Sequence[str]) -> int:
     """``build`` and ``export``: the table's files go into ``--out DIR`` / the table's name."""
     optical_depth = getattr(args, "optical_depth", None)
-    if "cosmoscout" in formats:
-        if optical_depth is not None and args.number_density_per_m3 is not None:
-            raise UsageError("give --optical-depth or --number-density-per-m3, not both")
-        if optical_depth is None and (
-            table.cross_sections is None or table.cross_sections.number_density_per_m3 is None
-        ):
-            raise UsageError(NEEDS_DENSITY)
+    if optical_depth is not None and args.number_density_per_m3 is not None:
+        raise UsageError("give --optical-depth or --number-density-per-m3, not both")
+    no_density = table.cross_sections is None or table.cross_sections.number_density_per_m3 is None
+    if "cosmoscout" in formats and optical_depth is None and no_density:
+        raise UsageError(NEEDS_DENSITY)
     table, options = prepare_export(
         table,
         formats,

@@ -17,7 +17,13 @@ from dustoptics.cli.parser import _float_list, _positive_float, _positive_int, d
 from dustoptics.io import FORMATS
 from dustoptics.io.registry import option_groups
 
-__all__ = ["add_format_options", "format_lines", "format_option_names", "parse_formats"]
+__all__ = [
+    "add_format_options",
+    "format_lines",
+    "format_option_names",
+    "parse_formats",
+    "unused_format_options",
+]
 
 #: The command line's parsers of the option types the format records name.
 _TYPES: dict[str, Callable[[str], Any]] = {
@@ -112,9 +118,29 @@ def add_format_options(
             keywords = dict(f.metadata["argparse"])
             if "type" in keywords:
                 keywords["type"] = _TYPES[keywords["type"]]
+            # None unless given (each format's dataclass default applies), so that an option
+            # that no format asked for takes is refused (:func:`unused_format_options`).
             g.add_argument(
                 "--" + f.name.replace("_", "-"),
-                default=f.default,
+                default=None,
                 help=f.metadata["help"],
                 **keywords,
             )
+
+
+def unused_format_options(args: argparse.Namespace, formats: Sequence[str]) -> list[str]:
+    """The format options given (``--scale-height-m``, ...) that none of ``formats`` takes.
+
+    Returns
+    -------
+    list of str
+        ``"--name (taken by fmt, ...)"`` for each, in the options' order.
+    """
+    out = []
+    for names, fields in option_groups():
+        if set(names) & set(formats):
+            continue
+        for f in fields:
+            if getattr(args, f.name, None) is not None:
+                out.append(f"--{f.name.replace('_', '-')} (taken by {', '.join(names)})")
+    return out

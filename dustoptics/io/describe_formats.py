@@ -256,6 +256,13 @@ def describe_shader(path: Path, full: bool = True) -> str:
 # --- Radiative-transfer text files ------------------------------------------------------------
 
 
+def _shortened(line: str, limit: int = 300) -> str:
+    """A long header line (a DISORT file's ``mu_phase:`` list) cut to its start and a count."""
+    if len(line) <= limit:
+        return line
+    return f"{line[:limit].rsplit(' ', 1)[0]} ... ({len(line.split())} words)"
+
+
 def describe_rt_text(path: Path, full: bool = True) -> str:
     """A DISORT moments file or a libRadtran aerosol file: its header and its rows.
 
@@ -268,7 +275,7 @@ def describe_rt_text(path: Path, full: bool = True) -> str:
         raise _format_error(path, "not a DISORT or libRadtran file written by dustoptics")
     header = [line[1:].strip() for line in text.splitlines() if line.startswith("#")]
     rows = [line.split() for line in text.splitlines() if line.strip() and line[0] != "#"]
-    lines = [f"{what}: {path.name}", *[f"  {h}" for h in header[1:]]]
+    lines = [f"{what}: {path.name}", *[f"  {_shortened(h)}" for h in header[1:]]]
     try:
         first = np.array([float(r[0]) for r in rows])
     except (ValueError, IndexError):

@@ -38,7 +38,8 @@ from dustoptics.io._atomic import STAGE_PREFIX, FormatError, _commit, file_set, 
 from dustoptics.io.csv.cosmoscout import ProfileOptions, write_atmosphere
 from dustoptics.io.csv.seed import SUMMARY_FILENAME, read_seed_csv
 from dustoptics.io.engines.bruneton import write_bruneton
-from dustoptics.io.registry import FormatOptions, write
+from dustoptics.io.registry import FORMATS, FormatOptions, write
+from dustoptics.io.rt.profile import RTProfileOptions
 from dustoptics.io.tables.netcdf import read_hdf5
 
 if TYPE_CHECKING:
@@ -133,10 +134,13 @@ def prepare_export(
 
     With ``"cosmoscout"`` among the formats, the constituent's density is an
     exponential profile (:class:`~dustoptics.io.csv.cosmoscout.ProfileOptions`,
-    recorded in the CosmoScout files' provenance); an ``optical_depth`` sets the
+    recorded in the CosmoScout files' provenance).  An ``optical_depth`` sets the
     table's number density (:func:`~dustoptics.atmosphere.sets.with_optical_depth`,
-    recorded in its provenance).  Without it, the profile parameters and optical
-    depth are not used.
+    recorded in its provenance) for the profile of the formats that write one:
+    cosmoscout's, or the radiative-transfer formats' (``disort``, ``libradtran``,
+    ``libradtran-nc``: :class:`~dustoptics.io.rt.profile.RTProfileOptions`); both
+    kinds together must describe the same column.  Without such a format, the profile
+    parameters and the optical depth are not used.
 
     Parameters
     ----------
@@ -146,8 +150,8 @@ def prepare_export(
     options : FormatOptions, optional
         The formats' options (default none).
     optical_depth : float, optional
-        cosmoscout: vertical optical depth at ``reference_wavelength_nm`` that
-        sets the number density, > 0. [-]
+        Vertical optical depth at ``reference_wavelength_nm`` that sets the number
+        density, > 0. [-]
     reference_wavelength_nm : float, optional
         Wavelength of ``optical_depth``, within the table's.  Default 550. [nm]
     scale_height_m, top_altitude_m, n_altitudes : optional
@@ -165,10 +169,12 @@ def prepare_export(
     ------
     ValueError
         cosmoscout without a number density (neither the table's nor an
-        ``optical_depth``), or profile parameters out of range.
+        ``optical_depth``), profile parameters out of range, or an optical depth for
+        cosmoscout and a radiative-transfer format whose profiles differ.
     """
     options = FormatOptions() if options is None else options
-    if "cosmoscout" not in formats:
+    rt = [name for name in formats if FORMATS[name].options is RTProfileOptions]
+    if "cosmoscout" not in formats and not (rt and optical_depth is not None):
         return table, options
     given = {
         "scale_height_m": scale_height_m,
@@ -176,22 +182,45 @@ def prepare_export(
         "n_altitudes": n_altitudes,
     }
     options = options.replace(**{k: v for k, v in given.items() if v is not None})
-    profile = ProfileOptions(**{k: v for k, v in options.values.items() if k in given})
-    if optical_depth is not None:
+    column: tuple[Any, float] | None = None
+    if rt:
+        rt_options = FORMATS[rt[0]].make_options(options.values)
+        column = rt_options.column()
+    if "cosmoscout" in formats:
+        profile = ProfileOptions(**{k: v for k, v in options.values.items() if k in given})
+        if column is not None and optical_depth is not None:
+            _same_column(column, profile, rt)
+        column = (profile.profile, profile.top_altitude_m)
+    if optical_depth is not None and column is not None:
         table = with_optical_depth(
             table,
             optical_depth=optical_depth,
             reference_wavelength_nm=reference_wavelength_nm,
-            profile=profile.profile,
-            top_altitude_m=profile.top_altitude_m,
+            profile=column[0],
+            top_altitude_m=column[1],
         )
-    if table.cross_sections is None or table.cross_sections.number_density_per_m3 is None:
-        raise ValueError(
-            "the cosmoscout format needs a number density for beta [m^-1]: give optical_depth "
-            "or a table with number_density_per_m3"
-        )
-    profile.check(table.wavelength_nm)
+    if "cosmoscout" in formats:
+        if table.cross_sections is None or table.cross_sections.number_density_per_m3 is None:
+            raise ValueError(
+                "the cosmoscout format needs a number density for beta [m^-1]: give "
+                "optical_depth or a table with number_density_per_m3"
+            )
+        profile.check(table.wavelength_nm)
     return table, options
+
+
+def _same_column(column: tuple[Any, float], profile: ProfileOptions, rt: Sequence[str]) -> None:
+    """One optical depth gives one number density only if both profiles hold the same column."""
+    rt_length = column[0].column_length_m(top_altitude_m=column[1])
+    cs_length = profile.profile.column_length_m(top_altitude_m=profile.top_altitude_m)
+    if abs(rt_length - cs_length) > 1e-9 * cs_length:
+        raise ValueError(
+            f"an optical depth sets one number density, but the cosmoscout profile (exponential, "
+            f"scale height {profile.scale_height_m:g} m, top {profile.top_altitude_m:g} m: column "
+            f"{cs_length:g} m) and the profile of {', '.join(rt)} (column {rt_length:g} m) "
+            "differ: give --scale-height-m (and --top-altitude-m) so that both share one, or "
+            "write them separately"
+        )
 
 
 def write_formats(

@@ -458,13 +458,16 @@ class ProfileOptions:
     """
 
     scale_height_m: float = option(
-        help="exponential density profile's scale height [m] (default 10000, the seeds' Mars dust)",
+        help="exponential density profile's scale height [m] (cosmoscout: default 10000, the "
+        "seeds' Mars dust; disort, libradtran, libradtran-nc: default none, one uniform layer)",
         default=10_000.0,
         type="positive_float",
         metavar="H",
     )
     top_altitude_m: float = option(
-        help="atmosphere top above the surface [m] (default 120000, Mars 3510 - 3390 km)",
+        help="atmosphere top above the surface [m] (cosmoscout: default 120000, Mars 3510 - 3390 "
+        "km; disort, libradtran, libradtran-nc: default 1000 uniform, 120000 with "
+        "--scale-height-m)",
         default=120_000.0,
         type="positive_float",
         metavar="Z",

@@ -44,16 +44,20 @@ Written atomically as one set (:func:`dustoptics.io._atomic.write_files`):
 
     The profile ``<name>_aerosol_species.dat`` is what uvspec's
     ``aerosol_species_file`` reads: altitude [km] and the species' amount
-    for the layer *below* that altitude's line, top line first; here one
-    layer from ``bottom_km`` to ``top_km`` holding the table's number density
-    in cm-3 (``1e-6 N[m-3]``), so that uvspec's layer optical depth ``ext *
-    amount * dz`` is ``N <C_ext> dz``.  libRadtran's own species files are
-    per mass (ext per g m-3, the profile in g m-3); per particle number
+    in the layer *starting* at that altitude's line (from it up to the line
+    above), top line first, the top line's amount 0 (it only marks the top);
+    by default one layer from 0 to 1 km, or the profile asked for
+    (:mod:`dustoptics.io.rt.profile`), each layer holding its mean number
+    density in cm-3 (``1e-6 N[m-3]``), so that uvspec's layer optical depth
+    ``ext * amount * dz`` is ``N <C_ext> dz``.  libRadtran's own species files
+    are per mass (ext per g m-3, the profile in g m-3); per particle number
     instead needs no particle density and gives the same product.  The uvspec
     input (``aerosol_default`` switches aerosol on, as in libRadtran's example
     ``examples/UVSPEC_AEROSOL_OPAC_POL.INP``; the library directory with its
     trailing slash, since uvspec appends the species name to it; the species
-    name is the file name before ``.mie.cdf``)::
+    name is the file name before ``.mie.cdf``); uvspec's default intensity
+    correction reads the file's phase function, so no ``disort_intcor`` line
+    is needed::
 
         aerosol_default
         aerosol_species_library ./
@@ -61,8 +65,8 @@ Written atomically as one set (:func:`dustoptics.io._atomic.write_files`):
 
 It needs the table's expansion coefficients (``compute_optics(...,
 expansion=True)``), its cross-sections, a number density, and an angle grid
-from 0 to 180 deg.  Not run against a uvspec binary here: the layout, names
-and checks follow the libRadtran 2.0.2 source cited above.
+from 0 to 180 deg.  ``tests/io/rt/test_uvspec.py`` runs uvspec on these files
+where ``LIBRADTRAN_DIR`` names a libRadtran build.
 
 References
 ----------
@@ -95,7 +99,8 @@ from dustoptics.io._atomic import FormatError, safe_stem, write_files
 from dustoptics.io._text import number
 from dustoptics.io.registry import Format, register
 from dustoptics.io.rt.disort import bound_text, header_lines
-from dustoptics.io.rt.libradtran import layer_bounds
+from dustoptics.io.rt.libradtran import uniform_layer
+from dustoptics.io.rt.profile import RTLayers, RTProfileOptions, coverage_lines
 from dustoptics.scattering.expansion import evaluate_matrix
 from dustoptics.table.provenance import _installed_version
 
@@ -279,7 +284,13 @@ def libradtran_netcdf_bytes(table: Any) -> bytes:
     return data
 
 
-def libradtran_species_text(table: Any, *, bottom_km: float = 0.0, top_km: float = 1.0) -> str:
+def libradtran_species_text(
+    table: Any,
+    *,
+    bottom_km: float = 0.0,
+    top_km: float = 1.0,
+    layers: RTLayers | None = None,
+) -> str:
     """The ``aerosol_species_file`` profile of the ``libradtran-nc`` format (module docstring).
 
     Parameters
@@ -287,26 +298,38 @@ def libradtran_species_text(table: Any, *, bottom_km: float = 0.0, top_km: float
     table : dustoptics.table.Table
         With ``number_density_per_m3``.
     bottom_km, top_km : float
-        Altitudes of the layer's bottom and top. [km]
+        One uniform layer's bottom and top, when ``layers`` is not given. [km]
+    layers : RTLayers, optional
+        The vertical profile (:func:`dustoptics.io.rt.profile.rt_layers`).
 
     Raises
     ------
     ValueError
         As :func:`libradtran_netcdf_bytes`, or ``top_km <= bottom_km``.
     """
-    bottom, top = layer_bounds(bottom_km=bottom_km, top_km=top_km)
+    if layers is None:
+        layers = uniform_layer(bottom_km=bottom_km, top_km=top_km)
     _needs(table)
     stem = safe_stem(table.name)
-    n_cm3 = float(table.cross_sections.number_density_per_m3) * 1e-6
+    n_cm3 = layers.relative_density * float(table.cross_sections.number_density_per_m3) * 1e-6
     lines = [
         *header_lines(table, "dustoptics libRadtran aerosol species profile, format version 1"),
-        f"# uvspec input: aerosol_default + aerosol_species_library ./ + aerosol_species_file "
-        f"{stem + LIBRADTRAN_SPECIES_SUFFIX} {stem} (optical properties: {stem}"
-        f"{LIBRADTRAN_NC_SUFFIX}, ext per particle per cm3)",
-        f"# columns: altitude [km], number density of {stem} [cm-3] in the layer below the "
-        "line's altitude (top line first)",
-        f"{number(top)} 0",
-        f"{number(bottom)} {number(n_cm3)}",
+        "# uvspec input (libRadtran 2.0.2) that runs these files as written (optical "
+        f"properties: {stem}{LIBRADTRAN_NC_SUFFIX}, ext per particle per cm3; its phase "
+        "function serves uvspec's default intensity correction):",
+        "#   aerosol_default",
+        "#   aerosol_species_library ./",
+        f"#   aerosol_species_file {stem + LIBRADTRAN_SPECIES_SUFFIX} {stem}",
+        *coverage_lines(table.wavelength_nm),
+        f"# profile: {layers.description}; {layers.n_layers} homogeneous layers",
+        f"# columns: altitude [km], number density of {stem} [cm-3] in the layer from the "
+        "line's altitude up to the line above (top line first; the top line's 0 only marks "
+        "the top)",
+        f"{number(layers.top_km[-1])} 0",
+    ]
+    lines += [
+        f"{number(layers.bottom_km[i])} {number(float(n_cm3[i]))}"
+        for i in reversed(range(layers.n_layers))
     ]
     return "\n".join(lines) + "\n"
 
@@ -318,10 +341,18 @@ def write_libradtran_netcdf(
     overwrite: bool = False,
     bottom_km: float = 0.0,
     top_km: float = 1.0,
+    layers: RTLayers | None = None,
 ) -> list[Path]:
     """Write libRadtran's polarized ``<name>.mie.cdf`` and its species profile into ``out_dir``.
 
     Both appear together or neither (one atomic set); see the module docstring.
+
+    Parameters
+    ----------
+    bottom_km, top_km : float
+        One uniform layer's bottom and top [km], when ``layers`` is not given.
+    layers : RTLayers, optional
+        The vertical profile; replaces ``bottom_km`` and ``top_km``.
 
     Returns
     -------
@@ -335,7 +366,7 @@ def write_libradtran_netcdf(
     ValueError
         As :func:`libradtran_netcdf_bytes` and :func:`libradtran_species_text`.
     """
-    profile = libradtran_species_text(table, bottom_km=bottom_km, top_km=top_km)
+    profile = libradtran_species_text(table, bottom_km=bottom_km, top_km=top_km, layers=layers)
     data = libradtran_netcdf_bytes(table)
     root = Path(os.fspath(out_dir))
     stem = safe_stem(table.name)
@@ -405,6 +436,7 @@ RECORD = register(
         summary="NAME.mie.cdf: libRadtran's P11, P12, P33, P34 (needs the expansion, N0)",
         write=write_libradtran_netcdf,
         suffixes=(".cdf",),
+        options=RTProfileOptions,
         needs=frozenset({"cross_sections", "number_density", "expansion", "matrix"}),
         recognise=lambda path: path.suffix.lower() == ".cdf" and is_libradtran_netcdf(path),
         describe=describe_libradtran_netcdf,
