@@ -50,12 +50,12 @@ from dustoptics.io.registry import option
 
 __all__ = [
     "AMES_COMMIT",
-    "AmesBands",
-    "AmesFile",
-    "AmesOptions",
     "BANDS",
     "DEFAULT_RADII_UM",
     "SINGLE_RADII",
+    "AmesBands",
+    "AmesFile",
+    "AmesOptions",
     "ames_grid",
     "ames_text",
     "describe_ames",
@@ -219,7 +219,9 @@ def _sidecar(grid: dict[str, Any], bands: str, v_eff: float | None) -> str:
         else f"effective radii, v_eff = {v_eff:g} ({p.distribution['model']} family or "
         "modified_gamma)",
         "band_edges_cm-1": list(spec.edges_cm),
-        "averaged_cm-1": [[float(lo), float(hi)] for lo, hi in zip(b.lower_cm, b.upper_cm, strict=True)],
+        "averaged_cm-1": [
+            [float(lo), float(hi)] for lo, hi in zip(b.lower_cm, b.upper_cm, strict=True)
+        ],
         "planck_energy_covered": [round(float(c), 6) for c in b.covered],
         "planck_temperature_k": grid["temperature_k"],
         "nodes_per_band": grid["nodes_per_band"],
@@ -294,18 +296,22 @@ def read_ames(path: str | os.PathLike[str], *, n_bands: int) -> AmesFile:
 
 
 def is_ames(path: Path, bands: str) -> bool:
-    """A ``<name>_Dust_<bands>_15bands.dat`` file whose first line reads in the layout."""
-    if path.suffix != ".dat" or not path.name.endswith(f"_Dust_{bands}_15bands.dat"):
-        return False
-    if not path.is_file():
+    """A ``<name>_Dust_<bands>_15bands.dat`` file whose first line reads in the layout, or its
+    JSON sidecar."""
+    stem = f"_Dust_{bands}_15bands"
+    if not path.name.endswith((stem + ".dat", stem + ".json")) or not path.is_file():
         return False
     with open(path, encoding="ascii", errors="replace") as f:
         first = f.readline().rstrip("\n")
+    if path.suffix == ".json":
+        return first == "{"
     return len(first) == len(BANDS[bands].edges_cm[1:]) * (_FIELD + 2) - 2
 
 
 def describe_ames(path: Path, full: bool = True) -> str:
-    """What an Ames dust file holds, for ``dustoptics info`` (with its sidecar, if there)."""
+    """What an Ames dust file holds, for ``dustoptics info`` (with its sidecar, if there; given
+    the sidecar, what the file beside it holds)."""
+    path = path.with_suffix(".dat")
     bands = "vis" if path.name.endswith("_Dust_vis_15bands.dat") else "ir"
     spec = BANDS[bands]
     f = read_ames(path, n_bands=len(spec.edges_cm) - 1)

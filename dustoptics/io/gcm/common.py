@@ -9,8 +9,8 @@ TOML file recorded there), and compute the cross-sections again over the grid:
 
 - :func:`gcm_particles`: the material and size distribution of a configuration's table
   (a table of :func:`dustoptics.scattering.optics.compute_optics` records index values at
-  its own wavelengths only, and analytic phase models have no particles: both are
-  refused, naming why);
+  its own wavelengths only: taken when they are one constant, refused otherwise; analytic
+  phase models have no particles);
 - :func:`distribution_at`: the distribution whose effective radius is one radius of the
   grid: by default the build's own distribution scaled in radius (every length
   parameter ``*_um`` times r / r_eff, so the shape, the effective variance and the
@@ -36,6 +36,7 @@ import numpy as np
 
 from dustoptics.io.registry import option
 from dustoptics.models.config import MaterialConfig, ModeConfig, SizeDistributionConfig
+from dustoptics.particles.custom_sizedist import from_dict
 from dustoptics.particles.sizedist import SIZE_DISTRIBUTIONS, Monodisperse, SizeDistribution
 from dustoptics.scattering.optics import compute_optics
 
@@ -45,9 +46,9 @@ __all__ = [
     "GcmOptions",
     "GcmParticles",
     "GridOptics",
+    "check_radii",
     "distribution_at",
     "gcm_particles",
-    "check_radii",
     "grid_optics",
     "planck_band_average",
     "planck_bands",
@@ -137,28 +138,37 @@ class GcmParticles:
 
 
 def gcm_particles(table: Any, *, format_name: str) -> GcmParticles:
-    """The material and size distribution recorded in a configuration's table.
+    """The material and size distribution recorded in a table's provenance.
+
+    A configuration's table (a preset, a TOML file) records its material, which gives
+    the index at any wavelength.  A table of
+    :func:`~dustoptics.scattering.optics.compute_optics` records the index's values at
+    its own wavelengths only: it is taken when they are all the same (a constant index,
+    valid at every wavelength) and refused otherwise.
 
     Raises
     ------
     ValueError
-        The table was not built from a configuration with a material and a size
-        distribution (an analytic phase model, or :func:`compute_optics`'s own table).
+        No material and size distribution to compute the grid from (an analytic phase
+        model, or a :func:`compute_optics` table whose index varies with wavelength).
     """
     inputs = table.provenance.inputs
-    material = inputs.get("material")
     sizes = inputs.get("size_distribution")
-    if "schema" not in inputs or not isinstance(material, Mapping) or not isinstance(sizes, Mapping):
+    if "schema" in inputs and isinstance(inputs.get("material"), Mapping):
+        material = inputs["material"]
+        built = MaterialConfig(
+            model=material["model"],
+            parameters={k: v for k, v in material.items() if k != "model"},
+        ).build()
+    else:
+        built = _constant_index(inputs)
+    if built is None or not isinstance(sizes, Mapping):
         raise ValueError(
-            f"format {format_name!r} computes a grid of particle radii from the table's "
-            f"configuration; table {table.name!r} records none with a material and a size "
-            "distribution (build a dust preset or a TOML configuration with [material] and "
-            "[size_distribution]; analytic phase models have no particles)"
+            f"format {format_name!r} computes a grid of particle radii from what table "
+            f"{table.name!r} was made of; it records no material and size distribution that "
+            "give the index at other wavelengths (build a dust preset or a TOML configuration "
+            "with [material] and [size_distribution]; analytic phase models have no particles)"
         )
-    config = MaterialConfig(
-        model=material["model"], parameters={k: v for k, v in material.items() if k != "model"}
-    )
-    built = config.build()
     low, high = getattr(built, "wavelength_range_nm", (0.0, math.inf))
     return GcmParticles(
         name=table.name,
@@ -169,15 +179,21 @@ def gcm_particles(table: Any, *, format_name: str) -> GcmParticles:
     )
 
 
+def _constant_index(inputs: Mapping[str, Any]) -> complex | None:
+    """The index of a :func:`compute_optics` table if it is one constant (no core); else None."""
+    index = inputs.get("refractive_index")
+    if not isinstance(index, Mapping) or "core" in inputs:
+        return None
+    n = np.asarray(index.get("n", ()), dtype=np.float64)
+    k = np.asarray(index.get("k", ()), dtype=np.float64)
+    if n.size == 0 or np.ptp(n) != 0 or np.ptp(k) != 0:
+        return None
+    return complex(n[0], k[0])
+
+
 def _mode(record: Mapping[str, Any]) -> ModeConfig:
     parameters = {
-        k: (
-            _mode(v)
-            if isinstance(v, Mapping)
-            else tuple(v)
-            if isinstance(v, list)
-            else v
-        )
+        k: (_mode(v) if isinstance(v, Mapping) else tuple(v) if isinstance(v, list) else v)
         for k, v in record.items()
         if k not in ("model", "relative_number_density")
     }
@@ -189,6 +205,8 @@ def _mode(record: Mapping[str, Any]) -> ModeConfig:
 
 
 def _build(record: Mapping[str, Any]) -> SizeDistribution:
+    if "parameters" in record:  # a SizeDistribution.to_dict record (compute_optics' tables)
+        return from_dict(record)
     if record["model"] == "multimodal":
         return SizeDistributionConfig(
             model="multimodal", modes=tuple(_mode(m) for m in record["modes"])
@@ -326,9 +344,7 @@ def grid_optics(
             allow_large=True,
         )
         qext[i], qsca[i], g[i] = t.qext, t.qsca, t.g
-    return GridOptics(
-        radius_um=radius_um, wavelength_nm=wavelength_nm, qext=qext, qsca=qsca, g=g
-    )
+    return GridOptics(radius_um=radius_um, wavelength_nm=wavelength_nm, qext=qext, qsca=qsca, g=g)
 
 
 def planck_wavenumber(wavenumber_cm: Any, temperature_k: float) -> np.ndarray:
@@ -415,7 +431,9 @@ def planck_bands(
         nodes[b] = mid + half * x
         weights[b] = half * w * planck_wavenumber(nodes[b], temperature_k)
         whole_half, whole_mid = 0.5 * (edges[b + 1] - edges[b]), 0.5 * (edges[b + 1] + edges[b])
-        whole = whole_half * fine_w @ planck_wavenumber(whole_mid + whole_half * fine_x, temperature_k)
+        whole = (
+            whole_half * fine_w @ planck_wavenumber(whole_mid + whole_half * fine_x, temperature_k)
+        )
         inside = half * fine_w @ planck_wavenumber(mid + half * fine_x, temperature_k)
         covered[b] = inside / whole
         weights[b] /= weights[b].sum()

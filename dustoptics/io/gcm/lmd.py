@@ -312,7 +312,9 @@ def describe_lmd(path: Path, full: bool = True) -> str:
     ]
     if full:
         lines += [f"  {h[2:]}" for h in f.header[2:] if not h.startswith("# Number")]
-        model_name = "optprop_dustir_n50.dat" if domain == "infrared" else "optprop_dustvis_TM_n50.dat"
+        model_name = (
+            "optprop_dustir_n50.dat" if domain == "infrared" else "optprop_dustvis_TM_n50.dat"
+        )
         lines.append(
             f"  the PCM reads it as {model_name} in its datadir (or the name set in suaer.F90's "
             "file_id)"

@@ -75,7 +75,7 @@ def _run(exe: Path, *args: Path) -> np.ndarray:
 
 
 def test_lmd_values_round_trip_and_the_build_s_own_radius_is_the_table(table, tmp_path):
-    text, radii, optics = lmd.lmd_text(
+    text, _, optics = lmd.lmd_text(
         table, domain="vis", gcm_radii_um=RADII_UM, gcm_wavelengths_um=VIS_UM
     )
     (path,) = FORMATS["lmd-dustvis"].write(
@@ -202,10 +202,18 @@ def test_scaling_keeps_the_build_s_shape():
     record = {
         "model": "multimodal",
         "modes": [
-            {"model": "modified_log_normal", "r_eff_um": 0.04, "v_eff": 0.1,
-             "relative_number_density": 1000.0},
-            {"model": "modified_gamma", "r_eff_um": 1.6, "v_eff": 0.2,
-             "relative_number_density": 1.0},
+            {
+                "model": "modified_log_normal",
+                "r_eff_um": 0.04,
+                "v_eff": 0.1,
+                "relative_number_density": 1000.0,
+            },
+            {
+                "model": "modified_gamma",
+                "r_eff_um": 1.6,
+                "v_eff": 0.2,
+                "relative_number_density": 1.0,
+            },
         ],
     }
     own = common.distribution_at(record, r_eff_um=1.0, v_eff=None)
@@ -218,8 +226,15 @@ def test_scaling_keeps_the_build_s_shape():
 
 def test_refusals_name_what_is_wrong(table, tmp_path):
     analytic = build_table(load_preset("costa"))
-    with pytest.raises(ValueError, match="material and a size"):
+    with pytest.raises(ValueError, match="records no material and size distribution"):
         FORMATS["lmd-dustvis"].write(analytic, tmp_path)
+    # compute_optics' own table records its index at its wavelengths only: refused unless
+    # it is one constant.
+    varying = compute_optics(
+        get_material("marsdust-wolff2009"), ModifiedGamma(r_eff_um=1.0, v_eff=0.2), [550.0, 670.0]
+    )
+    with pytest.raises(ValueError, match="give the index at other wavelengths"):
+        FORMATS["ames-dustir"].write(varying, tmp_path)
     with pytest.raises(ValueError, match="gcm_radii_um must be strictly increasing"):
         FORMATS["ames-dustvis"].write(table, tmp_path, gcm_radii_um=(2.0, 1.0))
     with pytest.raises(ValueError, match="bracket the PCM's infrared reference wavelength 9.3"):
