@@ -75,8 +75,9 @@ class GcmOptions:
     """Options of every GCM dust file: the radius grid and the size distribution's width."""
 
     gcm_radii_um: tuple[float, ...] | None = option(
-        help="GCM dust files: radius grid, effective radii in um, comma-separated "
-        "(default: the model's own grid, see `dustoptics info`)",
+        help="GCM dust files: radius grid in um, comma-separated: effective radii (the Ames "
+        "rows are single radii unless --gcm-v-eff is given); default the model's own grid "
+        "(LMD: 50 from 0.001 to 10 um; Ames: 20 from 0.1 to 50 um)",
         type="floats",
         metavar="R[,R...]",
     )

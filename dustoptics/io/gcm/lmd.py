@@ -10,7 +10,9 @@ The PCM averages them itself over its bands (``aerave``: Planck at 6000 K over
 0.1-0.5-5 um in the visible, at 215 K over 5-200 um in the infrared, from
 ``dimradmars_mod.F90``) and normalizes Q_ext by its value at the reference wavelength
 (0.67 um visible, ``longrefvis``; 9.3 um infrared in the ``dustrefir`` default), so the
-wavelength axis must bracket the reference wavelength.
+wavelength axis must bracket the reference wavelength.  Between the axis's points
+``aerave`` interpolates linearly in wavelength, and beyond its ends it holds the end
+values (read from a public copy of ``aerave.F``).
 
 The radius axis is a grid of effective radii: the PCM's own files carry 50, log-spaced
 from 1e-3 to 10 um (the list public converters reproduce: ``Wetewe/Build_Dust``,
