@@ -53,6 +53,7 @@ __all__ = [
     "planck_band_average",
     "planck_bands",
     "planck_wavenumber",
+    "scalable_radii",
 ]
 
 #: Relative tolerance of <C_ext>, <C_sca> (absolute for g) of each grid point: below the
@@ -279,6 +280,30 @@ def distribution_at(
         )
     own = _build(distribution).r_eff_um
     return _build(_scaled(distribution, r_eff_um / own))
+
+
+def scalable_radii(
+    distribution: Mapping[str, Any], radii_um: np.ndarray, *, v_eff: float | None
+) -> np.ndarray:
+    """The radii of a default grid at which :func:`distribution_at` can make the distribution.
+
+    Scaling a multimodal build down to the smallest radii of a model's grid takes its fine
+    mode below 1 nm, the smallest radius the size distributions take; a default grid
+    leaves those radii out (a grid the user gives is taken whole or refused). [um]
+    """
+    kept = []
+    for r in radii_um:
+        try:
+            distribution_at(distribution, r_eff_um=float(r), v_eff=v_eff)
+        except ValueError:
+            continue
+        kept.append(r)
+    if not kept:
+        raise ValueError(
+            "the build's size distribution cannot be scaled to any radius of the default grid; "
+            "give gcm_radii_um (--gcm-radii-um) or gcm_v_eff (--gcm-v-eff)"
+        )
+    return np.asarray(kept, dtype=np.float64)
 
 
 @dataclass(frozen=True)

@@ -34,7 +34,13 @@ import numpy as np
 
 from dustoptics.io._atomic import FormatError, safe_stem, write_files
 from dustoptics.io._text import printable
-from dustoptics.io.gcm.common import GcmOptions, check_radii, gcm_particles, grid_optics
+from dustoptics.io.gcm.common import (
+    GcmOptions,
+    check_radii,
+    gcm_particles,
+    grid_optics,
+    scalable_radii,
+)
 from dustoptics.io.registry import option
 
 __all__ = [
@@ -157,12 +163,20 @@ def lmd_text(
     d = DOMAINS[domain]
     name = f"lmd-dust{domain}"
     radii = check_radii(gcm_radii_um)
-    radii = np.asarray(DEFAULT_RADII_UM) if radii is None else radii
-    if radii.size > NSIZEMAX:
+    if radii is not None and radii.size > NSIZEMAX:
         raise ValueError(
             f"gcm_radii_um has {radii.size} radii; the PCM takes at most {NSIZEMAX} (nsizemax)"
         )
     particles = gcm_particles(table, format_name=name)
+    left_out = ""
+    if radii is None:
+        default = np.asarray(DEFAULT_RADII_UM)
+        radii = scalable_radii(particles.distribution, default, v_eff=gcm_v_eff)
+        if radii.size < default.size:
+            left_out = (
+                f" ({default.size - radii.size} of the PCM's {default.size} radii, below "
+                f"{radii[0]:.4g} um, left out: the build's fine mode would be below 1 nm)"
+            )
     axis_um = _wavelength_axis(d, gcm_wavelengths_um, particles.wavelength_range_nm)
     optics = grid_optics(particles, radius_um=radii, wavelength_nm=axis_um * 1e3, v_eff=gcm_v_eff)
     shape = (
@@ -174,7 +188,7 @@ def lmd_text(
         f"{FIRST_LINE} {d.title}",
         f"# table {printable(particles.name)}, input hash {particles.input_hash}",
         "# layout of the PCM's suaer.F90; wavelengths and radii in metres",
-        f"# radius axis: effective radii; distributions: {shape}",
+        f"# radius axis: effective radii; distributions: {shape}{left_out}",
         "# Q_ext per mean geometric cross-section; Mie theory for spheres; g and albedo "
         "cross-section weighted",
         f"# PCM reference wavelength of the domain: {d.reference_um:g} um; "

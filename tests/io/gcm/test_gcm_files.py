@@ -225,6 +225,20 @@ def test_scaling_keeps_the_build_s_shape():
     assert isinstance(fixed, ModifiedGamma) and fixed.v_eff == 0.25
 
 
+def test_the_default_lmd_grid_leaves_out_radii_a_fine_mode_cannot_reach():
+    # cosmoscout-mars' fine mode (r_eff 0.04 um) scaled to the PCM's smallest radii would be
+    # below 1 nm: the default grid keeps its tail, from the first radius that can be made.
+    record = load_preset("cosmoscout-mars").size_distribution.to_inputs()
+    default = np.asarray(lmd.DEFAULT_RADII_UM)
+    kept = common.scalable_radii(record, default, v_eff=None)
+    assert 0 < kept.size < default.size
+    np.testing.assert_array_equal(kept, default[default.size - kept.size :])
+    with pytest.raises(ValueError, match="below 0.001 um"):
+        common.distribution_at(record, r_eff_um=float(default[-kept.size - 1]), v_eff=None)
+    # With a v_eff the family needs no scaling: every radius of the grid.
+    assert common.scalable_radii(record, default, v_eff=0.3).size == default.size
+
+
 def test_refusals_name_what_is_wrong(table, tmp_path):
     analytic = build_table(load_preset("costa"))
     with pytest.raises(ValueError, match="records no material and size distribution"):
