@@ -117,6 +117,21 @@ class LmdOptions(GcmOptions):
         metavar="W[,W...]",
     )
 
+    def check(self, wavelength_nm: Any) -> None:
+        """Refuse, before the table is computed, what the writer would refuse."""
+        super().check(wavelength_nm)
+        if self.gcm_radii_um is not None and len(self.gcm_radii_um) > NSIZEMAX:
+            raise ValueError(
+                f"gcm_radii_um has {len(self.gcm_radii_um)} radii; the PCM takes at most "
+                f"{NSIZEMAX} (nsizemax)"
+            )
+        w = self.gcm_wavelengths_um
+        if w is not None and (len(w) < 2 or min(w) <= 0 or bool(np.any(np.diff(w) <= 0))):
+            raise ValueError(
+                f"gcm_wavelengths_um must be two or more increasing wavelengths > 0 [um]; got "
+                f"{list(w)!r}"
+            )
+
 
 def _wavelength_axis(
     domain: LmdDomain, given: tuple[float, ...] | None, index_range_nm: tuple[float, float]
