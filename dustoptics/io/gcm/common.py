@@ -34,11 +34,17 @@ from typing import Any
 
 import numpy as np
 
+from dustoptics._validation import BudgetError
 from dustoptics.io.registry import option
 from dustoptics.models.config import MaterialConfig, ModeConfig, SizeDistributionConfig
 from dustoptics.particles.custom_sizedist import from_dict
 from dustoptics.particles.sizedist import SIZE_DISTRIBUTIONS, Monodisperse, SizeDistribution
-from dustoptics.scattering.optics import compute_optics
+from dustoptics.scattering.optics import (
+    WORK_BUDGET,
+    compute_optics,
+    estimate_cost,
+    optics_request,
+)
 
 __all__ = [
     "CROSS_SECTION_RTOL",
@@ -279,7 +285,13 @@ def distribution_at(
             "each radius of the grid; give gcm_v_eff (--gcm-v-eff)"
         )
     own = _build(distribution).r_eff_um
-    return _build(_scaled(distribution, r_eff_um / own))
+    try:
+        return _build(_scaled(distribution, r_eff_um / own))
+    except ValueError as err:
+        raise ValueError(
+            f"the build's size distribution scaled to r_eff {r_eff_um:g} um cannot be made "
+            f"({err}); give larger radii (--gcm-radii-um) or a v_eff (--gcm-v-eff)"
+        ) from None
 
 
 def scalable_radii(
@@ -353,12 +365,14 @@ def grid_optics(
             f"wavelengths {wavelength_nm.min():g}-{wavelength_nm.max():g} nm reach beyond the "
             f"refractive index's range {low:g}-{high:g} nm"
         )
+    dists = [
+        distribution_at(particles.distribution, r_eff_um=float(r), v_eff=v_eff, single=single)
+        for r in radius_um
+    ]
+    _check_work(particles, dists, radius_um, wavelength_nm)
     shape = (radius_um.size, wavelength_nm.size)
     qext, qsca, g = np.empty(shape), np.empty(shape), np.empty(shape)
-    for i, r in enumerate(radius_um):
-        dist = distribution_at(
-            particles.distribution, r_eff_um=float(r), v_eff=v_eff, single=single
-        )
+    for i, dist in enumerate(dists):
         t = compute_optics(
             particles.material,
             dist,
@@ -371,6 +385,38 @@ def grid_optics(
         )
         qext[i], qsca[i], g[i] = t.qext, t.qsca, t.g
     return GridOptics(radius_um=radius_um, wavelength_nm=wavelength_nm, qext=qext, qsca=qsca, g=g)
+
+
+def _check_work(
+    particles: GcmParticles,
+    dists: Sequence[SizeDistribution],
+    radius_um: np.ndarray,
+    wavelength_nm: np.ndarray,
+) -> None:
+    """Refuse, before any work, a grid whose estimated work exceeds the package's budget."""
+    works = [
+        estimate_cost(
+            optics_request(
+                particles.material,
+                d,
+                wavelength_nm,
+                _THETA_DEG,
+                rtol=_PHASE_RTOL,
+                cross_section_rtol=CROSS_SECTION_RTOL,
+            ),
+            workers=1,
+        ).work
+        for d in dists
+    ]
+    total = float(sum(works))
+    if total > WORK_BUDGET:
+        worst = int(np.argmax(works))
+        raise BudgetError(
+            f"the radius grid would take about {total / WORK_BUDGET:.1f} times the work budget "
+            f"(about ten minutes): the distribution at r_eff {radius_um[worst]:g} um alone is "
+            f"{works[worst] / WORK_BUDGET:.2f} of it; give smaller or fewer radii "
+            "(--gcm-radii-um), a narrower distribution (--gcm-v-eff) or fewer wavelengths"
+        )
 
 
 def planck_wavenumber(wavenumber_cm: Any, temperature_k: float) -> np.ndarray:

@@ -16,6 +16,7 @@ import pytest
 from _render import missing
 from scipy import integrate
 
+from dustoptics._validation import BudgetError
 from dustoptics.cli import main
 from dustoptics.io import FORMATS
 from dustoptics.io.gcm import ames, common, lmd
@@ -237,6 +238,21 @@ def test_the_default_lmd_grid_leaves_out_radii_a_fine_mode_cannot_reach():
         common.distribution_at(record, r_eff_um=float(default[-kept.size - 1]), v_eff=None)
     # With a v_eff the family needs no scaling: every radius of the grid.
     assert common.scalable_radii(record, default, v_eff=0.3).size == default.size
+
+
+def test_a_grid_over_the_work_budget_is_refused_before_any_work(tmp_path):
+    # cosmoscout-mars' shape (v_eff 2.1) scaled to the PCM's largest radii reaches size
+    # parameters near 2e4: its default LMD grid is refused at once, naming the options.
+    config = load_preset("cosmoscout-mars")
+    small = dataclasses.replace(
+        config, optics=dataclasses.replace(config.optics, wavelengths_nm=(670.0,), n_theta=19)
+    )
+    table = build_table(small)
+    with pytest.raises(BudgetError, match="times the work budget.*--gcm-radii-um"):
+        FORMATS["lmd-dustvis"].write(table, tmp_path)
+    with pytest.raises(ValueError, match="scaled to r_eff 0.01 um cannot be made"):
+        FORMATS["lmd-dustvis"].write(table, tmp_path, gcm_radii_um=(0.01, 1.0))
+    assert not list(tmp_path.iterdir())
 
 
 def test_refusals_name_what_is_wrong(table, tmp_path):
