@@ -33,6 +33,9 @@ Formats, grouped by what they are for (each subpackage lists its modules):
 - :mod:`~dustoptics.io.engines`: parameters of engines' own models: Bruneton's
   precomputed atmospheric scattering (2017; as the ``bruneton`` format, one aerosol
   table's Mie part) and fitted analytic phase functions as JSON and constants.
+- :mod:`~dustoptics.io.gcm`: the dust files of Mars GCMs, over a grid of radii: the LMD
+  Mars PCM's visible and infrared files (formats ``lmd-dustvis``, ``lmd-dustir``) and the
+  NASA Ames Mars GCM's band files (formats ``ames-dustvis``, ``ames-dustir``).
 - :mod:`~dustoptics.io.outputs` (a table in several formats into ``OUT/NAME/``,
   beside what is there; :func:`read_table` of any table file) and
   :mod:`~dustoptics.io.describe` (what any file dustoptics writes holds).
@@ -49,6 +52,7 @@ from dustoptics.io import (
     csv,
     describe,
     engines,
+    gcm,
     outputs,
     rt,
     shaders,
@@ -100,6 +104,7 @@ __all__ = [
     "describe_path",
     "describe_table",
     "engines",
+    "gcm",
     "glsl_snippet",
     "open_table",
     "outputs",

@@ -1,0 +1,20 @@
+"""The dust files Mars general circulation models read.
+
+Each format computes the build's particles again over a grid of radii (a table is one
+size distribution; these files are many): :mod:`~dustoptics.io.gcm.common`.
+
+- :mod:`~dustoptics.io.gcm.lmd_vis`, :mod:`~dustoptics.io.gcm.lmd_ir`: the LMD Mars PCM's
+  ``optprop_dustvis_TM_n50.dat`` and ``optprop_dustir_n50.dat`` layouts (formats
+  ``lmd-dustvis``, ``lmd-dustir``; layout in :mod:`~dustoptics.io.gcm.lmd`);
+- :mod:`~dustoptics.io.gcm.ames_vis`, :mod:`~dustoptics.io.gcm.ames_ir`: the NASA Ames Mars
+  GCM's ``Dust_vis_wolff2010_JD_15bands.dat`` and ``Dust_ir_wolff2010_JD_15bands.dat``
+  layouts (formats ``ames-dustvis``, ``ames-dustir``; layout in :mod:`~dustoptics.io.gcm.ames`).
+"""
+
+from __future__ import annotations
+
+from dustoptics.io.gcm import ames_ir, ames_vis, lmd_ir, lmd_vis
+from dustoptics.io.gcm.ames import read_ames
+from dustoptics.io.gcm.lmd import read_lmd
+
+__all__ = ["ames_ir", "ames_vis", "lmd_ir", "lmd_vis", "read_ames", "read_lmd"]
