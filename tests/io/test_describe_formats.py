@@ -155,7 +155,7 @@ def test_a_sweep_store_and_file(tmp_path: Path) -> None:
     text = describe_path(store)
     assert text.startswith("sweep:")
     assert "size_distribution.r_eff_um: 2: 1, 1.5" in text
-    assert "(complete)" in text
+    assert "(complete: every chunk checked against its digests)" in text
     # A chunk marker gone: the store says it is incomplete.
     marker = next((store / "sweep-done").iterdir())
     shutil.rmtree(marker) if marker.is_dir() else marker.unlink()
