@@ -49,8 +49,10 @@ __all__ = [
     "is_bruneton",
     "is_rt_text",
     "is_shader",
+    "limit_of",
     "read_limit",
     "register_store_verifier",
+    "regular_size",
 ]
 
 #: Shading languages by file suffix.
@@ -135,7 +137,8 @@ def read_limit(max_bytes: int | None) -> Iterator[int]:
         _read_limit.reset(token)
 
 
-def _limit(max_bytes: int | None) -> int:
+def limit_of(max_bytes: int | None) -> int:
+    """``max_bytes`` checked (an integer >= 1), or the describers' limit when None."""
     if max_bytes is None:
         return _read_limit.get()
     if isinstance(max_bytes, bool) or not isinstance(max_bytes, int) or max_bytes < 1:
@@ -200,8 +203,9 @@ _NC_TYPE_SIZES = {1: 1, 2: 1, 3: 2, 4: 4, 5: 4, 6: 8}
 _NC_DIMENSION, _NC_VARIABLE, _NC_ATTRIBUTE = 10, 11, 12
 
 
-def _regular_size(path: Path, limit: int) -> int:
-    """The size of ``path``, refused unless a regular file of at most ``limit`` bytes."""
+def regular_size(path: Path, limit: int) -> int:
+    """The size of ``path`` [bytes], refused (FileNotFoundError, FormatError) unless a regular
+    file of at most ``limit`` bytes: never opened if a FIFO or a device."""
     try:
         info = os.stat(path)
     except FileNotFoundError:
@@ -263,8 +267,8 @@ def check_classic_netcdf(path: Path, *, max_bytes: int | None = None) -> dict[st
     dustoptics.io.FormatError
         The refusal, naming the file, the variable or attribute and the size.
     """
-    limit = _limit(max_bytes)
-    size = _regular_size(path, limit)
+    limit = limit_of(max_bytes)
+    size = regular_size(path, limit)
     with open(path, "rb") as handle:
         magic = handle.read(4)
         if magic not in (b"CDF\x01", b"CDF\x02"):
@@ -334,7 +338,7 @@ def check_hdf5_sizes(
     dustoptics.io.FormatError
         The refusal, naming the file, the dataset and the size.
     """
-    limit = _limit(max_bytes)
+    limit = limit_of(max_bytes)
     declared: dict[str, int] = {}
 
     def visit(name: str, obj: Any) -> None:
@@ -370,7 +374,7 @@ def check_zarr_store(path: Path, *, max_bytes: int | None = None) -> dict[str, i
     dustoptics.io.FormatError
         The refusal, naming the store, the array and the size.
     """
-    limit = _limit(max_bytes)
+    limit = limit_of(max_bytes)
     metas: dict[str, Any] = {}
     consolidated = path / ".zmetadata"
     if consolidated.exists() or consolidated.is_symlink():
@@ -785,13 +789,13 @@ _SWEEP_LAZY = frozenset({"phase", "cext_um2", "csca_um2", "g", "provenance", "n_
 
 def _check_sweep_sizes(path: Path, store: bool, max_bytes: int | None) -> None:
     """Refuse a sweep whose metadata declares more than :func:`describe_sweep` may read."""
-    limit = _limit(max_bytes)
+    limit = limit_of(max_bytes)
     if store:
         declared = check_zarr_store(path, max_bytes=limit)
     else:
         import h5py  # here: h5py adds ~0.06 s to `import dustoptics` (python -X importtime)
 
-        _regular_size(path, max(limit, _MAX_DEFLATE_RATIO * limit))
+        regular_size(path, max(limit, _MAX_DEFLATE_RATIO * limit))
         try:
             with h5py.File(path, "r") as f:
                 declared = check_hdf5_sizes(
