@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import os
 import re
+import stat
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -272,6 +273,8 @@ def describe_path(
 def _describe_file(p: Path, full: bool = True) -> str:
     """One file, by its name (and for JSON and netCDF its contents): the describer of its format."""
     name, suffix = p.name, p.suffix.lower()
+    if not stat.S_ISREG(os.stat(p).st_mode):  # recognisers open files: a FIFO would block them
+        raise FormatError(f"{str(p)!r}: not a regular file (a FIFO, device or socket); refused")
     describer = describer_of(p)
     if describer is not None:
         return describer(p, full)

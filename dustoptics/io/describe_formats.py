@@ -112,8 +112,8 @@ MAX_ZARR_CHUNKS = 10**6
 _MAX_DEFLATE_RATIO = 1100
 
 #: The limit the describers use when the caller gives none (set by :func:`read_limit`).
-_read_limit: contextvars.ContextVar[int] = contextvars.ContextVar(
-    "dustoptics_read_limit", default=MAX_READ_BYTES
+_read_limit: contextvars.ContextVar[int | None] = contextvars.ContextVar(
+    "dustoptics_read_limit", default=None
 )
 
 
@@ -127,9 +127,7 @@ def read_limit(max_bytes: int | None) -> Iterator[int]:
     ValueError
         ``max_bytes`` is not an integer >= 1.
     """
-    limit = MAX_READ_BYTES if max_bytes is None else max_bytes
-    if isinstance(limit, bool) or not isinstance(limit, int) or limit < 1:
-        raise ValueError(f"max_bytes must be an integer >= 1 [bytes]; got {max_bytes!r}")
+    limit = limit_of(max_bytes)
     token = _read_limit.set(limit)
     try:
         yield limit
@@ -140,7 +138,7 @@ def read_limit(max_bytes: int | None) -> Iterator[int]:
 def limit_of(max_bytes: int | None) -> int:
     """``max_bytes`` checked (an integer >= 1), or the describers' limit when None."""
     if max_bytes is None:
-        return _read_limit.get()
+        return _read_limit.get(None) or MAX_READ_BYTES
     if isinstance(max_bytes, bool) or not isinstance(max_bytes, int) or max_bytes < 1:
         raise ValueError(f"max_bytes must be an integer >= 1 [bytes]; got {max_bytes!r}")
     return max_bytes
@@ -245,6 +243,21 @@ class _Header:
         n = count * _NC_TYPE_SIZES[kind]
         self.bytes(n + (-n % 4), what)
 
+    def variable(self, n_dims: int) -> tuple[str, list[int], int, int]:
+        """A variable's name, dimension ids, type and offset (its attributes skipped)."""
+        name = self.name("variable")
+        rank = self.int(f"the rank of variable {name!r}")
+        ids = [self.int(f"a dimension of variable {name!r}") for _ in range(max(rank, 0))]
+        if rank < 0 or any(not 0 <= i < n_dims for i in ids):
+            raise _format_error(self.path, f"variable {name!r} names an unknown dimension")
+        self.attributes(f"variable {name!r}")
+        kind = self.int(f"the type of variable {name!r}")
+        self.int(f"the size of variable {name!r}")
+        begin = self.int(f"the offset of variable {name!r}", self.offset_bytes)
+        if kind not in _NC_TYPE_SIZES:
+            raise _format_error(self.path, f"variable {name!r} has the unknown netCDF type {kind}")
+        return name, ids, kind, begin & ((1 << (8 * self.offset_bytes)) - 1)
+
     def attributes(self, owner: str) -> None:
         tag, count = self.int("an attribute list"), self.int("an attribute count")
         if tag not in (0, _NC_ATTRIBUTE):
@@ -288,19 +301,7 @@ def check_classic_netcdf(path: Path, *, max_bytes: int | None = None) -> dict[st
             raise _format_error(path, "not a netCDF classic header (variables)")
         declared: dict[str, int] = {}
         for _ in range(n_vars):
-            name = h.name("variable")
-            rank = h.int(f"the rank of variable {name!r}")
-            ids = [h.int(f"a dimension of variable {name!r}") for _ in range(max(rank, 0))]
-            if rank < 0 or any(not 0 <= i < len(dims) for i in ids):
-                raise _format_error(path, f"variable {name!r} names an unknown dimension")
-            h.attributes(f"variable {name!r}")
-            kind = h.int(f"the type of variable {name!r}")
-            h.int(f"the size of variable {name!r}")
-            begin = h.int(f"the offset of variable {name!r}", h.offset_bytes) & (
-                (1 << (8 * h.offset_bytes)) - 1
-            )
-            if kind not in _NC_TYPE_SIZES:
-                raise _format_error(path, f"variable {name!r} has the unknown netCDF type {kind}")
+            name, ids, kind, begin = h.variable(len(dims))
             shape = [numrecs if dims[i] == 0 else dims[i] for i in ids]
             nbytes = math.prod(shape) * _NC_TYPE_SIZES[kind]
             if nbytes > limit:
@@ -363,18 +364,9 @@ def check_hdf5_sizes(
     return declared
 
 
-def check_zarr_store(path: Path, *, max_bytes: int | None = None) -> dict[str, int]:
-    """The bytes each array of a Zarr (v2) store declares, from its ``.zmetadata`` and
-    ``.zarray`` files (read within bounds), refused before a chunk is read if an array
-    declares more than ``max_bytes`` (None: :data:`MAX_READ_BYTES`) in one chunk, more than
-    :data:`MAX_ZARR_CHUNKS` chunks, or a shape, chunk shape or type that is not one.
-
-    Raises
-    ------
-    dustoptics.io.FormatError
-        The refusal, naming the store, the array and the size.
-    """
-    limit = limit_of(max_bytes)
+def _zarr_metadata(path: Path) -> dict[str, Any]:
+    """Every array's metadata in a Zarr (v2) store, from ``.zmetadata`` and each ``.zarray``
+    (read within bounds), keyed by where it was read and the array's name."""
     metas: dict[str, Any] = {}
     consolidated = path / ".zmetadata"
     if consolidated.exists() or consolidated.is_symlink():
@@ -389,8 +381,23 @@ def check_zarr_store(path: Path, *, max_bytes: int | None = None) -> dict[str, i
         zarray = entry / ".zarray"
         if entry.is_dir() and (zarray.exists() or zarray.is_symlink()):
             metas[f"{entry.name}/.zarray: {entry.name}"] = load_json(zarray)
+    return metas
+
+
+def check_zarr_store(path: Path, *, max_bytes: int | None = None) -> dict[str, int]:
+    """The bytes each array of a Zarr (v2) store declares, from its ``.zmetadata`` and
+    ``.zarray`` files (read within bounds), refused before a chunk is read if an array
+    declares more than ``max_bytes`` (None: :data:`MAX_READ_BYTES`) in one chunk, more than
+    :data:`MAX_ZARR_CHUNKS` chunks, or a shape, chunk shape or type that is not one.
+
+    Raises
+    ------
+    dustoptics.io.FormatError
+        The refusal, naming the store, the array and the size.
+    """
+    limit = limit_of(max_bytes)
     declared: dict[str, int] = {}
-    for where, meta in metas.items():
+    for where, meta in _zarr_metadata(path).items():
         name = where.split(": ", 1)[1]
         try:
             shape = [int(n) for n in meta["shape"]]

@@ -42,7 +42,7 @@ from pathlib import Path
 from typing import Any
 
 from dustoptics.io._atomic import FILE_MODE, FormatError, held_lock
-from dustoptics.io.describe_formats import register_store_verifier
+from dustoptics.io.describe_formats import check_zarr_store, register_store_verifier
 
 __all__ = ["StoreBusyError", "verify_store"]
 
@@ -342,6 +342,8 @@ def _acquire(
                 _check_identity(store, identity)
                 _, files = _read_created(store)
                 _check_created(store, files)
+                # its arrays' chunks within bounds before Zarr or Dask read any of them
+                check_zarr_store(store)
                 stack.enter_context(attempt)
                 return False
             store.parent.mkdir(parents=True, exist_ok=True)
