@@ -221,45 +221,45 @@ class _Header:
     def __init__(self, path: Path, handle: Any, size: int, offset_bytes: int) -> None:
         self.path, self.handle, self.size, self.offset_bytes = path, handle, size, offset_bytes
 
-    def bytes(self, n: int, what: str) -> bytes:
+    def take(self, n: int, what: str) -> bytes:
         if n < 0 or n > self.size - self.handle.tell():
             raise _format_error(
                 self.path, f"its header declares {n} bytes for {what}, beyond the file's end"
             )
         return bytes(self.handle.read(n))
 
-    def int(self, what: str, n: int = 4) -> int:
-        return int.from_bytes(self.bytes(n, what), "big", signed=n == 4)
+    def integer(self, what: str, n: int = 4) -> int:
+        return int.from_bytes(self.take(n, what), "big", signed=n == 4)
 
     def name(self, what: str) -> str:
-        n = self.int(f"the length of a {what} name")
-        raw = self.bytes(n + (-n % 4), f"a {what} name")[:n]
+        n = self.integer(f"the length of a {what} name")
+        raw = self.take(n + (-n % 4), f"a {what} name")[:n]
         return raw.decode("utf-8", "replace")
 
     def values(self, what: str) -> None:
-        kind, count = self.int(f"the type of {what}"), self.int(f"the length of {what}")
+        kind, count = self.integer(f"the type of {what}"), self.integer(f"the length of {what}")
         if kind not in _NC_TYPE_SIZES:
             raise _format_error(self.path, f"{what} has the unknown netCDF type {kind}")
         n = count * _NC_TYPE_SIZES[kind]
-        self.bytes(n + (-n % 4), what)
+        self.take(n + (-n % 4), what)
 
     def variable(self, n_dims: int) -> tuple[str, list[int], int, int]:
         """A variable's name, dimension ids, type and offset (its attributes skipped)."""
         name = self.name("variable")
-        rank = self.int(f"the rank of variable {name!r}")
-        ids = [self.int(f"a dimension of variable {name!r}") for _ in range(max(rank, 0))]
+        rank = self.integer(f"the rank of variable {name!r}")
+        ids = [self.integer(f"a dimension of variable {name!r}") for _ in range(max(rank, 0))]
         if rank < 0 or any(not 0 <= i < n_dims for i in ids):
             raise _format_error(self.path, f"variable {name!r} names an unknown dimension")
         self.attributes(f"variable {name!r}")
-        kind = self.int(f"the type of variable {name!r}")
-        self.int(f"the size of variable {name!r}")
-        begin = self.int(f"the offset of variable {name!r}", self.offset_bytes)
+        kind = self.integer(f"the type of variable {name!r}")
+        self.integer(f"the size of variable {name!r}")
+        begin = self.integer(f"the offset of variable {name!r}", self.offset_bytes)
         if kind not in _NC_TYPE_SIZES:
             raise _format_error(self.path, f"variable {name!r} has the unknown netCDF type {kind}")
         return name, ids, kind, begin & ((1 << (8 * self.offset_bytes)) - 1)
 
     def attributes(self, owner: str) -> None:
-        tag, count = self.int("an attribute list"), self.int("an attribute count")
+        tag, count = self.integer("an attribute list"), self.integer("an attribute count")
         if tag not in (0, _NC_ATTRIBUTE):
             raise _format_error(self.path, f"not a netCDF classic header ({owner}'s attributes)")
         for _ in range(count):
@@ -287,16 +287,16 @@ def check_classic_netcdf(path: Path, *, max_bytes: int | None = None) -> dict[st
         if magic not in (b"CDF\x01", b"CDF\x02"):
             raise _format_error(path, "not a netCDF classic or 64-bit offset file")
         h = _Header(path, handle, size, 4 if magic == b"CDF\x01" else 8)
-        numrecs = h.int("the number of records", 4) & 0xFFFFFFFF
-        tag, n_dims = h.int("the dimension list"), h.int("the dimension count")
+        numrecs = h.integer("the number of records", 4) & 0xFFFFFFFF
+        tag, n_dims = h.integer("the dimension list"), h.integer("the dimension count")
         if tag not in (0, _NC_DIMENSION) or n_dims < 0:
             raise _format_error(path, "not a netCDF classic header (dimensions)")
         dims = []
         for _ in range(n_dims):
             h.name("dimension")
-            dims.append(h.int("a dimension length") & 0xFFFFFFFF)
+            dims.append(h.integer("a dimension length") & 0xFFFFFFFF)
         h.attributes("the file")
-        tag, n_vars = h.int("the variable list"), h.int("the variable count")
+        tag, n_vars = h.integer("the variable list"), h.integer("the variable count")
         if tag not in (0, _NC_VARIABLE) or n_vars < 0:
             raise _format_error(path, "not a netCDF classic header (variables)")
         declared: dict[str, int] = {}
