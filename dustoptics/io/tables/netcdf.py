@@ -683,6 +683,22 @@ def _parameter_coordinates(
     }
 
 
+def _checked_path(path: str | os.PathLike[str], max_values: int) -> Path:
+    """``path`` as a Path, once it is a non-empty regular file and ``max_values`` a count."""
+    if isinstance(max_values, bool) or not isinstance(max_values, int) or max_values < 1:
+        raise ValueError(f"max_values must be an integer >= 1; got {max_values!r}")
+    path = Path(path)
+    if not path.exists() and not path.is_symlink():
+        raise FileNotFoundError(f"{path}: no such file")
+    if path.is_dir():
+        raise FormatError(f"{path}: is a directory, not a table file ({', '.join(SUFFIXES)})")
+    if not path.is_file():
+        raise FormatError(f"{path}: not a regular file")
+    if path.stat().st_size == 0:
+        raise FormatError(f"{path}: empty file, not a table")
+    return path
+
+
 def read_netcdf(path: str | os.PathLike[str], *, max_values: int = MAX_VALUES) -> Table:
     """Read a table file written by :func:`write_netcdf` (any suffix), verifying it.
 
@@ -709,17 +725,7 @@ def read_netcdf(path: str | os.PathLike[str], *, max_values: int = MAX_VALUES) -
     """
     import xarray as xr  # here: xarray adds ~0.7 s to `import dustoptics` (-X importtime)
 
-    if isinstance(max_values, bool) or not isinstance(max_values, int) or max_values < 1:
-        raise ValueError(f"max_values must be an integer >= 1; got {max_values!r}")
-    path = Path(path)
-    if not path.exists() and not path.is_symlink():
-        raise FileNotFoundError(f"{path}: no such file")
-    if path.is_dir():
-        raise FormatError(f"{path}: is a directory, not a table file ({', '.join(SUFFIXES)})")
-    if not path.is_file():
-        raise FormatError(f"{path}: not a regular file")
-    if path.stat().st_size == 0:
-        raise FormatError(f"{path}: empty file, not a table")
+    path = _checked_path(path, max_values)
     h5py = _h5py()
     try:
         f = h5py.File(path, "r")
