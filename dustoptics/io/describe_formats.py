@@ -211,7 +211,11 @@ def regular_size(path: Path, limit: int) -> int:
     if not stat.S_ISREG(info.st_mode):
         raise _format_error(path, "not a regular file (a FIFO, device, socket or directory)")
     if info.st_size > limit:
-        raise _too_large(path, "the file", info.st_size, limit)
+        raise _format_error(
+            path,
+            f"{info.st_size} bytes, larger than the {limit}-byte limit of this reader; refused "
+            "before reading (max_bytes=, or dustoptics info --max-bytes, raises it)",
+        )
     return info.st_size
 
 

@@ -190,7 +190,10 @@ def test_a_sweep_declaring_more_than_the_memory_budget_is_refused_before_reading
     import dustoptics._validation as validation
 
     monkeypatch.setattr(validation, "MEMORY_BUDGET_BYTES", 2 * 28_960 + 1_520 - 1)
-    with pytest.raises(ValueError, match=r"write_lookup declare 59440 bytes, beyond the memory budget of 59439 bytes"):
+    with pytest.raises(
+        ValueError,
+        match=r"write_lookup declare 59440 bytes, beyond the memory budget of 59439 bytes",
+    ):
         write_lookup(sweep_like(), tmp_path / "x")
     monkeypatch.setattr(validation, "MEMORY_BUDGET_BYTES", 2 * 28_960 + 1_520)
     assert len(write_lookup(sweep_like(), tmp_path / "y")) == 3
