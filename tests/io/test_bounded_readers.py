@@ -116,7 +116,9 @@ def test_a_whole_classic_file_passes_and_its_limit_can_be_raised_or_lowered(tmp_
     path = _classic_netcdf(tmp_path / "whole_sky.nc", n=1000)
     # 1000 float64 values in each of two variables: 8000 bytes each.
     assert check_classic_netcdf(path) == {"wavelength_nm": 8000, "radiance": 8000}
-    with pytest.raises(FormatError, match=r"beyond the 7999-byte limit"):
+    with pytest.raises(
+        FormatError, match=rf"{path.stat().st_size} bytes, larger than the 7999-byte limit"
+    ):
         check_classic_netcdf(path, max_bytes=7999)
     with pytest.raises(FormatError, match=r"--max-bytes"):
         describe_path(path, max_bytes=4000)
@@ -251,7 +253,7 @@ def test_a_ktx2_header_declaring_more_than_its_level_is_refused(textures, tmp_pa
     with pytest.raises(FormatError, match="crafted.ktx2"):
         read_ktx2_metadata(path)
     path.write_bytes(textures[0])
-    with pytest.raises(FormatError, match=r"beyond the 100-byte limit"):
+    with pytest.raises(FormatError, match=r"bytes, larger than the 100-byte limit"):
         read_ktx2_metadata(path, max_bytes=100)
 
 
@@ -273,7 +275,7 @@ def test_an_exr_data_window_declaring_2_30_squared_pixels_is_refused(textures, t
         read_exr_metadata(path)
     whole = tmp_path / "whole.exr"
     whole.write_bytes(textures[1])
-    with pytest.raises(FormatError, match=r"whole\.exr.*beyond the 100-byte limit"):
+    with pytest.raises(FormatError, match=r"whole\.exr.*larger than the 100-byte limit"):
         read_exr_metadata(whole, max_bytes=100)
 
 
