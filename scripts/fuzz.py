@@ -7,6 +7,7 @@ Usage::
     python scripts/fuzz.py --kinds api,files    # some kinds only
     python scripts/fuzz.py --kinds sweeps,stores --cases 25 --seed 1   # the sweep families
     python scripts/fuzz.py --kinds kills,bounds,inputs,digests --cases 50 # the files' families
+    python scripts/fuzz.py --kinds sizes --cases 60 --seed 1   # headers declaring huge sizes
 
 Kinds: ``api``, ``config``, ``cli``, ``files``, ``sweeps`` (sweep specifications: axes
 spelled several ways, huge and refused sizes, by the API and the command line),
@@ -17,7 +18,11 @@ devices, FIFOs and oversized files given to every reader), ``inputs`` (arguments
 provenance and texture sidecars that raised tracebacks), ``digests`` (seed-CSV sets
 without their checksums, and a process that forks after rendering a sky) and ``retrieve``
 (``dustoptics retrieve`` with bounds, priors and options at and beyond their edges, on
-observation files good, incomplete, damaged or of another kind).
+observation files good, incomplete, damaged or of another kind) and ``sizes`` (headers
+and metadata declaring more than their files hold: Zarr ``.zarray``/``.zmetadata``, a
+sweep's netCDF-4 bomb or missing chunks, a sky's and an observation file's netCDF classic
+header, KTX2 and EXR headers, and a link to a store, given to ``info`` and to the library's
+reader).
 
 Every case runs in a forked process with an address-space limit
 (``resource.setrlimit(RLIMIT_AS)``) and a timeout, and with the package's
