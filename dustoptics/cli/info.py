@@ -51,7 +51,7 @@ def add_parser(sub: Any) -> None:
         default=None,
         metavar="BYTES",
         help="most bytes read or decompressed from one file, as its header declares them "
-        "(a sky, a sweep's coordinates, a texture's pixels; default 1 GiB): a file declaring "
+        "(a sky, a sweep's coordinates, a texture's pixels; default 256 MiB): a file declaring "
         "more is refused before it is read",
     )
 

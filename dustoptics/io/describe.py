@@ -242,7 +242,7 @@ def describe_path(
     max_bytes : int, optional
         Most bytes read or decompressed from one file, as its header declares them (a sky,
         a sweep's coordinates, a texture's pixels); None:
-        :data:`~dustoptics.io.describe_formats.MAX_READ_BYTES` (1 GiB). [bytes]
+        :data:`~dustoptics.io.describe_formats.MAX_READ_BYTES` (256 MiB). [bytes]
 
     Returns
     -------

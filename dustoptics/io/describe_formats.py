@@ -99,10 +99,11 @@ _SKY_SUMMARY = (
 )
 
 #: Most bytes ``info`` reads or decompresses from one file, as its header declares them, by
-#: default (``describe_path(max_bytes=...)``, ``dustoptics info --max-bytes``): 1 GiB, a
-#: 1,024 x 1,024 sky at 128 wavelengths in float64, or a sweep's coordinates and error
-#: estimates of some 10^8 points. [bytes]
-MAX_READ_BYTES = 1024**3
+#: default (``describe_path(max_bytes=...)``, ``dustoptics info --max-bytes``): 256 MiB, a
+#: 1,024 x 1,024 sky at 32 wavelengths in float64, a sweep's coordinates and error estimates
+#: of 3 x 10^7 values, 20 times the largest texture (16,384 x 48 RGBA float32).  What xarray
+#: reads it may copy once or twice: ``info`` then peaks near 3 times the limit. [bytes]
+MAX_READ_BYTES = 256 * 1024**2
 
 #: Most chunks one array of a Zarr store may declare (xarray and Dask keep a tuple per chunk):
 #: a sweep of 10^6 chunks is 10^6 tasks, beyond what a sweep computes. [-]
