@@ -7,6 +7,7 @@ Usage::
     python scripts/fuzz.py --kinds api,files    # some kinds only
     python scripts/fuzz.py --kinds sweeps,stores --cases 25 --seed 1   # the sweep families
     python scripts/fuzz.py --kinds kills,bounds,inputs,digests --cases 50 # the files' families
+    python scripts/fuzz.py --kinds sizes --cases 60 --seed 1   # headers declaring huge sizes
 
 Kinds: ``api``, ``config``, ``cli``, ``files``, ``sweeps`` (sweep specifications: axes
 spelled several ways, huge and refused sizes, by the API and the command line),
@@ -17,7 +18,11 @@ devices, FIFOs and oversized files given to every reader), ``inputs`` (arguments
 provenance and texture sidecars that raised tracebacks), ``digests`` (seed-CSV sets
 without their checksums, and a process that forks after rendering a sky) and ``retrieve``
 (``dustoptics retrieve`` with bounds, priors and options at and beyond their edges, on
-observation files good, incomplete, damaged or of another kind).
+observation files good, incomplete, damaged or of another kind) and ``sizes`` (headers
+and metadata declaring more than their files hold: Zarr ``.zarray``/``.zmetadata``, a
+sweep's netCDF-4 bomb or missing chunks, a sky's and an observation file's netCDF classic
+header, KTX2 and EXR headers, and a link to a store, given to ``info`` and to the library's
+reader).
 
 Every case runs in a forked process with an address-space limit
 (``resource.setrlimit(RLIMIT_AS)``) and a timeout, and with the package's
@@ -57,6 +62,7 @@ import sys
 import tempfile
 import time
 import traceback
+import zlib
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -86,6 +92,7 @@ KINDS = (
     "inputs",
     "digests",
     "retrieve",
+    "sizes",
 )
 
 
@@ -116,9 +123,11 @@ def _address_space_now() -> int:
 
 def _child(case: Case, workdir: Path, write_fd: int) -> None:  # pragma: no cover - runs forked
     import dustoptics._validation as validation
+    import dustoptics.io.describe_formats as describe_formats
     import dustoptics.scattering.optics as optics
 
     validation.MEMORY_BUDGET_BYTES = CASE_MEMORY_BUDGET
+    describe_formats.MAX_READ_BYTES = CASE_MEMORY_BUDGET
     optics.WORK_BUDGET = CASE_WORK_BUDGET
     limit = _address_space_now() + CASE_ADDRESS_SPACE
     resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
@@ -1578,6 +1587,199 @@ def _retrieve_api(workdir: Path, kind: str, bound: Any) -> str:
     return f"converged={result.converged}"
 
 
+#: Crafted headers and metadata that declare more than their file holds (issue 42 item 1):
+#: what, and how it is made (:func:`_crafted`).
+SIZE_INPUTS = (
+    "a Zarr store whose .zarray and .zmetadata declare 2**40 angles",
+    "a Zarr store whose .zarray alone declares 2**40 angles",
+    "a Zarr store whose phase declares one chunk of 2**34 values",
+    "a sweep netCDF-4 whose error estimate declares 512 MiB compressed",
+    "a sweep netCDF-4 declaring chunks never written",
+    "a sky netCDF declaring 2**31 values",
+    "a sky netCDF whose attribute declares 2**31 bytes",
+    "a KTX2 declaring 65535 x 65535 texels",
+    "a KTX2 whose level lies beyond the file",
+    "an EXR whose data window declares 2**30 x 2**30 pixels",
+    "an observation file whose ssa declares 4e8 values",
+    "a symbolic link to a sweep store",
+)
+#: The readers each input is given to: the command line, and the library's own reader of it
+#: (describe_sweep, describe_sky, read_ktx2_metadata, read_exr_metadata, read_observations).
+SIZE_READERS = ("info", "library")
+
+_TEMPLATE_STORE: list[Path] = []
+
+
+def _template_store() -> Path:
+    """A small sweep store, computed once in the parent (copied by every case)."""
+    if not _TEMPLATE_STORE:
+        from dustoptics.sweep import sweep
+
+        root = Path(tempfile.mkdtemp(prefix="dustoptics-fuzz-template-"))
+        cluster, client = _threads_client()
+        with cluster, client:
+            sweep(
+                SMALL_CONFIG,
+                {"size_distribution.r_eff_um": [0.4, 0.6]},
+                out=root / "s.zarr",
+                client=client,
+                chunk_wavelengths=1,
+                progress=None,
+            )
+        _TEMPLATE_STORE.append(root / "s.zarr")
+    return _TEMPLATE_STORE[0]
+
+
+def sizes_cases(rng: random.Random, n: int) -> list[Case]:
+    """Files whose headers or metadata declare sizes they cannot hold, given to ``info`` and
+    to the library's reader: each must be refused (one clean line) before it is read, within
+    the case's memory limit; the link to a store must be described."""
+    cases = []
+    for _ in range(n):
+        what, reader = rng.choice(SIZE_INPUTS), rng.choice(SIZE_READERS)
+
+        def run(workdir: Path, what: str = what, reader: str = reader) -> str:
+            return _sizes_case(workdir, what, reader)
+
+        cases.append(Case("sizes", f"{what} given to {reader}", run))
+    return cases
+
+
+def _edit_json(path: Path, edit: Callable[[Any], None]) -> None:
+    data = json.loads(path.read_text(encoding="utf-8"))
+    edit(data)
+    path.write_text(json.dumps(data), encoding="utf-8")
+
+
+def _crafted_store(workdir: Path, what: str) -> Path:
+    store = workdir / "s.zarr"
+    shutil.copytree(_template_store(), store)
+    if "symbolic link" in what:
+        link = workdir / "link.zarr"
+        link.symlink_to(store.name)
+        return link
+    array, key, value = (
+        ("phase", "chunks", [1 << 11, 1 << 11, 1 << 12])
+        if "chunk of" in what
+        else ("theta_deg", "shape", [1 << 40])
+    )
+
+    def edit(meta: Any) -> None:
+        meta[key] = value
+
+    _edit_json(store / array / ".zarray", edit)
+    if ".zmetadata" in what or "chunk of" in what:
+        _edit_json(store / ".zmetadata", lambda m: edit(m["metadata"][f"{array}/.zarray"]))
+    return store
+
+
+def _crafted_sweep_nc(path: Path, what: str) -> None:
+    import h5py
+    import numpy as np
+
+    with h5py.File(path, "w") as f:
+        f.attrs["title"] = "dustoptics sweep of fuzz"
+        f.attrs["sweep"] = "{}"
+        f.create_dataset("wavelength_nm", data=np.array([550.0]))
+        f.create_dataset("theta_deg", data=np.linspace(0.0, 180.0, 5))
+        f.create_dataset("phase", data=np.ones((1, 5)))
+        shape, chunk = (2, 4096, 8192), (1, 512, 8192)
+        err = f.create_dataset(
+            "error_estimate", shape=shape, dtype="<f8", chunks=chunk, compression="gzip"
+        )
+        if "compressed" in what:  # the same deflated chunk of zeros, written raw 16 times
+            block = zlib.compress(bytes(8 * chunk[1] * chunk[2]), 9)
+            for i in range(shape[0]):
+                for j in range(0, shape[1], chunk[1]):
+                    err.id.write_direct_chunk((i, j, 0), block)
+
+
+def _crafted_netcdf3(path: Path, what: str) -> None:
+    import struct
+
+    from scipy.io import netcdf_file
+
+    with netcdf_file(path, "w", version=2) as f:
+        f.title = "crafted"
+        f.createDimension("wavelength_nm", 4)
+        wl = f.createVariable("wavelength_nm", "f8", ("wavelength_nm",))
+        wl[:] = [440.0, 550.0, 680.0, 800.0]
+        name = "ssa" if "observation" in what else "radiance"
+        var = f.createVariable(name, "f8", ("wavelength_nm",))
+        var[:] = 0.9
+        f.createVariable(f"{name}_sigma", "f8", ("wavelength_nm",))[:] = 0.01
+        var.units = "1"
+    data = bytearray(path.read_bytes())
+    if "attribute" in what:
+        at = data.find(b"title") + 8 + 4  # the padded name, then nc_type: the value count
+        data[at : at + 4] = struct.pack(">i", 0x7FFFFFFF)
+    else:
+        at = data.find(b"wavelength_nm") + 16  # the padded name: the dimension's length
+        count = 400_000_000 if "observation" in what else 0x7FFFFFFF
+        data[at : at + 4] = struct.pack(">i", count)
+    path.write_bytes(bytes(data))
+
+
+def _crafted_texture(workdir: Path, what: str) -> Path:
+    import struct
+
+    from dustoptics.io import write
+
+    suffix = "ktx2" if "KTX2" in what else "exr"
+    (path,) = write(_small_table(), workdir / "tex", format=suffix)
+    data = bytearray(path.read_bytes())
+    if "65535" in what:
+        data[20:28] = struct.pack("<2I", 65535, 65535)
+    elif "beyond" in what:
+        width, height, length = 1 << 20, 1 << 10, (1 << 30) * 16
+        data[20:28] = struct.pack("<2I", width, height)
+        data[88:104] = struct.pack("<2Q", length, length)
+    else:
+        at = data.find(b"dataWindow\0box2i\0") + len("dataWindow\0box2i\0") + 4
+        data[at + 8 : at + 16] = struct.pack("<2i", (1 << 30) - 1, (1 << 30) - 1)
+    path.write_bytes(bytes(data))
+    return path
+
+
+def _sizes_case(workdir: Path, what: str, reader: str) -> str:
+    from dustoptics.cli._retrieve_files import read_observations
+    from dustoptics.io.describe_formats import describe_sky, describe_sweep
+    from dustoptics.io.textures.exr import read_exr_metadata
+    from dustoptics.io.textures.ktx2 import read_ktx2_metadata
+
+    if "Zarr" in what or "symbolic" in what:
+        path = _crafted_store(workdir, what)
+        library: Callable[[Path], Any] = describe_sweep
+    elif "sweep netCDF-4" in what:
+        path = workdir / "sweep.nc"
+        _crafted_sweep_nc(path, what)
+        library = describe_sweep
+    elif "netCDF" in what or "observation" in what:
+        path = workdir / ("obs.nc" if "observation" in what else "crafted_sky.nc")
+        _crafted_netcdf3(path, what)
+        library = read_observations if "observation" in what else describe_sky
+    else:
+        path = _crafted_texture(workdir, what)
+        library = read_ktx2_metadata if "KTX2" in what else read_exr_metadata
+    accepted = "symbolic" in what
+    if reader == "info":
+        said = run_cli(workdir, ["info", str(path)])
+        assert (said == "exit 0") == accepted, f"info: {said}"
+        assert accepted or path.name in said, f"the refusal does not name the file: {said}"
+        if not accepted:  # counted as a clean error: the one line info printed
+            raise ValueError(said)
+        return said
+    try:
+        result = library(path)
+    except (ValueError, TypeError, FileNotFoundError) as exc:
+        assert not accepted, f"{library.__name__} refused {what}: {exc}"
+        assert str(exc) and "\n" not in str(exc), repr(exc)
+        assert str(path.name) in str(exc), f"the refusal does not name the file: {exc}"
+        raise
+    assert accepted, f"{library.__name__} read {what}: {str(result)[:200]}"
+    return f"described: {str(result).splitlines()[0]}"
+
+
 GENERATORS = {
     "api": api_cases,
     "config": config_cases,
@@ -1590,6 +1792,7 @@ GENERATORS = {
     "inputs": inputs_cases,
     "digests": digests_cases,
     "retrieve": retrieve_cases,
+    "sizes": sizes_cases,
 }
 
 
@@ -1602,8 +1805,10 @@ def warm_up(kinds: tuple[str, ...] = KINDS) -> None:
     changes nothing there (issue 29 item 9).
     """
     _small_table()
-    if {"sweeps", "stores"} & set(kinds):
+    if {"sweeps", "stores", "sizes"} & set(kinds):
         _warm_up_sweeps()
+    if "sizes" in kinds:
+        _template_store()
 
 
 def fuzz(

@@ -145,3 +145,17 @@ def test_the_file_families_reach_every_kind_of_input():
     assert inputs == set(fuzz.BOUND_INPUTS) and readers == set(fuzz.BOUND_READERS)
     assert {"build", "info", "export", "texture", "do.MultiModal(modes=None,"} <= kinds
     assert sky
+
+
+def test_the_sizes_family_reaches_every_input_and_reader():
+    """Within a few draws the sizes family gives every crafted header (issue 42 item 1) to
+    ``info`` and to the library's reader."""
+    import random
+
+    inputs, readers = set(), set()
+    for seed in range(4):
+        for case in fuzz.sizes_cases(random.Random(seed), 20):
+            what, reader = case.description.split(" given to ")
+            inputs.add(what)
+            readers.add(reader)
+    assert inputs == set(fuzz.SIZE_INPUTS) and readers == set(fuzz.SIZE_READERS)

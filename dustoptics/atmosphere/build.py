@@ -20,6 +20,7 @@ from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, TextIO
 
+from dustoptics._files import read_checked
 from dustoptics._validation import check_choice
 from dustoptics.atmosphere import gases, sets
 from dustoptics.atmosphere.sets import check_earth_aerosol
@@ -237,7 +238,7 @@ def set_inputs(
             **({"turbidity": earth_aerosol["turbidity"]} if "turbidity" in earth_aerosol else {}),
         }
     if name != "mars" and ozone_csv is not None:
-        data = Path(ozone_csv).read_bytes()
+        data = read_checked(ozone_csv)  # bounded: never a FIFO, a device or a huge file
         inputs["ozone_csv"] = {
             "path": str(Path(ozone_csv)),
             "sha256": hashlib.sha256(data).hexdigest(),

@@ -12,6 +12,7 @@ from typing import Any
 
 from dustoptics._files import FormatError, read_checked
 from dustoptics.cli.errors import UsageError
+from dustoptics.io.describe_formats import check_classic_netcdf
 from dustoptics.models.build import is_config_path
 from dustoptics.models.config import parse_config
 from dustoptics.models.files import PresetCopyWarning, preset_copy_problems
@@ -53,6 +54,10 @@ def read_observations(path: Path, limit: int = MAX_OBSERVATIONS_BYTES) -> Any:
             f"{path}: {info.st_size} bytes, larger than the {limit}-byte limit of the "
             "observations (--max-observation-bytes)"
         )
+    with open(path, "rb") as handle:
+        classic = handle.read(4) in (b"CDF\x01", b"CDF\x02")
+    if classic:  # its header checked against the file and the limit before xarray parses it
+        check_classic_netcdf(path, max_bytes=limit)
     try:
         with xr.open_dataset(path) as ds:
             _check_declared_size(path, ds, limit)

@@ -11,7 +11,7 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from dustoptics.cli.errors import PROG
+from dustoptics.cli.errors import PROG, UsageError
 from dustoptics.cli.parser import add_command
 from dustoptics.io import FORMATS
 from dustoptics.io.describe import describe_path
@@ -45,6 +45,15 @@ def add_parser(sub: Any) -> None:
         action="store_true",
         help="everything: software versions, citations, notes and every input (default: a summary)",
     )
+    p.add_argument(
+        "--max-bytes",
+        type=int,
+        default=None,
+        metavar="BYTES",
+        help="most bytes read or decompressed from one file, as its header declares them "
+        "(a sky, a sweep's coordinates, a texture's pixels; default 256 MiB): a file declaring "
+        "more is refused before it is read",
+    )
 
 
 def run(args: argparse.Namespace) -> int:
@@ -54,5 +63,7 @@ def run(args: argparse.Namespace) -> int:
     import dustoptics.sweep.store  # noqa: F401
 
     # What a file says is shown, never obeyed: describe_path escapes control characters.
-    print(describe_path(args.file, full=args.full))
+    if args.max_bytes is not None and args.max_bytes < 1:
+        raise UsageError(f"--max-bytes must be >= 1; got {args.max_bytes}")
+    print(describe_path(args.file, full=args.full, max_bytes=args.max_bytes))
     return 0

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import os
 import re
+import stat
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -27,7 +28,7 @@ from dustoptics.io._atomic import FormatError, whole_set
 from dustoptics.io._text import printable
 from dustoptics.io.csv.cosmoscout import check_cosmoscout_set, read_cosmoscout_constituent
 from dustoptics.io.csv.seed import EXTINCTION_FILENAME, PHASE_FILENAME, SUMMARY_FILENAME
-from dustoptics.io.describe_formats import _range, describer_of, inputs_lines
+from dustoptics.io.describe_formats import _range, describer_of, inputs_lines, read_limit
 from dustoptics.io.outputs import TABLE_SUFFIXES, read_table
 from dustoptics.io.textures.raw import read_texture
 
@@ -239,7 +240,9 @@ def _made_from(inputs: dict[str, Any]) -> list[str]:
     return lines
 
 
-def describe_path(path: str | os.PathLike[str], *, full: bool = True) -> str:
+def describe_path(
+    path: str | os.PathLike[str], *, full: bool = True, max_bytes: int | None = None
+) -> str:
     """What any file or folder dustoptics writes holds, as text.
 
     Parameters
@@ -259,6 +262,10 @@ def describe_path(path: str | os.PathLike[str], *, full: bool = True) -> str:
     full : bool, optional
         Everything (default), or a summary (:func:`describe_table`); the
         summary of a set or a texture leaves out their inputs as JSON.
+    max_bytes : int, optional
+        Most bytes read or decompressed from one file, as its header declares them (a sky,
+        a sweep's coordinates, a texture's pixels); None:
+        :data:`~dustoptics.io.describe_formats.MAX_READ_BYTES` (256 MiB). [bytes]
 
     Returns
     -------
@@ -276,7 +283,7 @@ def describe_path(path: str | os.PathLike[str], *, full: bool = True) -> str:
     p = Path(path)
     if not p.exists():
         raise FileNotFoundError(f"no such file or directory: {str(p)!r}")
-    with whole_set(p):  # a set a killed write left incomplete is refused, not described
+    with read_limit(max_bytes), whole_set(p):  # a set a killed write left incomplete is refused
         if p.is_dir() and (describer := describer_of(p)) is not None:  # a sweep's store
             text = describer(p, full)
         elif p.is_dir():
@@ -289,6 +296,8 @@ def describe_path(path: str | os.PathLike[str], *, full: bool = True) -> str:
 def _describe_file(p: Path, full: bool = True) -> str:
     """One file, by its name (and for JSON and netCDF its contents): the describer of its format."""
     name, suffix = p.name, p.suffix.lower()
+    if not stat.S_ISREG(os.stat(p).st_mode):  # recognisers open files: a FIFO would block them
+        raise FormatError(f"{str(p)!r}: not a regular file (a FIFO, device or socket); refused")
     describer = describer_of(p)
     if describer is not None:
         return describer(p, full)

@@ -47,6 +47,7 @@ from typing import Any
 
 import numpy as np
 
+import dustoptics._validation as _validation
 from dustoptics.io._atomic import write_files
 from dustoptics.io.shaders.glsl import glsl_float
 from dustoptics.table import PHASE_NORMALIZATION
@@ -60,6 +61,10 @@ LOOKUP_FORMAT = "dustoptics-phase-lut3d/1"
 DEFAULT_CHANNELS_NM = (680.0, 550.0, 440.0)
 
 _IDENTIFIER = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
+
+
+def _read_coordinates(axis: str) -> tuple[str, ...]:
+    return (axis, "theta_deg", "wavelength_nm")
 
 
 def _lookup_arrays(
@@ -79,6 +84,16 @@ def _lookup_arrays(
             f"select one value of each first, e.g. ds.isel({{{wide[0]!r}: 0}})"
         )
     ds = ds.isel(dict.fromkeys(others, 0))
+    # What is read below, from the declared sizes, before a value is read (a store opened
+    # lazily may declare more than memory holds): float64, the phase function twice.
+    declared = 8 * (2 * int(ds.phase.size) + sum(int(ds[k].size) for k in _read_coordinates(axis)))
+    if declared > _validation.MEMORY_BUDGET_BYTES:
+        raise ValueError(
+            f"the sweep's phase function and coordinates read by write_lookup declare "
+            f"{declared} bytes, beyond the memory budget of {_validation.MEMORY_BUDGET_BYTES} "
+            "bytes (dustoptics._validation.MEMORY_BUDGET_BYTES); select fewer radii (ds.isel) "
+            "first; refused before reading"
+        )
     radii = np.asarray(ds[axis].values, dtype=np.float64)
     if radii.size < 2 or np.any(np.diff(radii) <= 0):
         raise ValueError(

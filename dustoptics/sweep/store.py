@@ -42,7 +42,7 @@ from pathlib import Path
 from typing import Any
 
 from dustoptics.io._atomic import FILE_MODE, FormatError, held_lock
-from dustoptics.io.describe_formats import register_store_verifier
+from dustoptics.io.describe_formats import check_zarr_store, register_store_verifier
 
 __all__ = ["StoreBusyError", "verify_store"]
 
@@ -255,6 +255,18 @@ def _same_directory(path: Path, fd: int) -> bool:
     return held.st_nlink > 0 and (held.st_dev, held.st_ino) == (now.st_dev, now.st_ino)
 
 
+def _linked(store: Path) -> str:
+    """Why a symbolic link is not opened as a store (a sweep holds its store by its own path:
+    the lock, the staging folder beside it and the rename that publishes it)."""
+    target = os.readlink(store)
+    where = store.parent / target
+    what = "a sweep store" if (where / IDENTITY).is_file() else "nothing a sweep wrote"
+    return (
+        f"{str(store)!r} is a symbolic link to {target!r} ({what}); a sweep writes and resumes "
+        f"a store at its own path: give out={str(where)!r} (--out), or remove the link"
+    )
+
+
 def _busy(store: Path) -> StoreBusyError:
     return StoreBusyError(
         f"sweep store {str(store)!r} is being written by another run (of this or another "
@@ -314,7 +326,9 @@ def _acquire(
         attempt = contextlib.ExitStack()
         try:
             if store.exists() or store.is_symlink():
-                if store.is_symlink() or not store.is_dir():
+                if store.is_symlink():
+                    raise ValueError(_linked(store))
+                if not store.is_dir():
                     raise ValueError(
                         f"{str(store)!r} exists and is not a dustoptics sweep store; remove it "
                         "or choose another path"
@@ -328,6 +342,8 @@ def _acquire(
                 _check_identity(store, identity)
                 _, files = _read_created(store)
                 _check_created(store, files)
+                # its arrays' chunks within bounds before Zarr or Dask read any of them
+                check_zarr_store(store)
                 stack.enter_context(attempt)
                 return False
             store.parent.mkdir(parents=True, exist_ok=True)

@@ -135,3 +135,24 @@ def test_info_names_no_expansion_when_the_table_has_none(config, tmp_path, capsy
     assert main(["info", str(tmp_path / "small-dust" / "small-dust.nc")]) == 0
     out = capsys.readouterr().out
     assert "expansion:" not in out and "matrix:" not in out
+
+
+def test_info_max_bytes_bounds_what_it_reads(tmp_path, capsys):
+    """A sky's netCDF of 2 x 1,000 float64 values is described within --max-bytes of its
+    size and refused, in one line naming the file and its size, below it."""
+    from scipy.io import netcdf_file
+
+    path = tmp_path / "small_sky.nc"
+    with netcdf_file(path, "w", version=2) as f:
+        f.title = "a small sky"
+        f.createDimension("wavelength_nm", 1000)
+        f.createVariable("wavelength_nm", "f8", ("wavelength_nm",))[:] = np.linspace(400, 700, 1000)
+        f.createVariable("radiance", "f8", ("wavelength_nm",))[:] = 1.0
+    assert main(["info", "--max-bytes", str(path.stat().st_size), str(path)]) == 0
+    assert "radiance" in capsys.readouterr().out
+    assert main(["info", "--max-bytes", "7999", str(path)]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    size = path.stat().st_size
+    assert len(err) == 1 and "small_sky.nc" in err[0], err
+    assert f"{size} bytes, larger than the 7999-byte limit" in err[0], err
+    assert main(["info", "--max-bytes", "0", str(path)]) == 2

@@ -180,3 +180,20 @@ def test_runs_in_llvmpipe_and_matches_the_interpolation(lookup):
     # At the table's radii and theta = 0: the texels themselves, exactly.
     nodes = slice(3000, 3000 + RADII.size)
     assert np.array_equal(got[nodes], data[:, :, 0].T.astype(np.float64))
+
+
+def test_a_sweep_declaring_more_than_the_memory_budget_is_refused_before_reading(
+    tmp_path, monkeypatch
+):
+    """The phase function (5 x 4 x 181 float64, read and transposed: 2 x 28,960 bytes) and
+    its coordinates (190 values: 1,520 bytes) are counted from their declared sizes."""
+    import dustoptics._validation as validation
+
+    monkeypatch.setattr(validation, "MEMORY_BUDGET_BYTES", 2 * 28_960 + 1_520 - 1)
+    with pytest.raises(
+        ValueError,
+        match=r"write_lookup declare 59440 bytes, beyond the memory budget of 59439 bytes",
+    ):
+        write_lookup(sweep_like(), tmp_path / "x")
+    monkeypatch.setattr(validation, "MEMORY_BUDGET_BYTES", 2 * 28_960 + 1_520)
+    assert len(write_lookup(sweep_like(), tmp_path / "y")) == 3

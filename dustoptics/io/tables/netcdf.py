@@ -513,7 +513,7 @@ def _check_storage(path: Path, objects: Mapping[str, Any]) -> None:
 
 
 def _open_checked(
-    path: Path, f: Any
+    path: Path, f: Any, max_values: int = MAX_VALUES
 ) -> tuple[dict[str, tuple[np.ndarray, dict[str, Any]]], dict[str, str]]:
     """Variables and global attributes of an open file, after every structural check."""
     h5py = _h5py()
@@ -592,9 +592,11 @@ def _open_checked(
             raise FormatError(
                 f"{path}: variable {key!r} has shape {obj.shape}; expected {shapes[key]}"
             )
-        if obj.size > MAX_VALUES:
+        if obj.size > max_values:
             raise FormatError(
-                f"{path}: variable {key!r} declares {obj.size} values, more than the reader's limit {MAX_VALUES}"
+                f"{path}: variable {key!r} declares {obj.size} values "
+                f"({obj.size * obj.dtype.itemsize} bytes), more than the reader's limit "
+                f"{max_values}; refused before reading (max_values= raises it)"
             )
         kind = "i" if key in _INTEGERS else "f"
         if obj.dtype.kind != kind or obj.dtype.itemsize != 8:
@@ -681,13 +683,32 @@ def _parameter_coordinates(
     }
 
 
-def read_netcdf(path: str | os.PathLike[str]) -> Table:
+def _checked_path(path: str | os.PathLike[str], max_values: int) -> Path:
+    """``path`` as a Path, once it is a non-empty regular file and ``max_values`` a count."""
+    if isinstance(max_values, bool) or not isinstance(max_values, int) or max_values < 1:
+        raise ValueError(f"max_values must be an integer >= 1; got {max_values!r}")
+    path = Path(path)
+    if not path.exists() and not path.is_symlink():
+        raise FileNotFoundError(f"{path}: no such file")
+    if path.is_dir():
+        raise FormatError(f"{path}: is a directory, not a table file ({', '.join(SUFFIXES)})")
+    if not path.is_file():
+        raise FormatError(f"{path}: not a regular file")
+    if path.stat().st_size == 0:
+        raise FormatError(f"{path}: empty file, not a table")
+    return path
+
+
+def read_netcdf(path: str | os.PathLike[str], *, max_values: int = MAX_VALUES) -> Table:
     """Read a table file written by :func:`write_netcdf` (any suffix), verifying it.
 
     Parameters
     ----------
     path : path-like
         The file.
+    max_values : int, optional
+        Most values one variable may declare (default :data:`MAX_VALUES`, 2^25: 256 MiB of
+        float64); a file declaring more is refused before anything is read. [-]
 
     Returns
     -------
@@ -704,15 +725,7 @@ def read_netcdf(path: str | os.PathLike[str]) -> Table:
     """
     import xarray as xr  # here: xarray adds ~0.7 s to `import dustoptics` (-X importtime)
 
-    path = Path(path)
-    if not path.exists() and not path.is_symlink():
-        raise FileNotFoundError(f"{path}: no such file")
-    if path.is_dir():
-        raise FormatError(f"{path}: is a directory, not a table file ({', '.join(SUFFIXES)})")
-    if not path.is_file():
-        raise FormatError(f"{path}: not a regular file")
-    if path.stat().st_size == 0:
-        raise FormatError(f"{path}: empty file, not a table")
+    path = _checked_path(path, max_values)
     h5py = _h5py()
     try:
         f = h5py.File(path, "r")
@@ -722,7 +735,7 @@ def read_netcdf(path: str | os.PathLike[str]) -> Table:
         ) from None
     try:
         with f:
-            variables, attrs = _open_checked(path, f)
+            variables, attrs = _open_checked(path, f, max_values)
     except FormatError:
         raise
     except (OSError, RuntimeError, KeyError, ValueError, TypeError) as exc:
@@ -765,7 +778,7 @@ def read_netcdf(path: str | os.PathLike[str]) -> Table:
 read_hdf5 = read_netcdf
 
 
-def open_table(path: str | os.PathLike[str]) -> Table:
+def open_table(path: str | os.PathLike[str], *, max_values: int = MAX_VALUES) -> Table:
     """Open a table file (``.nc``, ``.h5``, ``.hdf5``, ``.nc4``), verifying it.
 
     Parameters
@@ -773,6 +786,8 @@ def open_table(path: str | os.PathLike[str]) -> Table:
     path : path-like
         A file written by :meth:`Table.save <dustoptics.table.Table.save>`
         (or ``dustoptics build``).
+    max_values : int, optional
+        Most values one variable may declare (:func:`read_netcdf`). [-]
 
     Returns
     -------
@@ -803,4 +818,4 @@ def open_table(path: str | os.PathLike[str]) -> Table:
         raise FormatError(
             f"{p}: unknown table file suffix {p.suffix!r}; expected one of {', '.join(SUFFIXES)}"
         )
-    return read_netcdf(p)
+    return read_netcdf(p, max_values=max_values)

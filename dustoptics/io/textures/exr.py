@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 
 from dustoptics.io._atomic import FormatError
-from dustoptics.io.describe_formats import describe_texture
+from dustoptics.io.describe_formats import describe_texture, limit_of, regular_size
 from dustoptics.io.registry import Format, register
 from dustoptics.io.textures.phase_texture import (
     PhaseTexture,
@@ -37,6 +37,9 @@ __all__ = ["encode_exr", "read_exr_metadata", "write_exr"]
 
 # The data window is stored as int32 coordinates.
 _CONTAINER_LIMIT = 2**31 - 1
+
+#: Most bytes ZIP (deflate) can expand one stored byte to (deflate's limit is about 1032:1).
+_MAX_ZIP_RATIO = 1100
 
 
 def _openexr() -> Any:
@@ -161,24 +164,46 @@ def write_exr(
     )
 
 
-def read_exr_metadata(path: str | os.PathLike[str]) -> dict[str, Any]:
+def read_exr_metadata(
+    path: str | os.PathLike[str], *, max_bytes: int | None = None
+) -> dict[str, Any]:
     """The ``dustoptics`` header attribute (sampling rule, axes, units, provenance) of an EXR
     texture, read with the OpenEXR library.
+
+    Before the library opens it, the file must be a regular file of at most ``max_bytes``
+    (None: :data:`~dustoptics.io.describe_formats.MAX_READ_BYTES`); then the pixels its data
+    window declares (at 4 bytes a channel) must fit in ``max_bytes`` and in what its bytes can
+    hold (ZIP: deflate's limit of about 1032:1), and the metadata's width and height must be
+    the data window's.
 
     Raises
     ------
     ImportError
         OpenEXR is not installed (the ``textures`` extra).
     dustoptics.io.FormatError
-        Not an OpenEXR file, or one without dustoptics' metadata.
+        Not an OpenEXR file, a crafted or damaged one, or one without dustoptics' metadata;
+        the message names the file and the size.
     """
     openexr = _openexr()
     p = Path(path)
+    limit = limit_of(max_bytes)
+    size = regular_size(p, limit)
     try:
         with openexr.File(str(p), header_only=True) as image:
-            text = image.header().get("dustoptics")
+            header = image.header()
+            text = header.get("dustoptics")
+            low, high = (tuple(int(v) for v in corner) for corner in header["dataWindow"])
+            n_channels = len(header["channels"])
     except Exception as exc:  # OpenEXR raises plain Exception/RuntimeError on damage
         raise FormatError(f"{str(p)!r}: not a readable OpenEXR file ({exc})") from None
+    width, height = high[0] - low[0] + 1, high[1] - low[1] + 1
+    declared = max(width, 0) * max(height, 0) * n_channels * 4
+    if width < 1 or height < 1 or declared > min(limit, _MAX_ZIP_RATIO * size):
+        raise FormatError(
+            f"{str(p)!r}: its data window declares {width} x {height} pixels of {n_channels} "
+            f"channels ({declared} bytes) in a file of {size} bytes, beyond what it can hold "
+            f"or the {limit}-byte limit (max_bytes=); refused before reading"
+        )
     if not isinstance(text, str):
         raise FormatError(f"{str(p)!r}: an OpenEXR file without dustoptics' metadata")
     try:
@@ -187,6 +212,11 @@ def read_exr_metadata(path: str | os.PathLike[str]) -> dict[str, Any]:
         raise FormatError(f"{str(p)!r}: its dustoptics metadata is not JSON (damaged)") from None
     if not isinstance(meta, dict):
         raise FormatError(f"{str(p)!r}: its dustoptics metadata is not a JSON object")
+    if (meta.get("width"), meta.get("height")) != (width, height):
+        raise FormatError(
+            f"{str(p)!r}: its metadata says {meta.get('width')!r} x {meta.get('height')!r} "
+            f"texels, its data window {width} x {height} (damaged or crafted)"
+        )
     return meta
 
 

@@ -37,7 +37,7 @@ from typing import Any
 import numpy as np
 
 from dustoptics.io._atomic import FormatError
-from dustoptics.io.describe_formats import describe_texture
+from dustoptics.io.describe_formats import describe_texture, limit_of, regular_size
 from dustoptics.io.registry import Format, register
 from dustoptics.io.textures.phase_texture import (
     PhaseTexture,
@@ -186,23 +186,32 @@ def write_ktx2(
     )
 
 
-def read_ktx2_metadata(path: str | os.PathLike[str]) -> dict[str, Any]:
+def read_ktx2_metadata(
+    path: str | os.PathLike[str], *, max_bytes: int | None = None
+) -> dict[str, Any]:
     """The ``dustoptics`` metadata (sampling rule, axes, units, provenance) of a KTX2 texture.
 
-    Reads the file's header and its key/value data only (Khronos KTX 2.0 specification,
-    sections 3 and 3.11), with every offset checked against the file's size.
+    Reads the file's header, level index and key/value data only (Khronos KTX 2.0
+    specification, sections 3 and 3.11).  Before anything else is read, the file must be a
+    regular file of at most ``max_bytes`` (None:
+    :data:`~dustoptics.io.describe_formats.MAX_READ_BYTES`); the header's format, its
+    pixel size and count of levels, layers and faces, and the level index must describe one
+    level of a format dustoptics writes whose bytes lie inside the file; and the metadata's
+    width and height must be the header's.
 
     Raises
     ------
     dustoptics.io.FormatError
-        Not a KTX2 file, a damaged one, or one without dustoptics' metadata.
+        Not a KTX2 file, a damaged or crafted one, or one without dustoptics' metadata; the
+        message names the file, the field and the size.
     """
     p = Path(path)
-    size = p.stat().st_size
+    size = regular_size(p, limit_of(max_bytes))
     with open(p, "rb") as f:
-        head = f.read(80)
+        head = f.read(104)
         if len(head) < 80 or head[:12] != KTX2_IDENTIFIER:
             raise FormatError(f"{str(p)!r}: not a KTX2 file")
+        width, height = _check_ktx2_header(p, head, size)
         kvd_offset, kvd_length = struct.unpack("<2I", head[56:64])
         if kvd_offset + kvd_length > size or kvd_length > 64 * 1024**2:
             raise FormatError(f"{str(p)!r}: its key/value data lies beyond the file (damaged)")
@@ -223,7 +232,45 @@ def read_ktx2_metadata(path: str | os.PathLike[str]) -> dict[str, Any]:
         raise FormatError(f"{str(p)!r}: its dustoptics metadata is not JSON (damaged)") from None
     if not isinstance(meta, dict):
         raise FormatError(f"{str(p)!r}: its dustoptics metadata is not a JSON object")
+    if (meta.get("width"), meta.get("height")) != (width, height):
+        raise FormatError(
+            f"{str(p)!r}: its metadata says {meta.get('width')!r} x {meta.get('height')!r} "
+            f"texels, its header {width} x {height} (damaged or crafted)"
+        )
     return meta
+
+
+def _check_ktx2_header(p: Path, head: bytes, size: int) -> tuple[int, int]:
+    """(width, height) of a KTX2 header that describes one level of a format dustoptics
+    writes, its bytes inside a file of ``size`` bytes; else FormatError."""
+    vk_format, type_size, width, height, depth, layers, faces, levels, scheme = struct.unpack(
+        "<9I", head[12:48]
+    )
+    channels = {fmt: n for (n, _), fmt in VK_FORMATS.items()}.get(vk_format)
+    if channels is None or type_size not in (2, 4):
+        raise FormatError(
+            f"{str(p)!r}: vkFormat {vk_format} with typeSize {type_size} is not a format "
+            "dustoptics writes (R/RGBA, 16- or 32-bit float)"
+        )
+    if (depth, layers, faces, levels, scheme) != (0, 0, 1, 1, 0) or len(head) < 104:
+        raise FormatError(
+            f"{str(p)!r}: declares depth {depth}, {layers} layers, {faces} faces, {levels} "
+            f"levels, supercompression {scheme}: not the one 2-D level dustoptics writes"
+        )
+    offset, length, uncompressed = struct.unpack("<3Q", head[80:104])
+    declared = width * height * channels * type_size
+    if width < 1 or height < 1 or declared != uncompressed or length != uncompressed:
+        raise FormatError(
+            f"{str(p)!r}: its level declares {length} bytes ({uncompressed} uncompressed) for "
+            f"{width} x {height} texels of {channels * type_size} bytes ({declared}): damaged "
+            "or crafted"
+        )
+    if offset + length > size:
+        raise FormatError(
+            f"{str(p)!r}: its {width} x {height} level declares {length} bytes at offset "
+            f"{offset}, beyond the file's {size} bytes (truncated or crafted); refused"
+        )
+    return width, height
 
 
 def describe_ktx2(path: Path, full: bool = True) -> str:

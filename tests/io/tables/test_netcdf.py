@@ -465,7 +465,6 @@ def test_huge_declared_size_is_refused_before_allocation(written):
 
 def test_reader_checks_the_declared_size_before_reading(tmp_path, monkeypatch):
     """A consistent file whose axes exceed the limit is refused from its metadata alone."""
-    monkeypatch.setattr("dustoptics.io.tables.netcdf.MAX_VALUES", 100)
     table = Table(
         wavelength_nm=[500.0],
         theta_deg=np.linspace(0.0, 180.0, 181),
@@ -476,10 +475,16 @@ def test_reader_checks_the_declared_size_before_reading(tmp_path, monkeypatch):
     read = []
     monkeypatch.setattr(h5py.Dataset, "__getitem__", lambda self, key: read.append(self.name))
     with pytest.raises(
-        FormatError, match=r"'theta_deg' declares 181 values, more than the reader's limit 100"
+        FormatError,
+        match=r"'theta_deg' declares 181 values \(1448 bytes\), more than the reader's limit "
+        r"100; refused before reading \(max_values= raises it\)",
     ):
-        open_table(path)
+        open_table(path, max_values=100)
     assert read == []
+    monkeypatch.undo()
+    assert open_table(path, max_values=181).theta_deg.size == 181
+    with pytest.raises(ValueError, match="max_values must be an integer >= 1; got 0"):
+        open_table(path, max_values=0)
 
 
 @pytest.mark.parametrize(
