@@ -200,10 +200,16 @@ class DiffuseField:
         return max(self.mu0, 0.0) * self.sun_transmittance
 
 
-def _level_altitudes(top: float, n_layers: int) -> np.ndarray:
+def _level_altitudes(top: float, n_layers: int, edges: np.ndarray | None = None) -> np.ndarray:
+    """Levels from the top down [m]: ``n_layers`` layers thin near the ground, and the
+    ``edges`` [m] (sharp layers' boundaries, :attr:`~dustoptics.sky.medium.Medium.edges_m`)
+    as levels of their own, so that no layer mixes the two sides of an edge."""
     u = np.linspace(1.0, 0.0, n_layers + 1)
     a = 4.0
-    return top * np.expm1(a * u) / np.expm1(a)
+    z = top * np.expm1(a * u) / np.expm1(a)
+    if edges is None or not np.size(edges):
+        return z
+    return np.union1d(z, np.asarray(edges, dtype=float))[::-1]
 
 
 def _layer_amounts(medium: Medium, z: np.ndarray) -> np.ndarray:
@@ -549,7 +555,7 @@ def solve_orders(
     n = medium.n_streams
     n_mom = 2 * n
     mu0 = math.cos(math.radians(sza))
-    z = _level_altitudes(medium.top_altitude_m, n_layers)
+    z = _level_altitudes(medium.top_altitude_m, n_layers, medium.edges_m)
     dtau, coef = _layer_optics(medium, z, n_mom)
     t_sun = _sun_transmittance(medium, z, mu0, dtau, geometry)
     regular = _Grid.make(n, n_mom, dtau, t_sun)

@@ -10,8 +10,9 @@ function (projected from the tables as for the renderer,
 :func:`~dustoptics.sky.medium.legendre_moments`, to ``n_moments``); CDISORT
 does its own delta-M scaling and its Nakajima-Tanaka intensity correction
 (TMS and IMS) from these moments.  Its layers are the renderer's
-(:func:`~dustoptics.sky.orders._level_altitudes`), ``n_layers`` of them,
-homogeneous.
+(:func:`~dustoptics.sky.orders._level_altitudes`), ``n_layers`` of them
+and one more at each edge of a sharp layer (the medium's
+:attr:`~dustoptics.sky.medium.Medium.edges_m` are levels), homogeneous.
 
 Converged settings for a reference (measured): with ``n_streams=64`` (``NSTR
 = 128``) and 40 layers CDISORT agrees with itself at ``NSTR = 192`` and 120
@@ -99,7 +100,7 @@ def column_optics(
         ``dtau`` (n_wavelength, n_layers), ``ssa`` (n_wavelength, n_layers) and
         ``pmom`` (n_wavelength, n_layers, n_moments + 1); layers from the top.
     """
-    z = _level_altitudes(medium.top_altitude_m, n_layers)
+    z = _level_altitudes(medium.top_altitude_m, n_layers, medium.edges_m)
     amount = _layer_amounts(medium, z)  # (c, k) [m^-2]
     nwl = medium.wavelength_nm.size
     chi = np.array(
@@ -180,7 +181,7 @@ def disort_radiance(
     umu = np.unique(umu_all)
     phi = np.unique(phi_all)
     s = nd.BatchSolver(nthreads=int(threads))
-    s.nstr, s.nlyr, s.nmom = 2 * int(n_streams), int(n_layers), int(n_moments)
+    s.nstr, s.nlyr, s.nmom = 2 * int(n_streams), optics["dtau"].shape[1], int(n_moments)
     s.ntau, s.numu, s.nphi = 1, umu.size, phi.size
     s.usrtau = s.usrang = s.lamber = s.quiet = True
     s.onlyfl = False
