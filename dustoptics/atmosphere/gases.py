@@ -28,6 +28,18 @@ and temperature by the ideal-gas law, ``N = p / (k_B T)``
 
 Models (:data:`RAYLEIGH_MODELS`, :func:`get_rayleigh_model`)
 -------------------------------------------------------------
+``"bodhaine1999"`` (the Earth default)
+    Bodhaine et al. 1999: Peck & Reeder's 1972 index of standard air
+    (:data:`AIR_PECKREEDER1972`) scaled to the CO2 content, the King factor of
+    the N2, O2, Ar and CO2 mixture (wavelength dependent, their eqs. 5, 6 and
+    23), ``sigma = 24 pi^3 (n_s^2 - 1)^2 F / (lambda^4 N_s^2 (n_s^2 + 2)^2)``
+    (:func:`bodhaine1999_cross_section_m2`), at 360 ppm CO2 (their eq. 30's); the
+    number density is their sea-level column at 45 deg N over the 8 km scale
+    height, so that the vertical optical depth is their eq. 30 to 1e-4
+    (``tests/atmosphere/test_gases.py``).  The formula libRadtran and most RT
+    codes use.  It is 0.7-1.2 % below ``"penndorf1957"`` at 360-830 nm
+    (the table in ``docs/concepts/earth_sky.rst``, from
+    :func:`rayleigh_optical_depth_difference`).
 ``"penndorf1957"``
     Standard air as Penndorf tabulated it: Edlén's 1953 dispersion formula
     (:data:`AIR_EDLEN1953`), King factor with ``delta = 0.035``, at 0 degC and
@@ -85,6 +97,11 @@ References
 .. [4] L. V. King, "On the complex anisotropic molecule in relation to the
    dispersion and scattering of light," Proc. R. Soc. Lond. A 104, 333-357
    (1923), doi:10.1098/rspa.1923.0113.
+.. [6] B. A. Bodhaine, N. B. Wood, E. G. Dutton and J. R. Slusser, "On
+   Rayleigh optical depth calculations," J. Atmos. Oceanic Technol. 16,
+   1854-1861 (1999), doi:10.1175/1520-0426(1999)016<1854:ORODC>2.0.CO;2.
+.. [7] E. R. Peck and K. Reeder, "Dispersion of air," J. Opt. Soc. Am. 62,
+   958-962 (1972), doi:10.1364/JOSA.62.000958.
 .. [5] D. Kobe, "Ozone absorption in single atmospheric scattering,"
    graduation work, Howest DAE, 2025-2026, eq. (8), section 11.5.1.
 """
@@ -122,18 +139,24 @@ from dustoptics.table import CrossSections, Provenance, Source, Table
 
 __all__ = [
     "AIR_EDLEN1953",
+    "AIR_PECKREEDER1972",
+    "BODHAINE_1999",
     "BOLTZMANN_J_PER_K",
     "COLLIENNE2013_WAVELENGTH_NM",
     "KOBE2026_OZONE",
     "KOBE2026_OZONE_FRACTION",
     "MARS_SURFACE_PRESSURE_PA",
     "MARS_SURFACE_TEMPERATURE_K",
+    "RAYLEIGH_FORMULAS",
     "RAYLEIGH_MODELS",
     "RAYLEIGH_PHASE_MODELS",
     "SERDYUCHENKO_2014",
     "ConstantRefractivity",
     "OzoneCrossSection",
     "RayleighModel",
+    "bodhaine1999_column_per_m2",
+    "bodhaine1999_cross_section_m2",
+    "bodhaine1999_king_factor",
     "collienne2013_beta_per_m",
     "collienne2013_table",
     "get_rayleigh_model",
@@ -144,6 +167,7 @@ __all__ = [
     "ozone_table",
     "rayleigh_beta_per_m",
     "rayleigh_cross_section_m2",
+    "rayleigh_optical_depth_difference",
     "read_ozone_csv",
     "scaled_refractivity",
 ]
@@ -186,6 +210,134 @@ AIR_EDLEN1953: Final = GasFormulaIndex(
     reference_co2_ppm=300.0,
     source="Edlén 1953, eq. (1), as used by Penndorf 1957",
 )
+
+
+BODHAINE_1999: Final = (
+    'B. A. Bodhaine, N. B. Wood, E. G. Dutton and J. R. Slusser, "On Rayleigh optical depth '
+    'calculations," J. Atmos. Oceanic Technol. 16, 1854-1861 (1999), '
+    "doi:10.1175/1520-0426(1999)016<1854:ORODC>2.0.CO;2"
+)
+
+#: Standard air (15 degC, 101325 Pa, 300 ppm CO2) after Peck & Reeder 1972,
+#: Bodhaine et al. 1999 eq. (4): ``(n - 1) 1e8 = 8060.51 + 2480990 / (132.274 - s^2)
+#: + 17455.7 / (39.32957 - s^2)``, ``s`` in um^-1, for wavelengths above 230 nm.
+AIR_PECKREEDER1972: Final = GasFormulaIndex(
+    name="air-peckreeder1972",
+    citation=(
+        'E. R. Peck and K. Reeder, "Dispersion of air," J. Opt. Soc. Am. 62, 958-962 (1972), '
+        "doi:10.1364/JOSA.62.000958"
+    ),
+    c1=8060.51e-8,
+    terms=((2480990e-8, 132.274), (17455.7e-8, 39.32957)),
+    wavelength_range_nm=(230.0, 20000.0),
+    reference_temperature_k=288.15,
+    reference_pressure_pa=101325.0,
+    reference_co2_ppm=300.0,
+    source="Bodhaine et al. 1999, eq. (4)",
+)
+
+#: Molecules per cm^3 of Bodhaine et al.'s standard air (288.15 K, 1013.25 hPa). [cm^-3]
+_BODHAINE_NS_PER_CM3: Final = 2.546899e19
+#: Bodhaine et al.'s eq. (30) prefactor: the sea-level column at 45 deg N (1013.25 hPa,
+#: 360 ppm CO2) times 1e-28 cm^2. [-]
+_BODHAINE_EQ30_PREFACTOR: Final = 0.0021520
+#: CO2 content of Bodhaine et al.'s eq. (30). [ppm by volume]
+_BODHAINE_CO2_PPM: Final = 360.0
+
+
+def _bodhaine_co2(co2_ppm: float) -> float:
+    c = float(co2_ppm)
+    if not (math.isfinite(c) and 0.0 <= c <= 1e4):
+        raise ValueError(f"co2_ppm must be within [0, 10000] ppm by volume; got {co2_ppm!r}")
+    return c
+
+
+def bodhaine1999_king_factor(wavelength_nm: ArrayLike, *, co2_ppm: float = 360.0) -> FloatArray:
+    """King factor of dry air with ``co2_ppm`` of CO2 (Bodhaine et al. 1999, eqs. 5, 6, 23).
+
+    ``F = (78.084 F_N2 + 20.946 F_O2 + 0.934 F_Ar + C F_CO2) / (78.084 + 20.946 +
+    0.934 + C)``, ``C`` the CO2 content in percent by volume, ``F_N2 = 1.034 +
+    3.17e-4 / lambda^2``, ``F_O2 = 1.096 + 1.385e-3 / lambda^2 + 1.448e-4 /
+    lambda^4``, ``F_Ar = 1``, ``F_CO2 = 1.15`` (``lambda`` in um).
+
+    Parameters
+    ----------
+    wavelength_nm : array_like
+        Vacuum wavelengths, > 0. [nm]
+    co2_ppm : float
+        CO2 content, in [0, 10000]. [ppm by volume]
+
+    Returns
+    -------
+    numpy.ndarray
+        ``F(air)`` (1.048-1.053 at 360-830 nm). [-]
+    """
+    c = _bodhaine_co2(co2_ppm) * 1e-4  # percent by volume
+    lam2 = (_positive_array("wavelength_nm", wavelength_nm, "nm") * 1e-3) ** 2
+    f_n2 = 1.034 + 3.17e-4 / lam2
+    f_o2 = 1.096 + 1.385e-3 / lam2 + 1.448e-4 / lam2**2
+    return np.asarray(
+        (78.084 * f_n2 + 20.946 * f_o2 + 0.934 * 1.0 + c * 1.15) / (78.084 + 20.946 + 0.934 + c),
+        dtype=np.float64,
+    )
+
+
+def bodhaine1999_cross_section_m2(
+    wavelength_nm: ArrayLike, *, co2_ppm: float = 360.0
+) -> FloatArray:
+    """Rayleigh cross-section per molecule of dry air (Bodhaine et al. 1999, eq. 2).
+
+    ``sigma = 24 pi^3 (n_s^2 - 1)^2 / (lambda^4 N_s^2 (n_s^2 + 2)^2) F(air)`` with
+    ``n_s - 1 = (n_300 - 1)(1 + 0.54 (C - 0.0003))`` (their eq. 19, ``C`` the CO2
+    content by volume, ``n_300`` Peck & Reeder's :data:`AIR_PECKREEDER1972`),
+    ``N_s = 2.546899e19 cm^-3`` and ``F`` :func:`bodhaine1999_king_factor`.
+
+    Parameters
+    ----------
+    wavelength_nm : array_like
+        Vacuum wavelengths in [230, 20000]. [nm]
+    co2_ppm : float
+        CO2 content, in [0, 10000]; their eq. 30 is at 360. [ppm by volume]
+
+    Returns
+    -------
+    numpy.ndarray
+        Cross-section per molecule. [m^2]
+
+    Examples
+    --------
+    At 550 nm and 360 ppm the fit Bodhaine et al. give with their eq. (30),
+    ``(1.0455996 - 341.29061 l^-2 - 0.90230850 l^2) / (1 + 0.0027059889 l^-2 -
+    85.968563 l^2)`` in 1e-28 cm^2 (``l`` in um), is 45.1047 (4.51047e-31 m^2):
+
+    >>> round(float(bodhaine1999_cross_section_m2(550.0)) * 1e31, 4)
+    4.5105
+    """
+    wl = _positive_array("wavelength_nm", wavelength_nm, "nm")
+    c = _bodhaine_co2(co2_ppm) * 1e-6
+    r = AIR_PECKREEDER1972.refractivity(wl) * (1.0 + 0.54 * (c - 3e-4))
+    n2m1 = r * (2.0 + r)
+    lam_cm = wl * 1e-7
+    sigma_cm2 = (
+        24.0
+        * math.pi**3
+        * n2m1**2
+        / (lam_cm**4 * _BODHAINE_NS_PER_CM3**2 * (n2m1 + 3.0) ** 2)
+        * bodhaine1999_king_factor(wl, co2_ppm=co2_ppm)
+    )
+    return np.asarray(sigma_cm2 * _CM2_TO_M2, dtype=np.float64)
+
+
+def bodhaine1999_column_per_m2(*, co2_ppm: float = 360.0) -> float:
+    """Molecules per m^2 in Bodhaine et al.'s sea-level column at 45 deg N, 1013.25 hPa.
+
+    Their eq. (30)'s ``0.0021520`` over 1e-28 cm^2 at 360 ppm CO2, scaled by the
+    mean molecular weight ``m_a = 15.0556 C + 28.9595`` [g mol^-1] (their eq. 17,
+    ``C`` by volume) for another CO2 content (the column is ``P A / (m_a g)``). [m^-2]
+    """
+    c = _bodhaine_co2(co2_ppm) * 1e-6
+    m_360 = 15.0556 * _BODHAINE_CO2_PPM * 1e-6 + 28.9595
+    return _BODHAINE_EQ30_PREFACTOR / (1e-28 * _CM2_TO_M2) * m_360 / (15.0556 * c + 28.9595)
 
 
 # ------------------------------------------------------------------ basic laws
@@ -392,6 +544,10 @@ def _reference(index: GasFormulaIndex | ConstantRefractivity) -> float:
 
 #: Phase-function choices of a :class:`RayleighModel`.
 RAYLEIGH_PHASE_MODELS: Final = ("rayleigh", "rayleigh_depolarized", "penndorf1957")
+#: Cross-section formulas of a :class:`RayleighModel`: ``"king1923"`` (one
+#: depolarization, :func:`rayleigh_cross_section_m2`) or ``"bodhaine1999"``
+#: (:func:`bodhaine1999_cross_section_m2`, wavelength-dependent King factor and CO2).
+RAYLEIGH_FORMULAS: Final = ("king1923", "bodhaine1999")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -420,6 +576,15 @@ class RayleighModel:
         Sources of the model.
     notes : tuple of str
         Choices made, recorded in table provenance.
+    formula : str
+        Cross-section formula, one of :data:`RAYLEIGH_FORMULAS` (default
+        ``"king1923"``).  With ``"bodhaine1999"`` the cross-section is
+        :func:`bodhaine1999_cross_section_m2` at ``co2_ppm`` (independent of the
+        number density), the refractivity is scaled to ``co2_ppm`` and the
+        depolarized phase function takes each wavelength's depolarization
+        ``6 (F - 1) / (3 + 7 F)`` (``depolarization`` is then its value at 550 nm).
+    co2_ppm : float
+        CO2 content for ``"bodhaine1999"``. [ppm by volume]
     """
 
     name: str
@@ -430,6 +595,8 @@ class RayleighModel:
     number_density_per_m3: float
     citation: str
     notes: tuple[str, ...] = ()
+    formula: str = "king1923"
+    co2_ppm: float = _BODHAINE_CO2_PPM
 
     def __post_init__(self) -> None:
         if not isinstance(self.index, (GasFormulaIndex, ConstantRefractivity)):
@@ -439,6 +606,8 @@ class RayleighModel:
         king_factor(depolarization=self.depolarization)  # validates 0 <= delta < 6/7
         object.__setattr__(self, "depolarization", float(self.depolarization))
         check_choice("phase_model", self.phase_model, RAYLEIGH_PHASE_MODELS)
+        check_choice("formula", self.formula, RAYLEIGH_FORMULAS)
+        object.__setattr__(self, "co2_ppm", _bodhaine_co2(self.co2_ppm))
         object.__setattr__(
             self,
             "number_density_per_m3",
@@ -467,6 +636,9 @@ class RayleighModel:
             r_ref = self.index.refractivity(wavelength_nm)
         else:
             r_ref = self.index.refractivity_at(wavelength_nm)
+        if self.formula == "bodhaine1999":  # Bodhaine et al. eq. (19)
+            ref_co2 = getattr(self.index, "reference_co2_ppm", None) or 300.0
+            r_ref = r_ref * (1.0 + 0.54e-6 * (self.co2_ppm - ref_co2))
         return np.asarray(
             scaled_refractivity(
                 refractivity=r_ref,
@@ -481,6 +653,8 @@ class RayleighModel:
     ) -> FloatArray:
         """Scattering cross-section per molecule at the number density. [m^2]"""
         n = self._density(number_density_per_m3)
+        if self.formula == "bodhaine1999":
+            return bodhaine1999_cross_section_m2(wavelength_nm, co2_ppm=self.co2_ppm)
         return np.asarray(
             rayleigh_cross_section_m2(
                 wavelength_nm=wavelength_nm,
@@ -548,8 +722,16 @@ class RayleighModel:
         theta = _theta_grid(theta_deg)
         n = self._density(number_density_per_m3)
         sigma_um2 = self.cross_section_m2(wl, number_density_per_m3=n) * _M2_TO_UM2
-        p = _tabulated.tabulate(self.phase_function, theta_deg=theta)
-        p = _tabulated.renormalize(np.broadcast_to(p, (wl.size, theta.size)), theta_deg=theta)
+        if self.formula == "bodhaine1999" and self.phase_model == "rayleigh_depolarized":
+            f = bodhaine1999_king_factor(wl, co2_ppm=self.co2_ppm)
+            rho = 6.0 * (f - 1.0) / (3.0 + 7.0 * f)
+            mu = np.cos(np.deg2rad(theta))
+            p = np.asarray(_phase.rayleigh_depolarized(mu[None, :], depolarization=rho[:, None]))
+        else:
+            p = np.broadcast_to(
+                _tabulated.tabulate(self.phase_function, theta_deg=theta), (wl.size, theta.size)
+            )
+        p = _tabulated.renormalize(p, theta_deg=theta)
         inputs = {
             "kind": "rayleigh-gas",
             "model": self.name,
@@ -557,6 +739,11 @@ class RayleighModel:
             "depolarization": self.depolarization,
             "king_correction": self.king_correction,
             "phase_model": self.phase_model,
+            **(
+                {"formula": self.formula, "co2_ppm": self.co2_ppm}
+                if self.formula != "king1923"
+                else {}
+            ),
             "number_density_per_m3": n,
             "wavelength_nm": wl,
             "theta_deg": theta,
@@ -614,6 +801,61 @@ def _penndorf1957() -> RayleighModel:
                 "Penndorf's 0.7629 (1 + 0.932 mu^2)/(4 pi) is the rounded form."
             ),
         ),
+    )
+
+
+def _bodhaine1999() -> RayleighModel:
+    f550 = float(bodhaine1999_king_factor(550.0))
+    return RayleighModel(
+        name="bodhaine1999",
+        index=AIR_PECKREEDER1972,
+        depolarization=6.0 * (f550 - 1.0) / (3.0 + 7.0 * f550),
+        king_correction=True,
+        phase_model="rayleigh_depolarized",
+        number_density_per_m3=bodhaine1999_column_per_m2() / 8000.0,
+        citation=f"{BODHAINE_1999}; index {AIR_PECKREEDER1972.citation}",
+        formula="bodhaine1999",
+        notes=(
+            (
+                "Bodhaine et al. 1999 eq. (2): Peck & Reeder 1972 index at 360 ppm CO2 (eq. 19), "
+                "King factor of N2, O2, Ar, CO2 (eqs. 5, 6, 23), N_s = 2.546899e19 cm^-3."
+            ),
+            (
+                "Number density: their sea-level column at 45 deg N (eq. 30's 0.0021520 over "
+                "1e-28 cm^2, 2.152e29 m^-2) over the 8 km scale height, so that the vertical "
+                "optical depth is their eq. 30."
+            ),
+            (
+                "Phase function: Chandrasekhar's depolarized Rayleigh with each wavelength's "
+                "depolarization 6 (F - 1) / (3 + 7 F)."
+            ),
+        ),
+    )
+
+
+def rayleigh_optical_depth_difference(
+    wavelength_nm: ArrayLike, *, model: str = "penndorf1957", reference: str = "bodhaine1999"
+) -> FloatArray:
+    """Relative difference of two models' vertical optical depths in Earth's default column.
+
+    ``tau_model / tau_reference - 1`` with each model's number density over the
+    same 8 km scale height (:func:`~dustoptics.atmosphere.sets.earth_atmosphere`'s
+    column), i.e. ``N sigma`` of the two models.
+
+    Examples
+    --------
+    Penndorf's standard air against Bodhaine et al. (the default since issue 40):
+
+    >>> d = rayleigh_optical_depth_difference([360.0, 440.0, 550.0, 680.0, 830.0])
+    >>> print(" ".join(f"{100 * x:+.2f}%" for x in d))
+    +0.69% +0.92% +1.06% +1.13% +1.17%
+    """
+    wl = _positive_array("wavelength_nm", wavelength_nm, "nm")
+    a = get_rayleigh_model(model)
+    b = get_rayleigh_model(reference)
+    return np.asarray(
+        a.beta_sca_per_m(wl) / b.beta_sca_per_m(wl) - 1.0,
+        dtype=np.float64,
     )
 
 
@@ -694,6 +936,7 @@ def _costa2021_mars() -> RayleighModel:
 
 _RAYLEIGH_FACTORIES: Final[Mapping[str, Callable[[], RayleighModel]]] = MappingProxyType(
     {
+        "bodhaine1999": _bodhaine1999,
         "penndorf1957": _penndorf1957,
         "costa2021": _costa2021,
         "kobe2026": _kobe2026,
