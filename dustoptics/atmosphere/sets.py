@@ -57,7 +57,7 @@ References
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Final
 
 import numpy as np
@@ -87,9 +87,11 @@ __all__ = [
     "EARTH_AEROSOLS",
     "EARTH_AEROSOL_OPTICAL_DEPTH_RANGE",
     "EARTH_MOLECULE_MODELS",
+    "EARTH_WAVELENGTHS_NM",
     "KOBE2026_AEROSOL_BETA_SCA_PER_M",
     "KOBE2026_WAVELENGTHS_NM",
     "MARS_MOLECULE_MODELS",
+    "RGB_WAVELENGTHS_NM",
     "Atmosphere",
     "Constituent",
     "check_earth_aerosol",
@@ -146,6 +148,17 @@ _N_ALTITUDES: Final = 1024
 
 #: CosmoScout VR's default wavelengths: 15 evenly spaced from 360 to 830 nm. [nm]
 COSMOSCOUT_WAVELENGTHS_NM: Final = tuple(np.linspace(360.0, 830.0, 15).tolist())
+
+#: The Earth set's wavelengths: 48 evenly spaced from 360 to 830 nm (Bruneton's), a
+#: multiple of three (CosmoScout's preprocessor runs passes of three) that holds the
+#: RGB wavelengths :data:`RGB_WAVELENGTHS_NM` exactly, so that an engine rendering
+#: them reads the set's own optics there (15 wavelengths put 440 nm between samples:
+#: interpolated, the molecules' extinction is 1.4 % and the ozone's 21 % off). [nm]
+EARTH_WAVELENGTHS_NM: Final = tuple(float(w) for w in range(360, 831, 10))
+
+#: The wavelengths engines render as red, green and blue (CosmoScout VR's three-wavelength
+#: mode, Bruneton's demo, the seed shader). [nm]
+RGB_WAVELENGTHS_NM: Final = (440.0, 550.0, 680.0)
 
 #: Kobe's three wavelengths (his ozone cross-sections exist only there). [nm]
 KOBE2026_WAVELENGTHS_NM: Final = (475.0, 510.0, 650.0)
@@ -214,6 +227,11 @@ class Atmosphere:
     n_altitudes : int
         Samples of each density profile in CosmoScout VR's density file
         (its default 1024), at the texel centres :attr:`density_altitudes_m`.
+    rgb_optics : Atmosphere, optional
+        The same atmosphere computed exactly at :data:`RGB_WAVELENGTHS_NM`
+        (:func:`dustoptics.atmosphere.build.build_atmosphere` attaches it), so
+        that an engine's error from the set's wavelength sampling can be
+        stated (:func:`~dustoptics.io.engines.cosmoscout_preprocessor.cosmoscout_sampling`).
     """
 
     name: str
@@ -223,6 +241,7 @@ class Atmosphere:
     sun_distance_m: float
     refractivity: float
     n_altitudes: int = _N_ALTITUDES
+    rgb_optics: Atmosphere | None = field(default=None, compare=False, repr=False)
 
     def __post_init__(self) -> None:
         if not isinstance(self.name, str) or not self.name:
