@@ -48,7 +48,7 @@ from typing import Any, Final
 import numpy as np
 
 from dustoptics.atmosphere import sets
-from dustoptics.atmosphere.column import ExponentialProfile
+from dustoptics.atmosphere.column import ExponentialProfile, PiecewiseLinearProfile
 from dustoptics.sky.medium import Medium, _scatters, legendre_moments
 from dustoptics.sky.orders import _layer_amounts, _level_altitudes
 from dustoptics.table import Table
@@ -60,6 +60,7 @@ __all__ = [
     "REFERENCE_LAYERS",
     "REFERENCE_MOMENTS",
     "REFERENCE_STREAMS",
+    "SHARP_LAYER",
     "VALIDATION_CASES",
     "VALIDATION_SUN_ELEVATIONS_DEG",
     "VALIDATION_WAVELENGTHS_NM",
@@ -216,6 +217,11 @@ VALIDATION_CASES: Final = (
     ("mars-dust", 0.5),
     ("mars-dust", 1.0),
     ("mars-dust", 2.0),
+    ("mars-dust-layer", 0.5),
+)
+#: A uniform layer from the ground to 1 km, nothing above (its top 1 mm thick).
+SHARP_LAYER: Final = PiecewiseLinearProfile(
+    altitude_m=(0.0, 1000.0, 1000.001), density=(1.0, 1.0, 0.0)
 )
 #: Sun elevations of the validation. [deg]
 VALIDATION_SUN_ELEVATIONS_DEG: Final = (20.0, 45.0, 70.0)
@@ -265,23 +271,28 @@ def validation_atmosphere(
     ``"rayleigh"``: Earth's air alone (no ozone, aerosols of zero density);
     ``"earth-aerosol"``: the air and :func:`validation_table`'s aerosol, 1.2
     km scale height, at ``optical_depth`` at 550 nm; ``"mars-dust"``: Mars's
-    CO2 and the dust, 11.1 km scale height, at ``optical_depth`` at 550 nm.
+    CO2 and the dust, 11.1 km scale height, at ``optical_depth`` at 550 nm;
+    ``"mars-dust-layer"``: the same dust uniform from the ground to 1 km and
+    none above (:data:`SHARP_LAYER`, the layer of the ``libradtran`` and
+    ``disort`` formats' files).
     ``table`` replaces the Mie computation (the particles at the
     wavelengths).
     """
     wl = [float(w) for w in np.atleast_1d(wavelength_nm)]
-    if kind == "mars-dust":
-        dust = validation_table(kind, wl) if table is None else table
+    if kind in ("mars-dust", "mars-dust-layer"):
+        dust = validation_table("mars-dust", wl) if table is None else table
         return sets.mars_atmosphere(
             dust_table=dust,
             optical_depth=optical_depth,
+            dust_profile=SHARP_LAYER if kind == "mars-dust-layer" else None,
             planet_radius_m=FLAT_RADIUS_M,
             atmosphere_radius_m=FLAT_RADIUS_M + 120e3,
-            name="mars-dust",
+            name=kind,
         )
     if kind not in ("rayleigh", "earth-aerosol"):
         raise ValueError(
-            f"kind must be one of 'rayleigh', 'earth-aerosol', 'mars-dust'; got {kind!r}"
+            "kind must be one of 'rayleigh', 'earth-aerosol', 'mars-dust', 'mars-dust-layer'; "
+            f"got {kind!r}"
         )
     profile = ExponentialProfile(scale_height_m=1200.0)
     aerosol = validation_table("earth-aerosol", wl) if table is None else table
