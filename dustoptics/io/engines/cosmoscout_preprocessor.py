@@ -501,7 +501,8 @@ def wavelength_sampling_error(atmosphere: Atmosphere) -> tuple[float, dict[str, 
 
     At each of the wavelengths engines render (:data:`~dustoptics.atmosphere.sets.RGB_WAVELENGTHS_NM`,
     440, 550 and 680 nm), the set's extinction coefficients read linearly between its
-    wavelengths (a wavelength of the set is read exactly) against the same atmosphere
+    wavelengths (a wavelength of the set is read exactly; outside the set's range, its
+    nearest wavelength's, what an engine without data there has) against the same atmosphere
     computed there (:attr:`~dustoptics.atmosphere.sets.Atmosphere.rgb_optics`), along
     straight rays from the ground at the zenith cosines :data:`_MUS` (where the exact
     transmittance is at least 1e-3): ``|exp(-(tau_set - tau_exact)) - 1|``.
