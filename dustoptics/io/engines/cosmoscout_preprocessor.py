@@ -34,7 +34,14 @@ The options and how they are chosen (tolerance ``tol``, default 0.5 %):
     along the zenith for the steps, along straight rays from the zenith to the
     horizon for the counts (where ``exp(-tau) >= 1e-3``).  The other half of
     ``tol`` is left to what the simulation does not model (float32 sums on the
-    GPU, its fixed-point filter weights, the bending of slant rays).
+    GPU, its fixed-point filter weights, the bending of slant rays).  With
+    refraction on, only the zenith is checked: below mu 0.2 the bent rays of
+    the texture depart from the straight-ray ``exp(-tau)`` by the bending
+    itself, a physical difference, not an error of the quadrature.  When no
+    value tried meets ``tol / 2``, the finest is used and its reason says what
+    it leaves.  The stated ``transmittance_error`` adds the error of the set's
+    wavelength sampling at the wavelengths engines render, 440, 550 and 680 nm
+    (:func:`wavelength_sampling_error`).
 ``stepSizeSingleScattering``, ``stepSizeMultiScattering`` [m]
     With steps, the in-scattering sums add a sample's own segment to the
     optical depth before using it, which darkens the result by about
