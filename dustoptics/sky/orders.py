@@ -84,6 +84,7 @@ __all__ = [
     "FINE_FACTOR",
     "FINE_ORDERS",
     "GEOMETRIES",
+    "MAX_LAYER_OPTICAL_DEPTH",
     "N_LAYERS",
     "WORK_BUDGET",
     "DiffuseField",
@@ -542,6 +543,9 @@ def solve_orders(
         Lambertian albedo, one value or one per wavelength, in [0, 1]. [-]
     n_layers : int
         Layers of the column (thin near the ground); default :data:`N_LAYERS`.
+        The medium's edges (:attr:`~dustoptics.sky.medium.Medium.edges_m`) are
+        levels too, and layers thicker than :data:`MAX_LAYER_OPTICAL_DEPTH` are
+        cut: :attr:`DiffuseField.altitude_m` gives the levels used.
     tol : float
         Tolerance on the remainder of the series of orders. [-]
     geometry : {"pseudo-spherical", "plane-parallel"}
