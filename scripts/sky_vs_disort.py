@@ -6,7 +6,8 @@ Usage::
                                     [--json OUT.json] [--no-horizon]
 
 For each validation case of ``tests/reference/disort.py`` (Rayleigh scattering,
-an Earth aerosol at optical depth 0.1 and 0.4, Mars dust at 0.5, 1 and 2; 440,
+an Earth aerosol at optical depth 0.1 and 0.4, Mars dust at 0.5, 1 and 2, Mars
+dust at 0.5 in a uniform layer from the ground to 1 km; 440,
 550 and 670 nm; the Sun at 20, 45 and 70 deg elevation) the renderer's
 radiance at its defaults (``--streams`` overrides the number of streams) is
 compared with converged CDISORT (``NSTR = 2 x --reference-streams``) on a
@@ -59,7 +60,7 @@ def run_cases(
     tables = {}
     rows = []
     for kind, tau in cases:
-        key = "mars-dust" if kind == "mars-dust" else "earth-aerosol"
+        key = "mars-dust" if kind.startswith("mars-dust") else "earth-aerosol"
         if key not in tables:
             log(f"Mie optics of the {key} (3 wavelengths)")
             tables[key] = ref.validation_table(key)

@@ -78,10 +78,14 @@ def build_atmosphere(
     angles every 0.1 deg (a superset of the files' 1 deg), its number density
     set by the vertical ``optical_depth`` at ``reference_wavelength_nm``
     (<C_ext> computed there exactly).
-    Earth: standard air (Penndorf 1957, King factor), OPAC's continental
+    Earth: dry air (Bodhaine et al. 1999, 360 ppm CO2), OPAC's continental
     average aerosol at optical depth 0.1 at 550 nm (or the aerosols
     ``earth_aerosol`` names) and the shipped ozone spectrum (Serdyuchenko et
-    al. 2014) in Bruneton's layer on CosmoScout VR's 15 wavelengths.
+    al. 2014) in Bruneton's layer on 48 wavelengths 360-830 nm
+    (:data:`~dustoptics.atmosphere.sets.EARTH_WAVELENGTHS_NM`, which hold 440,
+    550 and 680 nm).  Both sets carry the same atmosphere computed at 440, 550
+    and 680 nm (:attr:`~dustoptics.atmosphere.sets.Atmosphere.rgb_optics`), for
+    the error of the set's wavelength sampling where engines render.
     "earth-kobe2026": Kobe 2026's air, aerosols and ozone on his three
     wavelengths.
 
@@ -102,8 +106,9 @@ def build_atmosphere(
         Earth: ozone cross-sections replacing the shipped spectrum
         (:func:`dustoptics.atmosphere.gases.read_ozone_csv`).
     wavelength_nm : sequence of float, optional
-        Mars and Earth: the wavelengths, replacing CosmoScout VR's 15
-        (:data:`~dustoptics.atmosphere.sets.COSMOSCOUT_WAVELENGTHS_NM`). [nm]
+        Mars and Earth: the wavelengths, replacing CosmoScout VR's 15 for Mars
+        (:data:`~dustoptics.atmosphere.sets.COSMOSCOUT_WAVELENGTHS_NM`) and the
+        48 for Earth (:data:`~dustoptics.atmosphere.sets.EARTH_WAVELENGTHS_NM`). [nm]
     progress : text stream, optional
         Where the dust's or aerosols' computation reports its progress
         (:class:`~dustoptics.models.build.TableBuilder`); None is silent.
@@ -126,7 +131,10 @@ def build_atmosphere(
     """
     check_choice("name", name, ATMOSPHERES)
     _check_earth_aerosol(name, earth_aerosol)
-    grid_nm = sets.COSMOSCOUT_WAVELENGTHS_NM if wavelength_nm is None else wavelength_nm
+    if wavelength_nm is not None:
+        grid_nm = wavelength_nm
+    else:
+        grid_nm = sets.EARTH_WAVELENGTHS_NM if name == "earth" else sets.COSMOSCOUT_WAVELENGTHS_NM
     if name == "earth-kobe2026":
         if wavelength_nm is not None:
             raise ValueError(
@@ -139,7 +147,11 @@ def build_atmosphere(
         report = None if progress is None else (lambda line: print(line, file=progress))
         if report is not None:
             report("aerosols: OPAC's components by Mie (once per process)")
-        return sets.earth_atmosphere(wavelength_nm=grid_nm, ozone=ozone, **earth_aerosol)
+        atm = sets.earth_atmosphere(wavelength_nm=grid_nm, ozone=ozone, **earth_aerosol)
+        rgb = sets.earth_atmosphere(
+            wavelength_nm=sets.RGB_WAVELENGTHS_NM, ozone=ozone, **earth_aerosol
+        )
+        return replace(atm, rgb_optics=rgb)
     cfg = TableBuilder.from_name(dust, progress=progress).config if isinstance(dust, str) else dust
     if not cfg.phase.uses_mie:
         label = dust if isinstance(dust, str) else cfg.name
@@ -157,12 +169,23 @@ def build_atmosphere(
     )
     cext = TableBuilder(reference).build().quantity("cext_um2")
     assert cext is not None  # a Mie configuration computes cross-sections
-    return sets.mars_atmosphere(
+    rgb_cfg = replace(
+        cfg,
+        optics=replace(cfg.optics, wavelengths_nm=tuple(sets.RGB_WAVELENGTHS_NM), n_theta=181),
+    )
+    rgb = sets.mars_atmosphere(
+        dust_table=TableBuilder(rgb_cfg).build(),
+        optical_depth=optical_depth,
+        reference_wavelength_nm=reference_wavelength_nm,
+        reference_cext_um2=float(cext[0]),
+    )
+    atm = sets.mars_atmosphere(
         dust_table=dust_table,
         optical_depth=optical_depth,
         reference_wavelength_nm=reference_wavelength_nm,
         reference_cext_um2=float(cext[0]),
     )
+    return replace(atm, rgb_optics=rgb)
 
 
 def _check_earth_aerosol(name: str, earth_aerosol: Mapping[str, Any]) -> None:

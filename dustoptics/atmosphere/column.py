@@ -109,6 +109,16 @@ class DensityProfile(ABC):
     def column_length_m(self, *, top_altitude_m: float = math.inf) -> float:
         """``int_0^top rho(z) dz``, the column length. [m]"""
 
+    def edges_m(self) -> tuple[float, ...]:
+        """Altitudes above the ground where ``rho`` or its slope jumps, increasing. [m]
+
+        A layer's top and bottom, the nodes of a piecewise-linear profile:
+        where a quadrature over altitude must put a node (or a layer boundary)
+        to stay accurate (:class:`~dustoptics.sky.medium.Medium` does).  A smooth
+        profile has none (the default).
+        """
+        return ()
+
     def to_dict(self) -> dict[str, Any]:
         """Plain description for provenance."""
         out: dict[str, Any] = {"profile": type(self).__name__}
@@ -199,6 +209,10 @@ class PiecewiseLinearProfile(DensityProfile):
         self._check_top(z)
         return np.interp(z, self.altitude_m, self.density, right=0.0)
 
+    def edges_m(self) -> tuple[float, ...]:
+        """The nodes above the ground (the slope may change at each). [m]"""
+        return tuple(self.altitude_m[1:])
+
     def column_length_m(self, *, top_altitude_m: float = math.inf) -> float:
         """Exact integral of the piecewise-linear function up to ``top_altitude_m``. [m]"""
         top = _top(top_altitude_m)
@@ -256,6 +270,10 @@ class MultiModalProfile(DensityProfile):
         )
         return np.asarray(total, dtype=np.float64)
 
+    def edges_m(self) -> tuple[float, ...]:
+        """Every mode's edges, increasing, once each. [m]"""
+        return tuple(sorted({e for p in self.profiles for e in p.edges_m()}))
+
     def column_length_m(self, *, top_altitude_m: float = math.inf) -> float:
         """Weighted mean of the modes' column lengths. [m]"""
         return float(
@@ -296,6 +314,10 @@ class FixedFractionProfile(DensityProfile):
     def relative_density(self, altitude_m: ArrayLike) -> FloatArray:
         """The base profile's relative density. [-]"""
         return self.base.relative_density(altitude_m)
+
+    def edges_m(self) -> tuple[float, ...]:
+        """The base profile's edges. [m]"""
+        return self.base.edges_m()
 
     def column_length_m(self, *, top_altitude_m: float = math.inf) -> float:
         """The base profile's column length. [m]"""

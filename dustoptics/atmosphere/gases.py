@@ -28,6 +28,18 @@ and temperature by the ideal-gas law, ``N = p / (k_B T)``
 
 Models (:data:`RAYLEIGH_MODELS`, :func:`get_rayleigh_model`)
 -------------------------------------------------------------
+``"bodhaine1999"`` (the Earth default)
+    Bodhaine et al. 1999: Peck & Reeder's 1972 index of standard air
+    (:data:`AIR_PECKREEDER1972`) scaled to the CO2 content, the King factor of
+    the N2, O2, Ar and CO2 mixture (wavelength dependent, their eqs. 5, 6 and
+    23), ``sigma = 24 pi^3 (n_s^2 - 1)^2 F / (lambda^4 N_s^2 (n_s^2 + 2)^2)``
+    (:func:`bodhaine1999_cross_section_m2`), at 360 ppm CO2 (their eq. 30's); the
+    number density is their sea-level column at 45 deg N over the 8 km scale
+    height, so that the vertical optical depth is their eq. 30 to 1e-4
+    (``tests/atmosphere/test_gases.py``).  The formula libRadtran and most RT
+    codes use.  It is 0.7-1.2 % below ``"penndorf1957"`` at 360-830 nm
+    (the table in ``docs/concepts/earth_sky.rst``, from
+    :func:`rayleigh_optical_depth_difference`).
 ``"penndorf1957"``
     Standard air as Penndorf tabulated it: Edlén's 1953 dispersion formula
     (:data:`AIR_EDLEN1953`), King factor with ``delta = 0.035``, at 0 degC and
@@ -85,6 +97,11 @@ References
 .. [4] L. V. King, "On the complex anisotropic molecule in relation to the
    dispersion and scattering of light," Proc. R. Soc. Lond. A 104, 333-357
    (1923), doi:10.1098/rspa.1923.0113.
+.. [6] B. A. Bodhaine, N. B. Wood, E. G. Dutton and J. R. Slusser, "On
+   Rayleigh optical depth calculations," J. Atmos. Oceanic Technol. 16,
+   1854-1861 (1999), doi:10.1175/1520-0426(1999)016<1854:ORODC>2.0.CO;2.
+.. [7] E. R. Peck and K. Reeder, "Dispersion of air," J. Opt. Soc. Am. 62,
+   958-962 (1972), doi:10.1364/JOSA.62.000958.
 .. [5] D. Kobe, "Ozone absorption in single atmospheric scattering,"
    graduation work, Howest DAE, 2025-2026, eq. (8), section 11.5.1.
 """
@@ -114,6 +131,15 @@ from dustoptics._validation import (
     check_choice,
     check_positive,
 )
+from dustoptics.atmosphere.bodhaine1999 import (
+    _BODHAINE_CO2_PPM,
+    AIR_PECKREEDER1972,
+    BODHAINE_1999,
+    _bodhaine_co2,
+    bodhaine1999_column_per_m2,
+    bodhaine1999_cross_section_m2,
+    bodhaine1999_king_factor,
+)
 from dustoptics.particles.catalogue import get_material
 from dustoptics.particles.materials import GasFormulaIndex
 from dustoptics.scattering import phase as _phase
@@ -122,18 +148,24 @@ from dustoptics.table import CrossSections, Provenance, Source, Table
 
 __all__ = [
     "AIR_EDLEN1953",
+    "AIR_PECKREEDER1972",
+    "BODHAINE_1999",
     "BOLTZMANN_J_PER_K",
     "COLLIENNE2013_WAVELENGTH_NM",
     "KOBE2026_OZONE",
     "KOBE2026_OZONE_FRACTION",
     "MARS_SURFACE_PRESSURE_PA",
     "MARS_SURFACE_TEMPERATURE_K",
+    "RAYLEIGH_FORMULAS",
     "RAYLEIGH_MODELS",
     "RAYLEIGH_PHASE_MODELS",
     "SERDYUCHENKO_2014",
     "ConstantRefractivity",
     "OzoneCrossSection",
     "RayleighModel",
+    "bodhaine1999_column_per_m2",
+    "bodhaine1999_cross_section_m2",
+    "bodhaine1999_king_factor",
     "collienne2013_beta_per_m",
     "collienne2013_table",
     "get_rayleigh_model",
@@ -144,6 +176,7 @@ __all__ = [
     "ozone_table",
     "rayleigh_beta_per_m",
     "rayleigh_cross_section_m2",
+    "rayleigh_optical_depth_difference",
     "read_ozone_csv",
     "scaled_refractivity",
 ]
@@ -392,6 +425,10 @@ def _reference(index: GasFormulaIndex | ConstantRefractivity) -> float:
 
 #: Phase-function choices of a :class:`RayleighModel`.
 RAYLEIGH_PHASE_MODELS: Final = ("rayleigh", "rayleigh_depolarized", "penndorf1957")
+#: Cross-section formulas of a :class:`RayleighModel`: ``"king1923"`` (one
+#: depolarization, :func:`rayleigh_cross_section_m2`) or ``"bodhaine1999"``
+#: (:func:`bodhaine1999_cross_section_m2`, wavelength-dependent King factor and CO2).
+RAYLEIGH_FORMULAS: Final = ("king1923", "bodhaine1999")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -420,6 +457,15 @@ class RayleighModel:
         Sources of the model.
     notes : tuple of str
         Choices made, recorded in table provenance.
+    formula : str
+        Cross-section formula, one of :data:`RAYLEIGH_FORMULAS` (default
+        ``"king1923"``).  With ``"bodhaine1999"`` the cross-section is
+        :func:`bodhaine1999_cross_section_m2` at ``co2_ppm`` (independent of the
+        number density), the refractivity is scaled to ``co2_ppm`` and the
+        depolarized phase function takes each wavelength's depolarization
+        ``6 (F - 1) / (3 + 7 F)`` (``depolarization`` is then its value at 550 nm).
+    co2_ppm : float
+        CO2 content for ``"bodhaine1999"``. [ppm by volume]
     """
 
     name: str
@@ -430,6 +476,8 @@ class RayleighModel:
     number_density_per_m3: float
     citation: str
     notes: tuple[str, ...] = ()
+    formula: str = "king1923"
+    co2_ppm: float = _BODHAINE_CO2_PPM
 
     def __post_init__(self) -> None:
         if not isinstance(self.index, (GasFormulaIndex, ConstantRefractivity)):
@@ -439,6 +487,8 @@ class RayleighModel:
         king_factor(depolarization=self.depolarization)  # validates 0 <= delta < 6/7
         object.__setattr__(self, "depolarization", float(self.depolarization))
         check_choice("phase_model", self.phase_model, RAYLEIGH_PHASE_MODELS)
+        check_choice("formula", self.formula, RAYLEIGH_FORMULAS)
+        object.__setattr__(self, "co2_ppm", _bodhaine_co2(self.co2_ppm))
         object.__setattr__(
             self,
             "number_density_per_m3",
@@ -467,6 +517,9 @@ class RayleighModel:
             r_ref = self.index.refractivity(wavelength_nm)
         else:
             r_ref = self.index.refractivity_at(wavelength_nm)
+        if self.formula == "bodhaine1999":  # Bodhaine et al. eq. (19)
+            ref_co2 = getattr(self.index, "reference_co2_ppm", None) or 300.0
+            r_ref = r_ref * (1.0 + 0.54e-6 * (self.co2_ppm - ref_co2))
         return np.asarray(
             scaled_refractivity(
                 refractivity=r_ref,
@@ -481,6 +534,8 @@ class RayleighModel:
     ) -> FloatArray:
         """Scattering cross-section per molecule at the number density. [m^2]"""
         n = self._density(number_density_per_m3)
+        if self.formula == "bodhaine1999":
+            return bodhaine1999_cross_section_m2(wavelength_nm, co2_ppm=self.co2_ppm)
         return np.asarray(
             rayleigh_cross_section_m2(
                 wavelength_nm=wavelength_nm,
@@ -548,8 +603,16 @@ class RayleighModel:
         theta = _theta_grid(theta_deg)
         n = self._density(number_density_per_m3)
         sigma_um2 = self.cross_section_m2(wl, number_density_per_m3=n) * _M2_TO_UM2
-        p = _tabulated.tabulate(self.phase_function, theta_deg=theta)
-        p = _tabulated.renormalize(np.broadcast_to(p, (wl.size, theta.size)), theta_deg=theta)
+        if self.formula == "bodhaine1999" and self.phase_model == "rayleigh_depolarized":
+            f = bodhaine1999_king_factor(wl, co2_ppm=self.co2_ppm)
+            rho = 6.0 * (f - 1.0) / (3.0 + 7.0 * f)
+            mu = np.cos(np.deg2rad(theta))
+            p = np.asarray(_phase.rayleigh_depolarized(mu[None, :], depolarization=rho[:, None]))
+        else:
+            p = np.broadcast_to(
+                _tabulated.tabulate(self.phase_function, theta_deg=theta), (wl.size, theta.size)
+            )
+        p = _tabulated.renormalize(p, theta_deg=theta)
         inputs = {
             "kind": "rayleigh-gas",
             "model": self.name,
@@ -557,6 +620,11 @@ class RayleighModel:
             "depolarization": self.depolarization,
             "king_correction": self.king_correction,
             "phase_model": self.phase_model,
+            **(
+                {"formula": self.formula, "co2_ppm": self.co2_ppm}
+                if self.formula != "king1923"
+                else {}
+            ),
             "number_density_per_m3": n,
             "wavelength_nm": wl,
             "theta_deg": theta,
@@ -614,6 +682,61 @@ def _penndorf1957() -> RayleighModel:
                 "Penndorf's 0.7629 (1 + 0.932 mu^2)/(4 pi) is the rounded form."
             ),
         ),
+    )
+
+
+def _bodhaine1999() -> RayleighModel:
+    f550 = float(bodhaine1999_king_factor(550.0))
+    return RayleighModel(
+        name="bodhaine1999",
+        index=AIR_PECKREEDER1972,
+        depolarization=6.0 * (f550 - 1.0) / (3.0 + 7.0 * f550),
+        king_correction=True,
+        phase_model="rayleigh_depolarized",
+        number_density_per_m3=bodhaine1999_column_per_m2() / 8000.0,
+        citation=f"{BODHAINE_1999}; index {AIR_PECKREEDER1972.citation}",
+        formula="bodhaine1999",
+        notes=(
+            (
+                "Bodhaine et al. 1999 eq. (2): Peck & Reeder 1972 index at 360 ppm CO2 (eq. 19), "
+                "King factor of N2, O2, Ar, CO2 (eqs. 5, 6, 23), N_s = 2.546899e19 cm^-3."
+            ),
+            (
+                "Number density: their sea-level column at 45 deg N (eq. 30's 0.0021520 over "
+                "1e-28 cm^2, 2.152e29 m^-2) over the 8 km scale height, so that the vertical "
+                "optical depth is their eq. 30."
+            ),
+            (
+                "Phase function: Chandrasekhar's depolarized Rayleigh with each wavelength's "
+                "depolarization 6 (F - 1) / (3 + 7 F)."
+            ),
+        ),
+    )
+
+
+def rayleigh_optical_depth_difference(
+    wavelength_nm: ArrayLike, *, model: str = "penndorf1957", reference: str = "bodhaine1999"
+) -> FloatArray:
+    """Relative difference of two models' vertical optical depths in Earth's default column.
+
+    ``tau_model / tau_reference - 1`` with each model's number density over the
+    same 8 km scale height (:func:`~dustoptics.atmosphere.sets.earth_atmosphere`'s
+    column), i.e. ``N sigma`` of the two models.
+
+    Examples
+    --------
+    Penndorf's standard air against Bodhaine et al. (the default since issue 40):
+
+    >>> d = rayleigh_optical_depth_difference([360.0, 440.0, 550.0, 680.0, 830.0])
+    >>> print(" ".join(f"{100 * x:+.2f}%" for x in d))
+    +0.69% +0.92% +1.06% +1.13% +1.17%
+    """
+    wl = _positive_array("wavelength_nm", wavelength_nm, "nm")
+    a = get_rayleigh_model(model)
+    b = get_rayleigh_model(reference)
+    return np.asarray(
+        a.beta_sca_per_m(wl) / b.beta_sca_per_m(wl) - 1.0,
+        dtype=np.float64,
     )
 
 
@@ -694,6 +817,7 @@ def _costa2021_mars() -> RayleighModel:
 
 _RAYLEIGH_FACTORIES: Final[Mapping[str, Callable[[], RayleighModel]]] = MappingProxyType(
     {
+        "bodhaine1999": _bodhaine1999,
         "penndorf1957": _penndorf1957,
         "costa2021": _costa2021,
         "kobe2026": _kobe2026,

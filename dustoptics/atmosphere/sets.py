@@ -18,8 +18,10 @@ Builders (the presets of the seeds)
     table computed by the caller (any dust preset), whose number density is
     set from a measured optical depth at a reference wavelength.
 :func:`earth_atmosphere`
-    Air molecules (``"penndorf1957"``: standard air with the King factor, by
-    default; ``"costa2021"`` or ``"kobe2026"``), aerosols (one of OPAC's types
+    Air molecules (``"bodhaine1999"``: Bodhaine et al. 1999's dry air at 360
+    ppm CO2, whose optical depth is their eq. 30, by default; ``"penndorf1957"``,
+    standard air with one King factor, 0.7-1.2 % more optical depth;
+    ``"costa2021"`` or ``"kobe2026"``), aerosols (one of OPAC's types
     by :mod:`~dustoptics.atmosphere.aerosols`, by default the continental
     average at optical depth 0.1 at 550 nm, a typical clear day; Kobe's
     constant coefficients; or any table) and ozone (the shipped Serdyuchenko et al. 2014
@@ -55,7 +57,7 @@ References
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Final
 
 import numpy as np
@@ -85,9 +87,11 @@ __all__ = [
     "EARTH_AEROSOLS",
     "EARTH_AEROSOL_OPTICAL_DEPTH_RANGE",
     "EARTH_MOLECULE_MODELS",
+    "EARTH_WAVELENGTHS_NM",
     "KOBE2026_AEROSOL_BETA_SCA_PER_M",
     "KOBE2026_WAVELENGTHS_NM",
     "MARS_MOLECULE_MODELS",
+    "RGB_WAVELENGTHS_NM",
     "Atmosphere",
     "Constituent",
     "check_earth_aerosol",
@@ -103,7 +107,7 @@ CONSTITUENT_ROLES: Final = ("molecules", "aerosols", "ozone")
 #: Molecule models of :func:`mars_atmosphere`.
 MARS_MOLECULE_MODELS: Final = ("costa2021-mars", "collienne2013")
 #: Molecule models of :func:`earth_atmosphere`.
-EARTH_MOLECULE_MODELS: Final = ("kobe2026", "costa2021", "penndorf1957")
+EARTH_MOLECULE_MODELS: Final = ("kobe2026", "costa2021", "penndorf1957", "bodhaine1999")
 
 #: Molecule scale heights by model. [m]  Kobe: 7994 m (his section 10.4.1);
 #: Costa Earth: 7995.75 m (ICAO, their Table 1); Penndorf: 8000 m (Bruneton's
@@ -112,6 +116,7 @@ _MOLECULE_SCALE_HEIGHT_M: Final = {
     "kobe2026": 7994.0,
     "costa2021": 7995.75,
     "penndorf1957": 8000.0,
+    "bodhaine1999": 8000.0,
     "costa2021-mars": 8000.0,
     "collienne2013": 8000.0,
 }
@@ -143,6 +148,17 @@ _N_ALTITUDES: Final = 1024
 
 #: CosmoScout VR's default wavelengths: 15 evenly spaced from 360 to 830 nm. [nm]
 COSMOSCOUT_WAVELENGTHS_NM: Final = tuple(np.linspace(360.0, 830.0, 15).tolist())
+
+#: The Earth set's wavelengths: 48 evenly spaced from 360 to 830 nm (Bruneton's), a
+#: multiple of three (CosmoScout's preprocessor runs passes of three) that holds the
+#: RGB wavelengths :data:`RGB_WAVELENGTHS_NM` exactly, so that an engine rendering
+#: them reads the set's own optics there (15 wavelengths put 440 nm between samples:
+#: interpolated, the molecules' extinction is 1.4 % and the ozone's 21 % off). [nm]
+EARTH_WAVELENGTHS_NM: Final = tuple(float(w) for w in range(360, 831, 10))
+
+#: The wavelengths engines render as red, green and blue (CosmoScout VR's three-wavelength
+#: mode, Bruneton's demo, the seed shader). [nm]
+RGB_WAVELENGTHS_NM: Final = (440.0, 550.0, 680.0)
 
 #: Kobe's three wavelengths (his ozone cross-sections exist only there). [nm]
 KOBE2026_WAVELENGTHS_NM: Final = (475.0, 510.0, 650.0)
@@ -211,6 +227,11 @@ class Atmosphere:
     n_altitudes : int
         Samples of each density profile in CosmoScout VR's density file
         (its default 1024), at the texel centres :attr:`density_altitudes_m`.
+    rgb_optics : Atmosphere, optional
+        The same atmosphere computed exactly at :data:`RGB_WAVELENGTHS_NM`
+        (:func:`dustoptics.atmosphere.build.build_atmosphere` attaches it), so
+        that an engine's error from the set's wavelength sampling can be
+        stated (:func:`~dustoptics.io.engines.cosmoscout_preprocessor.cosmoscout_sampling`).
     """
 
     name: str
@@ -220,6 +241,7 @@ class Atmosphere:
     sun_distance_m: float
     refractivity: float
     n_altitudes: int = _N_ALTITUDES
+    rgb_optics: Atmosphere | None = field(default=None, compare=False, repr=False)
 
     def __post_init__(self) -> None:
         if not isinstance(self.name, str) or not self.name:
@@ -713,7 +735,7 @@ def _earth_aerosols(
 def earth_atmosphere(
     *,
     wavelength_nm: ArrayLike = COSMOSCOUT_WAVELENGTHS_NM,
-    molecules: str | gases.RayleighModel = "penndorf1957",
+    molecules: str | gases.RayleighModel = "bodhaine1999",
     molecules_scale_height_m: float | None = None,
     aerosol: str | None = None,
     aerosol_optical_depth: float | None = None,
@@ -737,10 +759,14 @@ def earth_atmosphere(
     wavelength_nm : array_like, default COSMOSCOUT_WAVELENGTHS_NM
         Strictly increasing wavelengths; CosmoScout VR's 15 from 360 to 830 nm
         by default. [nm]
-    molecules : {"penndorf1957", "costa2021", "kobe2026"} or RayleighModel
-        Molecule model; default standard air with the King factor
-        (Edlén 1953 index, delta = 0.035, 0 degC and 101325 Pa), within
-        3.1e-4 of Penndorf's 1957 table over 360-800 nm (tested).
+    molecules : {"bodhaine1999", "penndorf1957", "costa2021", "kobe2026"} or RayleighModel
+        Molecule model; default Bodhaine et al. 1999 (Peck & Reeder index,
+        wavelength-dependent King factor of N2, O2, Ar and CO2 at 360 ppm),
+        whose vertical optical depth is their eq. 30 to 1e-4 (tested);
+        ``"penndorf1957"`` is standard air with one King factor (Edlén 1953
+        index, delta = 0.035, 0 degC and 101325 Pa), within 3.1e-4 of
+        Penndorf's 1957 table and 0.69 % (360 nm) to 1.17 % (830 nm) above
+        Bodhaine's optical depth (:func:`~dustoptics.atmosphere.gases.rayleigh_optical_depth_difference`).
     molecules_scale_height_m : float, optional
         Default by model: 7994 m (Kobe), 7995.75 m (Costa), 8000 m. [m]
     aerosol : str, optional

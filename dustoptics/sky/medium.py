@@ -217,6 +217,7 @@ class _ColumnOptics:
     truncation: np.ndarray
     altitude_m: np.ndarray
     relative_density: np.ndarray
+    edges_m: np.ndarray
     n_streams: int
 
     @property
@@ -299,7 +300,8 @@ class MediumOptics(_ColumnOptics):
         scatters = np.array([_scatters(t) for t in tables])
         chi_arr[scatters] /= chi_arr[scatters, :, :1]
         f = np.clip(chi_arr[:, :, 2 * n_streams], 0.0, 1.0 - 1e-9)
-        altitude = _altitude_grid(top, _N_DENSITY_SAMPLES)
+        edges = _edges(atmosphere, top)
+        altitude = _with_edges(_altitude_grid(top, _N_DENSITY_SAMPLES), edges)
         rho = np.array([c.profile.relative_density(altitude) for c in atmosphere.constituents])
         return cls(
             name=atmosphere.name,
@@ -315,6 +317,7 @@ class MediumOptics(_ColumnOptics):
             truncation=f,
             altitude_m=altitude,
             relative_density=rho,
+            edges_m=edges,
             n_streams=n_streams,
         )
 
@@ -347,9 +350,18 @@ class Medium(_ColumnOptics):
     truncation : numpy.ndarray, shape (n_constituent, n_wavelength)
         Delta-M forward-peak fraction f. [-]
     altitude_m : numpy.ndarray, shape (n_z,)
-        Fine altitude grid of the relative densities. [m]
+        Fine altitude grid of the relative densities (the edges among its
+        nodes). [m]
     relative_density : numpy.ndarray, shape (n_constituent, n_z)
         rho_c on ``altitude_m``. [-]
+    edges_m : numpy.ndarray, shape (n_edge,)
+        Altitudes strictly inside the atmosphere where some constituent's
+        density or its slope jumps (its profile's
+        :meth:`~dustoptics.atmosphere.column.DensityProfile.edges_m`),
+        increasing: nodes of every grid in altitude (the densities, the slant
+        columns' radii, the levels of :func:`~dustoptics.sky.orders.solve_orders`)
+        and samples of every line of sight that crosses them, so that a sharp
+        layer is integrated as exactly as a smooth one. [m]
     slant : SlantColumns
         Column amounts along rays.
     n_streams : int
@@ -389,7 +401,7 @@ class Medium(_ColumnOptics):
         o = MediumOptics.from_atmosphere(atmosphere, n_streams=n_streams)
         slant = _slant_columns(
             o.altitude_m, o.relative_density, o.planet_radius_m, o.top_altitude_m,
-            n_radii=n_radii, n_mu=n_mu,
+            n_radii=n_radii, n_mu=n_mu, edges=o.edges_m,
         )  # fmt: skip
         return cls(**{f.name: getattr(o, f.name) for f in fields(o)}, slant=slant)
 
@@ -413,6 +425,17 @@ def _scatters(table: Table) -> bool:
     return table.cross_sections is not None and bool(np.any(table.cross_sections.csca_um2 > 0))
 
 
+def _edges(atmosphere: Atmosphere, top: float) -> np.ndarray:
+    """The constituents' edges strictly between the ground and ``top`` [m], increasing."""
+    found = {float(e) for c in atmosphere.constituents for e in c.profile.edges_m()}
+    return np.array(sorted(e for e in found if 0.0 < e < top), dtype=float)
+
+
+def _with_edges(grid: np.ndarray, edges: np.ndarray) -> np.ndarray:
+    """``grid`` with ``edges`` among its nodes (the same array when there are none)."""
+    return np.union1d(grid, edges) if edges.size else grid
+
+
 def _altitude_grid(top: float, n: int) -> np.ndarray:
     # Dense near the ground, where the densities change fastest.
     u = np.linspace(0.0, 1.0, n)
@@ -428,21 +451,56 @@ def _slant_columns(
     *,
     n_radii: int,
     n_mu: int,
+    edges: np.ndarray,
 ) -> SlantColumns:
-    """Tabulate ``int rho ds`` along rays (compiled Gauss-Legendre sums)."""
-    r_grid = radius + _altitude_grid(top, n_radii)
+    """Tabulate ``int rho ds`` along rays (compiled Gauss-Legendre sums).
+
+    The radii include the ``edges`` [m] (the columns have a kink there) and
+    each ray's path is split where it crosses one (the density jumps or bends
+    there), so that every Gauss-Legendre rule integrates a smooth density.
+    """
+    r_grid = radius + _with_edges(_altitude_grid(top, n_radii), edges)
     # Cosines dense near the horizon (where columns change fastest).
     u = np.linspace(-1.0, 1.0, n_mu)
     mu_grid = np.sign(u) * np.abs(u) ** 3
     x, w = legendre.leggauss(_SLANT_NODES)
     out = _slant_kernel(
-        r_grid, mu_grid, 0.5 * (x + 1.0), 0.5 * w, altitude, np.ascontiguousarray(rho), radius, top
-    )
+        r_grid, mu_grid, 0.5 * (x + 1.0), 0.5 * w, altitude, np.ascontiguousarray(rho), radius,
+        top, np.ascontiguousarray(edges, dtype=float),
+    )  # fmt: skip
     return SlantColumns(radius_m=r_grid, mu=mu_grid, column_m=out)
 
 
 #: Gauss-Legendre nodes on each part of a slant path.
 _SLANT_NODES: Final = 160
+
+
+@numba.njit(cache=True, nogil=True)
+def _path_breaks(
+    r: float, mu: float, length: float, radius: float, edges: np.ndarray
+) -> np.ndarray:
+    """Distances along a ray from radius ``r`` [m] with zenith cosine ``mu`` where it
+    crosses the altitudes ``edges`` [m] above ``radius`` [m], within ``(0, length)``,
+    unsorted. [m]
+
+    Roots of ``s^2 + 2 r mu s + r^2 - R_e^2 = 0``, with ``r^2 - R_e^2`` formed as
+    ``(r - R_e)(r + R_e)`` so that a planet of any size keeps the crossing's
+    altitude to rounding.
+    """
+    out = np.empty(2 * edges.size)
+    n = 0
+    b = r * mu
+    for e in range(edges.size):
+        r_e = radius + edges[e]
+        disc = b * b - (r - r_e) * (r + r_e)
+        if disc < 0.0:
+            continue
+        q = math.sqrt(disc)
+        for s in (-b - q, -b + q):
+            if 0.0 < s < length:
+                out[n] = s
+                n += 1
+    return out[:n]
 
 
 @parallel_kernel  # numba's fork-safe threading layer, one parallel kernel at a time
@@ -456,10 +514,12 @@ def _slant_kernel(
     rho: np.ndarray,
     radius: float,
     top: float,
+    edges: np.ndarray,
 ) -> np.ndarray:
-    # The path is split at the perigee of a downward ray; on each part the
-    # substitution s = s0 + span t^2 puts the nodes densely where the ray is
-    # lowest (the densities fall off with altitude).
+    # The path is split at the perigee of a downward ray and where it crosses
+    # an edge; on each part the substitution s = s0 + span t^2 puts the nodes
+    # densely at the end nearer the perigee, where the ray is lowest (the
+    # densities fall off with altitude).
     n_c = rho.shape[0]
     r_top = radius + top
     out = np.zeros((n_c, r_grid.size, mu_grid.size))
@@ -474,16 +534,18 @@ def _slant_kernel(
                 continue
             length = -r * m + math.sqrt(max(r * r * (m * m - 1.0) + r_top * r_top, 0.0))
             s_p = max(-r * m, 0.0)
-            for part in range(2):
-                if part == 0:
-                    lo, hi = 0.0, s_p
-                else:
-                    lo, hi = s_p, length
+            cuts = np.sort(
+                np.concatenate(
+                    (np.array([0.0, s_p, length]), _path_breaks(r, m, length, radius, edges))
+                )
+            )
+            for part in range(cuts.size - 1):
+                lo, hi = cuts[part], cuts[part + 1]
                 span = hi - lo
                 if span <= 0.0:
                     continue
                 for q in range(t.size):
-                    if part == 0:
+                    if hi <= s_p:
                         s = hi - span * t[q] * t[q]
                     else:
                         s = lo + span * t[q] * t[q]

@@ -84,6 +84,7 @@ __all__ = [
     "FINE_FACTOR",
     "FINE_ORDERS",
     "GEOMETRIES",
+    "MAX_LAYER_OPTICAL_DEPTH",
     "N_LAYERS",
     "WORK_BUDGET",
     "DiffuseField",
@@ -97,6 +98,13 @@ __all__ = [
 GEOMETRIES: Final = ("pseudo-spherical", "plane-parallel")
 #: Layers of the column (thin near the ground).
 N_LAYERS: Final = 120
+#: Largest scaled optical depth of one layer: thicker layers are cut into equal
+#: parts.  The later orders' source is linear in optical depth within a layer;
+#: a sharp dust layer (0-1 km at optical depth 0.5) in the default 120 layers has
+#: layers of 0.045, and its sky is 0.66 % from CDISORT at 550 nm (view zenith
+#: 75 deg, Sun at 20 deg), 0.13 % with layers of 0.011 (measured).  Smooth columns'
+#: layers stay below it (Mars dust at optical depth 0.5: 0.005).
+MAX_LAYER_OPTICAL_DEPTH: Final = 0.01
 #: The quadrature of the first orders has this many times ``n_streams`` nodes.
 FINE_FACTOR: Final = 2
 #: Orders computed on the fine quadrature.
@@ -200,13 +208,33 @@ class DiffuseField:
         return max(self.mu0, 0.0) * self.sun_transmittance
 
 
-def _level_altitudes(top: float, n_layers: int) -> np.ndarray:
+def _level_altitudes(top: float, n_layers: int, edges: np.ndarray | None = None) -> np.ndarray:
+    """Levels from the top down [m]: ``n_layers`` layers thin near the ground, and the
+    ``edges`` [m] (sharp layers' boundaries, :attr:`~dustoptics.sky.medium.Medium.edges_m`)
+    as levels of their own, so that no layer mixes the two sides of an edge."""
     u = np.linspace(1.0, 0.0, n_layers + 1)
     a = 4.0
-    return top * np.expm1(a * u) / np.expm1(a)
+    z = top * np.expm1(a * u) / np.expm1(a)
+    if edges is None or not np.size(edges):
+        return z
+    return np.union1d(z, np.asarray(edges, dtype=float))[::-1]
 
 
-def _layer_amounts(medium: Medium, z: np.ndarray) -> np.ndarray:
+def _split_thick_layers(medium: Medium | MediumOptics, z: np.ndarray) -> np.ndarray:
+    """Levels ``z`` [m] (from the top down) with every layer whose scaled optical depth
+    exceeds :data:`MAX_LAYER_OPTICAL_DEPTH` at some wavelength cut into equal parts
+    below it (``z`` itself when none does)."""
+    dtau = np.einsum("cx,ck->xk", medium.scaled_sigma_ext_m2, _layer_amounts(medium, z))
+    parts = np.ceil(dtau.max(axis=0, initial=0.0) / MAX_LAYER_OPTICAL_DEPTH).astype(np.int64)
+    if np.all(parts <= 1):
+        return z
+    levels = [z[:1]]
+    for k, n in enumerate(parts):
+        levels.append(np.linspace(z[k], z[k + 1], max(int(n), 1) + 1)[1:])
+    return np.concatenate(levels)
+
+
+def _layer_amounts(medium: Medium | MediumOptics, z: np.ndarray) -> np.ndarray:
     # N0 int rho dz over each layer, shape (n_constituent, n_layer) [m^-2].
     cum = np.concatenate(
         [
@@ -515,6 +543,9 @@ def solve_orders(
         Lambertian albedo, one value or one per wavelength, in [0, 1]. [-]
     n_layers : int
         Layers of the column (thin near the ground); default :data:`N_LAYERS`.
+        The medium's edges (:attr:`~dustoptics.sky.medium.Medium.edges_m`) are
+        levels too, and layers thicker than :data:`MAX_LAYER_OPTICAL_DEPTH` are
+        cut: :attr:`DiffuseField.altitude_m` gives the levels used.
     tol : float
         Tolerance on the remainder of the series of orders. [-]
     geometry : {"pseudo-spherical", "plane-parallel"}
@@ -549,7 +580,9 @@ def solve_orders(
     n = medium.n_streams
     n_mom = 2 * n
     mu0 = math.cos(math.radians(sza))
-    z = _level_altitudes(medium.top_altitude_m, n_layers)
+    z = _split_thick_layers(
+        medium, _level_altitudes(medium.top_altitude_m, n_layers, medium.edges_m)
+    )
     dtau, coef = _layer_optics(medium, z, n_mom)
     t_sun = _sun_transmittance(medium, z, mu0, dtau, geometry)
     regular = _Grid.make(n, n_mom, dtau, t_sun)

@@ -78,7 +78,7 @@ from dustoptics._numba_cache import parallel_kernel
 from dustoptics._validation import MEMORY_BUDGET_BYTES, BudgetError, check_budget
 from dustoptics.sky._progress import Reporter, reporter
 from dustoptics.sky._shared import geometry_memo
-from dustoptics.sky.medium import Medium, MediumOptics, _interp_columns, _scatters
+from dustoptics.sky.medium import Medium, MediumOptics, _interp_columns, _path_breaks, _scatters
 from dustoptics.sky.orders import DiffuseField, normalized_legendre
 
 __all__ = [
@@ -269,6 +269,7 @@ def _row_kernel(
     density: np.ndarray,
     sig_ext_scaled: np.ndarray,
     level_altitude: np.ndarray,
+    edges: np.ndarray,
     geo: np.ndarray,
     dens_out: np.ndarray,
     wb: np.ndarray,
@@ -282,6 +283,9 @@ def _row_kernel(
     scaled extinction (multiplies the emission); ``level[row, i]`` is the
     upper of the two levels of the diffuse field that bracket sample i and
     ``geo[row, i, 3]`` the sample's fraction of the way to the lower one.
+    The samples are the ``n_path + 1`` stretched ones and the row's crossings
+    of the ``edges`` (altitudes [m]), sorted; the unused places at the end
+    repeat the last sample (segments of length 0, weight 0).
     """
     n_rows = mu_rows.shape[0]
     n_c, nwl = sig_ext_scaled.shape
@@ -302,8 +306,16 @@ def _row_kernel(
         beta = np.empty(nwl)
         beta_prev = np.empty(nwl)
         tau = np.zeros(nwl)
+        n_samples = geo.shape[1]
+        s_all = np.full(n_samples, s_end)
         for i in range(n_path + 1):
-            s = s_end * math.expm1(a * i / n_path) / norm
+            s_all[i] = s_end * math.expm1(a * i / n_path) / norm
+        crossings = _path_breaks(r0, mv, s_end, r_ground, edges)
+        if crossings.size:
+            s_all[n_path + 1 : n_path + 1 + crossings.size] = crossings
+            s_all = np.sort(s_all)
+        for i in range(n_samples):
+            s = s_all[i]
             x_r = math.sqrt(max(r0 * r0 + s * s + 2.0 * r0 * s * mv, 0.0))
             z = x_r - r_ground
             mu_loc = min(max((r0 * mv + s) / x_r, -1.0), 1.0)
@@ -352,7 +364,9 @@ def _row_kernel(
             geo[row, i, 3] = min(max(fk, 0.0), 1.0)
         # The last sample's weight over its extinction.
         for x in range(nwl):
-            wb[row, n_path, x] = wb[row, n_path, x] / beta[x] if beta[x] > 0.0 else 0.0
+            wb[row, n_samples - 1, x] = (
+                wb[row, n_samples - 1, x] / beta[x] if beta[x] > 0.0 else 0.0
+            )
             t_end[row, x] = math.exp(-tau[x])
 
 
@@ -903,17 +917,20 @@ def _radiance(
     sig_ext_scaled = medium.scaled_sigma_ext_m2
     sig_sca_scaled = medium.scaled_sigma_sca_m2
     out = np.empty((n_rays, nwl))
-    chunk = _rows_per_chunk(mu_rows.size, n_path, n_modes, nwl)
+    edges = np.ascontiguousarray(medium.edges_m, dtype=float)
+    # Samples per row: the stretched ones and up to two crossings of each edge.
+    n_samples = n_path + 1 + 2 * edges.size
+    chunk = _rows_per_chunk(mu_rows.size, n_samples - 1, n_modes, nwl)
     done = 0
     for start in range(0, mu_rows.size, chunk):
         stop = min(start + chunk, mu_rows.size)
         rows = mu_rows[start:stop]
         nr = rows.size
-        geo = np.empty((nr, n_path + 1, 4))
-        dens = np.empty((nr, n_path + 1, n_c))
-        wb = np.zeros((nr, n_path + 1, nwl))
-        level = np.empty((nr, n_path + 1), dtype=np.int64)
-        g = np.empty((nr, n_path + 1, n_modes, nwl))
+        geo = np.empty((nr, n_samples, 4))
+        dens = np.empty((nr, n_samples, n_c))
+        wb = np.zeros((nr, n_samples, nwl))
+        level = np.empty((nr, n_samples), dtype=np.int64)
+        g = np.empty((nr, n_samples, n_modes, nwl))
         t_end = np.empty((nr, nwl))
         hits = np.zeros(nr, dtype=np.bool_)
         _row_kernel(
@@ -927,6 +944,7 @@ def _radiance(
             density,
             sig_ext_scaled,
             field.altitude_m,
+            edges,
             geo,
             dens,
             wb,

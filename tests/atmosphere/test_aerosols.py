@@ -229,7 +229,7 @@ def test_default_sky_between_cie_clear_sky_and_preetham() -> None:
     The two published clear skies disagree there by a factor 2.3: CIE 12 (standard clear
     sky) gives 1.10, Preetham et al. at the same optical depth (T 1.99) 2.48.  A physical
     sky at optical depth 0.1 belongs between them; Kobe's nearly aerosol-free set (optical
-    depth 0.0027) does not (3.1, above both).  Measured: 1.72.
+    depth 0.0027) does not (3.1, above both).  Measured: 1.71 (1.72 with Penndorf air).
     """
     from dustoptics.sky import daylight
     from dustoptics.sky.medium import Medium

@@ -167,7 +167,7 @@ def test_pressure_temperature_and_number_density_give_same_beta():
 
 
 def test_rayleigh_bad_input():
-    with pytest.raises(ValueError, match=r"model must be one of 'penndorf1957'.*got 'air'"):
+    with pytest.raises(ValueError, match=r"model must be one of 'bodhaine1999'.*got 'air'"):
         rayleigh_beta_per_m(550.0, model="air")
     with pytest.raises(
         ValueError, match=r"outside the data of material 'air-edlen1953'.*\[200, 20000\]"
@@ -331,4 +331,90 @@ def test_mars_co2_cross_section_against_vardavas_keady_form():
     np.testing.assert_allclose(sigma / sigma_ref, 1.0, atol=0.015)
     assert king_factor(depolarization=0.09) / king_factor(depolarization=co2["Delta"]) == (
         pytest.approx(1.0226, abs=5e-4)
+    )
+
+
+# ------------------------------------------------------- Bodhaine et al. 1999
+
+
+def _bodhaine_eq30(wavelength_nm: np.ndarray) -> np.ndarray:
+    # Bodhaine et al. 1999, eq. (30): sea-level Rayleigh optical depth at 45 deg N,
+    # 1013.25 hPa, 360 ppm CO2 (their published fit, an independent reference).
+    lam = wavelength_nm / 1000.0
+    return (
+        0.0021520
+        * (1.0455996 - 341.29061 * lam**-2 - 0.90230850 * lam**2)
+        / (1 + 0.0027059889 * lam**-2 - 85.968563 * lam**2)
+    )
+
+
+def test_bodhaine_default_air_gives_their_eq30_optical_depth():
+    wl = np.linspace(360.0, 830.0, 48)
+    model = get_rayleigh_model("bodhaine1999")
+    tau = model.beta_sca_per_m(wl) * 8000.0  # the Earth set's column: N0 over 8 km
+    # Their fit reproduces their formula to about 1e-4 (the fit's own error).
+    np.testing.assert_allclose(tau, _bodhaine_eq30(wl), rtol=1e-4)
+    from dustoptics.atmosphere import sets
+
+    atm = sets.earth_atmosphere(wavelength_nm=wl, ozone=None)
+    medium_tau = atm.constituent("molecules").table.beta_sca_per_m * 8000.0
+    np.testing.assert_allclose(medium_tau, _bodhaine_eq30(wl), rtol=1e-4)
+
+
+def test_bodhaine_co2_dependence():
+    # More CO2: a larger index (eq. 19) and King factor (F_CO2 = 1.15 > F_air), so
+    # a larger cross-section.
+    wl = np.array([440.0, 550.0, 680.0])
+    s360 = gases.bodhaine1999_cross_section_m2(wl)
+    s460 = gases.bodhaine1999_cross_section_m2(wl, co2_ppm=460.0)
+    np.testing.assert_array_less(s360, s460)
+    ratio = s460 / s360 - 1.0
+    # Independent, to first order in the 100 ppm: the index term (n - 1 grows by
+    # 0.54e-4, squared in sigma) and the King factor's, 0.01 % of the molecules
+    # turning from F to 1.15: d ln F = 1e-2 (1.15 - F) / (100 F).
+    f = gases.bodhaine1999_king_factor(wl)
+    expected = 2 * 0.54e-4 + 1e-2 * (1.15 - f) / (100.0 * f)
+    np.testing.assert_allclose(ratio, expected, rtol=2e-3)
+    # The column falls with the mean molecular weight m_a = 15.0556 C + 28.9595.
+    assert gases.bodhaine1999_column_per_m2(co2_ppm=460.0) / gases.bodhaine1999_column_per_m2() == (
+        pytest.approx((15.0556 * 360e-6 + 28.9595) / (15.0556 * 460e-6 + 28.9595), rel=1e-14)
+    )
+    with pytest.raises(ValueError, match=r"co2_ppm must be within \[0, 10000\] ppm.*got -1"):
+        gases.bodhaine1999_cross_section_m2(550.0, co2_ppm=-1)
+
+
+def test_bodhaine_king_factor_values():
+    # Their eqs. (5), (6) at 500 nm: F_N2 = 1.034 + 3.17e-4 / 0.25, F_O2 = 1.096 +
+    # 1.385e-3 / 0.25 + 1.448e-4 / 0.0625; the air mix with 0.036 % CO2.
+    fn2 = 1.034 + 3.17e-4 / 0.25
+    fo2 = 1.096 + 1.385e-3 / 0.25 + 1.448e-4 / 0.0625
+    mix = (78.084 * fn2 + 20.946 * fo2 + 0.934 + 0.036 * 1.15) / (78.084 + 20.946 + 0.934 + 0.036)
+    assert float(gases.bodhaine1999_king_factor(500.0)) == pytest.approx(mix, rel=1e-14)
+
+
+def test_penndorf_kept_by_name_and_difference_documented():
+    # Penndorf's standard air is kept as a named option, 0.69-1.17 % above Bodhaine.
+    wl = np.array([360.0, 800.0])
+    d = gases.rayleigh_optical_depth_difference(wl)
+    np.testing.assert_allclose(d, [0.0069, 0.0117], atol=5e-5)
+    from dustoptics.atmosphere import sets
+
+    atm = sets.earth_atmosphere(wavelength_nm=wl, ozone=None, molecules="penndorf1957")
+    beta = atm.constituent("molecules").table.beta_sca_per_m
+    np.testing.assert_allclose(beta, rayleigh_beta_per_m(wl, model="penndorf1957"), rtol=1e-12)
+
+
+def test_bodhaine_table_phase_uses_each_wavelengths_depolarization():
+    gas = get_rayleigh_model("bodhaine1999")
+    wl = np.array([360.0, 830.0])
+    t = gas.table(wl, theta_deg=np.linspace(0.0, 180.0, 181))
+    np.testing.assert_allclose(
+        tabulated_phase.sphere_integral(t.phase, theta_deg=t.theta_deg), 1.0, rtol=1e-12
+    )
+    f = gases.bodhaine1999_king_factor(wl)
+    rho = 6 * (f - 1) / (3 + 7 * f)
+    gamma = rho / (2 - rho)
+    # Chandrasekhar: P(0) / P(90) = 1 + (1 - gamma) / (1 + 3 gamma).
+    np.testing.assert_allclose(
+        t.phase[:, 0] / t.phase[:, 90], 1 + (1 - gamma) / (1 + 3 * gamma), rtol=1e-12
     )

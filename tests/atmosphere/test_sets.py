@@ -162,8 +162,11 @@ def test_earth_with_tabulated_ozone_and_bruneton_layer(tmp_path):
 
 
 def test_default_earth_is_cosmoscouts_15_wavelengths_with_standard_air_and_ozone(tmp_path):
-    """CosmoScout VR's 15 wavelengths, Penndorf standard air, shipped ozone in Bruneton's layer."""
-    earth = atm.earth_atmosphere()
+    """CosmoScout VR's 15 wavelengths, Penndorf standard air (by name; the default is
+    Bodhaine et al. 1999 since issue 40, tests/atmosphere/test_gases.py), shipped ozone in
+    Bruneton's layer."""
+    assert atm.earth_atmosphere().constituent("molecules").table.name == "bodhaine1999"
+    earth = atm.earth_atmosphere(molecules="penndorf1957")
     np.testing.assert_allclose(earth.wavelength_nm, np.linspace(360.0, 830.0, 15), rtol=1e-15)
     write_atmosphere(earth, tmp_path)
     assert check_cosmoscout_set(tmp_path) == ["earth_aerosols", "earth_molecules", "earth_ozone"]

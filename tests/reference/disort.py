@@ -10,8 +10,9 @@ function (projected from the tables as for the renderer,
 :func:`~dustoptics.sky.medium.legendre_moments`, to ``n_moments``); CDISORT
 does its own delta-M scaling and its Nakajima-Tanaka intensity correction
 (TMS and IMS) from these moments.  Its layers are the renderer's
-(:func:`~dustoptics.sky.orders._level_altitudes`), ``n_layers`` of them,
-homogeneous.
+(:func:`~dustoptics.sky.orders._level_altitudes`), ``n_layers`` of them
+and one more at each edge of a sharp layer (the medium's
+:attr:`~dustoptics.sky.medium.Medium.edges_m` are levels), homogeneous.
 
 Converged settings for a reference (measured): with ``n_streams=64`` (``NSTR
 = 128``) and 40 layers CDISORT agrees with itself at ``NSTR = 192`` and 120
@@ -47,7 +48,7 @@ from typing import Any, Final
 import numpy as np
 
 from dustoptics.atmosphere import sets
-from dustoptics.atmosphere.column import ExponentialProfile
+from dustoptics.atmosphere.column import ExponentialProfile, PiecewiseLinearProfile
 from dustoptics.sky.medium import Medium, _scatters, legendre_moments
 from dustoptics.sky.orders import _layer_amounts, _level_altitudes
 from dustoptics.table import Table
@@ -59,6 +60,7 @@ __all__ = [
     "REFERENCE_LAYERS",
     "REFERENCE_MOMENTS",
     "REFERENCE_STREAMS",
+    "SHARP_LAYER",
     "VALIDATION_CASES",
     "VALIDATION_SUN_ELEVATIONS_DEG",
     "VALIDATION_WAVELENGTHS_NM",
@@ -99,7 +101,7 @@ def column_optics(
         ``dtau`` (n_wavelength, n_layers), ``ssa`` (n_wavelength, n_layers) and
         ``pmom`` (n_wavelength, n_layers, n_moments + 1); layers from the top.
     """
-    z = _level_altitudes(medium.top_altitude_m, n_layers)
+    z = _level_altitudes(medium.top_altitude_m, n_layers, medium.edges_m)
     amount = _layer_amounts(medium, z)  # (c, k) [m^-2]
     nwl = medium.wavelength_nm.size
     chi = np.array(
@@ -180,7 +182,7 @@ def disort_radiance(
     umu = np.unique(umu_all)
     phi = np.unique(phi_all)
     s = nd.BatchSolver(nthreads=int(threads))
-    s.nstr, s.nlyr, s.nmom = 2 * int(n_streams), int(n_layers), int(n_moments)
+    s.nstr, s.nlyr, s.nmom = 2 * int(n_streams), optics["dtau"].shape[1], int(n_moments)
     s.ntau, s.numu, s.nphi = 1, umu.size, phi.size
     s.usrtau = s.usrang = s.lamber = s.quiet = True
     s.onlyfl = False
@@ -215,6 +217,11 @@ VALIDATION_CASES: Final = (
     ("mars-dust", 0.5),
     ("mars-dust", 1.0),
     ("mars-dust", 2.0),
+    ("mars-dust-layer", 0.5),
+)
+#: A uniform layer from the ground to 1 km, nothing above (its top 1 mm thick).
+SHARP_LAYER: Final = PiecewiseLinearProfile(
+    altitude_m=(0.0, 1000.0, 1000.001), density=(1.0, 1.0, 0.0)
 )
 #: Sun elevations of the validation. [deg]
 VALIDATION_SUN_ELEVATIONS_DEG: Final = (20.0, 45.0, 70.0)
@@ -264,23 +271,28 @@ def validation_atmosphere(
     ``"rayleigh"``: Earth's air alone (no ozone, aerosols of zero density);
     ``"earth-aerosol"``: the air and :func:`validation_table`'s aerosol, 1.2
     km scale height, at ``optical_depth`` at 550 nm; ``"mars-dust"``: Mars's
-    CO2 and the dust, 11.1 km scale height, at ``optical_depth`` at 550 nm.
+    CO2 and the dust, 11.1 km scale height, at ``optical_depth`` at 550 nm;
+    ``"mars-dust-layer"``: the same dust uniform from the ground to 1 km and
+    none above (:data:`SHARP_LAYER`, the layer of the ``libradtran`` and
+    ``disort`` formats' files).
     ``table`` replaces the Mie computation (the particles at the
     wavelengths).
     """
     wl = [float(w) for w in np.atleast_1d(wavelength_nm)]
-    if kind == "mars-dust":
-        dust = validation_table(kind, wl) if table is None else table
+    if kind in ("mars-dust", "mars-dust-layer"):
+        dust = validation_table("mars-dust", wl) if table is None else table
         return sets.mars_atmosphere(
             dust_table=dust,
             optical_depth=optical_depth,
+            dust_profile=SHARP_LAYER if kind == "mars-dust-layer" else None,
             planet_radius_m=FLAT_RADIUS_M,
             atmosphere_radius_m=FLAT_RADIUS_M + 120e3,
-            name="mars-dust",
+            name=kind,
         )
     if kind not in ("rayleigh", "earth-aerosol"):
         raise ValueError(
-            f"kind must be one of 'rayleigh', 'earth-aerosol', 'mars-dust'; got {kind!r}"
+            "kind must be one of 'rayleigh', 'earth-aerosol', 'mars-dust', 'mars-dust-layer'; "
+            f"got {kind!r}"
         )
     profile = ExponentialProfile(scale_height_m=1200.0)
     aerosol = validation_table("earth-aerosol", wl) if table is None else table

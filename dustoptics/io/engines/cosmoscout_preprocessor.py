@@ -34,7 +34,14 @@ The options and how they are chosen (tolerance ``tol``, default 0.5 %):
     along the zenith for the steps, along straight rays from the zenith to the
     horizon for the counts (where ``exp(-tau) >= 1e-3``).  The other half of
     ``tol`` is left to what the simulation does not model (float32 sums on the
-    GPU, its fixed-point filter weights, the bending of slant rays).
+    GPU, its fixed-point filter weights, the bending of slant rays).  With
+    refraction on, only the zenith is checked: below mu 0.2 the bent rays of
+    the texture depart from the straight-ray ``exp(-tau)`` by the bending
+    itself, a physical difference, not an error of the quadrature.  When no
+    value tried meets ``tol / 2``, the finest is used and its reason says what
+    it leaves.  The stated ``transmittance_error`` adds the error of the set's
+    wavelength sampling at the wavelengths engines render, 440, 550 and 680 nm
+    (:func:`wavelength_sampling_error`).
 ``stepSizeSingleScattering``, ``stepSizeMultiScattering`` [m]
     With steps, the in-scattering sums add a sample's own segment to the
     optical depth before using it, which darkens the result by about
@@ -103,6 +110,7 @@ __all__ = [
     "cosmoscout_sampling",
     "horizon_refraction_rad",
     "preprocessor_transmittance",
+    "wavelength_sampling_error",
 ]
 
 #: The commit of cosmoscout/cosmoscout-vr read (its preprocessor files are those of v1.10.0).
@@ -342,18 +350,31 @@ class CosmoScoutSampling:
     tolerance : float
         The error the rules keep within. [-]
     transmittance_error : float
-        Largest relative error of the ground-to-top transmittance with the
-        active quadrature (steps with refraction, counts without), over the
-        set's wavelengths. [-]
+        The set's whole stated transmittance error: :attr:`quadrature_error`
+        plus :attr:`wavelength_error` (where known). [-]
     inactive_transmittance_error : float
-        The same with the other quadrature's option (so that switching
-        ``refraction`` keeps the transmittance right). [-]
+        The quadrature error with the other quadrature's option (so that
+        switching ``refraction`` keeps the transmittance right), plus
+        :attr:`wavelength_error`. [-]
     horizon_refraction_rad : float
         :func:`horizon_refraction_rad`. [rad]
     precomputation : PrecomputationSampling
         Orders, NU size and scattering-density directions.
     reasons : dict
         Why each chosen value (by JSON key).
+    quadrature_error : float
+        Largest relative error of the ground-to-top transmittance with the
+        active quadrature (steps with refraction, along the zenith; counts
+        without, along straight rays from the zenith to the horizon), over the
+        set's wavelengths, against ``exp(-tau)`` along straight rays (with
+        refraction the texture departs from that below mu 0.2, by the bending
+        itself: not an error, and not checked). [-]
+    wavelength_error : float
+        :func:`wavelength_sampling_error`: what the set's wavelength sampling
+        adds at 440, 550 and 680 nm (``nan`` if the set carries no exact
+        optics there). [-]
+    wavelength_errors : dict
+        The same per wavelength (``"440"``, ``"550"``, ``"680"``). [-]
     notes : tuple of str
         What the preprocessor will not do with this set (its wavelength rules,
         ``main.cpp`` and ``Preprocessor.cpp``: at least three; exactly 440,
@@ -369,6 +390,9 @@ class CosmoScoutSampling:
     precomputation: PrecomputationSampling
     reasons: dict[str, str] = field(default_factory=dict)
     notes: tuple[str, ...] = ()
+    quadrature_error: float = math.nan
+    wavelength_error: float = math.nan
+    wavelength_errors: dict[str, float] = field(default_factory=dict)
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready record of the choices (the ``dustoptics`` entry of the settings)."""
@@ -377,6 +401,11 @@ class CosmoScoutSampling:
             "tolerance": self.tolerance,
             "transmittance_error": self.transmittance_error,
             "inactive_transmittance_error": self.inactive_transmittance_error,
+            "quadrature_transmittance_error": self.quadrature_error,
+            "wavelength_sampling_error": (
+                None if math.isnan(self.wavelength_error) else self.wavelength_error
+            ),
+            "wavelength_sampling_error_by_nm": dict(self.wavelength_errors),
             "horizon_refraction_deg": math.degrees(self.horizon_refraction_rad),
             "reasons": dict(self.reasons),
             "notes": list(self.notes),
@@ -474,6 +503,48 @@ def _transmittance_error_of(atmosphere: Atmosphere) -> Callable[..., float]:
     return error
 
 
+def wavelength_sampling_error(atmosphere: Atmosphere) -> tuple[float, dict[str, float]]:
+    """Error of the transmittance an engine gets from the set's wavelength sampling.
+
+    At each of the wavelengths engines render (:data:`~dustoptics.atmosphere.sets.RGB_WAVELENGTHS_NM`,
+    440, 550 and 680 nm), the set's extinction coefficients read linearly between its
+    wavelengths (a wavelength of the set is read exactly; outside the set's range, its
+    nearest wavelength's, what an engine without data there has) against the same atmosphere
+    computed there (:attr:`~dustoptics.atmosphere.sets.Atmosphere.rgb_optics`), along
+    straight rays from the ground at the zenith cosines :data:`_MUS` (where the exact
+    transmittance is at least 1e-3): ``|exp(-(tau_set - tau_exact)) - 1|``.
+
+    Returns
+    -------
+    (float, dict)
+        The largest relative error, and the largest per wavelength (keys ``"440"``,
+        ...); ``nan`` and an empty dict when the set carries no ``rgb_optics``. [-]
+    """
+    exact = atmosphere.rgb_optics
+    if exact is None:
+        return math.nan, {}
+    wl = np.asarray(atmosphere.wavelength_nm, dtype=np.float64)
+    rgb = np.asarray(exact.wavelength_nm, dtype=np.float64)
+    top = atmosphere.thickness_m
+    worst: dict[str, float] = {}
+    for mu in _MUS:
+        alt, w, _ = _straight_ray(mu, 20000, atmosphere.planet_radius_m, top)
+        d_tau = np.zeros(rgb.size)
+        tau = np.zeros(rgb.size)
+        for c, e in zip(atmosphere.constituents, exact.constituents, strict=True):
+            length = float(np.sum(w * c.profile.relative_density(np.clip(alt, 0.0, top))))
+            beta_set = np.interp(rgb, wl, np.asarray(c.table.beta_ext_per_m, dtype=np.float64))
+            beta_exact = np.asarray(e.table.beta_ext_per_m, dtype=np.float64)
+            d_tau += (beta_set - beta_exact) * length
+            tau += beta_exact * length
+        err = np.abs(np.expm1(-d_tau))
+        for lam, e_x, t in zip(rgb, err, tau, strict=True):
+            if math.exp(-t) >= _VISIBLE:
+                key = f"{lam:g}"
+                worst[key] = max(worst.get(key, 0.0), float(e_x))
+    return max(worst.values(), default=0.0), worst
+
+
 def _optical_depth_sampling(
     error: Callable[..., float], *, tol: float, reasons: dict[str, str]
 ) -> tuple[float, int]:
@@ -487,17 +558,34 @@ def _optical_depth_sampling(
     def count_ok(n: int) -> bool:
         return all(error(refraction=False, sample_count=n, mu=mu) <= bound for mu in _MUS)
 
-    step = next((dx for i, dx in enumerate(_STEPS_M) if step_ok(i)), _STEPS_M[-1])
-    count = next((n for n in _COUNTS if count_ok(n)), _COUNTS[-1])
-    reasons["stepSizeOpticalDepth"] = (
-        f"largest of {list(_STEPS_M)} m whose zenith transmittance (and the next two smaller "
-        f"steps') is within {bound:g} of exp(-tau) at every wavelength"
-    )
-    reasons["sampleCountOpticalDepth"] = (
-        f"smallest of {list(_COUNTS)} whose transmittance along straight rays at zenith cosines "
-        f"{list(_MUS)} is within {bound:g} of exp(-tau) at every wavelength (where "
-        f"exp(-tau) >= {_VISIBLE:g})"
-    )
+    step = next((dx for i, dx in enumerate(_STEPS_M) if step_ok(i)), None)
+    count = next((n for n in _COUNTS if count_ok(n)), None)
+    if step is not None:
+        reasons["stepSizeOpticalDepth"] = (
+            f"largest of {list(_STEPS_M)} m whose zenith transmittance (and the next two "
+            f"smaller steps') is within {bound:g} of exp(-tau) at every wavelength"
+        )
+    else:
+        step = _STEPS_M[-1]
+        reasons["stepSizeOpticalDepth"] = (
+            f"none of {list(_STEPS_M)} m keeps the zenith transmittance within {bound:g} of "
+            f"exp(-tau) at every wavelength: the finest, {step} m, leaves "
+            f"{error(refraction=True, step_m=step):.3g}"
+        )
+    if count is not None:
+        reasons["sampleCountOpticalDepth"] = (
+            f"smallest of {list(_COUNTS)} whose transmittance along straight rays at zenith "
+            f"cosines {list(_MUS)} is within {bound:g} of exp(-tau) at every wavelength (where "
+            f"exp(-tau) >= {_VISIBLE:g})"
+        )
+    else:
+        count = _COUNTS[-1]
+        worst = max(error(refraction=False, sample_count=count, mu=mu) for mu in _MUS)
+        reasons["sampleCountOpticalDepth"] = (
+            f"none of {list(_COUNTS)} keeps the transmittance along straight rays at zenith "
+            f"cosines {list(_MUS)} within {bound:g} of exp(-tau) at every wavelength (where "
+            f"exp(-tau) >= {_VISIBLE:g}): the largest, {count}, leaves {worst:.3g}"
+        )
     return step, count
 
 
@@ -664,13 +752,27 @@ def cosmoscout_sampling(
         "irradianceTextureHeight": BRUNETON_DEFAULTS["irradiance_texture_height"],
         "maxSunZenithAngle": math.radians(zenith),
     }
+    quadrature = error if refraction else error_off
+    inactive = error_off if refraction else error
+    wl_error, wl_errors = wavelength_sampling_error(atmosphere)
+    notes = _wavelength_notes(atmosphere.wavelength_nm)
+    if math.isnan(wl_error):
+        notes += (
+            "the error of the set's wavelength sampling at 440, 550 and 680 nm is not included "
+            "(the set carries no optics computed there: build it with "
+            "dustoptics.atmosphere.build.build_atmosphere)",
+        )
+    added = 0.0 if math.isnan(wl_error) else wl_error
     return CosmoScoutSampling(
         settings=settings,
         tolerance=tol,
-        transmittance_error=error if refraction else error_off,
-        inactive_transmittance_error=error_off if refraction else error,
+        transmittance_error=quadrature + added,
+        inactive_transmittance_error=inactive + added,
         horizon_refraction_rad=bend,
         precomputation=pre,
         reasons=reasons,
-        notes=_wavelength_notes(atmosphere.wavelength_nm),
+        notes=notes,
+        quadrature_error=quadrature,
+        wavelength_error=wl_error,
+        wavelength_errors=wl_errors,
     )

@@ -599,3 +599,79 @@ def test_path_prefix_and_refused_options(tmp_path):
         write_atmosphere(earth, tmp_path / "x", sampling=cosmoscout_sampling(
             earth, options={"sampleCountScatteringDensity": 16}))  # fmt: skip
     assert not (tmp_path / "x").exists()
+
+
+# ------------------------------------------- issue 40: the whole error, every reason true
+
+
+@pytest.fixture(scope="module")
+def kobe_earths():
+    """Earth with Kobe's constant aerosols (no Mie) on 15 and on 48 wavelengths, each
+    carrying the same atmosphere at 440, 550 and 680 nm."""
+    from dataclasses import replace
+
+    from dustoptics.atmosphere import sets
+
+    rgb = sets.earth_atmosphere(aerosol="kobe2026", wavelength_nm=sets.RGB_WAVELENGTHS_NM)
+    return {
+        n: replace(sets.earth_atmosphere(aerosol="kobe2026", wavelength_nm=wl), rgb_optics=rgb)
+        for n, wl in ((15, sets.COSMOSCOUT_WAVELENGTHS_NM), (48, sets.EARTH_WAVELENGTHS_NM))
+    }
+
+
+def test_wavelength_sampling_error_is_stated(kobe_earths):
+    from dustoptics.io.engines.cosmoscout_preprocessor import cosmoscout_sampling
+
+    s15 = cosmoscout_sampling(kobe_earths[15])
+    # Independent, along the zenith only: the set's coefficients read linearly between its
+    # wavelengths against the exact ones, times each profile's column length.
+    exact, atm = kobe_earths[15].rgb_optics, kobe_earths[15]
+    d_tau = sum(
+        (np.interp(exact.wavelength_nm, atm.wavelength_nm, c.table.beta_ext_per_m)
+         - e.table.beta_ext_per_m) * c.profile.column_length_m(top_altitude_m=atm.thickness_m)
+        for c, e in zip(atm.constituents, exact.constituents)
+    )  # fmt: skip
+    zenith = np.abs(np.expm1(-d_tau))
+    assert zenith[0] > 1e-3  # 440 nm: the ozone between samples (3.7e-3 at the zenith)
+    for lam, z in zip(("440", "550", "680"), zenith):
+        assert s15.wavelength_errors[lam] >= z * (1 - 1e-3)  # the slant rays add to it
+    assert s15.transmittance_error == s15.quadrature_error + s15.wavelength_error
+    record = s15.to_dict()
+    assert record["wavelength_sampling_error"] == s15.wavelength_error
+    # 48 wavelengths hold 440, 550 and 680 nm: nothing to add (the issue's 0.1 % target).
+    s48 = cosmoscout_sampling(kobe_earths[48])
+    assert max(s48.wavelength_errors.values()) < 1e-3
+    assert s48.transmittance_error == s48.quadrature_error + s48.wavelength_error
+    # Without optics at the engine's wavelengths the record says the error is left out.
+    bare = cosmoscout_sampling(replace_rgb(kobe_earths[15]))
+    assert np.isnan(bare.wavelength_error)
+    assert any("not included" in note for note in bare.notes)
+
+
+def replace_rgb(atmosphere):
+    from dataclasses import replace
+
+    return replace(atmosphere, rgb_optics=None)
+
+
+def test_every_optical_depth_reason_is_true(kobe_earths):
+    from dustoptics.io.engines import cosmoscout_preprocessor as cp
+
+    atm = kobe_earths[48]
+    s = cp.cosmoscout_sampling(atm)
+    bound = 0.5 * s.tolerance
+    count = s.settings["sampleCountOpticalDepth"]
+    worst = 0.0
+    for mu in (1.0, 0.5, 0.2, 0.1, 0.05, 0.02, 0.0):
+        got, want = cp.preprocessor_transmittance(atm, refraction=False, sample_count=count, mu=mu)
+        seen = want >= 1e-3
+        worst = max(worst, float(np.max(np.abs(got / want - 1.0)[seen], initial=0.0)))
+    reason = s.reasons["sampleCountOpticalDepth"]
+    if worst <= bound:
+        assert reason.startswith("smallest of"), reason
+    else:  # the issue's case: 20000 was recorded as "the smallest within 0.0025"
+        assert reason.startswith("none of") and f"leaves {worst:.3g}" in reason, (worst, reason)
+    step = s.settings["stepSizeOpticalDepth"]
+    got, want = cp.preprocessor_transmittance(atm, refraction=True, step_m=step)
+    zenith = float(np.max(np.abs(got / want - 1.0)))
+    assert (zenith <= bound) == s.reasons["stepSizeOpticalDepth"].startswith("largest of")
