@@ -484,7 +484,8 @@ def fit_engine(
     skies: Sequence[ReferenceSky],
     *,
     kind: str = "fitted",
-    max_evaluations: int = 150,
+    max_evaluations: int = 200,
+    start: Mapping[str, float] | None = None,
 ) -> EngineFit:
     """Fit an engine's parameters to the exact skies: least squares of Delta E 2000.
 
@@ -509,7 +510,10 @@ def fit_engine(
         ``"community"``: the community row, only its
         :attr:`EngineModel.community_parameters` adjusted.
     max_evaluations : int
-        Most evaluations of the residuals.
+        Most evaluations of the residuals, finite-difference Jacobians included.
+    start : mapping, optional
+        Every value the renderer takes, instead of the engine's start (or
+        community row) for ``atmosphere``.
 
     Returns
     -------
@@ -518,10 +522,10 @@ def fit_engine(
     if kind not in ("fitted", "community"):
         raise ValueError(f"kind must be 'fitted' or 'community'; got {kind!r}")
     if kind == "fitted":
-        base = engine.initial(atmosphere)
+        base = dict(engine.initial(atmosphere) if start is None else start)
         fitted = list(engine.parameters)
     else:
-        base = engine.community(atmosphere)
+        base = dict(engine.community(atmosphere) if start is None else start)
         fitted = [p for p in engine.parameters if p.name in engine.community_parameters]
     lower = np.array([math.log(p.lower) if p.log else p.lower for p in fitted])
     upper = np.array([math.log(p.upper) if p.log else p.upper for p in fitted])
@@ -537,8 +541,14 @@ def fit_engine(
         return np.concatenate(parts)
 
     if fitted:
+        # max_nfev does not count the evaluations of the finite-difference Jacobian (one
+        # per parameter per iteration): the budget covers both.
         result = least_squares(
-            residuals, x0, bounds=(lower, upper), x_scale=1.0, max_nfev=max_evaluations
+            residuals,
+            x0,
+            bounds=(lower, upper),
+            x_scale=1.0,
+            max_nfev=max(2, max_evaluations // (len(fitted) + 1)),
         )
         x = result.x
     else:
