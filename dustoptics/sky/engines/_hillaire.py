@@ -355,7 +355,7 @@ def _ray_geometry(
         hash(sun.tobytes()),
         hash(t_max.tobytes()),
     )
-    return _memo(key, compute)  # type: ignore[no-any-return]
+    return _memo(key, compute)
 
 
 def _ms_directions(kind: str) -> np.ndarray:
