@@ -264,7 +264,8 @@ def engines_report(
         Keys of :data:`~dustoptics.sky.engines.core.ENGINES` (default all).
     cache_dir : path, optional
         Where each planet's rows are kept (``engines-PLANET.json``) and read back
-        when they were made by this :data:`REPORT_VERSION` for these engines.
+        when they were made by this :data:`REPORT_VERSION`; only the engines
+        missing there are fitted (an engine added later costs its own rows).
     progress : text stream, optional
         Where to report each fit.
 
@@ -279,20 +280,21 @@ def engines_report(
         raise ValueError(f"engines must be among {sorted(ENGINES)}; got {unknown}")
     rows: list[ReportRow] = []
     for key in keys:
-        cached = None
+        found: list[ReportRow] = []
         path = None
         if cache_dir is not None:
             path = Path(cache_dir) / f"engines-{key.replace(':', '-')}.json"
             if path.is_file():
-                found = EngineReport.from_json(path.read_text(encoding="utf-8"))
-                if found.version == REPORT_VERSION and {r.engine for r in found.rows} >= set(names):
-                    cached = [r for r in found.rows if r.engine in names]
-        if cached is None:
-            cached = _planet_rows(key, names, progress)
+                cached = EngineReport.from_json(path.read_text(encoding="utf-8"))
+                if cached.version == REPORT_VERSION:
+                    found = list(cached.rows)
+        missing = [n for n in names if n not in {r.engine for r in found}]
+        if missing:
+            found += _planet_rows(key, missing, progress)
             if path is not None:
-                text = EngineReport(tuple(cached)).to_json()
+                text = EngineReport(tuple(found)).to_json()
                 write_files({path: text.encode("utf-8")}, overwrite=True)
-        rows += cached
+        rows += [r for n in names for r in found if r.engine == n]
     return EngineReport(tuple(rows))
 
 
