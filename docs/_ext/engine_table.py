@@ -43,8 +43,16 @@ def _engines_rst() -> list[str]:
 def _errors_rst() -> list[str]:
     report = shipped_report()
     lines = report.table_rst().splitlines()
+    rows = report.row_losses()
+    lines += [
+        "",
+        "Engines and planets where the fitted parameters do not beat the community's",
+        "(Delta E 2000 over the dome, averaged over the Sun elevations):",
+        "",
+    ]
+    lines += [f"- {line}" for line in rows] if rows else ["- none"]
     losses = report.losses()
-    lines += ["", "Rows where the fitted parameters do not beat the community's:", ""]
+    lines += ["", "Single Sun elevations where they do not (mean or 95th percentile):", ""]
     lines += [f"- {line}" for line in losses] if losses else ["- none"]
     return lines
 
