@@ -90,3 +90,18 @@ def test_shipped_report_covers_every_planet_and_both_kinds(capsys):
     assert report.row_losses() == []
     assert main(["engines", "report", "--shipped"]) == 0
     assert "Unreal Engine SkyAtmosphere" in capsys.readouterr().out
+
+
+def test_export_refuses_an_engine_format_before_reading_the_table(tmp_path, capsys):
+    # The file does not exist: the refusal comes first (usage error, 2), naming the command.
+    status = main(
+        ["export", str(tmp_path / "none.nc"), "--format", "unreal", "--out", str(tmp_path)]
+    )
+    assert status == 2
+    assert "build mars --dust PRESET --format unreal" in capsys.readouterr().err
+
+
+def test_build_refuses_an_engine_format_for_one_table(tmp_path, capsys):
+    status = main(["build", "costa", "--format", "godot", "--out", str(tmp_path)])
+    assert status == 2
+    assert "build mars --dust costa --format godot" in capsys.readouterr().err
