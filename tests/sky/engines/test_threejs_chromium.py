@@ -34,9 +34,10 @@ pytestmark = [
 ]
 
 #: Relative difference allowed between Chromium's pixels (float32 on SwiftShader) and our
-#: float64 model: the largest (measured locally up to 4.7e-3, 85 deg from the zenith, where
-#: the optical mass's pow(93.885 - deg, -1.253) loses float32 digits) and the median
-#: (measured 1e-5 to 6e-4).
+#: float64 model, with the Sun 5 deg or more above the horizon: the largest (measured locally
+#: up to 5.5e-3, 85 deg from the zenith, where the optical mass's pow(93.885 - deg, -1.253)
+#: loses float32 digits) and the median (measured 2e-4 to 7e-4).  At sunset the Sun's
+#: intensity is a small difference of float32 numbers: 4.7e-2 at most there (not tested).
 TOLERANCE_MAX = 1e-2
 TOLERANCE_MEDIAN = 1e-3
 
