@@ -44,6 +44,7 @@ extensions = [
     "format_table",
     "run_examples",
     "dust_phase_fit_table",
+    "engine_table",
 ]
 
 # Warnings are errors (-W): references that cannot resolve must be fixed, not hidden.

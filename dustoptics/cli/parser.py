@@ -38,6 +38,7 @@ _COMMAND_MODULES = (
     "sweep",
     "sky",
     "retrieve",
+    "engines",
 )
 
 
