@@ -94,7 +94,15 @@ def channel_coefficients(
     sca = n0 * (w @ csca) * 1e-12
     ext = n0 * (w @ cext) * 1e-12
     theta = np.asarray(table.theta_deg, dtype=np.float64)
-    phase = channel_phase(chosen, np.asarray(table.phase, dtype=np.float64), csca_um2=csca)
+    weight = w * csca[None, :]
+    scatters = bool(np.all(weight.sum(axis=1) > 0.0))
+    # A constituent that does not scatter (ozone) has its rows' plain channel average.
+    phase = channel_phase(
+        chosen, np.asarray(table.phase, dtype=np.float64), csca_um2=csca if scatters else None
+    )
+    if not scatters:
+        weight = w
+    g = (weight @ np.asarray(table.g, dtype=np.float64)) / weight.sum(axis=1)
     return ChannelCoefficients(
         names=tuple(chosen.names),
         wavelength_nm=np.asarray(chosen.centroid_nm, dtype=np.float64),
@@ -103,8 +111,7 @@ def channel_coefficients(
         extinction_per_m=ext,
         theta_deg=theta,
         phase=phase,
-        g=((w * csca[None, :]) @ np.asarray(table.g, dtype=np.float64))
-        / (w * csca[None, :]).sum(axis=1),
+        g=g,
     )
 
 
