@@ -126,6 +126,14 @@ def _sig(value: float, digits: int = 9) -> str:
     return _plain(round(float(value), decimals), decimals)
 
 
+def _up(value: float) -> str:
+    """A bound as 3 significant digits rounded up (a stated error never understates)."""
+    if value <= 0.0:
+        return "0"
+    scale = 10.0 ** (math.floor(math.log10(value)) - 2)
+    return f"{math.ceil(value / scale) * scale:.3g}"
+
+
 def _area(value_m2: float) -> str:
     """An area as ``NUMBER UNIT`` with 1 <= NUMBER < 1e6 in one of CalcMySky's units."""
     for unit, scale in (
@@ -213,7 +221,7 @@ def phase_glsl_body(name: str, values: np.ndarray, wavelength_nm: np.ndarray, er
             f"    // sphere] at {n_sets} sets of 4 wavelengths ({wavelength_nm[0]:g}-"
             f"{wavelength_nm[-1]:g} nm), {n} nodes theta_j = 180 (j/{n - 1})^2 deg per set,",
             "    // linear in sqrt(theta) between nodes; largest relative difference from the",
-            f"    // table's own interpolation {error:.3g}.",
+            f"    // table's own interpolation {_up(error)}.",
             f"    const int N = {n};",
             f"    const vec4 P[{n_sets * n}] = vec4[{n_sets * n}](",
             f"        {body});",
@@ -334,7 +342,10 @@ def calcmysky_scatterer(
     ]
     if tabulated:
         nodes = _nodes_deg(n_nodes)
-        values = _phase_rows(table, wavelength_nm, nodes)
+        # The values as the file holds them (7 significant digits), so the stated error is the file's.
+        values = np.array(
+            [[float(f"{v:.7g}") for v in row] for row in _phase_rows(table, wavelength_nm, nodes)]
+        )
         theta = np.asarray(table.theta_deg, dtype=np.float64)
         exact = _phase_rows(table, wavelength_nm, theta)
         got = calcmysky_phase_lookup(values, theta)
