@@ -81,6 +81,7 @@ __all__ = [
     "channel_phase",
     "channel_weights",
     "cmf_cie1931",
+    "delta_e_ciede2000",
     "linear_srgb_to_xyz",
     "rgb_to_xyz_matrix",
     "single_scattering_residual",
@@ -88,6 +89,7 @@ __all__ = [
     "spectrum_to_xyz",
     "srgb_encode",
     "xyz_to_display",
+    "xyz_to_lab",
     "xyz_to_linear_srgb",
     "xyz_weights",
 ]
@@ -778,3 +780,85 @@ def single_scattering_residual(
         max_relative_error=float(worst.max()),
         median_relative_error=float(np.median(worst)),
     )
+
+
+def xyz_to_lab(xyz: Any, white_xyz: Any) -> np.ndarray:
+    """CIE 1976 L*a*b* of CIE XYZ relative to a reference white (CIE 15:2004, Eq. 8.1-8.3).
+
+    ``L* = 116 f(Y/Yn) - 16``, ``a* = 500 (f(X/Xn) - f(Y/Yn))``,
+    ``b* = 200 (f(Y/Yn) - f(Z/Zn))``, with ``f(t) = t^(1/3)`` above
+    ``(6/29)^3`` and ``t / (3 (6/29)^2) + 4/29`` below.  Last axis X, Y, Z;
+    ``white_xyz`` broadcasts against ``xyz``.
+
+    >>> xyz_to_lab([0.95047, 1.0, 1.08883], [0.95047, 1.0, 1.08883]).round(6).tolist()
+    [100.0, 0.0, 0.0]
+    """
+    values = as_float_array("xyz", xyz)
+    white = as_float_array("white_xyz", white_xyz)
+    if values.ndim == 0 or values.shape[-1] != 3:
+        raise ValueError(f"xyz must have X, Y, Z on its last axis; got shape {values.shape}")
+    if white.ndim == 0 or white.shape[-1] != 3 or not np.all(white > 0):
+        raise ValueError(f"white_xyz must be three positive values on its last axis; got {white!r}")
+    t = values / white
+    delta = 6.0 / 29.0
+    f = np.where(t > delta**3, np.cbrt(np.maximum(t, delta**3)), t / (3 * delta**2) + 4.0 / 29.0)
+    return np.stack(
+        [
+            116.0 * f[..., 1] - 16.0,
+            500.0 * (f[..., 0] - f[..., 1]),
+            200.0 * (f[..., 1] - f[..., 2]),
+        ],
+        axis=-1,
+    )
+
+
+def delta_e_ciede2000(lab1: Any, lab2: Any) -> np.ndarray:
+    """CIE Delta E 2000 colour difference of two L*a*b* colours (last axis L, a, b). [-]
+
+    The formula of CIE 142-2001 as written out, with its worked pairs, by
+    G. Sharma, W. Wu and E. N. Dalal, "The CIEDE2000 color-difference formula:
+    implementation notes, supplementary test data, and mathematical
+    observations," Color Res. Appl. 30(1), 21-30 (2005), doi:10.1002/col.20070
+    (parametric factors kL = kC = kH = 1; hue mean and difference as in their
+    Eq. 10-14).
+    """
+    a = as_float_array("lab1", lab1)
+    b = as_float_array("lab2", lab2)
+    if a.shape[-1:] != (3,) or b.shape[-1:] != (3,):
+        raise ValueError("lab1 and lab2 must have L, a, b on their last axis")
+    l1, a1, b1 = a[..., 0], a[..., 1], a[..., 2]
+    l2, a2, b2 = b[..., 0], b[..., 1], b[..., 2]
+    c_bar = 0.5 * (np.hypot(a1, b1) + np.hypot(a2, b2))
+    g = 0.5 * (1.0 - np.sqrt(c_bar**7 / (c_bar**7 + 25.0**7)))
+    a1p, a2p = (1.0 + g) * a1, (1.0 + g) * a2
+    c1p, c2p = np.hypot(a1p, b1), np.hypot(a2p, b2)
+    h1p = np.degrees(np.arctan2(b1, a1p)) % 360.0
+    h2p = np.degrees(np.arctan2(b2, a2p)) % 360.0
+    dl = l2 - l1
+    dc = c2p - c1p
+    zero = c1p * c2p == 0.0
+    dh = h2p - h1p
+    dh = np.where(dh > 180.0, dh - 360.0, np.where(dh < -180.0, dh + 360.0, dh))
+    dh = np.where(zero, 0.0, dh)
+    dhh = 2.0 * np.sqrt(c1p * c2p) * np.sin(np.radians(dh) / 2.0)
+    l_bar = 0.5 * (l1 + l2)
+    cp_bar = 0.5 * (c1p + c2p)
+    hsum = h1p + h2p
+    far = np.abs(h1p - h2p) > 180.0
+    h_bar = np.where(far, np.where(hsum < 360.0, hsum + 360.0, hsum - 360.0), hsum) / 2.0
+    h_bar = np.where(zero, hsum, h_bar)
+    t = (
+        1.0
+        - 0.17 * np.cos(np.radians(h_bar - 30.0))
+        + 0.24 * np.cos(np.radians(2.0 * h_bar))
+        + 0.32 * np.cos(np.radians(3.0 * h_bar + 6.0))
+        - 0.20 * np.cos(np.radians(4.0 * h_bar - 63.0))
+    )
+    d_theta = 30.0 * np.exp(-(((h_bar - 275.0) / 25.0) ** 2))
+    r_c = 2.0 * np.sqrt(cp_bar**7 / (cp_bar**7 + 25.0**7))
+    s_l = 1.0 + 0.015 * (l_bar - 50.0) ** 2 / np.sqrt(20.0 + (l_bar - 50.0) ** 2)
+    s_c = 1.0 + 0.045 * cp_bar
+    s_h = 1.0 + 0.015 * cp_bar * t
+    r_t = -np.sin(np.radians(2.0 * d_theta)) * r_c
+    tl, tc, th = dl / s_l, dc / s_c, dhh / s_h
+    return np.sqrt(tl**2 + tc**2 + th**2 + r_t * tc * th)

@@ -36,6 +36,8 @@ from dustoptics.io.registry import formats_needing
 from dustoptics.models.build import TableBuilder, is_config_path
 from dustoptics.models.files import PresetCopyWarning
 from dustoptics.models.presets import DEFAULT_PRESET
+from dustoptics.sky.engines import ENGINES, reference_skies
+from dustoptics.sky.engines.core import write_engine_files
 
 __all__ = ["DEFAULT_FORMATS", "add_parser", "run", "table_builder"]
 
@@ -183,6 +185,12 @@ def run(args: argparse.Namespace) -> int:
 def _check_build_request(args: argparse.Namespace, builder: TableBuilder) -> None:
     """What the formats need and where the files go, checked before the table is computed."""
     formats = args.format or DEFAULT_FORMATS
+    engines = [f for f in formats if f in ENGINES]
+    if engines:
+        raise UsageError(
+            f"--format {','.join(engines)} is fitted to a planet's sky: build a set "
+            f"('{PROG} build mars --dust {args.name} --format {engines[0]}')"
+        )
     config = builder.config
     if not config.phase.uses_mie and args.number_density_per_m3 is not None:
         raise UsageError(
@@ -225,10 +233,11 @@ def _ask_for_needs(name: str, builder: TableBuilder, formats: Sequence[str]) -> 
 
 def _run_set(args: argparse.Namespace) -> int:
     """``build mars|earth|earth-kobe2026``: the set's files in ``DIR/NAME/``."""
-    if args.format is not None and not set(args.format) <= {"cosmoscout", "bruneton"}:
+    if args.format is not None and not set(args.format) <= {"cosmoscout", "bruneton", *ENGINES}:
         raise UsageError(
             f"'build {args.name}' writes CosmoScout VR's atmosphere set (format cosmoscout), and "
-            f"with --format bruneton also Bruneton's model parameters; --format "
+            f"with --format bruneton also Bruneton's model parameters, with --format "
+            f"{','.join(ENGINES)} an engine's parameters fitted to its sky; --format "
             f"{','.join(args.format)} is not available for a set. Build a table "
             "('dustoptics build PRESET --format ...') to get the other formats"
         )
@@ -267,11 +276,20 @@ def _run_set(args: argparse.Namespace) -> int:
         **earth_aerosol,
     )
     bruneton = args.format is not None and "bruneton" in args.format
+    engines = [f for f in args.format or () if f in ENGINES]
+    skies = reference_skies(atm) if engines else ()
     out_dir = args.out / args.name
-    placed = place_outputs(
-        lambda directory: write_atmosphere_set(
+
+    def write(directory: Path) -> list[Path]:
+        written = write_atmosphere_set(
             atm, directory, inputs=inputs, bruneton=bruneton, final_directory=out_dir
-        ),
+        )
+        for name in engines:
+            written += write_engine_files(name, atm, directory, skies=skies)
+        return written
+
+    placed = place_outputs(
+        write,
         out_dir,
         force=args.force,
         same=same_table,
