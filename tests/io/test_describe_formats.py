@@ -39,11 +39,6 @@ FIRST_WORDS = {
     ".raw": "texture:",
     "_float32.json": "texture:",
     "_theta.json": "texture:",
-    "_bevy.json": "Bevy ScatteringMedium:",
-    "_bevy_medium.rs": "Bevy ScatteringMedium (Rust):",
-    "_openspace_mie.asset": "OpenSpace asset:",
-    "_celestia.ssc": "Celestia ssc:",
-    "_calcmysky_scatterer.atmo": "CalcMySky description:",
 }
 
 
@@ -104,7 +99,7 @@ def test_shader_descriptions_give_the_sampling_rule(every_format: Path) -> None:
 
 def test_texture_containers_carry_their_metadata(every_format: Path) -> None:
     for suffix in (".exr", ".ktx2"):
-        (path,) = every_format.glob(f"*_phase_*{suffix}")
+        (path,) = every_format.glob(f"*{suffix}")
         text = describe_path(path)
         assert "sampling:        column j (0..720) at theta_j = 180 j / 720 deg" in text
         assert "sphere integral of the samples:" in text

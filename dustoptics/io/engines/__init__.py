@@ -13,9 +13,10 @@
   (:func:`~dustoptics.io.engines.fit.write_fit`).
 - :mod:`~dustoptics.io.engines.bevy`, :mod:`~dustoptics.io.engines.openspace`,
   :mod:`~dustoptics.io.engines.celestia`, :mod:`~dustoptics.io.engines.calcmysky`: the
-  ``bevy`` (ScatteringMedium terms and a phase texture in Bevy's column order),
-  ``openspace`` (an ``.asset`` atmosphere table), ``celestia`` (an ``.ssc`` atmosphere
-  block) and ``calcmysky`` (an ``.atmo`` file with its GLSL phase block) formats.
+  files of Bevy (ScatteringMedium terms and a phase texture in Bevy's column order),
+  OpenSpace (an ``.asset`` atmosphere table), Celestia (an ``.ssc`` atmosphere block)
+  and CalcMySky (an ``.atmo`` file with its GLSL phase block); their formats, fitted to
+  a set's sky, are :mod:`dustoptics.sky.engines`'.
 """
 
 from __future__ import annotations

@@ -35,7 +35,8 @@ Read from Bevy's source at :data:`BEVY_SOURCE` (``crates/bevy_light/src/atmosphe
 - ``ExrTextureLoader`` decodes any OpenEXR to ``Rgba32Float`` (A = 1 when
   absent); the KTX2 loader takes ``VK_FORMAT_R32G32B32A32_SFLOAT``.
 
-Files (:func:`write_bevy` for a set, the ``bevy`` format for one aerosol table):
+Files (:func:`write_bevy`; ``dustoptics build mars|earth --format bevy`` through
+:mod:`dustoptics.sky.engines.bevy`):
 ``NAME_bevy_phase.ktx2`` and ``NAME_bevy_phase.exr`` (the texture, float32 RGBA,
 first column 180 deg), ``NAME_bevy_medium.rs`` (a Rust function returning the
 ``ScatteringMedium`` and one returning the ``Atmosphere``) and ``NAME_bevy.json``
@@ -67,8 +68,6 @@ from dustoptics.atmosphere.column import (
 )
 from dustoptics.io._atomic import Content, FormatError, safe_stem, write_files
 from dustoptics.io.engines._channels import ChannelCoefficients, channel_coefficients, lua_number
-from dustoptics.io.registry import Format, option, register
-from dustoptics.io.shaders.common import ChannelOptions
 from dustoptics.io.textures.exr import _writer as _exr_writer
 from dustoptics.io.textures.ktx2 import ktx2_bytes
 from dustoptics.io.textures.phase_texture import PhaseTexture, phase_texture
@@ -76,7 +75,6 @@ from dustoptics.io.textures.phase_texture import PhaseTexture, phase_texture
 __all__ = [
     "BEVY_SOURCE",
     "BevyMedium",
-    "BevyOptions",
     "BevyTerm",
     "bevy_falloff",
     "bevy_lut_phase",
@@ -673,119 +671,3 @@ def write_bevy(
     return write_files(
         _files(bevy_medium(atmosphere, **options), Path(out_dir)), overwrite=overwrite
     )
-
-
-@dataclass(frozen=True)
-class BevyOptions(ChannelOptions):
-    """Options of the ``bevy`` format.
-
-    Attributes
-    ----------
-    bevy_columns : int, optional
-        Width of the phase texture (default 1024).
-    bevy_scale_height_m, bevy_atmosphere_height_m : float, optional
-        The dust term's exponential falloff ``scale = H / height`` (defaults 11100 m,
-        the Mars set's dust, and 120000 m, Bevy's ``Atmosphere::mars``). [m]
-    """
-
-    bevy_columns: int | None = option(
-        help="Bevy: columns of the phase texture (default 1024)", type="positive_int", metavar="N"
-    )
-    bevy_scale_height_m: float | None = option(
-        help="Bevy: scale height of the aerosol term's falloff [m] (default 11100)",
-        type="positive_float",
-    )
-    bevy_atmosphere_height_m: float | None = option(
-        help="Bevy: outer_radius - inner_radius the falloff is relative to [m] (default 120000)",
-        type="positive_float",
-    )
-
-
-def _write_bevy_table(
-    table: Any,
-    out_dir: Any,
-    *,
-    overwrite: bool = False,
-    channels_nm: Any = None,
-    colour: str | None = None,
-    bevy_columns: int | None = None,
-    bevy_scale_height_m: float | None = None,
-    bevy_atmosphere_height_m: float | None = None,
-    **_: Any,
-) -> list[Path]:
-    """The ``bevy`` format of one aerosol table: its term and phase texture."""
-    height = 120000.0 if bevy_atmosphere_height_m is None else float(bevy_atmosphere_height_m)
-    scale_height = 11100.0 if bevy_scale_height_m is None else float(bevy_scale_height_m)
-    n = DEFAULT_COLUMNS if bevy_columns is None else int(bevy_columns)
-    coeff = channel_coefficients(table, channels_nm=channels_nm, colour=colour)
-    texture = bevy_phase_texture(table, n_columns=n, channels_nm=channels_nm, colour=colour)
-    term = _term(
-        "aerosols",
-        coeff,
-        table,
-        ExponentialProfile(scale_height_m=scale_height),
-        height,
-        "texture",
-        channels_nm,
-        colour,
-    )
-    stem = safe_stem(table.name)
-    medium = BevyMedium(
-        name=table.name,
-        inner_radius_m=3_389_500.0,
-        outer_radius_m=3_389_500.0 + height,
-        ground_albedo=0.1,
-        terms=(term,),
-        channels={"names": list(coeff.names), "wavelength_nm": coeff.wavelength_nm.tolist()},
-        texture=texture,
-        texture_file=f"{stem}_bevy_phase",
-        notes=(
-            f"aerosols: table {table.name!r}, input hash {table.provenance.input_hash}, "
-            f"number density {table.cross_sections.number_density_per_m3:g} m^-3, exponential "
-            f"scale height {scale_height:g} m over an atmosphere {height:g} m high; radii: "
-            "Bevy's Atmosphere::mars",
-        ),
-    )
-    return write_files(_files(medium, Path(out_dir)), overwrite=overwrite)
-
-
-def _is_bevy(path: Path) -> bool:
-    return path.name.endswith(("_bevy.json", "_bevy_medium.rs"))
-
-
-def _describe_bevy(path: Path, full: bool = True) -> str:
-    if path.suffix == ".rs":
-        head = [
-            ln[3:] for ln in path.read_text(encoding="utf-8").splitlines() if ln.startswith("// ")
-        ]
-        return "\n".join([f"Bevy ScatteringMedium (Rust): {path.name}", *[f"  {h}" for h in head]])
-    try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-        lines = [
-            f"Bevy ScatteringMedium: {path.name} ({data['name']})",
-            f"source read:     {data['source_read']}",
-            f"channels:        {', '.join(data['channels']['names'])}",
-        ]
-        for term in data["terms"]:
-            lines.append(
-                f"  {term['name']}: scattering {term['scattering']} m^-1, absorption "
-                f"{term['absorption']} m^-1, falloff {next(iter(term['falloff']))}"
-            )
-    except (ValueError, KeyError, TypeError, StopIteration):
-        raise FormatError(f"{str(path)!r}: a damaged Bevy file") from None
-    return "\n".join(lines)
-
-
-RECORD = register(
-    Format(
-        name="bevy",
-        summary="Bevy: NAME_bevy_phase.ktx2/.exr (first column 180 deg), _bevy_medium.rs, "
-        "_bevy.json (needs N0)",
-        write=_write_bevy_table,
-        suffixes=(".ktx2", ".exr", ".rs", ".json"),
-        options=BevyOptions,
-        needs=frozenset({"cross_sections", "number_density"}),
-        recognise=_is_bevy,
-        describe=_describe_bevy,
-    )
-)

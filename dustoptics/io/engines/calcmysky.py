@@ -34,9 +34,8 @@ table's.  Settings (texture sizes, integration points, scattering orders):
 ``examples/mars.atmo``'s.  Solar irradiance: ASTM G173 (the source mars.atmo
 names) times (1 au / distance)^2.
 
-For one aerosol table (the ``calcmysky`` format): ``NAME_calcmysky_scatterer.atmo``,
-the ``Scatterer`` block alone, to paste into a description with the same
-wavelengths.
+``dustoptics build mars|earth --format calcmysky`` writes ``NAME_calcmysky.atmo``
+through :mod:`dustoptics.sky.engines.calcmysky`.
 """
 
 from __future__ import annotations
@@ -56,8 +55,7 @@ from dustoptics.atmosphere.column import (
     PiecewiseLinearProfile,
 )
 from dustoptics.colour import solar_irradiance_astm_g173
-from dustoptics.io._atomic import FormatError, safe_stem, write_files
-from dustoptics.io.registry import Format, option, register
+from dustoptics.io._atomic import safe_stem, write_files
 
 __all__ = [
     "CALCMYSKY_SOURCE",
@@ -478,79 +476,3 @@ def write_calcmysky(
     path = Path(out_dir) / f"{safe_stem(atmosphere.name)}_calcmysky.atmo"
     text = calcmysky_atmo(atmosphere, **options)
     return write_files({path: text.encode("utf-8")}, overwrite=overwrite)
-
-
-@dataclass(frozen=True)
-class CalcMySkyOptions:
-    """Options of the ``calcmysky`` format.
-
-    Attributes
-    ----------
-    calcmysky_scale_height_m : float, optional
-        The aerosols' exponential scale height (default 11100 m, the Mars set's dust). [m]
-    """
-
-    calcmysky_scale_height_m: float | None = option(
-        help="CalcMySky: scale height of the aerosols' number density [m] (default 11100)",
-        type="positive_float",
-    )
-
-
-def _write_calcmysky_table(
-    table: Any,
-    out_dir: Any,
-    *,
-    overwrite: bool = False,
-    calcmysky_scale_height_m: float | None = None,
-    **_: Any,
-) -> list[Path]:
-    """The ``calcmysky`` format of one aerosol table: its ``Scatterer`` block."""
-    h = 11100.0 if calcmysky_scale_height_m is None else float(calcmysky_scale_height_m)
-    wl, same = calcmysky_wavelengths(table.wavelength_nm)
-    s = calcmysky_scatterer(
-        "aerosols",
-        table,
-        ExponentialProfile(scale_height_m=h),
-        wl,
-        top_m=120000.0,
-        tabulated=True,
-    )
-    head = [
-        f"# dustoptics: aerosol table {table.name!r} as a CalcMySky Scatterer block.",
-        f"# CalcMySky source read: {CALCMYSKY_SOURCE}.",
-        f"# For a description with wavelengths: min={_plain(wl[0])}nm,max={_plain(wl[-1])}nm,"
-        f"count={wl.size}"
-        + ("" if same else " (the table's phase rows interpolated linearly in wavelength)"),
-        f"# number density: the table's, times exp(-altitude / {h:g} m)",
-    ]
-    path = Path(out_dir) / f"{safe_stem(table.name)}_calcmysky_scatterer.atmo"
-    text = "\n".join([*head, s.text()]) + "\n"
-    return write_files({path: text.encode("utf-8")}, overwrite=overwrite)
-
-
-def _is_calcmysky(path: Path) -> bool:
-    return path.name.endswith(("_calcmysky.atmo", "_calcmysky_scatterer.atmo"))
-
-
-def _describe_calcmysky(path: Path, full: bool = True) -> str:
-    try:
-        text = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise FormatError(f"{str(path)!r}: not readable ({exc})") from None
-    head = [ln[2:] for ln in text.splitlines()[:8] if ln.startswith("# ")]
-    return "\n".join([f"CalcMySky description: {path.name}", *[f"  {h}" for h in head]])
-
-
-RECORD = register(
-    Format(
-        name="calcmysky",
-        summary="CalcMySky/ShowMySky: NAME_calcmysky_scatterer.atmo, a Scatterer block with the "
-        "tabulated GLSL phase function (needs N0)",
-        write=_write_calcmysky_table,
-        suffixes=(".atmo",),
-        options=CalcMySkyOptions,
-        needs=frozenset({"cross_sections", "number_density"}),
-        recognise=_is_calcmysky,
-        describe=_describe_calcmysky,
-    )
-)

@@ -30,9 +30,9 @@ set to 0 and said); ``MieHGAnisotropy`` = a Henyey-Greenstein fit at 550 nm
 unless given (Celestia turns it into Schlick's k).
 
 Files: ``NAME_celestia.ssc``, a ``Modify "Mars" "Sol"`` (or ``"Earth"``) entry that
-only replaces the scattering keys (put it in Celestia's ``extras`` folder); for
-one aerosol table (the ``celestia`` format) the same with ``Mie``,
-``MieScaleHeight``, ``MieHGAnisotropy`` and ``Absorption`` of the dust alone.
+only replaces the scattering keys (put it in Celestia's ``extras`` folder);
+``dustoptics build mars|earth --format celestia`` writes it through
+:mod:`dustoptics.sky.engines.celestia`.
 """
 
 from __future__ import annotations
@@ -45,10 +45,9 @@ from typing import Any
 
 import numpy as np
 
-from dustoptics.io._atomic import FormatError, safe_stem, write_files
+from dustoptics.io._atomic import safe_stem, write_files
 from dustoptics.io.engines._channels import channel_coefficients, lua_number
 from dustoptics.io.engines.openspace import _scale_height_km
-from dustoptics.io.registry import Format, option, register
 from dustoptics.scattering.fit import fit_table
 
 __all__ = [
@@ -265,82 +264,3 @@ def write_celestia(
     p = parameters if parameters is not None else celestia_parameters(atmosphere, **options)
     path = Path(out_dir) / f"{safe_stem(atmosphere.name)}_celestia.ssc"
     return write_files({path: celestia_ssc(p).encode("utf-8")}, overwrite=overwrite)
-
-
-@dataclass(frozen=True)
-class CelestiaOptions:
-    """Options of the ``celestia`` format.
-
-    Attributes
-    ----------
-    celestia_scale_height_m : float, optional
-        ``MieScaleHeight`` of the aerosol table (default 11100 m, the Mars set's dust). [m]
-    """
-
-    celestia_scale_height_m: float | None = option(
-        help="Celestia: MieScaleHeight of the aerosols [m] (default 11100)", type="positive_float"
-    )
-
-
-def _write_celestia_table(
-    table: Any,
-    out_dir: Any,
-    *,
-    overwrite: bool = False,
-    celestia_scale_height_m: float | None = None,
-    **_: Any,
-) -> list[Path]:
-    """The ``celestia`` format of one aerosol table: Mars' dust keys only."""
-    h = 11100.0 if celestia_scale_height_m is None else float(celestia_scale_height_m)
-    c = channel_coefficients(table, channels_nm=CELESTIA_CHANNELS_NM)
-    g, rms = hg_g(table)
-    notes = [
-        f"aerosols: {table.name!r} ({table.provenance.input_hash}), number density "
-        f"{table.cross_sections.number_density_per_m3:g} m^-3; MieScaleHeight given ({h:g} m)",
-        f"MieHGAnisotropy: Henyey-Greenstein fit at 550 nm, rms relative error {rms:.3g}",
-        "Rayleigh is left as the body has it",
-    ]
-    mie = float(c.scattering_per_m[1]) * 1000.0
-    absorption = _absorption(c.extinction_per_m * 1000.0, mie, notes)
-    p = CelestiaAtmosphere(
-        name=table.name,
-        body="Mars",
-        parent="Sol",
-        height_km=None,
-        mie_per_km=mie,
-        mie_scale_height_km=h / 1000.0,
-        mie_hg_anisotropy=g,
-        rayleigh_per_km=None,
-        absorption_per_km=(absorption[0], absorption[1], absorption[2]),
-        notes=tuple(notes),
-    )
-    path = Path(out_dir) / f"{safe_stem(table.name)}_celestia.ssc"
-    return write_files({path: celestia_ssc(p).encode("utf-8")}, overwrite=overwrite)
-
-
-def _is_celestia(path: Path) -> bool:
-    return path.name.endswith("_celestia.ssc")
-
-
-def _describe_celestia(path: Path, full: bool = True) -> str:
-    try:
-        text = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise FormatError(f"{str(path)!r}: not readable ({exc})") from None
-    head = [ln[2:] for ln in text.splitlines() if ln.startswith("# ")]
-    return "\n".join([f"Celestia ssc: {path.name}", *[f"  {h}" for h in head]])
-
-
-RECORD = register(
-    Format(
-        name="celestia",
-        summary="Celestia: NAME_celestia.ssc, a Modify entry with the dust's Atmosphere keys "
-        "(needs N0)",
-        write=_write_celestia_table,
-        suffixes=(".ssc",),
-        options=CelestiaOptions,
-        needs=frozenset({"cross_sections", "number_density"}),
-        recognise=_is_celestia,
-        describe=_describe_celestia,
-    )
-)

@@ -28,9 +28,8 @@ length).  ``SunIntensity``, ``GroundRadianceEmission`` and the ground
 reflectance are OpenSpace's own Mars and Earth values (rendering choices, not
 physics).
 
-Files: ``NAME_openspace.asset`` for a set (:func:`write_openspace`), and for
-one aerosol table (the ``openspace`` format) ``NAME_openspace_mie.asset``, which
-exports its ``Mie`` table (``asset.require`` it and set ``Mie = dust.Mie``).
+Files: ``NAME_openspace.asset`` for a set (:func:`write_openspace`; ``dustoptics
+build mars|earth --format openspace`` through :mod:`dustoptics.sky.engines.openspace`).
 """
 
 from __future__ import annotations
@@ -44,9 +43,8 @@ from typing import Any
 import numpy as np
 
 from dustoptics.atmosphere.column import ExponentialProfile, FixedFractionProfile
-from dustoptics.io._atomic import FormatError, safe_stem, write_files
+from dustoptics.io._atomic import safe_stem, write_files
 from dustoptics.io.engines._channels import channel_coefficients, lua_number
-from dustoptics.io.registry import Format, option, register
 from dustoptics.scattering.fit import fit_table
 
 __all__ = [
@@ -355,82 +353,3 @@ def write_openspace(
     p = parameters if parameters is not None else openspace_parameters(atmosphere, **options)
     path = Path(out_dir) / f"{safe_stem(atmosphere.name)}_openspace.asset"
     return write_files({path: openspace_asset(p).encode("utf-8")}, overwrite=overwrite)
-
-
-@dataclass(frozen=True)
-class OpenSpaceOptions:
-    """Options of the ``openspace`` format.
-
-    Attributes
-    ----------
-    openspace_scale_height_m : float, optional
-        ``H_M`` of the aerosol table (default 11100 m, the Mars set's dust). [m]
-    """
-
-    openspace_scale_height_m: float | None = option(
-        help="OpenSpace: H_M of the aerosols [m] (default 11100)", type="positive_float"
-    )
-
-
-def _write_openspace_table(
-    table: Any,
-    out_dir: Any,
-    *,
-    overwrite: bool = False,
-    openspace_scale_height_m: float | None = None,
-    **_: Any,
-) -> list[Path]:
-    """The ``openspace`` format of one aerosol table: an asset exporting its ``Mie`` table."""
-    h = 11100.0 if openspace_scale_height_m is None else float(openspace_scale_height_m)
-    c = channel_coefficients(table, channels_nm=OPENSPACE_CHANNELS_NM)
-    g, rms = cornette_shanks_g(table)
-    if not -1.0 < g < 1.0:
-        raise ValueError(f"the fitted Cornette-Shanks g {g!r} is outside OpenSpace's (-1, 1)")
-    notes = (
-        f"aerosols: {table.name!r} ({table.provenance.input_hash}), number density "
-        f"{table.cross_sections.number_density_per_m3:g} m^-3; H_M given ({h:g} m)",
-        f"G: Cornette-Shanks fit at 550 nm, rms relative error {rms:.3g}",
-        "Use: local dust = asset.require('./<this file without .asset>'); then in the "
-        "RenderableAtmosphere, Mie = dust.Mie",
-    )
-    sca = _triple(c.scattering_per_m * 1000.0)
-    ext = _triple(c.extinction_per_m * 1000.0)
-    text = "\n".join(
-        [
-            *_comment(table.name, notes, "aerosol table"),
-            "local Mie = {",
-            *_mie_block(sca, ext, h / 1000.0, g, "  ")[1:],
-            "",
-            'asset.export("Mie", Mie)',
-        ]
-    )
-    path = Path(out_dir) / f"{safe_stem(table.name)}_openspace_mie.asset"
-    return write_files({path: (text + "\n").encode("utf-8")}, overwrite=overwrite)
-
-
-def _is_openspace(path: Path) -> bool:
-    return path.name.endswith(("_openspace.asset", "_openspace_mie.asset"))
-
-
-def _describe_openspace(path: Path, full: bool = True) -> str:
-    try:
-        text = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise FormatError(f"{str(path)!r}: not readable ({exc})") from None
-    head = [ln[3:] for ln in text.splitlines() if ln.startswith("-- ")]
-    return "\n".join([f"OpenSpace asset: {path.name}", *[f"  {h}" for h in head]])
-
-
-RECORD = register(
-    Format(
-        name="openspace",
-        summary="OpenSpace: NAME_openspace_mie.asset, the Mie table of a RenderableAtmosphere "
-        "(needs N0)",
-        write=_write_openspace_table,
-        suffixes=(".asset",),
-        options=OpenSpaceOptions,
-        needs=frozenset({"cross_sections", "number_density"}),
-        recognise=_is_openspace,
-        describe=_describe_openspace,
-    )
-)

@@ -11,7 +11,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from cli._cli import config_fixture, run_build  # noqa: F401 (fixture config)
 
 from dustoptics.atmosphere import sets as atm
 from dustoptics.io.engines.bevy import (
@@ -284,18 +283,3 @@ def test_bevys_own_mars_texture_reads_like_ours() -> None:
     assert cols.shape == (1024, 4)
     # Its first column is backscattering too: the forward end is far larger.
     assert np.all(cols[-1, :3] > 10.0 * cols[0, :3])
-
-
-def test_bevy_format_through_the_command_line(config, tmp_path) -> None:
-    out = tmp_path / "out"
-    assert run_build(config, out, "--format", "bevy", "--number-density-per-m3", "1e8") == 0
-    names = sorted(p.name for p in (out / "small-dust").iterdir() if "bevy" in p.name)
-    assert names == [
-        "small-dust_bevy.json",
-        "small-dust_bevy_medium.rs",
-        "small-dust_bevy_phase.exr",
-        "small-dust_bevy_phase.ktx2",
-    ]
-    data = json.loads((out / "small-dust" / "small-dust_bevy.json").read_text())
-    (term,) = data["terms"]
-    assert term["falloff"] == {"Exponential": {"scale": 11100.0 / 120000.0}}

@@ -12,7 +12,6 @@ from typing import Any
 
 import numpy as np
 import pytest
-from cli._cli import config_fixture, run_build  # noqa: F401 (fixture config)
 
 from dustoptics.atmosphere import sets as atm
 from dustoptics.io.engines.calcmysky import (
@@ -400,17 +399,3 @@ def test_calcmysky_earth_has_its_ozone_absorber(earth) -> None:
     ozone = parsed["absorbers"]["ozone"]
     assert len(ozone["cross section"].split(",")) == 16
     assert "if(altitude <" in ozone["number density"]
-
-
-def test_the_three_formats_through_the_command_line(config, tmp_path) -> None:
-    out = tmp_path / "out"
-    formats = "openspace,celestia,calcmysky"
-    assert run_build(config, out, "--format", formats, "--number-density-per-m3", "1e8") == 0
-    folder = out / "small-dust"
-    mie = parse_lua_local((folder / "small-dust_openspace_mie.asset").read_text(), "Mie")
-    assert mie["H_M"] == 11.1 and len(mie["Coefficients"]["Scattering"]) == 3
-    (entry,) = parse_ssc((folder / "small-dust_celestia.ssc").read_text())
-    assert set(entry["Atmosphere"]) == {"Mie", "MieScaleHeight", "MieHGAnisotropy", "Absorption"}
-    text = (folder / "small-dust_calcmysky_scatterer.atmo").read_text()
-    block = parse_atmo("version: 6\n" + text)["scatterers"]["aerosols"]
-    assert block["phase function type"] == "general"
