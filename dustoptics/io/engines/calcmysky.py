@@ -44,6 +44,7 @@ import math
 import os
 from dataclasses import dataclass
 from pathlib import Path
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -385,6 +386,7 @@ def calcmysky_atmo(
     ground_albedo: float = 0.1,
     n_nodes: int = DEFAULT_NODES,
     moon_distance_km: float | None = None,
+    notes: Sequence[str] = (),
 ) -> str:
     """The ``.atmo`` description of an atmosphere set (see the module docstring).
 
@@ -398,6 +400,8 @@ def calcmysky_atmo(
     moon_distance_km : float, optional
         ``Earth-Moon distance`` (default: the Moon's 384400 km for Earth, Deimos'
         23460 km for Mars, as examples/mars.atmo). [km]
+    notes : sequence of str
+        More comment lines for the header (e.g. the sky error).
     """
     wl, same = calcmysky_wavelengths(atmosphere.wavelength_nm)
     top = float(atmosphere.atmosphere_radius_m - atmosphere.planet_radius_m)
@@ -409,6 +413,7 @@ def calcmysky_atmo(
         f"# dustoptics: atmosphere {atmosphere.name!r} for CalcMySky/ShowMySky.",
         f"# CalcMySky source read: {CALCMYSKY_SOURCE}.",
         "# Settings (texture sizes, integration points, orders): examples/mars.atmo's.",
+        *[f"# {n}" for n in notes],
         "# Wavelengths: "
         + (
             "the tables' own."

@@ -61,7 +61,7 @@ it, and one import line below.
 
 from __future__ import annotations
 
-from dustoptics.sky.engines import celestia, core, threejs
+from dustoptics.sky.engines import calcmysky, celestia, core, threejs
 from dustoptics.sky.engines.core import (
     ENGINES,
     EngineFit,
@@ -82,6 +82,7 @@ __all__ = [
     "Parameter",
     "ReferenceSky",
     "SkyError",
+    "calcmysky",
     "celestia",
     "core",
     "fit_engine",
