@@ -193,8 +193,8 @@ def write_calcmysky_fit(fit: EngineFit, out_dir: Any, *, overwrite: bool = False
     if key not in _ORIGINAL:
         raise ValueError("a CalcMySky file is written from the set its fit was made for")
     notes = [
-        f"Sky error of this description against the exact spectral sky (CIE Delta E 2000 over "
-        f"the dome, mean / 95th pct): "
+        "Sky error of this description against the exact spectral sky (CIE Delta E 2000 over "
+        "the dome, mean / 95th pct): "
         + "; ".join(
             f"Sun {e.sun_elevation_deg:g} deg {e.delta_e_mean:.2f} / {e.delta_e_p95:.2f}"
             for e in fit.errors
