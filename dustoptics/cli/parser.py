@@ -37,6 +37,7 @@ _COMMAND_MODULES = (
     "sweep",
     "sky",
     "retrieve",
+    "engines",
 )
 
 

@@ -61,7 +61,7 @@ it, and one import line below.
 
 from __future__ import annotations
 
-from dustoptics.sky.engines import calcmysky, celestia, core, threejs
+from dustoptics.sky.engines import calcmysky, celestia, core, godot, threejs, unity, unreal
 from dustoptics.sky.engines.core import (
     ENGINES,
     EngineFit,
@@ -86,8 +86,11 @@ __all__ = [
     "celestia",
     "core",
     "fit_engine",
+    "godot",
     "reference_skies",
     "register_engine",
     "sky_error",
     "threejs",
+    "unity",
+    "unreal",
 ]

@@ -22,6 +22,7 @@ from dustoptics.sky.medium import Medium
 from dustoptics.sky.scene import sky_radiance, sunlit_xyz
 
 __all__ = [
+    "CHANNELS_NM",
     "DOME_AZIMUTH_DEG",
     "DOME_ZENITH_DEG",
     "ENGINES",
@@ -33,10 +34,13 @@ __all__ = [
     "Parameter",
     "ReferenceSky",
     "SkyError",
+    "channel_values",
+    "dust_tint_linear_srgb",
     "engine_xyz",
     "fit_engine",
     "reference_skies",
     "register_engine",
+    "scale_height_m",
     "sky_error",
     "sunlight_linear_srgb",
     "write_engine_files",
@@ -181,6 +185,42 @@ def sunlight_linear_srgb() -> np.ndarray:
     wl = np.arange(360.0, 831.0, 10.0)
     xyz = sunlit_xyz(wl, np.ones(wl.size))
     return colour.xyz_to_linear_srgb(xyz / xyz[1])
+
+
+#: The engines' three channels, R, G, B: the wavelengths at which a set's coefficients start
+#: a fit (Bruneton's kLambdaR/G/B, :data:`dustoptics.sky.approximations.ENGINE_CHANNELS_NM`). [nm]
+CHANNELS_NM: Final = (680.0, 550.0, 440.0)
+
+
+def channel_values(atmosphere: Atmosphere, role: str, quantity: str) -> np.ndarray:
+    """A constituent's per-wavelength quantity (``"beta_sca_per_m"``, ``"beta_abs_per_m"``,
+    ``"g"``) read linearly at :data:`CHANNELS_NM`; zeros if the set has no such role."""
+    found = [c for c in atmosphere.constituents if c.role == role]
+    if not found:
+        return np.zeros(3)
+    table = found[0].table
+    values = np.asarray(getattr(table, quantity), dtype=float)
+    return np.interp(CHANNELS_NM, np.asarray(table.wavelength_nm, dtype=float), values)
+
+
+def scale_height_m(atmosphere: Atmosphere, role: str, default_m: float) -> float:
+    """A constituent's scale height if its profile is exponential, else ``default_m``. [m]"""
+    found = [c for c in atmosphere.constituents if c.role == role]
+    height = getattr(found[0].profile, "scale_height_m", None) if found else None
+    return float(height) if height is not None else default_m
+
+
+def dust_tint_linear_srgb(atmosphere: Atmosphere) -> np.ndarray:
+    """The colour of the light the aerosols scatter: CIE XYZ of ``beta_sca(lambda)`` under
+    sunlight, in linear sRGB scaled to a largest channel of 1 and clipped to [0, 1].
+
+    The tint of the community rows (what a user picks for "dust" when the engine
+    has a colour but no spectrum).
+    """
+    table = atmosphere.constituent("aerosols").table
+    xyz = sunlit_xyz(np.asarray(table.wavelength_nm, dtype=float), table.beta_sca_per_m)
+    rgb = colour.xyz_to_linear_srgb(xyz)
+    return np.asarray(np.clip(rgb / np.max(rgb), 0.0, 1.0))
 
 
 def _white_xyz() -> np.ndarray:
@@ -444,7 +484,7 @@ def fit_engine(
     skies: Sequence[ReferenceSky],
     *,
     kind: str = "fitted",
-    max_evaluations: int = 400,
+    max_evaluations: int = 150,
 ) -> EngineFit:
     """Fit an engine's parameters to the exact skies: least squares of Delta E 2000.
 
