@@ -77,6 +77,7 @@ __all__ = [
     "BevyMedium",
     "BevyTerm",
     "bevy_falloff",
+    "bevy_files",
     "bevy_lut_phase",
     "bevy_medium",
     "bevy_phase_texture",
@@ -631,7 +632,8 @@ def bevy_rust(medium: BevyMedium) -> str:
     return "\n".join(lines) + "\n"
 
 
-def _files(medium: BevyMedium, out_dir: Path) -> dict[Path, Content]:
+def bevy_files(medium: BevyMedium, out_dir: Path) -> dict[Path, Content]:
+    """The four files of a medium (not written): textures, Rust, JSON."""
     stem = safe_stem(medium.name)
     texture = medium.texture
     assert texture is not None
@@ -669,5 +671,5 @@ def write_bevy(
     list of pathlib.Path
     """
     return write_files(
-        _files(bevy_medium(atmosphere, **options), Path(out_dir)), overwrite=overwrite
+        bevy_files(bevy_medium(atmosphere, **options), Path(out_dir)), overwrite=overwrite
     )

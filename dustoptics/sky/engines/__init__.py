@@ -61,7 +61,16 @@ it, and one import line below.
 
 from __future__ import annotations
 
-from dustoptics.sky.engines import calcmysky, celestia, core, godot, threejs, unity, unreal
+from dustoptics.sky.engines import (
+    bevy,
+    calcmysky,
+    celestia,
+    core,
+    godot,
+    threejs,
+    unity,
+    unreal,
+)
 from dustoptics.sky.engines.core import (
     ENGINES,
     EngineFit,
@@ -82,6 +91,7 @@ __all__ = [
     "Parameter",
     "ReferenceSky",
     "SkyError",
+    "bevy",
     "calcmysky",
     "celestia",
     "core",
