@@ -43,6 +43,7 @@ extensions = [
     "argparse_reference",
     "format_table",
     "run_examples",
+    "engine_table",
 ]
 
 # Warnings are errors (-W): references that cannot resolve must be fixed, not hidden.

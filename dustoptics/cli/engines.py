@@ -87,9 +87,14 @@ def run(args: argparse.Namespace) -> int:
             progress=None if args.quiet else sys.stderr,
         )
     print(report.table_text(), end="")
+    rows = report.row_losses()
+    print(
+        "\nengines and planets where the fitted parameters do not beat the community's "
+        "(mean over the dome and the elevations): " + (", ".join(rows) if rows else "none")
+    )
     losses = report.losses()
     if losses:
-        print("\nwhere the fitted parameters do not beat the community's:")
+        print("single elevations where they do not (mean or 95th percentile):")
         print("\n".join(f"  {line}" for line in losses))
     if args.out is not None:
         write_files({args.out: report.to_json().encode("utf-8")}, overwrite=True)

@@ -122,8 +122,14 @@ class HillaireSetup:
         The tent layer: density 0 below the bottom, 1 at the peak, 0 above the top.
     ground_albedo : numpy.ndarray
     distribution : str
-        ``"uniform"``: Hillaire's ``t = t_max (s + 0.3) / N``; ``"quadratic"``:
-        Unity's ``GetSample`` (quadratic, segment midpoints).
+        Of the samples along a view ray: ``"variable"``, Hillaire's sky-view
+        march (``VariableSampleCount``: segments ``t_max (s/N)^2`` to
+        ``t_max ((s+1)/N)^2``, the sample 0.3 into each); ``"quadratic"``,
+        Unity's ``GetSample`` (the same segments, the sample at the middle).
+    ms_distribution : str
+        Of the samples along a ray of the multiple-scattering integral:
+        ``"uniform"``, Hillaire's ``t = t_max (s + 0.3) / N`` (his
+        ``NewMultiScattCS``, no variable count), or ``"quadratic"`` (Unity).
     directions : str
         Of the multiple-scattering integral: ``"stratified"`` (Hillaire's 8 x 8)
         or ``"hammersley"`` (Unity's 64 points).
@@ -147,7 +153,8 @@ class HillaireSetup:
     ozone_peak_km: float
     ozone_top_km: float
     ground_albedo: np.ndarray
-    distribution: str = "uniform"
+    distribution: str = "variable"
+    ms_distribution: str = "uniform"
     directions: str = "stratified"
     ms_samples: int = 20
     multiple_scattering_factor: float = 1.0
@@ -255,7 +262,8 @@ def _samples(distribution: str, n: int) -> tuple[np.ndarray, np.ndarray]:
         t = (s + 0.3) / n
         return t, np.diff(np.concatenate([[0.0], t]))
     t0, t1 = (s / n) ** 2, ((s + 1.0) / n) ** 2
-    return 0.5 * (t0 + t1), t1 - t0
+    where = 0.3 if distribution == "variable" else 0.5
+    return t0 + where * (t1 - t0), t1 - t0
 
 
 def _sphere_exit(
@@ -278,6 +286,7 @@ def _march(
     sun: np.ndarray,
     t_max: np.ndarray,
     n_samples: int,
+    distribution: str,
     *,
     phase: tuple[np.ndarray, np.ndarray] | None,
     psi: np.ndarray | None,
@@ -287,7 +296,7 @@ def _march(
     ``phase`` is (Rayleigh, Mie) per ray; None: isotropic (the
     multiple-scattering pass). ``psi`` the multiple-scattering table, or None.
     """
-    r, mu_s, h, dt = _ray_geometry(setup, origin, direction, sun, t_max, n_samples)
+    r, mu_s, h, dt = _ray_geometry(setup, origin, direction, sun, t_max, n_samples, distribution)
     s_r, s_m, s_all, ext = _coefficients(setup, h)
     t_sun = sun_transmittance(setup, r, mu_s, cache=True)
     if phase is None:
@@ -326,11 +335,12 @@ def _ray_geometry(
     sun: np.ndarray,
     t_max: np.ndarray,
     n_samples: int,
+    distribution: str,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Radius, Sun zenith cosine, altitude and segment length of each sample [km]."""
 
     def compute() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        frac, dfrac = _samples(setup.distribution, n_samples)
+        frac, dfrac = _samples(distribution, n_samples)
         t = t_max[:, None] * frac
         dt = (t_max[:, None] * dfrac)[..., None]
         pos = origin[:, None, :] + t[..., None] * direction[:, None, :]
@@ -341,14 +351,14 @@ def _ray_geometry(
     key = (
         "rays",
         setup.planet_radius_km,
-        setup.distribution,
+        distribution,
         n_samples,
         hash(origin.tobytes()),
         hash(direction.tobytes()),
         hash(sun.tobytes()),
         hash(t_max.tobytes()),
     )
-    return _memo(key, compute)  # type: ignore[no-any-return]
+    return _memo(key, compute)
 
 
 def _ms_directions(kind: str) -> np.ndarray:
@@ -384,7 +394,15 @@ def multiple_scattering_table(setup: HillaireSetup) -> np.ndarray:
     hits = np.isfinite(ground)
     t_max = np.where(hits, np.nan_to_num(ground), top)
     radiance, trans, f_ms = _march(
-        setup, origin, direction, sun, t_max, setup.ms_samples, phase=None, psi=None
+        setup,
+        origin,
+        direction,
+        sun,
+        t_max,
+        setup.ms_samples,
+        setup.ms_distribution,
+        phase=None,
+        psi=None,
     )
     ground_pos = origin + t_max[:, None] * direction
     r_g = np.linalg.norm(ground_pos, axis=-1)
@@ -421,10 +439,12 @@ def sky_radiance_rgb(
     view_zenith_deg: np.ndarray,
     view_azimuth_deg: np.ndarray,
     psi: np.ndarray | None = None,
+    view_samples: int = VIEW_SAMPLES,
 ) -> np.ndarray:
     """The sky per unit (white) solar illuminance, shape ``zenith.shape + (3,)``. [sr^-1]
 
-    ``psi``: :func:`multiple_scattering_table` of ``setup`` if already made.
+    ``psi``: :func:`multiple_scattering_table` of ``setup`` if already made;
+    ``view_samples``: samples along each view ray.
     """
     z, a = np.broadcast_arrays(
         np.radians(np.asarray(view_zenith_deg, dtype=float)),
@@ -447,7 +467,8 @@ def sky_radiance_rgb(
         direction,
         np.ascontiguousarray(sun),
         t_max,
-        VIEW_SAMPLES,
+        view_samples,
+        setup.distribution,
         phase=(rayleigh_phase(cos_theta), setup.mie_phase(cos_theta)),
         psi=table,
     )

@@ -484,7 +484,8 @@ def fit_engine(
     skies: Sequence[ReferenceSky],
     *,
     kind: str = "fitted",
-    max_evaluations: int = 150,
+    max_evaluations: int = 200,
+    start: Mapping[str, float] | None = None,
 ) -> EngineFit:
     """Fit an engine's parameters to the exact skies: least squares of Delta E 2000.
 
@@ -505,11 +506,15 @@ def fit_engine(
     skies : sequence of ReferenceSky
         :func:`reference_skies` of ``atmosphere``.
     kind : str
-        ``"fitted"``: every parameter from the engine's start;
+        ``"fitted"``: every parameter, from the engine's start or the community
+        row, whichever is closer once its exposure is fitted;
         ``"community"``: the community row, only its
         :attr:`EngineModel.community_parameters` adjusted.
     max_evaluations : int
-        Most evaluations of the residuals.
+        Most evaluations of the residuals, finite-difference Jacobians included.
+    start : mapping, optional
+        Every value the renderer takes, instead of the engine's start (or
+        community row) for ``atmosphere``.
 
     Returns
     -------
@@ -517,33 +522,52 @@ def fit_engine(
     """
     if kind not in ("fitted", "community"):
         raise ValueError(f"kind must be 'fitted' or 'community'; got {kind!r}")
-    if kind == "fitted":
-        base = engine.initial(atmosphere)
-        fitted = list(engine.parameters)
+    community = [p for p in engine.parameters if p.name in engine.community_parameters]
+    if start is not None:
+        starts = [dict(start)]
+    elif kind == "fitted":
+        starts = [dict(engine.initial(atmosphere)), dict(engine.community(atmosphere))]
     else:
-        base = engine.community(atmosphere)
-        fitted = [p for p in engine.parameters if p.name in engine.community_parameters]
-    lower = np.array([math.log(p.lower) if p.log else p.lower for p in fitted])
-    upper = np.array([math.log(p.upper) if p.log else p.upper for p in fitted])
-    x0 = np.clip(_to_vector(base, fitted), lower + 1e-9, upper - 1e-9)
+        starts = [dict(engine.community(atmosphere))]
+    fitted = list(engine.parameters) if kind == "fitted" else community
     roots = [np.sqrt(s.weight) for s in skies]
 
-    def residuals(x: np.ndarray) -> np.ndarray:
-        params = _from_vector(x, base, fitted)
-        parts = []
-        for sky, root in zip(skies, roots, strict=True):
-            de = _delta_e(sky, engine_xyz(engine, params, sky))
-            parts.append((root * np.nan_to_num(de, nan=100.0)).ravel())
-        return np.concatenate(parts)
+    def residuals_of(base: Mapping[str, float], which: Sequence[Parameter]) -> Any:
+        def residuals(x: np.ndarray) -> np.ndarray:
+            params = _from_vector(x, base, which)
+            parts = []
+            for sky, root in zip(skies, roots, strict=True):
+                de = _delta_e(sky, engine_xyz(engine, params, sky))
+                parts.append((root * np.nan_to_num(de, nan=100.0)).ravel())
+            return np.concatenate(parts)
 
-    if fitted:
+        return residuals
+
+    def solve(base: Mapping[str, float], which: Sequence[Parameter], budget: int) -> Any:
+        lower = np.array([math.log(p.lower) if p.log else p.lower for p in which])
+        upper = np.array([math.log(p.upper) if p.log else p.upper for p in which])
+        x0 = np.clip(_to_vector(base, which), lower + 1e-9, upper - 1e-9)
+        if not which:
+            return _from_vector(x0, base, which), float("inf")
+        # max_nfev does not count the evaluations of the finite-difference Jacobian (one
+        # per parameter per iteration): the budget covers both.
         result = least_squares(
-            residuals, x0, bounds=(lower, upper), x_scale=1.0, max_nfev=max_evaluations
+            residuals_of(base, which),
+            x0,
+            bounds=(lower, upper),
+            x_scale=1.0,
+            max_nfev=max(2, budget // (len(which) + 1)),
         )
-        x = result.x
-    else:
-        x = x0
-    params = _from_vector(x, base, fitted)
+        return _from_vector(result.x, base, which), float(result.cost)
+
+    # Each start gets its exposure (the community parameters) first; the full fit goes on
+    # from the better one, so the fit starts no worse than what people use.
+    candidates = [
+        solve(base, community, 40) if kind == "fitted" else (base, 0.0) for base in starts
+    ]
+    best = min(candidates, key=lambda c: c[1])[0]
+    x_params, _ = solve(best, fitted, max_evaluations) if fitted else (best, 0.0)
+    params = dict(x_params)
     errors = tuple(sky_error(sky, engine_xyz(engine, params, sky)) for sky in skies)
     info = {
         "name": atmosphere.name,

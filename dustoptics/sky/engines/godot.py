@@ -158,24 +158,39 @@ def _color(params: Mapping[str, float], name: str) -> str:
     return f"Color({enc[0]:.6g}, {enc[1]:.6g}, {enc[2]:.6g}, 1)"
 
 
+def _comment(fit: EngineFit) -> str:
+    lines = [
+        f"PhysicalSkyMaterial for {fit.atmosphere} ({fit.kind} by dustoptics).",
+        f"Model read from: {GODOT_SOURCE}.",
+        "Colours sRGB-encoded as the inspector shows them (source_color). A",
+        "DirectionalLight3D of energy 1 is the Sun; energy_multiplier maps the sky to",
+        "radiance per unit solar illuminance [sr^-1] (times Godot's own exposure).",
+        "Sky error against the exact spectral sky (CIE Delta E 2000, dome mean / 95th pct):",
+        *(
+            f"  Sun {e.sun_elevation_deg:g} deg: {e.delta_e_mean:.2f} / {e.delta_e_p95:.2f}"
+            for e in fit.errors
+        ),
+    ]
+    return "\n".join(lines)
+
+
+def _godot_string(text: str) -> str:
+    escaped = text.replace("\\", "\\\\").replace('"', '\\"').replace("\n", "\\n")
+    return f'"{escaped}"'
+
+
 def godot_tres(fit: EngineFit) -> str:
-    """The ``.tres`` resource (Godot 4 text resource, ``format=3``)."""
+    """The ``.tres`` resource (Godot 4 text resource, ``format=3``).
+
+    The comment block is the resource's ``metadata/comment`` (Godot keeps it
+    with the material; ``;`` comments are dropped when Godot saves the file).
+    """
     p = fit.params
     lines = [
         '[gd_resource type="PhysicalSkyMaterial" format=3]',
         "",
-        f"; PhysicalSkyMaterial for {fit.atmosphere} ({fit.kind} by dustoptics).",
-        f"; Model read from: {GODOT_SOURCE}.",
-        "; Colours sRGB-encoded as the inspector shows them (source_color). A",
-        "; DirectionalLight3D of energy 1 is the Sun; energy_multiplier maps the sky to",
-        "; radiance per unit solar illuminance [sr^-1] (times Godot's own exposure).",
-        "; Sky error against the exact spectral sky (CIE Delta E 2000, dome mean / 95th pct):",
-        *(
-            f";   Sun {e.sun_elevation_deg:g} deg: {e.delta_e_mean:.2f} / {e.delta_e_p95:.2f}"
-            for e in fit.errors
-        ),
-        "",
         "[resource]",
+        f"metadata/comment = {_godot_string(_comment(fit))}",
         f"rayleigh_coefficient = {p['rayleigh_coefficient']:.6g}",
         f"rayleigh_color = {_color(p, 'rayleigh_color')}",
         f"mie_coefficient = {p['mie_coefficient']:.6g}",

@@ -169,17 +169,17 @@ class EngineReport:
         )
 
     def lines(self) -> list[list[str]]:
-        """Header and one row per engine, planet and kind: Delta E 2000 mean and 95th
-        percentile per Sun elevation, xy at the zenith and 10 deg above the Sun (exact ->
+        """Header and one row per engine, planet and kind: Delta E 2000 mean over the dome
+        averaged over the Sun elevations, mean and 95th percentile per Sun elevation, xy at the zenith and 10 deg above the Sun (exact ->
         engine) and the luminance ratio, both at the highest Sun."""
-        header = ["engine", "planet", "parameters"]
+        header = ["engine", "planet", "parameters", "dE00 mean, all elevations"]
         header += [f"dE00 {e:g} deg (mean/p95)" for e in self.sun_elevations_deg]
         header += ["xy zenith (exact -> engine)", "xy 10 deg from Sun", "luminance ratio"]
         out = [header]
         for row in self.rows:
             first = row.errors[0]
             cells = [ENGINES[row.engine].title if row.engine in ENGINES else row.engine]
-            cells += [row.planet, row.kind]
+            cells += [row.planet, row.kind, f"{row.delta_e_mean:.1f}"]
             cells += [f"{e.delta_e_mean:.1f} / {e.delta_e_p95:.1f}" for e in row.errors]
             cells.append(f"{_fmt_xy(first.xy_zenith_exact)} -> {_fmt_xy(first.xy_zenith_engine)}")
             cells.append(
@@ -188,6 +188,19 @@ class EngineReport:
             cells.append(" / ".join(f"{e.luminance_ratio:.2f}" for e in row.errors))
             out.append(cells)
         return out
+
+    def row_losses(self) -> list[str]:
+        """Engines and planets whose fitted Delta E 2000, averaged over the dome and the Sun
+        elevations, is not smaller than the community row's: one line each."""
+        by_key = {(r.engine, r.planet, r.kind): r for r in self.rows}
+        return [
+            f"{engine} {planet}: fitted {row.delta_e_mean:.2f} >= community "
+            f"{by_key[(engine, planet, 'community')].delta_e_mean:.2f}"
+            for (engine, planet, kind), row in by_key.items()
+            if kind == "fitted"
+            and (engine, planet, "community") in by_key
+            and not row.delta_e_mean < by_key[(engine, planet, "community")].delta_e_mean
+        ]
 
     def losses(self) -> list[str]:
         """Where the fitted row's Delta E 2000 (mean or 95th percentile, at any Sun
@@ -264,7 +277,8 @@ def engines_report(
         Keys of :data:`~dustoptics.sky.engines.core.ENGINES` (default all).
     cache_dir : path, optional
         Where each planet's rows are kept (``engines-PLANET.json``) and read back
-        when they were made by this :data:`REPORT_VERSION` for these engines.
+        when they were made by this :data:`REPORT_VERSION`; only the engines
+        missing there are fitted (an engine added later costs its own rows).
     progress : text stream, optional
         Where to report each fit.
 
@@ -279,20 +293,21 @@ def engines_report(
         raise ValueError(f"engines must be among {sorted(ENGINES)}; got {unknown}")
     rows: list[ReportRow] = []
     for key in keys:
-        cached = None
+        found: list[ReportRow] = []
         path = None
         if cache_dir is not None:
             path = Path(cache_dir) / f"engines-{key.replace(':', '-')}.json"
             if path.is_file():
-                found = EngineReport.from_json(path.read_text(encoding="utf-8"))
-                if found.version == REPORT_VERSION and {r.engine for r in found.rows} >= set(names):
-                    cached = [r for r in found.rows if r.engine in names]
-        if cached is None:
-            cached = _planet_rows(key, names, progress)
+                cached = EngineReport.from_json(path.read_text(encoding="utf-8"))
+                if cached.version == REPORT_VERSION:
+                    found = list(cached.rows)
+        missing = [n for n in names if n not in {r.engine for r in found}]
+        if missing:
+            found += _planet_rows(key, missing, progress)
             if path is not None:
-                text = EngineReport(tuple(cached)).to_json()
+                text = EngineReport(tuple(found)).to_json()
                 write_files({path: text.encode("utf-8")}, overwrite=True)
-        rows += cached
+        rows += [r for n in names for r in found if r.engine == n]
     return EngineReport(tuple(rows))
 
 

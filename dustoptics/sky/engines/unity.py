@@ -142,6 +142,7 @@ def unity_setup(params: Mapping[str, float]) -> _hillaire.HillaireSetup:
         ozone_top_km=bottom + width,
         ground_albedo=np.full(3, params["ground_tint"]),
         distribution="quadratic",
+        ms_distribution="quadratic",
         directions="hammersley",
         ms_samples=16,
     )

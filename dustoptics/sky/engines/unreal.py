@@ -128,7 +128,8 @@ def unreal_setup(params: Mapping[str, float]) -> _hillaire.HillaireSetup:
         ozone_peak_km=tip,
         ozone_top_km=tip + width,
         ground_albedo=np.full(3, params["ground_albedo"]),
-        distribution="uniform",
+        distribution="variable",
+        ms_distribution="uniform",
         directions="stratified",
         ms_samples=20,
     )
