@@ -246,17 +246,22 @@ def write_bevy_fit(fit: EngineFit, out_dir: Any, *, overwrite: bool = False) -> 
     coefficients and the fit's error in the comment block and the JSON."""
     p = fit.params
     medium = bevy_medium(set_of(p), ground_albedo=float(p["ground_albedo"]))
-    fitted = {
-        "molecules": {
-            "scattering_per_m": tuple(float(v) for v in _vector(p, "rayleigh_scattering"))
-        },
-        "aerosols": {
-            "scattering_per_m": tuple(float(v) for v in _vector(p, "dust_scattering")),
-            "absorption_per_m": tuple(float(v) for v in _vector(p, "dust_absorption")),
-        },
-    }
+
+    def triple(name: str) -> tuple[float, float, float]:
+        v = _vector(p, name)
+        return (float(v[0]), float(v[1]), float(v[2]))
+
     terms = tuple(
-        dataclasses.replace(t, **fitted[t.name]) if t.name in fitted else t for t in medium.terms
+        dataclasses.replace(t, scattering_per_m=triple("rayleigh_scattering"))
+        if t.name == "molecules"
+        else dataclasses.replace(
+            t,
+            scattering_per_m=triple("dust_scattering"),
+            absorption_per_m=triple("dust_absorption"),
+        )
+        if t.name == "aerosols"
+        else t
+        for t in medium.terms
     )
     errors = tuple(
         f"Sun {e.sun_elevation_deg:g} deg: Delta E 2000 {e.delta_e_mean:.2f} mean, "

@@ -147,7 +147,9 @@ def mars_atmo_example(atmosphere: Atmosphere) -> Atmosphere:
         planet_radius_m=3389.5e3,
         atmosphere_radius_m=3389.5e3 + 120e3,
         constituents=(
-            Constituent("molecules", co2, PiecewiseLinearProfile(z, n_co2 / n_co2[0])),
+            Constituent(
+                "molecules", co2, PiecewiseLinearProfile(z.tolist(), (n_co2 / n_co2[0]).tolist())
+            ),
             Constituent("aerosols", dust_table, ExponentialProfile(scale_height_m=10.8e3)),
         ),
         sun_distance_m=atmosphere.sun_distance_m,

@@ -208,19 +208,17 @@ def _planet(atmosphere: Atmosphere) -> str:
     return "earth" if "earth" in atmosphere.name else "mars"
 
 
-def _flat(p: CelestiaAtmosphere | Mapping[str, Any], radius_km: float) -> dict[str, float]:
-    get = p.get if isinstance(p, Mapping) else None
-    values = (
-        {
-            "Mie": p.mie_per_km,
-            "MieScaleHeight": p.mie_scale_height_km,
-            "MieHGAnisotropy": p.mie_hg_anisotropy,
-            "Rayleigh": p.rayleigh_per_km,
-            "Absorption": p.absorption_per_km,
-        }
-        if get is None
-        else dict(p)
-    )
+def _values(p: CelestiaAtmosphere) -> dict[str, Any]:
+    return {
+        "Mie": p.mie_per_km,
+        "MieScaleHeight": p.mie_scale_height_km,
+        "MieHGAnisotropy": p.mie_hg_anisotropy,
+        "Rayleigh": p.rayleigh_per_km,
+        "Absorption": p.absorption_per_km,
+    }
+
+
+def _flat(values: Mapping[str, Any], radius_km: float) -> dict[str, float]:
     out = {
         "Mie": float(values["Mie"]),
         "MieScaleHeight": float(values["MieScaleHeight"]),
@@ -236,7 +234,7 @@ def _flat(p: CelestiaAtmosphere | Mapping[str, Any], radius_km: float) -> dict[s
 
 
 def _initial(atmosphere: Atmosphere) -> dict[str, float]:
-    return _flat(celestia_parameters(atmosphere), atmosphere.planet_radius_m / 1000.0)
+    return _flat(_values(celestia_parameters(atmosphere)), atmosphere.planet_radius_m / 1000.0)
 
 
 def _community(atmosphere: Atmosphere) -> dict[str, float]:
