@@ -25,9 +25,12 @@ Viking's two-exponential density; dust ``10.155 um^2`` at 1 um, Angstrom -0.2,
 the single-scattering albedo of Ockert-Bell et al. 1997 Table 2 as its
 ``spectra/mars-dust-single-scattering-albedo.csv`` lists it, HG with ``g =
 0.64 + 0.23 exp(-0.00002378121 (lambda - 310)^2)``, ``4.559e6 m^-3 exp(-h / 10.8
-km)``; Mars radius 3389.5 km, atmosphere 120 km).  CalcMySky ships no Earth
-example with aerosols: for Earth the community row is the set's own (its
-``sample.atmo`` is not read here).
+km)``; Mars radius 3389.5 km, atmosphere 120 km); for Earth ``examples/sample.atmo``
+(air 0.04022 fm^2 at 1 um, Angstrom 4, ``3.08458e25 m^-3 exp(-h / 8 km)``; aerosols
+0.042968 um^2, Angstrom 0, albedo 1, ``1.03333e8 m^-3 exp(-h / 1.2 km)``, its
+Cornette-Shanks g = 0.76 plus a forward spike, times 0.904; radius 6371 km, 120 km
+high) with the set's own ozone (its ozone profile, a fit to the US standard
+atmosphere, is not reproduced).
 """
 
 from __future__ import annotations
@@ -52,7 +55,7 @@ from dustoptics.io.engines.calcmysky import (
 from dustoptics.sky.engines._sets import exact_sky_rgb, remember_set, set_of
 from dustoptics.sky.engines.core import EngineFit, EngineModel, register_engine
 
-__all__ = ["CALCMYSKY", "calcmysky_medium", "mars_atmo_example"]
+__all__ = ["CALCMYSKY", "calcmysky_medium", "mars_atmo_example", "sample_atmo_example"]
 
 #: examples/spectra/mars-dust-single-scattering-albedo.csv (Ockert-Bell et al. 1997, Table 2),
 #: the points within 210-1015 nm. [nm], [-]
@@ -157,6 +160,51 @@ def mars_atmo_example(atmosphere: Atmosphere) -> Atmosphere:
     )
 
 
+def sample_atmo_example(atmosphere: Atmosphere) -> Atmosphere:
+    """CalcMySky's ``examples/sample.atmo`` (Earth) on the set's grids; the set's own ozone."""
+    mol = atmosphere.constituent("molecules")
+    aer = atmosphere.constituent("aerosols")
+    wl_m = np.asarray(mol.table.wavelength_nm, dtype=float)
+    mu_m = np.cos(np.radians(np.asarray(mol.table.theta_deg, dtype=float)))
+    molecules = _replace_optics(
+        mol.table,
+        cext_um2=0.04022e-18 * (wl_m / 1000.0) ** -4.0,
+        ssa=np.ones(wl_m.size),
+        phase=np.array(
+            np.broadcast_to(3.0 / (16.0 * math.pi) * (1.0 + mu_m**2), np.shape(mol.table.phase))
+        ),
+        n0=3.08458e25,
+    )
+    # Its aerosols: Cornette-Shanks g = 0.76 plus a forward spike, times 0.904 (its GLSL).
+    g = 0.76
+    mu = np.cos(np.radians(np.asarray(aer.table.theta_deg, dtype=float)))
+    k = 3.0 / (8.0 * math.pi) * (1.0 - g * g) / (2.0 + g * g)
+    row = (
+        k * (1.0 + mu**2) / (1.0 + g * g - 2.0 * g * mu) ** 1.5 + 1.0 / ((1.0 - mu) * 600.0 + 0.05)
+    ) * 0.904
+    n_wl = np.asarray(aer.table.wavelength_nm).size
+    aerosols = _replace_optics(
+        aer.table,
+        cext_um2=np.full(n_wl, 0.042968),
+        ssa=np.ones(n_wl),
+        phase=np.array(np.broadcast_to(row, np.shape(aer.table.phase))),
+        n0=1.03333e8,
+    )
+    others = tuple(c for c in atmosphere.constituents if c.role == "ozone")
+    return Atmosphere(
+        name="CalcMySky examples/sample.atmo",
+        planet_radius_m=6371e3,
+        atmosphere_radius_m=6371e3 + 120e3,
+        constituents=(
+            Constituent("molecules", molecules, ExponentialProfile(scale_height_m=8e3)),
+            Constituent("aerosols", aerosols, ExponentialProfile(scale_height_m=1.2e3)),
+            *others,
+        ),
+        sun_distance_m=atmosphere.sun_distance_m,
+        refractivity=atmosphere.refractivity,
+    )
+
+
 def calcmysky_sky_rgb(
     params: Mapping[str, float],
     *,
@@ -184,9 +232,9 @@ def _initial(atmosphere: Atmosphere) -> dict[str, float]:
 
 
 def _community(atmosphere: Atmosphere) -> dict[str, float]:
-    if "earth" in atmosphere.name:
-        return _initial(atmosphere)
-    return {"set_key": remember_set(mars_atmo_example(atmosphere))}
+    if atmosphere.name.startswith("mars"):
+        return {"set_key": remember_set(mars_atmo_example(atmosphere))}
+    return {"set_key": remember_set(sample_atmo_example(atmosphere))}
 
 
 def write_calcmysky_fit(fit: EngineFit, out_dir: Any, *, overwrite: bool = False) -> list[Path]:

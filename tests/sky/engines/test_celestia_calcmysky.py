@@ -11,7 +11,11 @@ import pytest
 from dustoptics.atmosphere import sets as atm
 from dustoptics.io.tables.netcdf import read_hdf5
 from dustoptics.sky.engines import ENGINES
-from dustoptics.sky.engines.calcmysky import calcmysky_medium, mars_atmo_example
+from dustoptics.sky.engines.calcmysky import (
+    calcmysky_medium,
+    mars_atmo_example,
+    sample_atmo_example,
+)
 from dustoptics.sky.engines.celestia import COMMUNITY, celestia_sky_rgb
 from dustoptics.sky.engines.core import EngineFit, SkyError, sunlight_linear_srgb
 
@@ -105,6 +109,23 @@ def test_mars_atmo_example_is_calcmyskys(mars) -> None:
     np.testing.assert_allclose(dust.table.phase[i], hg, rtol=1e-12)
     # Ockert-Bell's albedo at 550 nm, linear between 500 (0.78) and 600 nm (0.91).
     assert dust.table.ssa[i] == pytest.approx(0.845, abs=1e-12)
+
+
+def test_sample_atmo_example_is_calcmyskys_earth() -> None:
+    earth = sample_atmo_example(atm.earth_atmosphere())
+    aerosols = earth.constituent("aerosols")
+    # examples/sample.atmo: 0.042968 um^2 at every wavelength (Angstrom 0), albedo 1,
+    # 1.03333e8 m^-3 exp(-h / 1.2 km): tau = N0 C H (1 - exp(-120 / 1.2)).
+    tau = 1.03333e8 * 0.042968e-12 * 1.2e3
+    got = np.asarray(aerosols.table.beta_ext_per_m) * aerosols.profile.column_length_m(
+        top_altitude_m=120e3
+    )
+    np.testing.assert_allclose(got, tau, rtol=1e-12)
+    assert np.all(np.asarray(aerosols.table.ssa) == 1.0)
+    # Its phase function (Cornette-Shanks 0.76 plus a spike, times 0.904) is about normalized.
+    mu = np.cos(np.radians(aerosols.table.theta_deg))[::-1]
+    row = np.asarray(aerosols.table.phase)[0][::-1]
+    assert 2 * math.pi * np.trapezoid(row, mu) == pytest.approx(1.0, abs=2e-3)
 
 
 def _fit(engine: str, params: dict[str, float], name: str) -> EngineFit:
