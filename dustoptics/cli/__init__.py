@@ -12,6 +12,7 @@ Usage::
     dustoptics fit NAME_OR_FILE [--model MODEL] [--colour C] [--out DIR] [--force]
     dustoptics sweep CONFIG --out STORE|FILE.nc [--scheduler ADDRESS] [--workers N] [--force]
     dustoptics sky mars|earth|compare --out DIR [--force]
+    dustoptics engines report [--shipped] [--planet P,...] [--engine E,...] [--cache-dir DIR]
     dustoptics --version
 
 ``python -m dustoptics`` (or ``python -m dustoptics.cli``) runs the same command line.

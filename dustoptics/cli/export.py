@@ -31,6 +31,7 @@ from dustoptics.io.outputs import (
     with_inputs,
 )
 from dustoptics.io.registry import NEEDS
+from dustoptics.sky.engines import ENGINES
 
 __all__ = ["NEEDS_DENSITY", "add_parser", "format_options", "run", "same_table", "write_table"]
 
@@ -76,6 +77,12 @@ def add_parser(sub: Any) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run ``export``; returns the exit status."""
+    engines = [f for f in args.format if f in ENGINES]
+    if engines:
+        raise UsageError(
+            f"--format {','.join(engines)} is fitted to a planet's sky, not written from a table: "
+            f"'{PROG} build mars --dust PRESET --format {engines[0]}' (or 'build earth')"
+        )
     table = read_table(args.file)
     if args.number_density_per_m3 is not None:
         table = with_inputs(

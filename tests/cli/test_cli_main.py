@@ -128,6 +128,7 @@ def test_the_documented_parser_has_every_command():
         "sweep",
         "sky",
         "retrieve",
+        "engines",
     ]
 
 

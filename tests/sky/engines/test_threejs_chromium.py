@@ -34,9 +34,10 @@ pytestmark = [
 ]
 
 #: Relative difference allowed between Chromium's pixels (float32 on SwiftShader) and our
-#: float64 model: the largest (measured locally up to 4.7e-3, 85 deg from the zenith, where
-#: the optical mass's pow(93.885 - deg, -1.253) loses float32 digits) and the median
-#: (measured 1e-5 to 6e-4).
+#: float64 model, with the Sun 5 deg or more above the horizon: the largest (measured locally
+#: up to 5.5e-3, 85 deg from the zenith, where the optical mass's pow(93.885 - deg, -1.253)
+#: loses float32 digits) and the median (measured 2e-4 to 7e-4).  At sunset the Sun's
+#: intensity is a small difference of float32 numbers: 4.7e-2 at most there (not tested).
 TOLERANCE_MAX = 1e-2
 TOLERANCE_MEDIAN = 1e-3
 
@@ -76,8 +77,7 @@ def _render(uniforms: dict[str, float], elevation: float, directions: list[list[
     return json.loads(found.group(1))
 
 
-@pytest.mark.parametrize("case", sorted(CASES))
-@pytest.mark.parametrize("elevation", [45.0, 5.0])
+@pytest.mark.parametrize(("case", "elevation"), [("fitted-mars", 5.0), ("example", 45.0)])
 def test_chromium_pixels_match_our_model_of_sky_js(case, elevation):
     # The uniforms as the module file writes them (clouds off, the disc off for the test).
     fit = EngineFit("threejs", "t", "fitted", {**CASES[case], "exposure": 1.0}, ())
