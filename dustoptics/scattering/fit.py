@@ -1,8 +1,12 @@
 """Analytic phase functions fitted to a table, per wavelength or per colour channel.
 
 Engines without a lookup table take one analytic phase function: Unreal's sky
-and Bevy's atmosphere an HG or Cornette-Shanks g, OpenSpace and CosmoScout VR a
-double HG.  :func:`fit_phase` finds the parameters of such a model that best
+a Cornette-Shanks or HG g, OpenSpace one Cornette-Shanks G for its three channels
+(``miePhaseFunction`` in ``modules/atmosphere/shaders/atmosphere_common.glsl``;
+Costa et al. 2021's Mars branch a double HG), Celestia an HG g turned into
+Schlick's k.  Bevy is not one of them: its ``PhaseFunction::Mie`` takes one HG g,
+but ``PhaseFunction::ChromaticTexture`` takes the tabulated phase function of
+each channel (:mod:`dustoptics.io.engines.bevy`).  :func:`fit_phase` finds the parameters of such a model that best
 match each row of a tabulated phase function; :func:`fit_table` does it for a
 :class:`~dustoptics.table.Table` per wavelength or per output channel
 (:func:`dustoptics.colour.channel_weights`).

@@ -11,10 +11,34 @@
 - :mod:`~dustoptics.io.engines.fit`: fitted analytic phase-function parameters
   (:mod:`dustoptics.scattering.fit`) as JSON and as GLSL, HLSL and WGSL constants
   (:func:`~dustoptics.io.engines.fit.write_fit`).
+- :mod:`~dustoptics.io.engines.bevy`, :mod:`~dustoptics.io.engines.openspace`,
+  :mod:`~dustoptics.io.engines.celestia`, :mod:`~dustoptics.io.engines.calcmysky`: the
+  files of Bevy (ScatteringMedium terms and a phase texture in Bevy's column order),
+  OpenSpace (an ``.asset`` atmosphere table), Celestia (an ``.ssc`` atmosphere block)
+  and CalcMySky (an ``.atmo`` file with its GLSL phase block); their formats, fitted to
+  a set's sky, are :mod:`dustoptics.sky.engines`'.
 """
 
 from __future__ import annotations
 
-from dustoptics.io.engines import bruneton, cosmoscout_preprocessor, fit, precomputation
+from dustoptics.io.engines import (
+    bevy,
+    bruneton,
+    calcmysky,
+    celestia,
+    cosmoscout_preprocessor,
+    fit,
+    openspace,
+    precomputation,
+)
 
-__all__ = ["bruneton", "cosmoscout_preprocessor", "fit", "precomputation"]
+__all__ = [
+    "bevy",
+    "bruneton",
+    "calcmysky",
+    "celestia",
+    "cosmoscout_preprocessor",
+    "fit",
+    "openspace",
+    "precomputation",
+]

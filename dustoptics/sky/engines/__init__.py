@@ -61,7 +61,17 @@ it, and one import line below.
 
 from __future__ import annotations
 
-from dustoptics.sky.engines import core, godot, threejs, unity, unreal
+from dustoptics.sky.engines import (
+    bevy,
+    calcmysky,
+    celestia,
+    core,
+    godot,
+    openspace,
+    threejs,
+    unity,
+    unreal,
+)
 from dustoptics.sky.engines.core import (
     ENGINES,
     EngineFit,
@@ -82,9 +92,13 @@ __all__ = [
     "Parameter",
     "ReferenceSky",
     "SkyError",
+    "bevy",
+    "calcmysky",
+    "celestia",
     "core",
     "fit_engine",
     "godot",
+    "openspace",
     "reference_skies",
     "register_engine",
     "sky_error",

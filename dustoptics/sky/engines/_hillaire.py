@@ -114,7 +114,8 @@ class HillaireSetup:
         At the ground.
     mie_scale_height_km : float
     mie_phase : callable
-        ``phase(cos_theta) -> [sr^-1]``, cos_theta between the view and the Sun.
+        ``phase(cos_theta) -> [sr^-1]``, cos_theta between the view and the Sun; the
+        result may have a last axis of 3 (one phase function per channel).
     ozone_absorption_per_km : numpy.ndarray
         At the tent's top.
     ozone_bottom_km, ozone_peak_km, ozone_top_km : float
@@ -301,7 +302,9 @@ def _march(
     if phase is None:
         scattered = s_all / (4.0 * math.pi)
     else:
-        scattered = s_r * phase[0][:, None, None] + s_m * phase[1][:, None, None]
+        mie = phase[1]  # (n,), or (n, 3) for a chromatic phase function (Bevy's texture)
+        mie = mie[:, None, :] if mie.ndim == 2 else mie[:, None, None]
+        scattered = s_r * phase[0][:, None, None] + s_m * mie
     source = t_sun * scattered
     if psi is not None:
         source = source + _read_psi(setup, psi, mu_s, h) * s_all
