@@ -16,34 +16,29 @@ import warnings
 from collections.abc import Sequence
 from dataclasses import replace
 from pathlib import Path
-from typing import Any, TextIO
+from typing import Any
 
 from dustoptics.atmosphere.build import (
     ATMOSPHERES,
-    DEFAULT_DUST,
-    build_atmosphere,
-    set_inputs,
 )
-from dustoptics.cli.aerosol_options import AEROSOL_OPTIONS, add_aerosol_options, aerosol_keywords
-from dustoptics.cli.checks import check_needs, check_outputs, check_set_outputs, no_expansion
+from dustoptics.cli.aerosol_options import AEROSOL_OPTIONS, add_aerosol_options
+from dustoptics.cli.build_set import run_set, table_builder
+from dustoptics.cli.checks import check_needs, check_outputs, no_expansion
 from dustoptics.cli.errors import PROG, UsageError
 from dustoptics.cli.export import (
     check_profile_density,
     format_options,
-    same_table,
     takes_optical_depth,
     write_table,
 )
 from dustoptics.cli.formats import add_format_options, format_option_names, unused_format_options
 from dustoptics.cli.parser import _float_list, _positive_float, add_command
-from dustoptics.cli.report import report_placement
-from dustoptics.io.outputs import place_outputs, with_inputs, write_atmosphere_set
+from dustoptics.io.outputs import with_inputs
 from dustoptics.io.registry import formats_needing
-from dustoptics.models.build import TableBuilder, is_config_path
+from dustoptics.models.build import TableBuilder
 from dustoptics.models.files import PresetCopyWarning
 from dustoptics.models.presets import DEFAULT_PRESET
-from dustoptics.sky.engines import ENGINES, reference_skies
-from dustoptics.sky.engines.core import write_engine_files
+from dustoptics.sky.engines import ENGINES
 
 __all__ = ["DEFAULT_FORMATS", "add_parser", "run", "table_builder"]
 
@@ -131,18 +126,6 @@ def add_parser(sub: Any) -> None:
     add_aerosol_options(p)
 
 
-def table_builder(
-    name: str, *, progress: TextIO | None = None, allow_large: bool = False
-) -> TableBuilder:
-    """:meth:`TableBuilder.from_name`, an unknown preset name a usage error."""
-    if is_config_path(name):
-        return TableBuilder.from_name(name, progress=progress, allow_large=allow_large)
-    try:
-        return TableBuilder.from_name(name, progress=progress, allow_large=allow_large)
-    except ValueError as exc:
-        raise UsageError(str(exc)) from None
-
-
 def _table_options() -> list[str]:
     """The options only a table's formats use: the format records' options that are None
     unless given, and the number density."""
@@ -174,7 +157,7 @@ def run(args: argparse.Namespace) -> int:
     """Run ``build``; returns the exit status."""
     _refuse_unused_options(args)
     if args.name in ATMOSPHERES:
-        return _run_set(args)
+        return run_set(args)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         builder = table_builder(
@@ -248,70 +231,3 @@ def _ask_for_needs(name: str, builder: TableBuilder, formats: Sequence[str]) -> 
     needing = formats_needing(("expansion", "matrix"), formats)
     if needing and builder.config.phase.model == "mie":
         builder.ask_for_expansion(f"--format {','.join(needing)}")
-
-
-def _run_set(args: argparse.Namespace) -> int:
-    """``build mars|earth|earth-kobe2026``: the set's files in ``DIR/NAME/``."""
-    if args.format is not None and not set(args.format) <= {"cosmoscout", "bruneton", *ENGINES}:
-        raise UsageError(
-            f"'build {args.name}' writes CosmoScout VR's atmosphere set (format cosmoscout), and "
-            f"with --format bruneton also Bruneton's model parameters, with --format "
-            f"{','.join(ENGINES)} an engine's parameters fitted to its sky; --format "
-            f"{','.join(args.format)} is not available for a set. Build a table "
-            "('dustoptics build PRESET --format ...') to get the other formats"
-        )
-    if args.name == "earth-kobe2026" and args.wavelengths_nm is not None:
-        raise UsageError("earth-kobe2026 has Kobe's three wavelengths only; drop --wavelengths-nm")
-    progress = None if args.quiet else sys.stderr
-    dust = DEFAULT_DUST if args.dust is None else args.dust
-    optical_depth = 0.5 if args.optical_depth is None else args.optical_depth
-    dust_config = None
-    if args.name == "mars":
-        dust_config = table_builder(dust, progress=progress).config
-        if not dust_config.phase.uses_mie:
-            raise UsageError(
-                f"dust {dust!r} has no cross-sections (a phase-function-only model); "
-                "choose a Mie preset"
-            )
-    earth_aerosol = aerosol_keywords(args) if args.name == "earth" else {}
-    check_set_outputs(args, dust=dust, optical_depth=optical_depth)
-    atm = build_atmosphere(
-        args.name,
-        dust=dust if dust_config is None else dust_config,
-        optical_depth=optical_depth,
-        reference_wavelength_nm=args.reference_wavelength_nm,
-        ozone_csv=args.ozone_csv,
-        wavelength_nm=args.wavelengths_nm,
-        progress=progress,
-        **earth_aerosol,
-    )
-    inputs = set_inputs(
-        args.name,
-        dust=dust,
-        optical_depth=optical_depth,
-        reference_wavelength_nm=args.reference_wavelength_nm,
-        ozone_csv=args.ozone_csv,
-        wavelength_nm=args.wavelengths_nm,
-        **earth_aerosol,
-    )
-    bruneton = args.format is not None and "bruneton" in args.format
-    engines = [f for f in args.format or () if f in ENGINES]
-    skies = reference_skies(atm) if engines else ()
-    out_dir = args.out / args.name
-
-    def write(directory: Path) -> list[Path]:
-        written = write_atmosphere_set(
-            atm, directory, inputs=inputs, bruneton=bruneton, final_directory=out_dir
-        )
-        for name in engines:
-            written += write_engine_files(name, atm, directory, skies=skies)
-        return written
-
-    placed = place_outputs(
-        write,
-        out_dir,
-        force=args.force,
-        same=same_table,
-    )
-    report_placement(args, f"{args.name} (CosmoScout VR set)", out_dir, placed)
-    return 0

@@ -13,7 +13,7 @@ from pathlib import Path
 from typing import Any
 
 from dustoptics._validation import check_file_name, check_inside
-from dustoptics.cli.build import table_builder
+from dustoptics.cli.build_set import table_builder
 from dustoptics.cli.errors import PROG, UsageError
 from dustoptics.cli.parser import _float_list, add_command
 from dustoptics.io._atomic import check_targets, safe_stem, write_files
