@@ -240,17 +240,19 @@ def compile_notice(command: str, stream: TextIO | None) -> Iterator[None]:
         return
     from numba.core import event  # here: only commands that compute import numba
 
-    class _Announce(event.Listener):  # type: ignore[misc]
+    out: TextIO = stream
+
+    class _Announce(event.Listener):
         said = False
 
         def on_start(self, ev: Any) -> None:
             if not self.said:
                 self.said = True
-                stream.write(
+                out.write(
                     f"dustoptics: compiling the '{command}' kernels, once for this installation "
                     f"({FIRST_RUN_COMMANDS[command]} on 2 cores; cached in {cache_dir()}) ...\n"
                 )
-                stream.flush()
+                out.flush()
 
         def on_end(self, ev: Any) -> None:
             pass
