@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 import dustoptics as do
+from dustoptics.sky.engines import ENGINES
 from dustoptics.cli import main
 from dustoptics.io import FORMATS, FormatError, FormatOptions
 from dustoptics.io.describe import describe_path
@@ -61,7 +62,8 @@ def table() -> do.Table:
 def every_format(table: do.Table, tmp_path_factory: pytest.TempPathFactory) -> Path:
     pytest.importorskip("OpenEXR")
     out = tmp_path_factory.mktemp("every-format")
-    formats = sorted(FORMATS)
+    # The engines' formats write a planet set, not a table (tests/sky/engines describe them).
+    formats = sorted(n for n in FORMATS if n not in ENGINES)
     dense, options = prepare_export(table, formats, options=FormatOptions(), n_altitudes=16)
     write_formats(dense, out, formats, options=options)
     return out
