@@ -479,6 +479,10 @@ def _greek(
     )
 
 
+#: The cross-sections whose derivatives :func:`_cross` gives (after g).
+_CROSS_KEYS = ("cext_um2", "csca_um2", "cback_um2")
+
+
 def _cross(
     s: _Sums,
     n_dist: int,
@@ -493,7 +497,7 @@ def _cross(
     del d_ang
     s_w, _, s_sca, s_gsca, s_g, _ = s.sums[0]
     g = s_g / s_w if per_particle else s_gsca / s_sca
-    out: dict[str, list[float]] = {"g": [], "cext_um2": [], "csca_um2": [], "cback_um2": []}
+    out: dict[str, list[float]] = {"g": [], **{k: [] for k in _CROSS_KEYS}}
     for j, ds in enumerate(d_sums):
         if per_particle:
             out["g"].append((ds[4] - g * ds[0]) / s_w)
@@ -601,38 +605,73 @@ def _one_wavelength(
     return _Wavelength(values, errors)
 
 
-def _monodisperse(at: _At, *, with_radius: bool) -> _Wavelength:
-    """One sphere: its derivatives exactly, with zero error estimates."""
+#: Terms added to Wiscombe's n_max to estimate a single sphere's series
+#: truncation error: beyond n_max the terms fall faster than geometrically, so
+#: the next ten hold all of the rest that double precision sees.
+EXTRA_TERMS = 10
+
+
+def _monodisperse_derivatives(
+    at: _At, *, with_radius: bool, extra_terms: int
+) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+    """One sphere's angular derivatives (n_parameter, n_q, n_theta) and those of
+    the cross-sections and g, with its series ``extra_terms`` longer than the table's."""
     k_um, per_particle, n_q = at.k_um, at.per_particle, at.n_q
     x = np.array([k_um * at.distribution.mean_radius_um])
     ang, dang, sums, dsums = _accumulate(
-        at.m, x, np.ones((1, 1)), np.ascontiguousarray(at.mu_out), per_particle, with_radius
+        at.m,
+        x,
+        np.ones((1, 1)),
+        np.ascontiguousarray(at.mu_out),
+        per_particle,
+        with_radius,
+        extra_terms,
     )
-    s = _Sums(ang, dang, sums, dsums)
-    directions = list(at.index_directions)
-    ang_d = _angular(s, 0, directions, per_particle=per_particle, n_q=n_q, project=lambda f: f)
-    cross = _cross(s, 0, directions, per_particle=per_particle, area=at.area, lossless=at.lossless)
+    n_theta = at.mu_out.size
+    ang_d = np.empty((0, n_q, n_theta))
+    cross: dict[str, np.ndarray] = {k: np.empty(0) for k in ("g", *_CROSS_KEYS)}
     if with_radius:
         # d/dr = k d/dx: the kernel's x direction, read as a direction "n" of weight k.
         radial = _Sums(ang, dang[[2, 2]] * k_um, sums, dsums[[2, 2]] * k_um)
-        ang_r = _angular(
+        ang_d = _angular(
             radial, 0, [1.0 + 0j], per_particle=per_particle, n_q=n_q, project=lambda f: f
         )
-        cross_r = _cross(
+        cross = _cross(
             radial, 0, [1.0 + 0j], per_particle=per_particle, area=at.area, lossless=False
         )
         if at.lossless:
-            cross_r["cext_um2"] = cross_r["csca_um2"]
-        ang_d = np.concatenate([ang_r, ang_d])
-        cross = {k: np.concatenate([cross_r[k], cross[k]]) for k in cross}
+            cross["cext_um2"] = cross["csca_um2"]
+    directions = list(at.index_directions)
+    if directions:
+        s = _Sums(ang, dang[:2], sums, dsums[:2])
+        ang_m = _angular(s, 0, directions, per_particle=per_particle, n_q=n_q, project=lambda f: f)
+        cross_m = _cross(
+            s, 0, directions, per_particle=per_particle, area=at.area, lossless=at.lossless
+        )
+        ang_d = np.concatenate([ang_d, ang_m])
+        cross = {k: np.concatenate([cross[k], cross_m[k]]) for k in cross}
+    return ang_d, cross
+
+
+def _monodisperse(at: _At, *, with_radius: bool) -> _Wavelength:
+    """One sphere: its derivatives exactly for the table's series (Wiscombe's
+    n_max terms), with the series' truncation error as the estimate: the change
+    when :data:`EXTRA_TERMS` more terms are summed, plus the round-off of a sum
+    of n_max terms (n_max eps of the largest derivative over angle)."""
+    ang_d, cross = _monodisperse_derivatives(at, with_radius=with_radius, extra_terms=0)
+    ang_l, cross_l = _monodisperse_derivatives(at, with_radius=with_radius, extra_terms=EXTRA_TERMS)
+    x = at.k_um * at.distribution.mean_radius_um
+    roundoff = mie.wiscombe_nmax(x) * float(np.finfo(np.float64).eps)
     values: dict[str, np.ndarray] = {}
     errors: dict[str, np.ndarray] = {}
     for q, key in enumerate(at.angular_keys):
         values[key] = ang_d[:, q]
-        errors[key] = np.zeros(ang_d.shape[0])
+        errors[key] = np.max(
+            np.abs(ang_l[:, q] - ang_d[:, q]) + roundoff * np.abs(ang_d[:, q]), axis=-1
+        )
     for key, v in cross.items():
         values[key] = v
-        errors[key] = np.zeros(v.shape[0])
+        errors[key] = np.abs(cross_l[key] - v) + roundoff * np.abs(v)
     return _Wavelength(values, errors)
 
 

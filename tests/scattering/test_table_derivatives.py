@@ -391,3 +391,43 @@ def test_size_derivatives_do_not_depend_on_the_index_ones_asked_with_them() -> N
                 size.derivatives.error_estimates[q][j],
                 both.derivatives.error_estimates[q][both.derivatives.parameters.index(p)],
             )
+
+
+@pytest.mark.parametrize("names", [("radius_um",), ("k",), ("n", "radius_um")])
+def test_monodisperse_any_subset_with_its_series_truncation_error(names: tuple[str, ...]) -> None:
+    """A single sphere's derivatives for any subset of its parameters are the same
+    as with all of them, and their estimate is the series' truncation error: above
+    0, and at least the change when the series is summed with ten more terms."""
+    from dustoptics.scattering import table_derivatives as td
+
+    sphere = Monodisperse(radius_um=0.7)
+    every = do.compute_optics(
+        1.5 + 0.01j, sphere, [550.0], THETA, derivatives=("radius_um", "n", "k")
+    )
+    some = do.compute_optics(1.5 + 0.01j, sphere, [550.0], THETA, derivatives=names)
+    for p in names:
+        for q in ("phase", "g", "cext_um2", "csca_um2", "cback_um2"):
+            assert np.array_equal(some.derivative(q, p), every.derivative(q, p)), (p, q)
+            assert np.all(some.derivative_error_estimate(q, p) > 0.0), (p, q)
+    # The estimate covers the longer series' change (computed here at 20 more terms).
+    assert some.diagnostics is not None
+    at = td._At(
+        m=1.5 + 0.01j,
+        wavelength_nm=550.0,
+        distribution=sphere,
+        settings=some.diagnostics.settings,
+        mu_out=np.cos(np.deg2rad(THETA)),
+        index_directions=[1j] if "k" in names else ([1.0 + 0j] if "n" in names else []),
+        dist_parameters=(),
+        per_particle=False,
+        n_q=1,
+        n_order=0,
+        angular_keys=("phase",),
+    )
+    with_radius = "radius_um" in names
+    short, _ = td._monodisperse_derivatives(at, with_radius=with_radius, extra_terms=0)
+    long, _ = td._monodisperse_derivatives(at, with_radius=with_radius, extra_terms=20)
+    order = (["radius_um"] if with_radius else []) + [p for p in names if p != "radius_um"]
+    for j, p in enumerate(order):
+        change = np.max(np.abs(long[j, 0] - short[j, 0]))
+        assert change <= some.derivative_error_estimate("phase", p)[0], p
