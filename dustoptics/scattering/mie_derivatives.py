@@ -534,6 +534,99 @@ def _accumulate(
 
 
 @njit(cache=True, nogil=True)
+def _accumulate_panels(
+    m: complex,
+    x_nodes: np.ndarray,
+    weights: np.ndarray,
+    mu: np.ndarray,
+    per_particle: bool,
+    node_panel: np.ndarray,
+    n_panels: int,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`_accumulate` (without the x direction) summed panel by panel:
+    node j adds to the rows of panel ``node_panel[j]``, so ``ang`` has shape
+    (n_panels, n_w, 4, n_mu), ``dang`` (n_panels, 2, 4, n_mu), ``sums``
+    (n_panels, n_w, N_SUMS), ``dsums`` (n_panels, 2, N_SUMS).  The
+    derivatives' refinement compares its panels' rules with these at a few
+    angles (:mod:`dustoptics.scattering.table_derivatives`)."""
+    want_x = False
+    extra_terms = 0
+    n_nodes = x_nodes.shape[0]
+    n_w = weights.shape[1]
+    n_mu = mu.shape[0]
+    n_dir = 3 if want_x else 2
+    ang = np.zeros((n_panels, n_w, 4, n_mu))
+    dang = np.zeros((n_panels, n_dir, 4, n_mu))
+    sums = np.zeros((n_panels, n_w, N_SUMS))
+    dsums = np.zeros((n_panels, n_dir, N_SUMS))
+    if n_nodes == 0:
+        return ang, dang, sums, dsums
+    x_top = x_nodes[0]
+    for j in range(n_nodes):
+        x_top = max(x_top, x_nodes[j])
+    pi_t, tau_t = _pi_tau_table(mu, wiscombe_nmax(x_top) + extra_terms)
+    for j in range(n_nodes):
+        x = x_nodes[j]
+        p = node_panel[j]
+        nmax = wiscombe_nmax(x) + extra_terms
+        a, b, da, db, dax, dbx = _coefficient_derivatives(m, x, nmax, want_x)
+        val, der = _sums(nmax, a, b, da, db, dax, dbx)
+        qs = val[1]  # x^2 Q_sca
+        g = val[2] / qs
+        node = np.empty(N_SUMS)
+        node[0] = 1.0
+        node[1] = val[0]
+        node[2] = val[1]
+        node[3] = val[2]
+        node[4] = g
+        node[5] = val[3]
+        w0 = weights[j, 0]
+        for c in range(n_w):
+            wc = weights[j, c]
+            for q in range(N_SUMS):
+                sums[p, c, q] += wc * node[q]
+        for d in range(n_dir):
+            dsums[p, d, 1] += w0 * der[d, 0]
+            dsums[p, d, 2] += w0 * der[d, 1]
+            dsums[p, d, 3] += w0 * der[d, 2]
+            dsums[p, d, 4] += w0 * (der[d, 2] - g * der[d, 1]) / qs
+            dsums[p, d, 5] += w0 * der[d, 3]
+        if n_mu == 0:
+            continue
+        amp = _amplitude_sums(nmax, a, b, da, db, dax, dbx, pi_t, tau_t, want_x)
+        scale = 1.0 / (2.0 * np.pi * qs) if per_particle else 1.0
+        for i in range(n_mu):
+            s1 = amp[0, i]
+            s2 = amp[1, i]
+            for d in range(n_dir):
+                if d == 0:
+                    e1 = amp[2, i]
+                    e2 = amp[3, i]
+                elif d == 1:
+                    e1 = 1j * amp[2, i]
+                    e2 = 1j * amp[3, i]
+                else:
+                    e1 = amp[4, i]
+                    e2 = amp[5, i]
+                xi, xq, xu, xv, di, dq, du, dv = _stokes(s1, s2, e1, e2)
+                if d == 0:
+                    for c in range(n_w):
+                        wc = weights[j, c] * scale
+                        ang[p, c, 0, i] += wc * xi
+                        ang[p, c, 1, i] += wc * xq
+                        ang[p, c, 2, i] += wc * xu
+                        ang[p, c, 3, i] += wc * xv
+                # d(scale X) = scale dX + X d(scale), d(scale) = -scale d(x^2 Q_sca) / (x^2 Q_sca)
+                rel = -der[d, 1] / qs if per_particle else 0.0
+                w = w0 * scale
+                dang[p, d, 0, i] += w * (di + rel * xi)
+                dang[p, d, 1, i] += w * (dq + rel * xq)
+                dang[p, d, 2, i] += w * (du + rel * xu)
+                dang[p, d, 3, i] += w * (dv + rel * xv)
+    return ang, dang, sums, dsums
+
+
+@njit(cache=True, nogil=True)
 def _series_lengths(x: np.ndarray) -> np.ndarray:
     """Wiscombe's n_max of every size parameter (``mie.wiscombe_nmax``). [-]"""
     out = np.empty(x.shape[0], dtype=np.int64)
@@ -744,3 +837,4 @@ def sphere_derivatives(*, m: complex, x: float, mu: ArrayLike = 1.0) -> SphereDe
         _holomorphic=holomorphic,
         _real=real,
     )
+

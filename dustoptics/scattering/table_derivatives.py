@@ -69,13 +69,13 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import lru_cache
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from dustoptics.particles.sizedist import SizeDistribution
+from dustoptics.particles.sizedist import MIN_TAIL_FRACTION, SizeDistribution
 from dustoptics.particles.sizedist_derivatives import (
     boundary_terms,
     number_density_derivative,
@@ -83,7 +83,11 @@ from dustoptics.particles.sizedist_derivatives import (
 )
 from dustoptics.scattering import mie
 from dustoptics.scattering.expansion import greek_coefficients
-from dustoptics.scattering.mie_derivatives import _accumulate, _series_lengths
+from dustoptics.scattering.mie_derivatives import (
+    _accumulate,
+    _accumulate_panels,
+    _series_lengths,
+)
 from dustoptics.scattering.mie_derivatives_blocked import (
     _accumulate_blocked,
     _legendre_evaluate_rows,
@@ -95,7 +99,10 @@ from dustoptics.scattering.quadrature import (
     _gauss_points,
     _node_weights,
     gauss_legendre,
+    initial_panels,
+    size_parameter_at,
 )
+from dustoptics.scattering.refinement import _KEEP_FRACTION, _choose_splits, _panel_cost
 from dustoptics.table import Table, TableDerivatives
 
 if TYPE_CHECKING:  # the request's module imports this one
@@ -243,6 +250,21 @@ def _rule_nodes(
     return x, rule
 
 
+def _weight_columns(
+    distribution: SizeDistribution,
+    x: np.ndarray,
+    rule: np.ndarray,
+    *,
+    k_um: float,
+    dist_parameters: Sequence[str],
+) -> np.ndarray:
+    """Weight columns of nodes in their given order: n J, then dn/dp J per parameter."""
+    r = x / k_um
+    columns = [np.asarray(distribution.pdf(r), dtype=np.float64) * rule]
+    columns += [number_density_derivative(distribution, r, p) * rule for p in dist_parameters]
+    return np.column_stack(columns)
+
+
 def _weights(
     distribution: SizeDistribution,
     x: np.ndarray,
@@ -255,10 +277,7 @@ def _weights(
     """Nodes sorted by size and their weight columns: n J, then dn/dp J per
     distribution parameter, with the point-mass nodes of moving support ends
     (unless ``boundary`` is false: a part of a rule whose whole has them)."""
-    r = x / k_um
-    columns = [np.asarray(distribution.pdf(r), dtype=np.float64) * rule]
-    columns += [number_density_derivative(distribution, r, p) * rule for p in dist_parameters]
-    weights = np.column_stack(columns)
+    weights = _weight_columns(distribution, x, rule, k_um=k_um, dist_parameters=dist_parameters)
     extra_x: list[float] = []
     extra_w: list[np.ndarray] = []
     for j, p in enumerate(dist_parameters if boundary else ()):
@@ -341,13 +360,17 @@ def _legendre_sums(
     with_m: bool,
     lmax: int,
     n_stokes: int,
+    boundary: bool = True,
 ) -> _Sums:
     """Sums whose angular parts are Legendre coefficients (orders 0..lmax):
     the nodes are summed in tiers of similar n_max, each on the Gauss grid its
     largest sphere needs (2 n_half >= 2 n_max + 2 nodes integrate the products
     of two amplitudes, degree <= 2 n_max, exactly), and each tier's sums
-    projected on P_l and added (the projection is linear)."""
-    xs, w = _weights(distribution, x, rule, k_um=k_um, dist_parameters=dist_parameters)
+    projected on P_l and added (the projection is linear); ``boundary`` as
+    :func:`_weights`."""
+    xs, w = _weights(
+        distribution, x, rule, k_um=k_um, dist_parameters=dist_parameters, boundary=boundary
+    )
     n_w = w.shape[1]
     ang = np.zeros((n_w, n_stokes, lmax + 1))
     dang = np.zeros((2, n_stokes, lmax + 1))
@@ -576,6 +599,7 @@ def _one_wavelength(
     dist_parameters: Sequence[str],
     with_radius: bool,
     per_particle: bool,
+    rtol: float,
 ) -> _Wavelength:
     matrix = table.matrix is not None
     n_order = 0 if table.expansion is None else int(table.expansion.alpha1.shape[1])
@@ -594,14 +618,350 @@ def _one_wavelength(
     )
     if at.distribution.is_monodisperse:
         return _monodisperse(at, with_radius=with_radius)
-    greek_panels = None if diagnostics.expansion_panels is None else diagnostics.expansion_panels[i]
-    values, errors, phase_sums = _angular_outputs(at, diagnostics.panels[i], greek_panels)
-    cross = _cross_outputs(
-        at, diagnostics.panels[i], diagnostics.cross_section_panels[i], phase_sums
+    return _refined(at, diagnostics.panels[i], rtol=rtol)
+
+
+#: The derivatives' own refinement stops after this many rounds of splits.
+MAX_ROUNDS = 10
+#: The derivatives' radius range leaves out this fraction of the table's tail
+#: fraction: dn/dp = n d(ln n)/dp grows in the tails (d(ln n)/dv_eff of a
+#: modified gamma ~ r / (r_eff v_eff^2)), so the table's tails, negligible for
+#: the values, are not for the derivatives.
+DERIVATIVE_TAIL_FACTOR = 1e-4
+
+
+def _extended(at: _At, panels: np.ndarray) -> np.ndarray:
+    """The table's panels (sorted) with panels added below and above them out
+    to the bounds of the tail fraction times :data:`DERIVATIVE_TAIL_FACTOR`
+    (no wider than the level-0 panels)."""
+    settings = at.settings
+    tail = max(MIN_TAIL_FRACTION, settings.tail_fraction * DERIVATIVE_TAIL_FACTOR)
+    edges = initial_panels(
+        at.distribution,
+        wavelength_nm=at.wavelength_nm,
+        settings=replace(settings, tail_fraction=tail),
+        lower_moment=0 if at.per_particle else 2,
     )
-    for key, (v, e) in cross.items():
-        values[key] = v
-        errors[key] = e
+    panels = panels[np.argsort(panels[:, 0], kind="stable")]
+    parts = [panels]
+    for lo, hi, first in ((edges[0], panels[0, 0], True), (panels[-1, 1], edges[-1], False)):
+        if hi > lo:
+            n = max(1, math.ceil((hi - lo) / settings.panel_width))
+            cut = np.linspace(lo, hi, n + 1)
+            cut[0 if not first else -1] = panels[0, 0] if first else panels[-1, 1]
+            extra = np.column_stack([cut[:-1], cut[1:]])
+            parts.insert(0 if first else len(parts), extra)
+    return np.concatenate(parts)
+
+
+def _combined(a: _Sums, b: _Sums, sign: float) -> _Sums:
+    """a + sign b, field by field."""
+    return _Sums(
+        a.ang + sign * b.ang,
+        a.dang + sign * b.dang,
+        a.sums + sign * b.sums,
+        a.dsums + sign * b.dsums,
+    )
+
+
+@dataclass(frozen=True)
+class _Plan:
+    """How one wavelength's sums are taken: at the output angles or as Legendre
+    coefficients (orders 0..lmax)."""
+
+    legendre: bool
+    lmax: int
+
+    def sums(self, at: _At, panels: np.ndarray, *, halves: bool, boundary: bool) -> _Sums:
+        """The sums of the panels' fine (``halves``) or coarse rule."""
+        x, rule = at.rule(panels, halves=halves)
+        if self.legendre:
+            return _legendre_sums(
+                at.m,
+                at.distribution,
+                x,
+                rule,
+                lmax=self.lmax,
+                n_stokes=at.n_q,
+                boundary=boundary,
+                **at.common(),
+            )
+        return _sums(
+            at.m,
+            at.distribution,
+            x,
+            rule,
+            mu=np.ascontiguousarray(at.mu_out),
+            n_stokes=at.n_q,
+            boundary=boundary,
+            **at.common(),
+        )
+
+    def outputs(
+        self, at: _At, fine: _Sums, coarse: _Sums
+    ) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
+        """Every derivative of the fine rule's sums, and its difference from the
+        coarse rule's (the largest over angle or order), by key."""
+        common = {"per_particle": at.per_particle, "n_q": at.n_q, "project": lambda f: f}
+        pair = [_angular(s, at.n_dist, at.index_directions, **common) for s in (fine, coarse)]
+        if self.legendre:
+            shape = pair[0].shape
+            rows = np.concatenate([pair[0], pair[0] - pair[1]]).reshape(-1, shape[-1])
+            found = _legendre_evaluate_rows(rows, np.ascontiguousarray(at.mu_out))
+            ang, diff = found.reshape((2, *shape[:-1], at.mu_out.size))
+        else:
+            ang, diff = pair[0], pair[0] - pair[1]
+        values: dict[str, np.ndarray] = {}
+        errors: dict[str, np.ndarray] = {}
+        for q, key in enumerate(at.angular_keys):
+            values[key] = ang[:, q]
+            errors[key] = np.max(np.abs(diff[:, q]), axis=-1)
+        if at.n_order:
+            greek = [
+                _greek(s, at.n_dist, at.index_directions, at.per_particle, at.n_order, self.lmax)
+                for s in (fine, coarse)
+            ]
+            for j, key in enumerate(EXPANSION_KEYS):
+                values[key] = greek[0][:, j]
+                errors[key] = np.max(np.abs(greek[0][:, j] - greek[1][:, j]), axis=-1)
+        cross = [
+            _cross(
+                s,
+                at.n_dist,
+                at.index_directions,
+                per_particle=at.per_particle,
+                area=at.area,
+                lossless=at.lossless,
+            )
+            for s in (fine, coarse)
+        ]
+        for key, v in cross[0].items():
+            values[key] = v
+            errors[key] = np.abs(v - cross[1][key])
+        return values, errors
+
+
+#: Output angles (evenly picked) at which the derivatives' refinement compares
+#: each panel's rules.
+PROBE_ANGLES = 48
+
+
+def _probe_mu(at: _At) -> np.ndarray:
+    """The output angles' cosines at which panels are compared (all if few)."""
+    n = at.mu_out.size
+    if n <= PROBE_ANGLES:
+        return np.ascontiguousarray(at.mu_out)
+    pick = np.unique(np.round(np.linspace(0, n - 1, PROBE_ANGLES)).astype(np.int64))
+    return np.ascontiguousarray(at.mu_out[pick])
+
+
+@dataclass(frozen=True)
+class _PanelSums:
+    """Sums per panel (leading axis) at the probe angles, as :class:`_Sums`."""
+
+    ang: np.ndarray
+    dang: np.ndarray
+    sums: np.ndarray
+    dsums: np.ndarray
+
+    def fields(self) -> tuple[np.ndarray, ...]:
+        return self.ang, self.dang, self.sums, self.dsums
+
+    def take(self, keep: np.ndarray) -> _PanelSums:
+        return _PanelSums(*(a[keep] for a in self.fields()))
+
+    def joined(self, other: _PanelSums) -> _PanelSums:
+        return _PanelSums(
+            *(np.concatenate([a, b]) for a, b in zip(self.fields(), other.fields(), strict=True))
+        )
+
+
+def _panel_probe(at: _At, panels: np.ndarray, mu: np.ndarray, *, halves: bool) -> _PanelSums:
+    """Each panel's sums (fine rule if ``halves``, else coarse) at the angles ``mu``,
+    without the point masses of moving ends (the same in both rules)."""
+    n = panels.shape[0]
+    x, rule = at.rule(panels, halves=halves)
+    weights = _weight_columns(
+        at.distribution, x, rule, k_um=at.k_um, dist_parameters=at.dist_parameters
+    )
+    node_panel = ((np.arange(x.size) // at.settings.nodes_per_panel) % n).astype(np.int64)
+    return _PanelSums(
+        *_accumulate_panels(
+            at.m, x, np.ascontiguousarray(weights), mu, at.per_particle, node_panel, n
+        )
+    )
+
+
+def _boundary_probe(at: _At, mu: np.ndarray) -> tuple[np.ndarray, ...]:
+    """The point masses' sums at ``mu`` (no rule nodes), as :class:`_PanelSums`
+    fields of one panel."""
+    xs, w = _weights(
+        at.distribution,
+        np.empty(0),
+        np.empty(0),
+        k_um=at.k_um,
+        dist_parameters=at.dist_parameters,
+    )
+    return tuple(_accumulate(at.m, xs, np.ascontiguousarray(w), mu, at.per_particle, False))
+
+
+def _batched_outputs(
+    at: _At, ang: np.ndarray, dang: np.ndarray, sums: np.ndarray, dsums: np.ndarray
+) -> np.ndarray:
+    """Derivatives of the angular outputs at the probe angles, then of g and
+    the cross-sections (as :func:`_angular`, :func:`_cross`), for a batch of
+    sums (leading axis): shape (batch, n_parameter, n_q n_mu + 4)."""
+    n_q = at.n_q
+    d_ang = [ang[:, 1 + j, :n_q] for j in range(at.n_dist)]
+    d_sums = [sums[:, 1 + j] for j in range(at.n_dist)]
+    for dm in at.index_directions:
+        d_ang.append(dm.real * dang[:, 0, :n_q] + dm.imag * dang[:, 1, :n_q])
+        d_sums.append(dm.real * dsums[:, 0] + dm.imag * dsums[:, 1])
+    s0 = sums[:, 0]
+    norm = s0[:, 0] if at.per_particle else 2.0 * math.pi * s0[:, 2]
+    f = ang[:, 0, :n_q] / norm[:, None, None]
+    g = s0[:, 4] / s0[:, 0] if at.per_particle else s0[:, 3] / s0[:, 2]
+    out = []
+    for j, (da, ds) in enumerate(zip(d_ang, d_sums, strict=True)):
+        d_norm = ds[:, 0] if at.per_particle else 2.0 * math.pi * ds[:, 2]
+        angular = (da - f * d_norm[:, None, None]) / norm[:, None, None]
+        if at.per_particle:
+            dg = (ds[:, 4] - g * ds[:, 0]) / s0[:, 0]
+        else:
+            dg = (ds[:, 3] - g * ds[:, 2]) / s0[:, 2]
+        d_ext = ds[:, 1]
+        if at.lossless:
+            dm = at.index_directions[j - at.n_dist] if j >= at.n_dist else 0j
+            d_ext = ds[:, 2] + dm.imag * (dsums[:, 1, 1] - dsums[:, 1, 2])
+        cross = np.column_stack([dg, at.area * d_ext, at.area * ds[:, 2], at.area * ds[:, 5]])
+        out.append(np.concatenate([angular.reshape(angular.shape[0], -1), cross], axis=1))
+    return np.stack(out, axis=1)
+
+
+def _panel_errors(
+    at: _At, fine: _PanelSums, coarse: _PanelSums, boundary: tuple[np.ndarray, ...]
+) -> tuple[np.ndarray, np.ndarray]:
+    """The outputs of the panels' summed fine rules (with the point masses), and
+    each panel's share of their error: the change of the outputs when that
+    panel's fine rule is replaced by its coarse one, shape (n_panels,
+    n_parameter, n_outputs)."""
+    total = [f.sum(axis=0) + b for f, b in zip(fine.fields(), boundary, strict=True)]
+    whole = _batched_outputs(at, *(t[None] for t in total))
+    swapped = _batched_outputs(
+        at,
+        *(t[None] - (f - c) for t, f, c in zip(total, fine.fields(), coarse.fields(), strict=True)),
+    )
+    return whole[0], np.abs(whole - swapped)
+
+
+def _converged(values: dict[str, np.ndarray], errors: dict[str, np.ndarray], rtol: float) -> bool:
+    """Whether every derivative's estimate is within ``rtol`` of its largest
+    magnitude (over angle or order), parameter by parameter."""
+    for key, v in values.items():
+        scale = np.max(np.abs(v.reshape(v.shape[0], -1)), axis=1)
+        if np.any(errors[key] > rtol * scale):
+            return False
+    return True
+
+
+def _with_panel_errors(
+    at: _At, errors: dict[str, np.ndarray], shares: np.ndarray
+) -> dict[str, np.ndarray]:
+    """The estimates: the larger of the summed rules' difference and the sum
+    over panels of each panel's share (no cancellation between panels), the
+    largest over the probe angles for the angular outputs."""
+    summed = shares.sum(axis=0)  # (n_parameter, n_outputs)
+    n_par = summed.shape[0]
+    n_mu = (summed.shape[1] - 4) // at.n_q
+    angular = summed[:, : at.n_q * n_mu].reshape(n_par, at.n_q, n_mu).max(axis=-1)
+    out = dict(errors)
+    for q, key in enumerate(at.angular_keys):
+        out[key] = np.maximum(errors[key], angular[:, q])
+    for j, key in enumerate(("g", *_CROSS_KEYS)):
+        out[key] = np.maximum(errors[key], summed[:, at.n_q * n_mu + j])
+    if at.n_order:
+        # The expansion coefficients' sums cancel between panels as the phase
+        # function's do: their estimate grows by the phase function's ratio.
+        ratio = np.maximum(out["phase"] / np.maximum(errors["phase"], 1e-300), 1.0)
+        for key in EXPANSION_KEYS:
+            out[key] = errors[key] * ratio
+    return out
+
+
+def _badness(at: _At, whole: np.ndarray, shares: np.ndarray, rtol: float) -> np.ndarray:
+    """Per panel, its largest share of an output's error in units of that
+    output's tolerance (``rtol`` times its largest magnitude over angle)."""
+    n_par, n_out = whole.shape
+    n_ang = n_out - 4
+    n_mu = n_ang // at.n_q
+    mag = np.abs(whole)
+    scale = np.empty_like(mag)
+    top = mag[:, :n_ang].reshape(n_par, at.n_q, n_mu).max(axis=-1)
+    scale[:, :n_ang] = np.repeat(top, n_mu, axis=-1)
+    scale[:, n_ang:] = mag[:, n_ang:]
+    return np.asarray(np.max(shares / (rtol * scale + 1e-300), axis=(1, 2)))
+
+
+def _refined(at: _At, table_panels: np.ndarray, *, rtol: float) -> _Wavelength:
+    """The derivatives refined to ``rtol`` on their own panels, from the table's.
+
+    Every derivative's estimate must be within ``rtol`` of its largest
+    magnitude: the estimate is the larger of the summed rules' difference and
+    the sum over panels of each panel's share (:func:`_panel_errors`, at
+    :data:`PROBE_ANGLES` output angles), so that panels' errors of opposite
+    signs do not hide each other.  Until then, the panels with the largest
+    shares are split (the rule of
+    :func:`~dustoptics.scattering.refinement._choose_splits`), and only their
+    sums are taken again: a split panel's fine rule becomes its halves'
+    coarse rules, so the totals change by differences alone.
+    """
+    panels = _extended(at, table_panels)
+    x_top = float(size_parameter_at(panels[:, 1].max(), settings=at.settings))
+    nmax = mie.wiscombe_nmax(max(x_top, 1e-3) * 1.0001 + 1.0)
+    n_half = 16 * ((nmax + 1 + 15) // 16)
+    plan = _Plan(legendre=bool(2 * n_half < at.mu_out.size or at.n_order), lmax=2 * nmax)
+    mu = _probe_mu(at)
+    boundary = _boundary_probe(at, mu)
+    fine = plan.sums(at, panels, halves=True, boundary=True)
+    coarse = plan.sums(at, panels, halves=False, boundary=True)
+    pf = _panel_probe(at, panels, mu, halves=True)
+    pc = _panel_probe(at, panels, mu, halves=False)
+    values, errors = plan.outputs(at, fine, coarse)
+    whole, shares = _panel_errors(at, pf, pc, boundary)
+    errors = _with_panel_errors(at, errors, shares)
+    max_panels = panels.shape[0] * 2**6
+    for _ in range(MAX_ROUNDS):
+        if _converged(values, errors, rtol) or panels.shape[0] >= max_panels:
+            break
+        cost = _panel_cost(
+            np.ascontiguousarray(panels[:, 1]), at.settings.transition_size_parameter, True
+        )
+        split, _, _ = _choose_splits(
+            _badness(at, whole, shares, rtol),
+            cost,
+            1.0,
+            _KEEP_FRACTION,
+            panels[:, 0].copy(),
+            panels[:, 1].copy(),
+        )
+        parents = panels[split]
+        mid = 0.5 * (parents[:, 0] + parents[:, 1])
+        new = np.concatenate(
+            [np.column_stack([parents[:, 0], mid]), np.column_stack([mid, parents[:, 1]])]
+        )
+        parent_fine = plan.sums(at, parents, halves=True, boundary=False)
+        parent_coarse = plan.sums(at, parents, halves=False, boundary=False)
+        new_fine = plan.sums(at, new, halves=True, boundary=False)
+        fine = _combined(_combined(fine, parent_fine, -1.0), new_fine, 1.0)
+        coarse = _combined(_combined(coarse, parent_coarse, -1.0), parent_fine, 1.0)
+        keep = np.ones(panels.shape[0], dtype=bool)
+        keep[split] = False
+        panels = np.concatenate([panels[keep], new])
+        pf = pf.take(keep).joined(_panel_probe(at, new, mu, halves=True))
+        pc = pc.take(keep).joined(_panel_probe(at, new, mu, halves=False))
+        values, errors = plan.outputs(at, fine, coarse)
+        whole, shares = _panel_errors(at, pf, pc, boundary)
+        errors = _with_panel_errors(at, errors, shares)
     return _Wavelength(values, errors)
 
 
@@ -879,6 +1239,7 @@ def table_derivatives(
             dist_parameters=dist_parameters,
             with_radius=with_radius,
             per_particle=per_particle,
+            rtol=request.rtol,
         )
 
     n_wl = table.wavelength_nm.size
