@@ -14,7 +14,8 @@ wavelength) the measured error is set against the estimate the table reports:
 - values: the phase function's and the matrix's relative estimate
   (``error_estimate``, ``matrix_error_estimate``: relative to the phase
   function at each angle), the cross-sections' (``cross_section_error_estimate``:
-  relative for C_ext, C_sca, C_back, absolute for g), propagated to the single
+  relative for C_ext, C_sca, absolute for g; C_back = 4 pi C_sca P(180 deg)
+  adds the phase function's ``error_estimate``), propagated to the single
   scattering albedo and the lidar ratio, and the expansion coefficients'
   (``expansion_error_estimate`` times 2 l + 1).
 
@@ -149,19 +150,26 @@ def models(*, seed: int, per_family: int, families: Sequence[str] = FAMILIES) ->
     return out
 
 
-def _table(model: Model, *, rtol: float, reference: bool) -> do.Table:
+def _table(
+    model: Model,
+    *,
+    rtol: float,
+    reference: bool,
+    wavelengths_nm: Sequence[float] = WAVELENGTHS_NM,
+    reference_rtol: float = REFERENCE_RTOL,
+) -> do.Table:
     kw: dict[str, Any] = {}
     if reference:
         kw = {
-            "cross_section_rtol": REFERENCE_CROSS_RTOL,
+            "cross_section_rtol": reference_rtol * REFERENCE_CROSS_RTOL / REFERENCE_RTOL,
             "quadrature": QuadratureSettings(tail_fraction=REFERENCE_TAIL, max_level=14),
         }
     return do.compute_optics(
         model.m,
         model.distribution,
-        list(WAVELENGTHS_NM),
+        list(wavelengths_nm),
         THETA_DEG,
-        rtol=REFERENCE_RTOL if reference else rtol,
+        rtol=reference_rtol if reference else rtol,
         polarization=True,
         expansion=EXPANSION_ORDER,
         derivatives=model.parameters,
@@ -203,7 +211,7 @@ def derivative_cases(model: Model, table: do.Table, ref: do.Table) -> Iterator[C
     for q in table.derivative_quantities:
         if q not in DERIVATIVE_QUANTITIES:
             continue
-        values = np.asarray(table.quantity(q) if q not in EXPANSION else table.quantity(q))
+        values = np.asarray(table.quantity(q))
         for p in model.parameters:
             d = table.derivative(q, p)
             d_ref = ref.derivative(q, p)
@@ -245,10 +253,14 @@ def value_cases(model: Model, table: do.Table, ref: do.Table) -> Iterator[Case]:
             a, b = np.asarray(table.quantity(q))[i], np.asarray(ref.quantity(q))[i]
             ratio = np.abs(a - b) / (rel[i] * phase_ref[i])
             j = int(np.argmax(ratio))
-            yield Case("value", model.family, q, "", wl, abs(a[j] - b[j]), rel[i] * phase[i, j], 1.0)
+            yield Case(
+                "value", model.family, q, "", wl, abs(a[j] - b[j]), rel[i] * phase[i, j], 1.0
+            )
         for q in ("cext_um2", "csca_um2", "cback_um2"):
             a, b = float(table.quantity(q)[i]), float(ref.quantity(q)[i])
-            yield Case("value", model.family, q, "", wl, abs(a - b), rel_cross[i] * abs(a), abs(b))
+            # <C_back> = 4 pi <C_sca> P(180 deg): the phase function's error adds.
+            rel = rel_cross[i] + (rel_phase[i] if q == "cback_um2" else 0.0)
+            yield Case("value", model.family, q, "", wl, abs(a - b), rel * abs(a), abs(b))
         g, g_ref = float(table.g[i]), float(ref.g[i])
         yield Case("value", model.family, "g", "", wl, abs(g - g_ref), float(rel_cross[i]), 1.0)
         ssa, ssa_ref = float(table.ssa[i]), float(ref.ssa[i])
@@ -263,7 +275,7 @@ def value_cases(model: Model, table: do.Table, ref: do.Table) -> Iterator[Case]:
             "",
             wl,
             abs(lr - lr_ref),
-            2 * rel_cross[i] * lr,
+            (2 * rel_cross[i] + rel_phase[i]) * lr,
             abs(lr_ref),
         )
         if table.expansion is not None and ref.expansion is not None:
@@ -275,7 +287,9 @@ def value_cases(model: Model, table: do.Table, ref: do.Table) -> Iterator[Case]:
                 b = np.asarray(getattr(ref.expansion, q))[i, : orders.size]
                 ratio = np.abs(a - b) / (e[i] * orders)
                 j = int(np.argmax(ratio))
-                yield Case("value", model.family, q, "", wl, abs(a[j] - b[j]), e[i] * orders[j], 1.0)
+                yield Case(
+                    "value", model.family, q, "", wl, abs(a[j] - b[j]), e[i] * orders[j], 1.0
+                )
 
 
 @dataclass
@@ -328,13 +342,20 @@ def totals(summaries: dict[tuple[str, str], Summary], kind: str) -> tuple[int, i
 
 
 def run(
-    *, seed: int, per_family: int, rtol: float, families: Sequence[str] = FAMILIES
+    *,
+    seed: int,
+    per_family: int,
+    rtol: float,
+    families: Sequence[str] = FAMILIES,
+    wavelengths_nm: Sequence[float] = WAVELENGTHS_NM,
+    reference_rtol: float = REFERENCE_RTOL,
 ) -> list[Case]:
     """Every case of the seeded models."""
     cases: list[Case] = []
+    kw = {"wavelengths_nm": wavelengths_nm, "reference_rtol": reference_rtol}
     for model in models(seed=seed, per_family=per_family, families=families):
-        table = _table(model, rtol=rtol, reference=False)
-        ref = _table(model, rtol=rtol, reference=True)
+        table = _table(model, rtol=rtol, reference=False, **kw)
+        ref = _table(model, rtol=rtol, reference=True, **kw)
         cases += derivative_cases(model, table, ref)
         cases += value_cases(model, table, ref)
     return cases

@@ -837,4 +837,3 @@ def sphere_derivatives(*, m: complex, x: float, mu: ArrayLike = 1.0) -> SphereDe
         _holomorphic=holomorphic,
         _real=real,
     )
-
