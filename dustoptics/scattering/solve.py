@@ -113,7 +113,12 @@ def assemble_table(
     not_converged = _warn_not_converged(request, results, err_phase, extra)
     # The stated estimate also holds the truncated tails' share (the refinement's
     # tolerance is for the quadrature, which cannot see them).
-    err_phase = err_phase + _tail_error(request)
+    tail = _tail_error(request)
+    err_phase = err_phase + tail
+    extra = {
+        k: v + tail if k in ("matrix_error_estimate", "expansion_error_estimate") else v
+        for k, v in extra.items()
+    }
     record = _quadrature_record(request, results, err_phase, extra, converged=not not_converged)
     return _table(
         request,
