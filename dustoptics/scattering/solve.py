@@ -68,7 +68,7 @@ def solve_wavelengths(
             m_core=complex(request.m_core[i]),
             core_fraction=request.core_fraction,
         )
-        return solver.solve(request.rtol, request.cross_section_rtol, request.expansion_rtol)
+        return solver.solve(*_quadrature_tolerances(request))
 
     def report(done: int) -> None:
         if progress is not None:
@@ -201,6 +201,24 @@ def _warn_not_converged(
 #: peak and the area), and the efficiencies of the left-out spheres are at
 #: most about twice the mean's: 2 tails x 2.
 TAIL_ERROR_FACTOR = 4.0
+
+
+def _quadrature_tolerances(request: OpticsRequest) -> tuple[float, float, float | None]:
+    """The refinement's tolerances (phase, cross-sections, expansion): each of the
+    request's less the tails' share (:func:`_tail_error`), so that the stated
+    estimates, which add it, meet the request; at least half of the request's
+    (a tail fraction too large for it leaves the stated estimate above it)."""
+    tail = _tail_error(request)
+
+    def less(tol: float) -> float:
+        return max(tol - tail, 0.5 * tol)
+
+    expansion = request.expansion_rtol
+    return (
+        less(request.rtol),
+        less(request.cross_section_rtol),
+        None if expansion is None else less(expansion),
+    )
 
 
 def _tail_error(request: OpticsRequest) -> float:
