@@ -1,13 +1,14 @@
-"""Exact derivatives of a computed table, on the table's own converged quadrature.
+"""Exact derivatives of a computed table, converged on their own radius quadrature.
 
 :func:`~dustoptics.scattering.optics.compute_optics` with ``derivatives=(...)``
 first refines its radius quadrature as always (the table's numbers do not
-change), then calls :func:`table_derivatives`, which sums the derivatives over
-the same radius nodes: the halves of the final panels the table records in
-its :class:`~dustoptics.scattering.quadrature.QuadratureDiagnostics` (the
-phase matrix's panels for the angular outputs, the finer cross-section panels
-for <C_ext>, <C_sca>, <C_back> and g, the expansion coefficients' own
-panels, refined further to their tolerance, for those).
+change), then calls :func:`table_derivatives`, which sums the derivatives
+over radius panels of their own: it starts from the table's final phase
+function panels (recorded in its
+:class:`~dustoptics.scattering.quadrature.QuadratureDiagnostics`), adds
+panels out to a tail fraction :data:`DERIVATIVE_TAIL_FACTOR` times the
+table's (dn/dp grows in the tails), and splits panels until every derivative
+meets the table's ``rtol`` (:func:`_refined`).
 
 At fixed nodes r_i with rule weights J_i, each polydisperse sum
 S[Y] = sum_i J_i n(r_i) Y(r_i) has the exact derivatives
@@ -36,32 +37,34 @@ Cost
 ``python scripts/benchmark.py --derivatives`` (section 11) measures the cost
 against the table alone.  The distribution's parameters need no Mie work
 beyond the sums' weight columns; n and k need S1, S2 and dS/dm of every node
-(twice the table's angular work a node), on the final panels' fine and
-coarse rules (the coarse rule, for the error estimate, is a third of the
-work).  The cross-sections' panels continue from the phase function's, so
-their rules are summed again only on the panels that differ (a tenth to a
-fifth of them for the default table); the rest come from the angular sums.
-Measured on the default table (48 x 1,801, one thread): the fine rule's
-angular sums with dS/dm 0.39 s of CPU and its Mie coefficients with their m
-derivatives 0.10 s, the coarse rule's 0.24 s, against 0.5-0.6 s for the table
-alone: the fine rule by itself, without an error estimate, is 0.8-1.0 times
-the table's cost.  Without a parameter of the refractive index the angular m
-derivatives are not summed (the amplitudes' pass without dS/dm): r_eff and
-v_eff alone cost 1.86-2.38 times the table against 2.13-2.58 for all four
-(seven runs of section 11 on 2 cores, load 0.5-1.2; the ratio moves with the load).
+(twice the table's angular work a node), on the panels' fine and coarse
+rules, and every panel is also summed on its own at :data:`PROBE_ANGLES`
+angles for the estimate; panels split by the refinement are summed again
+(their fine and coarse rules, and their halves' fine rules).
 
 Error estimate
 --------------
-Each sum is also taken with the coarse rule of every final panel (one
+Each sum is also taken with the coarse rule of every panel (one
 Gauss-Legendre rule on the panel instead of one on each half), as the
-table's own refinement estimates its error; the difference of the two
-derivatives, the largest over angle for the angular outputs, is the
-reported ``error_estimate`` (in the derivative's unit).  It overstates the
-error of the finer rule that gives the values when the rule converges fast.
-The quadrature's panels were refined for the values, not for the
-derivatives: where the estimate is large (lossless spheres with size
-parameters of tens, whose n derivatives have narrow resonance spikes) it says
-so, it does not refine further.
+table's own refinement estimates its error.  The estimate of a derivative is
+:data:`SAFETY` times the larger of the two rules' difference (the largest
+over angle or order) and the sum over panels of each panel's share of it
+(the change of the derivative when that panel alone takes its coarse rule,
+at :data:`PROBE_ANGLES` output angles), so that errors of opposite sign in
+different panels do not cancel in it.  The refinement splits the panels
+with the largest shares until every estimate (before the safety factor) is
+within ``rtol`` of the derivative's largest magnitude over angle or order,
+or after :data:`MAX_ROUNDS` rounds (the estimate then says how far it got).
+The cross-sections' estimates also hold their values' stated relative error
+times the derivative, so that the single scattering albedo's and the lidar
+ratio's, propagated from them with the table's values, cover those values'
+errors.  ``scripts/calibrate_estimates.py`` checks the estimates against
+tight references over random models of every family.
+
+One sphere (:class:`~dustoptics.particles.sizedist.Monodisperse`) has no
+quadrature: its derivatives are exact for the table's series of Wiscombe's
+n_max terms, and the estimate is the series' truncation error (the change
+with :data:`EXTRA_TERMS` more terms) plus its round-off.
 """
 
 from __future__ import annotations
@@ -122,9 +125,9 @@ INDEX_PARAMETERS = ("n", "k")
 
 #: How the derivatives are computed (recorded with them).
 METHOD = (
-    "exact derivatives summed over the table's final radius nodes (dn/dp in closed form, "
-    "dS/dm from the Mie recurrences, quotient and chain rules); error estimate = difference "
-    "from the panels' coarse rule"
+    "exact derivatives summed over radius panels refined for them to the table's rtol (dn/dp "
+    "in closed form, dS/dm from the Mie recurrences, quotient and chain rules); error estimate "
+    "= 2 x the panels' differences from their coarse rules, summed without cancellation"
 )
 
 
@@ -646,16 +649,6 @@ def _extended(at: _At, panels: np.ndarray) -> np.ndarray:
     return np.concatenate(parts)
 
 
-def _combined(a: _Sums, b: _Sums, sign: float) -> _Sums:
-    """a + sign b, field by field."""
-    return _Sums(
-        a.ang + sign * b.ang,
-        a.dang + sign * b.dang,
-        a.sums + sign * b.sums,
-        a.dsums + sign * b.dsums,
-    )
-
-
 @dataclass(frozen=True)
 class _Plan:
     """How one wavelength's sums are taken: at the output angles or as Legendre
@@ -741,7 +734,7 @@ SAFETY = 2.0
 
 #: Output angles (evenly picked) at which the derivatives' refinement compares
 #: each panel's rules.
-PROBE_ANGLES = 48
+PROBE_ANGLES = 12
 
 
 def _probe_mu(at: _At) -> np.ndarray:
@@ -852,16 +845,6 @@ def _panel_errors(
     return whole[0], np.abs(whole - swapped)
 
 
-def _converged(values: dict[str, np.ndarray], errors: dict[str, np.ndarray], rtol: float) -> bool:
-    """Whether every derivative's estimate is within ``rtol`` of its largest
-    magnitude (over angle or order), parameter by parameter."""
-    for key, v in values.items():
-        scale = np.max(np.abs(v.reshape(v.shape[0], -1)), axis=1)
-        if np.any(errors[key] > rtol * scale):
-            return False
-    return True
-
-
 def _with_panel_errors(
     at: _At, errors: dict[str, np.ndarray], shares: np.ndarray
 ) -> dict[str, np.ndarray]:
@@ -886,9 +869,9 @@ def _with_panel_errors(
     return out
 
 
-def _badness(at: _At, whole: np.ndarray, shares: np.ndarray, rtol: float) -> np.ndarray:
-    """Per panel, its largest share of an output's error in units of that
-    output's tolerance (``rtol`` times its largest magnitude over angle)."""
+def _scale(at: _At, whole: np.ndarray) -> np.ndarray:
+    """The magnitude each output of :func:`_batched_outputs` is held to: the
+    largest over the probe angles for the angular ones, its own for the others."""
     n_par, n_out = whole.shape
     n_ang = n_out - 4
     n_mu = n_ang // at.n_q
@@ -897,39 +880,42 @@ def _badness(at: _At, whole: np.ndarray, shares: np.ndarray, rtol: float) -> np.
     top = mag[:, :n_ang].reshape(n_par, at.n_q, n_mu).max(axis=-1)
     scale[:, :n_ang] = np.repeat(top, n_mu, axis=-1)
     scale[:, n_ang:] = mag[:, n_ang:]
-    return np.asarray(np.max(shares / (rtol * scale + 1e-300), axis=(1, 2)))
+    return scale
+
+
+def _badness(at: _At, whole: np.ndarray, shares: np.ndarray, rtol: float) -> np.ndarray:
+    """Per panel, its largest share of an output's error in units of that
+    output's tolerance (``rtol`` times :func:`_scale`)."""
+    return np.asarray(np.max(shares / (rtol * _scale(at, whole) + 1e-300), axis=(1, 2)))
 
 
 def _refined(at: _At, table_panels: np.ndarray, *, rtol: float) -> _Wavelength:
     """The derivatives refined to ``rtol`` on their own panels, from the table's.
 
-    Every derivative's estimate must be within ``rtol`` of its largest
-    magnitude: the estimate is the larger of the summed rules' difference and
-    the sum over panels of each panel's share (:func:`_panel_errors`, at
-    :data:`PROBE_ANGLES` output angles), so that panels' errors of opposite
-    signs do not hide each other.  Until then, the panels with the largest
-    shares are split (the rule of
-    :func:`~dustoptics.scattering.refinement._choose_splits`), and only their
-    sums are taken again: a split panel's fine rule becomes its halves'
-    coarse rules, so the totals change by differences alone.
+    Each panel is summed on its own at :data:`PROBE_ANGLES` output angles
+    (and without angles for the cross-sections and g), with its fine and its
+    coarse rule; a panel's share of a derivative's error is the change when
+    that panel alone takes its coarse rule (:func:`_panel_errors`), and the
+    shares are summed over panels, so that errors of opposite signs do not
+    hide each other.  Until every summed share is within ``rtol`` of its
+    derivative's magnitude, the panels with the largest shares are split (the
+    rule of :func:`~dustoptics.scattering.refinement._choose_splits`); only
+    the new panels are summed.  The derivatives are then summed over the final
+    panels at every output angle (or in Legendre coefficients), fine and
+    coarse rule, and the estimate is the larger of their difference and the
+    summed shares (:func:`_with_panel_errors`).
     """
     panels = _extended(at, table_panels)
-    x_top = float(size_parameter_at(panels[:, 1].max(), settings=at.settings))
-    nmax = mie.wiscombe_nmax(max(x_top, 1e-3) * 1.0001 + 1.0)
-    n_half = 16 * ((nmax + 1 + 15) // 16)
-    plan = _Plan(legendre=bool(2 * n_half < at.mu_out.size or at.n_order), lmax=2 * nmax)
     mu = _probe_mu(at)
     boundary = _boundary_probe(at, mu)
-    fine = plan.sums(at, panels, halves=True, boundary=True)
-    coarse = plan.sums(at, panels, halves=False, boundary=True)
     pf = _panel_probe(at, panels, mu, halves=True)
     pc = _panel_probe(at, panels, mu, halves=False)
-    values, errors = plan.outputs(at, fine, coarse)
     whole, shares = _panel_errors(at, pf, pc, boundary)
-    errors = _with_panel_errors(at, errors, shares)
     max_panels = panels.shape[0] * 2**6
     for _ in range(MAX_ROUNDS):
-        if _converged(values, errors, rtol) or panels.shape[0] >= max_panels:
+        if np.all(shares.sum(axis=0) <= rtol * _scale(at, whole)):
+            break
+        if panels.shape[0] >= max_panels:
             break
         cost = _panel_cost(
             np.ascontiguousarray(panels[:, 1]), at.settings.transition_size_parameter, True
@@ -947,19 +933,20 @@ def _refined(at: _At, table_panels: np.ndarray, *, rtol: float) -> _Wavelength:
         new = np.concatenate(
             [np.column_stack([parents[:, 0], mid]), np.column_stack([mid, parents[:, 1]])]
         )
-        parent_fine = plan.sums(at, parents, halves=True, boundary=False)
-        parent_coarse = plan.sums(at, parents, halves=False, boundary=False)
-        new_fine = plan.sums(at, new, halves=True, boundary=False)
-        fine = _combined(_combined(fine, parent_fine, -1.0), new_fine, 1.0)
-        coarse = _combined(_combined(coarse, parent_coarse, -1.0), parent_fine, 1.0)
         keep = np.ones(panels.shape[0], dtype=bool)
         keep[split] = False
         panels = np.concatenate([panels[keep], new])
         pf = pf.take(keep).joined(_panel_probe(at, new, mu, halves=True))
         pc = pc.take(keep).joined(_panel_probe(at, new, mu, halves=False))
-        values, errors = plan.outputs(at, fine, coarse)
         whole, shares = _panel_errors(at, pf, pc, boundary)
-        errors = _with_panel_errors(at, errors, shares)
+    x_top = float(size_parameter_at(panels[:, 1].max(), settings=at.settings))
+    nmax = mie.wiscombe_nmax(max(x_top, 1e-3) * 1.0001 + 1.0)
+    n_half = 16 * ((nmax + 1 + 15) // 16)
+    plan = _Plan(legendre=bool(2 * n_half < at.mu_out.size or at.n_order), lmax=2 * nmax)
+    fine = plan.sums(at, panels, halves=True, boundary=True)
+    coarse = plan.sums(at, panels, halves=False, boundary=True)
+    values, errors = plan.outputs(at, fine, coarse)
+    errors = _with_panel_errors(at, errors, shares)
     return _Wavelength(values, {k: SAFETY * e for k, e in errors.items()})
 
 
