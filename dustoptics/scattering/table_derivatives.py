@@ -687,8 +687,17 @@ class _Plan:
     ) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
         """Every derivative of the fine rule's sums, and its difference from the
         coarse rule's (the largest over angle or order), by key."""
-        common = {"per_particle": at.per_particle, "n_q": at.n_q, "project": lambda f: f}
-        pair = [_angular(s, at.n_dist, at.index_directions, **common) for s in (fine, coarse)]
+        pair = [
+            _angular(
+                s,
+                at.n_dist,
+                at.index_directions,
+                per_particle=at.per_particle,
+                n_q=at.n_q,
+                project=lambda f: f,
+            )
+            for s in (fine, coarse)
+        ]
         if self.legendre:
             shape = pair[0].shape
             rows = np.concatenate([pair[0], pair[0] - pair[1]]).reshape(-1, shape[-1])
