@@ -743,7 +743,7 @@ SAFETY = 2.0
 
 #: Output angles (evenly picked) at which the derivatives' refinement compares
 #: each panel's rules.
-PROBE_ANGLES = 12
+PROBE_ANGLES = 24
 
 
 def _probe_mu(at: _At) -> np.ndarray:
