@@ -30,6 +30,8 @@ Usage::
 
     python scripts/calibrate_estimates.py --per-family 20          # the full set
     python scripts/calibrate_estimates.py --per-family 2 --seed 7  # a quick look
+    python scripts/calibrate_estimates.py --per-family 1 --seed 3 --wavelengths 750 \
+        --reference-rtol 1e-7                                       # the suite's subset
 
 The suite runs a small seeded subset (``tests/scattering/test_calibration.py``).
 """
@@ -394,9 +396,20 @@ def main(args: Sequence[str] | None = None) -> int:
     parser.add_argument("--seed", type=int, default=20261206)
     parser.add_argument("--rtol", type=float, default=1e-4, help="the tolerance under test")
     parser.add_argument("--families", nargs="*", default=list(FAMILIES), choices=FAMILIES)
+    parser.add_argument(
+        "--wavelengths", nargs="*", type=float, default=list(WAVELENGTHS_NM), help="[nm]"
+    )
+    parser.add_argument("--reference-rtol", type=float, default=REFERENCE_RTOL)
     opts = parser.parse_args(args)
     start = time.perf_counter()
-    cases = run(seed=opts.seed, per_family=opts.per_family, rtol=opts.rtol, families=opts.families)
+    cases = run(
+        seed=opts.seed,
+        per_family=opts.per_family,
+        rtol=opts.rtol,
+        families=opts.families,
+        wavelengths_nm=opts.wavelengths,
+        reference_rtol=opts.reference_rtol,
+    )
     print(report(summarize(cases, rtol=opts.rtol), rtol=opts.rtol))
     print(
         f"{opts.per_family} models per family, seed {opts.seed}, rtol {opts.rtol:g}, "
