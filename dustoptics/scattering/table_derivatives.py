@@ -39,15 +39,13 @@ against the table alone.  The distribution's parameters need no Mie work
 beyond the sums' weight columns; n and k need S1, S2 and dS/dm of every node
 (twice the table's angular work a node), on the panels' fine and coarse
 rules, and every panel is also summed on its own at :data:`PROBE_ANGLES`
-angles for the estimate (the unblocked kernel of
-:mod:`~dustoptics.scattering.mie_derivatives`, panel by panel:
-``_accumulate_panels``), and the refinement adds panels where the
-derivatives need them.  ``python scripts/derivative_cost.py`` on a loaded
-2-core machine: 15.6 s of CPU against 0.73 s for the default table alone
-(21x; on the table's own panels without this refinement it was 2.3x, and
-16 % of the suite's calibration cases erred beyond their estimates).  Summing each panel's
-probe rows in the blocked kernel, alongside the final sums, would remove
-most of the difference.
+angles for the estimate (the blocked kernel, one panel at a time), and the
+refinement adds panels where the derivatives need them.  ``python
+scripts/derivative_cost.py`` on a loaded 2-core machine: 5.9 s of CPU
+against 0.63 s for the default table alone (9.4x; on the table's own panels
+without this refinement it was 2.3x, and 16 % of the suite's calibration
+cases erred beyond their estimates).  Summing each panel's probe rows in the
+final sums' pass would save most of the probe's work.
 
 Error estimate
 --------------
@@ -93,11 +91,7 @@ from dustoptics.particles.sizedist_derivatives import (
 )
 from dustoptics.scattering import mie
 from dustoptics.scattering.expansion import greek_coefficients
-from dustoptics.scattering.mie_derivatives import (
-    _accumulate,
-    _accumulate_panels,
-    _series_lengths,
-)
+from dustoptics.scattering.mie_derivatives import _accumulate, _series_lengths
 from dustoptics.scattering.mie_derivatives_blocked import (
     _accumulate_blocked,
     _legendre_evaluate_rows,
@@ -785,18 +779,39 @@ class _PanelSums:
 
 def _panel_probe(at: _At, panels: np.ndarray, mu: np.ndarray, *, halves: bool) -> _PanelSums:
     """Each panel's sums (fine rule if ``halves``, else coarse) at the angles ``mu``,
-    without the point masses of moving ends (the same in both rules)."""
+    without the point masses of moving ends (the same in both rules): the
+    blocked kernel, one panel at a time."""
     n = panels.shape[0]
     x, rule = at.rule(panels, halves=halves)
     weights = _weight_columns(
         at.distribution, x, rule, k_um=at.k_um, dist_parameters=at.dist_parameters
     )
-    node_panel = ((np.arange(x.size) // at.settings.nodes_per_panel) % n).astype(np.int64)
-    return _PanelSums(
-        *_accumulate_panels(
-            at.m, x, np.ascontiguousarray(weights), mu, at.per_particle, node_panel, n
-        )
+    npp = at.settings.nodes_per_panel
+    # Node j belongs to rule panel j // npp; with halves, panels k and k + n are
+    # the halves of panel k (left then right: increasing x, as the kernel batches).
+    parts = 2 if halves else 1
+    order = (np.arange(parts)[None, :] * n + np.arange(n)[:, None]).ravel()
+    x = x.reshape(-1, npp)[order].reshape(n, parts * npp)
+    weights = weights.reshape(-1, npp, weights.shape[1])[order].reshape(
+        n, parts * npp, weights.shape[1]
     )
+    table = mie.angular_table(_read_only(mu), int(_series_lengths(x.ravel()).max()))
+    with_m = bool(at.index_directions)
+    rows = [
+        _accumulate_blocked(
+            at.m,
+            np.ascontiguousarray(x[p]),
+            np.ascontiguousarray(weights[p]),
+            table,
+            int(mu.size),
+            False,
+            at.n_q,
+            at.per_particle,
+            with_m,
+        )
+        for p in range(n)
+    ]
+    return _PanelSums(*(np.stack([r[k] for r in rows]) for k in range(4)))
 
 
 def _boundary_probe(at: _At, mu: np.ndarray) -> tuple[np.ndarray, ...]:
@@ -809,7 +824,10 @@ def _boundary_probe(at: _At, mu: np.ndarray) -> tuple[np.ndarray, ...]:
         k_um=at.k_um,
         dist_parameters=at.dist_parameters,
     )
-    return tuple(_accumulate(at.m, xs, np.ascontiguousarray(w), mu, at.per_particle, False))
+    ang, dang, sums, dsums = _accumulate(
+        at.m, xs, np.ascontiguousarray(w), mu, at.per_particle, False
+    )
+    return ang[:, : at.n_q], dang[:, : at.n_q], sums, dsums
 
 
 def _batched_outputs(
