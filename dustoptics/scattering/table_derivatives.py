@@ -1054,6 +1054,27 @@ def _monodisperse(at: _At, *, with_radius: bool) -> _Wavelength:
     return _Wavelength(values, errors)
 
 
+def _add_value_errors(
+    table: Table, values: dict[str, np.ndarray], errors: dict[str, np.ndarray]
+) -> None:
+    """Add to each cross-section derivative's estimate its value's stated relative
+    error times the derivative, in place.
+
+    The single scattering albedo's and the lidar ratio's derivatives combine these
+    with the table's values (TableDerivatives.pair), so their propagated
+    estimates then cover those values' errors too.  <C_back> is
+    4 pi <C_sca> P(180 deg): its value's relative error is at most the phase
+    function's (error_estimate) plus <C_sca>'s."""
+    record = table.quadrature
+    if record is None or record.cross_section_error_estimate is None:
+        return
+    rel = np.asarray(record.cross_section_error_estimate)
+    for key in _CROSS_KEYS:
+        if key == "cback_um2":
+            rel = rel + np.asarray(record.error_estimate)
+        errors[key] = errors[key] + rel * np.abs(values[key])
+
+
 def table_derivatives(
     table: Table, request: OpticsRequest, *, workers: int = 1
 ) -> TableDerivatives:
@@ -1122,19 +1143,7 @@ def table_derivatives(
     keys = list(results[0].values)
     values = {k: np.stack([r.values[k] for r in results], axis=1)[positions] for k in keys}
     errors = {k: np.stack([r.errors[k] for r in results], axis=1)[positions] for k in keys}
-    # The single scattering albedo's and the lidar ratio's derivatives combine
-    # these with the table's values (TableDerivatives.pair): each cross-section's
-    # estimate also holds the value's relative error times the derivative, so that
-    # their propagated estimates cover the values' errors too.
-    # <C_back> is 4 pi <C_sca> P(180 deg): its value's relative error is at most the
-    # phase function's (error_estimate) plus <C_sca>'s.
-    record = table.quadrature
-    if record is not None and record.cross_section_error_estimate is not None:
-        rel = np.asarray(record.cross_section_error_estimate)
-        for key in _CROSS_KEYS:
-            if key == "cback_um2":
-                rel = rel + np.asarray(record.error_estimate)
-            errors[key] = errors[key] + rel * np.abs(values[key])
+    _add_value_errors(table, values, errors)
     return TableDerivatives(
         parameters=tuple(parameters),
         parameter_units=tuple(parameter_unit(p) for p in parameters),
