@@ -435,9 +435,14 @@ def _accumulate(
     mu: np.ndarray,
     per_particle: bool,
     want_x: bool,
+    extra_terms: int = 0,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Weighted sums over spheres of the scattering matrix and the efficiency
     sums, and their derivatives along n, k (and x).
+
+    Each sphere's series has ``extra_terms`` more terms than Wiscombe's n_max
+    (default 0, the table's): the difference of the two estimates the
+    truncation error of the table's series.
 
     Node j has size parameter ``x_nodes[j]`` and a row of weights
     ``weights[j, :]`` (column 0: the quadrature weight n(r_j) (dr/ds) w_s; the
@@ -467,10 +472,10 @@ def _accumulate(
     x_top = x_nodes[0]
     for j in range(n_nodes):
         x_top = max(x_top, x_nodes[j])
-    pi_t, tau_t = _pi_tau_table(mu, wiscombe_nmax(x_top))
+    pi_t, tau_t = _pi_tau_table(mu, wiscombe_nmax(x_top) + extra_terms)
     for j in range(n_nodes):
         x = x_nodes[j]
-        nmax = wiscombe_nmax(x)
+        nmax = wiscombe_nmax(x) + extra_terms
         a, b, da, db, dax, dbx = _coefficient_derivatives(m, x, nmax, want_x)
         val, der = _sums(nmax, a, b, da, db, dax, dbx)
         qs = val[1]  # x^2 Q_sca

@@ -77,7 +77,7 @@ def solve_wavelengths(
             m_core=complex(request.m_core[i]),
             core_fraction=request.core_fraction,
         )
-        return solver.solve(request.rtol, request.cross_section_rtol, request.expansion_rtol)
+        return solver.solve(*_quadrature_tolerances(request))
 
     def report(done: int) -> None:
         if progress is not None:
@@ -120,6 +120,14 @@ def assemble_table(
     if request.polarization:
         err_phase = np.maximum(err_phase, extra["matrix_error_estimate"])
     not_converged = _warn_not_converged(request, results, err_phase, extra)
+    # The stated estimate also holds the truncated tails' share (the refinement's
+    # tolerance is for the quadrature, which cannot see them).
+    tail = _tail_error(request)
+    err_phase = err_phase + tail
+    extra = {
+        k: v + tail if k in ("matrix_error_estimate", "expansion_error_estimate") else v
+        for k, v in extra.items()
+    }
     record = _quadrature_record(request, results, err_phase, extra, converged=not not_converged)
     record["domain"] = domain_record(
         m=request_indices(request),
@@ -201,6 +209,46 @@ def _warn_not_converged(
     return True
 
 
+#: The error from the truncated tails, in units of the tail fraction: each tail
+#: holds at most that fraction of the moment that normalizes the average below
+#: r_lo and of the fourth above r_hi (which bounds the phase function's forward
+#: peak and the area), and the efficiencies of the left-out spheres are at
+#: most about twice the mean's: 2 tails x 2.
+TAIL_ERROR_FACTOR = 4.0
+
+
+def _quadrature_tolerances(request: OpticsRequest) -> tuple[float, float, float | None]:
+    """The refinement's tolerances (phase, cross-sections, expansion): each of the
+    request's less the tails' share (:func:`_tail_error`), so that the stated
+    estimates, which add it, meet the request; at least half of the request's
+    (a tail fraction too large for it leaves the stated estimate above it)."""
+    tail = _tail_error(request)
+
+    def less(tol: float) -> float:
+        return max(tol - tail, 0.5 * tol)
+
+    expansion = request.expansion_rtol
+    return (
+        less(request.rtol),
+        less(request.cross_section_rtol),
+        None if expansion is None else less(expansion),
+    )
+
+
+def _tail_error(request: OpticsRequest) -> float:
+    """The truncated tails' share of a stated relative error:
+    :data:`TAIL_ERROR_FACTOR` times the tail fraction (none for one sphere). [-]"""
+    if request.distribution.is_monodisperse:
+        return 0.0
+    return TAIL_ERROR_FACTOR * request.quadrature.tail_fraction
+
+
+def _cross_section_estimates(request: OpticsRequest, results: Sequence[_Result]) -> np.ndarray:
+    """The cross-sections' stated error per wavelength: the quadrature's estimate
+    (relative for <C_ext>, <C_sca>, absolute for g) plus the tails' (:func:`_tail_error`)."""
+    return np.array([r.err_cross for r in results]) + _tail_error(request)
+
+
 def _quadrature_record(
     request: OpticsRequest,
     results: Sequence[_Result],
@@ -219,7 +267,7 @@ def _quadrature_record(
         "settings": request.quadrature,
         "converged": converged,
         "max_error_estimate": float(err_phase.max()),
-        "max_cross_section_error_estimate": float(np.array([r.err_cross for r in results]).max()),
+        "max_cross_section_error_estimate": float(_cross_section_estimates(request, results).max()),
         "n_nodes_total": int(np.array([r.n_nodes for r in results], dtype=np.int64).sum()),
         "cross_section_n_nodes_total": int(
             np.array([r.cross_section_n_nodes for r in results], dtype=np.int64).sum()
@@ -263,7 +311,7 @@ def _table(
         ),
         quadrature=QuadratureRecord(
             error_estimate=err_phase,
-            cross_section_error_estimate=np.array([r.err_cross for r in results]),
+            cross_section_error_estimate=_cross_section_estimates(request, results),
             n_nodes=np.array([r.n_nodes for r in results], dtype=np.int64),
             cross_section_n_nodes=np.array(
                 [r.cross_section_n_nodes for r in results], dtype=np.int64

@@ -1,13 +1,14 @@
-"""Exact derivatives of a computed table, on the table's own converged quadrature.
+"""Exact derivatives of a computed table, converged on their own radius quadrature.
 
 :func:`~dustoptics.scattering.optics.compute_optics` with ``derivatives=(...)``
 first refines its radius quadrature as always (the table's numbers do not
-change), then calls :func:`table_derivatives`, which sums the derivatives over
-the same radius nodes: the halves of the final panels the table records in
-its :class:`~dustoptics.scattering.quadrature.QuadratureDiagnostics` (the
-phase matrix's panels for the angular outputs, the finer cross-section panels
-for <C_ext>, <C_sca>, <C_back> and g, the expansion coefficients' own
-panels, refined further to their tolerance, for those).
+change), then calls :func:`table_derivatives`, which sums the derivatives
+over radius panels of their own: it starts from the table's final phase
+function panels (recorded in its
+:class:`~dustoptics.scattering.quadrature.QuadratureDiagnostics`), adds
+panels out to a tail fraction :data:`DERIVATIVE_TAIL_FACTOR` times the
+table's (dn/dp grows in the tails), and splits panels until every derivative
+meets the table's ``rtol`` (:func:`_refined`).
 
 At fixed nodes r_i with rule weights J_i, each polydisperse sum
 S[Y] = sum_i J_i n(r_i) Y(r_i) has the exact derivatives
@@ -36,32 +37,39 @@ Cost
 ``python scripts/benchmark.py --derivatives`` (section 11) measures the cost
 against the table alone.  The distribution's parameters need no Mie work
 beyond the sums' weight columns; n and k need S1, S2 and dS/dm of every node
-(twice the table's angular work a node), on the final panels' fine and
-coarse rules (the coarse rule, for the error estimate, is a third of the
-work).  The cross-sections' panels continue from the phase function's, so
-their rules are summed again only on the panels that differ (a tenth to a
-fifth of them for the default table); the rest come from the angular sums.
-Measured on the default table (48 x 1,801, one thread): the fine rule's
-angular sums with dS/dm 0.39 s of CPU and its Mie coefficients with their m
-derivatives 0.10 s, the coarse rule's 0.24 s, against 0.5-0.6 s for the table
-alone: the fine rule by itself, without an error estimate, is 0.8-1.0 times
-the table's cost.  Without a parameter of the refractive index the angular m
-derivatives are not summed (the amplitudes' pass without dS/dm): r_eff and
-v_eff alone cost 1.86-2.38 times the table against 2.13-2.58 for all four
-(seven runs of section 11 on 2 cores, load 0.5-1.2; the ratio moves with the load).
+(twice the table's angular work a node), on the panels' fine and coarse
+rules, and every panel is also summed on its own at :data:`PROBE_ANGLES`
+angles for the estimate (the blocked kernel, one panel at a time), and the
+refinement adds panels where the derivatives need them.  ``python
+scripts/derivative_cost.py`` on a loaded 2-core machine: 5.9 s of CPU
+against 0.63 s for the default table alone (9.4x; on the table's own panels
+without this refinement it was 2.3x, and 16 % of the suite's calibration
+cases erred beyond their estimates).  Summing each panel's probe rows in the
+final sums' pass would save most of the probe's work.
 
 Error estimate
 --------------
-Each sum is also taken with the coarse rule of every final panel (one
+Each sum is also taken with the coarse rule of every panel (one
 Gauss-Legendre rule on the panel instead of one on each half), as the
-table's own refinement estimates its error; the difference of the two
-derivatives, the largest over angle for the angular outputs, is the
-reported ``error_estimate`` (in the derivative's unit).  It overstates the
-error of the finer rule that gives the values when the rule converges fast.
-The quadrature's panels were refined for the values, not for the
-derivatives: where the estimate is large (lossless spheres with size
-parameters of tens, whose n derivatives have narrow resonance spikes) it says
-so, it does not refine further.
+table's own refinement estimates its error.  The estimate of a derivative is
+:data:`SAFETY` times the larger of the two rules' difference (the largest
+over angle or order) and the sum over panels of each panel's share of it
+(the change of the derivative when that panel alone takes its coarse rule,
+at :data:`PROBE_ANGLES` output angles), so that errors of opposite sign in
+different panels do not cancel in it.  The refinement splits the panels
+with the largest shares until every estimate (before the safety factor) is
+within ``rtol`` of the derivative's largest magnitude over angle or order,
+or after :data:`MAX_ROUNDS` rounds (the estimate then says how far it got).
+The cross-sections' estimates also hold their values' stated relative error
+times the derivative, so that the single scattering albedo's and the lidar
+ratio's, propagated from them with the table's values, cover those values'
+errors.  ``scripts/calibrate_estimates.py`` checks the estimates against
+tight references over random models of every family.
+
+One sphere (:class:`~dustoptics.particles.sizedist.Monodisperse`) has no
+quadrature: its derivatives are exact for the table's series of Wiscombe's
+n_max terms, and the estimate is the series' truncation error (the change
+with :data:`EXTRA_TERMS` more terms) plus its round-off.
 """
 
 from __future__ import annotations
@@ -69,13 +77,13 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import lru_cache
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from dustoptics.particles.sizedist import SizeDistribution
+from dustoptics.particles.sizedist import MIN_TAIL_FRACTION, SizeDistribution
 from dustoptics.particles.sizedist_derivatives import (
     boundary_terms,
     number_density_derivative,
@@ -95,7 +103,10 @@ from dustoptics.scattering.quadrature import (
     _gauss_points,
     _node_weights,
     gauss_legendre,
+    initial_panels,
+    size_parameter_at,
 )
+from dustoptics.scattering.refinement import _KEEP_FRACTION, _choose_splits, _panel_cost
 from dustoptics.table import Table, TableDerivatives
 
 if TYPE_CHECKING:  # the request's module imports this one
@@ -115,9 +126,9 @@ INDEX_PARAMETERS = ("n", "k")
 
 #: How the derivatives are computed (recorded with them).
 METHOD = (
-    "exact derivatives summed over the table's final radius nodes (dn/dp in closed form, "
-    "dS/dm from the Mie recurrences, quotient and chain rules); error estimate = difference "
-    "from the panels' coarse rule"
+    "exact derivatives summed over radius panels refined for them to the table's rtol (dn/dp "
+    "in closed form, dS/dm from the Mie recurrences, quotient and chain rules); error estimate "
+    "= 2 x the panels' differences from their coarse rules, summed without cancellation"
 )
 
 
@@ -243,6 +254,21 @@ def _rule_nodes(
     return x, rule
 
 
+def _weight_columns(
+    distribution: SizeDistribution,
+    x: np.ndarray,
+    rule: np.ndarray,
+    *,
+    k_um: float,
+    dist_parameters: Sequence[str],
+) -> np.ndarray:
+    """Weight columns of nodes in their given order: n J, then dn/dp J per parameter."""
+    r = x / k_um
+    columns = [np.asarray(distribution.pdf(r), dtype=np.float64) * rule]
+    columns += [number_density_derivative(distribution, r, p) * rule for p in dist_parameters]
+    return np.column_stack(columns)
+
+
 def _weights(
     distribution: SizeDistribution,
     x: np.ndarray,
@@ -255,10 +281,7 @@ def _weights(
     """Nodes sorted by size and their weight columns: n J, then dn/dp J per
     distribution parameter, with the point-mass nodes of moving support ends
     (unless ``boundary`` is false: a part of a rule whose whole has them)."""
-    r = x / k_um
-    columns = [np.asarray(distribution.pdf(r), dtype=np.float64) * rule]
-    columns += [number_density_derivative(distribution, r, p) * rule for p in dist_parameters]
-    weights = np.column_stack(columns)
+    weights = _weight_columns(distribution, x, rule, k_um=k_um, dist_parameters=dist_parameters)
     extra_x: list[float] = []
     extra_w: list[np.ndarray] = []
     for j, p in enumerate(dist_parameters if boundary else ()):
@@ -341,13 +364,17 @@ def _legendre_sums(
     with_m: bool,
     lmax: int,
     n_stokes: int,
+    boundary: bool = True,
 ) -> _Sums:
     """Sums whose angular parts are Legendre coefficients (orders 0..lmax):
     the nodes are summed in tiers of similar n_max, each on the Gauss grid its
     largest sphere needs (2 n_half >= 2 n_max + 2 nodes integrate the products
     of two amplitudes, degree <= 2 n_max, exactly), and each tier's sums
-    projected on P_l and added (the projection is linear)."""
-    xs, w = _weights(distribution, x, rule, k_um=k_um, dist_parameters=dist_parameters)
+    projected on P_l and added (the projection is linear); ``boundary`` as
+    :func:`_weights`."""
+    xs, w = _weights(
+        distribution, x, rule, k_um=k_um, dist_parameters=dist_parameters, boundary=boundary
+    )
     n_w = w.shape[1]
     ang = np.zeros((n_w, n_stokes, lmax + 1))
     dang = np.zeros((2, n_stokes, lmax + 1))
@@ -396,14 +423,6 @@ def _directions(
         d_ang.append(dm.real * s.dang[0] + dm.imag * s.dang[1])
         d_sums.append(dm.real * s.dsums[0] + dm.imag * s.dsums[1])
     return d_ang, d_sums
-
-
-def _panels_not_in(panels: np.ndarray, others: np.ndarray) -> np.ndarray:
-    """The rows of ``panels`` ([lower, upper] in s) that are not rows of ``others``
-    (the same floats: split panels keep their ends), shape (n, 2)."""
-    known = set(map(tuple, others.tolist()))
-    keep = [p for p in panels.tolist() if tuple(p) not in known]
-    return np.array(keep, dtype=np.float64).reshape(-1, 2)
 
 
 @dataclass(frozen=True)
@@ -479,6 +498,10 @@ def _greek(
     )
 
 
+#: The cross-sections whose derivatives :func:`_cross` gives (after g).
+_CROSS_KEYS = ("cext_um2", "csca_um2", "cback_um2")
+
+
 def _cross(
     s: _Sums,
     n_dist: int,
@@ -493,7 +516,7 @@ def _cross(
     del d_ang
     s_w, _, s_sca, s_gsca, s_g, _ = s.sums[0]
     g = s_g / s_w if per_particle else s_gsca / s_sca
-    out: dict[str, list[float]] = {"g": [], "cext_um2": [], "csca_um2": [], "cback_um2": []}
+    out: dict[str, list[float]] = {"g": [], **{k: [] for k in _CROSS_KEYS}}
     for j, ds in enumerate(d_sums):
         if per_particle:
             out["g"].append((ds[4] - g * ds[0]) / s_w)
@@ -572,6 +595,7 @@ def _one_wavelength(
     dist_parameters: Sequence[str],
     with_radius: bool,
     per_particle: bool,
+    rtol: float,
 ) -> _Wavelength:
     matrix = table.matrix is not None
     n_order = 0 if table.expansion is None else int(table.expansion.alpha1.shape[1])
@@ -590,189 +614,112 @@ def _one_wavelength(
     )
     if at.distribution.is_monodisperse:
         return _monodisperse(at, with_radius=with_radius)
-    greek_panels = None if diagnostics.expansion_panels is None else diagnostics.expansion_panels[i]
-    values, errors, phase_sums = _angular_outputs(at, diagnostics.panels[i], greek_panels)
-    cross = _cross_outputs(
-        at, diagnostics.panels[i], diagnostics.cross_section_panels[i], phase_sums
+    return _refined(at, diagnostics.panels[i], rtol=rtol)
+
+
+#: The derivatives' own refinement stops after this many rounds of splits.
+MAX_ROUNDS = 10
+#: The derivatives' radius range leaves out this fraction of the table's tail
+#: fraction: dn/dp = n d(ln n)/dp grows in the tails (d(ln n)/dv_eff of a
+#: modified gamma ~ r / (r_eff v_eff^2)), so the table's tails, negligible for
+#: the values, are not for the derivatives.
+DERIVATIVE_TAIL_FACTOR = 1e-4
+
+
+def _extended(at: _At, panels: np.ndarray) -> np.ndarray:
+    """The table's panels (sorted) with panels added below and above them out
+    to the bounds of the tail fraction times :data:`DERIVATIVE_TAIL_FACTOR`
+    (no wider than the level-0 panels)."""
+    settings = at.settings
+    tail = max(MIN_TAIL_FRACTION, settings.tail_fraction * DERIVATIVE_TAIL_FACTOR)
+    edges = initial_panels(
+        at.distribution,
+        wavelength_nm=at.wavelength_nm,
+        settings=replace(settings, tail_fraction=tail),
+        lower_moment=0 if at.per_particle else 2,
     )
-    for key, (v, e) in cross.items():
-        values[key] = v
-        errors[key] = e
-    return _Wavelength(values, errors)
+    panels = panels[np.argsort(panels[:, 0], kind="stable")]
+    parts = [panels]
+    for lo, hi, first in ((edges[0], panels[0, 0], True), (panels[-1, 1], edges[-1], False)):
+        if hi > lo:
+            n = max(1, math.ceil((hi - lo) / settings.panel_width))
+            cut = np.linspace(lo, hi, n + 1)
+            cut[0 if not first else -1] = panels[0, 0] if first else panels[-1, 1]
+            extra = np.column_stack([cut[:-1], cut[1:]])
+            parts.insert(0 if first else len(parts), extra)
+    return np.concatenate(parts)
 
 
-def _monodisperse(at: _At, *, with_radius: bool) -> _Wavelength:
-    """One sphere: its derivatives exactly, with zero error estimates."""
-    k_um, per_particle, n_q = at.k_um, at.per_particle, at.n_q
-    x = np.array([k_um * at.distribution.mean_radius_um])
-    ang, dang, sums, dsums = _accumulate(
-        at.m, x, np.ones((1, 1)), np.ascontiguousarray(at.mu_out), per_particle, with_radius
-    )
-    s = _Sums(ang, dang, sums, dsums)
-    directions = list(at.index_directions)
-    ang_d = _angular(s, 0, directions, per_particle=per_particle, n_q=n_q, project=lambda f: f)
-    cross = _cross(s, 0, directions, per_particle=per_particle, area=at.area, lossless=at.lossless)
-    if with_radius:
-        # d/dr = k d/dx: the kernel's x direction, read as a direction "n" of weight k.
-        radial = _Sums(ang, dang[[2, 2]] * k_um, sums, dsums[[2, 2]] * k_um)
-        ang_r = _angular(
-            radial, 0, [1.0 + 0j], per_particle=per_particle, n_q=n_q, project=lambda f: f
-        )
-        cross_r = _cross(
-            radial, 0, [1.0 + 0j], per_particle=per_particle, area=at.area, lossless=False
-        )
-        if at.lossless:
-            cross_r["cext_um2"] = cross_r["csca_um2"]
-        ang_d = np.concatenate([ang_r, ang_d])
-        cross = {k: np.concatenate([cross_r[k], cross[k]]) for k in cross}
-    values: dict[str, np.ndarray] = {}
-    errors: dict[str, np.ndarray] = {}
-    for q, key in enumerate(at.angular_keys):
-        values[key] = ang_d[:, q]
-        errors[key] = np.zeros(ang_d.shape[0])
-    for key, v in cross.items():
-        values[key] = v
-        errors[key] = np.zeros(v.shape[0])
-    return _Wavelength(values, errors)
+@dataclass(frozen=True)
+class _Plan:
+    """How one wavelength's sums are taken: at the output angles or as Legendre
+    coefficients (orders 0..lmax)."""
 
+    legendre: bool
+    lmax: int
 
-def _angular_outputs(
-    at: _At, panels: np.ndarray, greek_panels: np.ndarray | None
-) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray], list[tuple[np.ndarray, np.ndarray]]]:
-    """The angular outputs' derivatives and error estimates (and the expansion
-    coefficients'), with the fine and coarse rules' sums for the cross-sections."""
-    x_fine, rule_fine = at.rule(panels, halves=True)
-    x_coarse, rule_coarse = at.rule(panels, halves=False)
-    x_top = max(float(x_fine.max()), float(x_coarse.max()), 1e-3)
-    nmax = mie.wiscombe_nmax(x_top * 1.0001 + 1.0)
-    n_half = 16 * ((nmax + 1 + 15) // 16)
-    rules = ((x_fine, rule_fine), (x_coarse, rule_coarse))
-    # Angles: at the output angles, or at Gauss angles projected on Legendre
-    # polynomials when there are fewer of those (as the table's phase function).
-    if 2 * n_half < at.mu_out.size or at.n_order:
-        fine, diff, greek_pair, phase_sums = _legendre_outputs(
-            at, rules, panels, greek_panels, nmax
-        )
-    else:
-        fine, diff, phase_sums = _direct_outputs(at, rules)
-        greek_pair = []
-    values: dict[str, np.ndarray] = {}
-    errors: dict[str, np.ndarray] = {}
-    for q, key in enumerate(at.angular_keys):
-        values[key] = fine[:, q]
-        errors[key] = np.max(np.abs(diff[:, q]), axis=-1)
-    if greek_pair:
-        for j, key in enumerate(EXPANSION_KEYS):
-            values[key] = greek_pair[0][:, j]
-            errors[key] = np.max(np.abs(greek_pair[0][:, j] - greek_pair[1][:, j]), axis=-1)
-    return values, errors, phase_sums
-
-
-def _legendre_outputs(
-    at: _At,
-    rules: Sequence[tuple[np.ndarray, np.ndarray]],
-    panels: np.ndarray,
-    greek_panels: np.ndarray | None,
-    nmax: int,
-) -> tuple[np.ndarray, np.ndarray, list[np.ndarray], list[tuple[np.ndarray, np.ndarray]]]:
-    """Angular derivatives in Legendre coefficients, evaluated at the output
-    angles: (fine rule's, fine minus coarse, expansion pair, rules' sums)."""
-    n_dist, directions, per_particle, n_order = (
-        at.n_dist,
-        at.index_directions,
-        at.per_particle,
-        at.n_order,
-    )
-    # The expansion coefficients' own panels (refined to their own tolerance), if
-    # the table has them and they differ from the phase function's.
-    own_greek = (
-        bool(n_order) and greek_panels is not None and not np.array_equal(greek_panels, panels)
-    )
-    lmax = 2 * nmax
-    pair = []
-    greek_pair = []
-    phase_sums: list[tuple[np.ndarray, np.ndarray]] = []
-    for x, rule in rules:
-        s_ = _legendre_sums(
-            at.m, at.distribution, x, rule, lmax=lmax, n_stokes=at.n_q, **at.common()
-        )
-        phase_sums.append((s_.sums, s_.dsums))
-        # In Legendre coefficients (the derivative is linear in them).
-        pair.append(
-            _angular(
-                s_, n_dist, directions, per_particle=per_particle, n_q=at.n_q, project=lambda f: f
+    def sums(self, at: _At, panels: np.ndarray, *, halves: bool, boundary: bool) -> _Sums:
+        """The sums of the panels' fine (``halves``) or coarse rule."""
+        x, rule = at.rule(panels, halves=halves)
+        if self.legendre:
+            return _legendre_sums(
+                at.m,
+                at.distribution,
+                x,
+                rule,
+                lmax=self.lmax,
+                n_stokes=at.n_q,
+                boundary=boundary,
+                **at.common(),
             )
+        return _sums(
+            at.m,
+            at.distribution,
+            x,
+            rule,
+            mu=np.ascontiguousarray(at.mu_out),
+            n_stokes=at.n_q,
+            boundary=boundary,
+            **at.common(),
         )
-        if n_order and not own_greek:
-            greek_pair.append(_greek(s_, n_dist, directions, per_particle, n_order, lmax))
-    if own_greek:
-        assert greek_panels is not None
-        for halves in (True, False):
-            x, rule = at.rule(greek_panels, halves=halves)
-            s_ = _legendre_sums(
-                at.m, at.distribution, x, rule, lmax=lmax, n_stokes=4, **at.common()
-            )
-            greek_pair.append(_greek(s_, n_dist, directions, per_particle, n_order, lmax))
-    # The fine rule's derivatives and their differences from the coarse rule's,
-    # at the output angles, all rows at once.
-    shape = pair[0].shape
-    rows = np.concatenate([pair[0], pair[0] - pair[1]]).reshape(-1, shape[-1])
-    found_at = _legendre_evaluate_rows(rows, np.ascontiguousarray(at.mu_out))
-    fine, diff = found_at.reshape((2, *shape[:-1], at.mu_out.size))
-    return fine, diff, greek_pair, phase_sums
 
-
-def _direct_outputs(
-    at: _At, rules: Sequence[tuple[np.ndarray, np.ndarray]]
-) -> tuple[np.ndarray, np.ndarray, list[tuple[np.ndarray, np.ndarray]]]:
-    """Angular derivatives summed at the output angles: (fine rule's, fine minus
-    coarse, rules' sums)."""
-    mu = np.ascontiguousarray(at.mu_out)
-    pair = []
-    phase_sums: list[tuple[np.ndarray, np.ndarray]] = []
-    for x, rule in rules:
-        s_ = _sums(at.m, at.distribution, x, rule, mu=mu, n_stokes=at.n_q, **at.common())
-        phase_sums.append((s_.sums, s_.dsums))
-        pair.append(
+    def outputs(
+        self, at: _At, fine: _Sums, coarse: _Sums
+    ) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
+        """Every derivative of the fine rule's sums, and its difference from the
+        coarse rule's (the largest over angle or order), by key."""
+        pair = [
             _angular(
-                s_,
+                s,
                 at.n_dist,
                 at.index_directions,
                 per_particle=at.per_particle,
                 n_q=at.n_q,
                 project=lambda f: f,
             )
-        )
-    return pair[0], pair[0] - pair[1], phase_sums
-
-
-def _cross_outputs(
-    at: _At,
-    panels: np.ndarray,
-    cross_panels: np.ndarray,
-    phase_sums: Sequence[tuple[np.ndarray, np.ndarray]],
-) -> dict[str, tuple[np.ndarray, np.ndarray]]:
-    """The cross-sections' and g's derivatives and error estimates, by key.
-
-    The cross-section panels continue from the phase function's: most are the
-    same panels, whose rules the angular sums have summed already.  Only the
-    panels that differ are summed again (their sums without angles).
-    """
-    only_phase = _panels_not_in(panels, cross_panels)
-    only_cross = _panels_not_in(cross_panels, panels)
-    found = []
-    for rule_sums, halves in zip(phase_sums, (True, False), strict=True):
-        sums, dsums = rule_sums
-        for part, sign in ((only_phase, -1.0), (only_cross, 1.0)):
-            if part.size == 0:
-                continue
-            x, rule = at.rule(part, halves=halves)
-            s = _sums(at.m, at.distribution, x, rule, mu=np.empty(0), boundary=False, **at.common())
-            sums = sums + sign * s.sums
-            dsums = dsums + sign * s.dsums
-        n_w = sums.shape[0]
-        s = _Sums(np.zeros((n_w, 1, 0)), np.zeros((2, 1, 0)), sums, dsums)
-        found.append(
+            for s in (fine, coarse)
+        ]
+        if self.legendre:
+            shape = pair[0].shape
+            rows = np.concatenate([pair[0], pair[0] - pair[1]]).reshape(-1, shape[-1])
+            found = _legendre_evaluate_rows(rows, np.ascontiguousarray(at.mu_out))
+            ang, diff = found.reshape((2, *shape[:-1], at.mu_out.size))
+        else:
+            ang, diff = pair[0], pair[0] - pair[1]
+        values: dict[str, np.ndarray] = {}
+        errors: dict[str, np.ndarray] = {}
+        for q, key in enumerate(at.angular_keys):
+            values[key] = ang[:, q]
+            errors[key] = np.max(np.abs(diff[:, q]), axis=-1)
+        if at.n_order:
+            greek = [
+                _greek(s, at.n_dist, at.index_directions, at.per_particle, at.n_order, self.lmax)
+                for s in (fine, coarse)
+            ]
+            for j, key in enumerate(EXPANSION_KEYS):
+                values[key] = greek[0][:, j]
+                errors[key] = np.max(np.abs(greek[0][:, j] - greek[1][:, j]), axis=-1)
+        cross = [
             _cross(
                 s,
                 at.n_dist,
@@ -781,8 +728,351 @@ def _cross_outputs(
                 area=at.area,
                 lossless=at.lossless,
             )
+            for s in (fine, coarse)
+        ]
+        for key, v in cross[0].items():
+            values[key] = v
+            errors[key] = np.abs(v - cross[1][key])
+        return values, errors
+
+
+#: The stated estimate is this multiple of the rules' difference: the
+#: difference overstates the fine rule's error where the rules converge, but
+#: in 1-3 % of the cases of ``scripts/calibrate_estimates.py`` the error was up
+#: to 1.6 times it (expansion coefficients, f12, g near their tolerance).
+SAFETY = 2.0
+
+#: Output angles (evenly picked) at which the derivatives' refinement compares
+#: each panel's rules.
+PROBE_ANGLES = 24
+
+
+def _probe_mu(at: _At) -> np.ndarray:
+    """The output angles' cosines at which panels are compared (all if few)."""
+    n = at.mu_out.size
+    if n <= PROBE_ANGLES:
+        return np.ascontiguousarray(at.mu_out)
+    pick = np.unique(np.round(np.linspace(0, n - 1, PROBE_ANGLES)).astype(np.int64))
+    return np.ascontiguousarray(at.mu_out[pick])
+
+
+@dataclass(frozen=True)
+class _PanelSums:
+    """Sums per panel (leading axis) at the probe angles, as :class:`_Sums`."""
+
+    ang: np.ndarray
+    dang: np.ndarray
+    sums: np.ndarray
+    dsums: np.ndarray
+
+    def fields(self) -> tuple[np.ndarray, ...]:
+        return self.ang, self.dang, self.sums, self.dsums
+
+    def take(self, keep: np.ndarray) -> _PanelSums:
+        return _PanelSums(*(a[keep] for a in self.fields()))
+
+    def joined(self, other: _PanelSums) -> _PanelSums:
+        return _PanelSums(
+            *(np.concatenate([a, b]) for a, b in zip(self.fields(), other.fields(), strict=True))
         )
-    return {key: (v, np.abs(v - found[1][key])) for key, v in found[0].items()}
+
+
+def _panel_probe(at: _At, panels: np.ndarray, mu: np.ndarray, *, halves: bool) -> _PanelSums:
+    """Each panel's sums (fine rule if ``halves``, else coarse) at the angles ``mu``,
+    without the point masses of moving ends (the same in both rules): the
+    blocked kernel, one panel at a time."""
+    n = panels.shape[0]
+    x, rule = at.rule(panels, halves=halves)
+    weights = _weight_columns(
+        at.distribution, x, rule, k_um=at.k_um, dist_parameters=at.dist_parameters
+    )
+    npp = at.settings.nodes_per_panel
+    # Node j belongs to rule panel j // npp; with halves, panels k and k + n are
+    # the halves of panel k (left then right: increasing x, as the kernel batches).
+    parts = 2 if halves else 1
+    order = (np.arange(parts)[None, :] * n + np.arange(n)[:, None]).ravel()
+    x = x.reshape(-1, npp)[order].reshape(n, parts * npp)
+    weights = weights.reshape(-1, npp, weights.shape[1])[order].reshape(
+        n, parts * npp, weights.shape[1]
+    )
+    table = mie.angular_table(_read_only(mu), int(_series_lengths(x.ravel()).max()))
+    with_m = bool(at.index_directions)
+    rows = [
+        _accumulate_blocked(
+            at.m,
+            np.ascontiguousarray(x[p]),
+            np.ascontiguousarray(weights[p]),
+            table,
+            int(mu.size),
+            False,
+            at.n_q,
+            at.per_particle,
+            with_m,
+        )
+        for p in range(n)
+    ]
+    return _PanelSums(*(np.stack([r[k] for r in rows]) for k in range(4)))
+
+
+def _boundary_probe(at: _At, mu: np.ndarray) -> tuple[np.ndarray, ...]:
+    """The point masses' sums at ``mu`` (no rule nodes), as :class:`_PanelSums`
+    fields of one panel."""
+    xs, w = _weights(
+        at.distribution,
+        np.empty(0),
+        np.empty(0),
+        k_um=at.k_um,
+        dist_parameters=at.dist_parameters,
+    )
+    ang, dang, sums, dsums = _accumulate(
+        at.m, xs, np.ascontiguousarray(w), mu, at.per_particle, False
+    )
+    return ang[:, : at.n_q], dang[:, : at.n_q], sums, dsums
+
+
+def _batched_outputs(
+    at: _At, ang: np.ndarray, dang: np.ndarray, sums: np.ndarray, dsums: np.ndarray
+) -> np.ndarray:
+    """Derivatives of the angular outputs at the probe angles, then of g and
+    the cross-sections (as :func:`_angular`, :func:`_cross`), for a batch of
+    sums (leading axis): shape (batch, n_parameter, n_q n_mu + 4)."""
+    n_q = at.n_q
+    d_ang = [ang[:, 1 + j, :n_q] for j in range(at.n_dist)]
+    d_sums = [sums[:, 1 + j] for j in range(at.n_dist)]
+    for dm in at.index_directions:
+        d_ang.append(dm.real * dang[:, 0, :n_q] + dm.imag * dang[:, 1, :n_q])
+        d_sums.append(dm.real * dsums[:, 0] + dm.imag * dsums[:, 1])
+    s0 = sums[:, 0]
+    norm = s0[:, 0] if at.per_particle else 2.0 * math.pi * s0[:, 2]
+    f = ang[:, 0, :n_q] / norm[:, None, None]
+    g = s0[:, 4] / s0[:, 0] if at.per_particle else s0[:, 3] / s0[:, 2]
+    out = []
+    for j, (da, ds) in enumerate(zip(d_ang, d_sums, strict=True)):
+        d_norm = ds[:, 0] if at.per_particle else 2.0 * math.pi * ds[:, 2]
+        angular = (da - f * d_norm[:, None, None]) / norm[:, None, None]
+        if at.per_particle:
+            dg = (ds[:, 4] - g * ds[:, 0]) / s0[:, 0]
+        else:
+            dg = (ds[:, 3] - g * ds[:, 2]) / s0[:, 2]
+        d_ext = ds[:, 1]
+        if at.lossless:
+            dm = at.index_directions[j - at.n_dist] if j >= at.n_dist else 0j
+            d_ext = ds[:, 2] + dm.imag * (dsums[:, 1, 1] - dsums[:, 1, 2])
+        cross = np.column_stack([dg, at.area * d_ext, at.area * ds[:, 2], at.area * ds[:, 5]])
+        out.append(np.concatenate([angular.reshape(angular.shape[0], -1), cross], axis=1))
+    return np.stack(out, axis=1)
+
+
+def _panel_errors(
+    at: _At, fine: _PanelSums, coarse: _PanelSums, boundary: tuple[np.ndarray, ...]
+) -> tuple[np.ndarray, np.ndarray]:
+    """The outputs of the panels' summed fine rules (with the point masses), and
+    each panel's share of their error: the change of the outputs when that
+    panel's fine rule is replaced by its coarse one, shape (n_panels,
+    n_parameter, n_outputs)."""
+    total = [f.sum(axis=0) + b for f, b in zip(fine.fields(), boundary, strict=True)]
+    whole = _batched_outputs(at, *(t[None] for t in total))
+    swapped = _batched_outputs(
+        at,
+        *(t[None] - (f - c) for t, f, c in zip(total, fine.fields(), coarse.fields(), strict=True)),
+    )
+    return whole[0], np.abs(whole - swapped)
+
+
+def _with_panel_errors(
+    at: _At, errors: dict[str, np.ndarray], shares: np.ndarray
+) -> dict[str, np.ndarray]:
+    """The estimates: the larger of the summed rules' difference and the sum
+    over panels of each panel's share (no cancellation between panels), the
+    largest over the probe angles for the angular outputs."""
+    summed = shares.sum(axis=0)  # (n_parameter, n_outputs)
+    n_par = summed.shape[0]
+    n_mu = (summed.shape[1] - 4) // at.n_q
+    angular = summed[:, : at.n_q * n_mu].reshape(n_par, at.n_q, n_mu).max(axis=-1)
+    out = dict(errors)
+    for q, key in enumerate(at.angular_keys):
+        out[key] = np.maximum(errors[key], angular[:, q])
+    for j, key in enumerate(("g", *_CROSS_KEYS)):
+        out[key] = np.maximum(errors[key], summed[:, at.n_q * n_mu + j])
+    if at.n_order:
+        # The expansion coefficients' sums cancel between panels as the phase
+        # function's do: their estimate grows by the phase function's ratio.
+        ratio = np.maximum(out["phase"] / np.maximum(errors["phase"], 1e-300), 1.0)
+        for key in EXPANSION_KEYS:
+            out[key] = errors[key] * ratio
+    return out
+
+
+def _scale(at: _At, whole: np.ndarray) -> np.ndarray:
+    """The magnitude each output of :func:`_batched_outputs` is held to: the
+    largest over the probe angles for the angular ones, its own for the others."""
+    n_par, n_out = whole.shape
+    n_ang = n_out - 4
+    n_mu = n_ang // at.n_q
+    mag = np.abs(whole)
+    scale = np.empty_like(mag)
+    top = mag[:, :n_ang].reshape(n_par, at.n_q, n_mu).max(axis=-1)
+    scale[:, :n_ang] = np.repeat(top, n_mu, axis=-1)
+    scale[:, n_ang:] = mag[:, n_ang:]
+    return scale
+
+
+def _badness(at: _At, whole: np.ndarray, shares: np.ndarray, rtol: float) -> np.ndarray:
+    """Per panel, its largest share of an output's error in units of that
+    output's tolerance (``rtol`` times :func:`_scale`)."""
+    return np.asarray(np.max(shares / (rtol * _scale(at, whole) + 1e-300), axis=(1, 2)))
+
+
+def _refined(at: _At, table_panels: np.ndarray, *, rtol: float) -> _Wavelength:
+    """The derivatives refined to ``rtol`` on their own panels, from the table's.
+
+    Each panel is summed on its own at :data:`PROBE_ANGLES` output angles
+    (and without angles for the cross-sections and g), with its fine and its
+    coarse rule; a panel's share of a derivative's error is the change when
+    that panel alone takes its coarse rule (:func:`_panel_errors`), and the
+    shares are summed over panels, so that errors of opposite signs do not
+    hide each other.  Until every summed share is within ``rtol`` of its
+    derivative's magnitude, the panels with the largest shares are split (the
+    rule of :func:`~dustoptics.scattering.refinement._choose_splits`); only
+    the new panels are summed.  The derivatives are then summed over the final
+    panels at every output angle (or in Legendre coefficients), fine and
+    coarse rule, and the estimate is the larger of their difference and the
+    summed shares (:func:`_with_panel_errors`).
+    """
+    panels = _extended(at, table_panels)
+    mu = _probe_mu(at)
+    boundary = _boundary_probe(at, mu)
+    pf = _panel_probe(at, panels, mu, halves=True)
+    pc = _panel_probe(at, panels, mu, halves=False)
+    whole, shares = _panel_errors(at, pf, pc, boundary)
+    max_panels = panels.shape[0] * 2**6
+    for _ in range(MAX_ROUNDS):
+        if np.all(shares.sum(axis=0) <= rtol * _scale(at, whole)):
+            break
+        if panels.shape[0] >= max_panels:
+            break
+        cost = _panel_cost(
+            np.ascontiguousarray(panels[:, 1]), at.settings.transition_size_parameter, True
+        )
+        split, _, _ = _choose_splits(
+            _badness(at, whole, shares, rtol),
+            cost,
+            1.0,
+            _KEEP_FRACTION,
+            panels[:, 0].copy(),
+            panels[:, 1].copy(),
+        )
+        parents = panels[split]
+        mid = 0.5 * (parents[:, 0] + parents[:, 1])
+        new = np.concatenate(
+            [np.column_stack([parents[:, 0], mid]), np.column_stack([mid, parents[:, 1]])]
+        )
+        keep = np.ones(panels.shape[0], dtype=bool)
+        keep[split] = False
+        panels = np.concatenate([panels[keep], new])
+        pf = pf.take(keep).joined(_panel_probe(at, new, mu, halves=True))
+        pc = pc.take(keep).joined(_panel_probe(at, new, mu, halves=False))
+        whole, shares = _panel_errors(at, pf, pc, boundary)
+    x_top = float(size_parameter_at(panels[:, 1].max(), settings=at.settings))
+    nmax = mie.wiscombe_nmax(max(x_top, 1e-3) * 1.0001 + 1.0)
+    n_half = 16 * ((nmax + 1 + 15) // 16)
+    plan = _Plan(legendre=bool(2 * n_half < at.mu_out.size or at.n_order), lmax=2 * nmax)
+    fine = plan.sums(at, panels, halves=True, boundary=True)
+    coarse = plan.sums(at, panels, halves=False, boundary=True)
+    values, errors = plan.outputs(at, fine, coarse)
+    errors = _with_panel_errors(at, errors, shares)
+    return _Wavelength(values, {k: SAFETY * e for k, e in errors.items()})
+
+
+#: Terms added to Wiscombe's n_max to estimate a single sphere's series
+#: truncation error: beyond n_max the terms fall faster than geometrically, so
+#: the next ten hold all of the rest that double precision sees.
+EXTRA_TERMS = 10
+
+
+def _monodisperse_derivatives(
+    at: _At, *, with_radius: bool, extra_terms: int
+) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+    """One sphere's angular derivatives (n_parameter, n_q, n_theta) and those of
+    the cross-sections and g, with its series ``extra_terms`` longer than the table's."""
+    k_um, per_particle, n_q = at.k_um, at.per_particle, at.n_q
+    x = np.array([k_um * at.distribution.mean_radius_um])
+    ang, dang, sums, dsums = _accumulate(
+        at.m,
+        x,
+        np.ones((1, 1)),
+        np.ascontiguousarray(at.mu_out),
+        per_particle,
+        with_radius,
+        extra_terms,
+    )
+    n_theta = at.mu_out.size
+    ang_d = np.empty((0, n_q, n_theta))
+    cross: dict[str, np.ndarray] = {k: np.empty(0) for k in ("g", *_CROSS_KEYS)}
+    if with_radius:
+        # d/dr = k d/dx: the kernel's x direction, read as a direction "n" of weight k.
+        radial = _Sums(ang, dang[[2, 2]] * k_um, sums, dsums[[2, 2]] * k_um)
+        ang_d = _angular(
+            radial, 0, [1.0 + 0j], per_particle=per_particle, n_q=n_q, project=lambda f: f
+        )
+        cross = _cross(
+            radial, 0, [1.0 + 0j], per_particle=per_particle, area=at.area, lossless=False
+        )
+        if at.lossless:
+            cross["cext_um2"] = cross["csca_um2"]
+    directions = list(at.index_directions)
+    if directions:
+        s = _Sums(ang, dang[:2], sums, dsums[:2])
+        ang_m = _angular(s, 0, directions, per_particle=per_particle, n_q=n_q, project=lambda f: f)
+        cross_m = _cross(
+            s, 0, directions, per_particle=per_particle, area=at.area, lossless=at.lossless
+        )
+        ang_d = np.concatenate([ang_d, ang_m])
+        cross = {k: np.concatenate([cross[k], cross_m[k]]) for k in cross}
+    return ang_d, cross
+
+
+def _monodisperse(at: _At, *, with_radius: bool) -> _Wavelength:
+    """One sphere: its derivatives exactly for the table's series (Wiscombe's
+    n_max terms), with the series' truncation error as the estimate: the change
+    when :data:`EXTRA_TERMS` more terms are summed, plus the round-off of a sum
+    of n_max terms (n_max eps of the largest derivative over angle)."""
+    ang_d, cross = _monodisperse_derivatives(at, with_radius=with_radius, extra_terms=0)
+    ang_l, cross_l = _monodisperse_derivatives(at, with_radius=with_radius, extra_terms=EXTRA_TERMS)
+    x = at.k_um * at.distribution.mean_radius_um
+    roundoff = mie.wiscombe_nmax(x) * float(np.finfo(np.float64).eps)
+    values: dict[str, np.ndarray] = {}
+    errors: dict[str, np.ndarray] = {}
+    for q, key in enumerate(at.angular_keys):
+        values[key] = ang_d[:, q]
+        errors[key] = np.max(
+            np.abs(ang_l[:, q] - ang_d[:, q]) + roundoff * np.abs(ang_d[:, q]), axis=-1
+        )
+    for key, v in cross.items():
+        values[key] = v
+        errors[key] = np.abs(cross_l[key] - v) + roundoff * np.abs(v)
+    return _Wavelength(values, errors)
+
+
+def _add_value_errors(
+    table: Table, values: dict[str, np.ndarray], errors: dict[str, np.ndarray]
+) -> None:
+    """Add to each cross-section derivative's estimate its value's stated relative
+    error times the derivative, in place.
+
+    The single scattering albedo's and the lidar ratio's derivatives combine these
+    with the table's values (TableDerivatives.pair), so their propagated
+    estimates then cover those values' errors too.  <C_back> is
+    4 pi <C_sca> P(180 deg): its value's relative error is at most the phase
+    function's (error_estimate) plus <C_sca>'s."""
+    record = table.quadrature
+    if record is None or record.cross_section_error_estimate is None:
+        return
+    rel = np.asarray(record.cross_section_error_estimate)
+    for key in _CROSS_KEYS:
+        if key == "cback_um2":
+            rel = rel + np.asarray(record.error_estimate)
+        errors[key] = errors[key] + rel * np.abs(values[key])
 
 
 def table_derivatives(
@@ -840,6 +1130,7 @@ def table_derivatives(
             dist_parameters=dist_parameters,
             with_radius=with_radius,
             per_particle=per_particle,
+            rtol=request.rtol,
         )
 
     n_wl = table.wavelength_nm.size
@@ -852,6 +1143,7 @@ def table_derivatives(
     keys = list(results[0].values)
     values = {k: np.stack([r.values[k] for r in results], axis=1)[positions] for k in keys}
     errors = {k: np.stack([r.errors[k] for r in results], axis=1)[positions] for k in keys}
+    _add_value_errors(table, values, errors)
     return TableDerivatives(
         parameters=tuple(parameters),
         parameter_units=tuple(parameter_unit(p) for p in parameters),
