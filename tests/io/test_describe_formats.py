@@ -12,12 +12,12 @@ import numpy as np
 import pytest
 
 import dustoptics as do
-from dustoptics.sky.engines import ENGINES
 from dustoptics.cli import main
 from dustoptics.io import FORMATS, FormatError, FormatOptions
 from dustoptics.io.describe import describe_path
 from dustoptics.io.describe_formats import describer_of
 from dustoptics.io.outputs import prepare_export, write_formats
+from dustoptics.sky.engines import ENGINES
 
 #: What every file's description starts with, by the file's ending.
 FIRST_WORDS = {
