@@ -1,4 +1,5 @@
-// dustoptics 0.1.0: phase function of table "collienne" for GLSL.
+// dustoptics 0.1.dev748+g03bf89283: phase function of table "collienne" for GLSL.
+// requires: GLSL 1.30 or later (#version 130), or GLSL ES 3.00 or later (#version 300 es); include-ready (no #version line)
 // input_hash (SHA-256 of the table's inputs): 2921e539bf96655cb4cb396273519c1db4f53791e955ab07739f9e438ff58a9c
 // channels (.x, .y, .z): 680 nm, 550 nm, 440 nm (wavelengths)
 //   .x: 680 nm: the table's row at 680 nm
@@ -17,6 +18,7 @@
 
 const int MIE_PHASE_N = 721;
 const float MIE_PHASE_INDEX_PER_RAD = 2.2918312e+02;  // (N - 1) / pi [rad^-1]
+const float MIE_PI = 3.1415927e+00;  // pi in float32
 const vec3 MIE_WAVELENGTH_NM = vec3(6.8e+02, 5.5e+02, 4.4e+02);  // [nm]
 const vec3 MIE_G = vec3(8.436367e-01, 8.436367e-01, 8.436367e-01);  // asymmetry parameter [-]
 
@@ -750,7 +752,7 @@ vec3 MiePhaseFunction(float nu)
 {
     // Numerical safety only: a cosine computed by rounding (e.g. a dot product of
     // unit vectors) can exceed 1 in magnitude, where acos is undefined.
-    float c = clamp(nu, -1.0, 1.0);
+    float c = clamp(nu, -1.0e+00, 1.0e+00);
     // theta = acos(c) [rad]: Abramowitz & Stegun 4.4.46 (|error| <= 2e-8 rad in exact
     // arithmetic), for a result independent of the driver's acos precision.
     float a = abs(c);
@@ -762,10 +764,10 @@ vec3 MiePhaseFunction(float nu)
     p = p * a + 8.897899e-02;
     p = p * a + -2.145988e-01;
     p = p * a + 1.5707963e+00;
-    float theta = sqrt(1.0 - a) * p;
-    if (c < 0.0) theta = 3.1415927e+00 - theta;
-    float x = clamp(theta * MIE_PHASE_INDEX_PER_RAD, 0.0, float(MIE_PHASE_N - 1));
+    float theta = sqrt(1.0e+00 - a) * p;
+    if (c < 0.0e+00) theta = MIE_PI - theta;
+    float x = clamp(theta * MIE_PHASE_INDEX_PER_RAD, 0.0e+00, float(MIE_PHASE_N - 1));
     int i = min(int(x), MIE_PHASE_N - 2);
     float f = x - float(i);
-    return MIE_PHASE[i] * (1.0 - f) + MIE_PHASE[i + 1] * f;
+    return MIE_PHASE[i] * (1.0e+00 - f) + MIE_PHASE[i + 1] * f;
 }

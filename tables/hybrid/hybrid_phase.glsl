@@ -1,4 +1,5 @@
-// dustoptics 0.1.0: phase function of table "hybrid" for GLSL.
+// dustoptics 0.1.dev748+g03bf89283: phase function of table "hybrid" for GLSL.
+// requires: GLSL 1.30 or later (#version 130), or GLSL ES 3.00 or later (#version 300 es); include-ready (no #version line)
 // input_hash (SHA-256 of the table's inputs): 757e71a1530c1a0efed99a55906f7d7b09d9d75efce372231eb2b328b3afdfd6
 // channels (.x, .y, .z): 680 nm, 550 nm, 440 nm (wavelengths)
 //   .x: 680 nm: the table's row at 680 nm
@@ -17,11 +18,12 @@
 
 const int MIE_PHASE_N = 721;
 const float MIE_PHASE_INDEX_PER_RAD = 2.2918312e+02;  // (N - 1) / pi [rad^-1]
+const float MIE_PI = 3.1415927e+00;  // pi in float32
 const vec3 MIE_WAVELENGTH_NM = vec3(6.8e+02, 5.5e+02, 4.4e+02);  // [nm]
 const vec3 MIE_G = vec3(3.860533e-01, 5.5491513e-01, 6.8882096e-01);  // asymmetry parameter [-]
-const vec3 MIE_CEXT_M2 = vec3(9.234431e-12, 9.002837e-12, 8.807396e-12);  // mean extinction cross-section per particle [m^2]
+const vec3 MIE_CEXT_M2 = vec3(9.234432e-12, 9.002837e-12, 8.807396e-12);  // mean extinction cross-section per particle [m^2]
 const vec3 MIE_CSCA_M2 = vec3(8.83083e-12, 7.296248e-12, 5.8613336e-12);  // mean scattering cross-section per particle [m^2]
-const vec3 MIE_CABS_M2 = vec3(4.0360098e-13, 1.7065889e-12, 2.9460616e-12);  // mean absorption cross-section per particle [m^2]
+const vec3 MIE_CABS_M2 = vec3(4.0360128e-13, 1.7065888e-12, 2.9460618e-12);  // mean absorption cross-section per particle [m^2]
 const vec3 MIE_SSA = vec3(9.562939e-01, 8.1043875e-01, 6.6550136e-01);  // single-scattering albedo csca / cext [-]
 
 // Phase function [sr^-1] at theta_j = 180 j / 720 deg, j = 0..720.
@@ -754,7 +756,7 @@ vec3 MiePhaseFunction(float nu)
 {
     // Numerical safety only: a cosine computed by rounding (e.g. a dot product of
     // unit vectors) can exceed 1 in magnitude, where acos is undefined.
-    float c = clamp(nu, -1.0, 1.0);
+    float c = clamp(nu, -1.0e+00, 1.0e+00);
     // theta = acos(c) [rad]: Abramowitz & Stegun 4.4.46 (|error| <= 2e-8 rad in exact
     // arithmetic), for a result independent of the driver's acos precision.
     float a = abs(c);
@@ -766,10 +768,10 @@ vec3 MiePhaseFunction(float nu)
     p = p * a + 8.897899e-02;
     p = p * a + -2.145988e-01;
     p = p * a + 1.5707963e+00;
-    float theta = sqrt(1.0 - a) * p;
-    if (c < 0.0) theta = 3.1415927e+00 - theta;
-    float x = clamp(theta * MIE_PHASE_INDEX_PER_RAD, 0.0, float(MIE_PHASE_N - 1));
+    float theta = sqrt(1.0e+00 - a) * p;
+    if (c < 0.0e+00) theta = MIE_PI - theta;
+    float x = clamp(theta * MIE_PHASE_INDEX_PER_RAD, 0.0e+00, float(MIE_PHASE_N - 1));
     int i = min(int(x), MIE_PHASE_N - 2);
     float f = x - float(i);
-    return MIE_PHASE[i] * (1.0 - f) + MIE_PHASE[i + 1] * f;
+    return MIE_PHASE[i] * (1.0e+00 - f) + MIE_PHASE[i + 1] * f;
 }

@@ -1,4 +1,4 @@
-// dustoptics 0.1.1.dev229+gfc811411a: phase function of table "mer-sky-fit" for GLSL.
+// dustoptics 0.1.dev748+g03bf89283: phase function of table "mer-sky-fit" for GLSL.
 // requires: GLSL 1.30 or later (#version 130), or GLSL ES 3.00 or later (#version 300 es); include-ready (no #version line)
 // input_hash (SHA-256 of the table's inputs): 52cb4a5fb5aba99c71419adcdf94c2af8d00acb0535e5cd7fef478bb68a1794e
 // channels (.x, .y, .z): 680 nm, 550 nm, 440 nm (wavelengths)
@@ -23,7 +23,7 @@ const vec3 MIE_WAVELENGTH_NM = vec3(6.8e+02, 5.5e+02, 4.4e+02);  // [nm]
 const vec3 MIE_G = vec3(7.5501937e-01, 7.9594386e-01, 8.4650046e-01);  // asymmetry parameter [-]
 const vec3 MIE_CEXT_M2 = vec3(1.0954617e-11, 1.0723706e-11, 1.0523628e-11);  // mean extinction cross-section per particle [m^2]
 const vec3 MIE_CSCA_M2 = vec3(1.05014105e-11, 9.206331e-12, 7.68791e-12);  // mean scattering cross-section per particle [m^2]
-const vec3 MIE_CABS_M2 = vec3(4.5320662e-13, 1.5173744e-12, 2.8357173e-12);  // mean absorption cross-section per particle [m^2]
+const vec3 MIE_CABS_M2 = vec3(4.5320675e-13, 1.5173746e-12, 2.8357173e-12);  // mean absorption cross-section per particle [m^2]
 const vec3 MIE_SSA = vec3(9.586287e-01, 8.585028e-01, 7.305381e-01);  // single-scattering albedo csca / cext [-]
 
 // Phase function [sr^-1] at theta_j = 180 j / 720 deg, j = 0..720.
