@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from reference.mpmath_mie import mie_reference
 
 import dustoptics as do
 from dustoptics.cli import main
@@ -33,7 +34,6 @@ from dustoptics.scattering.domain import (
     domain_text,
 )
 from dustoptics.scattering.mie import MIN_SIZE_PARAMETER, single_sphere
-from tests.reference.mpmath_mie import mie_reference
 
 mp = pytest.importorskip("mpmath")
 
