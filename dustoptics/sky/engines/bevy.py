@@ -55,18 +55,19 @@ from dustoptics.io.engines.bevy import (
 from dustoptics.sky.engines import _hillaire
 from dustoptics.sky.engines._sets import remember_set, set_of
 from dustoptics.sky.engines.core import (
+    RGB,
     EngineFit,
     EngineModel,
-    Parameter,
+    error_notes,
+    hillaire_sky_rgb,
+    per_channel,
     register_engine,
-    sunlight_linear_srgb,
+    rgb_of,
 )
 
 __all__ = ["BEVY", "bevy_mars_texture", "bevy_setup", "bevy_sky_rgb"]
 
-_RGB: Final = ("r", "g", "b")
 _GROUND_ALBEDO: Final = 0.2
-_PSI_CACHE: dict[tuple[float, ...], np.ndarray] = {}
 _TEXTURES: dict[int, np.ndarray] = {}
 
 
@@ -93,10 +94,6 @@ def _texture(params: Mapping[str, float]) -> np.ndarray | None:
     return _TEXTURES[key]
 
 
-def _vector(params: Mapping[str, float], name: str) -> np.ndarray:
-    return np.array([params[f"{name}_{c}"] for c in _RGB])
-
-
 def bevy_setup(params: Mapping[str, float]) -> _hillaire.HillaireSetup:
     """Hillaire's passes with Bevy's medium (``params``: m^-1 and km, see :data:`BEVY`)."""
     columns = _texture(params)
@@ -111,14 +108,14 @@ def bevy_setup(params: Mapping[str, float]) -> _hillaire.HillaireSetup:
     return _hillaire.HillaireSetup(
         planet_radius_km=radius,
         top_radius_km=radius + params["atmosphere_height_km"],
-        rayleigh_scattering_per_km=_vector(params, "rayleigh_scattering") * 1000.0,
+        rayleigh_scattering_per_km=rgb_of(params, "rayleigh_scattering") * 1000.0,
         rayleigh_absorption_per_km=np.zeros(3),
         rayleigh_scale_height_km=params["rayleigh_scale_height_km"],
-        mie_scattering_per_km=_vector(params, "dust_scattering") * 1000.0,
-        mie_absorption_per_km=_vector(params, "dust_absorption") * 1000.0,
+        mie_scattering_per_km=rgb_of(params, "dust_scattering") * 1000.0,
+        mie_absorption_per_km=rgb_of(params, "dust_absorption") * 1000.0,
         mie_scale_height_km=params["dust_scale_height_km"],
         mie_phase=mie_phase,
-        ozone_absorption_per_km=_vector(params, "ozone_absorption") * 1000.0,
+        ozone_absorption_per_km=rgb_of(params, "ozone_absorption") * 1000.0,
         ozone_bottom_km=params["ozone_peak_km"] - params["ozone_half_width_km"],
         ozone_peak_km=params["ozone_peak_km"],
         ozone_top_km=params["ozone_peak_km"] + params["ozone_half_width_km"],
@@ -138,21 +135,13 @@ def bevy_sky_rgb(
 ) -> np.ndarray:
     """Bevy's sky per unit solar illuminance, linear sRGB [sr^-1] (a directional light of
     the sunlight's colour)."""
-    setup = bevy_setup(params)
-    key = tuple(float(params[k]) for k in sorted(params))
-    psi = _PSI_CACHE.get(key)
-    if psi is None:
-        if len(_PSI_CACHE) > 16:
-            _PSI_CACHE.clear()
-        psi = _PSI_CACHE[key] = _hillaire.multiple_scattering_table(setup)
-    rgb = _hillaire.sky_radiance_rgb(
-        setup,
+    return hillaire_sky_rgb(
+        bevy_setup(params),
+        params,
         sun_elevation_deg=sun_elevation_deg,
         view_zenith_deg=view_zenith_deg,
         view_azimuth_deg=view_azimuth_deg,
-        psi=psi,
     )
-    return np.asarray(rgb * sunlight_linear_srgb(), dtype=float)
 
 
 def _base(atmosphere: Atmosphere) -> dict[str, float]:
@@ -176,12 +165,12 @@ def _base(atmosphere: Atmosphere) -> dict[str, float]:
                 f"Bevy's model takes an exponential {role} profile; got {term.falloff}"
             )
         out[f"{name}_scale_height_km"] = term.falloff_values[0] * height_km
-        for i, c in enumerate(_RGB):
+        for i, c in enumerate(RGB):
             out[f"{name}_scattering_{c}"] = max(term.scattering_per_m[i], 1e-12)
             if name == "dust":
                 out[f"dust_absorption_{c}"] = max(term.absorption_per_m[i], 1e-12)
     ozone = terms.get("ozone")
-    for i, c in enumerate(_RGB):
+    for i, c in enumerate(RGB):
         out[f"ozone_absorption_{c}"] = ozone.absorption_per_m[i] if ozone is not None else 0.0
     if ozone is not None:
         center, width = ozone.falloff_values
@@ -236,7 +225,7 @@ def _community(atmosphere: Atmosphere) -> dict[str, float]:
             ozone_half_width_km=15.0,
         )
     for name, triple in values.items():
-        for c, v in zip(_RGB, triple, strict=True):
+        for c, v in zip(RGB, triple, strict=True):
             out[f"{name}_{c}"] = float(v)
     return out
 
@@ -248,7 +237,7 @@ def write_bevy_fit(fit: EngineFit, out_dir: Any, *, overwrite: bool = False) -> 
     medium = bevy_medium(set_of(p), ground_albedo=float(p["ground_albedo"]))
 
     def triple(name: str) -> tuple[float, float, float]:
-        v = _vector(p, name)
+        v = rgb_of(p, name)
         return (float(v[0]), float(v[1]), float(v[2]))
 
     terms = tuple(
@@ -263,23 +252,14 @@ def write_bevy_fit(fit: EngineFit, out_dir: Any, *, overwrite: bool = False) -> 
         else t
         for t in medium.terms
     )
-    errors = tuple(
-        f"Sun {e.sun_elevation_deg:g} deg: Delta E 2000 {e.delta_e_mean:.2f} mean, "
-        f"{e.delta_e_p95:.2f} 95th pct, luminance ratio {e.luminance_ratio:.3f}"
-        for e in fit.errors
-    )
     notes = (
         f"{fit.kind} to dustoptics' exact spectral sky (Hillaire's passes with Bevy's medium; "
         "CIE Delta E 2000 over the dome): the scattering of each term and the dust's absorption",
-        *errors,
+        *error_notes(fit),
         *medium.notes,
     )
     medium = dataclasses.replace(medium, terms=terms, notes=notes)
     return write_files(bevy_files(medium, Path(out_dir)), overwrite=overwrite)
-
-
-def _per_channel(name: str) -> tuple[Parameter, ...]:
-    return tuple(Parameter(f"{name}_{c}", 1e-10, 1e-2, log=True, unit="m^-1") for c in _RGB)
 
 
 BEVY = register_engine(
@@ -288,9 +268,9 @@ BEVY = register_engine(
         title="Bevy atmosphere (ScatteringMedium)",
         source=BEVY_SOURCE,
         parameters=(
-            *_per_channel("rayleigh_scattering"),
-            *_per_channel("dust_scattering"),
-            *_per_channel("dust_absorption"),
+            *per_channel("rayleigh_scattering", 1e-10, 1e-2, "m^-1"),
+            *per_channel("dust_scattering", 1e-10, 1e-2, "m^-1"),
+            *per_channel("dust_absorption", 1e-10, 1e-2, "m^-1"),
         ),
         community_parameters=(),
         render=bevy_sky_rgb,

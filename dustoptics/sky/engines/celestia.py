@@ -48,7 +48,6 @@ from typing import Any, Final
 import numpy as np
 
 from dustoptics.atmosphere.sets import Atmosphere
-from dustoptics.io._atomic import safe_stem, write_files
 from dustoptics.io.engines.celestia import (
     CELESTIA_CONTENT_SOURCE,
     CELESTIA_SOURCE,
@@ -58,11 +57,16 @@ from dustoptics.io.engines.celestia import (
     celestia_ssc,
 )
 from dustoptics.sky.engines.core import (
+    RGB,
     EngineFit,
     EngineModel,
     Parameter,
+    error_notes,
+    per_channel,
     register_engine,
+    rgb_of,
     sunlight_linear_srgb,
+    write_texts,
 )
 
 __all__ = ["CELESTIA", "celestia_sky_rgb"]
@@ -89,8 +93,6 @@ COMMUNITY: Final = {
     },
 }
 
-_CHANNELS: Final = ("r", "g", "b")
-
 
 def _chapman_to_space(r: np.ndarray, mu: np.ndarray, mie_h: float) -> np.ndarray:
     """``chapmanToSpace(r, mu)`` of the shader (planet radius 1). [planet radii]"""
@@ -110,10 +112,6 @@ def _chapman_to_space(r: np.ndarray, mu: np.ndarray, mie_h: float) -> np.ndarray
 def _smoothstep(e0: float, e1: float, x: np.ndarray) -> np.ndarray:
     t = np.clip((x - e0) / (e1 - e0), 0.0, 1.0)
     return t * t * (3.0 - 2.0 * t)
-
-
-def _vector(params: Mapping[str, float], name: str) -> np.ndarray:
-    return np.array([params[f"{name}_{c}"] for c in _CHANNELS])
 
 
 def celestia_sky_rgb(
@@ -143,9 +141,9 @@ def celestia_sky_rgb(
     h = float(params["MieScaleHeight"])
     mie_h = radius / h
     r_sky = 1.0 + h * -math.log(_THRESHOLD) / radius
-    rayleigh = _vector(params, "Rayleigh") * radius
+    rayleigh = rgb_of(params, "Rayleigh") * radius
     mie = float(params["Mie"]) * radius
-    ext = rayleigh + mie + _vector(params, "Absorption") * radius
+    ext = rayleigh + mie + rgb_of(params, "Absorption") * radius
     zen = np.radians(np.asarray(view_zenith_deg, dtype=float))
     azi = np.radians(np.asarray(view_azimuth_deg, dtype=float))
     zen, azi = np.broadcast_arrays(zen, azi)
@@ -228,7 +226,7 @@ def _flat(values: Mapping[str, Any], radius_km: float) -> dict[str, float]:
         "exposure": 1.0 / (4.0 * math.pi),
     }
     for name in ("Rayleigh", "Absorption"):
-        for c, v in zip(_CHANNELS, values[name], strict=True):
+        for c, v in zip(RGB, values[name], strict=True):
             out[f"{name}_{c}"] = max(float(v), 1e-9)
     return out
 
@@ -246,11 +244,6 @@ def _parameters_of(fit: EngineFit) -> CelestiaAtmosphere:
     top_km = (
         fit.atmosphere_info["atmosphere_radius_m"] - fit.atmosphere_info["planet_radius_m"]
     ) / 1000.0
-    errors = [
-        f"Sun {e.sun_elevation_deg:g} deg: Delta E 2000 {e.delta_e_mean:.2f} mean, "
-        f"{e.delta_e_p95:.2f} 95th pct, luminance ratio {e.luminance_ratio:.3f}"
-        for e in fit.errors
-    ]
     return CelestiaAtmosphere(
         name=fit.atmosphere,
         body="Earth" if "earth" in fit.atmosphere else "Mars",
@@ -264,7 +257,7 @@ def _parameters_of(fit: EngineFit) -> CelestiaAtmosphere:
         notes=(
             f"{fit.kind} to dustoptics' exact spectral sky of {fit.atmosphere!r} (single "
             "scattering model of Celestia's shader; CIE Delta E 2000 over the dome):",
-            *errors,
+            *error_notes(fit),
             f"exposure (the shader's colour to radiance per unit solar illuminance) "
             f"{float(p['exposure']):.6g}",
             f"community row: {CELESTIA_CONTENT_SOURCE}",
@@ -274,13 +267,8 @@ def _parameters_of(fit: EngineFit) -> CelestiaAtmosphere:
 
 def write_celestia_fit(fit: EngineFit, out_dir: Any, *, overwrite: bool = False) -> list[Path]:
     """Write ``NAME_celestia.ssc`` of a fit."""
-    path = Path(out_dir) / f"{safe_stem(fit.atmosphere)}_celestia.ssc"
     text = celestia_ssc(_parameters_of(fit))
-    return write_files({path: text.encode("utf-8")}, overwrite=overwrite)
-
-
-def _per_channel(name: str, lower: float, upper: float) -> tuple[Parameter, ...]:
-    return tuple(Parameter(f"{name}_{c}", lower, upper, log=True, unit="km^-1") for c in _CHANNELS)
+    return write_texts(fit, out_dir, "celestia", {"ssc": text}, overwrite=overwrite)
 
 
 CELESTIA = register_engine(
@@ -292,8 +280,8 @@ CELESTIA = register_engine(
             Parameter("Mie", 1e-7, 1.0, log=True, unit="km^-1"),
             Parameter("MieScaleHeight", 0.5, 60.0, log=True, unit="km"),
             Parameter("MieHGAnisotropy", -0.9, 0.95),
-            *_per_channel("Rayleigh", 1e-8, 1.0),
-            *_per_channel("Absorption", 1e-9, 1.0),
+            *per_channel("Rayleigh", 1e-8, 1.0, "km^-1"),
+            *per_channel("Absorption", 1e-9, 1.0, "km^-1"),
             Parameter("exposure", 1e-6, 1e3, log=True),
         ),
         community_parameters=("exposure",),

@@ -17,7 +17,9 @@ from scipy.optimize import least_squares
 
 from dustoptics import colour
 from dustoptics.atmosphere.sets import Atmosphere
+from dustoptics.io._atomic import safe_stem, write_files
 from dustoptics.io.registry import Format, register
+from dustoptics.sky.engines import _hillaire
 from dustoptics.sky.medium import Medium
 from dustoptics.sky.scene import sky_radiance, sunlit_xyz
 
@@ -28,6 +30,7 @@ __all__ = [
     "ENGINES",
     "FIT_SUN_ELEVATIONS_DEG",
     "NEAR_SUN_DEG",
+    "RGB",
     "SUN_EXCLUSION_DEG",
     "EngineFit",
     "EngineModel",
@@ -37,13 +40,20 @@ __all__ = [
     "channel_values",
     "dust_tint_linear_srgb",
     "engine_xyz",
+    "error_header",
+    "error_notes",
+    "errors_json",
     "fit_engine",
+    "hillaire_sky_rgb",
+    "per_channel",
     "reference_skies",
     "register_engine",
+    "rgb_of",
     "scale_height_m",
     "sky_error",
     "sunlight_linear_srgb",
     "write_engine_files",
+    "write_texts",
 ]
 
 #: Sun elevations of the fit and of the error table: high Sun, afternoon, low Sun, sunset. [deg]
@@ -615,3 +625,98 @@ def write_engine_files(
     engine = ENGINES[name]
     refs = reference_skies(atmosphere) if skies is None else skies
     return engine.write(fit_engine(engine, atmosphere, refs), out_dir, overwrite=overwrite)
+
+
+# What the engines' modules share: the channels' names, the Hillaire engines' renderer and
+# the fit's error in their files.
+
+#: The suffixes of a colour's three parameters (``NAME_r``, ``NAME_g``, ``NAME_b``).
+RGB: Final = ("r", "g", "b")
+
+#: Multiple-scattering tables of the Hillaire engines by their parameters (bounded).
+_PSI_CACHE: dict[tuple[tuple[str, float], ...], np.ndarray] = {}
+
+
+def rgb_of(params: Mapping[str, float], name: str) -> np.ndarray:
+    """The three values ``NAME_r``, ``NAME_g``, ``NAME_b`` of ``params`` as an array."""
+    return np.array([params[f"{name}_{c}"] for c in RGB])
+
+
+def per_channel(name: str, lower: float, upper: float, unit: str) -> tuple[Parameter, ...]:
+    """Three fitted scales ``NAME_r``, ``NAME_g``, ``NAME_b`` (log, within the bounds)."""
+    return tuple(Parameter(f"{name}_{c}", lower, upper, log=True, unit=unit) for c in RGB)
+
+
+def hillaire_sky_rgb(
+    setup: _hillaire.HillaireSetup,
+    params: Mapping[str, float],
+    *,
+    sun_elevation_deg: float,
+    view_zenith_deg: Any,
+    view_azimuth_deg: Any,
+) -> np.ndarray:
+    """Hillaire's sky of ``setup`` per unit solar illuminance times ``params["exposure"]``
+    (1 if absent), linear sRGB, lit by a Sun of :func:`sunlight_linear_srgb`. [sr^-1]
+
+    The multiple-scattering table is made once per ``params`` (the exposure aside).
+    """
+    key = tuple((k, float(params[k])) for k in sorted(params) if k != "exposure")
+    psi = _PSI_CACHE.get(key)
+    if psi is None:
+        if len(_PSI_CACHE) > 16:
+            _PSI_CACHE.clear()
+        psi = _PSI_CACHE[key] = _hillaire.multiple_scattering_table(setup)
+    rgb = _hillaire.sky_radiance_rgb(
+        setup,
+        sun_elevation_deg=sun_elevation_deg,
+        view_zenith_deg=view_zenith_deg,
+        view_azimuth_deg=view_azimuth_deg,
+        psi=psi,
+    )
+    if "exposure" in params:
+        rgb = params["exposure"] * rgb
+    return np.asarray(rgb * sunlight_linear_srgb(), dtype=float)
+
+
+def error_header(fit: EngineFit) -> list[str]:
+    """The comment lines of the fit's sky error, one per Sun elevation."""
+    return [
+        "Sky error against the exact spectral sky (CIE Delta E 2000, dome mean / 95th pct):",
+        *(
+            f"  Sun {e.sun_elevation_deg:g} deg: {e.delta_e_mean:.2f} / {e.delta_e_p95:.2f}"
+            for e in fit.errors
+        ),
+    ]
+
+
+def error_notes(fit: EngineFit) -> tuple[str, ...]:
+    """The fit's sky error as notes, one per Sun elevation, with the luminance ratio."""
+    return tuple(
+        f"Sun {e.sun_elevation_deg:g} deg: Delta E 2000 {e.delta_e_mean:.2f} mean, "
+        f"{e.delta_e_p95:.2f} 95th pct, luminance ratio {e.luminance_ratio:.3f}"
+        for e in fit.errors
+    )
+
+
+def errors_json(fit: EngineFit) -> list[dict[str, float]]:
+    """The fit's sky error per Sun elevation, for a JSON file."""
+    return [
+        {
+            "sun_elevation_deg": e.sun_elevation_deg,
+            "delta_e2000_mean": e.delta_e_mean,
+            "delta_e2000_p95": e.delta_e_p95,
+            "luminance_ratio": e.luminance_ratio,
+        }
+        for e in fit.errors
+    ]
+
+
+def write_texts(
+    fit: EngineFit, out_dir: Any, name: str, texts: Mapping[str, str], *, overwrite: bool
+) -> list[Path]:
+    """Write ``texts`` (suffix -> text) as ``STEM_NAME.SUFFIX`` atomically, UTF-8 (the stem
+    is the atmosphere's name, :func:`dustoptics.io._atomic.safe_stem`)."""
+    base = Path(out_dir) / f"{safe_stem(fit.atmosphere)}_{name}"
+    return write_files(
+        {Path(f"{base}.{k}"): v.encode("utf-8") for k, v in texts.items()}, overwrite=overwrite
+    )

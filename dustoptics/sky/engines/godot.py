@@ -31,7 +31,6 @@ energy multiplier adjusted.
 from __future__ import annotations
 
 import math
-import re
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any, Final
@@ -40,13 +39,16 @@ import numpy as np
 
 from dustoptics import colour
 from dustoptics.atmosphere.sets import Atmosphere
-from dustoptics.io._atomic import write_files
 from dustoptics.sky.engines.core import (
+    RGB,
     EngineFit,
     EngineModel,
     Parameter,
     dust_tint_linear_srgb,
+    error_header,
     register_engine,
+    rgb_of,
+    write_texts,
 )
 
 __all__ = ["GODOT", "GODOT_SOURCE", "godot_sky_rgb", "godot_tres", "srgb_decode"]
@@ -55,8 +57,6 @@ GODOT_SOURCE: Final = (
     "Godot 4.0-4.4 (4.4.1-stable) scene/resources/sky_material.cpp, "
     "PhysicalSkyMaterial::_update_shader"
 )
-
-_RGB: Final = ("r", "g", "b")
 
 
 def srgb_decode(encoded: Any) -> np.ndarray:
@@ -74,18 +74,18 @@ DEFAULTS: Final = {
     "rayleigh_coefficient": 2.0,
     **{
         f"rayleigh_color_{c}": float(v)
-        for c, v in zip(_RGB, srgb_decode([0.3, 0.405, 0.6]), strict=True)
+        for c, v in zip(RGB, srgb_decode([0.3, 0.405, 0.6]), strict=True)
     },
     "mie_coefficient": 0.005,
     "mie_eccentricity": 0.8,
     **{
         f"mie_color_{c}": float(v)
-        for c, v in zip(_RGB, srgb_decode([0.69, 0.729, 0.812]), strict=True)
+        for c, v in zip(RGB, srgb_decode([0.69, 0.729, 0.812]), strict=True)
     },
     "turbidity": 10.0,
     **{
         f"ground_color_{c}": float(v)
-        for c, v in zip(_RGB, srgb_decode([0.1, 0.07, 0.034]), strict=True)
+        for c, v in zip(RGB, srgb_decode([0.1, 0.07, 0.034]), strict=True)
     },
     "energy_multiplier": 1.0,
 }
@@ -112,9 +112,7 @@ def godot_sky_rgb(
     zenith_angle = min(max(light[1], -1.0), 1.0)
     sun_energy = max(0.0, 1.0 - math.exp(-(math.pi / 2 - math.acos(zenith_angle))))
     sun_fade = 1.0 - min(max(1.0 - math.exp(light[1]), 0.0), 1.0)
-    rc = np.array([params[f"rayleigh_color_{c}"] for c in _RGB])
-    mc = np.array([params[f"mie_color_{c}"] for c in _RGB])
-    ground = np.array([params[f"ground_color_{c}"] for c in _RGB])
+    rc, mc, ground = (rgb_of(params, f"{n}_color") for n in ("rayleigh", "mie", "ground"))
     rayleigh_beta = (params["rayleigh_coefficient"] - (1.0 - sun_fade)) * rc * 0.0001
     mie_beta = params["turbidity"] * params["mie_coefficient"] * mc * 0.000434
     up_eye = eye[..., 1]
@@ -148,13 +146,13 @@ def _community(atmosphere: Atmosphere) -> dict[str, float]:
     out = {**DEFAULTS, "energy_multiplier": 0.01}
     if atmosphere.name.startswith("mars"):
         tint = dust_tint_linear_srgb(atmosphere)
-        for i, c in enumerate(_RGB):
+        for i, c in enumerate(RGB):
             out[f"rayleigh_color_{c}"] = out[f"mie_color_{c}"] = float(tint[i])
     return out
 
 
 def _color(params: Mapping[str, float], name: str) -> str:
-    enc = _encode(np.array([params[f"{name}_{c}"] for c in _RGB]))
+    enc = _encode(rgb_of(params, name))
     return f"Color({enc[0]:.6g}, {enc[1]:.6g}, {enc[2]:.6g}, 1)"
 
 
@@ -165,11 +163,7 @@ def _comment(fit: EngineFit) -> str:
         "Colours sRGB-encoded as the inspector shows them (source_color). A",
         "DirectionalLight3D of energy 1 is the Sun; energy_multiplier maps the sky to",
         "radiance per unit solar illuminance [sr^-1] (times Godot's own exposure).",
-        "Sky error against the exact spectral sky (CIE Delta E 2000, dome mean / 95th pct):",
-        *(
-            f"  Sun {e.sun_elevation_deg:g} deg: {e.delta_e_mean:.2f} / {e.delta_e_p95:.2f}"
-            for e in fit.errors
-        ),
+        *error_header(fit),
     ]
     return "\n".join(lines)
 
@@ -207,9 +201,9 @@ def godot_tres(fit: EngineFit) -> str:
 
 def write_godot(fit: EngineFit, out_dir: Any, *, overwrite: bool = False) -> list[Path]:
     """Write ``NAME_godot_physical_sky.tres`` atomically."""
-    stem = re.sub(r"[^A-Za-z0-9._-]", "_", fit.atmosphere)
-    path = Path(out_dir) / f"{stem}_godot_physical_sky.tres"
-    return write_files({path: godot_tres(fit).encode("utf-8")}, overwrite=overwrite)
+    return write_texts(
+        fit, out_dir, "godot_physical_sky", {"tres": godot_tres(fit)}, overwrite=overwrite
+    )
 
 
 GODOT = register_engine(
@@ -219,10 +213,10 @@ GODOT = register_engine(
         source=GODOT_SOURCE,
         parameters=(
             Parameter("rayleigh_coefficient", 0.01, 64.0, log=True),
-            *(Parameter(f"rayleigh_color_{c}", 0.0, 1.0) for c in _RGB),
+            *(Parameter(f"rayleigh_color_{c}", 0.0, 1.0) for c in RGB),
             Parameter("mie_coefficient", 1e-5, 1.0, log=True),
             Parameter("mie_eccentricity", -0.99, 0.99),
-            *(Parameter(f"mie_color_{c}", 0.0, 1.0) for c in _RGB),
+            *(Parameter(f"mie_color_{c}", 0.0, 1.0) for c in RGB),
             Parameter("energy_multiplier", 1e-5, 128.0, log=True),
         ),
         community_parameters=("energy_multiplier",),

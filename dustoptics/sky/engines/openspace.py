@@ -33,7 +33,6 @@ from typing import Any, Final
 import numpy as np
 
 from dustoptics.atmosphere.sets import Atmosphere
-from dustoptics.io._atomic import safe_stem, write_files
 from dustoptics.io.engines.openspace import (
     OPENSPACE_SOURCE,
     OpenSpaceAtmosphere,
@@ -43,18 +42,21 @@ from dustoptics.io.engines.openspace import (
 )
 from dustoptics.sky.engines import _hillaire
 from dustoptics.sky.engines.core import (
+    RGB,
     EngineFit,
     EngineModel,
     Parameter,
+    error_notes,
+    hillaire_sky_rgb,
+    per_channel,
     register_engine,
-    sunlight_linear_srgb,
+    rgb_of,
+    write_texts,
 )
 
 __all__ = ["OPENSPACE", "openspace_setup", "openspace_sky_rgb"]
 
-_RGB: Final = ("r", "g", "b")
 _GROUND_ALBEDO: Final = 0.2
-_PSI_CACHE: dict[tuple[float, ...], np.ndarray] = {}
 
 #: OpenSpace's data/assets/scene/solarsystem/planets/{mars,earth}/atmosphere.asset.
 COMMUNITY: Final = {
@@ -81,10 +83,6 @@ COMMUNITY: Final = {
 }
 
 
-def _vector(params: Mapping[str, float], name: str) -> np.ndarray:
-    return np.array([params[f"{name}_{c}"] for c in _RGB])
-
-
 def openspace_setup(params: Mapping[str, float]) -> _hillaire.HillaireSetup:
     """Hillaire's passes with OpenSpace's medium (``params`` in km and km^-1)."""
     g = float(params["G"])
@@ -92,11 +90,11 @@ def openspace_setup(params: Mapping[str, float]) -> _hillaire.HillaireSetup:
     return _hillaire.HillaireSetup(
         planet_radius_km=radius,
         top_radius_km=radius + params["atmosphere_height_km"],
-        rayleigh_scattering_per_km=_vector(params, "rayleigh"),
+        rayleigh_scattering_per_km=rgb_of(params, "rayleigh"),
         rayleigh_absorption_per_km=np.zeros(3),
         rayleigh_scale_height_km=params["H_R"],
-        mie_scattering_per_km=_vector(params, "mie_scattering"),
-        mie_absorption_per_km=_vector(params, "mie_absorption"),
+        mie_scattering_per_km=rgb_of(params, "mie_scattering"),
+        mie_absorption_per_km=rgb_of(params, "mie_absorption"),
         mie_scale_height_km=params["H_M"],
         mie_phase=lambda cos_theta: openspace_mie_phase(cos_theta, g),
         ozone_absorption_per_km=np.zeros(3),
@@ -116,21 +114,13 @@ def openspace_sky_rgb(
 ) -> np.ndarray:
     """OpenSpace's sky (its medium, Hillaire's passes) per unit solar illuminance times
     ``exposure``, linear sRGB. [sr^-1]"""
-    setup = openspace_setup(params)
-    key = tuple(float(params[k]) for k in sorted(params) if k != "exposure")
-    psi = _PSI_CACHE.get(key)
-    if psi is None:
-        if len(_PSI_CACHE) > 16:
-            _PSI_CACHE.clear()
-        psi = _PSI_CACHE[key] = _hillaire.multiple_scattering_table(setup)
-    rgb = _hillaire.sky_radiance_rgb(
-        setup,
+    return hillaire_sky_rgb(
+        openspace_setup(params),
+        params,
         sun_elevation_deg=sun_elevation_deg,
         view_zenith_deg=view_zenith_deg,
         view_azimuth_deg=view_azimuth_deg,
-        psi=psi,
     )
-    return np.asarray(params["exposure"] * rgb * sunlight_linear_srgb(), dtype=float)
 
 
 def _flat(values: Mapping[str, Any]) -> dict[str, float]:
@@ -143,7 +133,7 @@ def _flat(values: Mapping[str, Any]) -> dict[str, float]:
         "ground_albedo": _GROUND_ALBEDO,
         "exposure": 1.0,
     }
-    for i, c in enumerate(_RGB):
+    for i, c in enumerate(RGB):
         sca = float(values["mie_scattering"][i])
         out[f"rayleigh_{c}"] = max(float(values["rayleigh"][i]), 1e-9)
         out[f"mie_scattering_{c}"] = max(sca, 1e-9)
@@ -174,13 +164,8 @@ def _community(atmosphere: Atmosphere) -> dict[str, float]:
 def write_openspace_fit(fit: EngineFit, out_dir: Any, *, overwrite: bool = False) -> list[Path]:
     """``NAME_openspace.asset`` of a fit, its sky error in the comment block."""
     p = fit.params
-    errors = tuple(
-        f"Sun {e.sun_elevation_deg:g} deg: Delta E 2000 {e.delta_e_mean:.2f} mean, "
-        f"{e.delta_e_p95:.2f} 95th pct, luminance ratio {e.luminance_ratio:.3f}"
-        for e in fit.errors
-    )
-    sca = tuple(float(v) for v in _vector(p, "mie_scattering"))
-    ext = tuple(float(v) for v in _vector(p, "mie_scattering") + _vector(p, "mie_absorption"))
+    sca = tuple(float(v) for v in rgb_of(p, "mie_scattering"))
+    ext = tuple(float(v) for v in rgb_of(p, "mie_scattering") + rgb_of(p, "mie_absorption"))
     planet = "earth" if "earth" in fit.atmosphere else "mars"
     parameters = OpenSpaceAtmosphere(
         name=fit.atmosphere,
@@ -198,18 +183,14 @@ def write_openspace_fit(fit: EngineFit, out_dir: Any, *, overwrite: bool = False
         notes=(
             f"{fit.kind} to dustoptics' exact spectral sky of {fit.atmosphere!r} (OpenSpace's "
             "medium with Hillaire's multiple scattering; CIE Delta E 2000 over the dome):",
-            *errors,
+            *error_notes(fit),
             f"the fit's exposure relative to OpenSpace's SunIntensity: {float(p['exposure']):.6g}",
             "SunIntensity, GroundRadianceEmission: OpenSpace's own asset values; no ozone "
             "(OpenSpace's ozone term is not part of the fitted model)",
         ),
     )
-    path = Path(out_dir) / f"{safe_stem(fit.atmosphere)}_openspace.asset"
-    return write_files({path: openspace_asset(parameters).encode("utf-8")}, overwrite=overwrite)
-
-
-def _per_channel(name: str) -> tuple[Parameter, ...]:
-    return tuple(Parameter(f"{name}_{c}", 1e-9, 10.0, log=True, unit="km^-1") for c in _RGB)
+    asset = openspace_asset(parameters)
+    return write_texts(fit, out_dir, "openspace", {"asset": asset}, overwrite=overwrite)
 
 
 OPENSPACE = register_engine(
@@ -218,9 +199,9 @@ OPENSPACE = register_engine(
         title="OpenSpace RenderableAtmosphere",
         source=OPENSPACE_SOURCE,
         parameters=(
-            *_per_channel("rayleigh"),
-            *_per_channel("mie_scattering"),
-            *_per_channel("mie_absorption"),
+            *per_channel("rayleigh", 1e-9, 10.0, "km^-1"),
+            *per_channel("mie_scattering", 1e-9, 10.0, "km^-1"),
+            *per_channel("mie_absorption", 1e-9, 10.0, "km^-1"),
             Parameter("G", -0.9, 0.99),
             Parameter("exposure", 1e-4, 1e4, log=True),
         ),

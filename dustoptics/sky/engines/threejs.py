@@ -30,7 +30,6 @@ from __future__ import annotations
 
 import json
 import math
-import re
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any, Final
@@ -38,8 +37,15 @@ from typing import Any, Final
 import numpy as np
 
 from dustoptics.atmosphere.sets import Atmosphere
-from dustoptics.io._atomic import write_files
-from dustoptics.sky.engines.core import EngineFit, EngineModel, Parameter, register_engine
+from dustoptics.sky.engines.core import (
+    EngineFit,
+    EngineModel,
+    Parameter,
+    error_header,
+    errors_json,
+    register_engine,
+    write_texts,
+)
 
 __all__ = ["THREEJS", "THREEJS_SOURCE", "threejs_files", "threejs_sky_rgb"]
 
@@ -146,11 +152,7 @@ def _header(fit: EngineFit) -> list[str]:
         "renderer.toneMapping = THREE.LinearToneMapping and renderer.toneMappingExposure =",
         "toneMappingExposure give radiance per unit solar illuminance [sr^-1]; multiply by your",
         "own exposure.  sunPosition: the unit vector toward the Sun, up = (0, 1, 0).",
-        "Sky error against the exact spectral sky (CIE Delta E 2000, dome mean / 95th pct):",
-        *(
-            f"  Sun {e.sun_elevation_deg:g} deg: {e.delta_e_mean:.2f} / {e.delta_e_p95:.2f}"
-            for e in fit.errors
-        ),
+        *error_header(fit),
     ]
 
 
@@ -169,15 +171,7 @@ def threejs_files(fit: EngineFit) -> dict[str, str]:
         "uniforms": uniforms,
         "toneMapping": "LinearToneMapping",
         "toneMappingExposure": exposure,
-        "errors": [
-            {
-                "sun_elevation_deg": e.sun_elevation_deg,
-                "delta_e2000_mean": e.delta_e_mean,
-                "delta_e2000_p95": e.delta_e_p95,
-                "luminance_ratio": e.luminance_ratio,
-            }
-            for e in fit.errors
-        ],
+        "errors": errors_json(fit),
     }
     module = [
         *(f"// {line}" for line in header),
@@ -204,13 +198,7 @@ def threejs_files(fit: EngineFit) -> dict[str, str]:
 
 def write_threejs(fit: EngineFit, out_dir: Any, *, overwrite: bool = False) -> list[Path]:
     """Write ``NAME_threejs_sky.json`` and ``NAME_threejs_sky.mjs`` atomically."""
-    stem = re.sub(r"[^A-Za-z0-9._-]", "_", fit.atmosphere)
-    contents = threejs_files(fit)
-    base = Path(out_dir)
-    return write_files(
-        {base / f"{stem}_threejs_sky.{k}": v.encode("utf-8") for k, v in contents.items()},
-        overwrite=overwrite,
-    )
+    return write_texts(fit, out_dir, "threejs_sky", threejs_files(fit), overwrite=overwrite)
 
 
 THREEJS = register_engine(

@@ -50,7 +50,6 @@ from __future__ import annotations
 
 import json
 import math
-import re
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any, Final
@@ -58,17 +57,23 @@ from typing import Any, Final
 import numpy as np
 
 from dustoptics.atmosphere.sets import Atmosphere
-from dustoptics.io._atomic import write_files
+from dustoptics.io._atomic import safe_stem
 from dustoptics.sky.engines import _hillaire
 from dustoptics.sky.engines.core import (
+    RGB,
     EngineFit,
     EngineModel,
     Parameter,
     channel_values,
     dust_tint_linear_srgb,
+    error_header,
+    errors_json,
+    hillaire_sky_rgb,
+    per_channel,
     register_engine,
+    rgb_of,
     scale_height_m,
-    sunlight_linear_srgb,
+    write_texts,
 )
 
 __all__ = ["UNITY", "UNITY_SOURCE", "unity_files", "unity_setup", "unity_sky_rgb"]
@@ -86,9 +91,7 @@ LAYER_DEPTH_TO_SCALE_HEIGHT: Final = 0.144765
 PBS_SCRIPT_GUID: Final = "d877ec3e844f2ca46830012e8e79319b"
 VOLUME_PROFILE_GUID: Final = "d7fd9488000d3734a9e00ee676215985"
 
-_RGB: Final = ("r", "g", "b")
 _OZONE_PER_M: Final = np.array([0.00065, 0.00188, 0.00008]) / 1000.0
-_PSI_CACHE: dict[tuple[float, ...], np.ndarray] = {}
 
 #: The override's Earth defaults, SI units (extinctions in m^-1, altitudes in m).
 EARTH_DEFAULTS: Final = {
@@ -115,10 +118,10 @@ EARTH_DEFAULTS: Final = {
 def unity_setup(params: Mapping[str, float]) -> _hillaire.HillaireSetup:
     """The Hillaire medium of the override's values (every key of :data:`EARTH_DEFAULTS`)."""
     radius_km = params["planet_radius_m"] / 1000.0
-    air_ext = np.array([params[f"air_extinction_{c}"] for c in _RGB]) * 1000.0
+    air_ext = rgb_of(params, "air_extinction") * 1000.0
     air_scat = air_ext * params["air_tint"]
     aer_ext = params["aerosol_extinction"] * 1000.0
-    tint = np.array([params[f"aerosol_tint_{c}"] for c in _RGB])
+    tint = rgb_of(params, "aerosol_tint")
     top = max(params["air_maximum_altitude_m"], params["aerosol_maximum_altitude_m"]) / 1000.0
     bottom = params["ozone_minimum_altitude_m"] / 1000.0
     width = params["ozone_layer_width_m"] / 1000.0
@@ -156,21 +159,13 @@ def unity_sky_rgb(
     view_azimuth_deg: Any,
 ) -> np.ndarray:
     """The Physically Based Sky per unit solar illuminance times ``exposure``, linear sRGB. [sr^-1]"""
-    setup = unity_setup(params)
-    key = tuple(float(params[k]) for k in sorted(params) if k != "exposure")
-    psi = _PSI_CACHE.get(key)
-    if psi is None:
-        if len(_PSI_CACHE) > 16:
-            _PSI_CACHE.clear()
-        psi = _PSI_CACHE[key] = _hillaire.multiple_scattering_table(setup)
-    rgb = _hillaire.sky_radiance_rgb(
-        setup,
+    return hillaire_sky_rgb(
+        unity_setup(params),
+        params,
         sun_elevation_deg=sun_elevation_deg,
         view_zenith_deg=view_zenith_deg,
         view_azimuth_deg=view_azimuth_deg,
-        psi=psi,
     )
-    return np.asarray(params["exposure"] * rgb * sunlight_linear_srgb(), dtype=float)
 
 
 def _initial(atmosphere: Atmosphere) -> dict[str, float]:
@@ -195,7 +190,7 @@ def _initial(atmosphere: Atmosphere) -> dict[str, float]:
         ground_tint=0.2,
         exposure=1.0,
     )
-    for i, c in enumerate(_RGB):
+    for i, c in enumerate(RGB):
         out[f"air_extinction_{c}"] = float(max(ray[i], 1e-9))
         out[f"aerosol_tint_{c}"] = float(np.clip(sca[i] / grey, 0.0, 1.0)) if grey > 0 else 0.9
     return out
@@ -206,7 +201,7 @@ def _community(atmosphere: Atmosphere) -> dict[str, float]:
     out["planet_radius_m"] = float(atmosphere.planet_radius_m)
     if atmosphere.name.startswith("mars"):
         tint = dust_tint_linear_srgb(atmosphere)
-        for i, c in enumerate(_RGB):
+        for i, c in enumerate(RGB):
             out[f"aerosol_tint_{c}"] = float(tint[i])
     return out
 
@@ -229,7 +224,7 @@ def override_values(params: Mapping[str, float]) -> dict[str, Any]:
         "aerosolDensity": _opacity(
             params["aerosol_extinction"], params["aerosol_maximum_altitude_m"]
         ),
-        "aerosolTint": [params[f"aerosol_tint_{c}"] for c in _RGB],
+        "aerosolTint": [params[f"aerosol_tint_{c}"] for c in RGB],
         "aerosolMaximumAltitude": params["aerosol_maximum_altitude_m"],
         "aerosolAnisotropy": params["aerosol_anisotropy"],
         "ozoneDensityDimmer": params["ozone_density_dimmer"],
@@ -248,11 +243,7 @@ def _header(fit: EngineFit) -> list[str]:
         "Altitudes in m; densities are zenith opacities; tints are albedos.",
         "Light with a directional light of the Sun's colour; exposure compensation",
         f"{ev:+.3f} EV gives radiance per unit solar illuminance [sr^-1].",
-        "Sky error against the exact spectral sky (CIE Delta E 2000, dome mean / 95th pct):",
-        *(
-            f"  Sun {e.sun_elevation_deg:g} deg: {e.delta_e_mean:.2f} / {e.delta_e_p95:.2f}"
-            for e in fit.errors
-        ),
+        *error_header(fit),
     ]
 
 
@@ -305,7 +296,6 @@ def unity_asset(fit: EngineFit, name: str) -> str:
 
 def unity_files(fit: EngineFit) -> dict[str, str]:
     """The two files' contents: ``json`` and ``asset``."""
-    stem = re.sub(r"[^A-Za-z0-9._-]", "_", fit.atmosphere)
     document = {
         "comment": _header(fit),
         "engine": "Unity HDRP Physically Based Sky",
@@ -315,30 +305,17 @@ def unity_files(fit: EngineFit) -> dict[str, str]:
         "planet_radius_km": fit.params["planet_radius_m"] / 1000.0,
         "override": override_values(fit.params),
         "exposure_compensation_ev": math.log2(fit.params["exposure"]),
-        "errors": [
-            {
-                "sun_elevation_deg": e.sun_elevation_deg,
-                "delta_e2000_mean": e.delta_e_mean,
-                "delta_e2000_p95": e.delta_e_p95,
-                "luminance_ratio": e.luminance_ratio,
-            }
-            for e in fit.errors
-        ],
+        "errors": errors_json(fit),
     }
     return {
         "json": json.dumps(document, indent=2, allow_nan=False) + "\n",
-        "asset": unity_asset(fit, f"{stem}_unity_pbs"),
+        "asset": unity_asset(fit, f"{safe_stem(fit.atmosphere)}_unity_pbs"),
     }
 
 
 def write_unity(fit: EngineFit, out_dir: Any, *, overwrite: bool = False) -> list[Path]:
     """Write ``NAME_unity_pbs.json`` and ``NAME_unity_pbs.asset`` atomically."""
-    stem = re.sub(r"[^A-Za-z0-9._-]", "_", fit.atmosphere)
-    base = Path(out_dir)
-    return write_files(
-        {base / f"{stem}_unity_pbs.{k}": v.encode("utf-8") for k, v in unity_files(fit).items()},
-        overwrite=overwrite,
-    )
+    return write_texts(fit, out_dir, "unity_pbs", unity_files(fit), overwrite=overwrite)
 
 
 UNITY = register_engine(
@@ -347,10 +324,10 @@ UNITY = register_engine(
         title="Unity HDRP Physically Based Sky",
         source=UNITY_SOURCE,
         parameters=(
-            *(Parameter(f"air_extinction_{c}", 1e-10, 1e-2, log=True, unit="m^-1") for c in _RGB),
+            *per_channel("air_extinction", 1e-10, 1e-2, "m^-1"),
             Parameter("air_maximum_altitude_m", 1e3, 5e5, log=True, unit="m"),
             Parameter("aerosol_extinction", 1e-10, 1e-2, log=True, unit="m^-1"),
-            *(Parameter(f"aerosol_tint_{c}", 0.0, 1.0) for c in _RGB),
+            *(Parameter(f"aerosol_tint_{c}", 0.0, 1.0) for c in RGB),
             Parameter("aerosol_maximum_altitude_m", 1e3, 5e5, log=True, unit="m"),
             Parameter("aerosol_anisotropy", -0.99, 0.99),
             Parameter("exposure", 1e-3, 1e3, log=True),

@@ -47,7 +47,6 @@ from __future__ import annotations
 
 import json
 import math
-import re
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any, Final
@@ -55,17 +54,22 @@ from typing import Any, Final
 import numpy as np
 
 from dustoptics.atmosphere.sets import Atmosphere
-from dustoptics.io._atomic import write_files
 from dustoptics.sky.engines import _hillaire
 from dustoptics.sky.engines.core import (
+    RGB,
     EngineFit,
     EngineModel,
     Parameter,
     channel_values,
     dust_tint_linear_srgb,
+    error_header,
+    errors_json,
+    hillaire_sky_rgb,
+    per_channel,
     register_engine,
+    rgb_of,
     scale_height_m,
-    sunlight_linear_srgb,
+    write_texts,
 )
 
 __all__ = ["UNREAL", "UNREAL_SOURCE", "unreal_files", "unreal_setup", "unreal_sky_rgb"]
@@ -101,13 +105,6 @@ EARTH_DEFAULTS: Final = {
     "exposure": 1.0,
 }
 
-_RGB: Final = ("r", "g", "b")
-_PSI_CACHE: dict[tuple[float, ...], np.ndarray] = {}
-
-
-def _vector(params: Mapping[str, float], name: str) -> np.ndarray:
-    return np.array([params[f"{name}_{c}"] for c in _RGB])
-
 
 def unreal_setup(params: Mapping[str, float]) -> _hillaire.HillaireSetup:
     """The Hillaire medium of the component's properties (every key of :data:`EARTH_DEFAULTS`)."""
@@ -116,14 +113,14 @@ def unreal_setup(params: Mapping[str, float]) -> _hillaire.HillaireSetup:
     return _hillaire.HillaireSetup(
         planet_radius_km=radius,
         top_radius_km=radius + params["atmosphere_height_km"],
-        rayleigh_scattering_per_km=_vector(params, "rayleigh_scattering"),
+        rayleigh_scattering_per_km=rgb_of(params, "rayleigh_scattering"),
         rayleigh_absorption_per_km=np.zeros(3),
         rayleigh_scale_height_km=params["rayleigh_exponential_distribution_km"],
-        mie_scattering_per_km=_vector(params, "mie_scattering"),
-        mie_absorption_per_km=_vector(params, "mie_absorption"),
+        mie_scattering_per_km=rgb_of(params, "mie_scattering"),
+        mie_absorption_per_km=rgb_of(params, "mie_absorption"),
         mie_scale_height_km=params["mie_exponential_distribution_km"],
         mie_phase=_hillaire.henyey_greenstein(params["mie_anisotropy"]),
-        ozone_absorption_per_km=_vector(params, "other_absorption"),
+        ozone_absorption_per_km=rgb_of(params, "other_absorption"),
         ozone_bottom_km=tip - width,
         ozone_peak_km=tip,
         ozone_top_km=tip + width,
@@ -146,21 +143,13 @@ def unreal_sky_rgb(
 
     The Sun is a directional light of the sunlight's colour and unit illuminance.
     """
-    setup = unreal_setup(params)
-    key = tuple(float(params[k]) for k in sorted(params) if k != "exposure")
-    psi = _PSI_CACHE.get(key)
-    if psi is None:
-        if len(_PSI_CACHE) > 16:
-            _PSI_CACHE.clear()
-        psi = _PSI_CACHE[key] = _hillaire.multiple_scattering_table(setup)
-    rgb = _hillaire.sky_radiance_rgb(
-        setup,
+    return hillaire_sky_rgb(
+        unreal_setup(params),
+        params,
         sun_elevation_deg=sun_elevation_deg,
         view_zenith_deg=view_zenith_deg,
         view_azimuth_deg=view_azimuth_deg,
-        psi=psi,
     )
-    return np.asarray(params["exposure"] * rgb * sunlight_linear_srgb(), dtype=float)
 
 
 def _planet(atmosphere: Atmosphere) -> dict[str, float]:
@@ -179,7 +168,7 @@ def _initial(atmosphere: Atmosphere) -> dict[str, float]:
     ozone = channel_values(atmosphere, "ozone", "beta_abs_per_m") * 1000.0
     out = dict(EARTH_DEFAULTS)
     out.update(_planet(atmosphere))
-    for i, c in enumerate(_RGB):
+    for i, c in enumerate(RGB):
         out[f"rayleigh_scattering_{c}"] = float(max(ray[i], 1e-7))
         out[f"mie_scattering_{c}"] = float(max(mie_s[i], 1e-7))
         out[f"mie_absorption_{c}"] = float(max(mie_a[i], 1e-7))
@@ -203,13 +192,13 @@ def _community(atmosphere: Atmosphere) -> dict[str, float]:
     out["bottom_radius_km"] = atmosphere.planet_radius_m / 1000.0
     if atmosphere.name.startswith("mars"):
         tint = dust_tint_linear_srgb(atmosphere)
-        for i, c in enumerate(_RGB):
+        for i, c in enumerate(RGB):
             out[f"mie_scattering_{c}"] = EARTH_DEFAULTS[f"mie_scattering_{c}"] * float(tint[i])
     return out
 
 
 def _scale_and_colour(params: Mapping[str, float], name: str) -> tuple[float, list[float]]:
-    v = _vector(params, name)
+    v = rgb_of(params, name)
     scale = float(np.max(v))
     return scale, [float(x / scale) if scale > 0 else 0.0 for x in v]
 
@@ -250,11 +239,7 @@ def _header(fit: EngineFit) -> list[str]:
         "Units: km (radius, height, exponential distributions) and km^-1 (scale x colour).",
         "Light the level with a directional light (Atmosphere Sun Light) of the Sun's colour;",
         f"exposure compensation {ev:+.3f} EV gives radiance per unit solar illuminance [sr^-1].",
-        "Sky error against the exact spectral sky (CIE Delta E 2000, dome mean / 95th pct):",
-        *(
-            f"  Sun {e.sun_elevation_deg:g} deg: {e.delta_e_mean:.2f} / {e.delta_e_p95:.2f}"
-            for e in fit.errors
-        ),
+        *error_header(fit),
     ]
 
 
@@ -287,15 +272,7 @@ def unreal_files(fit: EngineFit) -> dict[str, str]:
         "kind": fit.kind,
         "properties": props,
         "exposure_compensation_ev": math.log2(fit.params["exposure"]),
-        "errors": [
-            {
-                "sun_elevation_deg": e.sun_elevation_deg,
-                "delta_e2000_mean": e.delta_e_mean,
-                "delta_e2000_p95": e.delta_e_p95,
-                "luminance_ratio": e.luminance_ratio,
-            }
-            for e in fit.errors
-        ],
+        "errors": errors_json(fit),
     }
     script = [
         *(f"# {line}" for line in header),
@@ -321,19 +298,9 @@ def unreal_files(fit: EngineFit) -> dict[str, str]:
 
 def write_unreal(fit: EngineFit, out_dir: Any, *, overwrite: bool = False) -> list[Path]:
     """Write ``NAME_unreal_sky_atmosphere.json`` and ``.py`` atomically."""
-    stem = re.sub(r"[^A-Za-z0-9._-]", "_", fit.atmosphere)
-    base = Path(out_dir)
-    return write_files(
-        {
-            base / f"{stem}_unreal_sky_atmosphere.{k}": v.encode("utf-8")
-            for k, v in unreal_files(fit).items()
-        },
-        overwrite=overwrite,
+    return write_texts(
+        fit, out_dir, "unreal_sky_atmosphere", unreal_files(fit), overwrite=overwrite
     )
-
-
-def _per_channel(name: str, lower: float, upper: float) -> tuple[Parameter, ...]:
-    return tuple(Parameter(f"{name}_{c}", lower, upper, log=True, unit="km^-1") for c in _RGB)
 
 
 UNREAL = register_engine(
@@ -342,10 +309,10 @@ UNREAL = register_engine(
         title="Unreal Engine SkyAtmosphere",
         source=UNREAL_SOURCE,
         parameters=(
-            *_per_channel("rayleigh_scattering", 1e-7, 1.0),
+            *per_channel("rayleigh_scattering", 1e-7, 1.0, "km^-1"),
             Parameter("rayleigh_exponential_distribution_km", 0.1, 100.0, log=True, unit="km"),
-            *_per_channel("mie_scattering", 1e-7, 10.0),
-            *_per_channel("mie_absorption", 1e-8, 10.0),
+            *per_channel("mie_scattering", 1e-7, 10.0, "km^-1"),
+            *per_channel("mie_absorption", 1e-8, 10.0, "km^-1"),
             Parameter("mie_anisotropy", 0.0, 0.999),
             Parameter("mie_exponential_distribution_km", 0.1, 100.0, log=True, unit="km"),
             Parameter("exposure", 1e-3, 1e3, log=True),
