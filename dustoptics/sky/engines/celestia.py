@@ -65,6 +65,7 @@ from dustoptics.sky.engines.core import (
     per_channel,
     register_engine,
     rgb_of,
+    smoothstep,
     sunlight_linear_srgb,
     write_texts,
 )
@@ -107,11 +108,6 @@ def _chapman_to_space(r: np.ndarray, mu: np.ndarray, mie_h: float) -> np.ndarray
         0.0, (2.0 * tangent / mie_h) * np.sqrt(1.5707963267948966 * x * sin_zenith) - up
     )
     return np.where(mu >= 0.0, up, down)
-
-
-def _smoothstep(e0: float, e1: float, x: np.ndarray) -> np.ndarray:
-    t = np.clip((x - e0) / (e1 - e0), 0.0, 1.0)
-    return t * t * (3.0 - 2.0 * t)
 
 
 def celestia_sky_rgb(
@@ -173,7 +169,7 @@ def celestia_sky_rgb(
         s_rq = sample @ light
         s_r2 = np.sum(sample * sample, axis=-1)
         horizon = np.sqrt(np.maximum(0.0, s_r2 - 1.0))
-        visibility = _smoothstep(-shadow_width, shadow_width, s_rq + horizon)
+        visibility = smoothstep(-shadow_width, shadow_width, s_rq + horizon)
         d = np.sqrt(np.maximum(s_rq * s_rq - (s_r2 - r_sky * r_sky), 0.0))
         s_r = np.sqrt(s_r2)
         boundary = (

@@ -51,9 +51,11 @@ __all__ = [
     "rgb_of",
     "scale_height_m",
     "sky_error",
+    "smoothstep",
     "sunlight_linear_srgb",
     "write_engine_files",
     "write_texts",
+    "y_up_directions",
 ]
 
 #: Sun elevations of the fit and of the error table: high Sun, afternoon, low Sun, sunset. [deg]
@@ -192,9 +194,7 @@ def sunlight_linear_srgb() -> np.ndarray:
     An engine lit by a Sun of this light colour and unit illuminance draws the
     sky in the units of :class:`ReferenceSky` (per unit solar illuminance).
     """
-    wl = np.arange(360.0, 831.0, 10.0)
-    xyz = sunlit_xyz(wl, np.ones(wl.size))
-    return colour.xyz_to_linear_srgb(xyz / xyz[1])
+    return colour.xyz_to_linear_srgb(_white_xyz())
 
 
 #: The engines' three channels, R, G, B: the wavelengths at which a set's coefficients start
@@ -635,6 +635,23 @@ RGB: Final = ("r", "g", "b")
 
 #: Multiple-scattering tables of the Hillaire engines by their parameters (bounded).
 _PSI_CACHE: dict[tuple[tuple[str, float], ...], np.ndarray] = {}
+
+
+def smoothstep(e0: float, e1: float, x: np.ndarray) -> np.ndarray:
+    """GLSL's ``smoothstep(e0, e1, x)``: 0 below ``e0``, 1 above ``e1``, a cubic between."""
+    t = np.clip((x - e0) / (e1 - e0), 0.0, 1.0)
+    return t * t * (3.0 - 2.0 * t)
+
+
+def y_up_directions(
+    sun_elevation_deg: float, view_zenith_deg: Any, view_azimuth_deg: Any
+) -> tuple[np.ndarray, np.ndarray]:
+    """Unit view directions (x, y up, z) and the Sun's, azimuth measured from the Sun's."""
+    z = np.radians(np.asarray(view_zenith_deg, dtype=float))
+    a = np.radians(np.asarray(view_azimuth_deg, dtype=float))
+    d = np.stack([np.sin(z) * np.cos(a), np.cos(z), np.sin(z) * np.sin(a)], axis=-1)
+    e = math.radians(sun_elevation_deg)
+    return d, np.array([math.cos(e), math.sin(e), 0.0])
 
 
 def rgb_of(params: Mapping[str, float], name: str) -> np.ndarray:

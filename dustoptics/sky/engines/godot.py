@@ -48,7 +48,9 @@ from dustoptics.sky.engines.core import (
     error_header,
     register_engine,
     rgb_of,
+    smoothstep,
     write_texts,
+    y_up_directions,
 )
 
 __all__ = ["GODOT", "GODOT_SOURCE", "godot_sky_rgb", "godot_tres", "srgb_decode"]
@@ -91,11 +93,6 @@ DEFAULTS: Final = {
 }
 
 
-def _smoothstep(e0: float, e1: float, x: np.ndarray) -> np.ndarray:
-    t = np.clip((x - e0) / (e1 - e0), 0.0, 1.0)
-    return t * t * (3.0 - 2.0 * t)
-
-
 def godot_sky_rgb(
     params: Mapping[str, float],
     *,
@@ -104,11 +101,7 @@ def godot_sky_rgb(
     view_azimuth_deg: Any,
 ) -> np.ndarray:
     """The colour the PhysicalSkyMaterial writes (``COLOR``), linear. [engine units]"""
-    z = np.radians(np.asarray(view_zenith_deg, dtype=float))
-    a = np.radians(np.asarray(view_azimuth_deg, dtype=float))
-    eye = np.stack([np.sin(z) * np.cos(a), np.cos(z), np.sin(z) * np.sin(a)], axis=-1)
-    e = math.radians(sun_elevation_deg)
-    light = np.array([math.cos(e), math.sin(e), 0.0])
+    eye, light = y_up_directions(sun_elevation_deg, view_zenith_deg, view_azimuth_deg)
     zenith_angle = min(max(light[1], -1.0), 1.0)
     sun_energy = max(0.0, 1.0 - math.exp(-(math.pi / 2 - math.acos(zenith_angle))))
     sun_fade = 1.0 - min(max(1.0 - math.exp(light[1]), 0.0), 1.0)
@@ -132,7 +125,7 @@ def godot_sky_rgb(
     lin = (sun_energy * ratio * (1.0 - extinction)) ** 1.5
     mix = min(max((1.0 - zenith_angle) ** 5, 0.0), 1.0)
     lin = lin * ((1.0 - mix) + mix * np.sqrt(sun_energy * ratio * extinction))
-    blend = _smoothstep(-0.1, 0.1, up_eye)[..., None]
+    blend = smoothstep(-0.1, 0.1, up_eye)[..., None]
     lin = lin * (ground * (1.0 - blend) + blend)
     out = lin ** (1.0 / (1.2 + 1.2 * sun_fade)) * params["energy_multiplier"]
     return np.asarray(out, dtype=float)

@@ -45,6 +45,7 @@ from dustoptics.sky.engines.core import (
     errors_json,
     register_engine,
     write_texts,
+    y_up_directions,
 )
 
 __all__ = ["THREEJS", "THREEJS_SOURCE", "threejs_files", "threejs_sky_rgb"]
@@ -76,17 +77,6 @@ EXAMPLE_UNIFORMS: Final = {
 }
 
 
-def _directions(
-    sun_elevation_deg: float, view_zenith_deg: Any, view_azimuth_deg: Any
-) -> tuple[np.ndarray, np.ndarray]:
-    """Unit view directions (x, y up, z) and the Sun's, azimuth measured from the Sun's."""
-    z = np.radians(np.asarray(view_zenith_deg, dtype=float))
-    a = np.radians(np.asarray(view_azimuth_deg, dtype=float))
-    d = np.stack([np.sin(z) * np.cos(a), np.cos(z), np.sin(z) * np.sin(a)], axis=-1)
-    e = math.radians(sun_elevation_deg)
-    return d, np.array([math.cos(e), math.sin(e), 0.0])
-
-
 def threejs_sky_rgb(
     params: Mapping[str, float],
     *,
@@ -111,7 +101,7 @@ def threejs_sky_rgb(
     numpy.ndarray, shape ``broadcast(view_zenith_deg, view_azimuth_deg).shape + (3,)``
         Linear sRGB. [engine units times exposure]
     """
-    direction, sun = _directions(sun_elevation_deg, view_zenith_deg, view_azimuth_deg)
+    direction, sun = y_up_directions(sun_elevation_deg, view_zenith_deg, view_azimuth_deg)
     up_dot_sun = float(sun[1])
     sun_e = _EE * max(0.0, 1.0 - math.exp(-((_CUTOFF_ANGLE - math.acos(up_dot_sun)) / _STEEPNESS)))
     sunfade = 1.0 - min(max(1.0 - math.exp(sun[1] / 450000.0), 0.0), 1.0)
