@@ -5,6 +5,7 @@ See the package docstring (:mod:`dustoptics.sky.engines`) for the interface.
 
 from __future__ import annotations
 
+import json
 import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -42,8 +43,8 @@ __all__ = [
     "engine_xyz",
     "error_header",
     "error_notes",
-    "errors_json",
     "fit_engine",
+    "fit_json",
     "hillaire_sky_rgb",
     "per_channel",
     "reference_skies",
@@ -715,9 +716,10 @@ def error_notes(fit: EngineFit) -> tuple[str, ...]:
     )
 
 
-def errors_json(fit: EngineFit) -> list[dict[str, float]]:
-    """The fit's sky error per Sun elevation, for a JSON file."""
-    return [
+def fit_json(fit: EngineFit, header: list[str], engine: str, source: str, **fields: Any) -> str:
+    """The JSON file of a fit: ``header`` as its comment, the engine, the source read, the
+    atmosphere and kind, ``fields`` in order, and the sky error per Sun elevation."""
+    errors = [
         {
             "sun_elevation_deg": e.sun_elevation_deg,
             "delta_e2000_mean": e.delta_e_mean,
@@ -726,6 +728,16 @@ def errors_json(fit: EngineFit) -> list[dict[str, float]]:
         }
         for e in fit.errors
     ]
+    document = {
+        "comment": header,
+        "engine": engine,
+        "source": source,
+        "atmosphere": fit.atmosphere,
+        "kind": fit.kind,
+        **fields,
+        "errors": errors,
+    }
+    return json.dumps(document, indent=2, allow_nan=False) + "\n"
 
 
 def write_texts(

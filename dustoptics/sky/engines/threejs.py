@@ -28,7 +28,6 @@ only the exposure adjusted.
 
 from __future__ import annotations
 
-import json
 import math
 from collections.abc import Mapping
 from pathlib import Path
@@ -42,7 +41,7 @@ from dustoptics.sky.engines.core import (
     EngineModel,
     Parameter,
     error_header,
-    errors_json,
+    fit_json,
     register_engine,
     write_texts,
     y_up_directions,
@@ -152,17 +151,6 @@ def threejs_files(fit: EngineFit) -> dict[str, str]:
     uniforms.update(cloudCoverage=0.0, showSunDisc=1.0)
     exposure = float(fit.params["exposure"])
     header = _header(fit)
-    document = {
-        "comment": header,
-        "engine": "three.js Sky",
-        "source": THREEJS_SOURCE,
-        "atmosphere": fit.atmosphere,
-        "kind": fit.kind,
-        "uniforms": uniforms,
-        "toneMapping": "LinearToneMapping",
-        "toneMappingExposure": exposure,
-        "errors": errors_json(fit),
-    }
     module = [
         *(f"// {line}" for line in header),
         "",
@@ -181,7 +169,15 @@ def threejs_files(fit: EngineFit) -> dict[str, str]:
         "",
     ]
     return {
-        "json": json.dumps(document, indent=2, allow_nan=False) + "\n",
+        "json": fit_json(
+            fit,
+            header,
+            "three.js Sky",
+            THREEJS_SOURCE,
+            uniforms=uniforms,
+            toneMapping="LinearToneMapping",
+            toneMappingExposure=exposure,
+        ),
         "mjs": "\n".join(module),
     }
 

@@ -48,7 +48,6 @@ those of the HDRP and SRP-core packages' ``PhysicallyBasedSky.cs.meta`` and
 
 from __future__ import annotations
 
-import json
 import math
 from collections.abc import Mapping
 from pathlib import Path
@@ -67,7 +66,7 @@ from dustoptics.sky.engines.core import (
     channel_values,
     dust_tint_linear_srgb,
     error_header,
-    errors_json,
+    fit_json,
     hillaire_sky_rgb,
     per_channel,
     register_engine,
@@ -296,19 +295,16 @@ def unity_asset(fit: EngineFit, name: str) -> str:
 
 def unity_files(fit: EngineFit) -> dict[str, str]:
     """The two files' contents: ``json`` and ``asset``."""
-    document = {
-        "comment": _header(fit),
-        "engine": "Unity HDRP Physically Based Sky",
-        "source": UNITY_SOURCE,
-        "atmosphere": fit.atmosphere,
-        "kind": fit.kind,
-        "planet_radius_km": fit.params["planet_radius_m"] / 1000.0,
-        "override": override_values(fit.params),
-        "exposure_compensation_ev": math.log2(fit.params["exposure"]),
-        "errors": errors_json(fit),
-    }
     return {
-        "json": json.dumps(document, indent=2, allow_nan=False) + "\n",
+        "json": fit_json(
+            fit,
+            _header(fit),
+            "Unity HDRP Physically Based Sky",
+            UNITY_SOURCE,
+            planet_radius_km=fit.params["planet_radius_m"] / 1000.0,
+            override=override_values(fit.params),
+            exposure_compensation_ev=math.log2(fit.params["exposure"]),
+        ),
         "asset": unity_asset(fit, f"{safe_stem(fit.atmosphere)}_unity_pbs"),
     }
 

@@ -45,7 +45,6 @@ console that sets them on the selected actors' SkyAtmosphere components.
 
 from __future__ import annotations
 
-import json
 import math
 from collections.abc import Mapping
 from pathlib import Path
@@ -63,7 +62,7 @@ from dustoptics.sky.engines.core import (
     channel_values,
     dust_tint_linear_srgb,
     error_header,
-    errors_json,
+    fit_json,
     hillaire_sky_rgb,
     per_channel,
     register_engine,
@@ -264,16 +263,6 @@ def unreal_files(fit: EngineFit) -> dict[str, str]:
     """The two files' contents: ``json`` and ``py``."""
     props = _properties(fit.params)
     header = _header(fit)
-    document = {
-        "comment": header,
-        "engine": "Unreal Engine SkyAtmosphere",
-        "source": UNREAL_SOURCE,
-        "atmosphere": fit.atmosphere,
-        "kind": fit.kind,
-        "properties": props,
-        "exposure_compensation_ev": math.log2(fit.params["exposure"]),
-        "errors": errors_json(fit),
-    }
     script = [
         *(f"# {line}" for line in header),
         "#",
@@ -291,7 +280,14 @@ def unreal_files(fit: EngineFit) -> dict[str, str]:
         "",
     ]
     return {
-        "json": json.dumps(document, indent=2, allow_nan=False) + "\n",
+        "json": fit_json(
+            fit,
+            header,
+            "Unreal Engine SkyAtmosphere",
+            UNREAL_SOURCE,
+            properties=props,
+            exposure_compensation_ev=math.log2(fit.params["exposure"]),
+        ),
         "py": "\n".join(script),
     }
 
