@@ -357,9 +357,9 @@ def _apply_splits(
         grown[:n_rows] = pool[:n_rows]
         pool = grown
     pool[n_rows : n_rows + 2 * k2] = rows[: 2 * k2]
-    kept = np.ones(lower.shape[0], dtype=np.bool_)
-    kept[split] = False
-    kept = kept.nonzero()[0]
+    keep = np.ones(lower.shape[0], dtype=np.bool_)
+    keep[split] = False
+    kept = keep.nonzero()[0]
     # New panel h < k is split[h]'s left half, whose coarse row is the split
     # panel's left-half row; h >= k its right half.
     new_coarse = np.concatenate((left[split], right[split]))[:k2].astype(np.int64, copy=False)
