@@ -937,6 +937,69 @@ def _backscatter(ws: np.ndarray, s: int, nmax: int) -> float:
     return back_r * back_r + back_i * back_i
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _add_last_pass(
+    t: np.ndarray, a: np.ndarray, coef: np.ndarray, k: int, n_rest: int, n_blocks: int, nb: int
+) -> None:
+    """The pass of :func:`_add_sphere` over its last ``n_rest`` (1 to 3) orders,
+    from order index ``k``: the full pass's sums without the missing orders' terms."""
+    ar0, ai0, br0, bi0 = coef[k, 0], coef[k, 1], coef[k, 2], coef[k, 3]
+    if n_rest == 1:
+        for blk in range(n_blocks):
+            o = blk * 8 * BLOCK
+            for ii in range(nb):
+                i = o + ii
+                pp0 = t[i]
+                tt0 = t[BLOCK + i]
+                a[i] += ar0 * pp0
+                a[BLOCK + i] += ai0 * pp0
+                a[2 * BLOCK + i] += br0 * tt0
+                a[3 * BLOCK + i] += bi0 * tt0
+                a[4 * BLOCK + i] += br0 * pp0
+                a[5 * BLOCK + i] += bi0 * pp0
+                a[6 * BLOCK + i] += ar0 * tt0
+                a[7 * BLOCK + i] += ai0 * tt0
+        return
+    ar1, ai1, br1, bi1 = coef[k + 1, 0], coef[k + 1, 1], coef[k + 1, 2], coef[k + 1, 3]
+    if n_rest == 2:
+        for blk in range(n_blocks):
+            o = blk * 8 * BLOCK
+            for ii in range(nb):
+                i = o + ii
+                pp0 = t[i]
+                tt0 = t[BLOCK + i]
+                pp1 = t[2 * BLOCK + i]
+                tt1 = t[3 * BLOCK + i]
+                a[i] += ar0 * pp0 + br1 * tt1
+                a[BLOCK + i] += ai0 * pp0 + bi1 * tt1
+                a[2 * BLOCK + i] += br0 * tt0 + ar1 * pp1
+                a[3 * BLOCK + i] += bi0 * tt0 + ai1 * pp1
+                a[4 * BLOCK + i] += br0 * pp0 + ar1 * tt1
+                a[5 * BLOCK + i] += bi0 * pp0 + ai1 * tt1
+                a[6 * BLOCK + i] += ar0 * tt0 + br1 * pp1
+                a[7 * BLOCK + i] += ai0 * tt0 + bi1 * pp1
+        return
+    ar2, ai2, br2, bi2 = coef[k + 2, 0], coef[k + 2, 1], coef[k + 2, 2], coef[k + 2, 3]
+    for blk in range(n_blocks):
+        o = blk * 8 * BLOCK
+        for ii in range(nb):
+            i = o + ii
+            pp0 = t[i]
+            tt0 = t[BLOCK + i]
+            pp1 = t[2 * BLOCK + i]
+            tt1 = t[3 * BLOCK + i]
+            pp2 = t[4 * BLOCK + i]
+            tt2 = t[5 * BLOCK + i]
+            a[i] += ar0 * pp0 + br1 * tt1 + ar2 * pp2
+            a[BLOCK + i] += ai0 * pp0 + bi1 * tt1 + ai2 * pp2
+            a[2 * BLOCK + i] += br0 * tt0 + ar1 * pp1 + br2 * tt2
+            a[3 * BLOCK + i] += bi0 * tt0 + ai1 * pp1 + bi2 * tt2
+            a[4 * BLOCK + i] += br0 * pp0 + ar1 * tt1 + br2 * pp2
+            a[5 * BLOCK + i] += bi0 * pp0 + ai1 * tt1 + bi2 * pp2
+            a[6 * BLOCK + i] += ar0 * tt0 + br1 * pp1 + ar2 * tt2
+            a[7 * BLOCK + i] += ai0 * tt0 + bi1 * pp1 + ai2 * tt2
+
+
 @kernel(F8_1D, F8, F8, I8, F8_1D, I8, B1, F8_2D, I8, B1, I8, F8_2D, F8_1D)
 def _add_sphere(
     row: np.ndarray,
@@ -972,32 +1035,31 @@ def _add_sphere(
     if n_mu == 0:
         return
     c = w / (2.0 * np.pi * x2 * qsca) if per_particle else w
-    # (2n + 1) / (n (n + 1)) a_n and b_n as real and imaginary parts, padded
-    # with zero orders to a multiple of 4.
-    n_pass = (nmax + 3) // 4
-    for k in range(4 * n_pass):
-        if k < nmax:
-            n = k + 1
-            cn = (2.0 * n + 1.0) / (n * (n + 1.0))
-            o = _LANE + k * _BLK + s  # a_n, b_n in order n - 1's block
-            coef[k, 0] = cn * ws[o + _AR]
-            coef[k, 1] = cn * ws[o + _AI]
-            coef[k, 2] = cn * ws[o + _BR]
-            coef[k, 3] = cn * ws[o + _BI]
-        else:
-            coef[k, :] = 0.0
+    # (2n + 1) / (n (n + 1)) a_n and b_n as real and imaginary parts.
+    n_full = nmax // 4  # passes of four orders
+    n_rest = nmax - 4 * n_full  # orders of a last, short pass
+    for k in range(nmax):
+        n = k + 1
+        cn = (2.0 * n + 1.0) / (n * (n + 1.0))
+        o = _LANE + k * _BLK + s  # a_n, b_n in order n - 1's block
+        coef[k, 0] = cn * ws[o + _AR]
+        coef[k, 1] = cn * ws[o + _AI]
+        coef[k, 2] = cn * ws[o + _BR]
+        coef[k, 3] = cn * ws[o + _BI]
     # Parity split: rows 0-3 of each block of ``acc`` collect the terms of
     # S1 even in mu (real, imaginary) and odd in mu, rows 4-7 those of S2, so
     # S(+mu) = e + o and S(-mu) = e - o.  Four orders (n odd, even, odd, even)
     # per pass, in real arithmetic, which the compiler vectorizes over the
     # angles of a block; four rather than two halve the loads and stores of
-    # the accumulators per order.
+    # the accumulators per order.  The last pass holds the n_max mod 4 orders
+    # left, its terms added in the same order (a full pass with zero
+    # coefficients for the missing orders, which added zeros, gave the same sums).
     acc[:] = 0.0
     n_blocks = table.shape[1] // (8 * BLOCK)
     # The block's trip count, BLOCK, as a value known only at run time: a loop
     # of a constant 16 would be unrolled, not vectorized.
     nb = table.shape[1] // (8 * n_blocks)
-    for q in range(n_pass):
+    for q in range(n_full):
         k = 4 * q
         ar0, ai0, br0, bi0 = coef[k, 0], coef[k, 1], coef[k, 2], coef[k, 3]
         ar1, ai1, br1, bi1 = coef[k + 1, 0], coef[k + 1, 1], coef[k + 1, 2], coef[k + 1, 3]
@@ -1028,6 +1090,8 @@ def _add_sphere(
                 a[5 * BLOCK + i] += bi0 * pp0 + ai1 * tt1 + bi2 * pp2 + ai3 * tt3
                 a[6 * BLOCK + i] += ar0 * tt0 + br1 * pp1 + ar2 * tt2 + br3 * pp3
                 a[7 * BLOCK + i] += ai0 * tt0 + bi1 * pp1 + ai2 * tt2 + bi3 * pp3
+    if n_rest > 0:
+        _add_last_pass(table[n_full], acc, coef, 4 * n_full, n_rest, n_blocks, nb)
     if n_stokes > 1:
         _add_matrix(row, c, acc, n_mu, n_f, n_blocks, nb, symmetric)
         return
@@ -1367,31 +1431,76 @@ def _interpolation_maps_into(
             r_odd[i, k] = cp - cm
 
 
+#: Rows of :func:`_legendre_regrid` moved together (each map row read once for them all).
+_REGRID_ROWS = 4
+
+
 @kernel(F8_2D, F8_2D, F8_2D)
 def _legendre_regrid(rows: np.ndarray, r_even: np.ndarray, r_odd: np.ndarray) -> np.ndarray:
     """Each row's values (+mu_half, then -mu_half) moved to the output grid
     (+mu_half_out, then -mu_half_out) by the maps of
-    :func:`_interpolation_maps_into`."""
+    :func:`_interpolation_maps_into`.
+
+    Each output value is its row's sum over i of e_i R_even[i, k] (and o_i
+    R_odd[i, k]) in increasing i from 0.  Rows go _REGRID_ROWS at a time (a
+    short last group repeats its last row), so that each map row is read once
+    for all of them, and the output angles BLOCK at a time (the Gauss tiers'
+    sizes are multiples of BLOCK; other angles beyond the last whole block
+    one by one): every accumulator of a group then lies at a constant offset
+    from one array's start, which the compiler vectorizes without run-time
+    overlap tests (as in :func:`_add_sphere`).
+    """
     n_rows = rows.shape[0]
     n_in, n_out = r_even.shape
+    n_kb = n_out // BLOCK
+    # BLOCK as a value known only at run time: a loop of a constant 16 would be unrolled.
+    nb = n_kb * BLOCK // n_kb if n_kb > 0 else 0
     out = np.empty((n_rows, 2 * n_out))
-    even = np.empty(n_out)
-    odd = np.empty(n_out)
-    for r in range(n_rows):
-        row = rows[r]
-        even[:] = 0.0
-        odd[:] = 0.0
+    acc = np.empty(2 * _REGRID_ROWS * n_out)
+    eo = np.empty(2 * _REGRID_ROWS)
+    for r0 in range(0, n_rows, _REGRID_ROWS):
+        acc[:] = 0.0
         for i in range(n_in):
-            e = 0.5 * (row[i] + row[n_in + i])
-            o = 0.5 * (row[i] - row[n_in + i])
+            for j in range(_REGRID_ROWS):
+                row = rows[min(r0 + j, n_rows - 1)]
+                eo[2 * j] = 0.5 * (row[i] + row[n_in + i])
+                eo[2 * j + 1] = 0.5 * (row[i] - row[n_in + i])
+            e0, o0, e1, o1, e2, o2, e3, o3 = eo[0], eo[1], eo[2], eo[3], eo[4], eo[5], eo[6], eo[7]
             re = r_even[i]
             ro = r_odd[i]
-            for k in range(n_out):
-                even[k] += e * re[k]
-                odd[k] += o * ro[k]
-        for k in range(n_out):
-            out[r, k] = even[k] + odd[k]
-            out[r, n_out + k] = even[k] - odd[k]
+            for kb in range(n_kb):
+                o = kb * 2 * _REGRID_ROWS * BLOCK
+                m0 = kb * BLOCK
+                for kk in range(nb):
+                    a = re[m0 + kk]
+                    b = ro[m0 + kk]
+                    acc[o + kk] += e0 * a
+                    acc[o + BLOCK + kk] += o0 * b
+                    acc[o + 2 * BLOCK + kk] += e1 * a
+                    acc[o + 3 * BLOCK + kk] += o1 * b
+                    acc[o + 4 * BLOCK + kk] += e2 * a
+                    acc[o + 5 * BLOCK + kk] += o2 * b
+                    acc[o + 6 * BLOCK + kk] += e3 * a
+                    acc[o + 7 * BLOCK + kk] += o3 * b
+        for j in range(min(_REGRID_ROWS, n_rows - r0)):
+            for kb in range(n_kb):
+                o = kb * 2 * _REGRID_ROWS * BLOCK + 2 * j * BLOCK
+                for kk in range(BLOCK):
+                    ev = acc[o + kk]
+                    od = acc[o + BLOCK + kk]
+                    out[r0 + j, kb * BLOCK + kk] = ev + od
+                    out[r0 + j, n_out + kb * BLOCK + kk] = ev - od
+    # Output angles beyond the last whole block (grids not from the Gauss tiers), one by one.
+    for r in range(n_rows):
+        row = rows[r]
+        for k in range(n_kb * BLOCK, n_out):
+            ev = 0.0
+            od = 0.0
+            for i in range(n_in):
+                ev += 0.5 * (row[i] + row[n_in + i]) * r_even[i, k]
+                od += 0.5 * (row[i] - row[n_in + i]) * r_odd[i, k]
+            out[r, k] = ev + od
+            out[r, n_out + k] = ev - od
     return out
 
 

@@ -308,24 +308,23 @@ def _choose_splits(
     ``np.cumsum`` adds in order, as the compiled loop did.
     """
     badness = panel_error / tol
-    order = np.argsort(-badness / cost, kind="stable")
-    cumulative = np.cumsum(badness[order])
+    # ndarray methods rather than numpy's functions: a few calls per round,
+    # where the functions' Python wrappers cost more than the work.
+    order = (-badness / cost).argsort(kind="stable")
+    cumulative = badness[order].cumsum()
     n_split = min(
-        int(np.searchsorted(cumulative, cumulative[-1] - keep_fraction, side="left")) + 1,
+        int(cumulative.searchsorted(cumulative[-1] - keep_fraction, side="left")) + 1,
         order.shape[0],
     )
-    split = np.sort(order[:n_split])  # increasing
+    split = order[:n_split]
+    split.sort()  # increasing
     lo = lower[split]
     hi = upper[split]
     mid = 0.5 * (lo + hi)
-    new_lower = np.concatenate((lo, mid))
-    new_upper = np.concatenate((mid, hi))
-    new_mid = 0.5 * (new_lower + new_upper)
-    return (
-        split,
-        np.concatenate((new_lower, new_mid)),
-        np.concatenate((new_mid, new_upper)),
-    )
+    # The new panels [lo, mid] and [mid, hi], and their halves' edges.
+    q1 = 0.5 * (lo + mid)
+    q3 = 0.5 * (mid + hi)
+    return split, np.concatenate((lo, mid, q1, q3)), np.concatenate((q1, q3, mid, hi))
 
 
 def _apply_splits(
@@ -360,19 +359,20 @@ def _apply_splits(
     pool[n_rows : n_rows + 2 * k2] = rows[: 2 * k2]
     keep = np.ones(lower.shape[0], dtype=np.bool_)
     keep[split] = False
-    k = split.shape[0]
-    h = np.arange(k2, dtype=np.int64)
-    parent = split[h % k] if k2 else h
-    new_coarse = np.where(h < k, left[parent], right[parent]).astype(np.int64)
+    kept = keep.nonzero()[0]
+    # New panel h < k is split[h]'s left half, whose coarse row is the split
+    # panel's left-half row; h >= k its right half.
+    new_coarse = np.concatenate((left[split], right[split]))[:k2].astype(np.int64, copy=False)
+    new_left = np.arange(n_rows, n_rows + k2, dtype=np.int64)
     return (
         pool,
         n_rows + 2 * k2,
-        np.concatenate((coarse[keep], new_coarse)),
-        np.concatenate((left[keep], n_rows + h)),
-        np.concatenate((right[keep], n_rows + k2 + h)),
-        np.concatenate((lower[keep], eval_lower[:k2])),
-        np.concatenate((upper[keep], eval_upper[k2 : 2 * k2])),
-        np.concatenate((cost[keep], new_cost[:k2])),
+        np.concatenate((coarse[kept], new_coarse)),
+        np.concatenate((left[kept], new_left)),
+        np.concatenate((right[kept], new_left + k2)),
+        np.concatenate((lower[kept], eval_lower[:k2])),
+        np.concatenate((upper[kept], eval_upper[k2 : 2 * k2])),
+        np.concatenate((cost[kept], new_cost[:k2])),
     )
 
 
@@ -450,20 +450,25 @@ def _order_by_tier(
     used) is all it would cost.
     """
     n_panels = x.shape[0] // nodes_per_panel
-    by_panel = x[: n_panels * nodes_per_panel].reshape(n_panels, nodes_per_panel)
+    shape = (n_panels, nodes_per_panel)
+    by_panel = x[: n_panels * nodes_per_panel].reshape(shape)
     # The first tier that holds n_max + 2 orders of the panel's largest sphere.
     need = _orders_needed(np.ascontiguousarray(by_panel.max(axis=1)))
     panel_tier = np.searchsorted(tiers, need, side="left")
-    if np.any(panel_tier == tiers.shape[0]):
+    if n_panels and panel_tier.max() == tiers.shape[0]:
         raise ValueError("a panel's spheres need more orders than the largest angular tier holds")
     # Panels are disjoint, and x grows along each panel's nodes, so ordering
     # the panels by tier, then by their first node, orders the nodes by tier,
-    # then by x.
-    by_x = np.argsort(by_panel[:, 0], kind="stable")
-    by_tier = by_x[np.argsort(panel_tier[by_x], kind="stable")]
-    nodes = (by_tier[:, None] * nodes_per_panel + np.arange(nodes_per_panel)).ravel()
-    node_tier = np.repeat(panel_tier[by_tier], nodes_per_panel).astype(np.int64)
-    return x[nodes], w[nodes], node_panel[nodes], node_tier, int(n_panels)
+    # then by x (lexsort is stable: equal keys keep the panels' order).
+    order = np.lexsort((by_panel[:, 0], panel_tier))
+    node_tier = np.repeat(panel_tier[order], nodes_per_panel).astype(np.int64, copy=False)
+    return (
+        by_panel[order].ravel(),
+        w[: n_panels * nodes_per_panel].reshape(shape)[order].ravel(),
+        node_panel[: n_panels * nodes_per_panel].reshape(shape)[order].ravel(),
+        node_tier,
+        int(n_panels),
+    )
 
 
 # ----------------------------------------------------------------------------

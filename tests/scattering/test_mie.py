@@ -405,6 +405,73 @@ def test_interpolation_maps_reproduce_polynomials(n_in: int, n_out: int) -> None
     np.testing.assert_allclose(same[0], rows[0], rtol=0, atol=4e-16 * np.abs(rows).max())
 
 
+@pytest.mark.parametrize(("n_rows", "n_in", "n_out"), [(1, 5, 3), (7, 40, 57), (9, 96, 208)])
+def test_legendre_regrid_sums_in_order(n_rows: int, n_in: int, n_out: int) -> None:
+    """The regrid's blocked loops (rows four at a time, output angles in blocks
+    of 16, a tail one by one) add each output value's terms in the order of
+    the plain sum over input angles: the same bits as that sum, done here by
+    numpy one input angle at a time."""
+    rng = np.random.default_rng(n_rows * 100 + n_out)
+    rows = rng.normal(size=(n_rows, 2 * n_in))
+    r_even, r_odd = rng.normal(size=(n_in, n_out)), rng.normal(size=(n_in, n_out))
+    even = np.zeros((n_rows, n_out))
+    odd = np.zeros((n_rows, n_out))
+    for i in range(n_in):
+        even += (0.5 * (rows[:, i] + rows[:, n_in + i]))[:, None] * r_even[i]
+        odd += (0.5 * (rows[:, i] - rows[:, n_in + i]))[:, None] * r_odd[i]
+    moved = mie._legendre_regrid(rows, r_even, r_odd)
+    assert moved.tobytes() == np.hstack([even + odd, even - odd]).tobytes()
+
+
+@pytest.mark.parametrize("n_stokes", [1, 4])
+def test_short_last_pass_equals_zero_padded_orders(n_stokes: int) -> None:
+    """Spheres whose n_max is not a multiple of four end the angular sum with
+    a pass of one to three orders; the rows are those of the same spheres
+    summed with their orders padded by zero coefficients to a multiple of four
+    (computed here by giving the sum a larger n_max whose extra a_n, b_n are
+    zero), to the bit."""
+    from dustoptics.scattering.refinement import _gauss_angles
+
+    m = 1.52 + 0.004j
+    n_half = 48
+    table = _gauss_angles(n_half)[2]
+    x = np.array([0.9, 1.3, 2.2, 3.1, 4.4, 6.0, 8.5, 12.0, 16.0, 21.0, 25.0, 28.0])
+    nmax = np.array([mie.wiscombe_nmax(v) for v in x])
+    assert set(nmax % 4) == {0, 1, 2, 3}
+    rows = mie._accumulate(
+        m,
+        x,
+        np.ones(x.size),
+        np.arange(x.size),
+        x.size,
+        False,
+        table,
+        n_half,
+        True,
+        n_stokes,
+        0j,
+        0.0,
+    )
+    n_a = 2 * n_stokes * n_half
+    # The kernel's batch: the spheres in one, the last repeated to LANES.
+    x_b = np.concatenate([x, np.full(mie.LANES - x.size, x[-1])])
+    nmax_b = np.array([mie.wiscombe_nmax(v) for v in x_b])
+    ws = mie._workspace(int(nmax_b.max()) + 4)
+    mie._mie_coefficients(m, x_b, nmax_b, ws)
+    for s in range(x.size):
+        padded = 4 * ((int(nmax[s]) + 3) // 4)
+        for k in range(int(nmax[s]), padded):  # orders above n_max hold zeros
+            o = mie._LANE + k * mie._BLK + s
+            for plane in (mie._AR, mie._AI, mie._BR, mie._BI):
+                ws[o + plane] = 0.0
+        row = np.zeros(n_a + mie.N_SUMS)
+        mie._add_sphere(
+            row, 1.0, x[s], padded, ws, s, False, table, n_half, True, n_stokes,
+            np.empty((padded + 4, 4)), np.empty(table.shape[1]),
+        )  # fmt: skip
+        assert row[:n_a].tobytes() == rows[s, :n_a].tobytes()
+
+
 @pytest.mark.parametrize(
     ("n_stokes", "m_core", "core_fraction"), [(1, 0j, 0.0), (4, 0j, 0.0), (4, 2.0 + 0.5j, 0.6)]
 )
