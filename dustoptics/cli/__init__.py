@@ -86,7 +86,7 @@ def main(argv: list[str] | None = None) -> int:
 
     def command() -> int:
         try:
-            args = build_parser().parse_args(argv)
+            args = build_parser(sys.argv[1:] if argv is None else argv).parse_args(argv)
         except SystemExit as exc:  # argparse: --help/--version (0) or usage (2)
             return int(exc.code or 0)
         # A first run says so when numba starts compiling (build announces its own kernels).
