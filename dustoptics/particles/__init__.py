@@ -24,7 +24,7 @@ if TYPE_CHECKING:  # the names as type checkers see them (imported on first use 
 # The names are imported on first use (PEP 562): importing one module of the package
 # imports that module and what it needs, not the others (dustoptics._lazy).
 _SUBMODULES = ("catalogue", "coated", "custom_sizedist", "materials", "mixing", "sizedist")
-_NAMES = {}
+_NAMES: dict[str, tuple[str, ...]] = {}
 
 
 def __getattr__(name: str) -> Any:

@@ -49,7 +49,7 @@ _SUBMODULES = (
     "openspace",
     "precomputation",
 )
-_NAMES = {}
+_NAMES: dict[str, tuple[str, ...]] = {}
 
 
 def __getattr__(name: str) -> Any:
