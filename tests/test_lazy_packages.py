@@ -145,3 +145,25 @@ def test_a_program_calling_main_keeps_its_garbage_collector(capsys):
     assert main(["build", "--help"]) == 0
     capsys.readouterr()
     assert gc.isenabled()
+
+
+def test_the_programs_help_imports_no_scipy_or_numba():
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join(p for p in (str(ROOT), env.get("PYTHONPATH")) if p)
+    done = subprocess.run(
+        [
+            sys.executable,
+            "-c",
+            "import contextlib, io, sys\n"
+            "from dustoptics.cli import main\n"
+            "with contextlib.redirect_stdout(io.StringIO()):\n"
+            "    assert main(['--help']) == 0\n"
+            "print(sorted(m for m in ('scipy', 'numba', 'xarray', 'h5py') if m in sys.modules))",
+        ],
+        env=env,
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == "[]"
