@@ -22,6 +22,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
         "dustoptics._validation",
         "dustoptics._numba_cache",
         "dustoptics._files",
+        "dustoptics._lazy",
     ),
     ("dustoptics.table", "dustoptics.colour", "dustoptics.compare"),
     ("dustoptics.particles",),

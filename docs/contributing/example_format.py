@@ -4,7 +4,7 @@ The whole of a format is this module: its writer, its options (each with its com
 help), what it needs from the table, and how ``dustoptics info`` recognises and describes
 its files, in one record registered once.  In the package it would be
 ``dustoptics/io/<group>/g_table.py`` plus one line in ``dustoptics/io/__init__.py`` that
-imports it; ``tests/io/test_format_registry.py`` registers it from here.
+names it (``FORMAT_MODULES``); ``tests/io/test_format_registry.py`` registers it from here.
 """
 
 from __future__ import annotations

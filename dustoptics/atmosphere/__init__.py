@@ -13,14 +13,44 @@
   from a preset, and their provenance record (``dustoptics build mars``).
 """
 
-from dustoptics.atmosphere import aerosols, build, column, gases, parametric, sets
-from dustoptics.atmosphere.build import ATMOSPHERES, build_atmosphere
-from dustoptics.atmosphere.sets import (
-    Atmosphere,
-    Constituent,
-    earth_atmosphere,
-    mars_atmosphere,
-)
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
+from dustoptics._lazy import lazy_attribute, lazy_dir
+
+if TYPE_CHECKING:  # the names as type checkers see them (imported on first use below)
+    from dustoptics.atmosphere import aerosols, build, column, gases, parametric, sets
+    from dustoptics.atmosphere.build import ATMOSPHERES, build_atmosphere
+    from dustoptics.atmosphere.sets import (
+        Atmosphere,
+        Constituent,
+        earth_atmosphere,
+        mars_atmosphere,
+    )
+
+# The names are imported on first use (PEP 562): importing one module of the package
+# imports that module and what it needs, not the others (dustoptics._lazy).
+_SUBMODULES = ("aerosols", "build", "column", "gases", "parametric", "sets")
+_NAMES = {
+    "dustoptics.atmosphere.build": ("ATMOSPHERES", "build_atmosphere"),
+    "dustoptics.atmosphere.sets": (
+        "Atmosphere",
+        "Constituent",
+        "earth_atmosphere",
+        "mars_atmosphere",
+    ),
+}
+
+
+def __getattr__(name: str) -> Any:
+    """A public name, imported on first use."""
+    return lazy_attribute(__name__, name, _NAMES, _SUBMODULES)
+
+
+def __dir__() -> list[str]:
+    return lazy_dir(__name__, __all__)
+
 
 __all__ = [
     "ATMOSPHERES",

@@ -55,7 +55,6 @@ def add_parser(sub: Any) -> None:
     p = add_command(
         sub,
         "build",
-        help="compute a preset or configuration file and write its tables",
         examples=(
             f"{PROG} build hybrid --out tables --format netcdf,glsl",
             f"{PROG} build my-dust.toml --out tables --format netcdf,disort,libradtran",

@@ -19,7 +19,6 @@ def add_parser(sub: Any) -> None:
     p = add_command(
         sub,
         "presets",
-        help="list the presets, or print one's configuration file",
         examples=(f"{PROG} presets", f"{PROG} presets --show hybrid > my-dust.toml"),
     )
     p.set_defaults(run=run_presets)
@@ -28,7 +27,6 @@ def add_parser(sub: Any) -> None:
     p = add_command(
         sub,
         "materials",
-        help="list the refractive-index catalogue",
         examples=(f"{PROG} materials",),
     )
     p.set_defaults(run=run_materials)

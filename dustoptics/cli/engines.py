@@ -27,7 +27,6 @@ def add_parser(sub: Any) -> None:
     p = add_command(
         sub,
         "engines",
-        help="rendering engines' sky models fitted to the exact sky, and the error they cost",
         examples=(
             f"{PROG} engines report --shipped",
             f"{PROG} engines report --planet mars:blue-moons --engine threejs,godot",

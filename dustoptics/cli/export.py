@@ -66,7 +66,6 @@ def add_parser(sub: Any) -> None:
     p = add_command(
         sub,
         "export",
-        help="convert a table file into other formats",
         examples=(
             f"{PROG} export tables/blue-moons/blue-moons.nc --out shaders --format glsl,texture",
         ),

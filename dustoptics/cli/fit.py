@@ -41,7 +41,6 @@ def add_parser(sub: Any) -> None:
     p = add_command(
         sub,
         "fit",
-        help="fit an analytic phase function (HG, double HG, ...) to a table",
         examples=(
             f"{PROG} fit tables/blue-moons/blue-moons.nc --model dhg --out fits",
             f"{PROG} fit hybrid --model hg --colour linear-srgb-astmg173",

@@ -15,6 +15,7 @@ from dustoptics.cli.errors import PROG, UsageError
 from dustoptics.cli.parser import add_command
 from dustoptics.io import FORMATS
 from dustoptics.io.describe import describe_path
+from dustoptics.sky import engines  # noqa: F401  (registers the engines' formats, listed here)
 
 __all__ = ["add_parser", "run"]
 
@@ -24,7 +25,6 @@ def add_parser(sub: Any) -> None:
     p = add_command(
         sub,
         "info",
-        help="what any file or folder dustoptics writes holds and how it was made",
         examples=(
             f"{PROG} info tables/blue-moons/blue-moons.nc",
             f"{PROG} info --full tables/blue-moons/",

@@ -27,19 +27,34 @@ __all__ = ["HELP_COLUMNS", "HelpFormatter", "add_command", "build_parser", "deta
 #: Width of ``--help``, whatever the terminal's: an 80-column terminal shows it unwrapped.
 HELP_COLUMNS = 80
 
-#: Command modules of :mod:`dustoptics.cli`, in the order of the help's command list.
-_COMMAND_MODULES = (
-    "build",
-    "export",
-    "info",
-    "plot",
-    "catalogue",
-    "fit",
-    "sweep",
-    "sky",
-    "retrieve",
-    "engines",
-)
+#: The commands, in the order of the help's command list: name -> (the module of
+#: :mod:`dustoptics.cli` that adds it, its line in the list).  A command line imports the
+#: module of its command only (:func:`build_parser`): the others' imports are not its.
+COMMANDS: dict[str, tuple[str, str]] = {
+    "build": ("build", "compute a preset or configuration file and write its tables"),
+    "export": ("export", "convert a table file into other formats"),
+    "info": ("info", "what any file or folder dustoptics writes holds and how it was made"),
+    "plot": ("plot", "plot a table (needs the 'plot' extra: matplotlib)"),
+    "presets": ("catalogue", "list the presets, or print one's configuration file"),
+    "materials": ("catalogue", "list the refractive-index catalogue"),
+    "fit": ("fit", "fit an analytic phase function (HG, double HG, ...) to a table"),
+    "sweep": (
+        "sweep",
+        "compute a configuration over its [sweep] axes on Dask (needs the 'sweep' extra)",
+    ),
+    "sky": (
+        "sky",
+        "render the sky an atmosphere makes: images, data and the thesis's comparisons",
+    ),
+    "retrieve": (
+        "retrieve",
+        "fit dust parameters (size, index, hematite fraction) to observations",
+    ),
+    "engines": (
+        "engines",
+        "rendering engines' sky models fitted to the exact sky, and the error they cost",
+    ),
+}
 
 
 class _Parser(argparse.ArgumentParser):
@@ -158,7 +173,12 @@ class HelpFormatter(argparse.RawDescriptionHelpFormatter):
 
 
 def add_command(
-    sub: Any, name: str, *, help: str, examples: Sequence[str], description: str | None = None
+    sub: Any,
+    name: str,
+    *,
+    examples: Sequence[str],
+    help: str | None = None,
+    description: str | None = None,
 ) -> argparse.ArgumentParser:
     """A subcommand's parser, its ``--help`` ending with examples.
 
@@ -168,8 +188,9 @@ def add_command(
         Where the subcommand goes (``parser.add_subparsers()``).
     name : str
         The subcommand.
-    help : str
-        One line for the program's list of commands (and the description).
+    help : str, optional
+        One line for the program's list of commands (and the description); default the
+        command's line in :data:`COMMANDS`.
     examples : sequence of str
         Command lines shown at the end of the subcommand's ``--help``, each
         a complete command (``dustoptics ...``).
@@ -180,6 +201,7 @@ def add_command(
     -------
     argparse.ArgumentParser
     """
+    help = help if help is not None else COMMANDS[name][1]
     label = "example" if len(examples) == 1 else "examples"
     parser: argparse.ArgumentParser = sub.add_parser(
         name,
@@ -234,8 +256,17 @@ def _worker_count(text: str) -> int:
     return value
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(argv: Sequence[str] | None = None) -> argparse.ArgumentParser:
     """The command line's argument parser.
+
+    Parameters
+    ----------
+    argv : sequence of str, optional
+        The arguments it will parse: the module of the command they name (their first)
+        is imported and adds the command; the other commands are there by name and help
+        line only (their modules, and what those import, are not the command's: a warm
+        ``build`` imported every command's, the sky's and the retrieval's included).  None:
+        every command complete (the documentation's command reference).
 
     Returns
     -------
@@ -252,6 +283,12 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"{PROG} {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     sub.required = True
-    for name in _COMMAND_MODULES:
-        importlib.import_module(f"dustoptics.cli.{name}").add_parser(sub)
+    wanted = None if argv is None else COMMANDS.get(argv[0] if argv else "", ("", ""))[0]
+    added: set[str] = set()
+    for name, (module, line) in COMMANDS.items():
+        if wanted is not None and module != wanted:
+            sub.add_parser(name, help=line, add_help=False)
+        elif module not in added:
+            added.add(module)
+            importlib.import_module(f"dustoptics.cli.{module}").add_parser(sub)
     return parser

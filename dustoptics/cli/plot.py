@@ -20,7 +20,6 @@ def add_parser(sub: Any) -> None:
     p = add_command(
         sub,
         "plot",
-        help="plot a table (needs the 'plot' extra: matplotlib)",
         examples=(
             f"{PROG} plot tables/blue-moons/blue-moons.nc --kind polar --out blue-moons.png",
         ),

@@ -41,7 +41,6 @@ def add_parser(sub: Any) -> None:
     p = add_command(
         sub,
         "retrieve",
-        help="fit dust parameters (size, index, hematite fraction) to observations",
         examples=(
             f"{PROG} retrieve obs.nc --model blue-moons --fit r_eff_um=0.2:5 "
             "--fit hematite_fraction=0:0.2",

@@ -54,7 +54,6 @@ def add_parser(sub: Any) -> None:
     p = add_command(
         sub,
         "sky",
-        help="render the sky an atmosphere makes: images, data and the thesis's comparisons",
         examples=(
             f"{PROG} sky mars --dust hybrid --sunset --out skies",
             f"{PROG} sky compare --out skies",

@@ -23,7 +23,6 @@ def add_parser(sub: Any) -> None:
     p = add_command(
         sub,
         "sweep",
-        help="compute a configuration over its [sweep] axes on Dask (needs the 'sweep' extra)",
         examples=(f"{PROG} sweep my-sweep.toml --out my-sweep.zarr --workers 2",),
     )
     p.set_defaults(run=run)

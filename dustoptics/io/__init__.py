@@ -42,56 +42,151 @@ Formats, grouped by what they are for (each subpackage lists its modules):
 
 :data:`FORMATS` maps a format name (the command line's ``--format``) to its record
 (:class:`~dustoptics.io.registry.Format`): writer, options, needs, and how ``info``
-reads its files.  Each format module registers its record when imported; the
-imports below are the registration (adding a format: its module and one line here).
+reads its files.  Each format module registers its record when imported;
+:data:`FORMAT_MODULES` below is the registration (adding a format: its module and one
+line there), imported on the first look at :data:`FORMATS`.  The package's names are
+imported on first use: writing one format imports that format's module only.
 """
 
 from __future__ import annotations
 
-from dustoptics.io import (
-    csv,
-    describe,
-    engines,
-    gcm,
-    outputs,
-    rt,
-    shaders,
-    tables,
-    textures,
+from typing import TYPE_CHECKING, Any
+
+from dustoptics._lazy import lazy_attribute, lazy_dir
+
+if TYPE_CHECKING:  # the names as type checkers see them (imported on first use below)
+    from dustoptics.io import (
+        csv,
+        describe,
+        engines,
+        gcm,
+        outputs,
+        rt,
+        shaders,
+        tables,
+        textures,
+    )
+    from dustoptics.io._atomic import FormatError
+    from dustoptics.io.csv import (
+        check_cosmoscout_set,
+        read_cosmoscout_constituent,
+        read_seed_csv,
+        write_cosmoscout_constituent,
+        write_cosmoscout_set,
+        write_seed_csv,
+    )
+    from dustoptics.io.csv.cosmoscout import CosmoScoutConstituent
+    from dustoptics.io.describe import describe_path, describe_table
+    from dustoptics.io.outputs import (
+        Placement,
+        place_outputs,
+        place_table,
+        read_table,
+        with_inputs,
+        write_atmosphere_set,
+        write_formats,
+    )
+    from dustoptics.io.registry import FORMATS, Format, FormatOptions, Writer, register, write
+    from dustoptics.io.shaders import glsl_snippet, shader_source, write_glsl, write_shader
+    from dustoptics.io.tables import open_table, read_hdf5, read_netcdf, write_hdf5, write_netcdf
+    from dustoptics.io.textures import (
+        read_texture,
+        write_exr,
+        write_ktx2,
+        write_npy,
+        write_texture,
+    )
+
+#: The modules that register the formats, one line each (adding a format: its module and
+#: its line here).  The registry imports them on the first look at :data:`FORMATS`
+#: (:func:`dustoptics.io.registry.load_formats`), not before: importing the package, or one
+#: of its modules, imports no format's module.
+FORMAT_MODULES = (
+    "dustoptics.io.shaders.glsl",
+    "dustoptics.io.shaders.hlsl",
+    "dustoptics.io.shaders.wgsl",
+    "dustoptics.io.textures.raw",
+    "dustoptics.io.textures.exr",
+    "dustoptics.io.textures.ktx2",
+    "dustoptics.io.textures.npy",
+    "dustoptics.io.engines.bruneton",
+    "dustoptics.io.csv.cosmoscout",
+    "dustoptics.io.csv.seed",
+    "dustoptics.io.rt.disort",
+    "dustoptics.io.rt.libradtran",
+    "dustoptics.io.rt.libradtran_netcdf",
+    "dustoptics.io.tables.netcdf",
+    "dustoptics.io.gcm.ames_ir",
+    "dustoptics.io.gcm.ames_vis",
+    "dustoptics.io.gcm.lmd_ir",
+    "dustoptics.io.gcm.lmd_vis",
 )
-from dustoptics.io._atomic import FormatError
-from dustoptics.io.csv import (
-    check_cosmoscout_set,
-    read_cosmoscout_constituent,
-    read_seed_csv,
-    write_cosmoscout_constituent,
-    write_cosmoscout_set,
-    write_seed_csv,
+
+# The names are imported on first use (PEP 562): importing one module of the package
+# imports that module and what it needs, not the others (dustoptics._lazy).
+_SUBMODULES = (
+    "csv",
+    "describe",
+    "engines",
+    "gcm",
+    "outputs",
+    "rt",
+    "shaders",
+    "tables",
+    "textures",
 )
-from dustoptics.io.csv.cosmoscout import CosmoScoutConstituent
-from dustoptics.io.describe import describe_path, describe_table
-from dustoptics.io.outputs import (
-    Placement,
-    place_outputs,
-    place_table,
-    read_table,
-    with_inputs,
-    write_atmosphere_set,
-    write_formats,
-)
-from dustoptics.io.registry import FORMATS, Format, FormatOptions, Writer, register, write
-from dustoptics.io.shaders import glsl_snippet, shader_source, write_glsl, write_shader
-from dustoptics.io.tables import open_table, read_hdf5, read_netcdf, write_hdf5, write_netcdf
-from dustoptics.io.textures import (
-    read_texture,
-    write_exr,
-    write_ktx2,
-    write_npy,
-    write_texture,
-)
+_NAMES = {
+    "dustoptics.io._atomic": ("FormatError",),
+    "dustoptics.io.csv": (
+        "check_cosmoscout_set",
+        "read_cosmoscout_constituent",
+        "read_seed_csv",
+        "write_cosmoscout_constituent",
+        "write_cosmoscout_set",
+        "write_seed_csv",
+    ),
+    "dustoptics.io.csv.cosmoscout": ("CosmoScoutConstituent",),
+    "dustoptics.io.describe": ("describe_path", "describe_table"),
+    "dustoptics.io.outputs": (
+        "Placement",
+        "place_outputs",
+        "place_table",
+        "read_table",
+        "with_inputs",
+        "write_atmosphere_set",
+        "write_formats",
+    ),
+    "dustoptics.io.registry": ("FORMATS", "Format", "FormatOptions", "Writer", "register", "write"),
+    "dustoptics.io.shaders": ("glsl_snippet", "shader_source", "write_glsl", "write_shader"),
+    "dustoptics.io.tables": (
+        "open_table",
+        "read_hdf5",
+        "read_netcdf",
+        "write_hdf5",
+        "write_netcdf",
+    ),
+    "dustoptics.io.textures": (
+        "read_texture",
+        "write_exr",
+        "write_ktx2",
+        "write_npy",
+        "write_texture",
+    ),
+}
+
+
+def __getattr__(name: str) -> Any:
+    """A public name, imported on first use."""
+    return lazy_attribute(__name__, name, _NAMES, _SUBMODULES)
+
+
+def __dir__() -> list[str]:
+    return lazy_dir(__name__, __all__)
+
 
 __all__ = [
     "FORMATS",
+    "FORMAT_MODULES",
     "CosmoScoutConstituent",
     "Format",
     "FormatError",

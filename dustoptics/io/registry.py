@@ -7,13 +7,15 @@ Modelled on xarray's backend entry points.  A format module defines one
 Everything else reads :data:`FORMATS`: the command line's ``--format`` list,
 its option groups and needs check, ``info``, :class:`FormatOptions` and the
 documentation's format table (:func:`format_table`).  Adding a format is one
-module and one line that imports it (:mod:`dustoptics.io`).
+module and one line that names it (:data:`dustoptics.io.FORMAT_MODULES`); the
+first look at :data:`FORMATS` imports those modules (:func:`load_formats`).
 """
 
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable, Iterable, Mapping, Sequence
+import importlib
+from collections.abc import Callable, Iterable, Iterator, Mapping, MutableMapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -30,6 +32,7 @@ __all__ = [
     "cli_fields",
     "format_table",
     "formats_needing",
+    "load_formats",
     "option",
     "option_groups",
     "register",
@@ -199,13 +202,59 @@ class Format:
         }
 
 
-#: Format name -> record; filled by each format module when it is imported.
-FORMATS: dict[str, Format] = {}
+class _Formats(MutableMapping[str, Format]):
+    """Format name -> record, the format modules imported on the first look
+    (:func:`load_formats`); :func:`register` adds to it without looking."""
+
+    def __init__(self) -> None:
+        self.records: dict[str, Format] = {}
+        self.loaded = False
+
+    def __getitem__(self, name: str) -> Format:
+        return load_formats()[name]
+
+    def __setitem__(self, name: str, fmt: Format) -> None:
+        self.records[name] = fmt
+
+    def __delitem__(self, name: str) -> None:
+        del self.records[name]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(load_formats())
+
+    def __len__(self) -> int:
+        return len(load_formats())
+
+    def __contains__(self, name: object) -> bool:
+        return name in load_formats()
+
+    def __repr__(self) -> str:
+        return repr(load_formats())
+
+
+#: Format name -> record; filled by each format module when it is imported
+#: (:data:`dustoptics.io.FORMAT_MODULES`, imported on the first look).
+FORMATS = _Formats()
+
+
+def load_formats() -> dict[str, Format]:
+    """Every registered record by name, the format modules imported first (once).
+
+    The modules of :data:`dustoptics.io.FORMAT_MODULES` register their records when
+    imported; they are imported here, on the first look at :data:`FORMATS`, so that
+    importing this module (or one format's) imports no other format's writer.
+    """
+    if not FORMATS.loaded:
+        FORMATS.loaded = True
+        for module in importlib.import_module("dustoptics.io").FORMAT_MODULES:
+            importlib.import_module(module)
+    return FORMATS.records
 
 
 def register(fmt: Format) -> Format:
     """Add ``fmt`` to :data:`FORMATS` (names are unique) and return it."""
-    if fmt.name in FORMATS and FORMATS[fmt.name] is not fmt:
+    known = FORMATS.records.get(fmt.name)
+    if known is not None and known is not fmt:
         raise ValueError(f"format {fmt.name!r} is already registered")
     FORMATS[fmt.name] = fmt
     return fmt
@@ -215,7 +264,7 @@ def _check_names(formats: Iterable[str]) -> None:
     unknown = [name for name in formats if name not in FORMATS]
     if unknown:
         raise ValueError(
-            f"format must be one of {', '.join(map(repr, FORMATS))}; got {unknown[0]!r}"
+            f"format must be one of {', '.join(map(repr, sorted(FORMATS)))}; got {unknown[0]!r}"
         )
 
 

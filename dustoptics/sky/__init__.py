@@ -17,11 +17,38 @@
 - :mod:`~dustoptics.sky.job`: a sky as files (what ``dustoptics sky`` writes).
 """
 
-from dustoptics.sky import job, medium, orders, render
-from dustoptics.sky.job import SkyJob
-from dustoptics.sky.medium import Medium
-from dustoptics.sky.orders import DiffuseField, solve_orders
-from dustoptics.sky.render import line_of_sight_radiance
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
+from dustoptics._lazy import lazy_attribute, lazy_dir
+
+if TYPE_CHECKING:  # the names as type checkers see them (imported on first use below)
+    from dustoptics.sky import job, medium, orders, render
+    from dustoptics.sky.job import SkyJob
+    from dustoptics.sky.medium import Medium
+    from dustoptics.sky.orders import DiffuseField, solve_orders
+    from dustoptics.sky.render import line_of_sight_radiance
+
+# The names are imported on first use (PEP 562): importing one module of the package
+# imports that module and what it needs, not the others (dustoptics._lazy).
+_SUBMODULES = ("job", "medium", "orders", "render")
+_NAMES = {
+    "dustoptics.sky.job": ("SkyJob",),
+    "dustoptics.sky.medium": ("Medium",),
+    "dustoptics.sky.orders": ("DiffuseField", "solve_orders"),
+    "dustoptics.sky.render": ("line_of_sight_radiance",),
+}
+
+
+def __getattr__(name: str) -> Any:
+    """A public name, imported on first use."""
+    return lazy_attribute(__name__, name, _NAMES, _SUBMODULES)
+
+
+def __dir__() -> list[str]:
+    return lazy_dir(__name__, __all__)
+
 
 __all__ = [
     "DiffuseField",

@@ -12,14 +12,42 @@
 
 from __future__ import annotations
 
-from dustoptics.io.csv import cosmoscout, seed
-from dustoptics.io.csv.cosmoscout import (
-    check_cosmoscout_set,
-    read_cosmoscout_constituent,
-    write_cosmoscout_constituent,
-    write_cosmoscout_set,
-)
-from dustoptics.io.csv.seed import read_seed_csv, write_seed_csv
+from typing import TYPE_CHECKING, Any
+
+from dustoptics._lazy import lazy_attribute, lazy_dir
+
+if TYPE_CHECKING:  # the names as type checkers see them (imported on first use below)
+    from dustoptics.io.csv import cosmoscout, seed
+    from dustoptics.io.csv.cosmoscout import (
+        check_cosmoscout_set,
+        read_cosmoscout_constituent,
+        write_cosmoscout_constituent,
+        write_cosmoscout_set,
+    )
+    from dustoptics.io.csv.seed import read_seed_csv, write_seed_csv
+
+# The names are imported on first use (PEP 562): importing one module of the package
+# imports that module and what it needs, not the others (dustoptics._lazy).
+_SUBMODULES = ("cosmoscout", "seed")
+_NAMES = {
+    "dustoptics.io.csv.cosmoscout": (
+        "check_cosmoscout_set",
+        "read_cosmoscout_constituent",
+        "write_cosmoscout_constituent",
+        "write_cosmoscout_set",
+    ),
+    "dustoptics.io.csv.seed": ("read_seed_csv", "write_seed_csv"),
+}
+
+
+def __getattr__(name: str) -> Any:
+    """A public name, imported on first use."""
+    return lazy_attribute(__name__, name, _NAMES, _SUBMODULES)
+
+
+def __dir__() -> list[str]:
+    return lazy_dir(__name__, __all__)
+
 
 __all__ = [
     "check_cosmoscout_set",

@@ -21,16 +21,45 @@
 
 from __future__ import annotations
 
-from dustoptics.io.engines import (
-    bevy,
-    bruneton,
-    calcmysky,
-    celestia,
-    cosmoscout_preprocessor,
-    fit,
-    openspace,
-    precomputation,
+from typing import TYPE_CHECKING, Any
+
+from dustoptics._lazy import lazy_attribute, lazy_dir
+
+if TYPE_CHECKING:  # the names as type checkers see them (imported on first use below)
+    from dustoptics.io.engines import (
+        bevy,
+        bruneton,
+        calcmysky,
+        celestia,
+        cosmoscout_preprocessor,
+        fit,
+        openspace,
+        precomputation,
+    )
+
+# The names are imported on first use (PEP 562): importing one module of the package
+# imports that module and what it needs, not the others (dustoptics._lazy).
+_SUBMODULES = (
+    "bevy",
+    "bruneton",
+    "calcmysky",
+    "celestia",
+    "cosmoscout_preprocessor",
+    "fit",
+    "openspace",
+    "precomputation",
 )
+_NAMES: dict[str, tuple[str, ...]] = {}
+
+
+def __getattr__(name: str) -> Any:
+    """A public name, imported on first use."""
+    return lazy_attribute(__name__, name, _NAMES, _SUBMODULES)
+
+
+def __dir__() -> list[str]:
+    return lazy_dir(__name__, __all__)
+
 
 __all__ = [
     "bevy",

@@ -13,8 +13,31 @@ size distribution; these files are many): :mod:`~dustoptics.io.gcm.common`.
 
 from __future__ import annotations
 
-from dustoptics.io.gcm import ames_ir, ames_vis, lmd_ir, lmd_vis
-from dustoptics.io.gcm.ames import read_ames
-from dustoptics.io.gcm.lmd import read_lmd
+from typing import TYPE_CHECKING, Any
+
+from dustoptics._lazy import lazy_attribute, lazy_dir
+
+if TYPE_CHECKING:  # the names as type checkers see them (imported on first use below)
+    from dustoptics.io.gcm import ames_ir, ames_vis, lmd_ir, lmd_vis
+    from dustoptics.io.gcm.ames import read_ames
+    from dustoptics.io.gcm.lmd import read_lmd
+
+# The names are imported on first use (PEP 562): importing one module of the package
+# imports that module and what it needs, not the others (dustoptics._lazy).
+_SUBMODULES = ("ames_ir", "ames_vis", "lmd_ir", "lmd_vis")
+_NAMES = {
+    "dustoptics.io.gcm.ames": ("read_ames",),
+    "dustoptics.io.gcm.lmd": ("read_lmd",),
+}
+
+
+def __getattr__(name: str) -> Any:
+    """A public name, imported on first use."""
+    return lazy_attribute(__name__, name, _NAMES, _SUBMODULES)
+
+
+def __dir__() -> list[str]:
+    return lazy_dir(__name__, __all__)
+
 
 __all__ = ["ames_ir", "ames_vis", "lmd_ir", "lmd_vis", "read_ames", "read_lmd"]

@@ -13,15 +13,44 @@ All need ``compute_optics(expansion=...)``.
 
 from __future__ import annotations
 
-from dustoptics.io.rt import disort, libradtran, libradtran_netcdf
-from dustoptics.io.rt.disort import DISORT_SUFFIX, disort_text, write_disort
-from dustoptics.io.rt.libradtran import (
-    LIBRADTRAN_EXPLICIT_SUFFIX,
-    LIBRADTRAN_LAYER_SUFFIX,
-    libradtran_texts,
-    write_libradtran,
-)
-from dustoptics.io.rt.libradtran_netcdf import write_libradtran_netcdf
+from typing import TYPE_CHECKING, Any
+
+from dustoptics._lazy import lazy_attribute, lazy_dir
+
+if TYPE_CHECKING:  # the names as type checkers see them (imported on first use below)
+    from dustoptics.io.rt import disort, libradtran, libradtran_netcdf
+    from dustoptics.io.rt.disort import DISORT_SUFFIX, disort_text, write_disort
+    from dustoptics.io.rt.libradtran import (
+        LIBRADTRAN_EXPLICIT_SUFFIX,
+        LIBRADTRAN_LAYER_SUFFIX,
+        libradtran_texts,
+        write_libradtran,
+    )
+    from dustoptics.io.rt.libradtran_netcdf import write_libradtran_netcdf
+
+# The names are imported on first use (PEP 562): importing one module of the package
+# imports that module and what it needs, not the others (dustoptics._lazy).
+_SUBMODULES = ("disort", "libradtran", "libradtran_netcdf")
+_NAMES = {
+    "dustoptics.io.rt.disort": ("DISORT_SUFFIX", "disort_text", "write_disort"),
+    "dustoptics.io.rt.libradtran": (
+        "LIBRADTRAN_EXPLICIT_SUFFIX",
+        "LIBRADTRAN_LAYER_SUFFIX",
+        "libradtran_texts",
+        "write_libradtran",
+    ),
+    "dustoptics.io.rt.libradtran_netcdf": ("write_libradtran_netcdf",),
+}
+
+
+def __getattr__(name: str) -> Any:
+    """A public name, imported on first use."""
+    return lazy_attribute(__name__, name, _NAMES, _SUBMODULES)
+
+
+def __dir__() -> list[str]:
+    return lazy_dir(__name__, __all__)
+
 
 __all__ = [
     "DISORT_SUFFIX",

@@ -8,13 +8,41 @@
 
 from __future__ import annotations
 
-from dustoptics.io.tables import netcdf
-from dustoptics.io.tables.netcdf import (
-    open_table,
-    read_hdf5,
-    read_netcdf,
-    write_hdf5,
-    write_netcdf,
-)
+from typing import TYPE_CHECKING, Any
+
+from dustoptics._lazy import lazy_attribute, lazy_dir
+
+if TYPE_CHECKING:  # the names as type checkers see them (imported on first use below)
+    from dustoptics.io.tables import netcdf
+    from dustoptics.io.tables.netcdf import (
+        open_table,
+        read_hdf5,
+        read_netcdf,
+        write_hdf5,
+        write_netcdf,
+    )
+
+# The names are imported on first use (PEP 562): importing one module of the package
+# imports that module and what it needs, not the others (dustoptics._lazy).
+_SUBMODULES = ("netcdf",)
+_NAMES = {
+    "dustoptics.io.tables.netcdf": (
+        "open_table",
+        "read_hdf5",
+        "read_netcdf",
+        "write_hdf5",
+        "write_netcdf",
+    ),
+}
+
+
+def __getattr__(name: str) -> Any:
+    """A public name, imported on first use."""
+    return lazy_attribute(__name__, name, _NAMES, _SUBMODULES)
+
+
+def __dir__() -> list[str]:
+    return lazy_dir(__name__, __all__)
+
 
 __all__ = ["netcdf", "open_table", "read_hdf5", "read_netcdf", "write_hdf5", "write_netcdf"]

@@ -13,12 +13,38 @@
 
 from __future__ import annotations
 
-from dustoptics.io.textures import exr, ktx2, npy, phase_texture, raw
-from dustoptics.io.textures.exr import write_exr
-from dustoptics.io.textures.ktx2 import write_ktx2
-from dustoptics.io.textures.npy import write_npy
-from dustoptics.io.textures.phase_texture import PhaseTexture
-from dustoptics.io.textures.raw import read_texture, write_texture
+from typing import TYPE_CHECKING, Any
+
+from dustoptics._lazy import lazy_attribute, lazy_dir
+
+if TYPE_CHECKING:  # the names as type checkers see them (imported on first use below)
+    from dustoptics.io.textures import exr, ktx2, npy, phase_texture, raw
+    from dustoptics.io.textures.exr import write_exr
+    from dustoptics.io.textures.ktx2 import write_ktx2
+    from dustoptics.io.textures.npy import write_npy
+    from dustoptics.io.textures.phase_texture import PhaseTexture
+    from dustoptics.io.textures.raw import read_texture, write_texture
+
+# The names are imported on first use (PEP 562): importing one module of the package
+# imports that module and what it needs, not the others (dustoptics._lazy).
+_SUBMODULES = ("exr", "ktx2", "npy", "phase_texture", "raw")
+_NAMES = {
+    "dustoptics.io.textures.exr": ("write_exr",),
+    "dustoptics.io.textures.ktx2": ("write_ktx2",),
+    "dustoptics.io.textures.npy": ("write_npy",),
+    "dustoptics.io.textures.phase_texture": ("PhaseTexture",),
+    "dustoptics.io.textures.raw": ("read_texture", "write_texture"),
+}
+
+
+def __getattr__(name: str) -> Any:
+    """A public name, imported on first use."""
+    return lazy_attribute(__name__, name, _NAMES, _SUBMODULES)
+
+
+def __dir__() -> list[str]:
+    return lazy_dir(__name__, __all__)
+
 
 __all__ = [
     "PhaseTexture",

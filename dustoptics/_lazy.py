@@ -1,0 +1,59 @@
+"""Packages whose public names are imported on first use (PEP 562).
+
+A package ``__init__`` that imported every module of the package made importing one
+of them import them all: ``dustoptics build`` imported every format's writer (and
+with them scipy.integrate, the atmosphere sets, the engines) to write a netCDF file.
+A package built with :func:`lazy_attribute` names what it offers and imports it when
+it is first used: ``from dustoptics.io import FORMATS`` imports the registry only.
+"""
+
+from __future__ import annotations
+
+import importlib
+import sys
+from collections.abc import Iterable, Mapping
+from typing import Any
+
+__all__ = ["lazy_attribute", "lazy_dir"]
+
+
+def lazy_attribute(
+    package: str, name: str, names: Mapping[str, Iterable[str]], submodules: Iterable[str] = ()
+) -> Any:
+    """The public ``name`` of ``package``, imported now (a package's ``__getattr__``).
+
+    Parameters
+    ----------
+    package : str
+        The package (its ``__name__``).
+    name : str
+        The attribute asked for.
+    names : mapping
+        Defining module (absolute name) -> the public names it gives the package.
+    submodules : iterable of str
+        The package's submodules that are public names (``"csv"`` for ``package.csv``).
+
+    Returns
+    -------
+    object
+        The value, also set on the package (the next use does not come here).
+
+    Raises
+    ------
+    AttributeError
+        ``name`` is none of them.
+    """
+    if name in submodules:
+        value = importlib.import_module(f"{package}.{name}")
+    else:
+        module = next((m for m, given in names.items() if name in given), None)
+        if module is None:
+            raise AttributeError(f"module {package!r} has no attribute {name!r}")
+        value = getattr(importlib.import_module(module), name)
+    setattr(sys.modules[package], name, value)
+    return value
+
+
+def lazy_dir(package: str, public: Iterable[str]) -> list[str]:
+    """The names of ``package``: those set on it and the ``public`` ones (its ``__dir__``)."""
+    return sorted({*vars(sys.modules[package]), *public})
