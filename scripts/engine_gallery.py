@@ -32,6 +32,7 @@ from dustoptics.sky.engines.gallery import (
     engine_panels,
     exact_dome,
     gallery_png,
+    row_params,
 )
 from dustoptics.sky.engines.report import EngineReport, ReportRow, build_planet, shipped_report
 from dustoptics.sky.medium import Medium
@@ -86,6 +87,11 @@ def main(argv: list[str] | None = None) -> int:
         atmosphere = build_planet(planet)
         medium = Medium.from_atmosphere(atmosphere)
         panels: dict[str, list] = {e: [] for e in args.engines}
+        pairs = {e: {k: rows[(e, k)] for k in ("fitted", "community")} for e in args.engines}
+        params = {
+            e: {k: row_params(ENGINES[e], row, atmosphere) for k, row in pair.items()}
+            for e, pair in pairs.items()
+        }
         for elevation in args.sun_elevations:
             sky = exact_dome(
                 medium,
@@ -95,8 +101,9 @@ def main(argv: list[str] | None = None) -> int:
             )
             (dome,) = reference_skies(medium, sun_elevations_deg=[elevation])
             for engine in args.engines:
-                pair = {k: rows[(engine, k)] for k in ("fitted", "community")}
-                p = engine_panels(pair, atmosphere, sky, dome, size=args.size)
+                p = engine_panels(
+                    pairs[engine], atmosphere, sky, dome, size=args.size, params=params[engine]
+                )
                 panels[engine].append(p)
                 print(
                     f"{planet} {engine} Sun {elevation:g} deg: dE00 mean fitted "

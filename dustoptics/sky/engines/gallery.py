@@ -262,6 +262,7 @@ def engine_panels(
     dome: ReferenceSky,
     *,
     size: int,
+    params: Mapping[str, Mapping[str, float]] | None = None,
 ) -> EnginePanels:
     """Exact | fitted | community fisheyes of one engine at ``sky``'s Sun elevation.
 
@@ -279,6 +280,10 @@ def engine_panels(
         ``sky``'s Sun elevation: the directions of the Delta E.
     size : int
         Side of each fisheye. [pixels]
+    params : mapping, optional
+        ``{"fitted": ..., "community": ...}``: :func:`row_params` of the rows,
+        made once for every Sun elevation (an engine that renders a set builds
+        its medium once per set); default made here.
 
     Returns
     -------
@@ -309,12 +314,12 @@ def engine_panels(
     recomputed, own = [], []
     for kind in KINDS[1:]:
         row = rows[kind]
-        params = row_params(engine, row, atmosphere)
+        values = row_params(engine, row, atmosphere) if params is None else params[kind]
         rgb = engine.render(
-            params, sun_elevation_deg=elevation, view_zenith_deg=zz, view_azimuth_deg=aa
+            values, sun_elevation_deg=elevation, view_zenith_deg=zz, view_azimuth_deg=aa
         )
         grids.append(colour.linear_srgb_to_xyz(rgb))
-        value = sky_error(dome, engine_xyz(engine, params, dome)).delta_e_mean
+        value = sky_error(dome, engine_xyz(engine, values, dome)).delta_e_mean
         expected = _row_error(row, elevation)
         if not abs(value - expected) <= DELTA_E_TOLERANCE:
             raise ValueError(
