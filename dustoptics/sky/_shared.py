@@ -14,12 +14,15 @@ arrays of the same bits: only who computes them changes.
 
 from __future__ import annotations
 
+import itertools
+import os
 from collections.abc import Callable, Hashable, Iterator
+from concurrent.futures import ThreadPoolExecutor
 from contextlib import contextmanager
 from contextvars import ContextVar
 from typing import Any, TypeVar
 
-__all__ = ["geometry_memo", "shared_geometry"]
+__all__ = ["geometry_memo", "in_threads", "shared_geometry"]
 
 _T = TypeVar("_T")
 
@@ -47,3 +50,33 @@ def geometry_memo(key: Hashable, compute: Callable[[], _T]) -> _T:
         memo[key] = compute()
     value: _T = memo[key]
     return value
+
+
+#: Parts of a loop per thread in :func:`in_threads` (rows differ in cost: more parts than
+#: threads keep the cores busy to the end).
+_PARTS_PER_THREAD = 4
+
+
+def _cores() -> int:
+    try:
+        return len(os.sched_getaffinity(0))
+    except (AttributeError, OSError):  # pragma: no cover - not Linux
+        return os.cpu_count() or 1
+
+
+def in_threads(run: Callable[..., None], n: int, *args: Any) -> None:
+    """``run(lo, hi, *args)`` over contiguous parts of ``range(n)``, in one thread per core.
+
+    For the sky's serial kernels (``nogil``) whose iterations are independent and write
+    their own outputs: the bits are those of one ``run(0, n, *args)``.  Serial kernels compile
+    several times faster than numba's ``parallel=True`` ones and need no threading layer.
+    """
+    threads = min(_cores(), n)
+    if threads <= 1:
+        run(0, n, *args)
+        return
+    parts = min(n, _PARTS_PER_THREAD * threads)
+    bounds = [n * i // parts for i in range(parts + 1)]
+    with ThreadPoolExecutor(max_workers=threads) as pool:
+        for future in [pool.submit(run, lo, hi, *args) for lo, hi in itertools.pairwise(bounds)]:
+            future.result()

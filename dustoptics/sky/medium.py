@@ -38,8 +38,8 @@ import numpy as np
 from numpy.polynomial import legendre
 from scipy.special import roots_legendre
 
-from dustoptics._numba_cache import parallel_kernel
 from dustoptics.atmosphere.sets import Atmosphere
+from dustoptics.sky._shared import in_threads
 from dustoptics.table import Table
 
 __all__ = [
@@ -464,9 +464,11 @@ def _slant_columns(
     u = np.linspace(-1.0, 1.0, n_mu)
     mu_grid = np.sign(u) * np.abs(u) ** 3
     x, w = legendre.leggauss(_SLANT_NODES)
-    out = _slant_kernel(
+    out = np.zeros((rho.shape[0], r_grid.size, mu_grid.size))
+    in_threads(
+        _slant_kernel, r_grid.size,
         r_grid, mu_grid, 0.5 * (x + 1.0), 0.5 * w, altitude, np.ascontiguousarray(rho), radius,
-        top, np.ascontiguousarray(edges, dtype=float),
+        top, np.ascontiguousarray(edges, dtype=float), out,
     )  # fmt: skip
     return SlantColumns(radius_m=r_grid, mu=mu_grid, column_m=out)
 
@@ -503,9 +505,10 @@ def _path_breaks(
     return out[:n]
 
 
-@parallel_kernel  # numba's fork-safe threading layer, one parallel kernel at a time
-@numba.njit(cache=True, nogil=True, parallel=True)
+@numba.njit(cache=True, nogil=True)
 def _slant_kernel(
+    lo: int,
+    hi: int,
     r_grid: np.ndarray,
     mu_grid: np.ndarray,
     t: np.ndarray,
@@ -515,16 +518,16 @@ def _slant_kernel(
     radius: float,
     top: float,
     edges: np.ndarray,
-) -> np.ndarray:
-    # The path is split at the perigee of a downward ray and where it crosses
+    out: np.ndarray,
+) -> None:
+    # Columns ``out`` (zeros on entry) of the radii ``r_grid[lo:hi]``.  The path is split at the perigee of a downward ray and where it crosses
     # an edge; on each part the substitution s = s0 + span t^2 puts the nodes
     # densely at the end nearer the perigee, where the ray is lowest (the
     # densities fall off with altitude).
     n_c = rho.shape[0]
     r_top = radius + top
-    out = np.zeros((n_c, r_grid.size, mu_grid.size))
     nz = altitude.size
-    for i in numba.prange(r_grid.size):
+    for i in range(lo, hi):
         r = r_grid[i]
         for j in range(mu_grid.size):
             m = mu_grid[j]
@@ -557,4 +560,3 @@ def _slant_kernel(
                     f = min(max(f, 0.0), 1.0)
                     for c in range(n_c):
                         out[c, i, j] += (rho[c, k] * (1.0 - f) + rho[c, k + 1] * f) * ds
-    return out
