@@ -144,11 +144,40 @@ def _columns_many(
     out = np.empty((columns.shape[0], r.size))
     col = np.empty(columns.shape[0])
     for i in range(r.size):
-        if _interp_columns(r[i], mu[i], radius_grid, mu_grid, columns, col):
-            out[:, i] = col
-        else:
-            out[:, i] = np.inf
+        found = _interp_columns(r[i], mu[i], radius_grid, mu_grid, columns, col)
+        for c in range(columns.shape[0]):
+            out[c, i] = col[c] if found else np.inf
     return out
+
+
+@numba.njit(cache=True, nogil=True)
+def _search_left(a: np.ndarray, v: float) -> int:
+    """``numpy.searchsorted(a, v)`` (side "left") for a sorted ``a``: the first index whose
+    value is not below ``v`` (``a.size`` for NaN, which sorts last).  A plain bisection,
+    which numba compiles several times faster than its generic ``searchsorted``."""
+    lo, hi = 0, a.size
+    if v != v:
+        return hi
+    while lo < hi:
+        mid = (lo + hi) >> 1
+        if a[mid] < v:
+            lo = mid + 1
+        else:
+            hi = mid
+    return lo
+
+
+@numba.njit(cache=True, nogil=True)
+def _sort_small(a: np.ndarray) -> None:
+    """Sort ``a`` in place, ascending (insertion sort: the few numbers of a path's cuts,
+    or samples already sorted but for a few edge crossings)."""
+    for i in range(1, a.size):
+        v = a[i]
+        j = i - 1
+        while j >= 0 and a[j] > v:
+            a[j + 1] = a[j]
+            j -= 1
+        a[j + 1] = v
 
 
 @numba.njit(cache=True, nogil=True)
@@ -172,11 +201,11 @@ def _interp_columns(
     nr = radius_grid.shape[0]
     nm = mu_grid.shape[0]
     rr = min(max(r, radius_grid[0]), radius_grid[nr - 1])
-    ir = int(np.searchsorted(radius_grid, rr)) - 1
+    ir = _search_left(radius_grid, rr) - 1
     ir = min(max(ir, 0), nr - 2)
     fr = (rr - radius_grid[ir]) / (radius_grid[ir + 1] - radius_grid[ir])
     mm = min(max(mu, -1.0), 1.0)
-    im = int(np.searchsorted(mu_grid, mm)) - 1
+    im = _search_left(mu_grid, mm) - 1
     im = min(max(im, 0), nm - 2)
     fm = (mm - mu_grid[im]) / (mu_grid[im + 1] - mu_grid[im])
     den = 0.0
@@ -537,11 +566,12 @@ def _slant_kernel(
                 continue
             length = -r * m + math.sqrt(max(r * r * (m * m - 1.0) + r_top * r_top, 0.0))
             s_p = max(-r * m, 0.0)
-            cuts = np.sort(
-                np.concatenate(
-                    (np.array([0.0, s_p, length]), _path_breaks(r, m, length, radius, edges))
-                )
-            )
+            breaks = _path_breaks(r, m, length, radius, edges)
+            cuts = np.empty(3 + breaks.size)
+            cuts[0], cuts[1], cuts[2] = 0.0, s_p, length
+            for b in range(breaks.size):
+                cuts[3 + b] = breaks[b]
+            _sort_small(cuts)
             for part in range(cuts.size - 1):
                 lo, hi = cuts[part], cuts[part + 1]
                 span = hi - lo
@@ -554,7 +584,7 @@ def _slant_kernel(
                         s = lo + span * t[q] * t[q]
                     ds = span * 2.0 * t[q] * w[q]
                     h = math.sqrt(max(r * r + s * s + 2.0 * r * m * s, 0.0)) - radius
-                    k = int(np.searchsorted(altitude, h)) - 1
+                    k = _search_left(altitude, h) - 1
                     k = min(max(k, 0), nz - 2)
                     f = (h - altitude[k]) / (altitude[k + 1] - altitude[k])
                     f = min(max(f, 0.0), 1.0)

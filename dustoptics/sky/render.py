@@ -77,7 +77,15 @@ import numpy as np
 from dustoptics._validation import MEMORY_BUDGET_BYTES, BudgetError, check_budget
 from dustoptics.sky._progress import Reporter, reporter
 from dustoptics.sky._shared import geometry_memo, in_threads
-from dustoptics.sky.medium import Medium, MediumOptics, _interp_columns, _path_breaks, _scatters
+from dustoptics.sky.medium import (
+    Medium,
+    MediumOptics,
+    _interp_columns,
+    _path_breaks,
+    _scatters,
+    _search_left,
+    _sort_small,
+)
 from dustoptics.sky.orders import DiffuseField, normalized_legendre
 
 __all__ = [
@@ -306,13 +314,14 @@ def _row_kernel(
         beta_prev = np.empty(nwl)
         tau = np.zeros(nwl)
         n_samples = geo.shape[1]
-        s_all = np.full(n_samples, s_end)
-        for i in range(n_path + 1):
-            s_all[i] = s_end * math.expm1(a * i / n_path) / norm
+        s_all = np.empty(n_samples)
+        for i in range(n_samples):
+            s_all[i] = s_end * math.expm1(a * i / n_path) / norm if i <= n_path else s_end
         crossings = _path_breaks(r0, mv, s_end, r_ground, edges)
         if crossings.size:
-            s_all[n_path + 1 : n_path + 1 + crossings.size] = crossings
-            s_all = np.sort(s_all)
+            for i in range(crossings.size):
+                s_all[n_path + 1 + i] = crossings[i]
+            _sort_small(s_all)
         for i in range(n_samples):
             s = s_all[i]
             x_r = math.sqrt(max(r0 * r0 + s * s + 2.0 * r0 * s * mv, 0.0))
@@ -321,7 +330,7 @@ def _row_kernel(
             geo[row, i, 0] = s
             geo[row, i, 1] = x_r
             geo[row, i, 2] = mu_loc
-            iz = int(np.searchsorted(altitude, z)) - 1
+            iz = _search_left(altitude, z) - 1
             iz = min(max(iz, 0), nz - 2)
             fz = (z - altitude[iz]) / (altitude[iz + 1] - altitude[iz])
             fz = min(max(fz, 0.0), 1.0)
