@@ -134,8 +134,9 @@ HIGHLIGHTING = "NUMBA_DISABLE_ERROR_MESSAGE_HIGHLIGHTING"
 #: phase function, its refinement over radius and the node placement); those
 #: the scattering matrix and the expansion coefficients add; those of single
 #: spheres (:func:`dustoptics.scattering.mie.single_sphere`); those coated
-#: spheres add (:class:`dustoptics.particles.coated.CoatedSphere`).
-GROUPS = ("optics", "matrix", "sphere", "coated")
+#: spheres add (:class:`dustoptics.particles.coated.CoatedSphere`); the sky's
+#: (:mod:`dustoptics.sky`, declared when it is imported).
+GROUPS = ("optics", "matrix", "sphere", "coated", "sky")
 
 #: Processes that compile at once, this one included.
 MAX_PROCESSES = 4

@@ -38,6 +38,7 @@ import numpy as np
 from numpy.polynomial import legendre
 from scipy.special import roots_legendre
 
+from dustoptics._numba_cache import F8, F8_1D, F8_2D, I8, kernel
 from dustoptics.atmosphere.sets import Atmosphere
 from dustoptics.sky._shared import in_threads
 from dustoptics.table import Table
@@ -50,6 +51,10 @@ __all__ = [
     "SlantColumns",
     "legendre_moments",
 ]
+
+#: numba types of the sky's kernels' arguments (:func:`dustoptics._numba_cache.kernel`).
+_F8_3D, _F8_4D = "float64[:, :, ::1]", "float64[:, :, :, ::1]"
+_I8_2D, _B1_1D = "int64[:, ::1]", "boolean[::1]"
 
 _UM2_TO_M2: Final = 1e-12
 #: Gauss-Legendre nodes used to project a tabulated phase function on P_l.
@@ -137,7 +142,7 @@ class SlantColumns:
         return flat.reshape((self.column_m.shape[0],) + r.shape)
 
 
-@numba.njit(cache=True, nogil=True)
+@kernel(F8_1D, F8_1D, F8_1D, F8_1D, _F8_3D, group="sky")
 def _columns_many(
     r: np.ndarray, mu: np.ndarray, radius_grid: np.ndarray, mu_grid: np.ndarray, columns: np.ndarray
 ) -> np.ndarray:
@@ -534,7 +539,7 @@ def _path_breaks(
     return out[:n]
 
 
-@numba.njit(cache=True, nogil=True)
+@kernel(I8, I8, F8_1D, F8_1D, F8_1D, F8_1D, F8_1D, F8_2D, F8, F8, F8_1D, _F8_3D, group="sky")
 def _slant_kernel(
     lo: int,
     hi: int,

@@ -64,12 +64,12 @@ import warnings
 from dataclasses import dataclass
 from typing import Final, TextIO
 
-import numba
 import numpy as np
 from numpy.polynomial import legendre
 from scipy.special import gammaln, lpmv
 
 from dustoptics import _validation
+from dustoptics._numba_cache import F8_1D, I8_1D, kernel
 from dustoptics._validation import (
     BudgetError,
     check_budget,
@@ -78,7 +78,7 @@ from dustoptics._validation import (
 )
 from dustoptics.sky._progress import Reporter, reporter
 from dustoptics.sky._shared import geometry_memo
-from dustoptics.sky.medium import Medium, MediumOptics
+from dustoptics.sky.medium import _F8_3D, Medium, MediumOptics
 
 __all__ = [
     "FINE_FACTOR",
@@ -305,7 +305,7 @@ def _beam_weights(
     return a_down, b_down, a_up, b_up
 
 
-@numba.njit(cache=True, nogil=True)
+@kernel(_F8_3D, _F8_3D, _F8_3D, _F8_3D, _F8_3D, _F8_3D, _F8_3D, F8_1D, I8_1D, _F8_3D, group="sky")
 def _sweep_kernel(
     j_top: np.ndarray,
     j_bot: np.ndarray,

@@ -74,10 +74,15 @@ from typing import Final, NamedTuple, TextIO
 import numba
 import numpy as np
 
+from dustoptics._numba_cache import F8, F8_1D, F8_2D, I8, I8_1D, kernel
 from dustoptics._validation import MEMORY_BUDGET_BYTES, BudgetError, check_budget
 from dustoptics.sky._progress import Reporter, reporter
 from dustoptics.sky._shared import geometry_memo, in_threads
 from dustoptics.sky.medium import (
+    _B1_1D,
+    _F8_3D,
+    _F8_4D,
+    _I8_2D,
     Medium,
     MediumOptics,
     _interp_columns,
@@ -206,7 +211,7 @@ def _source_coefficients(
     return out
 
 
-@numba.njit(cache=True, nogil=True)
+@kernel(_F8_3D, _F8_4D, I8_1D, _F8_4D, group="sky")
 def _pack_coefficients(
     chi: np.ndarray, moments: np.ndarray, offsets: np.ndarray, out: np.ndarray
 ) -> None:
@@ -263,7 +268,28 @@ def _log_mean(a: float, b: float) -> float:
     return (a - b) / math.log(r)
 
 
-@numba.njit(cache=True, nogil=True)
+@kernel(
+    I8,
+    I8,
+    F8_1D,
+    F8,
+    F8,
+    F8,
+    I8,
+    F8,
+    F8_1D,
+    F8_2D,
+    F8_2D,
+    F8_1D,
+    F8_1D,
+    _F8_3D,
+    _F8_3D,
+    _F8_3D,
+    _I8_2D,
+    F8_2D,
+    _B1_1D,
+    group="sky",
+)
 def _row_kernel(
     lo: int,
     hi: int,
@@ -378,7 +404,22 @@ def _row_kernel(
             t_end[row, x] = math.exp(-tau[x])
 
 
-@numba.njit(cache=True, nogil=True)
+@kernel(
+    I8,
+    I8,
+    I8_1D,
+    _F8_3D,
+    _F8_3D,
+    _F8_3D,
+    _I8_2D,
+    F8_2D,
+    _F8_4D,
+    I8_1D,
+    I8_1D,
+    I8,
+    _F8_4D,
+    group="sky",
+)
 def _source_kernel(
     lo: int,
     hi: int,
@@ -446,7 +487,32 @@ def _source_kernel(
                 g[row, i, m, x] *= wb[row, i, x]
 
 
-@numba.njit(cache=True, nogil=True)
+@kernel(
+    I8,
+    I8,
+    I8_1D,
+    F8_1D,
+    F8_1D,
+    F8_1D,
+    F8,
+    F8_1D,
+    F8_2D,
+    F8_2D,
+    _F8_3D,
+    F8_1D,
+    F8_1D,
+    _F8_3D,
+    _F8_3D,
+    _F8_3D,
+    _F8_3D,
+    _F8_4D,
+    F8_2D,
+    _B1_1D,
+    F8_1D,
+    F8_1D,
+    F8_2D,
+    group="sky",
+)
 def _ray_kernel(
     lo: int,
     hi: int,
@@ -918,7 +984,7 @@ def _radiance(
     n_modes = int(modes_used.max()) if modes_used.size else 0
     coeffs = _source_coefficients(medium, field, scatterers, max(n_modes, 1))
     modes_kept = modes_used[scatterers].astype(np.int64)
-    ground_diffuse = field.flux_down_diffuse[:, -1]
+    ground_diffuse = np.ascontiguousarray(field.flux_down_diffuse[:, -1])
     nwl = medium.wavelength_nm.size
     n_c = len(medium.tables)
     n_mom = 2 * medium.n_streams
