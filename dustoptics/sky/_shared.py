@@ -14,15 +14,21 @@ arrays of the same bits: only who computes them changes.
 
 from __future__ import annotations
 
+import ctypes
+import functools
+import glob
 import itertools
 import os
+import threading
 from collections.abc import Callable, Hashable, Iterator
 from concurrent.futures import ThreadPoolExecutor
 from contextlib import contextmanager
 from contextvars import ContextVar
 from typing import Any, TypeVar
 
-__all__ = ["geometry_memo", "in_threads", "shared_geometry"]
+import numpy as np
+
+__all__ = ["geometry_memo", "in_threads", "one_blas_thread", "shared_geometry"]
 
 _T = TypeVar("_T")
 
@@ -80,3 +86,58 @@ def in_threads(run: Callable[..., None], n: int, *args: Any) -> None:
     with ThreadPoolExecutor(max_workers=threads) as pool:
         for future in [pool.submit(run, lo, hi, *args) for lo, hi in itertools.pairwise(bounds)]:
             future.result()
+
+
+@functools.lru_cache(maxsize=1)
+def _openblas() -> tuple[Any, Any] | None:
+    """The thread-count functions of the OpenBLAS numpy's wheel bundles (``numpy.libs``),
+    None for another BLAS."""
+    folder = os.path.join(os.path.dirname(os.path.dirname(np.__file__)), "numpy.libs")
+    for path in sorted(glob.glob(os.path.join(folder, "*openblas*"))):
+        try:
+            lib = ctypes.CDLL(path)  # loaded by numpy already: the same library
+        except OSError:
+            continue
+        for prefix in ("scipy_openblas", "openblas"):
+            for suffix in ("64_", ""):
+                get = getattr(lib, f"{prefix}_get_num_threads{suffix}", None)
+                put = getattr(lib, f"{prefix}_set_num_threads{suffix}", None)
+                if get is not None and put is not None:
+                    return get, put
+    return None
+
+
+_blas_lock = threading.Lock()
+_blas_depth = 0
+_blas_before = 0
+
+
+@contextmanager
+def one_blas_thread() -> Iterator[None]:
+    """numpy's OpenBLAS on one thread within (threads nest: the last one out restores it).
+
+    The orders of scattering make thousands of small matrix products (tens of MFLOP):
+    OpenBLAS's second thread gains little on them and spins between them, burning a
+    core (2.5 times the CPU time of one thread for the orders, measured on a busy
+    2-core machine).  The products' bits do not depend on OpenBLAS's threads.  The
+    setting is process-wide: other threads' products run on one thread meanwhile.
+    A BLAS other than the OpenBLAS of numpy's wheel is left alone.
+    """
+    global _blas_depth, _blas_before
+    funcs = _openblas()
+    if funcs is None:
+        yield
+        return
+    get, put = funcs
+    with _blas_lock:
+        if _blas_depth == 0:
+            _blas_before = int(get())
+            put(1)
+        _blas_depth += 1
+    try:
+        yield
+    finally:
+        with _blas_lock:
+            _blas_depth -= 1
+            if _blas_depth == 0:
+                put(_blas_before)

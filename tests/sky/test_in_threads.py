@@ -54,3 +54,17 @@ def test_bisection_and_sort_are_numpys():
         c = b.copy()
         _sort_small(c)
         assert c.tobytes() == np.sort(b).tobytes()
+
+
+def test_one_blas_thread_sets_one_and_the_last_out_restores():
+    funcs = _shared._openblas()
+    if funcs is None:
+        pytest.skip("numpy without the OpenBLAS of its wheel")
+    get, _ = funcs
+    before = get()
+    with _shared.one_blas_thread():
+        assert get() == 1
+        with _shared.one_blas_thread():
+            assert get() == 1
+        assert get() == 1
+    assert get() == before
