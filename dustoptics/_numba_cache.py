@@ -64,17 +64,18 @@ then hands them kernels.
 
 Threads and fork
 ----------------
-The sky's kernels run in parallel (``parallel=True``, numba's threading layer);
-the others are serial and run in threads (``nogil``).  numba's default layer on
+Every kernel of the package is serial and runs in threads (``nogil``; the sky's
+too, since they compile faster so: :func:`dustoptics.sky._shared.in_threads`).
+For a parallel kernel (``parallel=True``, numba's threading layer), numba's default layer on
 Linux is GNU OpenMP, which kills any child forked after its threads started as
 soon as the child runs a parallel kernel ("fork() called from a process already
-using GNU OpenMP"): a process that had rendered a sky could not fork one that
+using GNU OpenMP"): a process that had run one could not fork one that
 computes (``multiprocessing``'s ``fork`` start method, a forking server, a test
 runner).  So every parallel kernel is declared with :func:`parallel_kernel`,
 which before the first parallel run selects numba's ``forksafe`` layer: TBB
 when it is installed (``pip install tbb``), else numba's own ``workqueue`` (on
-the benchmark's machine the sky renders as fast with it: 1.3-1.5 s against
-1.1-1.5 s with OpenMP, busy).  ``workqueue`` aborts the process when two
+the benchmark's machine the sky, when its kernels were parallel, rendered as
+fast with it: 1.3-1.5 s against 1.1-1.5 s with OpenMP, busy).  ``workqueue`` aborts the process when two
 threads run parallel kernels at once, so the package runs its parallel kernels
 one at a time (a lock; each uses every core).  A layer the user chose
 (``NUMBA_THREADING_LAYER`` or ``numba.config.THREADING_LAYER``), or that
@@ -134,8 +135,9 @@ HIGHLIGHTING = "NUMBA_DISABLE_ERROR_MESSAGE_HIGHLIGHTING"
 #: phase function, its refinement over radius and the node placement); those
 #: the scattering matrix and the expansion coefficients add; those of single
 #: spheres (:func:`dustoptics.scattering.mie.single_sphere`); those coated
-#: spheres add (:class:`dustoptics.particles.coated.CoatedSphere`).
-GROUPS = ("optics", "matrix", "sphere", "coated")
+#: spheres add (:class:`dustoptics.particles.coated.CoatedSphere`); the sky's
+#: (:mod:`dustoptics.sky`, declared when it is imported).
+GROUPS = ("optics", "matrix", "sphere", "coated", "sky")
 
 #: Processes that compile at once, this one included.
 MAX_PROCESSES = 4

@@ -14,12 +14,21 @@ arrays of the same bits: only who computes them changes.
 
 from __future__ import annotations
 
+import ctypes
+import functools
+import glob
+import itertools
+import os
+import threading
 from collections.abc import Callable, Hashable, Iterator
+from concurrent.futures import ThreadPoolExecutor
 from contextlib import contextmanager
 from contextvars import ContextVar
 from typing import Any, TypeVar
 
-__all__ = ["geometry_memo", "shared_geometry"]
+import numpy as np
+
+__all__ = ["geometry_memo", "in_threads", "one_blas_thread", "shared_geometry"]
 
 _T = TypeVar("_T")
 
@@ -47,3 +56,88 @@ def geometry_memo(key: Hashable, compute: Callable[[], _T]) -> _T:
         memo[key] = compute()
     value: _T = memo[key]
     return value
+
+
+#: Parts of a loop per thread in :func:`in_threads` (rows differ in cost: more parts than
+#: threads keep the cores busy to the end).
+_PARTS_PER_THREAD = 4
+
+
+def _cores() -> int:
+    try:
+        return len(os.sched_getaffinity(0))
+    except (AttributeError, OSError):  # pragma: no cover - not Linux
+        return os.cpu_count() or 1
+
+
+def in_threads(run: Callable[..., None], n: int, *args: Any) -> None:
+    """``run(lo, hi, *args)`` over contiguous parts of ``range(n)``, in one thread per core.
+
+    For the sky's serial kernels (``nogil``) whose iterations are independent and write
+    their own outputs: the bits are those of one ``run(0, n, *args)``.  Serial kernels compile
+    several times faster than numba's ``parallel=True`` ones and need no threading layer.
+    """
+    threads = min(_cores(), n)
+    if threads <= 1:
+        run(0, n, *args)
+        return
+    parts = min(n, _PARTS_PER_THREAD * threads)
+    bounds = [n * i // parts for i in range(parts + 1)]
+    with ThreadPoolExecutor(max_workers=threads) as pool:
+        for future in [pool.submit(run, lo, hi, *args) for lo, hi in itertools.pairwise(bounds)]:
+            future.result()
+
+
+@functools.lru_cache(maxsize=1)
+def _openblas() -> tuple[Any, Any] | None:
+    """The thread-count functions of the OpenBLAS numpy's wheel bundles (``numpy.libs``),
+    None for another BLAS."""
+    folder = os.path.join(os.path.dirname(os.path.dirname(np.__file__)), "numpy.libs")
+    for path in sorted(glob.glob(os.path.join(folder, "*openblas*"))):
+        try:
+            lib = ctypes.CDLL(path)  # loaded by numpy already: the same library
+        except OSError:
+            continue
+        for prefix in ("scipy_openblas", "openblas"):
+            for suffix in ("64_", ""):
+                get = getattr(lib, f"{prefix}_get_num_threads{suffix}", None)
+                put = getattr(lib, f"{prefix}_set_num_threads{suffix}", None)
+                if get is not None and put is not None:
+                    return get, put
+    return None
+
+
+_blas_lock = threading.Lock()
+_blas_depth = 0
+_blas_before = 0
+
+
+@contextmanager
+def one_blas_thread() -> Iterator[None]:
+    """numpy's OpenBLAS on one thread within (threads nest: the last one out restores it).
+
+    The orders of scattering make thousands of small matrix products (tens of MFLOP):
+    OpenBLAS's second thread gains little on them and spins between them, burning a
+    core (2.5 times the CPU time of one thread for the orders, measured on a busy
+    2-core machine).  The products' bits do not depend on OpenBLAS's threads.  The
+    setting is process-wide: other threads' products run on one thread meanwhile.
+    A BLAS other than the OpenBLAS of numpy's wheel is left alone.
+    """
+    global _blas_depth, _blas_before
+    funcs = _openblas()
+    if funcs is None:
+        yield
+        return
+    get, put = funcs
+    with _blas_lock:
+        if _blas_depth == 0:
+            _blas_before = int(get())
+            put(1)
+        _blas_depth += 1
+    try:
+        yield
+    finally:
+        with _blas_lock:
+            _blas_depth -= 1
+            if _blas_depth == 0:
+                put(_blas_before)

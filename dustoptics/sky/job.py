@@ -32,6 +32,7 @@ from typing import TYPE_CHECKING, Any, Final, TextIO
 
 import numpy as np
 
+from dustoptics import _numba_cache
 from dustoptics._validation import check_choice
 from dustoptics.atmosphere import sets
 from dustoptics.atmosphere.sets import check_earth_aerosol
@@ -430,7 +431,13 @@ class SkyJob:
         if self.space:
             space.check_limb_cost(medium, allow_large=self.allow_large)
 
+    def _compile(self) -> None:
+        # The kernels of the Mie tables and of the sky that numba's cache lacks, on every
+        # core (as a build does): nothing to do on a filled cache.
+        _numba_cache.compile_kernels(("optics", "sky"), progress=self.progress)
+
     def _sky_files(self) -> dict[Path, bytes]:
+        self._compile()
         atm = self.atmosphere()
         if self.preview is not None:  # refused before the medium and the sky
             # lazy: sky.approximations adds 25-35 ms to import dustoptics (-X importtime)
@@ -519,6 +526,7 @@ class SkyJob:
         return out
 
     def _comparison_files(self) -> dict[Path, bytes]:
+        self._compile()
         # lazy: sky.compare adds 20-30 ms to import dustoptics (-X importtime)
         from dustoptics.sky.compare import MARS_MODELS, compare_mars_models, plot_comparison
 

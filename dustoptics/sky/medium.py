@@ -38,8 +38,9 @@ import numpy as np
 from numpy.polynomial import legendre
 from scipy.special import roots_legendre
 
-from dustoptics._numba_cache import parallel_kernel
+from dustoptics._numba_cache import F8, F8_1D, F8_2D, I8, kernel
 from dustoptics.atmosphere.sets import Atmosphere
+from dustoptics.sky._shared import in_threads
 from dustoptics.table import Table
 
 __all__ = [
@@ -50,6 +51,10 @@ __all__ = [
     "SlantColumns",
     "legendre_moments",
 ]
+
+#: numba types of the sky's kernels' arguments (:func:`dustoptics._numba_cache.kernel`).
+_F8_3D, _F8_4D = "float64[:, :, ::1]", "float64[:, :, :, ::1]"
+_I8_2D, _B1_1D = "int64[:, ::1]", "boolean[::1]"
 
 _UM2_TO_M2: Final = 1e-12
 #: Gauss-Legendre nodes used to project a tabulated phase function on P_l.
@@ -137,18 +142,47 @@ class SlantColumns:
         return flat.reshape((self.column_m.shape[0],) + r.shape)
 
 
-@numba.njit(cache=True, nogil=True)
+@kernel(F8_1D, F8_1D, F8_1D, F8_1D, _F8_3D, group="sky")
 def _columns_many(
     r: np.ndarray, mu: np.ndarray, radius_grid: np.ndarray, mu_grid: np.ndarray, columns: np.ndarray
 ) -> np.ndarray:
     out = np.empty((columns.shape[0], r.size))
     col = np.empty(columns.shape[0])
     for i in range(r.size):
-        if _interp_columns(r[i], mu[i], radius_grid, mu_grid, columns, col):
-            out[:, i] = col
-        else:
-            out[:, i] = np.inf
+        found = _interp_columns(r[i], mu[i], radius_grid, mu_grid, columns, col)
+        for c in range(columns.shape[0]):
+            out[c, i] = col[c] if found else np.inf
     return out
+
+
+@numba.njit(cache=True, nogil=True)
+def _search_left(a: np.ndarray, v: float) -> int:
+    """``numpy.searchsorted(a, v)`` (side "left") for a sorted ``a``: the first index whose
+    value is not below ``v`` (``a.size`` for NaN, which sorts last).  A plain bisection,
+    which numba compiles several times faster than its generic ``searchsorted``."""
+    lo, hi = 0, a.size
+    if v != v:
+        return hi
+    while lo < hi:
+        mid = (lo + hi) >> 1
+        if a[mid] < v:
+            lo = mid + 1
+        else:
+            hi = mid
+    return lo
+
+
+@numba.njit(cache=True, nogil=True)
+def _sort_small(a: np.ndarray) -> None:
+    """Sort ``a`` in place, ascending (insertion sort: the few numbers of a path's cuts,
+    or samples already sorted but for a few edge crossings)."""
+    for i in range(1, a.size):
+        v = a[i]
+        j = i - 1
+        while j >= 0 and a[j] > v:
+            a[j + 1] = a[j]
+            j -= 1
+        a[j + 1] = v
 
 
 @numba.njit(cache=True, nogil=True)
@@ -172,11 +206,11 @@ def _interp_columns(
     nr = radius_grid.shape[0]
     nm = mu_grid.shape[0]
     rr = min(max(r, radius_grid[0]), radius_grid[nr - 1])
-    ir = int(np.searchsorted(radius_grid, rr)) - 1
+    ir = _search_left(radius_grid, rr) - 1
     ir = min(max(ir, 0), nr - 2)
     fr = (rr - radius_grid[ir]) / (radius_grid[ir + 1] - radius_grid[ir])
     mm = min(max(mu, -1.0), 1.0)
-    im = int(np.searchsorted(mu_grid, mm)) - 1
+    im = _search_left(mu_grid, mm) - 1
     im = min(max(im, 0), nm - 2)
     fm = (mm - mu_grid[im]) / (mu_grid[im + 1] - mu_grid[im])
     den = 0.0
@@ -464,9 +498,11 @@ def _slant_columns(
     u = np.linspace(-1.0, 1.0, n_mu)
     mu_grid = np.sign(u) * np.abs(u) ** 3
     x, w = legendre.leggauss(_SLANT_NODES)
-    out = _slant_kernel(
+    out = np.zeros((rho.shape[0], r_grid.size, mu_grid.size))
+    in_threads(
+        _slant_kernel, r_grid.size,
         r_grid, mu_grid, 0.5 * (x + 1.0), 0.5 * w, altitude, np.ascontiguousarray(rho), radius,
-        top, np.ascontiguousarray(edges, dtype=float),
+        top, np.ascontiguousarray(edges, dtype=float), out,
     )  # fmt: skip
     return SlantColumns(radius_m=r_grid, mu=mu_grid, column_m=out)
 
@@ -503,9 +539,10 @@ def _path_breaks(
     return out[:n]
 
 
-@parallel_kernel  # numba's fork-safe threading layer, one parallel kernel at a time
-@numba.njit(cache=True, nogil=True, parallel=True)
+@kernel(I8, I8, F8_1D, F8_1D, F8_1D, F8_1D, F8_1D, F8_2D, F8, F8, F8_1D, _F8_3D, group="sky")
 def _slant_kernel(
+    lo: int,
+    hi: int,
     r_grid: np.ndarray,
     mu_grid: np.ndarray,
     t: np.ndarray,
@@ -515,16 +552,16 @@ def _slant_kernel(
     radius: float,
     top: float,
     edges: np.ndarray,
-) -> np.ndarray:
-    # The path is split at the perigee of a downward ray and where it crosses
+    out: np.ndarray,
+) -> None:
+    # Columns ``out`` (zeros on entry) of the radii ``r_grid[lo:hi]``.  The path is split at the perigee of a downward ray and where it crosses
     # an edge; on each part the substitution s = s0 + span t^2 puts the nodes
     # densely at the end nearer the perigee, where the ray is lowest (the
     # densities fall off with altitude).
     n_c = rho.shape[0]
     r_top = radius + top
-    out = np.zeros((n_c, r_grid.size, mu_grid.size))
     nz = altitude.size
-    for i in numba.prange(r_grid.size):
+    for i in range(lo, hi):
         r = r_grid[i]
         for j in range(mu_grid.size):
             m = mu_grid[j]
@@ -534,11 +571,12 @@ def _slant_kernel(
                 continue
             length = -r * m + math.sqrt(max(r * r * (m * m - 1.0) + r_top * r_top, 0.0))
             s_p = max(-r * m, 0.0)
-            cuts = np.sort(
-                np.concatenate(
-                    (np.array([0.0, s_p, length]), _path_breaks(r, m, length, radius, edges))
-                )
-            )
+            breaks = _path_breaks(r, m, length, radius, edges)
+            cuts = np.empty(3 + breaks.size)
+            cuts[0], cuts[1], cuts[2] = 0.0, s_p, length
+            for b in range(breaks.size):
+                cuts[3 + b] = breaks[b]
+            _sort_small(cuts)
             for part in range(cuts.size - 1):
                 lo, hi = cuts[part], cuts[part + 1]
                 span = hi - lo
@@ -551,10 +589,9 @@ def _slant_kernel(
                         s = lo + span * t[q] * t[q]
                     ds = span * 2.0 * t[q] * w[q]
                     h = math.sqrt(max(r * r + s * s + 2.0 * r * m * s, 0.0)) - radius
-                    k = int(np.searchsorted(altitude, h)) - 1
+                    k = _search_left(altitude, h) - 1
                     k = min(max(k, 0), nz - 2)
                     f = (h - altitude[k]) / (altitude[k + 1] - altitude[k])
                     f = min(max(f, 0.0), 1.0)
                     for c in range(n_c):
                         out[c, i, j] += (rho[c, k] * (1.0 - f) + rho[c, k + 1] * f) * ds
-    return out

@@ -64,12 +64,12 @@ import warnings
 from dataclasses import dataclass
 from typing import Final, TextIO
 
-import numba
 import numpy as np
 from numpy.polynomial import legendre
 from scipy.special import gammaln, lpmv
 
 from dustoptics import _validation
+from dustoptics._numba_cache import F8_1D, I8_1D, kernel
 from dustoptics._validation import (
     BudgetError,
     check_budget,
@@ -77,8 +77,8 @@ from dustoptics._validation import (
     check_closed_interval,
 )
 from dustoptics.sky._progress import Reporter, reporter
-from dustoptics.sky._shared import geometry_memo
-from dustoptics.sky.medium import Medium, MediumOptics
+from dustoptics.sky._shared import geometry_memo, one_blas_thread
+from dustoptics.sky.medium import _F8_3D, Medium, MediumOptics
 
 __all__ = [
     "FINE_FACTOR",
@@ -305,7 +305,7 @@ def _beam_weights(
     return a_down, b_down, a_up, b_up
 
 
-@numba.njit(cache=True, nogil=True)
+@kernel(_F8_3D, _F8_3D, _F8_3D, _F8_3D, _F8_3D, _F8_3D, _F8_3D, F8_1D, I8_1D, _F8_3D, group="sky")
 def _sweep_kernel(
     j_top: np.ndarray,
     j_bot: np.ndarray,
@@ -589,29 +589,30 @@ def solve_orders(
     fine = _Grid.make(FINE_FACTOR * n, n_mom, dtau, t_sun) if FINE_FACTOR > 1 else regular
     series = _Series(coef, t_sun, albedo, mu0)
 
-    n_orders = 0
-    for order in range(1, _MAX_ORDERS + 1):
-        if not series.active.any():
-            break
-        n_orders = order
-        series.add_order(order, fine if order <= FINE_ORDERS else regular, regular)
-        series.converge(order, tol)
-        left = int(series.active.any(axis=1).sum())
-        if left:
-            report(
-                f"orders of scattering: order {order}, {left} of {n_mom} Fourier modes still converging"
+    with one_blas_thread():  # many small products: a second BLAS thread spins
+        n_orders = 0
+        for order in range(1, _MAX_ORDERS + 1):
+            if not series.active.any():
+                break
+            n_orders = order
+            series.add_order(order, fine if order <= FINE_ORDERS else regular, regular)
+            series.converge(order, tol)
+            left = int(series.active.any(axis=1).sum())
+            if left:
+                report(
+                    f"orders of scattering: order {order}, {left} of {n_mom} Fourier modes still converging"
+                )
+        else:
+            with np.errstate(invalid="ignore", divide="ignore"):
+                est = float(
+                    np.max(series.remainder.sum(axis=0) / np.abs(series.total).max(axis=(0, 2, 3)))
+                )
+            warnings.warn(
+                f"orders of scattering did not reach tol={tol:g} in {_MAX_ORDERS} orders "
+                f"(estimate {est:.2g})",
+                SkyConvergenceWarning,
+                stacklevel=2,
             )
-    else:
-        with np.errstate(invalid="ignore", divide="ignore"):
-            est = float(
-                np.max(series.remainder.sum(axis=0) / np.abs(series.total).max(axis=(0, 2, 3)))
-            )
-        warnings.warn(
-            f"orders of scattering did not reach tol={tol:g} in {_MAX_ORDERS} orders "
-            f"(estimate {est:.2g})",
-            SkyConvergenceWarning,
-            stacklevel=2,
-        )
     report(f"orders of scattering: {n_orders} orders (expected about {cost.orders})", last=True)
     return DiffuseField(
         mu0=mu0,

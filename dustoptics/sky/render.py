@@ -74,11 +74,23 @@ from typing import Final, NamedTuple, TextIO
 import numba
 import numpy as np
 
-from dustoptics._numba_cache import parallel_kernel
+from dustoptics._numba_cache import F8, F8_1D, F8_2D, I8, I8_1D, kernel
 from dustoptics._validation import MEMORY_BUDGET_BYTES, BudgetError, check_budget
 from dustoptics.sky._progress import Reporter, reporter
-from dustoptics.sky._shared import geometry_memo
-from dustoptics.sky.medium import Medium, MediumOptics, _interp_columns, _path_breaks, _scatters
+from dustoptics.sky._shared import geometry_memo, in_threads
+from dustoptics.sky.medium import (
+    _B1_1D,
+    _F8_3D,
+    _F8_4D,
+    _I8_2D,
+    Medium,
+    MediumOptics,
+    _interp_columns,
+    _path_breaks,
+    _scatters,
+    _search_left,
+    _sort_small,
+)
 from dustoptics.sky.orders import DiffuseField, normalized_legendre
 
 __all__ = [
@@ -199,7 +211,7 @@ def _source_coefficients(
     return out
 
 
-@numba.njit(cache=True, nogil=True)
+@kernel(_F8_3D, _F8_4D, I8_1D, _F8_4D, group="sky")
 def _pack_coefficients(
     chi: np.ndarray, moments: np.ndarray, offsets: np.ndarray, out: np.ndarray
 ) -> None:
@@ -256,9 +268,31 @@ def _log_mean(a: float, b: float) -> float:
     return (a - b) / math.log(r)
 
 
-@parallel_kernel  # numba's fork-safe threading layer, one parallel kernel at a time
-@numba.njit(cache=True, nogil=True, parallel=True)
+@kernel(
+    I8,
+    I8,
+    F8_1D,
+    F8,
+    F8,
+    F8,
+    I8,
+    F8,
+    F8_1D,
+    F8_2D,
+    F8_2D,
+    F8_1D,
+    F8_1D,
+    _F8_3D,
+    _F8_3D,
+    _F8_3D,
+    _I8_2D,
+    F8_2D,
+    _B1_1D,
+    group="sky",
+)
 def _row_kernel(
+    lo: int,
+    hi: int,
     mu_rows: np.ndarray,
     r0: float,
     r_top: float,
@@ -277,7 +311,7 @@ def _row_kernel(
     t_end: np.ndarray,
     hits: np.ndarray,
 ) -> None:
-    """Per row (one view cosine): samples, densities, path weights, the levels around each sample.
+    """Rows ``lo .. hi - 1`` (one view cosine each): samples, densities, path weights, the levels around each sample.
 
     ``wb[row, i, x]`` is sample i's weight in the path integral over its
     scaled extinction (multiplies the emission); ``level[row, i]`` is the
@@ -287,13 +321,12 @@ def _row_kernel(
     of the ``edges`` (altitudes [m]), sorted; the unused places at the end
     repeat the last sample (segments of length 0, weight 0).
     """
-    n_rows = mu_rows.shape[0]
     n_c, nwl = sig_ext_scaled.shape
     n_lev = level_altitude.shape[0]
     nz = altitude.shape[0]
     a = stretch
     norm = math.expm1(a)
-    for row in numba.prange(n_rows):
+    for row in range(lo, hi):
         mv = mu_rows[row]
         b = r0 * mv
         disc_g = b * b - (r0 * r0 - r_ground * r_ground)
@@ -307,13 +340,14 @@ def _row_kernel(
         beta_prev = np.empty(nwl)
         tau = np.zeros(nwl)
         n_samples = geo.shape[1]
-        s_all = np.full(n_samples, s_end)
-        for i in range(n_path + 1):
-            s_all[i] = s_end * math.expm1(a * i / n_path) / norm
+        s_all = np.empty(n_samples)
+        for i in range(n_samples):
+            s_all[i] = s_end * math.expm1(a * i / n_path) / norm if i <= n_path else s_end
         crossings = _path_breaks(r0, mv, s_end, r_ground, edges)
         if crossings.size:
-            s_all[n_path + 1 : n_path + 1 + crossings.size] = crossings
-            s_all = np.sort(s_all)
+            for i in range(crossings.size):
+                s_all[n_path + 1 + i] = crossings[i]
+            _sort_small(s_all)
         for i in range(n_samples):
             s = s_all[i]
             x_r = math.sqrt(max(r0 * r0 + s * s + 2.0 * r0 * s * mv, 0.0))
@@ -322,7 +356,7 @@ def _row_kernel(
             geo[row, i, 0] = s
             geo[row, i, 1] = x_r
             geo[row, i, 2] = mu_loc
-            iz = int(np.searchsorted(altitude, z)) - 1
+            iz = _search_left(altitude, z) - 1
             iz = min(max(iz, 0), nz - 2)
             fz = (z - altitude[iz]) / (altitude[iz + 1] - altitude[iz])
             fz = min(max(fz, 0.0), 1.0)
@@ -370,9 +404,25 @@ def _row_kernel(
             t_end[row, x] = math.exp(-tau[x])
 
 
-@parallel_kernel  # numba's fork-safe threading layer, one parallel kernel at a time
-@numba.njit(cache=True, nogil=True, parallel=True)
+@kernel(
+    I8,
+    I8,
+    I8_1D,
+    _F8_3D,
+    _F8_3D,
+    _F8_3D,
+    _I8_2D,
+    F8_2D,
+    _F8_4D,
+    I8_1D,
+    I8_1D,
+    I8,
+    _F8_4D,
+    group="sky",
+)
 def _source_kernel(
+    lo: int,
+    hi: int,
     samples: np.ndarray,
     geo: np.ndarray,
     dens: np.ndarray,
@@ -385,7 +435,7 @@ def _source_kernel(
     n_mom: int,
     g: np.ndarray,
 ) -> None:
-    """The diffuse source's Fourier modes at each sample, times the sample's path weight.
+    """The diffuse source's Fourier modes at samples ``samples[lo:hi]``, times their path weights.
 
     ``g[row, i, m, x] = wb[row, i, x] sum_c N_c sigma'_sca,c J_c^m(z_i, mu_i)``,
     ``J^m`` summed over ``l`` in the sample's own direction of propagation
@@ -393,14 +443,15 @@ def _source_kernel(
     in altitude).  ``samples`` lists the flat indices ``row * n_samples + i``
     sorted by level, so that each thread reads one level's coefficients for
     many samples in a row (they are tens of megabytes: read once per sample
-    they made this step memory-bound).
+    they made this step memory-bound).  The threads take contiguous parts of
+    ``samples``.
     """
     n_samples = geo.shape[1]
     n_s = scatterers.shape[0]
     nwl = sig_sca_scaled.shape[1]
     n_modes = g.shape[2]
     n_packed = coeffs.shape[2]
-    for j in numba.prange(samples.shape[0]):
+    for j in range(lo, hi):
         flat = samples[j]
         row = flat // n_samples
         i = flat - row * n_samples
@@ -436,9 +487,35 @@ def _source_kernel(
                 g[row, i, m, x] *= wb[row, i, x]
 
 
-@parallel_kernel  # numba's fork-safe threading layer, one parallel kernel at a time
-@numba.njit(cache=True, nogil=True, parallel=True)
+@kernel(
+    I8,
+    I8,
+    I8_1D,
+    F8_1D,
+    F8_1D,
+    F8_1D,
+    F8,
+    F8_1D,
+    F8_2D,
+    F8_2D,
+    _F8_3D,
+    F8_1D,
+    F8_1D,
+    _F8_3D,
+    _F8_3D,
+    _F8_3D,
+    _F8_3D,
+    _F8_4D,
+    F8_2D,
+    _B1_1D,
+    F8_1D,
+    F8_1D,
+    F8_2D,
+    group="sky",
+)
 def _ray_kernel(
+    lo: int,
+    hi: int,
     row_start: np.ndarray,
     mu_view: np.ndarray,
     phi_view: np.ndarray,
@@ -459,8 +536,10 @@ def _ray_kernel(
     hits: np.ndarray,
     ground_albedo: np.ndarray,
     ground_diffuse: np.ndarray,
-) -> np.ndarray:
-    """Radiance of the rays of each row: single scattering, the ground, the diffuse source.
+    out: np.ndarray,
+) -> None:
+    """Radiance ``out`` of the rays of rows ``lo .. hi - 1``: single scattering, the ground,
+    the diffuse source.
 
     Rays ``row_start[row] .. row_start[row + 1]`` belong to ``row``; the diffuse
     source at a sample is the row's modes ``g[row, i, m]`` times ``cos(m phi)``
@@ -468,13 +547,11 @@ def _ray_kernel(
     its samples, each sample's modes used by every ray of the row while they
     are in the cache.
     """
-    n_rows = row_start.shape[0] - 1
     n_modes = g.shape[2]
     n_c, nwl = sig_ext_scaled.shape
     n_samples = geo.shape[1]
     r_ground = radius_grid[0]
-    out = np.zeros((mu_view.shape[0], nwl))
-    for row in numba.prange(n_rows):
+    for row in range(lo, hi):
         first = row_start[row]
         n_ray = row_start[row + 1] - first
         if n_ray == 0:
@@ -544,7 +621,6 @@ def _ray_kernel(
                     acc[r, x] += e_g * t_end[row, x]
             for x in range(nwl):
                 out[ray, x] = acc[r, x] + diffuse[r, x]
-    return out
 
 
 class RenderCost(NamedTuple):
@@ -908,7 +984,7 @@ def _radiance(
     n_modes = int(modes_used.max()) if modes_used.size else 0
     coeffs = _source_coefficients(medium, field, scatterers, max(n_modes, 1))
     modes_kept = modes_used[scatterers].astype(np.int64)
-    ground_diffuse = field.flux_down_diffuse[:, -1]
+    ground_diffuse = np.ascontiguousarray(field.flux_down_diffuse[:, -1])
     nwl = medium.wavelength_nm.size
     n_c = len(medium.tables)
     n_mom = 2 * medium.n_streams
@@ -933,7 +1009,7 @@ def _radiance(
         g = np.empty((nr, n_samples, n_modes, nwl))
         t_end = np.empty((nr, nwl))
         hits = np.zeros(nr, dtype=np.bool_)
-        _row_kernel(
+        row_args = (
             rows,
             float(radius_m),
             r_top,
@@ -952,9 +1028,11 @@ def _radiance(
             t_end,
             hits,
         )
+        in_threads(_row_kernel, nr, *row_args)
         if n_modes:
-            _source_kernel(
-                np.argsort(level.ravel(), kind="stable"),
+            samples = np.argsort(level.ravel(), kind="stable")
+            source_args = (
+                samples,
                 geo,
                 dens,
                 wb,
@@ -966,8 +1044,10 @@ def _radiance(
                 n_mom,
                 g,
             )
+            in_threads(_source_kernel, samples.size, *source_args)
         a, b = bounds[start], bounds[stop]
-        out[order[a:b]] = _ray_kernel(
+        rays = np.zeros((b - a, nwl))
+        ray_args = (
             bounds[start : stop + 1] - a,
             mu_sorted[a:b],
             phi_sorted[a:b],
@@ -988,7 +1068,10 @@ def _radiance(
             hits,
             field.ground_albedo,
             ground_diffuse,
+            rays,
         )
+        in_threads(_ray_kernel, nr, *ray_args)
+        out[order[a:b]] = rays
         done += b - a
         report(f"lines of sight: {done} of {n_rays}", last=done == n_rays)
     return out

@@ -323,15 +323,12 @@ class SkyRadiance:
         k = min(4 * _SUN_SUPERSAMPLING, max(_SUN_SUPERSAMPLING, math.ceil(8.0 * pixel_deg / alpha)))
         offsets = (np.arange(k) + 0.5) / k - 0.5
         total = np.zeros((int(near.sum()), 3))
+        centre = sunlit_xyz(self.wavelength_nm, np.asarray(self.sun_transmittance, dtype=float))
         for du in offsets:
             for dv in offsets:
                 z, a = direction(zen[near], azi[near], du, dv)
-                total += sun_disc_xyz(
-                    self.wavelength_nm,
-                    self.sun_transmittance,
-                    _angle_from_sun_deg(self.sun_zenith_deg, z, a),
-                    sun_angular_radius_deg=alpha,
-                )
+                psi = _angle_from_sun_deg(self.sun_zenith_deg, z, a)
+                total += _limb_darkening(psi, alpha)[..., None] * centre
         out[near] = total / (k * k)
         return out
 
@@ -499,14 +496,20 @@ def sun_disc_xyz(
     -------
     numpy.ndarray, shape ``angle_from_centre_deg.shape + (3,)``
     """
+    darkening = _limb_darkening(angle_from_centre_deg, sun_angular_radius_deg)
+    centre = sunlit_xyz(wavelength_nm, np.asarray(sun_transmittance, dtype=float))
+    return darkening[..., None] * centre
+
+
+def _limb_darkening(angle_from_centre_deg: Any, sun_angular_radius_deg: float) -> np.ndarray:
+    """:func:`sun_disc_xyz`'s disc radiance over the transmitted beam's, ``(2 + 3 mu) /
+    (4 pi sin^2 alpha)`` inside the disc, 0 outside. [sr^-1]"""
     psi = np.asarray(angle_from_centre_deg, dtype=float)
     sin_a = math.sin(math.radians(sun_angular_radius_deg))
     r = np.sin(np.radians(np.minimum(psi, 90.0))) / sin_a
     inside = (psi < sun_angular_radius_deg) & (r < 1.0)
     mu = np.sqrt(np.clip(1.0 - r * r, 0.0, 1.0))
-    darkening = np.where(inside, (2.0 + 3.0 * mu) / 5.0, 0.0) / (0.8 * math.pi * sin_a * sin_a)
-    centre = sunlit_xyz(wavelength_nm, np.asarray(sun_transmittance, dtype=float))
-    return darkening[..., None] * centre
+    return np.where(inside, (2.0 + 3.0 * mu) / 5.0, 0.0) / (0.8 * math.pi * sin_a * sin_a)
 
 
 def _angle_from_sun_deg(sun_zenith_deg: float, zenith_deg: Any, azimuth_deg: Any) -> np.ndarray:
