@@ -11,6 +11,7 @@ from scipy import integrate
 from dustoptics.atmosphere.column import (
     BRUNETON2017_OZONE,
     BRUNETON2017_OZONE_PEAK_NUMBER_DENSITY_PER_M3,
+    KINK_RELATIVE_SLOPE,
     ExponentialProfile,
     FixedFractionProfile,
     MultiModalProfile,
@@ -163,3 +164,23 @@ def test_sample_profile_for_cosmoscout():
         sample_profile(BRUNETON2017_OZONE, top_altitude_m=5000.0)
     with pytest.raises(ValueError, match=r"altitude_m must be >= 0 m"):
         ExponentialProfile(scale_height_m=1.0).relative_density([-1.0])
+
+
+def test_a_densely_sampled_smooth_profile_has_no_inner_edges() -> None:
+    # An exponential sampled every 100 m changes slope by 1 - exp(-h/H) per node (1.3 %
+    # at H 7.75 km): no node is a kink, the last node ends the profile.
+    z = np.linspace(0.0, 120e3, 1201)
+    smooth = PiecewiseLinearProfile(altitude_m=z.tolist(), density=np.exp(-z / 7750.0).tolist())
+    assert smooth.edges_m() == (120e3,)
+    # Two exponentials joined at 40 km (Viking's fit, CalcMySky's mars.atmo): the slope
+    # drops by 1 - 0.09 / 0.129 = 30 % there, a real kink at the node nearest the join.
+    rho = np.where(z < 40e3, np.exp(-0.129e-3 * z), np.exp(-0.09e-3 * z) * math.exp(-39e-3 * 40))
+    joined = PiecewiseLinearProfile(altitude_m=z.tolist(), density=(rho / rho.max()).tolist())
+    assert joined.edges_m() == (40e3, 120e3)
+    # A kink of more than KINK_RELATIVE_SLOPE is an edge, one of less is not.
+    for change, edges in (
+        (1.5 * KINK_RELATIVE_SLOPE, (1e3, 2e3)),
+        (0.5 * KINK_RELATIVE_SLOPE, (2e3,)),
+    ):
+        d = (1.0, 0.5, 0.5 - 0.5 * (1.0 - change))
+        assert PiecewiseLinearProfile(altitude_m=(0.0, 1e3, 2e3), density=d).edges_m() == edges
