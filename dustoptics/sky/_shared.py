@@ -14,9 +14,7 @@ arrays of the same bits: only who computes them changes.
 
 from __future__ import annotations
 
-import ctypes
 import functools
-import glob
 import itertools
 import os
 import threading
@@ -26,7 +24,7 @@ from contextlib import contextmanager
 from contextvars import ContextVar
 from typing import Any, TypeVar
 
-import numpy as np
+from threadpoolctl import ThreadpoolController
 
 __all__ = ["geometry_memo", "in_threads", "one_blas_thread", "shared_geometry"]
 
@@ -89,27 +87,14 @@ def in_threads(run: Callable[..., None], n: int, *args: Any) -> None:
 
 
 @functools.lru_cache(maxsize=1)
-def _openblas() -> tuple[Any, Any] | None:
-    """The thread-count functions of the OpenBLAS numpy's wheel bundles (``numpy.libs``),
-    None for another BLAS."""
-    folder = os.path.join(os.path.dirname(os.path.dirname(np.__file__)), "numpy.libs")
-    for path in sorted(glob.glob(os.path.join(folder, "*openblas*"))):
-        try:
-            lib = ctypes.CDLL(path)  # loaded by numpy already: the same library
-        except OSError:
-            continue
-        for prefix in ("scipy_openblas", "openblas"):
-            for suffix in ("64_", ""):
-                get = getattr(lib, f"{prefix}_get_num_threads{suffix}", None)
-                put = getattr(lib, f"{prefix}_set_num_threads{suffix}", None)
-                if get is not None and put is not None:
-                    return get, put
-    return None
+def _blas_pools() -> ThreadpoolController:
+    """The BLAS thread pools loaded in this process (numpy's), found once."""
+    return ThreadpoolController()
 
 
 _blas_lock = threading.Lock()
 _blas_depth = 0
-_blas_before = 0
+_blas_limiter: Any = None
 
 
 @contextmanager
@@ -121,18 +106,12 @@ def one_blas_thread() -> Iterator[None]:
     core (2.5 times the CPU time of one thread for the orders, measured on a busy
     2-core machine).  The products' bits do not depend on OpenBLAS's threads.  The
     setting is process-wide: other threads' products run on one thread meanwhile.
-    A BLAS other than the OpenBLAS of numpy's wheel is left alone.
+    Any BLAS threadpoolctl knows (OpenBLAS, MKL, BLIS) is limited.
     """
-    global _blas_depth, _blas_before
-    funcs = _openblas()
-    if funcs is None:
-        yield
-        return
-    get, put = funcs
+    global _blas_depth, _blas_limiter
     with _blas_lock:
         if _blas_depth == 0:
-            _blas_before = int(get())
-            put(1)
+            _blas_limiter = _blas_pools().limit(limits=1, user_api="blas")
         _blas_depth += 1
     try:
         yield
@@ -140,4 +119,5 @@ def one_blas_thread() -> Iterator[None]:
         with _blas_lock:
             _blas_depth -= 1
             if _blas_depth == 0:
-                put(_blas_before)
+                _blas_limiter.restore_original_limits()
+                _blas_limiter = None
