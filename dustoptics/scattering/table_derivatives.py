@@ -805,20 +805,20 @@ class _Probe:
     left: _PanelSums
     right: _PanelSums
     coarse: _PanelSums
+    fine: _PanelSums  # left plus right, added once per panel
 
-    @property
-    def fine(self) -> _PanelSums:
-        return self.left.plus(self.right)
+    @classmethod
+    def of(cls, left: _PanelSums, right: _PanelSums, coarse: _PanelSums) -> _Probe:
+        return cls(left, right, coarse, left.plus(right))
+
+    def parts(self) -> tuple[_PanelSums, ...]:
+        return self.left, self.right, self.coarse, self.fine
 
     def take(self, keep: np.ndarray) -> _Probe:
-        return _Probe(self.left.take(keep), self.right.take(keep), self.coarse.take(keep))
+        return _Probe(*(p.take(keep) for p in self.parts()))
 
     def joined(self, other: _Probe) -> _Probe:
-        return _Probe(
-            self.left.joined(other.left),
-            self.right.joined(other.right),
-            self.coarse.joined(other.coarse),
-        )
+        return _Probe(*(a.joined(b) for a, b in zip(self.parts(), other.parts(), strict=True)))
 
 
 def _probe_table(at: _At, panels: np.ndarray, mu: np.ndarray) -> np.ndarray:
@@ -866,7 +866,7 @@ def _panel_probe(at: _At, panels: np.ndarray, mu: np.ndarray, table: np.ndarray)
     n = panels.shape[0]
     left, right = _halves(panels)
     rows = _interval_sums(at, np.concatenate([left, right, panels]), mu, table)
-    return _Probe(
+    return _Probe.of(
         rows.take(np.arange(n)), rows.take(np.arange(n, 2 * n)), rows.take(np.arange(2 * n, 3 * n))
     )
 
@@ -1035,7 +1035,7 @@ def _refined(at: _At, table_panels: np.ndarray, *, rtol: float) -> _Wavelength:
         children = np.concatenate(_halves(panels[split]))
         n_new = children.shape[0]
         quarters = _interval_sums(at, np.concatenate(_halves(children)), mu, table)
-        new = _Probe(
+        new = _Probe.of(
             quarters.take(np.arange(n_new)),
             quarters.take(np.arange(n_new, 2 * n_new)),
             parents.left.joined(parents.right),
