@@ -37,21 +37,27 @@ Cost
 ``python scripts/benchmark.py --derivatives`` (section 11) measures the cost
 against the table alone.  The distribution's parameters need no Mie work
 beyond the sums' weight columns; n and k need S1, S2 and dS/dm of every node
-(twice the table's angular work a node), on the panels' fine and coarse
-rules, and every panel is also summed on its own at :data:`PROBE_ANGLES`
-angles for the estimate (the blocked kernel, one panel at a time), and the
-refinement adds panels where the derivatives need them.  ``python
-scripts/derivative_cost.py`` on a loaded 2-core machine: 5.9 s of CPU
-against 0.63 s for the default table alone (9.4x; on the table's own panels
-without this refinement it was 2.3x, and 16 % of the suite's calibration
-cases erred beyond their estimates).  Summing each panel's probe rows in the
-final sums' pass would save most of the probe's work.
+(twice the table's angular work a node).  The refinement's probe sums every
+panel on its own at :data:`PROBE_ANGLES` angles, each half of its fine rule
+and its coarse rule, all panels of a round in one kernel call
+(``mie_derivatives_blocked._accumulate_groups``); a split panel's halves are
+its children's coarse rules (the same nodes and weights), so a split sums
+only the children's halves.  The final sums over all output angles (or
+Legendre orders) take both rules only on the panels whose share of some
+error is above :data:`NEGLIGIBLE` of its tolerance, and the others once,
+with their coarse rule (about half the final sums' work on the default
+table).  The derivatives need 2-3 times the table's panels (d phase / dn
+most: its integrand oscillates x times faster than the phase function's),
+which is most of what they cost: ``python scripts/derivative_cost.py``
+gives the CPU time against the table alone (CHANGELOG for the figures).
 
 Error estimate
 --------------
-Each sum is also taken with the coarse rule of every panel (one
+Each sum is also taken with the coarse rule of the panels (one
 Gauss-Legendre rule on the panel instead of one on each half), as the
-table's own refinement estimates its error.  The estimate of a derivative is
+table's own refinement estimates its error (on the panels whose share, below,
+is negligible, only the coarse rule is summed, and their shares are added to
+the rules' difference).  The estimate of a derivative is
 :data:`SAFETY` times the larger of the two rules' difference (the largest
 over angle or order) and the sum over panels of each panel's share of it
 (the change of the derivative when that panel alone takes its coarse rule,
@@ -1001,9 +1007,12 @@ def _refined(at: _At, table_panels: np.ndarray, *, rtol: float) -> _Wavelength:
     hide each other.  Until every summed share is within ``rtol`` of its
     derivative's magnitude, the panels with the largest shares are split (the
     rule of :func:`~dustoptics.scattering.refinement._choose_splits`); only
-    the new panels are summed.  The derivatives are then summed over the final
-    panels at every output angle (or in Legendre coefficients), fine and
-    coarse rule, and the estimate is the larger of their difference and the
+    the children's halves are summed (their coarse rules are their parents'
+    halves).  The derivatives are then summed over the final panels at every
+    output angle (or in Legendre coefficients), fine and coarse rule where a
+    panel's share of some error is above :data:`NEGLIGIBLE` of its tolerance,
+    the coarse rule alone elsewhere, and the estimate is the larger of the
+    totals' difference (plus the shares of the panels summed once) and the
     summed shares (:func:`_with_panel_errors`).
     """
     panels = _extended(at, table_panels)
