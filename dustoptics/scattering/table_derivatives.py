@@ -96,6 +96,7 @@ from dustoptics.particles.sizedist_derivatives import (
     parameter_names,
 )
 from dustoptics.scattering import mie
+from dustoptics.scattering.derivative_panels import _halves, _PanelSums, _Probe
 from dustoptics.scattering.expansion import greek_coefficients
 from dustoptics.scattering.mie_derivatives import _accumulate, _series_lengths
 from dustoptics.scattering.mie_derivatives_blocked import (
@@ -777,56 +778,6 @@ def _probe_mu(at: _At) -> np.ndarray:
     return np.ascontiguousarray(at.mu_out[pick])
 
 
-@dataclass(frozen=True)
-class _PanelSums:
-    """Sums per panel (leading axis) at the probe angles, as :class:`_Sums`."""
-
-    ang: np.ndarray
-    dang: np.ndarray
-    sums: np.ndarray
-    dsums: np.ndarray
-
-    def fields(self) -> tuple[np.ndarray, ...]:
-        return self.ang, self.dang, self.sums, self.dsums
-
-    def take(self, keep: np.ndarray) -> _PanelSums:
-        return _PanelSums(*(a[keep] for a in self.fields()))
-
-    def joined(self, other: _PanelSums) -> _PanelSums:
-        return _PanelSums(
-            *(np.concatenate([a, b]) for a, b in zip(self.fields(), other.fields(), strict=True))
-        )
-
-    def plus(self, other: _PanelSums) -> _PanelSums:
-        return _PanelSums(*(a + b for a, b in zip(self.fields(), other.fields(), strict=True)))
-
-
-@dataclass(frozen=True)
-class _Probe:
-    """The probe rows of panels (leading axis): each half's rule (the fine
-    rule is the two together) and the coarse rule.  A panel's halves are its
-    children's coarse rules when it is split (the same nodes and weights),
-    so a split sums only the children's halves."""
-
-    left: _PanelSums
-    right: _PanelSums
-    coarse: _PanelSums
-    fine: _PanelSums  # left plus right, added once per panel
-
-    @classmethod
-    def of(cls, left: _PanelSums, right: _PanelSums, coarse: _PanelSums) -> _Probe:
-        return cls(left, right, coarse, left.plus(right))
-
-    def parts(self) -> tuple[_PanelSums, ...]:
-        return self.left, self.right, self.coarse, self.fine
-
-    def take(self, keep: np.ndarray) -> _Probe:
-        return _Probe(*(p.take(keep) for p in self.parts()))
-
-    def joined(self, other: _Probe) -> _Probe:
-        return _Probe(*(a.joined(b) for a, b in zip(self.parts(), other.parts(), strict=True)))
-
-
 def _probe_table(at: _At, panels: np.ndarray, mu: np.ndarray) -> np.ndarray:
     """``mie.angular_table`` of the probe angles for every node of ``panels``
     (and of panels split from them: they lie inside)."""
@@ -857,12 +808,6 @@ def _interval_sums(at: _At, intervals: np.ndarray, mu: np.ndarray, table: np.nda
             bool(at.index_directions),
         )
     )
-
-
-def _halves(panels: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The left and right halves of panels, as the fine rule cuts them."""
-    mid = 0.5 * (panels[:, 0] + panels[:, 1])
-    return np.column_stack([panels[:, 0], mid]), np.column_stack([mid, panels[:, 1]])
 
 
 def _panel_probe(at: _At, panels: np.ndarray, mu: np.ndarray, table: np.ndarray) -> _Probe:
