@@ -401,8 +401,25 @@ def _stokes_rows(acc: np.ndarray, sgn: float, blk: int, n_stokes: int, st: np.nd
         st[11, i] = 2.0 * (ar_ - br_)
 
 
+@njit(cache=True, nogil=True)
+def _work_arrays(x_top: float, table: np.ndarray, n_mu: int) -> tuple[np.ndarray, ...]:
+    """Work arrays of :func:`_accumulate_into` for nodes up to size parameter
+    ``x_top`` at the angles of ``table``."""
+    n_top = wiscombe_nmax(x_top)
+    width = table.shape[1] if n_mu > 0 else 0
+    return (
+        _workspace(n_top),
+        np.empty(LANES),
+        np.empty(LANES, dtype=np.int64),
+        np.zeros((4 * ((n_top + 3) // 4) + 4, 8 * LANES)),
+        np.empty(2 * width),
+        np.empty((12, BLOCK)),
+        np.empty(2),
+    )
+
+
 @njit(cache=True, nogil=True, error_model="numpy")
-def _accumulate_blocked(
+def _accumulate_into(
     m: complex,
     x_nodes: np.ndarray,
     weights: np.ndarray,
@@ -412,45 +429,19 @@ def _accumulate_blocked(
     n_stokes: int,
     per_particle: bool,
     with_m: bool,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """:func:`_accumulate` (without the x direction) on the table's own kernels.
-
-    The Mie coefficients come LANES spheres at a time from the table's kernel
-    (``mie._mie_coefficients``), their m derivatives from its D_n, psi_n and
-    chi_n (:func:`_batch_derivatives`), and S1, S2, dS1/dm, dS2/dm in one pass
-    over the orders at the angles of ``table`` (``mie.angular_table`` of the
-    first ``n_mu`` angles, at least n_max orders of every node), and, if
-    ``symmetric`` (angles mu >= 0), at -mu by parity
-    (:func:`_amplitudes_and_derivatives`).  n and k are one complex
-    derivative: dS/dk = i dS/dn.  Returns ``ang`` (n_w, n_stokes, n_f),
-    ``dang`` (2, n_stokes, n_f), ``sums`` (n_w, N_SUMS), ``dsums``
-    (2, N_SUMS), as :func:`_accumulate`, n_f = 2 n_mu if ``symmetric`` else
-    n_mu; ``n_mu`` = 0 gives the sums alone.  Without ``with_m`` the
-    angular m derivatives are not summed (``dang`` stays zero): the
-    distribution's parameters alone need the amplitudes only.
-    """
+    work: tuple[np.ndarray, ...],
+    out: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+) -> None:
+    """The body of :func:`_accumulate_blocked`: adds the nodes' sums to ``out``
+    = (ang, dang, sums, dsums), with the work arrays ``work`` of
+    :func:`_work_arrays` (made for at least the nodes' largest n_max), which
+    calls on several node sets share."""
+    ws, x_b, nmax_b, coef, acc, st, rel = work
+    ang, dang, sums, dsums = out
     n_nodes = x_nodes.shape[0]
     n_w = weights.shape[1]
-    n_f = 2 * n_mu if symmetric else n_mu
-    ang = np.zeros((n_w, n_stokes, n_f))
-    dang = np.zeros((2, n_stokes, n_f))
-    sums = np.zeros((n_w, N_SUMS))
-    dsums = np.zeros((2, N_SUMS))
-    if n_nodes == 0:
-        return ang, dang, sums, dsums
-    x_top = x_nodes[0]
-    for j in range(n_nodes):
-        x_top = max(x_top, x_nodes[j])
-    n_top = wiscombe_nmax(x_top)
-    ws = _workspace(n_top)
-    x_b = np.empty(LANES)
-    nmax_b = np.empty(LANES, dtype=np.int64)
-    coef = np.zeros((4 * ((n_top + 3) // 4) + 4, 8 * LANES))
     width = table.shape[1] if n_mu > 0 else 0
     n_blocks = width // (8 * BLOCK)
-    acc = np.empty(2 * width)
-    st = np.empty((12, BLOCK))
-    rel = np.empty(2)
     for b0 in range(0, n_nodes, LANES):
         n_live = min(LANES, n_nodes - b0)
         for s in range(LANES):
@@ -501,6 +492,111 @@ def _accumulate_blocked(
                             sq = st[q]
                             for i in range(n_l):
                                 row[j0 + i] += wd * (sd[i] + r * sq[i])
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _accumulate_blocked(
+    m: complex,
+    x_nodes: np.ndarray,
+    weights: np.ndarray,
+    table: np.ndarray,
+    n_mu: int,
+    symmetric: bool,
+    n_stokes: int,
+    per_particle: bool,
+    with_m: bool,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`_accumulate` (without the x direction) on the table's own kernels.
+
+    The Mie coefficients come LANES spheres at a time from the table's kernel
+    (``mie._mie_coefficients``), their m derivatives from its D_n, psi_n and
+    chi_n (:func:`_batch_derivatives`), and S1, S2, dS1/dm, dS2/dm in one pass
+    over the orders at the angles of ``table`` (``mie.angular_table`` of the
+    first ``n_mu`` angles, at least n_max orders of every node), and, if
+    ``symmetric`` (angles mu >= 0), at -mu by parity
+    (:func:`_amplitudes_and_derivatives`).  n and k are one complex
+    derivative: dS/dk = i dS/dn.  Returns ``ang`` (n_w, n_stokes, n_f),
+    ``dang`` (2, n_stokes, n_f), ``sums`` (n_w, N_SUMS), ``dsums``
+    (2, N_SUMS), as :func:`_accumulate`, n_f = 2 n_mu if ``symmetric`` else
+    n_mu; ``n_mu`` = 0 gives the sums alone.  Without ``with_m`` the
+    angular m derivatives are not summed (``dang`` stays zero): the
+    distribution's parameters alone need the amplitudes only.
+    """
+    n_nodes = x_nodes.shape[0]
+    n_w = weights.shape[1]
+    n_f = 2 * n_mu if symmetric else n_mu
+    ang = np.zeros((n_w, n_stokes, n_f))
+    dang = np.zeros((2, n_stokes, n_f))
+    sums = np.zeros((n_w, N_SUMS))
+    dsums = np.zeros((2, N_SUMS))
+    if n_nodes == 0:
+        return ang, dang, sums, dsums
+    x_top = x_nodes[0]
+    for j in range(n_nodes):
+        x_top = max(x_top, x_nodes[j])
+    work = _work_arrays(x_top, table, n_mu)
+    _accumulate_into(
+        m,
+        x_nodes,
+        weights,
+        table,
+        n_mu,
+        symmetric,
+        n_stokes,
+        per_particle,
+        with_m,
+        work,
+        (ang, dang, sums, dsums),
+    )
+    return ang, dang, sums, dsums
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _accumulate_groups(
+    m: complex,
+    x_nodes: np.ndarray,
+    weights: np.ndarray,
+    starts: np.ndarray,
+    table: np.ndarray,
+    n_mu: int,
+    n_stokes: int,
+    per_particle: bool,
+    with_m: bool,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`_accumulate_blocked` (at the angles ``mu`` of ``table``, not
+    symmetric) of each group of nodes ``starts[g]:starts[g + 1]`` on its own,
+    in one call: one set of work arrays, no call per group.  Returns ``ang``
+    (n_group, n_w, n_stokes, n_mu), ``dang`` (n_group, 2, n_stokes, n_mu),
+    ``sums`` (n_group, n_w, N_SUMS), ``dsums`` (n_group, 2, N_SUMS), each
+    group's rows equal to its own :func:`_accumulate_blocked` call's."""
+    n_group = starts.shape[0] - 1
+    n_w = weights.shape[1]
+    ang = np.zeros((n_group, n_w, n_stokes, n_mu))
+    dang = np.zeros((n_group, 2, n_stokes, n_mu))
+    sums = np.zeros((n_group, n_w, N_SUMS))
+    dsums = np.zeros((n_group, 2, N_SUMS))
+    if x_nodes.shape[0] == 0:
+        return ang, dang, sums, dsums
+    x_top = x_nodes[0]
+    for j in range(x_nodes.shape[0]):
+        x_top = max(x_top, x_nodes[j])
+    work = _work_arrays(x_top, table, n_mu)
+    for g in range(n_group):
+        a, b = starts[g], starts[g + 1]
+        if b > a:
+            _accumulate_into(
+                m,
+                x_nodes[a:b],
+                weights[a:b],
+                table,
+                n_mu,
+                False,
+                n_stokes,
+                per_particle,
+                with_m,
+                work,
+                (ang[g], dang[g], sums[g], dsums[g]),
+            )
     return ang, dang, sums, dsums
 
 

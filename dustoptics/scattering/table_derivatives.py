@@ -37,21 +37,27 @@ Cost
 ``python scripts/benchmark.py --derivatives`` (section 11) measures the cost
 against the table alone.  The distribution's parameters need no Mie work
 beyond the sums' weight columns; n and k need S1, S2 and dS/dm of every node
-(twice the table's angular work a node), on the panels' fine and coarse
-rules, and every panel is also summed on its own at :data:`PROBE_ANGLES`
-angles for the estimate (the blocked kernel, one panel at a time), and the
-refinement adds panels where the derivatives need them.  ``python
-scripts/derivative_cost.py`` on a loaded 2-core machine: 5.9 s of CPU
-against 0.63 s for the default table alone (9.4x; on the table's own panels
-without this refinement it was 2.3x, and 16 % of the suite's calibration
-cases erred beyond their estimates).  Summing each panel's probe rows in the
-final sums' pass would save most of the probe's work.
+(twice the table's angular work a node).  The refinement's probe sums every
+panel on its own at :data:`PROBE_ANGLES` angles, each half of its fine rule
+and its coarse rule, all panels of a round in one kernel call
+(``mie_derivatives_blocked._accumulate_groups``); a split panel's halves are
+its children's coarse rules (the same nodes and weights), so a split sums
+only the children's halves.  The final sums over all output angles (or
+Legendre orders) take both rules only on the panels whose share of some
+error is above :data:`NEGLIGIBLE` of its tolerance, and the others once,
+with their coarse rule (about half the final sums' work on the default
+table).  The derivatives need 2-3 times the table's panels (d phase / dn
+most: its integrand oscillates x times faster than the phase function's),
+which is most of what they cost: ``python scripts/derivative_cost.py``
+gives the CPU time against the table alone (CHANGELOG for the figures).
 
 Error estimate
 --------------
-Each sum is also taken with the coarse rule of every panel (one
+Each sum is also taken with the coarse rule of the panels (one
 Gauss-Legendre rule on the panel instead of one on each half), as the
-table's own refinement estimates its error.  The estimate of a derivative is
+table's own refinement estimates its error (on the panels whose share, below,
+is negligible, only the coarse rule is summed, and their shares are added to
+the rules' difference).  The estimate of a derivative is
 :data:`SAFETY` times the larger of the two rules' difference (the largest
 over angle or order) and the sum over panels of each panel's share of it
 (the change of the derivative when that panel alone takes its coarse rule,
@@ -90,10 +96,12 @@ from dustoptics.particles.sizedist_derivatives import (
     parameter_names,
 )
 from dustoptics.scattering import mie
+from dustoptics.scattering.derivative_panels import _halves, _PanelSums, _Probe
 from dustoptics.scattering.expansion import greek_coefficients
 from dustoptics.scattering.mie_derivatives import _accumulate, _series_lengths
 from dustoptics.scattering.mie_derivatives_blocked import (
     _accumulate_blocked,
+    _accumulate_groups,
     _legendre_evaluate_rows,
     _legendre_project_rows,
 )
@@ -229,6 +237,14 @@ class _Sums:
     dang: np.ndarray
     sums: np.ndarray
     dsums: np.ndarray
+
+    def plus(self, other: _Sums) -> _Sums:
+        return _Sums(
+            self.ang + other.ang,
+            self.dang + other.dang,
+            self.sums + other.sums,
+            self.dsums + other.dsums,
+        )
 
 
 def _rule_nodes(
@@ -742,6 +758,12 @@ class _Plan:
 #: to 1.6 times it (expansion coefficients, f12, g near their tolerance).
 SAFETY = 2.0
 
+#: A panel's coarse rule is summed over all output angles (or orders) only if
+#: its share of some derivative's error is above this fraction of that
+#: derivative's tolerance: the others' shares, summed, stay within about 1 % of
+#: it on the default Mars-dust table (and are added to the estimate).
+NEGLIGIBLE = 1e-3
+
 #: Output angles (evenly picked) at which the derivatives' refinement compares
 #: each panel's rules.
 PROBE_ANGLES = 24
@@ -756,62 +778,48 @@ def _probe_mu(at: _At) -> np.ndarray:
     return np.ascontiguousarray(at.mu_out[pick])
 
 
-@dataclass(frozen=True)
-class _PanelSums:
-    """Sums per panel (leading axis) at the probe angles, as :class:`_Sums`."""
-
-    ang: np.ndarray
-    dang: np.ndarray
-    sums: np.ndarray
-    dsums: np.ndarray
-
-    def fields(self) -> tuple[np.ndarray, ...]:
-        return self.ang, self.dang, self.sums, self.dsums
-
-    def take(self, keep: np.ndarray) -> _PanelSums:
-        return _PanelSums(*(a[keep] for a in self.fields()))
-
-    def joined(self, other: _PanelSums) -> _PanelSums:
-        return _PanelSums(
-            *(np.concatenate([a, b]) for a, b in zip(self.fields(), other.fields(), strict=True))
-        )
+def _probe_table(at: _At, panels: np.ndarray, mu: np.ndarray) -> np.ndarray:
+    """``mie.angular_table`` of the probe angles for every node of ``panels``
+    (and of panels split from them: they lie inside)."""
+    x_top = float(size_parameter_at(panels[:, 1].max(), settings=at.settings))
+    return mie.angular_table(_read_only(mu), int(_series_lengths(np.array([x_top])).max()))
 
 
-def _panel_probe(at: _At, panels: np.ndarray, mu: np.ndarray, *, halves: bool) -> _PanelSums:
-    """Each panel's sums (fine rule if ``halves``, else coarse) at the angles ``mu``,
-    without the point masses of moving ends (the same in both rules): the
-    blocked kernel, one panel at a time."""
-    n = panels.shape[0]
-    x, rule = at.rule(panels, halves=halves)
+def _interval_sums(at: _At, intervals: np.ndarray, mu: np.ndarray, table: np.ndarray) -> _PanelSums:
+    """The sums of one Gauss rule on each interval (rows of ``intervals``, in
+    the panels' coordinate) at the angles ``mu``, without the point masses of
+    moving ends: one kernel call for all of them (``_accumulate_groups``)."""
+    n = intervals.shape[0]
+    x, rule = at.rule(intervals, halves=False)
     weights = _weight_columns(
         at.distribution, x, rule, k_um=at.k_um, dist_parameters=at.dist_parameters
     )
-    npp = at.settings.nodes_per_panel
-    # Node j belongs to rule panel j // npp; with halves, panels k and k + n are
-    # the halves of panel k (left then right: increasing x, as the kernel batches).
-    parts = 2 if halves else 1
-    order = (np.arange(parts)[None, :] * n + np.arange(n)[:, None]).ravel()
-    x = x.reshape(-1, npp)[order].reshape(n, parts * npp)
-    weights = weights.reshape(-1, npp, weights.shape[1])[order].reshape(
-        n, parts * npp, weights.shape[1]
-    )
-    table = mie.angular_table(_read_only(mu), int(_series_lengths(x.ravel()).max()))
-    with_m = bool(at.index_directions)
-    rows = [
-        _accumulate_blocked(
+    starts = np.arange(n + 1, dtype=np.int64) * at.settings.nodes_per_panel
+    return _PanelSums(
+        *_accumulate_groups(
             at.m,
-            np.ascontiguousarray(x[p]),
-            np.ascontiguousarray(weights[p]),
+            np.ascontiguousarray(x),
+            np.ascontiguousarray(weights),
+            starts,
             table,
             int(mu.size),
-            False,
             at.n_q,
             at.per_particle,
-            with_m,
+            bool(at.index_directions),
         )
-        for p in range(n)
-    ]
-    return _PanelSums(*(np.stack([r[k] for r in rows]) for k in range(4)))
+    )
+
+
+def _panel_probe(at: _At, panels: np.ndarray, mu: np.ndarray, table: np.ndarray) -> _Probe:
+    """Each panel's sums on each half and with its coarse rule at the angles
+    ``mu``, without the point masses of moving ends (the same in both rules):
+    one kernel call for all of them."""
+    n = panels.shape[0]
+    left, right = _halves(panels)
+    rows = _interval_sums(at, np.concatenate([left, right, panels]), mu, table)
+    return _Probe.of(
+        rows.take(np.arange(n)), rows.take(np.arange(n, 2 * n)), rows.take(np.arange(2 * n, 3 * n))
+    )
 
 
 def _boundary_probe(at: _At, mu: np.ndarray) -> tuple[np.ndarray, ...]:
@@ -879,21 +887,31 @@ def _panel_errors(
     return whole[0], np.abs(whole - swapped)
 
 
-def _with_panel_errors(
-    at: _At, errors: dict[str, np.ndarray], shares: np.ndarray
-) -> dict[str, np.ndarray]:
-    """The estimates: the larger of the summed rules' difference and the sum
-    over panels of each panel's share (no cancellation between panels), the
-    largest over the probe angles for the angular outputs."""
+def _by_key(at: _At, shares: np.ndarray) -> dict[str, np.ndarray]:
+    """The sum over panels of shares (n_panels, n_parameter, n_outputs) per
+    output key, the largest over the probe angles for the angular ones."""
     summed = shares.sum(axis=0)  # (n_parameter, n_outputs)
     n_par = summed.shape[0]
     n_mu = (summed.shape[1] - 4) // at.n_q
     angular = summed[:, : at.n_q * n_mu].reshape(n_par, at.n_q, n_mu).max(axis=-1)
-    out = dict(errors)
-    for q, key in enumerate(at.angular_keys):
-        out[key] = np.maximum(errors[key], angular[:, q])
+    out = {key: angular[:, q] for q, key in enumerate(at.angular_keys)}
     for j, key in enumerate(("g", *_CROSS_KEYS)):
-        out[key] = np.maximum(errors[key], summed[:, at.n_q * n_mu + j])
+        out[key] = summed[:, at.n_q * n_mu + j]
+    return out
+
+
+def _with_panel_errors(
+    at: _At, errors: dict[str, np.ndarray], shares: np.ndarray, left_out: np.ndarray
+) -> dict[str, np.ndarray]:
+    """The estimates: the larger of the summed rules' difference (plus the
+    shares of the panels ``left_out`` of it, whose coarse rules were not
+    summed) and the sum over panels of each panel's share (no cancellation
+    between panels), the largest over the probe angles for the angular outputs."""
+    summed = _by_key(at, shares)
+    missing = _by_key(at, left_out)
+    out = dict(errors)
+    for key in (*at.angular_keys, "g", *_CROSS_KEYS):
+        out[key] = np.maximum(errors[key] + missing[key], summed[key])
     if at.n_order:
         # The expansion coefficients' sums cancel between panels as the phase
         # function's do: their estimate grows by the phase function's ratio.
@@ -934,17 +952,20 @@ def _refined(at: _At, table_panels: np.ndarray, *, rtol: float) -> _Wavelength:
     hide each other.  Until every summed share is within ``rtol`` of its
     derivative's magnitude, the panels with the largest shares are split (the
     rule of :func:`~dustoptics.scattering.refinement._choose_splits`); only
-    the new panels are summed.  The derivatives are then summed over the final
-    panels at every output angle (or in Legendre coefficients), fine and
-    coarse rule, and the estimate is the larger of their difference and the
+    the children's halves are summed (their coarse rules are their parents'
+    halves).  The derivatives are then summed over the final panels at every
+    output angle (or in Legendre coefficients), fine and coarse rule where a
+    panel's share of some error is above :data:`NEGLIGIBLE` of its tolerance,
+    the coarse rule alone elsewhere, and the estimate is the larger of the
+    totals' difference (plus the shares of the panels summed once) and the
     summed shares (:func:`_with_panel_errors`).
     """
     panels = _extended(at, table_panels)
     mu = _probe_mu(at)
+    table = _probe_table(at, panels, mu)
     boundary = _boundary_probe(at, mu)
-    pf = _panel_probe(at, panels, mu, halves=True)
-    pc = _panel_probe(at, panels, mu, halves=False)
-    whole, shares = _panel_errors(at, pf, pc, boundary)
+    probe = _panel_probe(at, panels, mu, table)
+    whole, shares = _panel_errors(at, probe.fine, probe.coarse, boundary)
     max_panels = panels.shape[0] * 2**6
     for _ in range(MAX_ROUNDS):
         if np.all(shares.sum(axis=0) <= rtol * _scale(at, whole)):
@@ -962,25 +983,41 @@ def _refined(at: _At, table_panels: np.ndarray, *, rtol: float) -> _Wavelength:
             panels[:, 0].copy(),
             panels[:, 1].copy(),
         )
-        parents = panels[split]
-        mid = 0.5 * (parents[:, 0] + parents[:, 1])
-        new = np.concatenate(
-            [np.column_stack([parents[:, 0], mid]), np.column_stack([mid, parents[:, 1]])]
+        # The children (left ones, then right ones): their coarse rules are
+        # the parents' halves; only their own halves are summed.
+        parents = probe.take(split)
+        children = np.concatenate(_halves(panels[split]))
+        n_new = children.shape[0]
+        quarters = _interval_sums(at, np.concatenate(_halves(children)), mu, table)
+        new = _Probe.of(
+            quarters.take(np.arange(n_new)),
+            quarters.take(np.arange(n_new, 2 * n_new)),
+            parents.left.joined(parents.right),
         )
         keep = np.ones(panels.shape[0], dtype=bool)
         keep[split] = False
-        panels = np.concatenate([panels[keep], new])
-        pf = pf.take(keep).joined(_panel_probe(at, new, mu, halves=True))
-        pc = pc.take(keep).joined(_panel_probe(at, new, mu, halves=False))
-        whole, shares = _panel_errors(at, pf, pc, boundary)
+        panels = np.concatenate([panels[keep], children])
+        probe = probe.take(keep).joined(new)
+        whole, shares = _panel_errors(at, probe.fine, probe.coarse, boundary)
     x_top = float(size_parameter_at(panels[:, 1].max(), settings=at.settings))
     nmax = mie.wiscombe_nmax(max(x_top, 1e-3) * 1.0001 + 1.0)
     n_half = 16 * ((nmax + 1 + 15) // 16)
     plan = _Plan(legendre=bool(2 * n_half < at.mu_out.size or at.n_order), lmax=2 * nmax)
-    fine = plan.sums(at, panels, halves=True, boundary=True)
-    coarse = plan.sums(at, panels, halves=False, boundary=True)
+    # Both rules only where they can matter: the panels whose share of some
+    # derivative's error is above NEGLIGIBLE of its tolerance.  The others are
+    # summed once, with their coarse rule (their share is its error), into
+    # both totals (their rules' difference counts as zero in the totals'
+    # difference), and their shares are added to the estimate.
+    badness = _badness(at, whole, shares, rtol)
+    sig = badness > NEGLIGIBLE
+    sig[np.argmax(badness)] = True
+    fine = plan.sums(at, panels[sig], halves=True, boundary=True)
+    coarse = plan.sums(at, panels[sig], halves=False, boundary=True)
+    if not np.all(sig):
+        rest = plan.sums(at, panels[~sig], halves=False, boundary=False)
+        fine, coarse = fine.plus(rest), coarse.plus(rest)
     values, errors = plan.outputs(at, fine, coarse)
-    errors = _with_panel_errors(at, errors, shares)
+    errors = _with_panel_errors(at, errors, shares, shares[~sig])
     return _Wavelength(values, {k: SAFETY * e for k, e in errors.items()})
 
 
