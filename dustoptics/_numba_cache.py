@@ -689,6 +689,12 @@ def _child_env() -> dict[str, str]:
     return env
 
 
+#: Packages a compiling child imports whole: the data model, whose names
+#: (``Table``, ``CrossSections``) the sky's kernel modules import through the
+#: atmosphere sets; its ``__init__`` imports numpy only.
+_IMPORTED_WHOLE = ("dustoptics.table",)
+
+
 def _import_bare(modules: list[str]) -> None:
     """Import ``modules`` with the packages above them bare: their ``__init__`` not run.
 
@@ -700,7 +706,7 @@ def _import_bare(modules: list[str]) -> None:
     for init in sorted(_PACKAGE_DIR.glob("**/__init__.py")):
         folder = init.parent
         name = ".".join(("dustoptics", *folder.relative_to(_PACKAGE_DIR).parts))
-        if name not in sys.modules:
+        if name not in sys.modules and name not in _IMPORTED_WHOLE:
             package = types.ModuleType(name)
             package.__path__ = [str(folder)]
             sys.modules[name] = package

@@ -7,6 +7,7 @@ temporary ``NUMBA_CACHE_DIR``; the scheduler's tests replace numba by a stand-in
 
 from __future__ import annotations
 
+import importlib
 import json
 import os
 import re
@@ -328,8 +329,13 @@ def test_prestart_is_for_the_build_command(argv, command):
 def test_a_child_imports_the_kernels_modules_without_the_package():
     """A compiling child runs no package ``__init__`` (``import dustoptics`` would cost it
     a second and a half of a core that compiles): it imports the modules that declare the
-    kernels, and gets all of them; with numba's error-message highlighting off."""
+    kernels, and gets all of them; with numba's error-message highlighting off.  The sky's
+    kernels are declared too (their modules import the data model through the atmosphere
+    sets), as they are when the suite has imported them before."""
+    for module in ("dustoptics.sky.medium", "dustoptics.sky.orders", "dustoptics.sky.render"):
+        importlib.import_module(module)
     modules = sorted({k.dispatcher.py_func.__module__ for k in kernels()})
+    assert "dustoptics.sky.medium" in modules
     command = _numba_cache._child_command(modules)
     code = command[2].replace(
         "c._end(c._serve(sys.argv[2:]))",
