@@ -8,8 +8,15 @@ fast enough; it changes miepython's speed, not its results beyond round-off.
 """
 
 import os
+import signal
 
 os.environ.setdefault("MIEPYTHON_USE_JIT", "1")
+
+# A shell's background job (`nohup ... &`) and pytest-xdist's workers start with Ctrl-C
+# ignored, and a child inherits "ignored" through exec: the tests that send SIGINT to
+# a command would see it ignored.  Python's own handler here resets the children's.
+if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+    signal.signal(signal.SIGINT, signal.default_int_handler)
 
 from hypothesis import settings
 
