@@ -229,13 +229,13 @@ def table_variables(table: Table) -> tuple[dict[str, _Variable], dict[str, _Vari
     if table.derivatives is not None:
         _derivative_variables(table, coords, data)
 
-    def plain(variables: dict[str, Any]) -> dict[str, _Variable]:
+    def as_variables(variables: dict[str, Any]) -> dict[str, _Variable]:
         return {
             key: ((dims,) if isinstance(dims, str) else tuple(dims), np.asarray(v), dict(a))
             for key, (dims, v, a) in variables.items()
         }
 
-    return plain(data), plain(coords)
+    return as_variables(data), as_variables(coords)
 
 
 def _file_variables(
