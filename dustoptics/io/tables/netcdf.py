@@ -187,7 +187,7 @@ _Variable = tuple[tuple[str, ...], np.ndarray, dict[str, Any]]
 
 
 def table_variables(table: Table) -> tuple[dict[str, _Variable], dict[str, _Variable]]:
-    """The data variables and coordinates of :meth:`Table.to_xarray`'s dataset, without xarray.
+    """The variables of :meth:`~dustoptics.table.Table.to_xarray`'s dataset, made without xarray.
 
     What the file stores is that dataset, variable for variable; this is the same assembly
     (:func:`dustoptics.table.conversion.to_dataset`) into plain dictionaries.  Building an
