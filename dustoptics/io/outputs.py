@@ -34,7 +34,14 @@ from typing import TYPE_CHECKING, Any
 from dustoptics._validation import check_file_name, check_inside
 from dustoptics.atmosphere.build import SET_PROVENANCE_SUFFIX, set_provenance
 from dustoptics.atmosphere.sets import with_optical_depth
-from dustoptics.io._atomic import STAGE_PREFIX, FormatError, _commit, file_set, write_files
+from dustoptics.io._atomic import (
+    STAGE_PREFIX,
+    FormatError,
+    _commit,
+    file_set,
+    scratch,
+    write_files,
+)
 from dustoptics.io.csv.cosmoscout import ProfileOptions, write_atmosphere
 from dustoptics.io.csv.seed import SUMMARY_FILENAME, read_seed_csv
 from dustoptics.io.engines.bruneton import write_bruneton
@@ -383,7 +390,10 @@ def place_outputs(
     with tempfile.TemporaryDirectory(prefix="dustoptics-") as tmp:
         staging = Path(tmp).resolve()
         rendered: dict[Path, Path] = {}
-        for path in render(staging):
+        # A private directory, read back below: the write into out is the durable one.
+        with scratch(staging):
+            paths = render(staging)
+        for path in paths:
             rendered[out / Path(path).resolve().relative_to(staging)] = Path(path)
         contents: dict[Path, bytes] = {t: p.read_bytes() for t, p in rendered.items()}
         if _all_up_to_date(out, rendered, same):

@@ -36,7 +36,6 @@ from typing import Any, ClassVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.integrate import quad
 
 from dustoptics._files import FormatError, read_checked
 from dustoptics._validation import as_float_array, check_real
@@ -492,6 +491,10 @@ class DensityDistribution(SizeDistribution):
             return float(np.asarray(self.density(np.array([r])), dtype=np.float64)[0]) * r ** (
                 k + 1.0
             )
+
+        # here: scipy.integrate (with scipy.optimize, linalg, sparse) is 0.25 s of a warm
+        # `dustoptics build`'s CPU, and only a tabulated or custom density needs it
+        from scipy.integrate import quad
 
         value, _ = quad(f, math.log(a), math.log(b), epsabs=0.0, epsrel=1e-11, limit=500)
         return value / self._norm

@@ -81,7 +81,6 @@ from typing import Any, ClassVar, Final
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy import special
-from scipy.optimize import brentq
 
 from dustoptics._validation import (
     check_open_interval,
@@ -1104,6 +1103,10 @@ def _numeric_bounds(
     in ln r (Brent's method) within its finite ``support``: F_lower^<(r_lo)
     = eps and F_upper^>(r_hi) = eps, or the support's ends when their tails
     are already below eps."""
+
+    # here: scipy.optimize (with scipy.linalg, sparse) is 0.2 s of a warm `dustoptics
+    # build`'s CPU, and the modified gamma and log-normal families never come here
+    from scipy.optimize import brentq
 
     lo, hi = support
 

@@ -42,7 +42,9 @@ def plain(value: Any) -> Any:
     if isinstance(value, Mapping):
         return {str(k): plain(v) for k, v in value.items()}
     if isinstance(value, np.ndarray):
-        return plain(value.tolist())
+        # Real numbers come out of tolist() plain already (a table's grids and node counts:
+        # thousands of values); complex ones become Python complex, converted below.
+        return value.tolist() if value.dtype.kind in "biuf" else plain(value.tolist())
     if isinstance(value, (list, tuple)):
         return [plain(v) for v in value]
     if isinstance(value, np.generic):

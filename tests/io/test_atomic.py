@@ -20,6 +20,7 @@ from dustoptics.io._atomic import (
     clean_leftovers,
     file_set,
     is_leftover,
+    scratch,
     write_files,
 )
 
@@ -115,6 +116,31 @@ def test_failure_mid_write_leaves_no_partial_set(tmp_path, monkeypatch, victim):
     monkeypatch.undo()
     write_files(targets)  # and a retry succeeds
     assert _listing(tmp_path) == ["a", "b", "c"]
+
+
+def test_writes_inside_a_scratch_directory_are_not_fsynced(tmp_path, monkeypatch):
+    """scratch(): a private directory whose files a later write copies needs no fsync; every
+    other write (the set around it, the same set afterwards) is fsync-ed as before."""
+    real, synced = os.fsync, []
+
+    def counting(fd):
+        synced.append(os.readlink(f"/proc/self/fd/{fd}") if os.path.exists("/proc") else fd)
+        return real(fd)
+
+    monkeypatch.setattr(os, "fsync", counting)
+    inside, outside = tmp_path / "scratch", tmp_path / "kept"
+    contents = {"a": b"1\n", "sub/b": b"2\n"}
+    with scratch(inside):
+        write_files({inside / k: v for k, v in contents.items()})
+        in_block = len(synced)
+        write_files({outside / k: v for k, v in contents.items()})
+    assert in_block == 0
+    after_block = len(synced)
+    assert after_block > 0  # outside the directory, inside the block: fsync-ed
+    assert all(not str(p).startswith(str(inside)) for p in synced)
+    write_files({inside / "c": b"3\n"})  # after the block: fsync-ed again
+    assert len(synced) > after_block
+    assert _listing(inside) == ["a", "c", "sub"] and (inside / "sub" / "b").read_bytes() == b"2\n"
 
 
 @pytest.mark.parametrize("fail_at", [2, 3])

@@ -13,6 +13,7 @@ from __future__ import annotations
 import json
 import shutil
 import subprocess
+import sys
 from pathlib import Path
 
 import h5py
@@ -21,7 +22,13 @@ import pytest
 
 import dustoptics as do
 from dustoptics.io import FORMATS, FormatError, open_table, write_netcdf
-from dustoptics.io.tables.netcdf import DIGEST_ATTRIBUTE, MAX_VALUES, SUFFIXES, dataset_digest
+from dustoptics.io.tables.netcdf import (
+    DIGEST_ATTRIBUTE,
+    MAX_VALUES,
+    SUFFIXES,
+    dataset_digest,
+    table_variables,
+)
 from dustoptics.scattering.tabulated_phase import renormalize
 from dustoptics.table import DERIVED, SCHEMA, UNITS, Table
 
@@ -131,6 +138,60 @@ def test_a_table_rebuilt_from_its_file_provenance_gives_the_same_bytes(table, tm
         cross_sections={"number_density_per_m3": 4.64e8}
     )
     assert again.save(tmp_path / "b.nc").read_bytes() == path.read_bytes()
+
+
+@pytest.fixture(scope="module")
+def full() -> Table:
+    """A table with every optional part: expansion, scattering matrix and derivatives."""
+    return do.compute_optics(
+        1.5 + 0.01j,
+        do.ModifiedGamma(r_eff_um=0.4, v_eff=0.15),
+        wavelength_nm=[450.0, 650.0],
+        theta_deg=np.linspace(0.0, 180.0, 19),
+        rtol=1e-3,
+        workers=1,
+        expansion=True,
+        derivatives=("r_eff_um", "k"),
+    )
+
+
+@pytest.mark.parametrize("which", ["table", "rayleigh", "full"])
+def test_the_written_variables_are_the_xarray_datasets(which, request):
+    """The writer assembles the dataset without xarray: the same variables, in the same
+    order, with the same dimensions, types, values and attributes as Table.to_xarray."""
+    t = request.getfixturevalue(which)
+    ds = t.to_xarray()
+    data, coords = table_variables(t)
+    assert list(data) == [str(k) for k in ds.data_vars]
+    assert list(coords) == [str(k) for k in ds.coords]
+    for name, (dims, values, attrs) in {**data, **coords}.items():
+        var = ds.variables[name]
+        assert dims == var.dims, name
+        assert values.dtype == var.values.dtype and values.shape == var.shape, name
+        np.testing.assert_array_equal(values, var.values, err_msg=name)
+        assert attrs == var.attrs, name
+    assert dict(t.global_attributes()) == ds.attrs
+
+
+def test_writing_a_table_file_imports_no_xarray_pandas_or_dask(table, tmp_path):
+    """xarray (with pandas, and dask.array where dask is installed: xarray looks for its
+    array type on the first variable it makes) is no part of writing a table file."""
+    path = table.save(tmp_path / "t.nc")
+    code = (
+        "import sys\n"
+        "from dustoptics.io import open_table, write_netcdf\n"
+        "from dustoptics.table import Table\n"
+        "import h5py\n"
+        f"with h5py.File({str(path)!r}, 'r') as f:\n"
+        "    fields = {k: f[k][()] for k in ('wavelength_nm', 'theta_deg', 'phase', 'g')}\n"
+        "t = Table(name='t', **fields)\n"
+        f"write_netcdf(t, {str(tmp_path / 'again.nc')!r})\n"
+        "print(sorted(m for m in ('xarray', 'pandas', 'dask') if m in sys.modules))\n"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=False)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == "[]"
+    assert open_table(tmp_path / "again.nc").phase.tobytes() == table.phase.tobytes()
 
 
 # ------------------------------------------------------------------ layout (CF-1.10)
