@@ -116,10 +116,8 @@ FORMAT_MODULES = (
     "dustoptics.io.rt.libradtran",
     "dustoptics.io.rt.libradtran_netcdf",
     "dustoptics.io.tables.netcdf",
-    "dustoptics.io.gcm.ames_ir",
-    "dustoptics.io.gcm.ames_vis",
-    "dustoptics.io.gcm.lmd_ir",
-    "dustoptics.io.gcm.lmd_vis",
+    "dustoptics.io.gcm.ames",
+    "dustoptics.io.gcm.lmd",
 )
 
 # The names are imported on first use (PEP 562): importing one module of the package

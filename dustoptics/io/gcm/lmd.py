@@ -1,4 +1,8 @@
-"""The LMD Mars PCM's dust optical-property files (``optprop_dustvis_TM_n50.dat`` layout).
+"""The LMD Mars PCM's dust optical-property files (formats ``lmd-dustvis``, ``lmd-dustir``).
+
+``<name>_optprop_dust<vis|ir>_n<nsize>.dat``: Q_ext, single-scattering albedo and g per
+wavelength and effective radius, over the PCM's visible (0.1-5 um) or infrared (5-200 um)
+bands, in the layout of the PCM's ``optprop_dustvis_TM_n50.dat`` and ``optprop_dustir_n50.dat``.
 
 The layout is the one the PCM's ``suaer.F90`` reads (LMD Mars PCM, ``phymars/suaer.F90``;
 read from a public copy of the source, see :doc:`/howto/gcm_dust_files`): lines whose
@@ -25,6 +29,7 @@ numbers are printed with 7 significant digits, five to a line.
 
 from __future__ import annotations
 
+import functools
 import os
 from dataclasses import dataclass
 from pathlib import Path
@@ -41,12 +46,14 @@ from dustoptics.io.gcm.common import (
     grid_optics,
     scalable_radii,
 )
-from dustoptics.io.registry import option
+from dustoptics.io.registry import Format, option, register
 
 __all__ = [
     "DEFAULT_RADII_UM",
     "DOMAINS",
     "FIRST_LINE",
+    "IR_RECORD",
+    "VIS_RECORD",
     "LmdDomain",
     "LmdFile",
     "LmdOptions",
@@ -351,3 +358,22 @@ def describe_lmd(path: Path, full: bool = True) -> str:
             "file_id)"
         )
     return "\n".join(lines)
+
+
+def _record(domain: LmdDomain) -> Format:
+    """The format of one domain's file."""
+    return Format(
+        name=f"lmd-dust{domain.key}",
+        summary=f"NAME_optprop_dust{domain.key}_nN.dat: LMD Mars PCM {domain.title} dust file "
+        "(Q_ext, albedo, g per wavelength and radius)",
+        write=functools.partial(write_lmd, domain=domain.key),
+        suffixes=(".dat",),
+        options=LmdOptions,
+        recognise=lambda path: is_lmd(path) and f"_optprop_dust{domain.key}_" in path.name,
+        describe=describe_lmd,
+    )
+
+
+# In the order the formats were listed before (infrared first).
+IR_RECORD = register(_record(DOMAINS["ir"]))
+VIS_RECORD = register(_record(DOMAINS["vis"]))
