@@ -15,9 +15,9 @@
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
-from dustoptics._lazy import lazy_attribute, lazy_dir
+from dustoptics._lazy import lazy_package
 
 if TYPE_CHECKING:  # the names as type checkers see them (imported on first use below)
     from dustoptics.atmosphere import aerosols, build, column, gases, parametric, sets
@@ -43,15 +43,6 @@ _NAMES = {
 }
 
 
-def __getattr__(name: str) -> Any:
-    """A public name, imported on first use."""
-    return lazy_attribute(__name__, name, _NAMES, _SUBMODULES)
-
-
-def __dir__() -> list[str]:
-    return lazy_dir(__name__, __all__)
-
-
 __all__ = [
     "ATMOSPHERES",
     "Atmosphere",
@@ -66,3 +57,4 @@ __all__ = [
     "parametric",
     "sets",
 ]
+__getattr__, __dir__ = lazy_package(__name__, _NAMES, _SUBMODULES, __all__)

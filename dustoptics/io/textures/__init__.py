@@ -13,9 +13,9 @@
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
-from dustoptics._lazy import lazy_attribute, lazy_dir
+from dustoptics._lazy import lazy_package
 
 if TYPE_CHECKING:  # the names as type checkers see them (imported on first use below)
     from dustoptics.io.textures import exr, ktx2, npy, phase_texture, raw
@@ -37,15 +37,6 @@ _NAMES = {
 }
 
 
-def __getattr__(name: str) -> Any:
-    """A public name, imported on first use."""
-    return lazy_attribute(__name__, name, _NAMES, _SUBMODULES)
-
-
-def __dir__() -> list[str]:
-    return lazy_dir(__name__, __all__)
-
-
 __all__ = [
     "PhaseTexture",
     "exr",
@@ -59,3 +50,4 @@ __all__ = [
     "write_npy",
     "write_texture",
 ]
+__getattr__, __dir__ = lazy_package(__name__, _NAMES, _SUBMODULES, __all__)
