@@ -440,19 +440,25 @@ def _cext_at(table: Table, wavelength_nm: float) -> float:
 
 
 def _molecules(
-    model: str | gases.RayleighModel, allowed: tuple[str, ...], wl: np.ndarray
-) -> tuple[Table, str, float]:
-    """Molecule table, model name and ground refractivity at 550 nm."""
-    if isinstance(model, gases.RayleighModel):
-        gas = model
-    else:
+    model: str | gases.RayleighModel,
+    allowed: tuple[str, ...],
+    wl: np.ndarray,
+    scale_height_m: float | None,
+) -> tuple[Constituent, float]:
+    """The molecules (exponential profile; default scale height the model's, else 8 km) and
+    their ground refractivity at 550 nm."""
+    if not isinstance(model, gases.RayleighModel):
         check_choice("molecules", model, allowed)
-        if model == "collienne2013":
-            table = gases.collienne2013_table(wl, name="collienne2013-molecules")
-            co2 = gases.get_rayleigh_model("costa2021-mars")
-            return table, model, float(co2.refractivity(550.0))
-        gas = gases.get_rayleigh_model(model)
-    return gas.table(wl), gas.name, float(gas.refractivity(550.0))
+    if model == "collienne2013":
+        table = gases.collienne2013_table(wl, name="collienne2013-molecules")
+        name, refractivity = model, gases.get_rayleigh_model("costa2021-mars").refractivity(550.0)
+    else:
+        gas = gases.get_rayleigh_model(model) if isinstance(model, str) else model
+        table, name, refractivity = gas.table(wl), gas.name, gas.refractivity(550.0)
+    if scale_height_m is None:
+        scale_height_m = _MOLECULE_SCALE_HEIGHT_M.get(name, 8000.0)
+    profile = ExponentialProfile(scale_height_m=scale_height_m)
+    return Constituent(role="molecules", table=table, profile=profile), float(refractivity)
 
 
 def mars_atmosphere(
@@ -530,20 +536,13 @@ def mars_atmosphere(
         profile=profile,
         top_altitude_m=top,
     )
-    mol_table, mol_name, refractivity = _molecules(molecules, MARS_MOLECULE_MODELS, wl)
-    h_mol = (
-        molecules_scale_height_m
-        if molecules_scale_height_m is not None
-        else _MOLECULE_SCALE_HEIGHT_M.get(mol_name, 8000.0)
-    )
+    mols, refractivity = _molecules(molecules, MARS_MOLECULE_MODELS, wl, molecules_scale_height_m)
     return Atmosphere(
         name=name,
         planet_radius_m=planet_radius_m,
         atmosphere_radius_m=atmosphere_radius_m,
         constituents=(
-            Constituent(
-                role="molecules", table=mol_table, profile=ExponentialProfile(scale_height_m=h_mol)
-            ),
+            mols,
             Constituent(role="aerosols", table=dust, profile=profile),
         ),
         sun_distance_m=_MARS_SUN_DISTANCE_M,
@@ -829,13 +828,8 @@ def earth_atmosphere(
     Atmosphere
     """
     wl = as_increasing_grid("wavelength_nm", wavelength_nm, unit="nm")
-    mol_table, mol_name, refractivity = _molecules(molecules, EARTH_MOLECULE_MODELS, wl)
-    h_mol = (
-        molecules_scale_height_m
-        if molecules_scale_height_m is not None
-        else _MOLECULE_SCALE_HEIGHT_M.get(mol_name, 8000.0)
-    )
-    mol_profile = ExponentialProfile(scale_height_m=h_mol)
+    mols, refractivity = _molecules(molecules, EARTH_MOLECULE_MODELS, wl, molecules_scale_height_m)
+    mol_table = mols.table
     r = check_positive("planet_radius_m", planet_radius_m, unit="m")
     if check_positive("atmosphere_radius_m", atmosphere_radius_m, unit="m") <= r:
         raise ValueError(
@@ -854,7 +848,7 @@ def earth_atmosphere(
         top_altitude_m=atmosphere_radius_m - planet_radius_m,
     )
     cons = [
-        Constituent(role="molecules", table=mol_table, profile=mol_profile),
+        mols,
         Constituent(role="aerosols", table=aerosols, profile=profile_a),
     ]
     if isinstance(ozone, str):
