@@ -127,17 +127,25 @@ class LmdOptions(GcmOptions):
     def check(self, wavelength_nm: Any) -> None:
         """Refuse, before the table is computed, what the writer would refuse."""
         super().check(wavelength_nm)
-        if self.gcm_radii_um is not None and len(self.gcm_radii_um) > NSIZEMAX:
-            raise ValueError(
-                f"gcm_radii_um has {len(self.gcm_radii_um)} radii; the PCM takes at most "
-                f"{NSIZEMAX} (nsizemax)"
-            )
-        w = self.gcm_wavelengths_um
-        if w is not None and (len(w) < 2 or min(w) <= 0 or bool(np.any(np.diff(w) <= 0))):
-            raise ValueError(
-                f"gcm_wavelengths_um must be two or more increasing wavelengths > 0 [um]; got "
-                f"{list(w)!r}"
-            )
+        _check_size(check_radii(self.gcm_radii_um))
+        if self.gcm_wavelengths_um is not None:
+            _checked_wavelengths(self.gcm_wavelengths_um)
+
+
+def _check_size(radii: np.ndarray | None) -> None:
+    if radii is not None and radii.size > NSIZEMAX:
+        raise ValueError(
+            f"gcm_radii_um has {radii.size} radii; the PCM takes at most {NSIZEMAX} (nsizemax)"
+        )
+
+
+def _checked_wavelengths(given: tuple[float, ...]) -> np.ndarray:
+    w = np.asarray(given, dtype=np.float64)
+    if w.size < 2 or np.any(np.diff(w) <= 0) or not np.all(np.isfinite(w)) or w[0] <= 0:
+        raise ValueError(
+            f"gcm_wavelengths_um must be two or more increasing wavelengths > 0 [um]; got {list(given)!r}"
+        )
+    return w
 
 
 def _wavelength_axis(
@@ -154,11 +162,7 @@ def _wavelength_axis(
             )
         axis = np.union1d(np.geomspace(lo, hi, _N_WAVELENGTHS), [domain.reference_um])
         return axis
-    w = np.asarray(given, dtype=np.float64)
-    if w.size < 2 or np.any(np.diff(w) <= 0) or not np.all(np.isfinite(w)) or w[0] <= 0:
-        raise ValueError(
-            f"gcm_wavelengths_um must be two or more increasing wavelengths > 0 [um]; got {list(given)!r}"
-        )
+    w = _checked_wavelengths(given)
     if not w[0] <= domain.reference_um <= w[-1]:
         raise ValueError(
             f"gcm_wavelengths_um ({w[0]:g}-{w[-1]:g} um) must bracket the PCM's {domain.title} "
@@ -185,10 +189,7 @@ def lmd_text(
     d = DOMAINS[domain]
     name = f"lmd-dust{domain}"
     radii = check_radii(gcm_radii_um)
-    if radii is not None and radii.size > NSIZEMAX:
-        raise ValueError(
-            f"gcm_radii_um has {radii.size} radii; the PCM takes at most {NSIZEMAX} (nsizemax)"
-        )
+    _check_size(radii)
     particles = gcm_particles(table, format_name=name)
     left_out = ""
     if radii is None:
