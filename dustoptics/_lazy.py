@@ -63,19 +63,19 @@ def lazy_dir(package: str, public: Iterable[str]) -> list[str]:
 
 
 def lazy_package(
-    package: str,
-    names: Mapping[str, Iterable[str]],
-    submodules: Iterable[str],
-    public: Iterable[str],
+    package: str, names: Mapping[str, Iterable[str]], public: Iterable[str]
 ) -> tuple[Callable[[str], Any], Callable[[], list[str]]]:
     """A package's ``__getattr__`` and ``__dir__``, for::
 
-        __getattr__, __dir__ = lazy_package(__name__, _NAMES, _SUBMODULES, __all__)
+        __getattr__, __dir__ = lazy_package(__name__, _NAMES, __all__)
 
-    ``names`` and ``submodules`` as for :func:`lazy_attribute`, ``public`` as for
-    :func:`lazy_dir`.
+    ``names`` as for :func:`lazy_attribute`; the ``public`` names (``__all__``) that no
+    module of ``names`` gives are the package's submodules (a name the package defines
+    itself never reaches ``__getattr__``).
     """
-    submodules, public = tuple(submodules), tuple(public)
+    public = tuple(public)
+    given = {n for module_names in names.values() for n in module_names}
+    submodules = tuple(n for n in public if n not in given)
 
     def attribute(name: str) -> Any:
         """A public name, imported on first use."""

@@ -31,7 +31,6 @@ if TYPE_CHECKING:  # the names as type checkers see them (imported on first use 
 
 # The names are imported on first use (PEP 562): importing one module of the package
 # imports that module and what it needs, not the others (dustoptics._lazy).
-_SUBMODULES = ("aerosols", "build", "column", "gases", "parametric", "sets")
 _NAMES = {
     "dustoptics.atmosphere.build": ("ATMOSPHERES", "build_atmosphere"),
     "dustoptics.atmosphere.sets": (
@@ -57,4 +56,4 @@ __all__ = [
     "parametric",
     "sets",
 ]
-__getattr__, __dir__ = lazy_package(__name__, _NAMES, _SUBMODULES, __all__)
+__getattr__, __dir__ = lazy_package(__name__, _NAMES, __all__)

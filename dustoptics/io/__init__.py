@@ -122,17 +122,6 @@ FORMAT_MODULES = (
 
 # The names are imported on first use (PEP 562): importing one module of the package
 # imports that module and what it needs, not the others (dustoptics._lazy).
-_SUBMODULES = (
-    "csv",
-    "describe",
-    "engines",
-    "gcm",
-    "outputs",
-    "rt",
-    "shaders",
-    "tables",
-    "textures",
-)
 _NAMES = {
     "dustoptics.io._atomic": ("FormatError",),
     "dustoptics.io.csv": (
@@ -222,4 +211,4 @@ __all__ = [
     "write_shader",
     "write_texture",
 ]
-__getattr__, __dir__ = lazy_package(__name__, _NAMES, _SUBMODULES, __all__)
+__getattr__, __dir__ = lazy_package(__name__, _NAMES, __all__)

@@ -23,9 +23,8 @@ if TYPE_CHECKING:  # the names as type checkers see them (imported on first use 
 
 # The names are imported on first use (PEP 562): importing one module of the package
 # imports that module and what it needs, not the others (dustoptics._lazy).
-_SUBMODULES = ("catalogue", "coated", "custom_sizedist", "materials", "mixing", "sizedist")
 _NAMES: dict[str, tuple[str, ...]] = {}
 
 
 __all__ = ["catalogue", "coated", "custom_sizedist", "materials", "mixing", "sizedist"]
-__getattr__, __dir__ = lazy_package(__name__, _NAMES, _SUBMODULES, __all__)
+__getattr__, __dir__ = lazy_package(__name__, _NAMES, __all__)

@@ -32,7 +32,6 @@ if TYPE_CHECKING:  # the names as type checkers see them (imported on first use 
 
 # The names are imported on first use (PEP 562): importing one module of the package
 # imports that module and what it needs, not the others (dustoptics._lazy).
-_SUBMODULES = ("job", "medium", "orders", "render")
 _NAMES = {
     "dustoptics.sky.job": ("SkyJob",),
     "dustoptics.sky.medium": ("Medium",),
@@ -52,4 +51,4 @@ __all__ = [
     "render",
     "solve_orders",
 ]
-__getattr__, __dir__ = lazy_package(__name__, _NAMES, _SUBMODULES, __all__)
+__getattr__, __dir__ = lazy_package(__name__, _NAMES, __all__)

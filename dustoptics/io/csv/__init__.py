@@ -28,7 +28,6 @@ if TYPE_CHECKING:  # the names as type checkers see them (imported on first use 
 
 # The names are imported on first use (PEP 562): importing one module of the package
 # imports that module and what it needs, not the others (dustoptics._lazy).
-_SUBMODULES = ("cosmoscout", "seed")
 _NAMES = {
     "dustoptics.io.csv.cosmoscout": (
         "check_cosmoscout_set",
@@ -50,4 +49,4 @@ __all__ = [
     "write_cosmoscout_set",
     "write_seed_csv",
 ]
-__getattr__, __dir__ = lazy_package(__name__, _NAMES, _SUBMODULES, __all__)
+__getattr__, __dir__ = lazy_package(__name__, _NAMES, __all__)

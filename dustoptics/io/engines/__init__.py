@@ -39,16 +39,6 @@ if TYPE_CHECKING:  # the names as type checkers see them (imported on first use 
 
 # The names are imported on first use (PEP 562): importing one module of the package
 # imports that module and what it needs, not the others (dustoptics._lazy).
-_SUBMODULES = (
-    "bevy",
-    "bruneton",
-    "calcmysky",
-    "celestia",
-    "cosmoscout_preprocessor",
-    "fit",
-    "openspace",
-    "precomputation",
-)
 _NAMES: dict[str, tuple[str, ...]] = {}
 
 
@@ -62,4 +52,4 @@ __all__ = [
     "openspace",
     "precomputation",
 ]
-__getattr__, __dir__ = lazy_package(__name__, _NAMES, _SUBMODULES, __all__)
+__getattr__, __dir__ = lazy_package(__name__, _NAMES, __all__)

@@ -23,7 +23,6 @@ if TYPE_CHECKING:  # the names as type checkers see them (imported on first use 
 
 # The names are imported on first use (PEP 562): importing one module of the package
 # imports that module and what it needs, not the others (dustoptics._lazy).
-_SUBMODULES = ("ames", "lmd")
 _NAMES = {
     "dustoptics.io.gcm.ames": ("read_ames",),
     "dustoptics.io.gcm.lmd": ("read_lmd",),
@@ -31,4 +30,4 @@ _NAMES = {
 
 
 __all__ = ["ames", "lmd", "read_ames", "read_lmd"]
-__getattr__, __dir__ = lazy_package(__name__, _NAMES, _SUBMODULES, __all__)
+__getattr__, __dir__ = lazy_package(__name__, _NAMES, __all__)

@@ -30,7 +30,6 @@ if TYPE_CHECKING:  # the names as type checkers see them (imported on first use 
 
 # The names are imported on first use (PEP 562): importing one module of the package
 # imports that module and what it needs, not the others (dustoptics._lazy).
-_SUBMODULES = ("disort", "libradtran", "libradtran_netcdf")
 _NAMES = {
     "dustoptics.io.rt.disort": ("DISORT_SUFFIX", "disort_text", "write_disort"),
     "dustoptics.io.rt.libradtran": (
@@ -56,4 +55,4 @@ __all__ = [
     "write_libradtran",
     "write_libradtran_netcdf",
 ]
-__getattr__, __dir__ = lazy_package(__name__, _NAMES, _SUBMODULES, __all__)
+__getattr__, __dir__ = lazy_package(__name__, _NAMES, __all__)

@@ -24,7 +24,6 @@ if TYPE_CHECKING:  # the names as type checkers see them (imported on first use 
 
 # The names are imported on first use (PEP 562): importing one module of the package
 # imports that module and what it needs, not the others (dustoptics._lazy).
-_SUBMODULES = ("netcdf",)
 _NAMES = {
     "dustoptics.io.tables.netcdf": (
         "open_table",
@@ -37,4 +36,4 @@ _NAMES = {
 
 
 __all__ = ["netcdf", "open_table", "read_hdf5", "read_netcdf", "write_hdf5", "write_netcdf"]
-__getattr__, __dir__ = lazy_package(__name__, _NAMES, _SUBMODULES, __all__)
+__getattr__, __dir__ = lazy_package(__name__, _NAMES, __all__)

@@ -27,7 +27,6 @@ if TYPE_CHECKING:  # the names as type checkers see them (imported on first use 
 
 # The names are imported on first use (PEP 562): importing one module of the package
 # imports that module and what it needs, not the others (dustoptics._lazy).
-_SUBMODULES = ("exr", "ktx2", "npy", "phase_texture", "raw")
 _NAMES = {
     "dustoptics.io.textures.exr": ("write_exr",),
     "dustoptics.io.textures.ktx2": ("write_ktx2",),
@@ -50,4 +49,4 @@ __all__ = [
     "write_npy",
     "write_texture",
 ]
-__getattr__, __dir__ = lazy_package(__name__, _NAMES, _SUBMODULES, __all__)
+__getattr__, __dir__ = lazy_package(__name__, _NAMES, __all__)
