@@ -246,12 +246,7 @@ class Atmosphere:
     def __post_init__(self) -> None:
         if not isinstance(self.name, str) or not self.name:
             raise ValueError(f"name must be a non-empty string; got {self.name!r}")
-        r = check_positive("planet_radius_m", self.planet_radius_m, unit="m")
-        top = check_positive("atmosphere_radius_m", self.atmosphere_radius_m, unit="m")
-        if top <= r:
-            raise ValueError(
-                f"atmosphere_radius_m must exceed planet_radius_m ({r!r} m); got {self.atmosphere_radius_m!r}"
-            )
+        _depth_m(self.planet_radius_m, self.atmosphere_radius_m)
         check_positive("sun_distance_m", self.sun_distance_m, unit="m")
         if not (math.isfinite(self.refractivity) and self.refractivity >= 0.0):
             raise ValueError(
@@ -439,6 +434,17 @@ def _cext_at(table: Table, wavelength_nm: float) -> float:
     return float(np.interp(w, wl, table.cross_sections.cext_um2))
 
 
+def _depth_m(planet_radius_m: float, atmosphere_radius_m: float) -> float:
+    """The atmosphere's depth, checked: both radii > 0, the atmosphere's the larger. [m]"""
+    r = check_positive("planet_radius_m", planet_radius_m, unit="m")
+    top = check_positive("atmosphere_radius_m", atmosphere_radius_m, unit="m")
+    if top <= r:
+        raise ValueError(
+            f"atmosphere_radius_m must exceed planet_radius_m ({r!r} m); got {atmosphere_radius_m!r}"
+        )
+    return top - r
+
+
 def _molecules(
     model: str | gases.RayleighModel,
     allowed: tuple[str, ...],
@@ -516,13 +522,7 @@ def mars_atmosphere(
     if not isinstance(dust_table, Table):
         raise TypeError(f"dust_table must be a Table; got {type(dust_table).__name__}")
     wl = dust_table.wavelength_nm
-    top = check_positive("atmosphere_radius_m", atmosphere_radius_m, unit="m") - check_positive(
-        "planet_radius_m", planet_radius_m, unit="m"
-    )
-    if top <= 0:
-        raise ValueError(
-            f"atmosphere_radius_m must exceed planet_radius_m; got {atmosphere_radius_m!r}"
-        )
+    top = _depth_m(planet_radius_m, atmosphere_radius_m)
     profile = (
         dust_profile
         if dust_profile is not None
@@ -830,11 +830,7 @@ def earth_atmosphere(
     wl = as_increasing_grid("wavelength_nm", wavelength_nm, unit="nm")
     mols, refractivity = _molecules(molecules, EARTH_MOLECULE_MODELS, wl, molecules_scale_height_m)
     mol_table = mols.table
-    r = check_positive("planet_radius_m", planet_radius_m, unit="m")
-    if check_positive("atmosphere_radius_m", atmosphere_radius_m, unit="m") <= r:
-        raise ValueError(
-            f"atmosphere_radius_m must exceed planet_radius_m ({r!r} m); got {atmosphere_radius_m!r}"
-        )
+    _depth_m(planet_radius_m, atmosphere_radius_m)
     aerosols, profile_a = _earth_aerosols(
         wl,
         aerosol=aerosol,
