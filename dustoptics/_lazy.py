@@ -5,16 +5,19 @@ of them import them all: ``dustoptics build`` imported every format's writer (an
 with them scipy.integrate, the atmosphere sets, the engines) to write a netCDF file.
 A package built with :func:`lazy_attribute` names what it offers and imports it when
 it is first used: ``from dustoptics.io import FORMATS`` imports the registry only.
+
+``__all__`` stays a literal list beside the name map (type checkers read it: a name of a
+typed package is re-exported when ``__all__`` lists it); the tests check that they agree.
 """
 
 from __future__ import annotations
 
 import importlib
 import sys
-from collections.abc import Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from typing import Any
 
-__all__ = ["lazy_attribute", "lazy_dir"]
+__all__ = ["lazy_attribute", "lazy_dir", "lazy_package"]
 
 
 def lazy_attribute(
@@ -57,3 +60,28 @@ def lazy_attribute(
 def lazy_dir(package: str, public: Iterable[str]) -> list[str]:
     """The names of ``package``: those set on it and the ``public`` ones (its ``__dir__``)."""
     return sorted({*vars(sys.modules[package]), *public})
+
+
+def lazy_package(
+    package: str, names: Mapping[str, Iterable[str]], public: Iterable[str]
+) -> tuple[Callable[[str], Any], Callable[[], list[str]]]:
+    """A package's ``__getattr__`` and ``__dir__``, for::
+
+        __getattr__, __dir__ = lazy_package(__name__, _NAMES, __all__)
+
+    ``names`` as for :func:`lazy_attribute`; the ``public`` names (``__all__``) that no
+    module of ``names`` gives are the package's submodules (a name the package defines
+    itself never reaches ``__getattr__``).
+    """
+    public = tuple(public)
+    given = {n for module_names in names.values() for n in module_names}
+    submodules = tuple(n for n in public if n not in given)
+
+    def attribute(name: str) -> Any:
+        """A public name, imported on first use."""
+        return lazy_attribute(package, name, names, submodules)
+
+    def listing() -> list[str]:
+        return lazy_dir(package, public)
+
+    return attribute, listing

@@ -65,32 +65,16 @@ then hands them kernels.
 Threads and fork
 ----------------
 Every kernel of the package is serial and runs in threads (``nogil``; the sky's
-too, since they compile faster so: :func:`dustoptics.sky._shared.in_threads`).
-For a parallel kernel (``parallel=True``, numba's threading layer), numba's default layer on
-Linux is GNU OpenMP, which kills any child forked after its threads started as
-soon as the child runs a parallel kernel ("fork() called from a process already
-using GNU OpenMP"): a process that had run one could not fork one that
-computes (``multiprocessing``'s ``fork`` start method, a forking server, a test
-runner).  So every parallel kernel is declared with :func:`parallel_kernel`,
-which before the first parallel run selects numba's ``forksafe`` layer: TBB
-when it is installed (``pip install tbb``), else numba's own ``workqueue`` (on
-the benchmark's machine the sky, when its kernels were parallel, rendered as
-fast with it: 1.3-1.5 s against 1.1-1.5 s with OpenMP, busy).  ``workqueue`` aborts the process when two
-threads run parallel kernels at once, so the package runs its parallel kernels
-one at a time (a lock; each uses every core).  A layer the user chose
-(``NUMBA_THREADING_LAYER`` or ``numba.config.THREADING_LAYER``), or that
-started before the package's first parallel kernel, is kept; if it is GNU
-OpenMP, a parallel kernel in a forked child raises :class:`RuntimeError` that
-says so, instead of the child being killed.  The layer is process-wide: code of
-the user's that calls numba's parallel functions from several threads at once
-should choose ``tbb`` or ``omp`` itself.
+too, since they compile faster so: :func:`dustoptics.sky._shared.in_threads`), so
+rendering starts no numba threading layer: a process forked after it (numba's
+default layer on Linux, GNU OpenMP, kills such a child once it runs a parallel
+kernel) computes as its parent does.
 """
 
 from __future__ import annotations
 
 import atexit
 import contextlib
-import functools
 import hashlib
 import importlib
 import os
@@ -121,9 +105,7 @@ __all__ = [
     "configure",
     "kernel",
     "kernels_cached",
-    "parallel_kernel",
     "prestart",
-    "select_threading_layer",
     "variant",
 ]
 
@@ -352,95 +334,6 @@ def variant(dispatcher: Any, *arg_types: str, group: str) -> None:
 # ----------------------------------------------------------------------------
 # Parallel kernels: the threading layer, fork and threads
 # ----------------------------------------------------------------------------
-
-#: numba's threading layer selected for the parallel kernels when the user chose none
-#: (numba's name for TBB if installed, else ``workqueue``; never GNU OpenMP).
-THREADING_LAYER = "forksafe"
-
-_parallel_lock = threading.RLock()
-#: Whether this process was forked from one whose threading layer had started.
-_forked_after_launch = False
-
-
-def _launched_layer() -> str | None:
-    """The threading layer running in this process (or its parent), None before any."""
-    import numba  # after configure(): numba reads NUMBA_* on import
-
-    try:
-        return str(numba.threading_layer())
-    except ValueError:  # numba: "Threading layer is not initialized."
-        return None
-
-
-def select_threading_layer() -> str | None:
-    """Select :data:`THREADING_LAYER` unless a layer is chosen or running; returns the one
-    running (None: none yet, the next parallel kernel starts the one configured)."""
-    import numba  # after configure(): numba reads NUMBA_* on import
-
-    layer = _launched_layer()
-    chosen = "NUMBA_THREADING_LAYER" in os.environ or numba.config.THREADING_LAYER != "default"
-    if layer is None and not chosen:
-        numba.config.THREADING_LAYER = THREADING_LAYER
-    return layer
-
-
-def _gnu_openmp() -> bool:
-    try:
-        omppool = importlib.import_module("numba.np.ufunc.omppool")
-    except ImportError:  # pragma: no cover - numba built without OpenMP
-        return False
-    return str(getattr(omppool, "openmp_vendor", "GNU")) == "GNU"
-
-
-def parallel_kernel(dispatcher: Any) -> Callable[..., Any]:
-    """Declare a ``parallel=True`` kernel: the call selects the fork-safe threading layer
-    first and runs one parallel kernel at a time (see the module's docstring).
-
-    Parameters
-    ----------
-    dispatcher : numba.core.registry.CPUDispatcher
-        ``numba.njit(parallel=True, ...)`` of the kernel (the function itself with
-        numba's JIT off).
-
-    Returns
-    -------
-    callable
-        Calls ``dispatcher``; its ``dispatcher`` attribute is numba's dispatcher.
-
-    Raises
-    ------
-    RuntimeError
-        In a process forked after GNU OpenMP's threads started (a layer the user chose),
-        where the OpenMP runtime would kill the process.
-    """
-
-    # With numba's JIT off (NUMBA_DISABLE_JIT=1) njit returns the Python function itself.
-    @functools.wraps(getattr(dispatcher, "py_func", dispatcher))
-    def call(*args: Any) -> Any:
-        with _parallel_lock:
-            layer = select_threading_layer()
-            if _forked_after_launch and layer == "omp" and _gnu_openmp():
-                raise RuntimeError(
-                    f"{call.__qualname__}: this process was forked after numba's GNU OpenMP "
-                    "threads started, and GNU OpenMP kills such a process; set "
-                    "NUMBA_THREADING_LAYER=workqueue (or tbb), or unset it to let dustoptics "
-                    "choose, or start processes with the 'spawn' or 'forkserver' method"
-                )
-            return dispatcher(*args)
-
-    call.dispatcher = dispatcher  # type: ignore[attr-defined]
-    return call
-
-
-def _after_fork_in_child() -> None:  # pragma: no cover - runs in forked children
-    global _parallel_lock, _forked_after_launch
-    _parallel_lock = threading.RLock()  # a thread of the parent may have held it
-    parallel = sys.modules.get("numba.np.ufunc.parallel")
-    _forked_after_launch = bool(getattr(parallel, "_is_initialized", False))
-
-
-if hasattr(os, "register_at_fork"):
-    os.register_at_fork(after_in_child=_after_fork_in_child)
 
 
 def kernels(groups: Iterable[str] = GROUPS) -> list[Kernel]:

@@ -51,6 +51,7 @@ import numpy as np
 import dustoptics as do
 from dustoptics.particles.custom_sizedist import MultiModal
 from dustoptics.particles.sizedist import (
+    SIZE_DISTRIBUTIONS,
     DeirmendjianGamma,
     Gamma,
     LogNormal,
@@ -74,16 +75,15 @@ ROUNDOFF = 1e-11
 #: A derivative is near zero where |p dY/dp| < NEAR_ZERO |Y|.
 NEAR_ZERO = 1e-3
 
-FAMILIES = (
-    "modified_gamma",
-    "gamma",
-    "log_normal",
-    "modified_log_normal",
-    "deirmendjian_gamma",
-    "power_law",
-    "truncated",
-    "multimodal",
-    "monodisperse",
+#: Families with no sampler below: a measured table and a density function have no shape
+#: parameters to draw.
+_NOT_SAMPLED = ("tabulated", "density_function")
+#: The registry's other families (a new one needs a sampler in :func:`_distribution`), in
+#: the order the seeded draws take them: the registry's, monodisperse last.
+FAMILIES = tuple(
+    sorted(
+        (n for n in SIZE_DISTRIBUTIONS if n not in _NOT_SAMPLED), key=lambda n: n == "monodisperse"
+    )
 )
 
 

@@ -5,7 +5,7 @@ was rendered as soon as the child rendered one ("fork() called from a process al
 GNU OpenMP"), when the sky's kernels were ``parallel=True``.  They are now serial kernels
 that the sky runs in threads (:func:`dustoptics.sky._shared.in_threads`): rendering a sky
 starts no threading layer at all, so even with GNU OpenMP chosen a forked child renders the
-same sky.  :func:`dustoptics._numba_cache.parallel_kernel` stays for parallel kernels to come.
+same sky.
 The threading layer is chosen once per process, so each test runs a fresh interpreter.
 """
 
@@ -112,18 +112,3 @@ def test_with_gnu_openmp_chosen_a_forked_child_renders_the_same_sky() -> None:
     assert lines[0] == "layer none", done.stdout
     assert lines[1] == "child 0 same True", done.stdout + done.stderr[-3000:]
     assert "fork() called from a process already using GNU OpenMP" not in done.stderr
-
-
-def test_parallel_kernel_calls_the_function_numba_jit_off_returns() -> None:
-    # With NUMBA_DISABLE_JIT=1 numba.njit returns the function itself (no py_func): the
-    # declaration must still import and call it (tests/test_numba_cache.py runs a table so).
-    from dustoptics._numba_cache import parallel_kernel
-
-    def add(a: int, b: int) -> int:
-        """Add."""
-        return a + b
-
-    wrapped = parallel_kernel(add)
-    assert wrapped(2, 3) == 5
-    assert wrapped.dispatcher is add  # type: ignore[attr-defined]
-    assert wrapped.__name__ == "add" and wrapped.__doc__ == "Add."

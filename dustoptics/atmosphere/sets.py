@@ -246,12 +246,7 @@ class Atmosphere:
     def __post_init__(self) -> None:
         if not isinstance(self.name, str) or not self.name:
             raise ValueError(f"name must be a non-empty string; got {self.name!r}")
-        r = check_positive("planet_radius_m", self.planet_radius_m, unit="m")
-        top = check_positive("atmosphere_radius_m", self.atmosphere_radius_m, unit="m")
-        if top <= r:
-            raise ValueError(
-                f"atmosphere_radius_m must exceed planet_radius_m ({r!r} m); got {self.atmosphere_radius_m!r}"
-            )
+        _depth_m(self.planet_radius_m, self.atmosphere_radius_m)
         check_positive("sun_distance_m", self.sun_distance_m, unit="m")
         if not (math.isfinite(self.refractivity) and self.refractivity >= 0.0):
             raise ValueError(
@@ -439,20 +434,37 @@ def _cext_at(table: Table, wavelength_nm: float) -> float:
     return float(np.interp(w, wl, table.cross_sections.cext_um2))
 
 
+def _depth_m(planet_radius_m: float, atmosphere_radius_m: float) -> float:
+    """The atmosphere's depth, checked: both radii > 0, the atmosphere's the larger. [m]"""
+    r = check_positive("planet_radius_m", planet_radius_m, unit="m")
+    top = check_positive("atmosphere_radius_m", atmosphere_radius_m, unit="m")
+    if top <= r:
+        raise ValueError(
+            f"atmosphere_radius_m must exceed planet_radius_m ({r!r} m); got {atmosphere_radius_m!r}"
+        )
+    return top - r
+
+
 def _molecules(
-    model: str | gases.RayleighModel, allowed: tuple[str, ...], wl: np.ndarray
-) -> tuple[Table, str, float]:
-    """Molecule table, model name and ground refractivity at 550 nm."""
-    if isinstance(model, gases.RayleighModel):
-        gas = model
-    else:
+    model: str | gases.RayleighModel,
+    allowed: tuple[str, ...],
+    wl: np.ndarray,
+    scale_height_m: float | None,
+) -> tuple[Constituent, float]:
+    """The molecules (exponential profile; default scale height the model's, else 8 km) and
+    their ground refractivity at 550 nm."""
+    if not isinstance(model, gases.RayleighModel):
         check_choice("molecules", model, allowed)
-        if model == "collienne2013":
-            table = gases.collienne2013_table(wl, name="collienne2013-molecules")
-            co2 = gases.get_rayleigh_model("costa2021-mars")
-            return table, model, float(co2.refractivity(550.0))
-        gas = gases.get_rayleigh_model(model)
-    return gas.table(wl), gas.name, float(gas.refractivity(550.0))
+    if model == "collienne2013":
+        table = gases.collienne2013_table(wl, name="collienne2013-molecules")
+        name, refractivity = model, gases.get_rayleigh_model("costa2021-mars").refractivity(550.0)
+    else:
+        gas = gases.get_rayleigh_model(model) if isinstance(model, str) else model
+        table, name, refractivity = gas.table(wl), gas.name, gas.refractivity(550.0)
+    if scale_height_m is None:
+        scale_height_m = _MOLECULE_SCALE_HEIGHT_M.get(name, 8000.0)
+    profile = ExponentialProfile(scale_height_m=scale_height_m)
+    return Constituent(role="molecules", table=table, profile=profile), float(refractivity)
 
 
 def mars_atmosphere(
@@ -510,13 +522,7 @@ def mars_atmosphere(
     if not isinstance(dust_table, Table):
         raise TypeError(f"dust_table must be a Table; got {type(dust_table).__name__}")
     wl = dust_table.wavelength_nm
-    top = check_positive("atmosphere_radius_m", atmosphere_radius_m, unit="m") - check_positive(
-        "planet_radius_m", planet_radius_m, unit="m"
-    )
-    if top <= 0:
-        raise ValueError(
-            f"atmosphere_radius_m must exceed planet_radius_m; got {atmosphere_radius_m!r}"
-        )
+    top = _depth_m(planet_radius_m, atmosphere_radius_m)
     profile = (
         dust_profile
         if dust_profile is not None
@@ -530,20 +536,13 @@ def mars_atmosphere(
         profile=profile,
         top_altitude_m=top,
     )
-    mol_table, mol_name, refractivity = _molecules(molecules, MARS_MOLECULE_MODELS, wl)
-    h_mol = (
-        molecules_scale_height_m
-        if molecules_scale_height_m is not None
-        else _MOLECULE_SCALE_HEIGHT_M.get(mol_name, 8000.0)
-    )
+    mols, refractivity = _molecules(molecules, MARS_MOLECULE_MODELS, wl, molecules_scale_height_m)
     return Atmosphere(
         name=name,
         planet_radius_m=planet_radius_m,
         atmosphere_radius_m=atmosphere_radius_m,
         constituents=(
-            Constituent(
-                role="molecules", table=mol_table, profile=ExponentialProfile(scale_height_m=h_mol)
-            ),
+            mols,
             Constituent(role="aerosols", table=dust, profile=profile),
         ),
         sun_distance_m=_MARS_SUN_DISTANCE_M,
@@ -829,18 +828,9 @@ def earth_atmosphere(
     Atmosphere
     """
     wl = as_increasing_grid("wavelength_nm", wavelength_nm, unit="nm")
-    mol_table, mol_name, refractivity = _molecules(molecules, EARTH_MOLECULE_MODELS, wl)
-    h_mol = (
-        molecules_scale_height_m
-        if molecules_scale_height_m is not None
-        else _MOLECULE_SCALE_HEIGHT_M.get(mol_name, 8000.0)
-    )
-    mol_profile = ExponentialProfile(scale_height_m=h_mol)
-    r = check_positive("planet_radius_m", planet_radius_m, unit="m")
-    if check_positive("atmosphere_radius_m", atmosphere_radius_m, unit="m") <= r:
-        raise ValueError(
-            f"atmosphere_radius_m must exceed planet_radius_m ({r!r} m); got {atmosphere_radius_m!r}"
-        )
+    mols, refractivity = _molecules(molecules, EARTH_MOLECULE_MODELS, wl, molecules_scale_height_m)
+    mol_table = mols.table
+    _depth_m(planet_radius_m, atmosphere_radius_m)
     aerosols, profile_a = _earth_aerosols(
         wl,
         aerosol=aerosol,
@@ -854,7 +844,7 @@ def earth_atmosphere(
         top_altitude_m=atmosphere_radius_m - planet_radius_m,
     )
     cons = [
-        Constituent(role="molecules", table=mol_table, profile=mol_profile),
+        mols,
         Constituent(role="aerosols", table=aerosols, profile=profile_a),
     ]
     if isinstance(ozone, str):

@@ -50,9 +50,9 @@ imported on first use: writing one format imports that format's module only.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
-from dustoptics._lazy import lazy_attribute, lazy_dir
+from dustoptics._lazy import lazy_package
 
 if TYPE_CHECKING:  # the names as type checkers see them (imported on first use below)
     from dustoptics.io import (
@@ -116,25 +116,12 @@ FORMAT_MODULES = (
     "dustoptics.io.rt.libradtran",
     "dustoptics.io.rt.libradtran_netcdf",
     "dustoptics.io.tables.netcdf",
-    "dustoptics.io.gcm.ames_ir",
-    "dustoptics.io.gcm.ames_vis",
-    "dustoptics.io.gcm.lmd_ir",
-    "dustoptics.io.gcm.lmd_vis",
+    "dustoptics.io.gcm.ames",
+    "dustoptics.io.gcm.lmd",
 )
 
 # The names are imported on first use (PEP 562): importing one module of the package
 # imports that module and what it needs, not the others (dustoptics._lazy).
-_SUBMODULES = (
-    "csv",
-    "describe",
-    "engines",
-    "gcm",
-    "outputs",
-    "rt",
-    "shaders",
-    "tables",
-    "textures",
-)
 _NAMES = {
     "dustoptics.io._atomic": ("FormatError",),
     "dustoptics.io.csv": (
@@ -173,15 +160,6 @@ _NAMES = {
         "write_texture",
     ),
 }
-
-
-def __getattr__(name: str) -> Any:
-    """A public name, imported on first use."""
-    return lazy_attribute(__name__, name, _NAMES, _SUBMODULES)
-
-
-def __dir__() -> list[str]:
-    return lazy_dir(__name__, __all__)
 
 
 __all__ = [
@@ -233,3 +211,4 @@ __all__ = [
     "write_shader",
     "write_texture",
 ]
+__getattr__, __dir__ = lazy_package(__name__, _NAMES, __all__)

@@ -19,9 +19,9 @@
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
-from dustoptics._lazy import lazy_attribute, lazy_dir
+from dustoptics._lazy import lazy_package
 
 if TYPE_CHECKING:  # the names as type checkers see them (imported on first use below)
     from dustoptics.sky import job, medium, orders, render
@@ -32,22 +32,12 @@ if TYPE_CHECKING:  # the names as type checkers see them (imported on first use 
 
 # The names are imported on first use (PEP 562): importing one module of the package
 # imports that module and what it needs, not the others (dustoptics._lazy).
-_SUBMODULES = ("job", "medium", "orders", "render")
 _NAMES = {
     "dustoptics.sky.job": ("SkyJob",),
     "dustoptics.sky.medium": ("Medium",),
     "dustoptics.sky.orders": ("DiffuseField", "solve_orders"),
     "dustoptics.sky.render": ("line_of_sight_radiance",),
 }
-
-
-def __getattr__(name: str) -> Any:
-    """A public name, imported on first use."""
-    return lazy_attribute(__name__, name, _NAMES, _SUBMODULES)
-
-
-def __dir__() -> list[str]:
-    return lazy_dir(__name__, __all__)
 
 
 __all__ = [
@@ -61,3 +51,4 @@ __all__ = [
     "render",
     "solve_orders",
 ]
+__getattr__, __dir__ = lazy_package(__name__, _NAMES, __all__)

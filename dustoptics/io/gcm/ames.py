@@ -1,4 +1,9 @@
-"""The NASA Ames Mars GCM's dust files (``Dust_vis_wolff2010_JD_15bands.dat`` layout).
+"""The NASA Ames Mars GCM's dust files (formats ``ames-dustvis``, ``ames-dustir``).
+
+``<name>_Dust_<vis|ir>_15bands.dat`` (and its ``.json`` sidecar): per radius, Q_ext, Q_sca
+and g averaged over each of the model's 7 visible bands (0.24-4.5 um, Planck-weighted at
+6000 K) or 8 infrared bands (4.5-1000 um, at 215 K), in the layout of its
+``Dust_vis_wolff2010_JD_15bands.dat`` and ``Dust_ir_wolff2010_JD_15bands.dat``.
 
 Read from the model's public repository, nasa/AmesGCM at commit
 eaba9b5400031651f6d5545acbca08eaf471defb (:data:`AMES_COMMIT`),
@@ -29,6 +34,7 @@ since the layout has no room for a header.
 
 from __future__ import annotations
 
+import functools
 import json
 import os
 from dataclasses import dataclass
@@ -46,13 +52,15 @@ from dustoptics.io.gcm.common import (
     planck_band_average,
     planck_bands,
 )
-from dustoptics.io.registry import option
+from dustoptics.io.registry import Format, option, register
 
 __all__ = [
     "AMES_COMMIT",
     "BANDS",
     "DEFAULT_RADII_UM",
+    "IR_RECORD",
     "SINGLE_RADII",
+    "VIS_RECORD",
     "AmesBands",
     "AmesFile",
     "AmesOptions",
@@ -341,3 +349,22 @@ def describe_ames(path: Path, full: bool = True) -> str:
                 f"  the model reads it as {record['model_file_name']} (rtdata_path)",
             ]
     return "\n".join(lines)
+
+
+def _record(spec: AmesBands) -> Format:
+    """The format of one spectral set's file."""
+    return Format(
+        name=f"ames-dust{spec.key}",
+        summary=f"NAME_Dust_{spec.key}_15bands.dat: NASA Ames Mars GCM {spec.title} dust file "
+        "(Q_ext, Q_sca, g per band and radius) and a JSON sidecar",
+        write=functools.partial(write_ames, bands=spec.key),
+        suffixes=(".dat", ".json"),
+        options=AmesOptions,
+        recognise=lambda path: is_ames(path, spec.key),
+        describe=describe_ames,
+    )
+
+
+# In the order the formats were listed before (infrared first).
+IR_RECORD = register(_record(BANDS["ir"]))
+VIS_RECORD = register(_record(BANDS["vis"]))

@@ -1,4 +1,8 @@
-"""The LMD Mars PCM's dust optical-property files (``optprop_dustvis_TM_n50.dat`` layout).
+"""The LMD Mars PCM's dust optical-property files (formats ``lmd-dustvis``, ``lmd-dustir``).
+
+``<name>_optprop_dust<vis|ir>_n<nsize>.dat``: Q_ext, single-scattering albedo and g per
+wavelength and effective radius, over the PCM's visible (0.1-5 um) or infrared (5-200 um)
+bands, in the layout of the PCM's ``optprop_dustvis_TM_n50.dat`` and ``optprop_dustir_n50.dat``.
 
 The layout is the one the PCM's ``suaer.F90`` reads (LMD Mars PCM, ``phymars/suaer.F90``;
 read from a public copy of the source, see :doc:`/howto/gcm_dust_files`): lines whose
@@ -25,6 +29,7 @@ numbers are printed with 7 significant digits, five to a line.
 
 from __future__ import annotations
 
+import functools
 import os
 from dataclasses import dataclass
 from pathlib import Path
@@ -41,12 +46,14 @@ from dustoptics.io.gcm.common import (
     grid_optics,
     scalable_radii,
 )
-from dustoptics.io.registry import option
+from dustoptics.io.registry import Format, option, register
 
 __all__ = [
     "DEFAULT_RADII_UM",
     "DOMAINS",
     "FIRST_LINE",
+    "IR_RECORD",
+    "VIS_RECORD",
     "LmdDomain",
     "LmdFile",
     "LmdOptions",
@@ -120,17 +127,25 @@ class LmdOptions(GcmOptions):
     def check(self, wavelength_nm: Any) -> None:
         """Refuse, before the table is computed, what the writer would refuse."""
         super().check(wavelength_nm)
-        if self.gcm_radii_um is not None and len(self.gcm_radii_um) > NSIZEMAX:
-            raise ValueError(
-                f"gcm_radii_um has {len(self.gcm_radii_um)} radii; the PCM takes at most "
-                f"{NSIZEMAX} (nsizemax)"
-            )
-        w = self.gcm_wavelengths_um
-        if w is not None and (len(w) < 2 or min(w) <= 0 or bool(np.any(np.diff(w) <= 0))):
-            raise ValueError(
-                f"gcm_wavelengths_um must be two or more increasing wavelengths > 0 [um]; got "
-                f"{list(w)!r}"
-            )
+        _check_size(check_radii(self.gcm_radii_um))
+        if self.gcm_wavelengths_um is not None:
+            _checked_wavelengths(self.gcm_wavelengths_um)
+
+
+def _check_size(radii: np.ndarray | None) -> None:
+    if radii is not None and radii.size > NSIZEMAX:
+        raise ValueError(
+            f"gcm_radii_um has {radii.size} radii; the PCM takes at most {NSIZEMAX} (nsizemax)"
+        )
+
+
+def _checked_wavelengths(given: tuple[float, ...]) -> np.ndarray:
+    w = np.asarray(given, dtype=np.float64)
+    if w.size < 2 or np.any(np.diff(w) <= 0) or not np.all(np.isfinite(w)) or w[0] <= 0:
+        raise ValueError(
+            f"gcm_wavelengths_um must be two or more increasing wavelengths > 0 [um]; got {list(given)!r}"
+        )
+    return w
 
 
 def _wavelength_axis(
@@ -147,11 +162,7 @@ def _wavelength_axis(
             )
         axis = np.union1d(np.geomspace(lo, hi, _N_WAVELENGTHS), [domain.reference_um])
         return axis
-    w = np.asarray(given, dtype=np.float64)
-    if w.size < 2 or np.any(np.diff(w) <= 0) or not np.all(np.isfinite(w)) or w[0] <= 0:
-        raise ValueError(
-            f"gcm_wavelengths_um must be two or more increasing wavelengths > 0 [um]; got {list(given)!r}"
-        )
+    w = _checked_wavelengths(given)
     if not w[0] <= domain.reference_um <= w[-1]:
         raise ValueError(
             f"gcm_wavelengths_um ({w[0]:g}-{w[-1]:g} um) must bracket the PCM's {domain.title} "
@@ -178,10 +189,7 @@ def lmd_text(
     d = DOMAINS[domain]
     name = f"lmd-dust{domain}"
     radii = check_radii(gcm_radii_um)
-    if radii is not None and radii.size > NSIZEMAX:
-        raise ValueError(
-            f"gcm_radii_um has {radii.size} radii; the PCM takes at most {NSIZEMAX} (nsizemax)"
-        )
+    _check_size(radii)
     particles = gcm_particles(table, format_name=name)
     left_out = ""
     if radii is None:
@@ -351,3 +359,22 @@ def describe_lmd(path: Path, full: bool = True) -> str:
             "file_id)"
         )
     return "\n".join(lines)
+
+
+def _record(domain: LmdDomain) -> Format:
+    """The format of one domain's file."""
+    return Format(
+        name=f"lmd-dust{domain.key}",
+        summary=f"NAME_optprop_dust{domain.key}_nN.dat: LMD Mars PCM {domain.title} dust file "
+        "(Q_ext, albedo, g per wavelength and radius)",
+        write=functools.partial(write_lmd, domain=domain.key),
+        suffixes=(".dat",),
+        options=LmdOptions,
+        recognise=lambda path: is_lmd(path) and f"_optprop_dust{domain.key}_" in path.name,
+        describe=describe_lmd,
+    )
+
+
+# In the order the formats were listed before (infrared first).
+IR_RECORD = register(_record(DOMAINS["ir"]))
+VIS_RECORD = register(_record(DOMAINS["vis"]))

@@ -13,9 +13,9 @@ All need ``compute_optics(expansion=...)``.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
-from dustoptics._lazy import lazy_attribute, lazy_dir
+from dustoptics._lazy import lazy_package
 
 if TYPE_CHECKING:  # the names as type checkers see them (imported on first use below)
     from dustoptics.io.rt import disort, libradtran, libradtran_netcdf
@@ -30,7 +30,6 @@ if TYPE_CHECKING:  # the names as type checkers see them (imported on first use 
 
 # The names are imported on first use (PEP 562): importing one module of the package
 # imports that module and what it needs, not the others (dustoptics._lazy).
-_SUBMODULES = ("disort", "libradtran", "libradtran_netcdf")
 _NAMES = {
     "dustoptics.io.rt.disort": ("DISORT_SUFFIX", "disort_text", "write_disort"),
     "dustoptics.io.rt.libradtran": (
@@ -41,15 +40,6 @@ _NAMES = {
     ),
     "dustoptics.io.rt.libradtran_netcdf": ("write_libradtran_netcdf",),
 }
-
-
-def __getattr__(name: str) -> Any:
-    """A public name, imported on first use."""
-    return lazy_attribute(__name__, name, _NAMES, _SUBMODULES)
-
-
-def __dir__() -> list[str]:
-    return lazy_dir(__name__, __all__)
 
 
 __all__ = [
@@ -65,3 +55,4 @@ __all__ = [
     "write_libradtran",
     "write_libradtran_netcdf",
 ]
+__getattr__, __dir__ = lazy_package(__name__, _NAMES, __all__)

@@ -35,11 +35,8 @@ for polarized solvers, the format ``libradtran-nc``
 (:mod:`dustoptics.io.rt.libradtran_netcdf`) writes the phase matrix in
 libRadtran's signs.
 
-It needs the table's expansion coefficients (``compute_optics(...,
-expansion=True)`` or ``expansion=N``) and cross-sections; a table without
-them is refused with a message naming the option, since projecting the
-tabulated phase function onto Legendre polynomials would lose its forward
-peak without an error bound.
+It needs what DISORT's file needs, and refuses a table without it alike
+(:mod:`dustoptics.io.rt.disort`): expansion coefficients and cross-sections.
 """
 
 from __future__ import annotations

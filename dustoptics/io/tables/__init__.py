@@ -8,9 +8,9 @@
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
-from dustoptics._lazy import lazy_attribute, lazy_dir
+from dustoptics._lazy import lazy_package
 
 if TYPE_CHECKING:  # the names as type checkers see them (imported on first use below)
     from dustoptics.io.tables import netcdf
@@ -24,7 +24,6 @@ if TYPE_CHECKING:  # the names as type checkers see them (imported on first use 
 
 # The names are imported on first use (PEP 562): importing one module of the package
 # imports that module and what it needs, not the others (dustoptics._lazy).
-_SUBMODULES = ("netcdf",)
 _NAMES = {
     "dustoptics.io.tables.netcdf": (
         "open_table",
@@ -36,13 +35,5 @@ _NAMES = {
 }
 
 
-def __getattr__(name: str) -> Any:
-    """A public name, imported on first use."""
-    return lazy_attribute(__name__, name, _NAMES, _SUBMODULES)
-
-
-def __dir__() -> list[str]:
-    return lazy_dir(__name__, __all__)
-
-
 __all__ = ["netcdf", "open_table", "read_hdf5", "read_netcdf", "write_hdf5", "write_netcdf"]
+__getattr__, __dir__ = lazy_package(__name__, _NAMES, __all__)

@@ -13,9 +13,9 @@
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
-from dustoptics._lazy import lazy_attribute, lazy_dir
+from dustoptics._lazy import lazy_package
 
 if TYPE_CHECKING:  # the names as type checkers see them (imported on first use below)
     from dustoptics.io.textures import exr, ktx2, npy, phase_texture, raw
@@ -27,7 +27,6 @@ if TYPE_CHECKING:  # the names as type checkers see them (imported on first use 
 
 # The names are imported on first use (PEP 562): importing one module of the package
 # imports that module and what it needs, not the others (dustoptics._lazy).
-_SUBMODULES = ("exr", "ktx2", "npy", "phase_texture", "raw")
 _NAMES = {
     "dustoptics.io.textures.exr": ("write_exr",),
     "dustoptics.io.textures.ktx2": ("write_ktx2",),
@@ -35,15 +34,6 @@ _NAMES = {
     "dustoptics.io.textures.phase_texture": ("PhaseTexture",),
     "dustoptics.io.textures.raw": ("read_texture", "write_texture"),
 }
-
-
-def __getattr__(name: str) -> Any:
-    """A public name, imported on first use."""
-    return lazy_attribute(__name__, name, _NAMES, _SUBMODULES)
-
-
-def __dir__() -> list[str]:
-    return lazy_dir(__name__, __all__)
 
 
 __all__ = [
@@ -59,3 +49,4 @@ __all__ = [
     "write_npy",
     "write_texture",
 ]
+__getattr__, __dir__ = lazy_package(__name__, _NAMES, __all__)

@@ -59,7 +59,7 @@ from dustoptics.sky.engines.core import (
     EngineFit,
     EngineModel,
     error_notes,
-    hillaire_sky_rgb,
+    hillaire_renderer,
     per_channel,
     register_engine,
     rgb_of,
@@ -126,22 +126,12 @@ def bevy_setup(params: Mapping[str, float]) -> _hillaire.HillaireSetup:
     )
 
 
-def bevy_sky_rgb(
-    params: Mapping[str, float],
-    *,
-    sun_elevation_deg: float,
-    view_zenith_deg: Any,
-    view_azimuth_deg: Any,
-) -> np.ndarray:
+bevy_sky_rgb = hillaire_renderer(
+    bevy_setup,
+    "bevy_sky_rgb",
     """Bevy's sky per unit solar illuminance, linear sRGB [sr^-1] (a directional light of
-    the sunlight's colour)."""
-    return hillaire_sky_rgb(
-        bevy_setup(params),
-        params,
-        sun_elevation_deg=sun_elevation_deg,
-        view_zenith_deg=view_zenith_deg,
-        view_azimuth_deg=view_azimuth_deg,
-    )
+    the sunlight's colour).""",
+)
 
 
 def _base(atmosphere: Atmosphere) -> dict[str, float]:

@@ -45,6 +45,7 @@ __all__ = [
     "error_notes",
     "fit_engine",
     "fit_json",
+    "hillaire_renderer",
     "hillaire_sky_rgb",
     "per_channel",
     "reference_skies",
@@ -694,6 +695,42 @@ def hillaire_sky_rgb(
     if "exposure" in params:
         rgb = params["exposure"] * rgb
     return np.asarray(rgb * sunlight_linear_srgb(), dtype=float)
+
+
+def hillaire_renderer(
+    setup: Callable[[Mapping[str, float]], _hillaire.HillaireSetup], name: str, doc: str
+) -> Renderer:
+    """An engine's :data:`Renderer`: :func:`hillaire_sky_rgb` of ``setup(params)``.
+
+    Parameters
+    ----------
+    setup : callable
+        The engine's Hillaire medium of its parameters.
+    name : str
+        The renderer's name (``bevy_sky_rgb``), in the module of ``setup``.
+    doc : str
+        Its docstring.
+    """
+
+    def render(
+        params: Mapping[str, float],
+        *,
+        sun_elevation_deg: float,
+        view_zenith_deg: Any,
+        view_azimuth_deg: Any,
+    ) -> np.ndarray:
+        return hillaire_sky_rgb(
+            setup(params),
+            params,
+            sun_elevation_deg=sun_elevation_deg,
+            view_zenith_deg=view_zenith_deg,
+            view_azimuth_deg=view_azimuth_deg,
+        )
+
+    render.__name__ = render.__qualname__ = name
+    render.__module__ = setup.__module__
+    render.__doc__ = doc
+    return render
 
 
 def error_header(fit: EngineFit) -> list[str]:

@@ -47,7 +47,7 @@ from dustoptics.sky.engines.core import (
     EngineModel,
     Parameter,
     error_notes,
-    hillaire_sky_rgb,
+    hillaire_renderer,
     per_channel,
     register_engine,
     rgb_of,
@@ -105,22 +105,12 @@ def openspace_setup(params: Mapping[str, float]) -> _hillaire.HillaireSetup:
     )
 
 
-def openspace_sky_rgb(
-    params: Mapping[str, float],
-    *,
-    sun_elevation_deg: float,
-    view_zenith_deg: Any,
-    view_azimuth_deg: Any,
-) -> np.ndarray:
+openspace_sky_rgb = hillaire_renderer(
+    openspace_setup,
+    "openspace_sky_rgb",
     """OpenSpace's sky (its medium, Hillaire's passes) per unit solar illuminance times
-    ``exposure``, linear sRGB. [sr^-1]"""
-    return hillaire_sky_rgb(
-        openspace_setup(params),
-        params,
-        sun_elevation_deg=sun_elevation_deg,
-        view_zenith_deg=view_zenith_deg,
-        view_azimuth_deg=view_azimuth_deg,
-    )
+    ``exposure``, linear sRGB. [sr^-1]""",
+)
 
 
 def _flat(values: Mapping[str, Any]) -> dict[str, float]:

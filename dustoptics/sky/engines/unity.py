@@ -67,7 +67,7 @@ from dustoptics.sky.engines.core import (
     dust_tint_linear_srgb,
     error_header,
     fit_json,
-    hillaire_sky_rgb,
+    hillaire_renderer,
     per_channel,
     register_engine,
     rgb_of,
@@ -150,21 +150,11 @@ def unity_setup(params: Mapping[str, float]) -> _hillaire.HillaireSetup:
     )
 
 
-def unity_sky_rgb(
-    params: Mapping[str, float],
-    *,
-    sun_elevation_deg: float,
-    view_zenith_deg: Any,
-    view_azimuth_deg: Any,
-) -> np.ndarray:
-    """The Physically Based Sky per unit solar illuminance times ``exposure``, linear sRGB. [sr^-1]"""
-    return hillaire_sky_rgb(
-        unity_setup(params),
-        params,
-        sun_elevation_deg=sun_elevation_deg,
-        view_zenith_deg=view_zenith_deg,
-        view_azimuth_deg=view_azimuth_deg,
-    )
+unity_sky_rgb = hillaire_renderer(
+    unity_setup,
+    "unity_sky_rgb",
+    """The Physically Based Sky per unit solar illuminance times ``exposure``, linear sRGB. [sr^-1]""",
+)
 
 
 def _initial(atmosphere: Atmosphere) -> dict[str, float]:

@@ -63,7 +63,7 @@ from dustoptics.sky.engines.core import (
     dust_tint_linear_srgb,
     error_header,
     fit_json,
-    hillaire_sky_rgb,
+    hillaire_renderer,
     per_channel,
     register_engine,
     rgb_of,
@@ -131,24 +131,14 @@ def unreal_setup(params: Mapping[str, float]) -> _hillaire.HillaireSetup:
     )
 
 
-def unreal_sky_rgb(
-    params: Mapping[str, float],
-    *,
-    sun_elevation_deg: float,
-    view_zenith_deg: Any,
-    view_azimuth_deg: Any,
-) -> np.ndarray:
+unreal_sky_rgb = hillaire_renderer(
+    unreal_setup,
+    "unreal_sky_rgb",
     """The SkyAtmosphere's sky per unit solar illuminance times ``exposure``, linear sRGB. [sr^-1]
 
     The Sun is a directional light of the sunlight's colour and unit illuminance.
-    """
-    return hillaire_sky_rgb(
-        unreal_setup(params),
-        params,
-        sun_elevation_deg=sun_elevation_deg,
-        view_zenith_deg=view_zenith_deg,
-        view_azimuth_deg=view_azimuth_deg,
-    )
+    """,
+)
 
 
 def _planet(atmosphere: Atmosphere) -> dict[str, float]:
