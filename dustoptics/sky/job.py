@@ -40,7 +40,7 @@ from dustoptics.io._atomic import check_targets, write_files
 from dustoptics.io.outputs import Placement, place_outputs
 from dustoptics.sky import hdr, scene, space
 from dustoptics.sky._netcdf import read_netcdf3
-from dustoptics.sky.medium import Medium
+from dustoptics.sky.medium import Medium, prefetch_projection_rule
 from dustoptics.sky.orders import N_LAYERS, check_orders_cost
 from dustoptics.sky.render import N_PATH, check_render_cost
 from dustoptics.table import canonical_json
@@ -436,6 +436,7 @@ class SkyJob:
         _numba_cache.compile_kernels(("optics", "sky"), progress=self.progress)
 
     def _sky_files(self) -> dict[Path, bytes]:
+        prefetch_projection_rule()  # on the core the tables' first wavelength leaves free
         self._compile()
         atm = self.atmosphere()
         if self.preview is not None:  # refused before the medium and the sky
@@ -527,6 +528,7 @@ class SkyJob:
         return out
 
     def _comparison_files(self) -> dict[Path, bytes]:
+        prefetch_projection_rule()  # as for a sky
         self._compile()
         # lazy: sky.compare adds 20-30 ms to import dustoptics (-X importtime)
         from dustoptics.sky.compare import MARS_MODELS, compare_mars_models, plot_comparison
