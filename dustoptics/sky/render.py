@@ -872,8 +872,11 @@ def line_of_sight_radiance(
         correction = None
         if aureole and field.mu0 > 0.0:
             context = contextvars.copy_context()  # the caller's shared geometry
-            args = (medium, field, mu_view, phi_view, radius)
-            correction = pool.submit(context.run, _aureole_for_observer, *args)
+
+            def aureole_part() -> np.ndarray:
+                return _aureole_for_observer(medium, field, mu_view, phi_view, radius)
+
+            correction = pool.submit(context.run, aureole_part)
         out = _radiance(
             medium,
             field,

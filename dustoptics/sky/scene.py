@@ -725,9 +725,10 @@ def png_bytes(rgb: np.ndarray) -> bytes:
     # chunk, 100 dpi), without importing matplotlib.
     from PIL import Image, PngImagePlugin  # lazy: the plot extra's
 
-    rgba = np.empty(rgb.shape[:2] + (4,), dtype=np.uint8)
+    height, width = int(rgb.shape[0]), int(rgb.shape[1])
+    rgba = np.empty((height, width, 4), dtype=np.uint8)
     rgba[..., :3] = rgb
     rgba[..., 3] = 255
-    image = Image.frombuffer("RGBA", (rgba.shape[1], rgba.shape[0]), rgba, "raw", "RGBA", 0, 1)
+    image = Image.frombuffer("RGBA", (width, height), rgba, "raw", "RGBA", 0, 1)
     image.save(buf, format="png", pnginfo=PngImagePlugin.PngInfo(), dpi=(100, 100))
     return buf.getvalue()
