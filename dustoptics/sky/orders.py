@@ -840,7 +840,11 @@ class _Series:
 
     def error_estimate(self) -> np.ndarray:
         """The remainder of the series relative to the largest radiance, per wavelength."""
-        ref = np.abs(self.total).max(axis=(0, 2, 3))
+        # The largest |radiance| per wavelength, mode by mode (a maximum is exact in any
+        # order): no temporary of the whole field, whose reduction took 0.2-0.3 s.
+        ref = np.zeros(self.nwl)
+        for total in self.total:  # (x, level, direction) of one mode
+            ref = np.maximum(ref, np.abs(total).reshape(self.nwl, -1).max(axis=1))
         with np.errstate(invalid="ignore", divide="ignore"):
             return np.where(
                 ref > 0,
