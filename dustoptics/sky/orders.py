@@ -649,8 +649,11 @@ def _mode_pool() -> Iterator[Executor | None]:
     if n <= 1:
         yield None
         return
-    with ThreadPoolExecutor(max_workers=n) as pool:
+    pool = ThreadPoolExecutor(max_workers=n)
+    try:
         yield pool
+    finally:  # an error or an interrupt: the modes not started are not run
+        pool.shutdown(wait=True, cancel_futures=True)
 
 
 def _checked_request(
