@@ -281,7 +281,8 @@ def run(args: argparse.Namespace) -> int:
     report_placement(args, job.name, job.out_dir, placed)
     report_preview(args, [*placed.written, *placed.unchanged])
     sky_file = job.out_dir / f"{job.name}_sky.nc"
-    summary = sky_colour_summary(sky_file) if sky_file.is_file() else None
+    # Read back only to be said (--quiet says nothing).
+    summary = sky_colour_summary(sky_file) if sky_file.is_file() and not args.quiet else None
     if summary is not None:
         say(args, summary)
     if args.sky_command == "compare" and not args.quiet:  # the rover table, read back

@@ -26,7 +26,7 @@ from typing import Any, TypeVar
 
 from threadpoolctl import ThreadpoolController
 
-__all__ = ["geometry_memo", "in_threads", "one_blas_thread", "shared_geometry"]
+__all__ = ["cores", "geometry_memo", "in_threads", "one_blas_thread", "shared_geometry"]
 
 _T = TypeVar("_T")
 
@@ -61,7 +61,8 @@ def geometry_memo(key: Hashable, compute: Callable[[], _T]) -> _T:
 _PARTS_PER_THREAD = 4
 
 
-def _cores() -> int:
+def cores() -> int:
+    """The cores this process may run on."""
     try:
         return len(os.sched_getaffinity(0))
     except (AttributeError, OSError):  # pragma: no cover - not Linux
@@ -75,7 +76,7 @@ def in_threads(run: Callable[..., None], n: int, *args: Any) -> None:
     their own outputs: the bits are those of one ``run(0, n, *args)``.  Serial kernels compile
     several times faster than numba's ``parallel=True`` ones and need no threading layer.
     """
-    threads = min(_cores(), n)
+    threads = min(cores(), n)
     if threads <= 1:
         run(0, n, *args)
         return

@@ -25,6 +25,7 @@ import dataclasses
 import io
 import os
 from collections.abc import Mapping
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import KW_ONLY, dataclass, field
 from pathlib import Path
 from types import MappingProxyType
@@ -39,7 +40,8 @@ from dustoptics.atmosphere.sets import check_earth_aerosol
 from dustoptics.io._atomic import check_targets, write_files
 from dustoptics.io.outputs import Placement, place_outputs
 from dustoptics.sky import hdr, scene, space
-from dustoptics.sky.medium import Medium
+from dustoptics.sky._netcdf import read_netcdf3
+from dustoptics.sky.medium import Medium, prefetch_projection_rule
 from dustoptics.sky.orders import N_LAYERS, check_orders_cost
 from dustoptics.sky.render import N_PATH, check_render_cost
 from dustoptics.table import canonical_json
@@ -294,12 +296,10 @@ class SkyJob:
         """
         import json
 
-        import xarray as xr  # lazy: xarray adds 0.7-1 s to import dustoptics (-X importtime)
-
-        try:
-            with xr.open_dataset(self.record, engine="scipy") as ds:
-                found = json.loads(ds.attrs[INPUTS_ATTRIBUTE])
-        except (OSError, ValueError, KeyError, TypeError):
+        try:  # the file's attributes (classic netCDF, as the job writes it), without xarray
+            _, attrs = read_netcdf3(self.record, names=())
+            found = json.loads(attrs[INPUTS_ATTRIBUTE])
+        except (OSError, ValueError, KeyError, TypeError, AttributeError):
             return None
         return found if isinstance(found, dict) else None
 
@@ -437,6 +437,7 @@ class SkyJob:
         _numba_cache.compile_kernels(("optics", "sky"), progress=self.progress)
 
     def _sky_files(self) -> dict[Path, bytes]:
+        prefetch_projection_rule()  # on the core the tables' first wavelength leaves free
         self._compile()
         atm = self.atmosphere()
         if self.preview is not None:  # refused before the medium and the sky
@@ -457,10 +458,12 @@ class SkyJob:
         )
         exposure = self.exposure if self.exposure is not None else sky.default_exposure()
         stem = self.out_dir / atm.name
-        data = sky.to_xarray()
+        inputs = {INPUTS_ATTRIBUTE: canonical_json(self.inputs())}
         out: dict[Path, bytes] = {}
         images = self.png
-        if self.preview is not None:
+        if self.preview is None:  # the bytes of sky.to_xarray().to_netcdf(), without xarray
+            out[stem.with_name(f"{atm.name}_sky.nc")] = sky.netcdf_bytes(inputs)
+        else:
             from dustoptics.sky.approximations import preview_sky  # lazy: as above
 
             pv = preview_sky(
@@ -473,10 +476,10 @@ class SkyJob:
                 allow_large=self.allow_large,
             )
             data = pv.to_xarray()
+            data.attrs.update(inputs)
+            out[stem.with_name(f"{atm.name}_sky.nc")] = bytes(data.to_netcdf(engine="scipy"))
             if images:
                 out[stem.with_name(f"{atm.name}_preview.png")] = pv.png(exposure=exposure)
-        data.attrs[INPUTS_ATTRIBUTE] = canonical_json(self.inputs())
-        out[stem.with_name(f"{atm.name}_sky.nc")] = bytes(data.to_netcdf(engine="scipy"))
         if self.exr is not None:
             env = hdr.environment_map(
                 sky,
@@ -494,14 +497,16 @@ class SkyJob:
                 )
         if not images:
             return out
-        out |= {
-            stem.with_name(f"{atm.name}_fisheye.png"): scene.png_bytes(
-                sky.fisheye(size=self.size_px, exposure=exposure)
-            ),
-            stem.with_name(f"{atm.name}_panorama.png"): scene.png_bytes(
-                sky.panorama(exposure=exposure)
-            ),
-        }
+        # The two images side by side (numpy and zlib leave the GIL for most of their work).
+        with ThreadPoolExecutor(max_workers=1) as pool:
+            fisheye = pool.submit(
+                lambda: scene.png_bytes(sky.fisheye(size=self.size_px, exposure=exposure))
+            )
+            panorama = scene.png_bytes(sky.panorama(exposure=exposure))
+            out |= {
+                stem.with_name(f"{atm.name}_fisheye.png"): fisheye.result(),
+                stem.with_name(f"{atm.name}_panorama.png"): panorama,
+            }
         if self.sunset:
             for elev in SUNSET_ELEVATIONS_DEG:
                 s = scene.sky_radiance(
@@ -526,6 +531,7 @@ class SkyJob:
         return out
 
     def _comparison_files(self) -> dict[Path, bytes]:
+        prefetch_projection_rule()  # as for a sky
         self._compile()
         # lazy: sky.compare adds 20-30 ms to import dustoptics (-X importtime)
         from dustoptics.sky.compare import MARS_MODELS, compare_mars_models, plot_comparison
@@ -564,23 +570,25 @@ def sky_colour_summary(path: str | os.PathLike[str]) -> str | None:
         ``zenith: xy 0.4321, 0.3889, sRGB #c49a74``, the horizon's line and the luminance
         ratio; None for a file without the sky's chromaticity and luminance.
     """
-    import xarray as xr  # lazy: xarray adds ~0.7 s to `import dustoptics` (-X importtime)
-
     from dustoptics import colour
 
-    with xr.open_dataset(path, engine="scipy", decode_times=False, cache=False) as ds:
-        if not {"chromaticity_x", "chromaticity_y", "luminance_factor"} <= set(ds.variables):
-            return None  # not a sky of one observer (a preview's, another job's)
-        x, y, lum = ds["chromaticity_x"], ds["chromaticity_y"], ds["luminance_factor"]
-        zenith = {"view_zenith_angle": 0.0}
-        horizon = {"view_zenith_angle": 90.0, "view_azimuth_angle": 180.0}
-        points = []
-        for where in (zenith, horizon):
-            sel = {k: v for k, v in where.items() if k in x.dims}
-            xs, ys, ls = (
-                float(np.asarray(v.sel(sel, method="nearest")).ravel()[0]) for v in (x, y, lum)
-            )
-            points.append((xs, ys, ls))
+    wanted = ("chromaticity_x", "chromaticity_y", "luminance_factor")
+    # Read as classic netCDF (the sky files are), without xarray: 1-1.5 s of start-up.
+    found, _ = read_netcdf3(path, names=(*wanted, "view_zenith_angle", "view_azimuth_angle"))
+    if not set(wanted) <= set(found):
+        return None  # not a sky of one observer (a preview's, another job's)
+    dims, _ = found["chromaticity_x"]
+    zenith = {"view_zenith_angle": 0.0}
+    horizon = {"view_zenith_angle": 90.0, "view_azimuth_angle": 180.0}
+    points = []
+    for where in (zenith, horizon):
+        # The nearest sample along each dimension named (xarray's sel(method="nearest"),
+        # a tie to the larger coordinate), the first along the others.
+        index = tuple(
+            _nearest(found[d][1], where[d]) if d in where and d in found else 0 for d in dims
+        )
+        xs, ys, ls = (float(found[k][1][index]) for k in wanted)
+        points.append((xs, ys, ls))
     lines = []
     for label, (xs, ys, _) in zip(("zenith", "horizon away from the Sun"), points):
         xyz = np.array([xs / ys, 1.0, (1.0 - xs - ys) / ys])
@@ -591,3 +599,9 @@ def sky_colour_summary(path: str | os.PathLike[str]) -> str | None:
     ratio = points[1][2] / points[0][2] if points[0][2] > 0 else float("nan")
     lines.append(f"horizon / zenith luminance: {ratio:.3g}")
     return "\n".join(lines)
+
+
+def _nearest(coordinate: np.ndarray, value: float) -> int:
+    """The index of ``coordinate`` (increasing) nearest ``value``, a tie to the larger one."""
+    distance = np.abs(np.asarray(coordinate, dtype=float) - value)
+    return int(len(distance) - 1 - np.argmin(distance[::-1]))

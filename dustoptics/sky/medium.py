@@ -28,10 +28,12 @@ References
 
 from __future__ import annotations
 
-import functools
 import math
+import threading
+from collections.abc import Callable
+from concurrent.futures import Future
 from dataclasses import dataclass, fields
-from typing import Final
+from typing import Final, Generic, TypeVar
 
 import numba
 import numpy as np
@@ -56,6 +58,8 @@ __all__ = [
 _F8_3D, _F8_4D = "float64[:, :, ::1]", "float64[:, :, :, ::1]"
 _I8_2D, _B1_1D = "int64[:, ::1]", "boolean[::1]"
 
+_T = TypeVar("_T")
+
 _UM2_TO_M2: Final = 1e-12
 #: Gauss-Legendre nodes used to project a tabulated phase function on P_l.
 _PROJECTION_NODES: Final = 4096
@@ -72,13 +76,69 @@ N_STREAMS: Final = 20
 AUREOLE_MOMENTS: Final = 512
 
 
-@functools.lru_cache(maxsize=1)
-def _projection_rule() -> tuple[np.ndarray, np.ndarray]:
-    # The Gauss-Legendre rule of the projections (0.4 s to compute; shared).
+def _compute_projection_rule() -> tuple[np.ndarray, np.ndarray]:
     mu, w = roots_legendre(_PROJECTION_NODES)
     mu.setflags(write=False)
     w.setflags(write=False)
     return mu, w
+
+
+class _Once(Generic[_T]):
+    """A value computed once in the process: by the first caller of :meth:`get`, or by a
+    thread of its own from :meth:`start` on, so that it is ready when first asked for."""
+
+    def __init__(self, compute: Callable[[], _T]) -> None:
+        self._compute = compute
+        self._lock = threading.Lock()
+        self._future: Future[_T] | None = None
+
+    def _claim(self) -> Future[_T] | None:
+        """A new future if nobody computes the value yet (the caller computes it)."""
+        with self._lock:
+            if self._future is not None:
+                return None
+            self._future = Future()
+            return self._future
+
+    def _run(self, future: Future[_T]) -> None:
+        try:
+            future.set_result(self._compute())
+        except BaseException as exc:  # handed to whoever asks (get)
+            future.set_exception(exc)
+
+    def start(self) -> None:
+        """Compute the value in a thread of its own, unless it is (being) computed."""
+        future = self._claim()
+        if future is not None:
+            threading.Thread(target=self._run, args=(future,), daemon=True).start()
+
+    def get(self) -> _T:
+        """The value (computed now if nobody has started it; else waited for)."""
+        future = self._claim()
+        if future is not None:
+            self._run(future)
+        assert self._future is not None
+        return self._future.result()
+
+
+#: The Gauss-Legendre rule of the projections: ``roots_legendre(4096)``, 0.35 s of CPU,
+#: computed once per process and shared.
+_PROJECTION_RULE: Final = _Once(_compute_projection_rule)
+
+
+def _projection_rule() -> tuple[np.ndarray, np.ndarray]:
+    return _PROJECTION_RULE.get()
+
+
+def prefetch_projection_rule() -> None:
+    """Start computing the projection rule of :func:`legendre_moments` in a thread of its own.
+
+    It depends on nothing: a job that will build a medium starts it before the atmosphere's
+    tables, whose first wavelength leaves a core free (it loads the kernels alone), and
+    finds it ready.  Its scipy routines release the GIL for most of their work; the values
+    are the same whoever computes them.
+    """
+    _PROJECTION_RULE.start()
 
 
 def legendre_moments(table: Table, n_moments: int) -> np.ndarray:
@@ -101,10 +161,21 @@ def legendre_moments(table: Table, n_moments: int) -> np.ndarray:
         ``chi_l``; ``chi_0`` is the table's normalization (1 to its accuracy),
         ``chi_1`` its asymmetry parameter g. [-]
     """
+    return _moments(table, _projection_vander(n_moments))
+
+
+def _projection_vander(n_moments: int) -> np.ndarray:
+    """``P_l(mu_i)`` at the projection rule's nodes, l < ``n_moments``: (4096, n_moments)."""
+    mu, _ = _projection_rule()
+    return legendre.legvander(mu, n_moments - 1)
+
+
+def _moments(table: Table, vander: np.ndarray) -> np.ndarray:
+    """:func:`legendre_moments` with the nodes' Legendre polynomials given (shared by the
+    tables of a medium)."""
     mu, w = _projection_rule()
     theta = np.rad2deg(np.arccos(mu))
     p = table.phase_at(theta)
-    vander = legendre.legvander(mu, n_moments - 1)
     return 2.0 * np.pi * (p * w) @ vander
 
 
@@ -312,6 +383,7 @@ class MediumOptics(_ColumnOptics):
         radius = float(atmosphere.planet_radius_m)
         n_mom = 2 * n_streams + 1 if budget_only else max(2 * n_streams + 1, AUREOLE_MOMENTS)
         roles, tables, n0, ext, sca, chi = [], [], [], [], [], []
+        vander = _projection_vander(n_mom)  # one for all the constituents
         for c in atmosphere.constituents:
             t = c.table
             assert t.cross_sections is not None
@@ -324,7 +396,7 @@ class MediumOptics(_ColumnOptics):
             ext.append(t.cross_sections.cext_um2 * _UM2_TO_M2)
             sca.append(t.cross_sections.csca_um2 * _UM2_TO_M2)
             chi.append(
-                legendre_moments(t, n_mom)
+                _moments(t, vander)
                 if np.any(t.cross_sections.csca_um2 > 0)
                 else np.zeros((t.wavelength_nm.size, n_mom))
             )

@@ -68,7 +68,9 @@ References
 
 from __future__ import annotations
 
+import contextvars
 import math
+from concurrent.futures import ThreadPoolExecutor
 from typing import Final, NamedTuple, TextIO
 
 import numba
@@ -864,19 +866,30 @@ def line_of_sight_radiance(
     mu_view = np.cos(np.deg2rad(vz)).ravel()
     phi_view = np.deg2rad(va).ravel()
     radius = medium.planet_radius_m + h
-    out = _radiance(
-        medium,
-        field,
-        mu_view=mu_view,
-        phi_view=phi_view,
-        mu_sun=np.full(mu_view.shape, field.mu0),
-        radius_m=radius,
-        n_path=n_path,
-        report=reporter(progress),
-        allow_large=allow_large,
-    )
-    if aureole and field.mu0 > 0.0:
-        out += _aureole_for_observer(medium, field, mu_view, phi_view, radius)
+    # The aureole correction (vectorized numpy, 0.2-0.3 s) in a thread of its own beside the
+    # lines of sight, whose serial parts leave a core free; added as before.
+    with ThreadPoolExecutor(max_workers=1) as pool:
+        correction = None
+        if aureole and field.mu0 > 0.0:
+            context = contextvars.copy_context()  # the caller's shared geometry
+
+            def aureole_part() -> np.ndarray:
+                return _aureole_for_observer(medium, field, mu_view, phi_view, radius)
+
+            correction = pool.submit(context.run, aureole_part)
+        out = _radiance(
+            medium,
+            field,
+            mu_view=mu_view,
+            phi_view=phi_view,
+            mu_sun=np.full(mu_view.shape, field.mu0),
+            radius_m=radius,
+            n_path=n_path,
+            report=reporter(progress),
+            allow_large=allow_large,
+        )
+        if correction is not None:
+            out += correction.result()
     return out.reshape(vz.shape + (medium.wavelength_nm.size,))
 
 

@@ -21,8 +21,10 @@ text stream when it takes longer than two seconds (``progress=``).
 
 from __future__ import annotations
 
+import importlib.util
 import io as _io
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
 from dataclasses import field as dataclass_field
 from typing import Any, Final, TextIO
@@ -37,6 +39,7 @@ from dustoptics._validation import (
     check_positive,
 )
 from dustoptics.atmosphere.sets import Atmosphere
+from dustoptics.sky._netcdf import Variable, netcdf3_bytes
 from dustoptics.sky._progress import Reporter, reporter
 from dustoptics.sky.accuracy import VALIDATED_DOMAIN, radiance_error_estimate
 from dustoptics.sky.medium import Medium
@@ -108,12 +111,18 @@ def check_png_support() -> None:
 
     Call it before a long computation whose results go to PNG files.
     """
+    # Found, not imported: importing matplotlib takes 0.3-0.5 s, and the sky's own images
+    # are written with Pillow (matplotlib's image writer, which the plot extra brings).
+    if not all(_module_found(name) for name in ("matplotlib", "PIL")):
+        raise ImportError("writing PNG images needs matplotlib: pip install 'dustoptics[plot]'")
+
+
+def _module_found(name: str) -> bool:
+    """Whether ``import name`` would find the module (None in ``sys.modules``: not found)."""
     try:
-        import matplotlib.image  # noqa: F401
-    except ImportError as exc:
-        raise ImportError(
-            "writing PNG images needs matplotlib: pip install 'dustoptics[plot]'"
-        ) from exc
+        return importlib.util.find_spec(name) is not None
+    except (ImportError, ValueError):
+        return False
 
 
 def default_view_zenith_deg() -> np.ndarray:
@@ -369,9 +378,31 @@ class SkyRadiance:
         """The sky as an ``xarray.Dataset`` (radiance, XYZ, chromaticity)."""
         import xarray as xr  # lazy: xarray adds 0.7-1 s to start-up (-X importtime)
 
+        data, coords, attrs = self.dataset_variables()
+        return xr.Dataset(data, coords=coords, attrs=attrs)
+
+    def netcdf_bytes(self, attrs: Mapping[str, Any] | None = None) -> bytes:
+        """The classic netCDF file of :meth:`to_xarray`'s dataset with ``attrs`` added to its
+        global attributes: the bytes of its ``to_netcdf(engine="scipy")``, without xarray
+        (:func:`dustoptics.sky._netcdf.netcdf3_bytes`)."""
+        data, coords, own = self.dataset_variables()
+        return netcdf3_bytes(data, coords, {**own, **(attrs or {})})
+
+    def dataset_variables(
+        self,
+    ) -> tuple[dict[str, Variable], dict[str, Variable], dict[str, Any]]:
+        """The data variables, coordinates and attributes of :meth:`to_xarray`'s dataset.
+
+        Returns
+        -------
+        data, coords : dict
+            Name -> (dimensions, values, attributes), in the dataset's order.
+        attrs : dict
+            The global attributes.
+        """
         xyz = self.xyz()
         dims = ("view_zenith_angle", "view_azimuth_angle")
-        return xr.Dataset(
+        return (
             {
                 "radiance": (
                     dims + ("wavelength",),
@@ -412,20 +443,20 @@ class SkyRadiance:
                     else {}
                 ),
             },
-            coords={
+            {
                 "view_zenith_angle": (
-                    "view_zenith_angle",
+                    ("view_zenith_angle",),
                     self.view_zenith_deg,
                     {"units": "degree"},
                 ),
                 "view_azimuth_angle": (
-                    "view_azimuth_angle",
+                    ("view_azimuth_angle",),
                     self.view_azimuth_deg,
                     {"units": "degree", "long_name": "azimuth from the Sun's"},
                 ),
-                "wavelength": ("wavelength", self.wavelength_nm, {"units": "nm"}),
+                "wavelength": (("wavelength",), self.wavelength_nm, {"units": "nm"}),
             },
-            attrs={
+            {
                 "title": f"sky of {self.name}",
                 "sun_zenith_angle_degree": self.sun_zenith_deg,
                 "observer_altitude_m": self.observer_altitude_m,
@@ -682,9 +713,22 @@ def png_bytes(rgb: np.ndarray) -> bytes:
     Needs the ``plot`` extra (matplotlib).
     """
     check_png_support()
-    import matplotlib.image
-
+    rgb = np.asarray(rgb)
     buf = _io.BytesIO()
-    no_stamp: dict[str, Any] = {"Software": None}  # same bytes on every run
-    matplotlib.image.imsave(buf, rgb, format="png", metadata=no_stamp)
+    if rgb.dtype != np.uint8 or rgb.ndim != 3 or rgb.shape[2] != 3:
+        import matplotlib.image  # lazy: 0.3-0.5 s (-X importtime)
+
+        no_stamp: dict[str, Any] = {"Software": None}  # same bytes on every run
+        matplotlib.image.imsave(buf, rgb, format="png", metadata=no_stamp)
+        return buf.getvalue()
+    # The bytes matplotlib.image.imsave writes for 8-bit RGB (an opaque RGBA image, no text
+    # chunk, 100 dpi), without importing matplotlib.
+    from PIL import Image, PngImagePlugin  # lazy: the plot extra's
+
+    height, width = int(rgb.shape[0]), int(rgb.shape[1])
+    rgba = np.empty((height, width, 4), dtype=np.uint8)
+    rgba[..., :3] = rgb
+    rgba[..., 3] = 255
+    image = Image.frombuffer("RGBA", (width, height), rgba, "raw", "RGBA", 0, 1)
+    image.save(buf, format="png", pnginfo=PngImagePlugin.PngInfo(), dpi=(100, 100))
     return buf.getvalue()

@@ -15,7 +15,7 @@ from dustoptics.sky.scene import sky_radiance
 @pytest.mark.parametrize("cores", [1, 2, 3])
 @pytest.mark.parametrize("n", [0, 1, 2, 7, 100])
 def test_in_threads_runs_every_index_once(monkeypatch, cores, n):
-    monkeypatch.setattr(_shared, "_cores", lambda: cores)
+    monkeypatch.setattr(_shared, "cores", lambda: cores)
     seen = np.zeros(n, dtype=int)
     parts = []
 
@@ -38,9 +38,9 @@ def test_a_sky_in_one_thread_and_in_two_has_the_same_bits(monkeypatch):
         )  # fmt: skip
         return np.asarray(sky.radiance)
 
-    monkeypatch.setattr(_shared, "_cores", lambda: 1)
+    monkeypatch.setattr(_shared, "cores", lambda: 1)
     one = render()
-    monkeypatch.setattr(_shared, "_cores", lambda: 2)
+    monkeypatch.setattr(_shared, "cores", lambda: 2)
     two = render()
     assert one.tobytes() == two.tobytes()
 
