@@ -2,7 +2,7 @@
 
 :func:`write_netcdf` stores a :class:`~dustoptics.table.Table` in one netCDF-4
 file: the :meth:`~dustoptics.table.Table.to_xarray` dataset (assembled without xarray,
-:func:`table_variables`), variable for
+:func:`~dustoptics.table.conversion.dataset_variables`), variable for
 variable and attribute for attribute, so that ``xarray.open_dataset``,
 ``netCDF4``, ``ncdump``, ``h5py`` and ``h5dump`` all read it as labelled data
 and :func:`read_netcdf` (:func:`dustoptics.open_table`) returns the table bit
@@ -80,7 +80,7 @@ from dustoptics.io._atomic import FormatError, write_files
 from dustoptics.io.registry import Format, register
 from dustoptics.scattering.tabulated_phase import sphere_integral
 from dustoptics.table import Table, canonical_json, register_table_writer
-from dustoptics.table.conversion import _derivative_variables, per_wavelength_values
+from dustoptics.table.conversion import Variable, dataset_variables
 from dustoptics.table.schema import (
     ANGLE_DIM,
     DERIVATIVE_FIELDS,
@@ -106,7 +106,6 @@ __all__ = [
     "read_hdf5",
     "read_netcdf",
     "save_table",
-    "table_variables",
     "write_hdf5",
     "write_netcdf",
 ]
@@ -182,64 +181,8 @@ def dataset_digest(
     return h.hexdigest()
 
 
-#: A variable of a table's dataset: its dimensions, values and attributes.
-_Variable = tuple[tuple[str, ...], np.ndarray, dict[str, Any]]
-
-
-def table_variables(table: Table) -> tuple[dict[str, _Variable], dict[str, _Variable]]:
-    """The variables of :meth:`~dustoptics.table.Table.to_xarray`'s dataset, made without xarray.
-
-    What the file stores is that dataset, variable for variable; this is the same assembly
-    (:func:`dustoptics.table.conversion.to_dataset`) into plain dictionaries.  Building an
-    xarray Dataset to write a file cost a warm ``dustoptics build`` the import of xarray
-    with pandas and, where dask is installed, of ``dask.array`` (xarray looks for dask's
-    array type the first time it makes a variable): 0.5-0.7 s of its CPU time.  The
-    tests hold the two to the same names, order, dimensions, values and attributes.
-
-    Parameters
-    ----------
-    table : Table
-
-    Returns
-    -------
-    data, coords : dict
-        Name -> (dimensions, values, attributes), in the dataset's order.
-    """
-    wl, angle = WAVELENGTH_DIM, ANGLE_DIM
-    attrs = table.variable_attributes
-    coords: dict[str, Any] = {
-        wl: (wl, np.asarray(table.wavelength_nm), attrs(wl)),
-        angle: (angle, np.asarray(table.theta_deg), attrs(angle)),
-    }
-    data: dict[str, Any] = {"phase": ((wl, angle), np.asarray(table.phase), attrs("phase"))}
-    for key, values in per_wavelength_values(table).items():
-        data[key] = (wl, np.asarray(values), attrs(key))
-    for key in SCALAR_FIELDS:
-        value = table.quantity(key)
-        if value is not None:
-            data[key] = ((), np.asarray(np.float64(value)), attrs(key))
-    if table.matrix is not None:
-        for key in MATRIX_FIELDS:
-            data[key] = ((wl, angle), np.asarray(getattr(table.matrix, key)), attrs(key))
-    if table.expansion is not None:
-        order = np.arange(table.expansion.n_order, dtype=np.float64)
-        coords[ORDER_DIM] = (ORDER_DIM, order, attrs(ORDER_DIM))
-        for key in EXPANSION_FIELDS:
-            data[key] = ((wl, ORDER_DIM), np.asarray(getattr(table.expansion, key)), attrs(key))
-    if table.derivatives is not None:
-        _derivative_variables(table, coords, data)
-
-    def as_variables(variables: dict[str, Any]) -> dict[str, _Variable]:
-        return {
-            key: ((dims,) if isinstance(dims, str) else tuple(dims), np.asarray(v), dict(a))
-            for key, (dims, v, a) in variables.items()
-        }
-
-    return as_variables(data), as_variables(coords)
-
-
 def _file_variables(
-    variables: Mapping[str, _Variable],
+    variables: Mapping[str, Variable],
 ) -> dict[str, tuple[np.ndarray, dict[str, Any]]]:
     """The dataset's variables as the file stores them: the ``parameter``
     coordinate of a table with derivatives becomes the indices 0, 1, ... with
@@ -276,7 +219,7 @@ def _derivative_dims() -> dict[str, tuple[str, ...]]:
 def _writer(table: Table) -> Callable[[Path], None]:
     """A callback that writes the table's dataset to the (temporary) path it is given."""
     h5py = _h5py()
-    data, coords = table_variables(table)
+    data, coords = dataset_variables(table)
     variables = _file_variables({**data, **coords})
     attrs = dict(table.global_attributes())
     attrs[DIGEST_ATTRIBUTE] = dataset_digest(variables, attrs)

@@ -27,10 +27,10 @@ from dustoptics.io.tables.netcdf import (
     MAX_VALUES,
     SUFFIXES,
     dataset_digest,
-    table_variables,
 )
 from dustoptics.scattering.tabulated_phase import renormalize
 from dustoptics.table import DERIVED, SCHEMA, UNITS, Table
+from dustoptics.table.conversion import dataset_variables
 
 TABLES = Path(__file__).resolve().parents[3] / "tables"
 PRESET_FILES = sorted(TABLES.glob("*/*.nc"))
@@ -161,7 +161,7 @@ def test_the_written_variables_are_the_xarray_datasets(which, request):
     order, with the same dimensions, types, values and attributes as Table.to_xarray."""
     t = request.getfixturevalue(which)
     ds = t.to_xarray()
-    data, coords = table_variables(t)
+    data, coords = dataset_variables(t)
     assert list(data) == [str(k) for k in ds.data_vars]
     assert list(coords) == [str(k) for k in ds.coords]
     for name, (dims, values, attrs) in {**data, **coords}.items():
