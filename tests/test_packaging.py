@@ -29,7 +29,7 @@ ROOT = Path(__file__).resolve().parents[1]
 PACKAGE = ROOT / "dustoptics"
 
 #: Import name -> distribution name, where they differ.
-DISTRIBUTION = {"yaml": "pyyaml", "OpenEXR": "openexr"}
+DISTRIBUTION = {"yaml": "pyyaml", "OpenEXR": "openexr", "PIL": "pillow"}
 
 
 def _pyproject() -> dict:
@@ -527,6 +527,11 @@ OPTIONAL_IMPORTS = [
         "dustoptics[plot]",
     ),
     (
+        "PIL",
+        "from dustoptics.sky.scene import check_png_support; check_png_support()",
+        "dustoptics[plot]",
+    ),
+    (
         "pandas",
         "from dustoptics.compare import TableComparison; TableComparison.to_frame(None)",
         "dustoptics[pandas]",
@@ -564,7 +569,7 @@ def test_every_optional_import_has_a_case_above():
     runtime = {_requirement_name(r) for r in _pyproject()["project"]["dependencies"]}
     _, anywhere = _third_party_imports()
     optional = {name.lower() for name in anywhere} - runtime - {"xarray", "dask", "tbb"}
-    covered = {module.lower() for module, _, _ in OPTIONAL_IMPORTS}
+    covered = {DISTRIBUTION.get(module, module).lower() for module, _, _ in OPTIONAL_IMPORTS}
     assert optional <= covered | {"pandas"}, optional - covered
 
 

@@ -107,14 +107,16 @@ def check_image_size(name: str, value: Any, *, minimum: int = 16, allow_large: b
 
 
 def check_png_support() -> None:
-    """Raise ImportError now if PNG images cannot be written (matplotlib is missing).
+    """Raise ImportError now if PNG images cannot be written (matplotlib or Pillow missing).
 
     Call it before a long computation whose results go to PNG files.
     """
     # Found, not imported: importing matplotlib takes 0.3-0.5 s, and the sky's own images
     # are written with Pillow (matplotlib's image writer, which the plot extra brings).
     if not all(_module_found(name) for name in ("matplotlib", "PIL")):
-        raise ImportError("writing PNG images needs matplotlib: pip install 'dustoptics[plot]'")
+        raise ImportError(
+            "writing PNG images needs matplotlib and Pillow: pip install 'dustoptics[plot]'"
+        )
 
 
 def _module_found(name: str) -> bool:
