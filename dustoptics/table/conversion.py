@@ -40,7 +40,7 @@ if TYPE_CHECKING:
 
     from dustoptics.table.core import Table
 
-__all__ = ["Variable", "dataset_variables", "per_wavelength_values", "table_fields", "to_dataset"]
+__all__ = ["dataset_variables", "per_wavelength_values", "table_fields", "to_dataset"]
 
 
 def per_wavelength_values(table: Table) -> dict[str, np.ndarray]:
