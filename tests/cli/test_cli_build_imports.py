@@ -19,16 +19,25 @@ from pathlib import Path
 
 from _cli import SMALL
 
-ROOT = Path(__file__).resolve().parents[2]
+import dustoptics
+
+#: Where the dustoptics under test is (the checkout, or the installed wheel the release check
+#: tests: the checkout's folder has no data package, the wheel maps it in).
+WHERE = Path(dustoptics.__file__).resolve().parents[1]
 
 
 def _imported(code: str, modules: tuple[str, ...]) -> list[str]:
     """Which of ``modules`` are in sys.modules after ``code`` ran in a new interpreter."""
     env = dict(os.environ)
-    env["PYTHONPATH"] = os.pathsep.join(p for p in (str(ROOT), env.get("PYTHONPATH")) if p)
+    env["PYTHONPATH"] = os.pathsep.join(p for p in (str(WHERE), env.get("PYTHONPATH")) if p)
     script = f"{code}\nimport sys\nprint(sorted(m for m in {modules!r} if m in sys.modules))"
     done = subprocess.run(
-        [sys.executable, "-c", script], env=env, capture_output=True, text=True, check=False
+        [sys.executable, "-c", script],
+        env=env,
+        cwd=WHERE,
+        capture_output=True,
+        text=True,
+        check=False,
     )
     assert done.returncode == 0, done.stderr
     return eval(done.stdout.strip().splitlines()[-1])  # a list of str, printed above
