@@ -110,6 +110,7 @@ from dustoptics.scattering.quadrature import (
     QuadratureSettings,
     _gauss_points,
     _node_weights,
+    _stretch,
     gauss_legendre,
     initial_panels,
     size_parameter_at,
@@ -514,8 +515,29 @@ def _greek(
     )
 
 
+#: Gauss angles added to the expansion coefficients' projection to measure its
+#: round-off (:meth:`_Plan.outputs`).
+GREEK_EXTRA_NODES = 32
+
 #: The cross-sections whose derivatives :func:`_cross` gives (after g).
 _CROSS_KEYS = ("cext_um2", "csca_um2", "cback_um2")
+#: The per-wavelength outputs of :func:`_cross` and of the probe's last columns,
+#: in order: g, the cross-sections, the lidar ratio.
+_SCALAR_KEYS = ("g", *_CROSS_KEYS, "lidar_ratio_sr")
+
+
+def _lidar_ratio_derivative(s_ext: Any, s_back: Any, d_ext: Any, d_back: Any) -> np.ndarray:
+    """d(4 pi <C_ext> / <C_back>) from one rule's sums: their values (S_ext,
+    S_back) and derivatives, by the quotient rule,
+    4 pi (dS_ext S_back - S_ext dS_back) / S_back^2 (the efficiencies' unit of
+    area cancels). [sr per unit of the parameter]
+
+    Both terms come from the same nodes, so their quadrature errors cancel
+    where the terms do (where the lidar ratio changes little with the
+    parameter), and the rules' difference of the quotient is its own error
+    estimate (the quotient of the table's values, refined separately, and of
+    the derivatives' sums kept each term's error: up to 20x rtol)."""
+    return np.asarray(4.0 * math.pi * (d_ext * s_back - s_ext * d_back) / (s_back * s_back))
 
 
 def _cross(
@@ -527,12 +549,13 @@ def _cross(
     area: float,
     lossless: bool,
 ) -> dict[str, np.ndarray]:
-    """Derivatives of g, <C_ext>, <C_sca>, <C_back>, one per parameter."""
+    """Derivatives of g, <C_ext>, <C_sca>, <C_back> and the lidar ratio, one per
+    parameter."""
     d_ang, d_sums = _directions(s, n_dist, index_directions)
     del d_ang
-    s_w, _, s_sca, s_gsca, s_g, _ = s.sums[0]
+    s_w, s_ext, s_sca, s_gsca, s_g, s_back = s.sums[0]
     g = s_g / s_w if per_particle else s_gsca / s_sca
-    out: dict[str, list[float]] = {"g": [], **{k: [] for k in _CROSS_KEYS}}
+    out: dict[str, list[Any]] = {k: [] for k in _SCALAR_KEYS}
     for j, ds in enumerate(d_sums):
         if per_particle:
             out["g"].append((ds[4] - g * ds[0]) / s_w)
@@ -547,6 +570,9 @@ def _cross(
         out["cext_um2"].append(area * d_ext)
         out["csca_um2"].append(area * ds[2])
         out["cback_um2"].append(area * ds[5])
+        out["lidar_ratio_sr"].append(
+            _lidar_ratio_derivative(s_sca if lossless else s_ext, s_back, d_ext, ds[5])
+        )
     return {k: np.array(v) for k, v in out.items()}
 
 
@@ -642,10 +668,37 @@ MAX_ROUNDS = 10
 DERIVATIVE_TAIL_FACTOR = 1e-4
 
 
+def _hard_ends(at: _At, edges: np.ndarray) -> np.ndarray:
+    """``edges`` (stretched coordinate) with an end moved onto the end of the
+    distribution's support where its density jumps (a truncation's or a power
+    law's ``r_min_um``, ``r_max_um``) when it lies within one panel width
+    beyond it.
+
+    The tail bounds leave out a sliver at such an end (its share of the
+    number is below the tail fraction), but the density there is not small:
+    at the default tail fraction the sliver moved the derivatives of a
+    truncated distribution by 3.6e-10 of their scale (d phase / d v_eff of
+    its parent at 0 deg), 7x their estimate."""
+    edges = edges.copy()
+    x_c, width = at.settings.transition_size_parameter, at.settings.panel_width
+    lo = getattr(at.distribution, "r_min_um", 0.0)
+    hi = getattr(at.distribution, "r_max_um", math.inf)
+    if isinstance(lo, float) and lo > 0.0:
+        s_lo = float(_stretch(at.k_um * lo, x_c))
+        if 0.0 < edges[0] - s_lo <= width:
+            edges[0] = s_lo
+    if isinstance(hi, float) and math.isfinite(hi):
+        s_hi = float(_stretch(at.k_um * hi, x_c))
+        if 0.0 < s_hi - edges[-1] <= width:
+            edges[-1] = s_hi
+    return edges
+
+
 def _extended(at: _At, panels: np.ndarray) -> np.ndarray:
     """The table's panels (sorted) with panels added below and above them out
     to the bounds of the tail fraction times :data:`DERIVATIVE_TAIL_FACTOR`
-    (no wider than the level-0 panels)."""
+    (no wider than the level-0 panels), or to the support's ends where the
+    density jumps there (:func:`_hard_ends`)."""
     settings = at.settings
     tail = max(MIN_TAIL_FRACTION, settings.tail_fraction * DERIVATIVE_TAIL_FACTOR)
     edges = initial_panels(
@@ -654,6 +707,7 @@ def _extended(at: _At, panels: np.ndarray) -> np.ndarray:
         settings=replace(settings, tail_fraction=tail),
         lower_moment=0 if at.per_particle else 2,
     )
+    edges = _hard_ends(at, edges)
     panels = panels[np.argsort(panels[:, 0], kind="stable")]
     parts = [panels]
     for lo, hi, first in ((edges[0], panels[0, 0], True), (panels[-1, 1], edges[-1], False)):
@@ -728,13 +782,25 @@ class _Plan:
             values[key] = ang[:, q]
             errors[key] = np.max(np.abs(diff[:, q]), axis=-1)
         if at.n_order:
+            # The fine sums also on GREEK_EXTRA_NODES more Gauss angles: exact
+            # either way but for round-off, so the difference is the
+            # projection's round-off (the sums' Legendre series run to order
+            # 2 n_max, thousands for the largest spheres, and their forward
+            # peak is far above the coefficients: the coefficients' error was
+            # up to 3.5e-10 of their scale, 3.8x the estimate without it).
             greek = [
-                _greek(s, at.n_dist, at.index_directions, at.per_particle, at.n_order, self.lmax)
-                for s in (fine, coarse)
+                _greek(s, at.n_dist, at.index_directions, at.per_particle, at.n_order, lmax)
+                for s, lmax in (
+                    (fine, self.lmax),
+                    (coarse, self.lmax),
+                    (fine, self.lmax + 2 * GREEK_EXTRA_NODES),
+                )
             ]
             for j, key in enumerate(EXPANSION_KEYS):
                 values[key] = greek[0][:, j]
-                errors[key] = np.max(np.abs(greek[0][:, j] - greek[1][:, j]), axis=-1)
+                errors[key] = np.max(np.abs(greek[0][:, j] - greek[1][:, j]), axis=-1) + np.max(
+                    np.abs(greek[0][:, j] - greek[2][:, j]), axis=-1
+                )
         cross = [
             _cross(
                 s,
@@ -842,8 +908,9 @@ def _batched_outputs(
     at: _At, ang: np.ndarray, dang: np.ndarray, sums: np.ndarray, dsums: np.ndarray
 ) -> np.ndarray:
     """Derivatives of the angular outputs at the probe angles, then of g and
-    the cross-sections (as :func:`_angular`, :func:`_cross`), for a batch of
-    sums (leading axis): shape (batch, n_parameter, n_q n_mu + 4)."""
+    the cross-sections and the lidar ratio (as :func:`_angular`,
+    :func:`_cross`), for a batch of sums (leading axis): shape (batch,
+    n_parameter, n_q n_mu + 5)."""
     n_q = at.n_q
     d_ang = [ang[:, 1 + j, :n_q] for j in range(at.n_dist)]
     d_sums = [sums[:, 1 + j] for j in range(at.n_dist)]
@@ -866,7 +933,11 @@ def _batched_outputs(
         if at.lossless:
             dm = at.index_directions[j - at.n_dist] if j >= at.n_dist else 0j
             d_ext = ds[:, 2] + dm.imag * (dsums[:, 1, 1] - dsums[:, 1, 2])
-        cross = np.column_stack([dg, at.area * d_ext, at.area * ds[:, 2], at.area * ds[:, 5]])
+        s_ext = s0[:, 2] if at.lossless else s0[:, 1]
+        lidar = _lidar_ratio_derivative(s_ext, s0[:, 5], d_ext, ds[:, 5])
+        cross = np.column_stack(
+            [dg, at.area * d_ext, at.area * ds[:, 2], at.area * ds[:, 5], lidar]
+        )
         out.append(np.concatenate([angular.reshape(angular.shape[0], -1), cross], axis=1))
     return np.stack(out, axis=1)
 
@@ -892,10 +963,10 @@ def _by_key(at: _At, shares: np.ndarray) -> dict[str, np.ndarray]:
     output key, the largest over the probe angles for the angular ones."""
     summed = shares.sum(axis=0)  # (n_parameter, n_outputs)
     n_par = summed.shape[0]
-    n_mu = (summed.shape[1] - 4) // at.n_q
+    n_mu = (summed.shape[1] - len(_SCALAR_KEYS)) // at.n_q
     angular = summed[:, : at.n_q * n_mu].reshape(n_par, at.n_q, n_mu).max(axis=-1)
     out = {key: angular[:, q] for q, key in enumerate(at.angular_keys)}
-    for j, key in enumerate(("g", *_CROSS_KEYS)):
+    for j, key in enumerate(_SCALAR_KEYS):
         out[key] = summed[:, at.n_q * n_mu + j]
     return out
 
@@ -910,7 +981,7 @@ def _with_panel_errors(
     summed = _by_key(at, shares)
     missing = _by_key(at, left_out)
     out = dict(errors)
-    for key in (*at.angular_keys, "g", *_CROSS_KEYS):
+    for key in (*at.angular_keys, *_SCALAR_KEYS):
         out[key] = np.maximum(errors[key] + missing[key], summed[key])
     if at.n_order:
         # The expansion coefficients' sums cancel between panels as the phase
@@ -925,7 +996,7 @@ def _scale(at: _At, whole: np.ndarray) -> np.ndarray:
     """The magnitude each output of :func:`_batched_outputs` is held to: the
     largest over the probe angles for the angular ones, its own for the others."""
     n_par, n_out = whole.shape
-    n_ang = n_out - 4
+    n_ang = n_out - len(_SCALAR_KEYS)
     n_mu = n_ang // at.n_q
     mag = np.abs(whole)
     scale = np.empty_like(mag)
@@ -1045,18 +1116,17 @@ def _monodisperse_derivatives(
     )
     n_theta = at.mu_out.size
     ang_d = np.empty((0, n_q, n_theta))
-    cross: dict[str, np.ndarray] = {k: np.empty(0) for k in ("g", *_CROSS_KEYS)}
+    cross: dict[str, np.ndarray] = {k: np.empty(0) for k in _SCALAR_KEYS}
     if with_radius:
         # d/dr = k d/dx: the kernel's x direction, read as a direction "n" of weight k.
         radial = _Sums(ang, dang[[2, 2]] * k_um, sums, dsums[[2, 2]] * k_um)
         ang_d = _angular(
             radial, 0, [1.0 + 0j], per_particle=per_particle, n_q=n_q, project=lambda f: f
         )
+        # Lossless: C_ext = C_sca, as the table holds it (d/dr is real: no absorption term).
         cross = _cross(
-            radial, 0, [1.0 + 0j], per_particle=per_particle, area=at.area, lossless=False
+            radial, 0, [1.0 + 0j], per_particle=per_particle, area=at.area, lossless=at.lossless
         )
-        if at.lossless:
-            cross["cext_um2"] = cross["csca_um2"]
     directions = list(at.index_directions)
     if directions:
         s = _Sums(ang, dang[:2], sums, dsums[:2])
