@@ -67,9 +67,18 @@ with the largest shares until every estimate (before the safety factor) is
 within ``rtol`` of the derivative's largest magnitude over angle or order,
 or after :data:`MAX_ROUNDS` rounds (the estimate then says how far it got).
 The cross-sections' estimates also hold their values' stated relative error
-times the derivative, so that the single scattering albedo's and the lidar
-ratio's, propagated from them with the table's values, cover those values'
-errors.  ``scripts/calibrate_estimates.py`` checks the estimates against
+times the derivative, so that the single scattering albedo's, propagated from
+them with the table's values, covers those values' errors.  The lidar ratio's
+derivative is not propagated: its two terms, d<C_ext>/<C_ext> and
+d<C_back>/<C_back>, nearly cancel for some parameters (the quotient of
+separately converged terms was 20x rtol off), so it is summed from the same
+rule's sums as an output of its own (:func:`_lidar_ratio_derivative`), watched
+by the refinement and estimated by its rules' difference like the others.
+The expansion coefficients' estimate adds the round-off of their projection
+(the fine sums projected again on :data:`GREEK_EXTRA_NODES` more Gauss
+angles).  Where the distribution's density jumps at an end of its support (a
+truncation, a power law), the derivatives' range reaches that end
+(:func:`_hard_ends`).  ``scripts/calibrate_estimates.py`` checks the estimates against
 tight references over random models of every family.
 
 One sphere (:class:`~dustoptics.particles.sizedist.Monodisperse`) has no
