@@ -73,7 +73,10 @@ derivative is not propagated: its two terms, d<C_ext>/<C_ext> and
 d<C_back>/<C_back>, nearly cancel for some parameters (the quotient of
 separately converged terms was 20x rtol off), so it is summed from the same
 rule's sums as an output of its own (:func:`_lidar_ratio_derivative`), watched
-by the refinement and estimated by its rules' difference like the others.
+by the refinement and estimated by its rules' difference like the others,
+plus the cross-sections' derivative estimates propagated to it
+(:func:`_lidar_ratio_terms_error`: the quotient's difference can cancel
+between its terms).
 The expansion coefficients' estimate adds the round-off of their projection
 (the fine sums projected again on :data:`GREEK_EXTRA_NODES` more Gauss
 angles).  Where the distribution's density jumps at an end of its support (a
