@@ -143,13 +143,22 @@ class Model:
 
 
 def models(*, seed: int, per_family: int, families: Sequence[str] = FAMILIES) -> list[Model]:
-    """``per_family`` random models of each family, reproducible from ``seed``."""
+    """``per_family`` random models of each family, reproducible from ``seed``.
+
+    The models of a family do not depend on ``families``: all are drawn, in
+    the order of :data:`FAMILIES`, and those of ``families`` kept (a subset
+    run checks the same models as the full set)."""
+    unknown = sorted(set(families) - set(FAMILIES))
+    if unknown:
+        raise ValueError(f"families must be among {FAMILIES}; got {unknown}")
     rng = np.random.default_rng(seed)
     out = []
-    for family in families:
+    for family in FAMILIES:
         for _ in range(per_family):
             m = complex(rng.uniform(1.35, 1.7), 10.0 ** rng.uniform(-4.0, -1.5))
-            out.append(Model(family, m, _distribution(family, rng)))
+            model = Model(family, m, _distribution(family, rng))
+            if family in families:
+                out.append(model)
     return out
 
 
@@ -193,6 +202,14 @@ class Case:
     scale: float
     relative_error: float = math.nan  # |error| / |derivative|, where not near zero
     reference_estimate: float = 0.0  # the reference's own stated error
+    model: str = ""  # the model's index among the run's and its parameters
+
+    @property
+    def ratio(self) -> float:
+        """The error (less the reference's own estimate) over the estimate."""
+        if self.estimate <= ROUNDOFF * self.scale:
+            return math.nan
+        return max(self.error - self.reference_estimate, 0.0) / self.estimate
 
 
 ANGULAR = ("phase", "f12", "f33", "f34")
@@ -360,12 +377,35 @@ def run(
     """Every case of the seeded models."""
     cases: list[Case] = []
     kw = {"wavelengths_nm": wavelengths_nm, "reference_rtol": reference_rtol}
-    for model in models(seed=seed, per_family=per_family, families=families):
+    for i, model in enumerate(models(seed=seed, per_family=per_family, families=families)):
         table = _table(model, rtol=rtol, reference=False, **kw)
         ref = _table(model, rtol=rtol, reference=True, **kw)
-        cases += derivative_cases(model, table, ref)
-        cases += value_cases(model, table, ref)
+        label = f"#{i} m={model.m:.5g} {model.distribution!r}"
+        for c in (*derivative_cases(model, table, ref), *value_cases(model, table, ref)):
+            c.model = label
+            cases.append(c)
     return cases
+
+
+def worst(cases: Sequence[Case], n: int, *, rtol: float) -> str:
+    """The ``n`` cases of largest error / estimate and of largest relative error."""
+    lines = [f"the {n} largest error / estimate:"]
+    by_ratio = sorted((c for c in cases if c.ratio > 0), key=lambda c: -c.ratio)
+    for c in by_ratio[:n]:
+        lines.append(
+            f"  {c.ratio:7.3g}  {c.kind} {c.quantity} {c.parameter} {c.wavelength_nm:g} nm "
+            f"err {c.error:.3g} est {c.estimate:.3g} ref est {c.reference_estimate:.3g}  {c.model}"
+        )
+    lines.append(f"the {n} largest relative derivative errors / rtol:")
+    by_rel = sorted(
+        (c for c in cases if math.isfinite(c.relative_error)), key=lambda c: -c.relative_error
+    )
+    for c in by_rel[:n]:
+        lines.append(
+            f"  {c.relative_error / rtol:7.3g}  {c.quantity} {c.parameter} {c.wavelength_nm:g} nm "
+            f"err {c.error:.3g} est {c.estimate:.3g} |d| {c.scale:.3g}  {c.model}"
+        )
+    return "\n".join(lines)
 
 
 def report(summaries: dict[tuple[str, str], Summary], *, rtol: float) -> str:
@@ -400,6 +440,9 @@ def main(args: Sequence[str] | None = None) -> int:
         "--wavelengths", nargs="*", type=float, default=list(WAVELENGTHS_NM), help="[nm]"
     )
     parser.add_argument("--reference-rtol", type=float, default=REFERENCE_RTOL)
+    parser.add_argument(
+        "--worst", type=int, default=0, help="also list this many worst cases, with their models"
+    )
     opts = parser.parse_args(args)
     start = time.perf_counter()
     cases = run(
@@ -411,6 +454,8 @@ def main(args: Sequence[str] | None = None) -> int:
         reference_rtol=opts.reference_rtol,
     )
     print(report(summarize(cases, rtol=opts.rtol), rtol=opts.rtol))
+    if opts.worst:
+        print(worst(cases, opts.worst, rtol=opts.rtol))
     print(
         f"{opts.per_family} models per family, seed {opts.seed}, rtol {opts.rtol:g}, "
         f"{len(cases)} cases in {time.perf_counter() - start:.0f} s"

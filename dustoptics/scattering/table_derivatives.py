@@ -67,9 +67,21 @@ with the largest shares until every estimate (before the safety factor) is
 within ``rtol`` of the derivative's largest magnitude over angle or order,
 or after :data:`MAX_ROUNDS` rounds (the estimate then says how far it got).
 The cross-sections' estimates also hold their values' stated relative error
-times the derivative, so that the single scattering albedo's and the lidar
-ratio's, propagated from them with the table's values, cover those values'
-errors.  ``scripts/calibrate_estimates.py`` checks the estimates against
+times the derivative, so that the single scattering albedo's, propagated from
+them with the table's values, covers those values' errors.  The lidar ratio's
+derivative is not propagated: its two terms, d<C_ext>/<C_ext> and
+d<C_back>/<C_back>, nearly cancel for some parameters (the quotient of
+separately converged terms was 20x rtol off), so it is summed from the same
+rule's sums as an output of its own (:func:`_lidar_ratio_derivative`), watched
+by the refinement and estimated by its rules' difference like the others,
+plus the cross-sections' derivative estimates propagated to it
+(:func:`_lidar_ratio_terms_error`: the quotient's difference can cancel
+between its terms).
+The expansion coefficients' estimate adds the round-off of their projection
+(the fine sums projected again on :data:`GREEK_EXTRA_NODES` more Gauss
+angles).  Where the distribution's density jumps at an end of its support (a
+truncation, a power law), the derivatives' range reaches that end
+(:func:`_hard_ends`).  ``scripts/calibrate_estimates.py`` checks the estimates against
 tight references over random models of every family.
 
 One sphere (:class:`~dustoptics.particles.sizedist.Monodisperse`) has no
@@ -93,10 +105,16 @@ from dustoptics.particles.sizedist import MIN_TAIL_FRACTION, SizeDistribution
 from dustoptics.particles.sizedist_derivatives import (
     boundary_terms,
     number_density_derivative,
-    parameter_names,
 )
 from dustoptics.scattering import mie
 from dustoptics.scattering.derivative_panels import _halves, _PanelSums, _Probe
+from dustoptics.scattering.derivative_parameters import (
+    INDEX_PARAMETERS,
+    check_parameters,
+    index_directions,
+    index_parameter_names,
+    parameter_unit,
+)
 from dustoptics.scattering.expansion import greek_coefficients
 from dustoptics.scattering.mie_derivatives import _accumulate, _series_lengths
 from dustoptics.scattering.mie_derivatives_blocked import (
@@ -110,6 +128,7 @@ from dustoptics.scattering.quadrature import (
     QuadratureSettings,
     _gauss_points,
     _node_weights,
+    _stretch,
     gauss_legendre,
     initial_panels,
     size_parameter_at,
@@ -129,103 +148,12 @@ __all__ = [
     "table_derivatives",
 ]
 
-#: Parameters of the refractive index itself: m = n + i k at every wavelength.
-INDEX_PARAMETERS = ("n", "k")
-
 #: How the derivatives are computed (recorded with them).
 METHOD = (
     "exact derivatives summed over radius panels refined for them to the table's rtol (dn/dp "
     "in closed form, dS/dm from the Mie recurrences, quotient and chain rules); error estimate "
     "= 2 x the panels' differences from their coarse rules, summed without cancellation"
 )
-
-
-def parameter_unit(name: str) -> str:
-    """udunits2 unit of a parameter: ``"um"`` for names ending in ``_um``, else ``"1"``."""
-    return "um" if name.endswith(("_um", "_um]")) else "1"
-
-
-def index_parameter_names(refractive_index: Any) -> tuple[str, ...]:
-    """Parameters of a refractive index besides ``"n"`` and ``"k"``: those of an
-    object with ``index_parameters`` and ``index_derivatives`` (a
-    :class:`~dustoptics.particles.mixing.Mixture`: its volume fraction and host index)."""
-    names = getattr(refractive_index, "index_parameters", None)
-    if names is None or not callable(getattr(refractive_index, "index_derivatives", None)):
-        return ()
-    return tuple(names)
-
-
-def index_directions(
-    refractive_index: Any, parameters: Sequence[str], wavelength_nm: np.ndarray
-) -> dict[str, np.ndarray]:
-    """dm/dp per wavelength for every parameter of the refractive index among
-    ``parameters``: 1 for ``"n"``, 1j for ``"k"``, the index's own
-    ``index_derivatives`` for the others (a mixture's, by the chain rule). [-]"""
-    out: dict[str, np.ndarray] = {}
-    own = [p for p in parameters if p in index_parameter_names(refractive_index)]
-    if own:
-        found = refractive_index.index_derivatives(wavelength_nm)
-        for p in own:
-            out[p] = np.asarray(found[p], dtype=np.complex128) * np.ones(wavelength_nm.size)
-    for p, dm in (("n", 1.0 + 0j), ("k", 1j)):
-        if p in parameters:
-            out[p] = np.full(wavelength_nm.size, dm, dtype=np.complex128)
-    return out
-
-
-def check_parameters(
-    derivatives: Any,
-    distribution: SizeDistribution,
-    extra: Sequence[str] = (),
-) -> tuple[str, ...]:
-    """The parameter names of ``compute_optics(derivatives=...)``, checked before any work.
-
-    Parameters
-    ----------
-    derivatives : sequence of str
-        Names: the distribution's (:func:`parameter_names`, or ``"radius_um"``
-        of a monodisperse one), ``"n"``, ``"k"``, and ``extra`` (the
-        refractive index's own, e.g. a mixture's ``"hematite_fraction"``).
-    distribution : SizeDistribution
-    extra : sequence of str
-        Further allowed names.
-
-    Returns
-    -------
-    tuple of str
-
-    Raises
-    ------
-    TypeError
-        ``derivatives`` is a string or not a sequence of strings.
-    ValueError
-        An unknown or repeated name; the message lists the allowed ones.
-    """
-    if isinstance(derivatives, str) or not isinstance(derivatives, Sequence):
-        raise TypeError(
-            "derivatives must be a sequence of parameter names, e.g. ('r_eff_um', 'n'); "
-            f"got {derivatives!r}"
-        )
-    names = tuple(derivatives)
-    if not names:
-        return names
-    if distribution.is_monodisperse:
-        own: tuple[str, ...] = ("radius_um",)
-    else:
-        try:
-            own = parameter_names(distribution)
-        except (TypeError, ValueError):
-            own = ()
-    allowed = (*own, *INDEX_PARAMETERS, *extra)
-    for p in names:
-        if not isinstance(p, str) or p not in allowed:
-            raise ValueError(
-                f"derivatives: unknown parameter {p!r}; allowed for this distribution and "
-                f"refractive index: {', '.join(map(repr, allowed))}"
-            )
-    if len(set(names)) != len(names):
-        raise ValueError(f"derivatives must not repeat a parameter; got {names!r}")
-    return names
 
 
 @dataclass(frozen=True)
@@ -514,8 +442,29 @@ def _greek(
     )
 
 
+#: Gauss angles added to the expansion coefficients' projection to measure its
+#: round-off (:meth:`_Plan.outputs`).
+GREEK_EXTRA_NODES = 32
+
 #: The cross-sections whose derivatives :func:`_cross` gives (after g).
 _CROSS_KEYS = ("cext_um2", "csca_um2", "cback_um2")
+#: The per-wavelength outputs of :func:`_cross` and of the probe's last columns,
+#: in order: g, the cross-sections, the lidar ratio.
+_SCALAR_KEYS = ("g", *_CROSS_KEYS, "lidar_ratio_sr")
+
+
+def _lidar_ratio_derivative(s_ext: Any, s_back: Any, d_ext: Any, d_back: Any) -> np.ndarray:
+    """d(4 pi <C_ext> / <C_back>) from one rule's sums: their values (S_ext,
+    S_back) and derivatives, by the quotient rule,
+    4 pi (dS_ext S_back - S_ext dS_back) / S_back^2 (the efficiencies' unit of
+    area cancels). [sr per unit of the parameter]
+
+    Both terms come from the same nodes, so their quadrature errors cancel
+    where the terms do (where the lidar ratio changes little with the
+    parameter), and the rules' difference of the quotient is its own error
+    estimate (the quotient of the table's values, refined separately, and of
+    the derivatives' sums kept each term's error: up to 20x rtol)."""
+    return np.asarray(4.0 * math.pi * (d_ext * s_back - s_ext * d_back) / (s_back * s_back))
 
 
 def _cross(
@@ -527,12 +476,13 @@ def _cross(
     area: float,
     lossless: bool,
 ) -> dict[str, np.ndarray]:
-    """Derivatives of g, <C_ext>, <C_sca>, <C_back>, one per parameter."""
+    """Derivatives of g, <C_ext>, <C_sca>, <C_back> and the lidar ratio, one per
+    parameter."""
     d_ang, d_sums = _directions(s, n_dist, index_directions)
     del d_ang
-    s_w, _, s_sca, s_gsca, s_g, _ = s.sums[0]
+    s_w, s_ext, s_sca, s_gsca, s_g, s_back = s.sums[0]
     g = s_g / s_w if per_particle else s_gsca / s_sca
-    out: dict[str, list[float]] = {"g": [], **{k: [] for k in _CROSS_KEYS}}
+    out: dict[str, list[Any]] = {k: [] for k in _SCALAR_KEYS}
     for j, ds in enumerate(d_sums):
         if per_particle:
             out["g"].append((ds[4] - g * ds[0]) / s_w)
@@ -547,6 +497,9 @@ def _cross(
         out["cext_um2"].append(area * d_ext)
         out["csca_um2"].append(area * ds[2])
         out["cback_um2"].append(area * ds[5])
+        out["lidar_ratio_sr"].append(
+            _lidar_ratio_derivative(s_sca if lossless else s_ext, s_back, d_ext, ds[5])
+        )
     return {k: np.array(v) for k, v in out.items()}
 
 
@@ -642,10 +595,37 @@ MAX_ROUNDS = 10
 DERIVATIVE_TAIL_FACTOR = 1e-4
 
 
+def _hard_ends(at: _At, edges: np.ndarray) -> np.ndarray:
+    """``edges`` (stretched coordinate) with an end moved onto the end of the
+    distribution's support where its density jumps (a truncation's or a power
+    law's ``r_min_um``, ``r_max_um``) when it lies within one panel width
+    beyond it.
+
+    The tail bounds leave out a sliver at such an end (its share of the
+    number is below the tail fraction), but the density there is not small:
+    at the default tail fraction the sliver moved the derivatives of a
+    truncated distribution by 3.6e-10 of their scale (d phase / d v_eff of
+    its parent at 0 deg), 7x their estimate."""
+    edges = edges.copy()
+    x_c, width = at.settings.transition_size_parameter, at.settings.panel_width
+    lo = getattr(at.distribution, "r_min_um", 0.0)
+    hi = getattr(at.distribution, "r_max_um", math.inf)
+    if isinstance(lo, float) and lo > 0.0:
+        s_lo = float(_stretch(at.k_um * lo, x_c))
+        if 0.0 < edges[0] - s_lo <= width:
+            edges[0] = s_lo
+    if isinstance(hi, float) and math.isfinite(hi):
+        s_hi = float(_stretch(at.k_um * hi, x_c))
+        if 0.0 < s_hi - edges[-1] <= width:
+            edges[-1] = s_hi
+    return edges
+
+
 def _extended(at: _At, panels: np.ndarray) -> np.ndarray:
     """The table's panels (sorted) with panels added below and above them out
     to the bounds of the tail fraction times :data:`DERIVATIVE_TAIL_FACTOR`
-    (no wider than the level-0 panels)."""
+    (no wider than the level-0 panels), or to the support's ends where the
+    density jumps there (:func:`_hard_ends`)."""
     settings = at.settings
     tail = max(MIN_TAIL_FRACTION, settings.tail_fraction * DERIVATIVE_TAIL_FACTOR)
     edges = initial_panels(
@@ -654,6 +634,7 @@ def _extended(at: _At, panels: np.ndarray) -> np.ndarray:
         settings=replace(settings, tail_fraction=tail),
         lower_moment=0 if at.per_particle else 2,
     )
+    edges = _hard_ends(at, edges)
     panels = panels[np.argsort(panels[:, 0], kind="stable")]
     parts = [panels]
     for lo, hi, first in ((edges[0], panels[0, 0], True), (panels[-1, 1], edges[-1], False)):
@@ -728,13 +709,25 @@ class _Plan:
             values[key] = ang[:, q]
             errors[key] = np.max(np.abs(diff[:, q]), axis=-1)
         if at.n_order:
+            # The fine sums also on GREEK_EXTRA_NODES more Gauss angles: exact
+            # either way but for round-off, so the difference is the
+            # projection's round-off (the sums' Legendre series run to order
+            # 2 n_max, thousands for the largest spheres, and their forward
+            # peak is far above the coefficients: the coefficients' error was
+            # up to 3.5e-10 of their scale, 3.8x the estimate without it).
             greek = [
-                _greek(s, at.n_dist, at.index_directions, at.per_particle, at.n_order, self.lmax)
-                for s in (fine, coarse)
+                _greek(s, at.n_dist, at.index_directions, at.per_particle, at.n_order, lmax)
+                for s, lmax in (
+                    (fine, self.lmax),
+                    (coarse, self.lmax),
+                    (fine, self.lmax + 2 * GREEK_EXTRA_NODES),
+                )
             ]
             for j, key in enumerate(EXPANSION_KEYS):
                 values[key] = greek[0][:, j]
-                errors[key] = np.max(np.abs(greek[0][:, j] - greek[1][:, j]), axis=-1)
+                errors[key] = np.max(np.abs(greek[0][:, j] - greek[1][:, j]), axis=-1) + np.max(
+                    np.abs(greek[0][:, j] - greek[2][:, j]), axis=-1
+                )
         cross = [
             _cross(
                 s,
@@ -842,8 +835,9 @@ def _batched_outputs(
     at: _At, ang: np.ndarray, dang: np.ndarray, sums: np.ndarray, dsums: np.ndarray
 ) -> np.ndarray:
     """Derivatives of the angular outputs at the probe angles, then of g and
-    the cross-sections (as :func:`_angular`, :func:`_cross`), for a batch of
-    sums (leading axis): shape (batch, n_parameter, n_q n_mu + 4)."""
+    the cross-sections and the lidar ratio (as :func:`_angular`,
+    :func:`_cross`), for a batch of sums (leading axis): shape (batch,
+    n_parameter, n_q n_mu + 5)."""
     n_q = at.n_q
     d_ang = [ang[:, 1 + j, :n_q] for j in range(at.n_dist)]
     d_sums = [sums[:, 1 + j] for j in range(at.n_dist)]
@@ -866,7 +860,11 @@ def _batched_outputs(
         if at.lossless:
             dm = at.index_directions[j - at.n_dist] if j >= at.n_dist else 0j
             d_ext = ds[:, 2] + dm.imag * (dsums[:, 1, 1] - dsums[:, 1, 2])
-        cross = np.column_stack([dg, at.area * d_ext, at.area * ds[:, 2], at.area * ds[:, 5]])
+        s_ext = s0[:, 2] if at.lossless else s0[:, 1]
+        lidar = _lidar_ratio_derivative(s_ext, s0[:, 5], d_ext, ds[:, 5])
+        cross = np.column_stack(
+            [dg, at.area * d_ext, at.area * ds[:, 2], at.area * ds[:, 5], lidar]
+        )
         out.append(np.concatenate([angular.reshape(angular.shape[0], -1), cross], axis=1))
     return np.stack(out, axis=1)
 
@@ -892,10 +890,10 @@ def _by_key(at: _At, shares: np.ndarray) -> dict[str, np.ndarray]:
     output key, the largest over the probe angles for the angular ones."""
     summed = shares.sum(axis=0)  # (n_parameter, n_outputs)
     n_par = summed.shape[0]
-    n_mu = (summed.shape[1] - 4) // at.n_q
+    n_mu = (summed.shape[1] - len(_SCALAR_KEYS)) // at.n_q
     angular = summed[:, : at.n_q * n_mu].reshape(n_par, at.n_q, n_mu).max(axis=-1)
     out = {key: angular[:, q] for q, key in enumerate(at.angular_keys)}
-    for j, key in enumerate(("g", *_CROSS_KEYS)):
+    for j, key in enumerate(_SCALAR_KEYS):
         out[key] = summed[:, at.n_q * n_mu + j]
     return out
 
@@ -910,7 +908,7 @@ def _with_panel_errors(
     summed = _by_key(at, shares)
     missing = _by_key(at, left_out)
     out = dict(errors)
-    for key in (*at.angular_keys, "g", *_CROSS_KEYS):
+    for key in (*at.angular_keys, *_SCALAR_KEYS):
         out[key] = np.maximum(errors[key] + missing[key], summed[key])
     if at.n_order:
         # The expansion coefficients' sums cancel between panels as the phase
@@ -925,7 +923,7 @@ def _scale(at: _At, whole: np.ndarray) -> np.ndarray:
     """The magnitude each output of :func:`_batched_outputs` is held to: the
     largest over the probe angles for the angular ones, its own for the others."""
     n_par, n_out = whole.shape
-    n_ang = n_out - 4
+    n_ang = n_out - len(_SCALAR_KEYS)
     n_mu = n_ang // at.n_q
     mag = np.abs(whole)
     scale = np.empty_like(mag)
@@ -1018,7 +1016,28 @@ def _refined(at: _At, table_panels: np.ndarray, *, rtol: float) -> _Wavelength:
         fine, coarse = fine.plus(rest), coarse.plus(rest)
     values, errors = plan.outputs(at, fine, coarse)
     errors = _with_panel_errors(at, errors, shares, shares[~sig])
+    errors["lidar_ratio_sr"] = errors["lidar_ratio_sr"] + _lidar_ratio_terms_error(at, fine, errors)
     return _Wavelength(values, {k: SAFETY * e for k, e in errors.items()})
+
+
+def _lidar_ratio_terms_error(at: _At, s: _Sums, errors: dict[str, np.ndarray]) -> np.ndarray:
+    """The estimates of d<C_ext> and d<C_back> (their quadrature's, before the
+    values' errors are added) propagated to the lidar ratio's derivative,
+    4 pi (e_ext / S_back + S_ext e_back / S_back^2) / area, with S the
+    efficiency sums of ``s``. [sr per unit of the parameter]
+
+    The rules' difference of the quotient can cancel between its two terms
+    (the coarse rule's errors in d<C_ext> and d<C_back> cancelling where the
+    fine rule's do not): on ``scripts/calibrate_estimates.py``'s modified
+    log-normals at 450 nm the error was up to 2.3x the quotient's estimate
+    alone, and d<C_back>'s error up to 1.9x its quadrature estimate."""
+    s_w, s_ext, s_sca, _, _, s_back = s.sums[0]
+    del s_w
+    ext = s_sca if at.lossless else s_ext
+    four_pi = 4.0 * math.pi / at.area
+    return np.asarray(
+        four_pi * (errors["cext_um2"] / s_back + ext * errors["cback_um2"] / (s_back * s_back))
+    )
 
 
 #: Terms added to Wiscombe's n_max to estimate a single sphere's series
@@ -1045,18 +1064,17 @@ def _monodisperse_derivatives(
     )
     n_theta = at.mu_out.size
     ang_d = np.empty((0, n_q, n_theta))
-    cross: dict[str, np.ndarray] = {k: np.empty(0) for k in ("g", *_CROSS_KEYS)}
+    cross: dict[str, np.ndarray] = {k: np.empty(0) for k in _SCALAR_KEYS}
     if with_radius:
         # d/dr = k d/dx: the kernel's x direction, read as a direction "n" of weight k.
         radial = _Sums(ang, dang[[2, 2]] * k_um, sums, dsums[[2, 2]] * k_um)
         ang_d = _angular(
             radial, 0, [1.0 + 0j], per_particle=per_particle, n_q=n_q, project=lambda f: f
         )
+        # Lossless: C_ext = C_sca, as the table holds it (d/dr is real: no absorption term).
         cross = _cross(
-            radial, 0, [1.0 + 0j], per_particle=per_particle, area=at.area, lossless=False
+            radial, 0, [1.0 + 0j], per_particle=per_particle, area=at.area, lossless=at.lossless
         )
-        if at.lossless:
-            cross["cext_um2"] = cross["csca_um2"]
     directions = list(at.index_directions)
     if directions:
         s = _Sums(ang, dang[:2], sums, dsums[:2])

@@ -286,9 +286,13 @@ def _derivatives_from_xarray(ds: xr.Dataset) -> TableDerivatives | None:
     values: dict[str, np.ndarray] = {}
     errors: dict[str, np.ndarray] = {}
     for name, key in known.items():
-        if name not in ds.variables or key in DERIVED_DERIVATIVES:
+        if name not in ds.variables:
             continue
         var = ds.variables[name]
+        if key in DERIVED_DERIVATIVES and (
+            key not in DERIVATIVE_FIELDS or "derived_from" in var.attrs
+        ):
+            continue  # derived on writing: derived again from the stored ones
         expected = [derivative_unit(UNITS[key][0], u) for u in units]
         if var.attrs.get("units_by_parameter") != "; ".join(expected):
             raise ValueError(

@@ -122,15 +122,15 @@ class TableDerivatives:
         names = [k for k in DERIVATIVE_FIELDS if k in self.values]
         if "cext_um2" in self.values and "csca_um2" in self.values:
             names += ["ssa", "cabs_um2"]
-            if "cback_um2" in self.values:
+            if "cback_um2" in self.values and "lidar_ratio_sr" not in names:
                 names += ["lidar_ratio_sr"]
         return tuple(names)
 
     def pair(
         self, quantity: str, parameter: str, cross_sections: CrossSections | None
     ) -> tuple[np.ndarray, np.ndarray]:
-        """d(quantity)/d(parameter) and its error estimate (derived ones by the chain rule,
-        from the table's ``cross_sections``).
+        """d(quantity)/d(parameter) and its error estimate (stored ones as stored,
+        derived ones by the chain rule, from the table's ``cross_sections``).
 
         Raises
         ------

@@ -167,7 +167,10 @@ MATRIX_FIELDS = ("f12", "f33", "f34")
 EXPANSION_FIELDS = ("alpha1", "alpha2", "alpha3", "alpha4", "beta1", "beta2")
 
 #: Quantities whose derivatives a table stores (the others are derived from
-#: them); angular ones have shape (n_wavelength, n_theta).
+#: them); angular ones have shape (n_wavelength, n_theta).  The lidar ratio's
+#: is stored where it was summed with the cross-sections' (its two terms
+#: nearly cancel, so the quotient of separately converged terms is not
+#: accurate to their tolerance); else it is derived.
 DERIVATIVE_FIELDS = (
     "phase",
     *MATRIX_FIELDS,
@@ -176,8 +179,10 @@ DERIVATIVE_FIELDS = (
     "csca_um2",
     "cback_um2",
     *EXPANSION_FIELDS,
+    "lidar_ratio_sr",
 )
-#: Derived quantities whose derivatives follow from the stored ones.
+#: Derived quantities whose derivatives follow from the stored ones (by the
+#: chain rule, where not stored).
 DERIVED_DERIVATIVES = ("ssa", "cabs_um2", "lidar_ratio_sr")
 #: The dimension of the parameters in :meth:`Table.to_xarray <dustoptics.table.Table.to_xarray>`.
 PARAMETER_DIM = "parameter"

@@ -18,6 +18,8 @@ import pytest
 import dustoptics as do
 from dustoptics.particles.sizedist import LogNormal, ModifiedGamma, Monodisperse
 from dustoptics.particles.sizedist_derivatives import with_parameter
+from dustoptics.scattering import table_derivatives as td
+from dustoptics.scattering.quadrature import QuadratureSettings, _stretch
 
 THETA = np.linspace(0.0, 180.0, 37)
 WL = [450.0, 700.0]
@@ -55,6 +57,10 @@ def _value_error(t: do.Table, q: str) -> np.ndarray:
             rel = np.maximum(rel, t.matrix.matrix_error_estimate)
         return rel[:, None] * t.phase
     assert t.quadrature is not None and t.quadrature.cross_section_error_estimate is not None
+    if q == "lidar_ratio_sr":
+        # 4 pi C_ext / C_back, C_back = 4 pi C_sca P(180 deg): the relative errors add.
+        rel = 2.0 * t.quadrature.cross_section_error_estimate + t.quadrature.error_estimate
+        return rel * np.abs(t.lidar_ratio_sr)
     if q in ("g", "ssa"):
         return t.quadrature.cross_section_error_estimate
     return t.quadrature.cross_section_error_estimate * np.abs(t.quantity(q))
@@ -105,9 +111,83 @@ def test_gamma_absorbing_every_output_against_finite_differences() -> None:
         1.52 + 0.01j,
         ModifiedGamma(r_eff_um=0.4, v_eff=0.15),
         {"r_eff_um": 2e-3, "v_eff": 2e-3, "n": 1e-3, "k": 1e-4},
-        ("phase", "f12", "f33", "f34", "g", "cext_um2", "csca_um2", "cback_um2", "ssa"),
+        (
+            "phase",
+            "f12",
+            "f33",
+            "f34",
+            "g",
+            "cext_um2",
+            "csca_um2",
+            "cback_um2",
+            "ssa",
+            "lidar_ratio_sr",
+        ),
         polarization=True,
     )
+
+
+def test_lidar_ratio_from_its_own_sums_within_the_chain_rules_estimate() -> None:
+    """The lidar ratio's derivative is summed with the cross-sections' (stored):
+    it agrees with the quotient rule on the table's values within the two
+    estimates, its own the tighter (the chain rule's holds both values' errors)."""
+    t = _table(1.52 + 0.003j, ModifiedGamma(r_eff_um=0.8, v_eff=0.2), derivatives=("r_eff_um", "n"))
+    d = t.derivatives
+    assert d is not None and t.cross_sections is not None
+    assert "lidar_ratio_sr" in d.values
+    assert t.derivative_quantities.count("lidar_ratio_sr") == 1
+    for j, p in enumerate(d.parameters):
+        chain, chain_error = d._chain_rule("lidar_ratio_sr", j, t.cross_sections)
+        own, own_error = (
+            t.derivative("lidar_ratio_sr", p),
+            t.derivative_error_estimate("lidar_ratio_sr", p),
+        )
+        assert np.all(np.abs(own - chain) <= chain_error + own_error), p
+        assert np.all(own_error < chain_error), p
+    # A table whose lidar ratio derivative is not stored (a file written before)
+    # derives it by the chain rule, from the dataset and in memory alike.
+    ds = t.to_xarray()
+    ds["d_lidar_ratio_sr_d_parameter"].attrs["derived_from"] = "derivatives of ... (chain rule)"
+    back = do.Table.from_xarray(ds)
+    assert back.derivatives is not None and "lidar_ratio_sr" not in back.derivatives.values
+    np.testing.assert_array_equal(
+        back.derivative("lidar_ratio_sr", "n"),
+        d._chain_rule("lidar_ratio_sr", 1, t.cross_sections)[0],
+    )
+
+
+def test_a_truncations_derivative_range_reaches_its_bounds() -> None:
+    """The tail bounds leave a sliver below a truncation's bounds (the density
+    jumps there); the derivatives' range reaches them exactly."""
+    dist = ModifiedGamma(r_eff_um=0.905, v_eff=0.111).truncated(r_min_um=0.2995, r_max_um=1.358)
+    settings = QuadratureSettings()
+    at = td._At(
+        m=1.5 + 0.001j,
+        wavelength_nm=450.0,
+        distribution=dist,
+        settings=settings,
+        mu_out=np.array([1.0]),
+        index_directions=(),
+        dist_parameters=("parent.v_eff",),
+        per_particle=False,
+        n_q=1,
+        n_order=0,
+        angular_keys=("phase",),
+    )
+    lo, hi = dist.radius_bounds_um(
+        tail_fraction=settings.tail_fraction * td.DERIVATIVE_TAIL_FACTOR,
+        lower_moment=2,
+        upper_moment=4,
+    )
+    assert dist.r_min_um < lo and hi < dist.r_max_um  # the sliver left out
+    edges = np.array([_stretch(at.k_um * lo, 1.0), _stretch(at.k_um * hi, 1.0)])
+    ends = td._hard_ends(at, edges)
+    assert ends[0] == _stretch(at.k_um * dist.r_min_um, 1.0)
+    assert ends[-1] == _stretch(at.k_um * dist.r_max_um, 1.0)
+    # A bound far beyond the tail bound (more than a panel width) is left alone.
+    far = ModifiedGamma(r_eff_um=0.905, v_eff=0.111).truncated(r_min_um=0.0, r_max_um=50.0)
+    at_far = td._At(**{**at.__dict__, "distribution": far})
+    np.testing.assert_array_equal(td._hard_ends(at_far, edges), edges)
 
 
 def test_expansion_coefficients_against_finite_differences() -> None:
