@@ -664,8 +664,10 @@ class Table:
             ``"phase"``, ``"f12"``, ``"f33"``, ``"f34"`` (shape (n_wavelength,
             n_theta)), ``"g"``, ``"cext_um2"``, ``"csca_um2"``, ``"cback_um2"``,
             the expansion coefficients ``"alpha1"`` ... ``"beta2"`` (shape
-            (n_wavelength, n_order)), or the derived ``"ssa"``, ``"cabs_um2"``, ``"lidar_ratio_sr"``
-            (chain rule), where the table has them (:attr:`derivative_quantities`).
+            (n_wavelength, n_order)), ``"lidar_ratio_sr"`` (the quotient rule on the size
+            integral's own cext and cback sums; by the chain rule in files that do not store
+            it), or the derived ``"ssa"`` and ``"cabs_um2"`` (chain rule), where the table has
+            them (:attr:`derivative_quantities`).
         parameter : str
             One of ``table.derivatives.parameters``.
 
