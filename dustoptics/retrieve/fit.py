@@ -39,6 +39,11 @@ from dustoptics.retrieve.sky import (
     sky_progress,
 )
 from dustoptics.scattering import optics as _optics
+from dustoptics.scattering.derivative_parameters import (
+    INDEX_PARAMETERS,
+    check_parameters,
+    index_parameter_names,
+)
 from dustoptics.scattering.optics import (
     check_cost,
     compute_optics,
@@ -46,11 +51,6 @@ from dustoptics.scattering.optics import (
     optics_request,
 )
 from dustoptics.scattering.quadrature import QuadratureSettings
-from dustoptics.scattering.table_derivatives import (
-    INDEX_PARAMETERS,
-    check_parameters,
-    index_parameter_names,
-)
 from dustoptics.table import Table
 
 if TYPE_CHECKING:

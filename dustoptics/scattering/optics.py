@@ -72,6 +72,7 @@ from dustoptics.particles.custom_sizedist import from_dict as _distribution_from
 from dustoptics.particles.materials import RefractiveIndex
 from dustoptics.particles.sizedist import SizeDistribution
 from dustoptics.scattering import mie
+from dustoptics.scattering.derivative_parameters import check_parameters, index_parameter_names
 from dustoptics.scattering.domain import check_domain
 from dustoptics.scattering.quadrature import (
     _UPPER_MOMENT,
@@ -85,11 +86,7 @@ from dustoptics.scattering.solve import (
     request_indices,
     solve_wavelengths,
 )
-from dustoptics.scattering.table_derivatives import (
-    check_parameters,
-    index_parameter_names,
-    table_derivatives,
-)
+from dustoptics.scattering.table_derivatives import table_derivatives
 from dustoptics.table import DEFAULT_NAME, Provenance, Source, Table
 
 __all__ = [

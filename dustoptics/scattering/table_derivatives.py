@@ -108,13 +108,7 @@ from dustoptics.particles.sizedist_derivatives import (
 )
 from dustoptics.scattering import mie
 from dustoptics.scattering.derivative_panels import _halves, _PanelSums, _Probe
-from dustoptics.scattering.derivative_parameters import (
-    INDEX_PARAMETERS,
-    check_parameters,
-    index_directions,
-    index_parameter_names,
-    parameter_unit,
-)
+from dustoptics.scattering.derivative_parameters import index_directions, parameter_unit
 from dustoptics.scattering.expansion import greek_coefficients
 from dustoptics.scattering.mie_derivatives import _accumulate, _series_lengths
 from dustoptics.scattering.mie_derivatives_blocked import (
@@ -139,14 +133,7 @@ from dustoptics.table import Table, TableDerivatives
 if TYPE_CHECKING:  # the request's module imports this one
     from dustoptics.scattering.optics import OpticsRequest
 
-__all__ = [
-    "INDEX_PARAMETERS",
-    "check_parameters",
-    "index_directions",
-    "index_parameter_names",
-    "parameter_unit",
-    "table_derivatives",
-]
+__all__ = ["table_derivatives"]
 
 #: How the derivatives are computed (recorded with them).
 METHOD = (
